@@ -1,0 +1,327 @@
+//! `dea-fit hyperelastic`: fit strain-energy coefficients to tensile-test files.
+
+use clap::ValueEnum;
+use dea_fit::data::Dataset;
+use dea_fit::fit::hyperelastic::{self, HyperelasticFit, Settings};
+use dea_fit::fit::problem::Residual;
+use dea_fit::io::tensile::{self, TensileOptions};
+use dea_fit::io::write::{write_fit, Replaced};
+use dea_fit::material::hyperelastic::{Mode, ModelSpec, OgdenForm};
+use dea_fit::report::format::{si, table};
+use dea_fit::units::{parse_quantity, Dimension};
+use dea_fit::{Error, Result};
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum Form {
+    Seed,
+    Original,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum ResidualArg {
+    Abs,
+    Rel,
+}
+
+/// Fit hyperelastic coefficients. Positional files are uniaxial unless the file says
+/// otherwise (a `mode` column or a `# mode: …` comment).
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Test files (CSV; uniaxial unless they say otherwise).
+    files: Vec<PathBuf>,
+    /// Equibiaxial test file(s).
+    #[arg(long, value_name = "FILE")]
+    equibiaxial: Vec<PathBuf>,
+    /// Planar (pure shear) test file(s).
+    #[arg(long, value_name = "FILE")]
+    planar: Vec<PathBuf>,
+    /// Model: neo-hookean, mooney-rivlin, yeoh, gent, ogden1..ogden4, or auto.
+    #[arg(long, default_value = "auto")]
+    model: String,
+    /// Ogden coefficient form: seed (Eq. 2.9, 2μ/α²) or original (Ogden 1972, μ/α).
+    #[arg(long, value_enum, default_value = "seed")]
+    ogden_form: Form,
+    /// Residuals: abs (Pa; default, load-cell noise is absolute) or rel.
+    #[arg(long, value_enum, default_value = "abs")]
+    residual: ResidualArg,
+    /// Keep the fit Drucker-stable over stretch 0.1–10 in every mode.
+    #[arg(long)]
+    stable: bool,
+    /// Reference cross-section for force columns, e.g. 22mm2 (bare number: m²).
+    #[arg(long)]
+    area: Option<String>,
+    /// Gauge length for displacement columns, e.g. 80mm (bare number: m).
+    #[arg(long)]
+    gauge_length: Option<String>,
+    /// Fit file to write (default fits/<data>-<model>.json).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Report directory (default reports/<data>-<model>/).
+    #[arg(long)]
+    report: Option<PathBuf>,
+    /// Do not write a report.
+    #[arg(long)]
+    no_report: bool,
+    /// Print the fit as JSON on stdout (the fit file's object).
+    #[arg(long)]
+    json: bool,
+    /// Exit with status 1 when the fit is ill-posed, unstable or not converged.
+    #[arg(long)]
+    strict: bool,
+    /// Use at most N multi-start points (default: all).
+    #[arg(long, value_name = "N")]
+    max_starts: Option<usize>,
+}
+
+fn load(a: &Args) -> Result<Dataset> {
+    let area = a
+        .area
+        .as_deref()
+        .map(|s| parse_quantity(s, Dimension::Area).map(|q| q.value))
+        .transpose()
+        .map_err(|e| Error::settings(format!("--area: {e}")))?;
+    let gauge_length = a
+        .gauge_length
+        .as_deref()
+        .map(|s| parse_quantity(s, Dimension::Length).map(|q| q.value))
+        .transpose()
+        .map_err(|e| Error::settings(format!("--gauge-length: {e}")))?;
+    for (name, v) in [("--area", area), ("--gauge-length", gauge_length)] {
+        if let Some(v) = v.filter(|v| *v <= 0.0) {
+            return Err(Error::settings(format!("{name} must be > 0, found {v}")));
+        }
+    }
+    if a.files.is_empty() && a.equibiaxial.is_empty() && a.planar.is_empty() {
+        return Err(Error::settings("no data files given").with_hint(
+            "dea-fit hyperelastic tension.csv [--equibiaxial bulge.csv] [--planar shear.csv]",
+        ));
+    }
+    let mut data = Dataset::default();
+    let groups = [
+        (&a.files, None),
+        (&a.equibiaxial, Some(Mode::Equibiaxial)),
+        (&a.planar, Some(Mode::Planar)),
+    ];
+    for (files, mode) in groups {
+        for f in files {
+            let opts = TensileOptions {
+                area,
+                gauge_length,
+                mode,
+            };
+            data.extend(tensile::read(f, &opts)?);
+        }
+    }
+    Ok(data)
+}
+
+fn run_name(a: &Args, model: &str) -> String {
+    let first = a.files.iter().chain(&a.equibiaxial).chain(&a.planar).next();
+    let stem = first
+        .map(|f| {
+            let s = f
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            match f.parent().and_then(|p| p.file_name()) {
+                Some(d) => format!("{}-{s}", d.to_string_lossy()),
+                None => s,
+            }
+        })
+        .unwrap_or_else(|| "fit".into());
+    format!("{stem}-{model}")
+}
+
+/// Run the subcommand.
+pub fn run(a: Args) -> Result<i32> {
+    let data = load(&a)?;
+    let settings = Settings {
+        residual: match a.residual {
+            ResidualArg::Abs => Residual::Abs,
+            ResidualArg::Rel => Residual::Rel,
+        },
+        stable: a.stable,
+        ogden_form: match a.ogden_form {
+            Form::Seed => OgdenForm::Seed,
+            Form::Original => OgdenForm::Original,
+        },
+        max_starts: a.max_starts,
+        ..Settings::default()
+    };
+    let fit = if a.model == "auto" {
+        hyperelastic::fit_auto(&data, &settings)?.0
+    } else {
+        hyperelastic::fit(
+            &data,
+            &ModelSpec::new(&a.model, settings.ogden_form),
+            &settings,
+        )?
+    };
+    let name = run_name(&a, &fit.model);
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("fits").join(format!("{name}.json")));
+    let json = serde_json::to_string_pretty(&fit).expect("a fit serialises");
+    let replaced = write_fit(&out, json.as_bytes(), |old| same_fit(old, &fit))?;
+    let report = if a.no_report {
+        None
+    } else {
+        let dir = a
+            .report
+            .clone()
+            .unwrap_or_else(|| Path::new("reports").join(&name));
+        Some(dea_fit::report::hyperelastic::write(&fit, &data, &dir)?)
+    };
+    if a.json {
+        println!("{json}");
+    } else {
+        print!("{}", summary(&fit));
+        println!("fit: {}", out.display());
+        if let Some(r) = &report {
+            println!("report: {}", r.display());
+        }
+    }
+    if let Replaced::KeptAs(p) = &replaced {
+        eprintln!(
+            "note: {} held a different fit; it was kept as {}",
+            out.display(),
+            p.display()
+        );
+    }
+    Ok(if a.strict && fit.status.is_blocking() {
+        1
+    } else {
+        0
+    })
+}
+
+/// Same model, parameters and inputs: the file holds this very fit.
+fn same_fit(old: &str, new: &HyperelasticFit) -> bool {
+    serde_json::from_str::<HyperelasticFit>(old).is_ok_and(|o| {
+        o.model == new.model
+            && o.form == new.form
+            && o.provenance.files == new.provenance.files
+            && o.parameters.len() == new.parameters.len()
+            && o.parameters
+                .iter()
+                .zip(&new.parameters)
+                .all(|(a, b)| (a.value - b.value).abs() <= 1e-9 * a.value.abs().max(b.value.abs()))
+    })
+}
+
+/// The human-readable summary printed by `dea-fit hyperelastic`.
+pub fn summary(fit: &HyperelasticFit) -> String {
+    let mut s = String::new();
+    let files: Vec<String> = fit
+        .provenance
+        .files
+        .iter()
+        .map(|f| {
+            let modes: Vec<String> = f.modes.iter().map(|m| m.to_string()).collect();
+            format!(
+                "{} ({}, {} points, λ {:.3}–{:.3})",
+                f.path,
+                modes.join("+"),
+                f.points,
+                f.stretch_min,
+                f.stretch_max
+            )
+        })
+        .collect();
+    s.push_str(&format!("data: {}\n", files.join("; ")));
+    if let Some(sel) = &fit.selection {
+        let rows: Vec<Vec<String>> = sel
+            .candidates
+            .iter()
+            .map(|c| {
+                vec![
+                    c.model.clone(),
+                    c.k.to_string(),
+                    si(c.rmse_pa, "Pa"),
+                    format!("{:.5}", c.r2),
+                    c.aicc.map(|v| format!("{v:.2}")).unwrap_or("n/a".into()),
+                    c.delta_aicc
+                        .map(|v| format!("{v:.2}"))
+                        .unwrap_or("n/a".into()),
+                    format!("{:.2}", c.bic),
+                    format!("{:?}", c.status),
+                ]
+            })
+            .collect();
+        s.push_str("\nmodel comparison\n");
+        s.push_str(&table(
+            &["model", "k", "RMSE", "R²", "AICc", "ΔAICc", "BIC", "status"],
+            &rows,
+        ));
+        s.push_str(&format!("chosen: {}\n", sel.reason));
+    }
+    s.push_str(&format!(
+        "\nmodel: {}{}\n",
+        fit.model,
+        fit.form
+            .map(|f| format!(" ({f:?} form)").to_lowercase())
+            .unwrap_or_default()
+    ));
+    let rows: Vec<Vec<String>> = fit
+        .parameters
+        .iter()
+        .map(|p| {
+            vec![
+                p.name.clone(),
+                si(p.value, &p.unit),
+                p.std_error
+                    .map(|e| format!("± {}", si(e, &p.unit)))
+                    .unwrap_or("± n/a".into()),
+                p.ci95
+                    .map(|[a, b]| format!("[{}, {}]", si(a, &p.unit), si(b, &p.unit)))
+                    .unwrap_or("n/a".into()),
+            ]
+        })
+        .collect();
+    s.push_str(&table(
+        &["parameter", "value", "std. error", "95 % interval"],
+        &rows,
+    ));
+    s.push_str(&format!(
+        "μ0 {}  RMSE {}  R² {:.5}  %RMSE {}  AICc {}  BIC {:.2}\n",
+        si(fit.initial_shear_modulus_pa, "Pa"),
+        si(fit.rmse_pa, "Pa"),
+        fit.r2,
+        fit.rmse_pct
+            .map(|v| format!("{v:.3} %"))
+            .unwrap_or("n/a".into()),
+        fit.aicc.map(|v| format!("{v:.2}")).unwrap_or("n/a".into()),
+        fit.bic
+    ));
+    let dr: Vec<String> = fit
+        .drucker
+        .iter()
+        .map(|d| {
+            if d.stable {
+                format!("{} stable", d.mode)
+            } else {
+                format!(
+                    "{} stable only for λ {:.3}–{:.3}",
+                    d.mode, d.stretch_min, d.stretch_max
+                )
+            }
+        })
+        .collect();
+    s.push_str(&format!("Drucker (λ 0.1–10): {}\n", dr.join("; ")));
+    s.push_str(&format!(
+        "solver: {} start(s), {} at best, {} iterations, {} evaluations, {:.3} ms, {}\n",
+        fit.solver.starts,
+        fit.solver.starts_at_best,
+        fit.solver.iterations,
+        fit.solver.evaluations,
+        fit.solver.seconds * 1e3,
+        fit.solver.termination
+    ));
+    s.push_str(&format!("status: {:?}\n", fit.status).to_lowercase());
+    for w in &fit.warnings {
+        s.push_str(&format!("warning: {w}\n"));
+    }
+    s
+}

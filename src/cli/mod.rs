@@ -1,0 +1,35 @@
+//! Subcommands, one file each.
+
+mod bench;
+mod hyperelastic;
+mod synth;
+
+use clap::{Parser, Subcommand};
+use dea_fit::Result;
+
+/// Material constants and forward simulation for dielectric elastomer actuators.
+#[derive(Debug, Parser)]
+#[command(name = "dea-fit", version, about)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Fit hyperelastic strain-energy coefficients to tensile-test data.
+    Hyperelastic(hyperelastic::Args),
+    /// Generate synthetic test data from known constants (with noise and seed).
+    Synth(synth::Args),
+    /// Measure speed against accuracy and write tables and charts under reports/.
+    Bench(bench::Args),
+}
+
+/// Run a parsed command line; returns the exit status.
+pub fn run(cli: Cli) -> Result<i32> {
+    match cli.command {
+        Command::Hyperelastic(a) => hyperelastic::run(a),
+        Command::Synth(a) => synth::run(a),
+        Command::Bench(a) => bench::run(a),
+    }
+}

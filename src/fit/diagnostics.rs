@@ -1,0 +1,189 @@
+//! Fit diagnostics: covariance and standard errors from the Jacobian, confidence
+//! intervals, correlation and condition number, information criteria, the seed's
+//! %RMSE (Eq. 3.28) and Drucker stability.
+
+use crate::material::hyperelastic::{Mode, StrainEnergy};
+use nalgebra::DMatrix;
+use serde::{Deserialize, Serialize};
+use statrs::distribution::{ContinuousCDF, StudentsT};
+
+/// Parameter uncertainty from the linearised model.
+#[derive(Debug, Clone)]
+pub struct Uncertainty {
+    /// Covariance s²·(JᵀJ)⁻¹ (NaN where not identifiable).
+    pub covariance: DMatrix<f64>,
+    /// Standard errors (None where not identifiable).
+    pub std_error: Vec<Option<f64>>,
+    /// Correlation matrix (None where undefined).
+    pub correlation: Vec<Vec<Option<f64>>>,
+    /// Condition number of the column-normalised Jacobian (∞ if rank deficient).
+    pub condition: f64,
+    /// Two-sided 95 % Student-t quantile used for the intervals (None if no dof).
+    pub t95: Option<f64>,
+}
+
+/// Covariance of least-squares estimates: cov = s²·(JᵀJ)⁻¹, s² = RSS/(n − k), with
+/// J the Jacobian of the scaled residuals at the optimum (pseudo-inverse by SVD).
+pub fn uncertainty(jac: &DMatrix<f64>, rss: f64) -> Uncertainty {
+    let (n, k) = jac.shape();
+    let dof = n.saturating_sub(k);
+    let mut norm = jac.clone();
+    let mut col = vec![1.0; k];
+    for j in 0..k {
+        let s = jac.column(j).norm();
+        if s > 0.0 {
+            col[j] = s;
+            norm.column_mut(j).scale_mut(1.0 / s);
+        }
+    }
+    let svd = norm.svd(false, true);
+    let sv = &svd.singular_values;
+    let smax = sv.max();
+    let smin = sv.min();
+    let condition = if smin > 0.0 {
+        smax / smin
+    } else {
+        f64::INFINITY
+    };
+    let identifiable = smin > 1e-12 * smax && dof > 0;
+    let s2 = if dof > 0 { rss / dof as f64 } else { f64::NAN };
+    let mut cov = DMatrix::from_element(k, k, f64::NAN);
+    if identifiable {
+        let vt = svd.v_t.expect("requested");
+        for a in 0..k {
+            for b in 0..k {
+                let mut acc = 0.0;
+                for i in 0..sv.len() {
+                    acc += vt[(i, a)] * vt[(i, b)] / (sv[i] * sv[i]);
+                }
+                cov[(a, b)] = s2 * acc / (col[a] * col[b]);
+            }
+        }
+    }
+    let std_error: Vec<Option<f64>> = (0..k)
+        .map(|i| Some(cov[(i, i)].sqrt()).filter(|v| v.is_finite()))
+        .collect();
+    let correlation = (0..k)
+        .map(|a| {
+            (0..k)
+                .map(|b| match (std_error[a], std_error[b]) {
+                    (Some(sa), Some(sb)) if sa > 0.0 && sb > 0.0 => Some(cov[(a, b)] / (sa * sb)),
+                    _ => None,
+                })
+                .collect()
+        })
+        .collect();
+    let t95 = (dof > 0).then(|| {
+        StudentsT::new(0.0, 1.0, dof as f64)
+            .map(|t| t.inverse_cdf(0.975))
+            .unwrap_or(1.96)
+    });
+    Uncertainty {
+        covariance: cov,
+        std_error,
+        correlation,
+        condition,
+        t95,
+    }
+}
+
+/// Corrected Akaike and Bayesian information criteria for a least-squares fit with
+/// Gaussian errors: AIC = n·ln(RSS/n) + 2k, AICc = AIC + 2k(k+1)/(n−k−1),
+/// BIC = n·ln(RSS/n) + k·ln n. AICc is None when n ≤ k + 1.
+pub fn information_criteria(rss: f64, n: usize, k: usize) -> (Option<f64>, f64) {
+    let nf = n as f64;
+    let kf = k as f64;
+    let base = nf * (rss.max(f64::MIN_POSITIVE) / nf).ln();
+    let aic = base + 2.0 * kf;
+    let aicc = (n > k + 1).then(|| aic + 2.0 * kf * (kf + 1.0) / (nf - kf - 1.0));
+    (aicc, base + kf * nf.ln())
+}
+
+/// Seed Eq. 3.28: %RMSE = RMSE / (max ŷ − min ŷ)·100, normalised by the reference range.
+pub fn rmse_percent(rmse: f64, reference: &[f64]) -> Option<f64> {
+    let (lo, hi) = reference
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &y| {
+            (a.min(y), b.max(y))
+        });
+    (hi > lo).then(|| 100.0 * rmse / (hi - lo))
+}
+
+/// Stretch range over which Drucker stability is checked.
+pub const DRUCKER_RANGE: (f64, f64) = (0.1, 10.0);
+
+/// Drucker stability of one mode over [`DRUCKER_RANGE`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DruckerCheck {
+    /// Mode.
+    pub mode: Mode,
+    /// True if dP/dλ > 0 over the whole checked range.
+    pub stable: bool,
+    /// Lower end of the stable interval that contains λ = 1.
+    pub stretch_min: f64,
+    /// Upper end of the stable interval that contains λ = 1.
+    pub stretch_max: f64,
+    /// Intervals [a, b] of the checked range where dP/dλ ≤ 0 or is undefined.
+    pub unstable: Vec<[f64; 2]>,
+}
+
+/// Check dP/dλ > 0 on a log-spaced grid (400 points per decade pair) in each mode.
+pub fn drucker(model: &dyn StrainEnergy, p: &[f64]) -> Vec<DruckerCheck> {
+    const N: usize = 801;
+    let (a, b) = (DRUCKER_RANGE.0.ln(), DRUCKER_RANGE.1.ln());
+    let grid: Vec<f64> = (0..N)
+        .map(|i| (a + (b - a) * i as f64 / (N - 1) as f64).exp())
+        .collect();
+    Mode::ALL
+        .iter()
+        .map(|&mode| {
+            let ok: Vec<bool> = grid
+                .iter()
+                .map(|&l| {
+                    let t = model.tangent(p, mode, l);
+                    t.is_finite() && t > 0.0
+                })
+                .collect();
+            let mut unstable = Vec::new();
+            let mut i = 0;
+            while i < N {
+                if !ok[i] {
+                    let start = i;
+                    while i < N && !ok[i] {
+                        i += 1;
+                    }
+                    unstable.push([grid[start], grid[i - 1]]);
+                } else {
+                    i += 1;
+                }
+            }
+            let one = grid.iter().position(|&l| l >= 1.0).unwrap_or(N / 2);
+            let (mut lo, mut hi) = (one, one);
+            if ok[one] {
+                while lo > 0 && ok[lo - 1] {
+                    lo -= 1;
+                }
+                while hi + 1 < N && ok[hi + 1] {
+                    hi += 1;
+                }
+            }
+            DruckerCheck {
+                mode,
+                stable: unstable.is_empty(),
+                stretch_min: if ok[one] { grid[lo] } else { 1.0 },
+                stretch_max: if ok[one] { grid[hi] } else { 1.0 },
+                unstable,
+            }
+        })
+        .collect()
+}
+
+/// The grid of (mode, stretch) points at which `--stable` constrains dP/dλ ≥ 0.
+pub fn drucker_grid() -> Vec<(Mode, f64)> {
+    const N: usize = 121;
+    let (a, b) = (DRUCKER_RANGE.0.ln(), DRUCKER_RANGE.1.ln());
+    Mode::ALL
+        .iter()
+        .flat_map(|&m| (0..N).map(move |i| (m, (a + (b - a) * i as f64 / (N - 1) as f64).exp())))
+        .collect()
+}

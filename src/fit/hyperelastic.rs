@@ -1,0 +1,850 @@
+//! The hyperelastic estimator: coefficients of a strain-energy function from
+//! uniaxial, equibiaxial and planar test data.
+//!
+//! * Models linear in their parameters (Neo-Hookean, Mooney-Rivlin, Yeoh): exact
+//!   weighted linear least squares (SVD); with `stable`, a Clarabel QP keeps
+//!   dP/dλ ≥ 0 over [`DRUCKER_RANGE`] in every mode.
+//! * Ogden and Gent: bounded Levenberg-Marquardt over the nonlinear parameters with
+//!   the linear ones solved exactly inside (variable projection), from a
+//!   deterministic set of physically informed starts, then a full LM polish of all
+//!   parameters from the best start.
+
+use super::diagnostics::{self, DruckerCheck, DRUCKER_RANGE};
+use super::linear::constrained_least_squares;
+use super::lm::{self, LeastSquares, LmSettings, Termination};
+use super::problem::{svd_solve, HyperProblem, Residual, VarPro};
+use super::{Parameter, SolverReport, Status};
+use crate::data::{Dataset, Source};
+use crate::error::{Error, Result};
+use crate::material::hyperelastic::{Mode, ModelSpec, OgdenForm, StrainEnergy, MODEL_NAMES};
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// Schema tag of hyperelastic fit files.
+pub const SCHEMA: &str = "dea-fit/hyperelastic-fit/1";
+
+/// Estimator settings (checked by [`Settings::check`] before use).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Settings {
+    /// Residual definition (default absolute, see [`Residual`]).
+    pub residual: Residual,
+    /// Constrain linear models to Drucker stability; pick the best stable start for
+    /// nonlinear ones.
+    pub stable: bool,
+    /// Ogden coefficient form.
+    pub ogden_form: OgdenForm,
+    /// Iteration limit of each LM search.
+    pub max_iterations: usize,
+    /// Relative cost tolerance of the LM searches.
+    pub ftol: f64,
+    /// Use at most this many multi-start points (None: all).
+    pub max_starts: Option<usize>,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            residual: Residual::Abs,
+            stable: false,
+            ogden_form: OgdenForm::Seed,
+            max_iterations: 200,
+            ftol: 1e-12,
+            max_starts: None,
+        }
+    }
+}
+
+impl Settings {
+    /// Reject settings that cannot work.
+    pub fn check(&self) -> Result<()> {
+        if self.max_iterations == 0 {
+            return Err(Error::settings("the iteration limit must be at least 1"));
+        }
+        if !(self.ftol > 0.0 && self.ftol < 1.0) {
+            return Err(Error::settings(format!(
+                "tolerance must be in (0, 1), found {}",
+                self.ftol
+            )));
+        }
+        if self.max_starts == Some(0) {
+            return Err(Error::settings("at least one start is needed"));
+        }
+        Ok(())
+    }
+}
+
+/// Residual statistics of one mode.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ModeStats {
+    /// Mode.
+    pub mode: Mode,
+    /// Points.
+    pub points: usize,
+    /// Smallest stretch of the data.
+    pub stretch_min: f64,
+    /// Largest stretch of the data.
+    pub stretch_max: f64,
+    /// Root-mean-square absolute error (Pa).
+    pub rmse_pa: f64,
+    /// Coefficient of determination of this mode.
+    pub r2: f64,
+}
+
+/// A model prediction in a mode the data does not cover.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Extrapolation {
+    /// Mode without data.
+    pub mode: Mode,
+    /// Stretch.
+    pub stretch: f64,
+    /// Predicted nominal stress (Pa).
+    pub stress_pa: f64,
+    /// Range predicted by the other models fitted to the same data (Pa), when known.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub other_models_pa: Option<[f64; 2]>,
+}
+
+/// One row of the `--model auto` comparison.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Candidate {
+    /// Model.
+    pub model: String,
+    /// Number of parameters.
+    pub k: usize,
+    /// RMSE (Pa).
+    #[serde(rename = "rmse_Pa")]
+    pub rmse_pa: f64,
+    /// R².
+    pub r2: f64,
+    /// AICc (None when n ≤ k + 1).
+    pub aicc: Option<f64>,
+    /// BIC.
+    pub bic: f64,
+    /// AICc minus the smallest AICc.
+    pub delta_aicc: Option<f64>,
+    /// Fit status.
+    pub status: Status,
+}
+
+/// How `--model auto` chose.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Selection {
+    /// The rule, in words.
+    pub rule: String,
+    /// Why this model.
+    pub reason: String,
+    /// Every model tried.
+    pub candidates: Vec<Candidate>,
+}
+
+/// Data provenance and settings of a fit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Provenance {
+    /// Input files with hashes, modes and stretch ranges.
+    pub files: Vec<Source>,
+    /// Settings used.
+    pub settings: serde_json::Value,
+}
+
+/// A hyperelastic fit: what `--json` prints and what the fit file holds.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HyperelasticFit {
+    /// Schema tag.
+    pub schema: String,
+    /// dea-fit version that wrote it.
+    pub tool_version: String,
+    /// Model name.
+    pub model: String,
+    /// Ogden coefficient form (Ogden models only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub form: Option<OgdenForm>,
+    /// Parameters in SI.
+    pub parameters: Vec<Parameter>,
+    /// Small-strain shear modulus μ0 (Pa).
+    #[serde(rename = "initial_shear_modulus_Pa")]
+    pub initial_shear_modulus_pa: f64,
+    /// RMSE over all points (Pa, unweighted).
+    #[serde(rename = "rmse_Pa")]
+    pub rmse_pa: f64,
+    /// R² over all points.
+    pub r2: f64,
+    /// Seed Eq. 3.28 %RMSE (RMSE over the data's stress range).
+    pub rmse_pct: Option<f64>,
+    /// AICc of the fitted objective (None when n ≤ k + 1).
+    pub aicc: Option<f64>,
+    /// BIC of the fitted objective.
+    pub bic: f64,
+    /// Residual definition of the objective.
+    pub residual: Residual,
+    /// Number of points.
+    pub points: usize,
+    /// Per-mode residual statistics and fitted stretch ranges.
+    pub per_mode: Vec<ModeStats>,
+    /// Drucker stability per mode over stretch 0.1–10.
+    pub drucker: Vec<DruckerCheck>,
+    /// Parameter correlation matrix (None where undefined).
+    pub correlation: Vec<Vec<Option<f64>>>,
+    /// Condition number of the column-normalised Jacobian.
+    pub condition_number: Option<f64>,
+    /// Predictions in modes without data.
+    pub extrapolation: Vec<Extrapolation>,
+    /// Overall status.
+    pub status: Status,
+    /// Everything the user should know.
+    pub warnings: Vec<String>,
+    /// Solver report.
+    pub solver: SolverReport,
+    /// How `auto` chose this model (auto only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub selection: Option<Selection>,
+    /// Inputs and settings.
+    pub provenance: Provenance,
+}
+
+impl HyperelasticFit {
+    /// Parameter values in model order.
+    pub fn values(&self) -> Vec<f64> {
+        self.parameters.iter().map(|p| p.value).collect()
+    }
+
+    /// The model evaluator.
+    pub fn evaluator(&self) -> Result<Box<dyn StrainEnergy>> {
+        ModelSpec {
+            name: self.model.clone(),
+            form: self.form,
+        }
+        .build()
+    }
+
+    /// A warning if `stretch` in `mode` lies outside what the data covered. Uniaxial
+    /// compression at λ is equibiaxial tension at λ^-1/2 and is checked as such.
+    pub fn range_warning(&self, mode: Mode, stretch: f64) -> Option<String> {
+        let (m, l) = if mode == Mode::Uniaxial && stretch < 1.0 {
+            match self.per_mode.iter().find(|s| s.mode == Mode::Uniaxial) {
+                Some(s) if s.stretch_min <= stretch => return None,
+                _ => (Mode::Equibiaxial, stretch.powf(-0.5)),
+            }
+        } else {
+            (mode, stretch)
+        };
+        match self.per_mode.iter().find(|s| s.mode == m) {
+            Some(s) if l >= s.stretch_min - 1e-12 && l <= s.stretch_max + 1e-12 => None,
+            Some(s) => Some(format!(
+                "{mode} stretch {stretch:.3} lies outside the fitted {m} range {:.3}–{:.3}: the model is extrapolated",
+                s.stretch_min, s.stretch_max
+            )),
+            None => Some(format!(
+                "{mode} stretch {stretch:.3} needs {m} behaviour, for which the fit had no data: the model is extrapolated"
+            )),
+        }
+    }
+}
+
+/// Result of the numerical search alone.
+struct Estimate {
+    params: Vec<f64>,
+    method: String,
+    starts: usize,
+    starts_at_best: usize,
+    iterations: usize,
+    evaluations: usize,
+    termination: Termination,
+    notes: Vec<String>,
+}
+
+fn too_few(data: &Dataset, model: &dyn StrainEnergy) -> Option<Error> {
+    let (n, k) = (data.samples.len(), model.params().len());
+    (n < k).then(|| {
+        Error::settings(format!(
+            "{n} point{} cannot determine {k} parameters of {}",
+            if n == 1 { "" } else { "s" },
+            model.name()
+        ))
+        .with_hint("add data or choose a model with fewer parameters (neo-hookean has 1)")
+    })
+}
+
+fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Estimate> {
+    if let Some(e) = too_few(data, model) {
+        return Err(e);
+    }
+    let mut prob = HyperProblem::new(model, data, s.residual);
+    let (n, k) = (prob.len(), model.params().len());
+    if model.linear_in_params() {
+        let mut a = DMatrix::zeros(n, k);
+        prob.jacobian(&vec![0.0; k], &mut a);
+        let b = prob.scaled_targets();
+        if s.stable {
+            let grid = diagnostics::drucker_grid();
+            let mut g = DMatrix::zeros(grid.len(), k);
+            let mut e = vec![0.0; k];
+            for j in 0..k {
+                e.iter_mut().for_each(|v| *v = 0.0);
+                e[j] = 1.0;
+                for (i, &(m, l)) in grid.iter().enumerate() {
+                    g[(i, j)] = model.tangent(&e, m, l);
+                }
+            }
+            let qp = constrained_least_squares(&a, &b, &g).map_err(|e| {
+                Error::settings(format!("the stability-constrained fit failed: {e}"))
+            })?;
+            let mut notes = Vec::new();
+            if qp.active > 0 {
+                notes.push(format!(
+                    "--stable: {} stability constraint(s) active; the fit is stable by construction but worse than the unconstrained optimum",
+                    qp.active
+                ));
+            }
+            return Ok(Estimate {
+                params: qp.x.iter().copied().collect(),
+                method: "stability-constrained linear least squares (Clarabel QP)".into(),
+                starts: 1,
+                starts_at_best: 1,
+                iterations: qp.iterations as usize,
+                evaluations: 1,
+                termination: Termination::Converged("interior point"),
+                notes,
+            });
+        }
+        let (c, _) = svd_solve(&a, &b).ok_or_else(|| {
+            Error::settings("the data determine none of the model's parameters (all-zero design)")
+        })?;
+        return Ok(Estimate {
+            params: c.iter().copied().collect(),
+            method: "linear least squares (SVD)".into(),
+            starts: 1,
+            starts_at_best: 1,
+            iterations: 0,
+            evaluations: 1,
+            termination: Termination::Converged("exact"),
+            notes: Vec::new(),
+        });
+    }
+
+    // Nonlinear: variable projection over the nonlinear parameters, multi-start.
+    let max_x = prob.max_i1_minus_3();
+    let bounds = model.bounds(max_x);
+    let mut starts = model.nonlinear_starts(max_x);
+    if let Some(m) = s.max_starts {
+        starts.truncate(m);
+    }
+    let lm_settings = LmSettings {
+        max_iterations: s.max_iterations,
+        ftol: s.ftol,
+        ..LmSettings::default()
+    };
+    let nonlin: Vec<usize> = (0..k).filter(|&j| !model.params()[j].linear).collect();
+    let theta_bounds: Vec<(f64, f64)> = nonlin.iter().map(|&j| bounds[j]).collect();
+    let mut results = Vec::with_capacity(starts.len());
+    let mut iterations = 0;
+    for start in &starts {
+        let mut full = vec![1.0; k];
+        for (&j, &v) in nonlin.iter().zip(start) {
+            full[j] = v;
+        }
+        let mut vp = VarPro::new(&mut prob, &full);
+        let res = lm::minimize(&mut vp, start, &theta_bounds, &lm_settings);
+        iterations += res.iterations;
+        // Recompute the projected linear coefficients at the final θ.
+        let mut r = DVector::zeros(n);
+        let ok = vp.eval(&res.x, &mut r, None);
+        if ok && res.cost.is_finite() {
+            results.push((res.cost, vp.full.clone()));
+        }
+    }
+    if results.is_empty() {
+        return Ok(Estimate {
+            params: vec![f64::NAN; k],
+            method: "variable projection + bounded Levenberg-Marquardt".into(),
+            starts: starts.len(),
+            starts_at_best: 0,
+            iterations,
+            evaluations: prob.evaluations,
+            termination: Termination::Failed("no start gave a finite fit".into()),
+            notes: Vec::new(),
+        });
+    }
+    let mut notes = Vec::new();
+    let stable_ok = |p: &[f64]| diagnostics::drucker(model, p).iter().all(|d| d.stable);
+    let best_cost = results.iter().map(|r| r.0).fold(f64::INFINITY, f64::min);
+    let at_best = results
+        .iter()
+        .filter(|r| r.0 <= best_cost * (1.0 + 1e-6) + 1e-300)
+        .count();
+    let chosen = if s.stable {
+        let mut stable: Vec<&(f64, Vec<f64>)> =
+            results.iter().filter(|r| stable_ok(&r.1)).collect();
+        stable.sort_by(|a, b| a.0.total_cmp(&b.0));
+        match stable.first() {
+            Some(r) => {
+                if r.0 > best_cost * (1.0 + 1e-6) {
+                    notes.push(format!(
+                        "--stable: the best Drucker-stable start has cost {:.4e}, above the unconstrained best {:.4e}",
+                        r.0, best_cost
+                    ));
+                }
+                r.1.clone()
+            }
+            None => {
+                notes.push(
+                    "--stable: no start ended Drucker-stable; the best fit is reported".into(),
+                );
+                results
+                    .iter()
+                    .min_by(|a, b| a.0.total_cmp(&b.0))
+                    .expect("non-empty")
+                    .1
+                    .clone()
+            }
+        }
+    } else {
+        results
+            .iter()
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .expect("non-empty")
+            .1
+            .clone()
+    };
+    // Polish all parameters together from the chosen point.
+    let polish = lm::minimize(&mut prob, &chosen, &bounds, &lm_settings);
+    let params = if polish.cost.is_finite()
+        && polish.cost
+            <= 0.5
+                * {
+                    let mut r = DVector::zeros(n);
+                    prob.residuals(&chosen, &mut r);
+                    r.norm_squared()
+                }
+                * (1.0 + 1e-9)
+    {
+        polish.x.clone()
+    } else {
+        chosen
+    };
+    Ok(Estimate {
+        params,
+        method: "variable projection + bounded Levenberg-Marquardt, multi-start, full LM polish"
+            .into(),
+        starts: starts.len(),
+        starts_at_best: at_best,
+        iterations: iterations + polish.iterations,
+        evaluations: prob.evaluations,
+        termination: polish.termination,
+        notes,
+    })
+}
+
+/// Unweighted absolute-residual statistics: (rmse, r²).
+fn stats(pred: &[f64], y: &[f64]) -> (f64, f64) {
+    let n = y.len() as f64;
+    let mean = y.iter().sum::<f64>() / n;
+    let ss_res: f64 = pred.iter().zip(y).map(|(p, y)| (p - y).powi(2)).sum();
+    let ss_tot: f64 = y.iter().map(|y| (y - mean).powi(2)).sum();
+    (
+        (ss_res / n).sqrt(),
+        if ss_tot > 0.0 {
+            1.0 - ss_res / ss_tot
+        } else {
+            f64::NAN
+        },
+    )
+}
+
+/// Fit one model to the data.
+pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<HyperelasticFit> {
+    settings.check()?;
+    let model = spec.build()?;
+    let model = model.as_ref();
+    let t0 = Instant::now();
+    let est = estimate(model, data, settings)?;
+    let seconds = t0.elapsed().as_secs_f64();
+    let p = est.params.clone();
+    let mut prob = HyperProblem::new(model, data, settings.residual);
+    let (n, k) = (prob.len(), p.len());
+    let mut r = DVector::zeros(n);
+    let finite = prob.residuals(&p, &mut r);
+    let rss = r.norm_squared();
+    let mut jac = DMatrix::zeros(n, k);
+    prob.jacobian(&p, &mut jac);
+    let unc = diagnostics::uncertainty(&jac, rss);
+    let pred: Vec<f64> = data
+        .samples
+        .iter()
+        .map(|s| model.nominal_stress(&p, s.mode, s.stretch))
+        .collect();
+    let y: Vec<f64> = data.samples.iter().map(|s| s.stress).collect();
+    let (rmse, r2) = stats(&pred, &y);
+    let (aicc, bic) = diagnostics::information_criteria(rss, n, k);
+    let mut warnings = est.notes.clone();
+    let mut status = Status::Ok;
+    let mut escalate = |s: Status| {
+        if status == Status::Ok || (status == Status::Warning && s != Status::Warning) {
+            status = s;
+        }
+    };
+
+    // Per-mode statistics and fitted ranges.
+    let per_mode: Vec<ModeStats> = data
+        .modes()
+        .into_iter()
+        .map(|m| {
+            let idx: Vec<usize> = (0..n).filter(|&i| data.samples[i].mode == m).collect();
+            let pm: Vec<f64> = idx.iter().map(|&i| pred[i]).collect();
+            let ym: Vec<f64> = idx.iter().map(|&i| y[i]).collect();
+            let (rm, r2m) = stats(&pm, &ym);
+            let (lo, hi) = data.stretch_range(m).expect("mode present");
+            ModeStats {
+                mode: m,
+                points: idx.len(),
+                stretch_min: lo,
+                stretch_max: hi,
+                rmse_pa: rm,
+                r2: r2m,
+            }
+        })
+        .collect();
+
+    // Convergence.
+    match &est.termination {
+        Termination::Converged(_) => {}
+        Termination::MaxIterations => {
+            escalate(Status::NotConverged);
+            warnings.push(format!(
+                "the search stopped at the iteration limit ({}) without converging",
+                settings.max_iterations
+            ));
+        }
+        Termination::Failed(why) => {
+            escalate(Status::NotConverged);
+            warnings.push(format!("the search failed: {why}"));
+        }
+    }
+    if !finite {
+        escalate(Status::NotConverged);
+        warnings.push("the model gives no finite stress at some data points".into());
+    }
+
+    // Identifiability.
+    let params_info = model.params();
+    if unc.std_error.iter().any(Option::is_none) && n > k {
+        escalate(Status::IllPosed);
+        warnings.push(format!(
+            "parameters not identifiable from these data (condition number {:.2e}); fewer parameters or more modes are needed",
+            unc.condition
+        ));
+    } else if unc.condition > 1e6 {
+        escalate(Status::Warning);
+        warnings.push(format!(
+            "ill-conditioned: condition number {:.2e}; the parameters are poorly determined individually",
+            unc.condition
+        ));
+    }
+    if n <= k {
+        escalate(Status::IllPosed);
+        warnings.push(format!(
+            "{n} points for {k} parameters: no degrees of freedom left for uncertainty"
+        ));
+    }
+    for a in 0..k {
+        for b in a + 1..k {
+            if let Some(c) = unc.correlation[a][b] {
+                if c.abs() > 0.99 {
+                    escalate(Status::Warning);
+                    warnings.push(format!(
+                        "{} and {} are correlated ({c:+.4}): the data pin down a combination, not each",
+                        params_info[a].name, params_info[b].name
+                    ));
+                }
+            }
+        }
+    }
+    let bounds = model.bounds(prob.max_i1_minus_3());
+    for (j, info) in params_info.iter().enumerate() {
+        if info.linear {
+            continue;
+        }
+        let (lo, hi) = bounds[j];
+        let span = (hi - lo).abs();
+        if span.is_finite() && ((p[j] - lo).abs() < 1e-6 * span || (hi - p[j]).abs() < 1e-6 * span)
+        {
+            escalate(Status::IllPosed);
+            warnings.push(format!(
+                "{} ran to its bound ({:.4}): the data do not determine it (ill-posed)",
+                info.name, p[j]
+            ));
+        }
+    }
+    // Vanishing terms: a linear coefficient whose contribution is negligible.
+    if k > 1 {
+        let mut row = vec![0.0; k];
+        let ymax = y.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        for (j, info) in params_info.iter().enumerate() {
+            if !info.linear || !model.name().starts_with("ogden") {
+                continue;
+            }
+            let contrib = data
+                .samples
+                .iter()
+                .map(|s| {
+                    model.stress_jacobian(&p, s.mode, s.stretch, &mut row);
+                    (row[j] * p[j]).abs()
+                })
+                .fold(0.0, f64::max);
+            if contrib < 1e-3 * ymax {
+                escalate(Status::IllPosed);
+                warnings.push(format!(
+                    "{} is negligible (its term contributes < 0.1 % of the largest stress): a term too many for these data",
+                    info.name
+                ));
+            }
+        }
+    }
+
+    // Drucker stability.
+    let drucker = diagnostics::drucker(model, &p);
+    for d in &drucker {
+        if d.stable {
+            continue;
+        }
+        let in_data = per_mode.iter().find(|s| s.mode == d.mode).is_some_and(|s| {
+            d.unstable
+                .iter()
+                .any(|[a, b]| *a <= s.stretch_max && *b >= s.stretch_min)
+        });
+        let ranges: Vec<String> = d
+            .unstable
+            .iter()
+            .map(|[a, b]| format!("{a:.3}–{b:.3}"))
+            .collect();
+        if in_data {
+            escalate(Status::Unstable);
+            warnings.push(format!(
+                "Drucker-unstable in {} within the data's stretch range (dP/dλ ≤ 0 at {})",
+                d.mode,
+                ranges.join(", ")
+            ));
+        } else {
+            escalate(Status::Warning);
+            warnings.push(format!(
+                "Drucker-unstable in {} at stretch {} (outside the data; checked {}–{}); stable for {:.3}–{:.3}",
+                d.mode,
+                ranges.join(", "),
+                DRUCKER_RANGE.0,
+                DRUCKER_RANGE.1,
+                d.stretch_min,
+                d.stretch_max
+            ));
+        }
+    }
+
+    // Extrapolation to modes without data.
+    let lam_max = data.samples.iter().map(|s| s.stretch).fold(1.0, f64::max);
+    let mut extrapolation = Vec::new();
+    for m in Mode::ALL {
+        if per_mode.iter().any(|s| s.mode == m) {
+            continue;
+        }
+        let top = if m == Mode::Equibiaxial {
+            lam_max.min(4.0)
+        } else {
+            lam_max
+        };
+        for i in 1..=4 {
+            let l = 1.0 + (top - 1.0) * i as f64 / 4.0;
+            extrapolation.push(Extrapolation {
+                mode: m,
+                stretch: l,
+                stress_pa: model.nominal_stress(&p, m, l),
+                other_models_pa: None,
+            });
+        }
+        if m == Mode::Equibiaxial {
+            escalate(Status::Warning);
+            let e = extrapolation.iter().rfind(|e| e.mode == m);
+            warnings.push(format!(
+                "no equibiaxial data: equibiaxial stress (the state of a compressed stack layer) is extrapolated{}",
+                e.map(|e| format!(" — the model predicts {:.4} MPa at λ = {:.2}", e.stress_pa / 1e6, e.stretch))
+                    .unwrap_or_default()
+            ));
+        }
+    }
+
+    let parameters = params_info
+        .iter()
+        .zip(&p)
+        .zip(&unc.std_error)
+        .map(|((info, &v), se)| Parameter {
+            name: info.name.clone(),
+            value: v,
+            unit: info.unit.to_string(),
+            std_error: *se,
+            ci95: se.zip(unc.t95).map(|(s, t)| [v - t * s, v + t * s]),
+        })
+        .collect();
+    let termination = match &est.termination {
+        Termination::Converged(w) => format!("converged ({w})"),
+        Termination::MaxIterations => "iteration limit".into(),
+        Termination::Failed(w) => format!("failed: {w}"),
+    };
+    Ok(HyperelasticFit {
+        schema: SCHEMA.into(),
+        tool_version: env!("CARGO_PKG_VERSION").into(),
+        model: model.name(),
+        form: spec.build().ok().and(spec.form),
+        parameters,
+        initial_shear_modulus_pa: model.initial_shear_modulus(&p),
+        rmse_pa: rmse,
+        r2,
+        rmse_pct: diagnostics::rmse_percent(rmse, &y),
+        aicc,
+        bic,
+        residual: settings.residual,
+        points: n,
+        per_mode,
+        drucker,
+        correlation: unc.correlation,
+        condition_number: unc.condition.is_finite().then_some(unc.condition),
+        extrapolation,
+        status,
+        warnings,
+        solver: SolverReport {
+            method: est.method,
+            starts: est.starts,
+            starts_at_best: est.starts_at_best,
+            iterations: est.iterations,
+            evaluations: est.evaluations,
+            seconds,
+            termination,
+        },
+        selection: None,
+        provenance: Provenance {
+            files: data.sources.clone(),
+            settings: serde_json::to_value(settings).unwrap_or_default(),
+        },
+    })
+}
+
+/// The rule `auto` applies.
+pub const AUTO_RULE: &str = "among models that converged, are identifiable and are Drucker-stable over the data, take the fewest parameters within ΔAICc ≤ 2 of the smallest AICc (BIC where AICc is undefined)";
+
+/// ΔAICc below which models count as fitting the data about equally well when their
+/// extrapolations are compared (Burnham & Anderson: ΔAIC > 10 means essentially no support).
+pub const EQUALLY_GOOD: f64 = 10.0;
+
+/// Fit every model (in parallel) and choose the simplest the data support.
+/// Returns the chosen fit (with its `selection`) and all fits.
+pub fn fit_auto(
+    data: &Dataset,
+    settings: &Settings,
+) -> Result<(HyperelasticFit, Vec<HyperelasticFit>)> {
+    settings.check()?;
+    let n = data.samples.len();
+    let specs: Vec<ModelSpec> = MODEL_NAMES
+        .iter()
+        .map(|m| ModelSpec::new(m, settings.ogden_form))
+        .collect();
+    let fits: Vec<HyperelasticFit> = specs
+        .par_iter()
+        .filter(|s| s.build().map(|m| m.params().len() < n).unwrap_or(false))
+        .map(|s| fit(data, s, settings))
+        .collect::<Result<Vec<_>>>()?;
+    if fits.is_empty() {
+        return Err(Error::settings(format!(
+            "{n} point(s) are too few for any model"
+        )));
+    }
+    let score = |f: &HyperelasticFit| f.aicc.unwrap_or(f.bic);
+    let best = fits.iter().map(score).fold(f64::INFINITY, f64::min);
+    let eligible: Vec<&HyperelasticFit> = fits.iter().filter(|f| !f.status.is_blocking()).collect();
+    let pool: Vec<&HyperelasticFit> = if eligible.is_empty() {
+        fits.iter().collect()
+    } else {
+        eligible
+    };
+    let best_eligible = pool.iter().map(|f| score(f)).fold(f64::INFINITY, f64::min);
+    let chosen = pool
+        .iter()
+        .filter(|f| score(f) <= best_eligible + 2.0)
+        .min_by(|a, b| {
+            a.parameters
+                .len()
+                .cmp(&b.parameters.len())
+                .then(score(a).total_cmp(&score(b)))
+        })
+        .expect("pool is non-empty");
+    let best_fit = fits
+        .iter()
+        .min_by(|a, b| score(a).total_cmp(&score(b)))
+        .expect("non-empty");
+    let reason = if chosen.model == best_fit.model {
+        format!(
+            "{} has the smallest AICc and no simpler model is within 2 of it",
+            chosen.model
+        )
+    } else {
+        format!(
+            "{} ({} parameters) is within ΔAICc = {:.2} of the best ({}, {} parameters{}); the extra parameters are not supported by the data",
+            chosen.model,
+            chosen.parameters.len(),
+            score(chosen) - best,
+            best_fit.model,
+            best_fit.parameters.len(),
+            if best_fit.status.is_blocking() { ", but not eligible: see its status" } else { "" }
+        )
+    };
+    let candidates = fits
+        .iter()
+        .map(|f| Candidate {
+            model: f.model.clone(),
+            k: f.parameters.len(),
+            rmse_pa: f.rmse_pa,
+            r2: f.r2,
+            aicc: f.aicc,
+            bic: f.bic,
+            delta_aicc: f.aicc.map(|a| a - best),
+            status: f.status,
+        })
+        .collect();
+    let mut out = (*chosen).clone();
+    // Spread of the other models' predictions where the data say nothing.
+    for e in &mut out.extrapolation {
+        let preds: Vec<f64> = fits
+            .iter()
+            .filter(|f| !f.status.is_blocking() && score(f) <= best + EQUALLY_GOOD)
+            .filter_map(|f| {
+                f.evaluator()
+                    .ok()
+                    .map(|m| m.nominal_stress(&f.values(), e.mode, e.stretch))
+            })
+            .filter(|v| v.is_finite())
+            .collect();
+        if !preds.is_empty() {
+            e.other_models_pa = Some([
+                preds.iter().copied().fold(f64::INFINITY, f64::min),
+                preds.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            ]);
+        }
+    }
+    if let Some(e) = out
+        .extrapolation
+        .iter()
+        .rfind(|e| e.mode == Mode::Equibiaxial)
+    {
+        if let Some([lo, hi]) = e.other_models_pa {
+            out.warnings.push(format!(
+                "the models that fit these data equally well disagree in equibiaxial: {:.4}–{:.4} MPa at λ = {:.2}",
+                lo / 1e6,
+                hi / 1e6,
+                e.stretch
+            ));
+        }
+    }
+    out.selection = Some(Selection {
+        rule: AUTO_RULE.into(),
+        reason,
+        candidates,
+    });
+    Ok((out, fits))
+}

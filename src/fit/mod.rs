@@ -1,0 +1,72 @@
+//! Estimation: least-squares machinery shared by every estimator, and the
+//! estimators themselves.
+
+pub mod diagnostics;
+pub mod hyperelastic;
+pub mod linear;
+pub mod lm;
+pub mod problem;
+
+use serde::{Deserialize, Serialize};
+
+/// One fitted parameter, in SI.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Parameter {
+    /// Name (`mu`, `C10`, `alpha1`, ...).
+    pub name: String,
+    /// Value (SI).
+    pub value: f64,
+    /// Unit (`Pa`, `1`, ...).
+    pub unit: String,
+    /// Standard error (None if not identifiable from the data).
+    pub std_error: Option<f64>,
+    /// 95 % confidence interval (Student t on n − k degrees of freedom).
+    pub ci95: Option<[f64; 2]>,
+}
+
+/// Outcome of a fit as a whole. `Err` is kept for unusable input; everything else,
+/// including a fit that should not be trusted, is a status.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Status {
+    /// Converged, identifiable, stable over the data: nothing to report.
+    Ok,
+    /// Usable, with warnings worth reading.
+    Warning,
+    /// Parameters not identifiable from the data (exponents at bounds, vanishing
+    /// terms, singular information matrix).
+    IllPosed,
+    /// Drucker-unstable within the stretch range of the data.
+    Unstable,
+    /// The search did not converge.
+    NotConverged,
+}
+
+impl Status {
+    /// Statuses that `--strict` turns into exit status 1.
+    pub fn is_blocking(self) -> bool {
+        matches!(
+            self,
+            Status::IllPosed | Status::Unstable | Status::NotConverged
+        )
+    }
+}
+
+/// What the solver did.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SolverReport {
+    /// Method used.
+    pub method: String,
+    /// Number of starts of the multi-start search (1 for exact solvers).
+    pub starts: usize,
+    /// Starts whose search ended at the best objective (within 1e-6 relative).
+    pub starts_at_best: usize,
+    /// Iterations (summed over starts).
+    pub iterations: usize,
+    /// Residual evaluations (summed over starts).
+    pub evaluations: usize,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+    /// Why the final search stopped.
+    pub termination: String,
+}

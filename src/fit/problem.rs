@@ -1,0 +1,244 @@
+//! The hyperelastic least-squares problem: scaled residuals r_i = s_i·(P(λ_i; p) − y_i)
+//! and their Jacobian, plus the variable-projection form that solves the linear
+//! coefficients exactly inside the search over the nonlinear ones.
+
+use super::lm::LeastSquares;
+use crate::data::Dataset;
+use crate::material::hyperelastic::{Mode, StrainEnergy};
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+/// How residuals are measured.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Residual {
+    /// Absolute stress error in Pa (default): load-cell noise is absolute, and
+    /// relative errors blow up rounding noise at the near-zero stresses by λ = 1.
+    #[default]
+    Abs,
+    /// Error relative to the measured stress, with a floor of 1 % of the mode's
+    /// largest |stress| so that points at λ = 1 (P = 0) stay finite.
+    Rel,
+}
+
+/// Residual floor of relative residuals, as a fraction of the mode's largest |stress|.
+pub const REL_FLOOR: f64 = 0.01;
+
+/// Data of a fit, flattened for fast evaluation.
+pub struct HyperProblem<'a> {
+    /// The model.
+    pub model: &'a dyn StrainEnergy,
+    /// Mode of each point.
+    pub modes: Vec<Mode>,
+    /// Stretch of each point.
+    pub stretch: Vec<f64>,
+    /// Measured nominal stress (Pa).
+    pub stress: Vec<f64>,
+    /// Residual multiplier s_i (√weight / scale).
+    pub scale: Vec<f64>,
+    /// Evaluation count.
+    pub evaluations: usize,
+    row: Vec<f64>,
+}
+
+impl<'a> HyperProblem<'a> {
+    /// Build from a dataset.
+    pub fn new(model: &'a dyn StrainEnergy, data: &Dataset, residual: Residual) -> Self {
+        let s = &data.samples;
+        let max_abs = |m: Mode| {
+            s.iter()
+                .filter(|x| x.mode == m)
+                .map(|x| x.stress.abs())
+                .fold(0.0, f64::max)
+        };
+        let scale = s
+            .iter()
+            .map(|x| match residual {
+                Residual::Abs => x.weight.sqrt(),
+                Residual::Rel => {
+                    let floor = (REL_FLOOR * max_abs(x.mode)).max(f64::MIN_POSITIVE);
+                    x.weight.sqrt() / x.stress.abs().max(floor)
+                }
+            })
+            .collect();
+        HyperProblem {
+            model,
+            modes: s.iter().map(|x| x.mode).collect(),
+            stretch: s.iter().map(|x| x.stretch).collect(),
+            stress: s.iter().map(|x| x.stress).collect(),
+            scale,
+            evaluations: 0,
+            row: vec![0.0; model.params().len()],
+        }
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.stretch.len()
+    }
+
+    /// True if there are no points.
+    pub fn is_empty(&self) -> bool {
+        self.stretch.is_empty()
+    }
+
+    /// Largest I1 − 3 over the data (the Gent limit must exceed it).
+    pub fn max_i1_minus_3(&self) -> f64 {
+        self.modes
+            .iter()
+            .zip(&self.stretch)
+            .map(|(m, &l)| m.kinematics(l).invariants().0 - 3.0)
+            .fold(0.0, f64::max)
+    }
+
+    /// Scaled Jacobian ∂r/∂p into `jac` (n × k).
+    pub fn jacobian(&mut self, p: &[f64], jac: &mut DMatrix<f64>) {
+        for i in 0..self.len() {
+            self.model
+                .stress_jacobian(p, self.modes[i], self.stretch[i], &mut self.row);
+            for (k, v) in self.row.iter().enumerate() {
+                jac[(i, k)] = self.scale[i] * v;
+            }
+        }
+    }
+
+    /// Scaled residuals; false if any is not finite.
+    pub fn residuals(&self, p: &[f64], r: &mut DVector<f64>) -> bool {
+        let mut ok = true;
+        for i in 0..self.len() {
+            let v = self.scale[i]
+                * (self.model.nominal_stress(p, self.modes[i], self.stretch[i]) - self.stress[i]);
+            ok &= v.is_finite();
+            r[i] = v;
+        }
+        ok
+    }
+
+    /// Scaled measured stresses s_i·y_i.
+    pub fn scaled_targets(&self) -> DVector<f64> {
+        DVector::from_iterator(
+            self.len(),
+            self.stress.iter().zip(&self.scale).map(|(y, s)| y * s),
+        )
+    }
+}
+
+impl LeastSquares for HyperProblem<'_> {
+    fn dims(&self) -> (usize, usize) {
+        (self.len(), self.model.params().len())
+    }
+    fn eval(&mut self, p: &[f64], r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>) -> bool {
+        self.evaluations += 1;
+        if !self.residuals(p, r) {
+            return false;
+        }
+        if let Some(j) = jac {
+            self.jacobian(p, j);
+            return j.iter().all(|v| v.is_finite());
+        }
+        true
+    }
+}
+
+/// Solve min ‖A·c − b‖ by SVD with a relative rank tolerance; returns (c, U_r) where
+/// U_r spans the range of A (for the orthogonal projector), or `None` if A is empty
+/// of rank.
+pub fn svd_solve(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<(DVector<f64>, DMatrix<f64>)> {
+    let svd = a.clone().svd(true, true);
+    let smax = svd.singular_values.max();
+    if !(smax > 0.0) || !smax.is_finite() {
+        return None;
+    }
+    let tol = smax * 1e-13 * (a.nrows().max(a.ncols()) as f64);
+    let u = svd.u.as_ref()?;
+    let vt = svd.v_t.as_ref()?;
+    let rank = svd.singular_values.iter().filter(|&&s| s > tol).count();
+    let mut c = DVector::zeros(a.ncols());
+    for k in 0..rank {
+        let coef = u.column(k).dot(b) / svd.singular_values[k];
+        c += vt.row(k).transpose() * coef;
+    }
+    Some((c, u.columns(0, rank).into_owned()))
+}
+
+/// Variable projection (Golub-Pereyra with Kaufman's Jacobian): the search runs over
+/// the nonlinear parameters θ only; for each θ the linear coefficients c are the exact
+/// least-squares solution, r(θ) = A(θ)c(θ) − b, and ∂r/∂θ ≈ P⊥·(∂A/∂θ)c.
+pub struct VarPro<'p, 'a> {
+    /// The full problem.
+    pub inner: &'p mut HyperProblem<'a>,
+    lin: Vec<usize>,
+    nonlin: Vec<usize>,
+    /// Full parameter vector of the last evaluation.
+    pub full: Vec<f64>,
+    jfull: DMatrix<f64>,
+    b: DVector<f64>,
+}
+
+impl<'p, 'a> VarPro<'p, 'a> {
+    /// Wrap a problem; `start` supplies values for all parameters (linear ones are
+    /// overwritten by the projection).
+    pub fn new(inner: &'p mut HyperProblem<'a>, start: &[f64]) -> Self {
+        let params = inner.model.params();
+        let lin = (0..params.len()).filter(|&k| params[k].linear).collect();
+        let nonlin = (0..params.len()).filter(|&k| !params[k].linear).collect();
+        let jfull = DMatrix::zeros(inner.len(), params.len());
+        let b = inner.scaled_targets();
+        VarPro {
+            inner,
+            lin,
+            nonlin,
+            full: start.to_vec(),
+            jfull,
+            b,
+        }
+    }
+
+    /// Indices of the nonlinear parameters.
+    pub fn nonlinear(&self) -> &[usize] {
+        &self.nonlin
+    }
+}
+
+impl LeastSquares for VarPro<'_, '_> {
+    fn dims(&self) -> (usize, usize) {
+        (self.inner.len(), self.nonlin.len())
+    }
+    fn eval(
+        &mut self,
+        theta: &[f64],
+        r: &mut DVector<f64>,
+        jac: Option<&mut DMatrix<f64>>,
+    ) -> bool {
+        self.inner.evaluations += 1;
+        for (&k, &t) in self.nonlin.iter().zip(theta) {
+            self.full[k] = t;
+        }
+        self.inner.jacobian(&self.full, &mut self.jfull);
+        let a = self.jfull.select_columns(&self.lin);
+        if !a.iter().all(|v| v.is_finite()) {
+            return false;
+        }
+        let Some((c, u)) = svd_solve(&a, &self.b) else {
+            return false;
+        };
+        for (&k, &v) in self.lin.iter().zip(c.iter()) {
+            self.full[k] = v;
+        }
+        let fit = &a * &c;
+        for i in 0..r.len() {
+            r[i] = fit[i] - self.b[i];
+        }
+        if !r.iter().all(|v| v.is_finite()) {
+            return false;
+        }
+        if let Some(j) = jac {
+            self.inner.jacobian(&self.full, &mut self.jfull);
+            let n = self.jfull.select_columns(&self.nonlin);
+            let proj = &n - &u * (u.transpose() * &n);
+            j.copy_from(&proj);
+            return j.iter().all(|v| v.is_finite());
+        }
+        true
+    }
+}

@@ -1,0 +1,358 @@
+//! Tensile-test files (uniaxial, equibiaxial, planar) → [`Dataset`] in SI.
+//!
+//! Header columns are `name_unit` (also `name [unit]` or `name (unit)`):
+//! one kinematic column (`stretch`, `strain`, `strain_pct`, or `displacement_<length>`
+//! with a gauge length), one stress column (`nominal_stress_<stress>`,
+//! `true_stress_<stress>` converted with incompressibility σ = P·λ, or `force_<force>`
+//! with a reference area), and optionally `weight`, `mode` and `time_<time>` (ignored).
+//! The mode comes from a `mode` column, a `# mode: …` comment, or the caller.
+
+use super::table::Table;
+use crate::data::{Dataset, Sample, Source};
+use crate::error::{Error, Location, Result};
+use crate::material::hyperelastic::Mode;
+use crate::units::Dimension;
+use std::path::Path;
+
+/// How to read a tensile file.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct TensileOptions {
+    /// Reference cross-section (m²) for force columns.
+    pub area: Option<f64>,
+    /// Gauge length (m) for displacement columns.
+    pub gauge_length: Option<f64>,
+    /// Mode the caller requires (`--equibiaxial FILE`), or `None` for "uniaxial unless
+    /// the file says otherwise".
+    pub mode: Option<Mode>,
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Kin {
+    Stretch,
+    Strain(f64),
+    Displacement(f64),
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Stress {
+    Nominal(f64),
+    True(f64),
+    Force(f64),
+}
+
+const ACCEPTED: &str = "stretch, strain, strain_pct, displacement_mm, nominal_stress_Pa|kPa|MPa, true_stress_Pa|kPa|MPa, force_N, weight, mode, time_s";
+
+/// Split a header like `nominal_stress_kPa`, `nominal_stress [kPa]` or `stress (MPa)`
+/// into a lower-case name and a unit.
+fn split_header(h: &str) -> (String, Option<String>) {
+    let h = h.trim();
+    if let Some(open) = h.find(['[', '(']) {
+        let name = h[..open].trim().trim_end_matches('_');
+        let unit = h[open + 1..].trim_end_matches([']', ')']).trim();
+        return (
+            name.to_ascii_lowercase().replace(' ', "_"),
+            Some(unit.to_string()),
+        );
+    }
+    let lower = h.to_ascii_lowercase();
+    for prefix in [
+        "nominal_stress",
+        "true_stress",
+        "force",
+        "displacement",
+        "time",
+    ] {
+        if let Some(rest) = lower.strip_prefix(prefix) {
+            let unit = rest
+                .strip_prefix('_')
+                .map(|_| h[prefix.len() + 1..].to_string());
+            return (prefix.to_string(), unit.filter(|u| !u.is_empty()));
+        }
+    }
+    (lower.replace(' ', "_"), None)
+}
+
+fn unit_factor(
+    table: &Table,
+    col: usize,
+    header: &str,
+    unit: Option<String>,
+    dim: Dimension,
+) -> Result<f64> {
+    let loc = Location::at(&table.path, table.header_line, col + 1);
+    let Some(unit) = unit else {
+        return Err(Error::input(loc, format!("column '{header}' has no unit"))
+            .with_hint(format!("write it as e.g. '{header}_{}'", dim.units()[0].0)));
+    };
+    dim.factor(&unit).ok_or_else(|| {
+        Error::input(loc, format!("unknown unit '{unit}' in column '{header}'"))
+            .with_hint(format!("expected one of {}", dim.accepted()))
+    })
+}
+
+/// Read one tensile-test file.
+pub fn read(path: &Path, opts: &TensileOptions) -> Result<Dataset> {
+    let table = Table::read(path)?;
+    from_table(&table, opts)
+}
+
+/// Interpret a parsed table as tensile data.
+pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
+    let path = &table.path;
+    let hloc = |c: usize| Location::at(path, table.header_line, c + 1);
+    let mut kin: Option<(usize, Kin)> = None;
+    let mut stress: Option<(usize, Stress)> = None;
+    let mut weight_col = None;
+    let mut mode_col = None;
+    let mut conversions = Vec::new();
+    for (c, h) in table.header.iter().enumerate() {
+        let (name, unit) = split_header(h);
+        let k = match name.as_str() {
+            "stretch" | "lambda" => Some(Kin::Stretch),
+            "strain" => Some(Kin::Strain(match unit.as_deref() {
+                None | Some("-") | Some("1") => 1.0,
+                Some("%") | Some("pct") => 0.01,
+                Some(u) => {
+                    return Err(Error::input(
+                        hloc(c),
+                        format!("unknown unit '{u}' in column '{h}'"),
+                    )
+                    .with_hint("strain is a fraction ('strain') or a percentage ('strain_pct')"))
+                }
+            })),
+            "strain_pct" | "strain_percent" => Some(Kin::Strain(0.01)),
+            "displacement" => {
+                let f = unit_factor(table, c, h, unit.clone(), Dimension::Length)?;
+                let l0 = opts.gauge_length.ok_or_else(|| {
+                    Error::input(
+                        hloc(c),
+                        format!("column '{h}' needs the gauge length to give a stretch"),
+                    )
+                    .with_hint("pass --gauge-length, e.g. --gauge-length 80mm")
+                })?;
+                conversions.push(format!("stretch = 1 + displacement / {l0} m"));
+                Some(Kin::Displacement(f / l0))
+            }
+            _ => None,
+        };
+        if let Some(k) = k {
+            if let Some((c0, _)) = kin {
+                return Err(Error::input(
+                    hloc(c),
+                    format!(
+                        "a second deformation column '{h}' (column {} is '{}')",
+                        c0 + 1,
+                        table.header[c0]
+                    ),
+                )
+                .with_hint("keep one of stretch, strain, strain_pct, displacement"));
+            }
+            kin = Some((c, k));
+            continue;
+        }
+        let s = match name.as_str() {
+            "nominal_stress" | "engineering_stress" => Some(Stress::Nominal(unit_factor(
+                table,
+                c,
+                h,
+                unit.clone(),
+                Dimension::Stress,
+            )?)),
+            "true_stress" | "cauchy_stress" => {
+                conversions.push("nominal stress = true stress / stretch (incompressible)".into());
+                Some(Stress::True(unit_factor(
+                    table,
+                    c,
+                    h,
+                    unit.clone(),
+                    Dimension::Stress,
+                )?))
+            }
+            "force" => {
+                let f = unit_factor(table, c, h, unit.clone(), Dimension::Force)?;
+                let a = opts.area.ok_or_else(|| {
+                    Error::input(
+                        hloc(c),
+                        format!("column '{h}' needs the reference cross-section to give a stress"),
+                    )
+                    .with_hint("pass --area, e.g. --area 22mm2")
+                })?;
+                conversions.push(format!("nominal stress = force / {a} m²"));
+                Some(Stress::Force(f / a))
+            }
+            _ => None,
+        };
+        if let Some(s) = s {
+            if let Some((c0, _)) = stress {
+                return Err(Error::input(
+                    hloc(c),
+                    format!(
+                        "a second stress column '{h}' (column {} is '{}')",
+                        c0 + 1,
+                        table.header[c0]
+                    ),
+                )
+                .with_hint("keep one of nominal_stress, true_stress, force"));
+            }
+            stress = Some((c, s));
+            continue;
+        }
+        match name.as_str() {
+            "weight" => weight_col = Some(c),
+            "mode" => mode_col = Some(c),
+            "time" => {
+                unit_factor(table, c, h, unit, Dimension::Time)?;
+            }
+            _ if h.trim().is_empty() => {
+                return Err(Error::input(hloc(c), "empty column name in the header")
+                    .with_hint(format!("name every column; accepted: {ACCEPTED}")))
+            }
+            _ if h.trim().parse::<f64>().is_ok() => {
+                return Err(Error::input(
+                    hloc(c),
+                    format!("expected a header naming each column, found the number '{h}'"),
+                )
+                .with_hint("add a first line such as stretch,nominal_stress_MPa"))
+            }
+            _ => {
+                return Err(Error::input(hloc(c), format!("unknown column '{h}'"))
+                    .with_hint(format!("accepted columns: {ACCEPTED}")))
+            }
+        }
+    }
+    let (kc, kin) = kin.ok_or_else(|| {
+        Error::input(Location::line(path, table.header_line), "no stretch column")
+            .with_hint("name one column stretch, strain, strain_pct or displacement_mm")
+    })?;
+    let (sc, stress) = stress.ok_or_else(|| {
+        Error::input(Location::line(path, table.header_line), "no stress column")
+            .with_hint("name one column nominal_stress_<Pa|kPa|MPa>, true_stress_<unit> or force_N")
+    })?;
+
+    // The file's own mode statement (a comment), checked against the caller's.
+    let mut file_mode = None;
+    for (line, key, value) in &table.directives {
+        if key == "mode" {
+            let m = Mode::parse(value).ok_or_else(|| {
+                Error::input(
+                    Location::line(path, *line),
+                    format!("unknown mode '{value}'"),
+                )
+                .with_hint("use uniaxial, equibiaxial or planar")
+            })?;
+            file_mode = Some((m, *line));
+        }
+    }
+    let default_mode = match (opts.mode, file_mode) {
+        (Some(want), Some((m, line))) if want != m => {
+            return Err(Error::input(
+                Location::line(path, line),
+                format!("the file says mode {m} but it was given as {want} data"),
+            )
+            .with_hint("pass it with the flag of its mode, or correct the comment"))
+        }
+        (Some(want), _) => want,
+        (None, Some((m, _))) => m,
+        (None, None) => Mode::Uniaxial,
+    };
+
+    let mut samples = Vec::with_capacity(table.rows.len());
+    for row in &table.rows {
+        let x = table.number(row, kc, &format!("'{}'", table.header[kc]))?;
+        let lam = match kin {
+            Kin::Stretch => x,
+            Kin::Strain(f) => 1.0 + x * f,
+            Kin::Displacement(f) => 1.0 + x * f,
+        };
+        if lam <= 0.0 {
+            return Err(Error::input(
+                table.loc(row, kc),
+                format!(
+                    "stretch must be > 0, found {lam} (from '{}')",
+                    row.fields[kc]
+                ),
+            )
+            .with_hint(match kin {
+                Kin::Stretch => "is this column a strain? name it 'strain' or 'strain_pct'",
+                _ => "a strain of -1 or less means the coupon has zero length",
+            }));
+        }
+        let y = table.number(row, sc, &format!("'{}'", table.header[sc]))?;
+        let p = match stress {
+            Stress::Nominal(f) => y * f,
+            Stress::True(f) => y * f / lam,
+            Stress::Force(f) => y * f,
+        };
+        let weight = match weight_col {
+            Some(c) => {
+                let w = table.number(row, c, "'weight'")?;
+                if w <= 0.0 {
+                    return Err(Error::input(
+                        table.loc(row, c),
+                        format!("weight must be > 0, found {w}"),
+                    )
+                    .with_hint("drop the point instead of giving it weight 0"));
+                }
+                w
+            }
+            None => 1.0,
+        };
+        let mode = match mode_col {
+            Some(c) => {
+                let m = Mode::parse(&row.fields[c]).ok_or_else(|| {
+                    Error::input(
+                        table.loc(row, c),
+                        format!("unknown mode '{}'", row.fields[c]),
+                    )
+                    .with_hint("use uniaxial, equibiaxial or planar")
+                })?;
+                if let Some(want) = opts.mode.filter(|w| *w != m) {
+                    return Err(Error::input(
+                        table.loc(row, c),
+                        format!("mode {m} in a file given as {want} data"),
+                    ));
+                }
+                m
+            }
+            None => default_mode,
+        };
+        if matches!(mode, Mode::Equibiaxial | Mode::Planar) && lam < 1.0 {
+            return Err(Error::input(
+                table.loc(row, kc),
+                format!("{mode} tests stretch the coupon: stretch must be ≥ 1, found {lam}"),
+            )
+            .with_hint(
+                "compression of a layer is uniaxial compression (stretch < 1 in a uniaxial file)",
+            ));
+        }
+        samples.push(Sample {
+            mode,
+            stretch: lam,
+            stress: p,
+            weight,
+            source: 0,
+            line: row.line,
+        });
+    }
+    let mut modes: Vec<Mode> = samples.iter().map(|s| s.mode).collect();
+    modes.sort();
+    modes.dedup();
+    let (lo, hi) = samples
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| {
+            (a.min(s.stretch), b.max(s.stretch))
+        });
+    Ok(Dataset {
+        samples,
+        sources: vec![Source {
+            path: path.display().to_string(),
+            sha256: table.sha256.clone(),
+            modes,
+            points: table.rows.len(),
+            stretch_min: lo,
+            stretch_max: hi,
+            columns: table.header.clone(),
+            conversions,
+        }],
+    })
+}

@@ -1,0 +1,104 @@
+//! Gent (1996): W = −(μ·Jm/2)·ln(1 − (I1 − 3)/Jm), with the limiting chain
+//! extensibility Jm > I1 − 3. μ0 = μ; Neo-Hookean is the limit Jm → ∞.
+//! Linear in μ for fixed Jm.
+
+use super::loadcase::{InvariantDerivs, Mode};
+use super::{ParamInfo, StrainEnergy};
+
+/// The Gent model, parameters `mu` (Pa) and `Jm` (dimensionless).
+#[derive(Debug, Clone)]
+pub struct Gent {
+    params: Vec<ParamInfo>,
+}
+
+impl Default for Gent {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Gent {
+    /// A Gent model.
+    pub fn new() -> Self {
+        Gent {
+            params: vec![
+                ParamInfo::modulus("mu"),
+                ParamInfo {
+                    name: "Jm".into(),
+                    unit: "1",
+                    lower: 1e-3,
+                    upper: 1e6,
+                    linear: false,
+                },
+            ],
+        }
+    }
+
+    /// Derivatives at I1; NaN beyond the extensibility limit (no finite stress there).
+    #[inline]
+    fn derivs(p: &[f64], i1: f64) -> InvariantDerivs {
+        let (mu, jm) = (p[0], p[1]);
+        let gap = jm - (i1 - 3.0);
+        if gap <= 0.0 {
+            let nan = f64::NAN;
+            return InvariantDerivs {
+                w1: nan,
+                w2: nan,
+                w11: nan,
+                w12: nan,
+                w22: nan,
+            };
+        }
+        InvariantDerivs {
+            w1: 0.5 * mu * jm / gap,
+            w11: 0.5 * mu * jm / (gap * gap),
+            ..Default::default()
+        }
+    }
+}
+
+impl StrainEnergy for Gent {
+    fn name(&self) -> String {
+        "gent".into()
+    }
+    fn params(&self) -> &[ParamInfo] {
+        &self.params
+    }
+    fn nominal_stress(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
+        let k = mode.kinematics(lam);
+        let d = Self::derivs(p, k.invariants().0);
+        k.invariant_stress(d.w1, 0.0)
+    }
+    fn tangent(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
+        let k = mode.kinematics(lam);
+        k.invariant_tangent(&Self::derivs(p, k.invariants().0))
+    }
+    fn stress_jacobian(&self, p: &[f64], mode: Mode, lam: f64, out: &mut [f64]) {
+        let k = mode.kinematics(lam);
+        let x = k.invariants().0 - 3.0;
+        let (mu, jm) = (p[0], p[1]);
+        let gap = jm - x;
+        let f = k.invariant_factor();
+        // ∂W1/∂μ = Jm/(2·gap); ∂W1/∂Jm = −μ·x/(2·gap²).
+        out[0] = f * 0.5 * jm / gap;
+        out[1] = -f * 0.5 * mu * x / (gap * gap);
+    }
+    fn initial_shear_modulus(&self, p: &[f64]) -> f64 {
+        p[0]
+    }
+    fn nonlinear_starts(&self, max_x: f64) -> Vec<Vec<f64>> {
+        let lo = self.bounds(max_x)[1].0;
+        [1.05 * lo, 1.5 * lo, 3.0 * lo, 10.0 * lo, 100.0 * lo]
+            .into_iter()
+            .map(|j| vec![j])
+            .collect()
+    }
+    fn bounds(&self, max_x: f64) -> Vec<(f64, f64)> {
+        // The limit must lie beyond every data point: Jm > max(I1 − 3).
+        let lo = (max_x * (1.0 + 1e-6)).max(self.params[1].lower);
+        vec![
+            (f64::NEG_INFINITY, f64::INFINITY),
+            (lo, self.params[1].upper),
+        ]
+    }
+}

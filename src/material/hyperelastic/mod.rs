@@ -1,0 +1,141 @@
+//! Incompressible hyperelastic strain-energy functions.
+//!
+//! A model supplies its energy derivatives; [`loadcase`] turns them into nominal
+//! stress, tangent and parameter Jacobian for every test mode. Neo-Hookean,
+//! Mooney-Rivlin and Yeoh are members of one polynomial in (I1 − 3, I2 − 3)
+//! ([`polynomial`]); Gent is invariant-based ([`gent`]); Ogden is stretch-based
+//! ([`ogden`]). Adding a model is one file, one line in [`ModelSpec::build`] and one
+//! row in the table-driven tests.
+
+pub mod gent;
+pub mod loadcase;
+pub mod ogden;
+pub mod polynomial;
+
+pub use loadcase::{Kinematics, Mode};
+
+use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+
+/// Description of one parameter of a model.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamInfo {
+    /// Name as written in fit files (`mu`, `C10`, `alpha1`, `Jm`, ...).
+    pub name: String,
+    /// SI unit (`Pa` or `1` for dimensionless).
+    pub unit: &'static str,
+    /// Lower bound used by the nonlinear search.
+    pub lower: f64,
+    /// Upper bound used by the nonlinear search.
+    pub upper: f64,
+    /// Whether the stress is linear in this parameter (solved exactly, never searched).
+    pub linear: bool,
+}
+
+impl ParamInfo {
+    /// A linear stress coefficient in Pa, unbounded.
+    pub fn modulus(name: impl Into<String>) -> Self {
+        ParamInfo {
+            name: name.into(),
+            unit: "Pa",
+            lower: f64::NEG_INFINITY,
+            upper: f64::INFINITY,
+            linear: true,
+        }
+    }
+}
+
+/// An incompressible strain-energy function evaluated for homogeneous test modes.
+///
+/// All stresses are nominal (first Piola-Kirchhoff, force per reference area) in Pa.
+pub trait StrainEnergy: Send + Sync {
+    /// Registry name (`neo-hookean`, `yeoh`, `ogden3`, ...).
+    fn name(&self) -> String;
+    /// Parameter descriptions, in the order of the parameter vector.
+    fn params(&self) -> &[ParamInfo];
+    /// Nominal stress P(λ) in `mode`.
+    fn nominal_stress(&self, p: &[f64], mode: Mode, lam: f64) -> f64;
+    /// Tangent dP/dλ (Drucker stability requires it to be positive).
+    fn tangent(&self, p: &[f64], mode: Mode, lam: f64) -> f64;
+    /// ∂P/∂p written into `out` (length = number of parameters). No allocation.
+    fn stress_jacobian(&self, p: &[f64], mode: Mode, lam: f64, out: &mut [f64]);
+    /// Small-strain shear modulus μ0 (Pa); Young's modulus is 3μ0.
+    fn initial_shear_modulus(&self, p: &[f64]) -> f64;
+    /// Deterministic, physically informed starting values of the nonlinear
+    /// parameters (in parameter order, skipping linear ones). Empty for linear models.
+    fn nonlinear_starts(&self, _max_i1_minus_3: f64) -> Vec<Vec<f64>> {
+        Vec::new()
+    }
+    /// Bounds of every parameter given the data's largest I1 − 3 (the Gent limit
+    /// must lie beyond the data). Defaults to [`ParamInfo`] bounds.
+    fn bounds(&self, _max_i1_minus_3: f64) -> Vec<(f64, f64)> {
+        self.params().iter().map(|p| (p.lower, p.upper)).collect()
+    }
+    /// True if the stress is linear in every parameter (exact linear least squares).
+    fn linear_in_params(&self) -> bool {
+        self.params().iter().all(|p| p.linear)
+    }
+}
+
+/// How Ogden's coefficients are written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum OgdenForm {
+    /// Seed Eq. 2.9: W = Σ 2μi/αi² (λ1^αi + λ2^αi + λ3^αi − 3); μ0 = Σμi (FE codes' form).
+    #[default]
+    Seed,
+    /// Ogden (1972): W = Σ μi/αi (λ1^αi + λ2^αi + λ3^αi − 3); μ0 = ½Σμiαi.
+    Original,
+}
+
+/// A model as the user names it: plain data, turned into an evaluator by [`ModelSpec::build`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ModelSpec {
+    /// Registry name.
+    pub name: String,
+    /// Ogden coefficient form (only for `ogdenN`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub form: Option<OgdenForm>,
+}
+
+/// Names accepted by `--model` (besides `auto`).
+pub const MODEL_NAMES: [&str; 8] = [
+    "neo-hookean",
+    "mooney-rivlin",
+    "yeoh",
+    "gent",
+    "ogden1",
+    "ogden2",
+    "ogden3",
+    "ogden4",
+];
+
+impl ModelSpec {
+    /// A spec from a registry name and an Ogden form (ignored for other models).
+    pub fn new(name: &str, form: OgdenForm) -> Self {
+        let form = name.starts_with("ogden").then_some(form);
+        ModelSpec {
+            name: name.to_string(),
+            form,
+        }
+    }
+
+    /// Build the evaluator. The registry: one line per model.
+    pub fn build(&self) -> Result<Box<dyn StrainEnergy>> {
+        let form = self.form.unwrap_or_default();
+        Ok(match self.name.as_str() {
+            "neo-hookean" => Box::new(polynomial::Polynomial::neo_hookean()),
+            "mooney-rivlin" => Box::new(polynomial::Polynomial::mooney_rivlin()),
+            "yeoh" => Box::new(polynomial::Polynomial::yeoh()),
+            "gent" => Box::new(gent::Gent::new()),
+            "ogden1" => Box::new(ogden::Ogden::new(1, form)),
+            "ogden2" => Box::new(ogden::Ogden::new(2, form)),
+            "ogden3" => Box::new(ogden::Ogden::new(3, form)),
+            "ogden4" => Box::new(ogden::Ogden::new(4, form)),
+            other => {
+                return Err(Error::settings(format!("unknown model '{other}'"))
+                    .with_hint(format!("use one of {} or auto", MODEL_NAMES.join(", "))))
+            }
+        })
+    }
+}

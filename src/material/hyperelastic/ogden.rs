@@ -1,0 +1,161 @@
+//! Ogden N-term model, stretch-based (separable).
+//!
+//! * Seed form (Eq. 2.9, as FE codes write it): W = Σ 2μi/αi²·(λ1^αi + λ2^αi + λ3^αi − 3),
+//!   μ0 = Σμi.
+//! * Original form (Ogden 1972): W = Σ μi/αi·(λ1^αi + λ2^αi + λ3^αi − 3), μ0 = ½Σμiαi.
+//!
+//! With a = ln λ1, b = ln λ3 the nominal stress is P = Σ ci(μi, αi)·(e^{αi·a} − e^{αi·b})/λ1,
+//! ci = 2μi/αi (seed) or μi (original). The seed form's term (e^{αa} − e^{αb})/α stays
+//! finite as α → 0 (it tends to a − b), so the seed form is the better-conditioned one
+//! to search in. Parameters are ordered μ1, α1, μ2, α2, …; the stress is linear in the μi.
+
+use super::loadcase::Mode;
+use super::{OgdenForm, ParamInfo, StrainEnergy};
+
+/// Ogden model with `n` terms in a chosen coefficient form.
+#[derive(Debug, Clone)]
+pub struct Ogden {
+    n: usize,
+    form: OgdenForm,
+    params: Vec<ParamInfo>,
+}
+
+/// Bounds of the exponents searched.
+pub const ALPHA_BOUND: f64 = 20.0;
+
+impl Ogden {
+    /// An `n`-term Ogden model.
+    pub fn new(n: usize, form: OgdenForm) -> Self {
+        let mut params = Vec::with_capacity(2 * n);
+        for i in 1..=n {
+            params.push(ParamInfo::modulus(format!("mu{i}")));
+            params.push(ParamInfo {
+                name: format!("alpha{i}"),
+                unit: "1",
+                lower: -ALPHA_BOUND,
+                upper: ALPHA_BOUND,
+                linear: false,
+            });
+        }
+        Ogden { n, form, params }
+    }
+
+    /// The coefficient form.
+    pub fn form(&self) -> OgdenForm {
+        self.form
+    }
+
+    /// Convert parameters from this model's form to the other form (same function).
+    pub fn convert(p: &[f64], from: OgdenForm, to: OgdenForm) -> Vec<f64> {
+        let mut q = p.to_vec();
+        for t in q.chunks_mut(2) {
+            let (mu, alpha) = (t[0], t[1]);
+            t[0] = match (from, to) {
+                (OgdenForm::Seed, OgdenForm::Original) => 2.0 * mu / alpha,
+                (OgdenForm::Original, OgdenForm::Seed) => mu * alpha / 2.0,
+                _ => mu,
+            };
+        }
+        q
+    }
+
+    /// Per-term basis B(α) = k(α)·(e^{αa} − e^{αb}) and its α-derivative, where
+    /// k = 2/α (seed) or 1 (original).
+    #[inline]
+    fn basis(&self, alpha: f64, a: f64, b: f64) -> (f64, f64) {
+        let (ea, eb) = ((alpha * a).exp(), (alpha * b).exp());
+        match self.form {
+            OgdenForm::Original => (ea - eb, a * ea - b * eb),
+            OgdenForm::Seed => {
+                if alpha.abs() < 1e-6 {
+                    // Series of 2(e^{αa} − e^{αb})/α about α = 0.
+                    let (d1, d2, d3) = (a - b, a * a - b * b, a * a * a - b * b * b);
+                    (
+                        2.0 * (d1 + alpha * d2 / 2.0 + alpha * alpha * d3 / 6.0),
+                        2.0 * (d2 / 2.0 + alpha * d3 / 3.0),
+                    )
+                } else {
+                    let v = 2.0 * (ea - eb) / alpha;
+                    (v, 2.0 * (a * ea - b * eb) / alpha - v / alpha)
+                }
+            }
+        }
+    }
+
+    /// d(λ·∂w/∂λ)/dλ per unit μ: seed 2λ^(α−1), original α·λ^(α−1).
+    #[inline]
+    fn dg(&self, mu: f64, alpha: f64, lam: f64) -> f64 {
+        let k = match self.form {
+            OgdenForm::Seed => 2.0,
+            OgdenForm::Original => alpha,
+        };
+        k * mu * lam.powf(alpha - 1.0)
+    }
+}
+
+impl StrainEnergy for Ogden {
+    fn name(&self) -> String {
+        format!("ogden{}", self.n)
+    }
+    fn params(&self) -> &[ParamInfo] {
+        &self.params
+    }
+    fn nominal_stress(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
+        let k = mode.kinematics(lam);
+        let (a, b) = (k.l[0].ln(), k.l[2].ln());
+        p.chunks(2)
+            .map(|t| t[0] * self.basis(t[1], a, b).0)
+            .sum::<f64>()
+            / k.l[0]
+    }
+    fn tangent(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
+        // P = (g(λ1) − g(λ3))/λ1 ⇒ dP/dλ = (g'(λ1)λ1' − g'(λ3)λ3')/λ1 − P·λ1'/λ1.
+        let k = mode.kinematics(lam);
+        let stress = self.nominal_stress(p, mode, lam);
+        let dg: f64 = p
+            .chunks(2)
+            .map(|t| self.dg(t[0], t[1], k.l[0]) * k.dl[0] - self.dg(t[0], t[1], k.l[2]) * k.dl[2])
+            .sum();
+        dg / k.l[0] - stress * k.dl[0] / k.l[0]
+    }
+    fn stress_jacobian(&self, p: &[f64], mode: Mode, lam: f64, out: &mut [f64]) {
+        let k = mode.kinematics(lam);
+        let (a, b) = (k.l[0].ln(), k.l[2].ln());
+        for (t, o) in p.chunks(2).zip(out.chunks_mut(2)) {
+            let (v, dv) = self.basis(t[1], a, b);
+            o[0] = v / k.l[0];
+            o[1] = t[0] * dv / k.l[0];
+        }
+    }
+    fn initial_shear_modulus(&self, p: &[f64]) -> f64 {
+        p.chunks(2)
+            .map(|t| match self.form {
+                OgdenForm::Seed => t[0],
+                OgdenForm::Original => 0.5 * t[0] * t[1],
+            })
+            .sum()
+    }
+    fn nonlinear_starts(&self, _max_x: f64) -> Vec<Vec<f64>> {
+        // Physically informed exponents: small positive ones carry the low-stretch
+        // response, large positive ones the upturn, negative ones the biaxial
+        // stiffness. Every combination of n distinct values is one start.
+        const SET: [f64; 8] = [-4.0, -2.0, -1.0, 0.5, 1.5, 3.0, 5.0, 8.0];
+        let mut out = Vec::new();
+        let mut idx: Vec<usize> = (0..self.n).collect();
+        loop {
+            out.push(idx.iter().map(|&i| SET[i]).collect());
+            // Next combination in lexicographic order.
+            let mut i = self.n;
+            while i > 0 && idx[i - 1] == SET.len() - self.n + (i - 1) {
+                i -= 1;
+            }
+            if i == 0 {
+                return out;
+            }
+            idx[i - 1] += 1;
+            for j in i..self.n {
+                idx[j] = idx[j - 1] + 1;
+            }
+        }
+    }
+}

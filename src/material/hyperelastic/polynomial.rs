@@ -1,0 +1,116 @@
+//! The polynomial family W = Σ s_k·p_k·(I1 − 3)^i_k·(I2 − 3)^j_k, linear in its
+//! parameters p_k.
+//!
+//! * Neo-Hookean: W = μ/2·(I1 − 3) (s = ½), μ0 = μ.
+//! * Mooney-Rivlin (seed Eq. 2.7): W = C10(I1 − 3) + C01(I2 − 3), μ0 = 2(C10 + C01).
+//! * Yeoh (seed Eq. 2.8): W = Σ_{i=1..3} Ci0(I1 − 3)^i, μ0 = 2·C10.
+
+use super::loadcase::{InvariantDerivs, Mode};
+use super::{ParamInfo, StrainEnergy};
+
+/// One term s·p·x^i·y^j with x = I1 − 3, y = I2 − 3.
+#[derive(Debug, Clone, Copy)]
+struct Term {
+    i: i32,
+    j: i32,
+    scale: f64,
+}
+
+/// A polynomial strain energy (Neo-Hookean, Mooney-Rivlin, Yeoh).
+#[derive(Debug, Clone)]
+pub struct Polynomial {
+    name: &'static str,
+    terms: Vec<Term>,
+    params: Vec<ParamInfo>,
+}
+
+/// x^n with x^0 = 1 and x^(negative) = 0 (those terms carry a zero coefficient).
+#[inline]
+fn pw(x: f64, n: i32) -> f64 {
+    if n < 0 {
+        0.0
+    } else {
+        x.powi(n)
+    }
+}
+
+impl Polynomial {
+    fn make(name: &'static str, terms: &[(&str, i32, i32, f64)]) -> Self {
+        Polynomial {
+            name,
+            terms: terms
+                .iter()
+                .map(|&(_, i, j, scale)| Term { i, j, scale })
+                .collect(),
+            params: terms.iter().map(|&(n, ..)| ParamInfo::modulus(n)).collect(),
+        }
+    }
+    /// Neo-Hookean, parameter `mu`.
+    pub fn neo_hookean() -> Self {
+        Self::make("neo-hookean", &[("mu", 1, 0, 0.5)])
+    }
+    /// Two-term Mooney-Rivlin, parameters `C10`, `C01`.
+    pub fn mooney_rivlin() -> Self {
+        Self::make("mooney-rivlin", &[("C10", 1, 0, 1.0), ("C01", 0, 1, 1.0)])
+    }
+    /// Three-term Yeoh, parameters `C10`, `C20`, `C30`.
+    pub fn yeoh() -> Self {
+        Self::make(
+            "yeoh",
+            &[("C10", 1, 0, 1.0), ("C20", 2, 0, 1.0), ("C30", 3, 0, 1.0)],
+        )
+    }
+
+    /// Energy derivatives at (I1, I2).
+    #[inline]
+    fn derivs(&self, p: &[f64], i1: f64, i2: f64) -> InvariantDerivs {
+        let (x, y) = (i1 - 3.0, i2 - 3.0);
+        let mut d = InvariantDerivs::default();
+        for (t, &c) in self.terms.iter().zip(p) {
+            let (i, j, c) = (t.i, t.j, c * t.scale);
+            let (fi, fj) = (f64::from(i), f64::from(j));
+            d.w1 += c * fi * pw(x, i - 1) * pw(y, j);
+            d.w2 += c * fj * pw(x, i) * pw(y, j - 1);
+            d.w11 += c * fi * (fi - 1.0) * pw(x, i - 2) * pw(y, j);
+            d.w12 += c * fi * fj * pw(x, i - 1) * pw(y, j - 1);
+            d.w22 += c * fj * (fj - 1.0) * pw(x, i) * pw(y, j - 2);
+        }
+        d
+    }
+}
+
+impl StrainEnergy for Polynomial {
+    fn name(&self) -> String {
+        self.name.to_string()
+    }
+    fn params(&self) -> &[ParamInfo] {
+        &self.params
+    }
+    fn nominal_stress(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
+        let k = mode.kinematics(lam);
+        let (i1, i2) = k.invariants();
+        let d = self.derivs(p, i1, i2);
+        k.invariant_stress(d.w1, d.w2)
+    }
+    fn tangent(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
+        let k = mode.kinematics(lam);
+        let (i1, i2) = k.invariants();
+        k.invariant_tangent(&self.derivs(p, i1, i2))
+    }
+    fn stress_jacobian(&self, _p: &[f64], mode: Mode, lam: f64, out: &mut [f64]) {
+        let k = mode.kinematics(lam);
+        let (i1, i2) = k.invariants();
+        let (x, y) = (i1 - 3.0, i2 - 3.0);
+        for (t, o) in self.terms.iter().zip(out.iter_mut()) {
+            let (fi, fj) = (f64::from(t.i), f64::from(t.j));
+            let w1 = t.scale * fi * pw(x, t.i - 1) * pw(y, t.j);
+            let w2 = t.scale * fj * pw(x, t.i) * pw(y, t.j - 1);
+            *o = k.invariant_stress(w1, w2);
+        }
+    }
+    fn initial_shear_modulus(&self, p: &[f64]) -> f64 {
+        // μ0 = 2(W1 + W2) at I1 = I2 = 3.
+        let d = self.derivs(p, 3.0, 3.0);
+        2.0 * (d.w1 + d.w2)
+    }
+}

@@ -1,0 +1,4 @@
+//! Constitutive models: hyperelastic strain-energy functions (and, later,
+//! viscoelastic and dielectric laws).
+
+pub mod hyperelastic;

@@ -1,0 +1,222 @@
+//! Report of a hyperelastic fit: data vs model for every mode on one figure
+//! (modes without data drawn dashed as extrapolation), residuals, and a Markdown page.
+
+use super::format::{si, table};
+use super::plot::{Chart, Series, Style};
+use crate::data::Dataset;
+use crate::error::Result;
+use crate::fit::hyperelastic::HyperelasticFit;
+use crate::io::write::atomic_write;
+use crate::material::hyperelastic::Mode;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+fn mode_color(m: Mode) -> usize {
+    match m {
+        Mode::Uniaxial => 0,
+        Mode::Equibiaxial => 1,
+        Mode::Planar => 2,
+    }
+}
+
+/// Write `fit.svg`, `residuals.svg` and `index.md` into `dir`; returns the page.
+pub fn write(fit: &HyperelasticFit, data: &Dataset, dir: &Path) -> Result<PathBuf> {
+    let model = fit.evaluator()?;
+    let p = fit.values();
+    let mut series = Vec::new();
+    let mut resid = Vec::new();
+    let lam_max = data.samples.iter().map(|s| s.stretch).fold(1.0, f64::max);
+    for m in Mode::ALL {
+        let pts: Vec<(f64, f64)> = data
+            .samples
+            .iter()
+            .filter(|s| s.mode == m)
+            .map(|s| (s.stretch, s.stress / 1e6))
+            .collect();
+        let (lo, hi, style, label) = match data.stretch_range(m) {
+            Some((lo, hi)) => (lo.min(1.0), hi, Style::Line, format!("{} {m}", fit.model)),
+            None => (
+                1.0,
+                if m == Mode::Equibiaxial {
+                    lam_max.min(4.0)
+                } else {
+                    lam_max
+                },
+                Style::Dashed,
+                format!("{} {m} (extrapolated, no data)", fit.model),
+            ),
+        };
+        if !pts.is_empty() {
+            series.push(Series {
+                label: format!("data {m}"),
+                points: pts,
+                color: mode_color(m),
+                style: Style::Points,
+            });
+            resid.push(Series {
+                label: format!("{m}"),
+                points: data
+                    .samples
+                    .iter()
+                    .filter(|s| s.mode == m)
+                    .map(|s| {
+                        (
+                            s.stretch,
+                            (model.nominal_stress(&p, m, s.stretch) - s.stress) / 1e3,
+                        )
+                    })
+                    .collect(),
+                color: mode_color(m),
+                style: Style::Points,
+            });
+        }
+        let curve = (0..=200)
+            .map(|i| {
+                let l = lo + (hi - lo) * i as f64 / 200.0;
+                (l, model.nominal_stress(&p, m, l) / 1e6)
+            })
+            .collect();
+        series.push(Series {
+            label,
+            points: curve,
+            color: mode_color(m),
+            style,
+        });
+    }
+    Chart {
+        title: format!("{}: data and model", fit.model),
+        x_label: "stretch λ".into(),
+        y_label: "nominal stress [MPa]".into(),
+        series,
+        log_x: false,
+    }
+    .write_svg(&dir.join("fit.svg"))?;
+    Chart {
+        title: format!("{}: residuals (model − data)", fit.model),
+        x_label: "stretch λ".into(),
+        y_label: "residual [kPa]".into(),
+        series: resid,
+        log_x: false,
+    }
+    .write_svg(&dir.join("residuals.svg"))?;
+
+    let page = dir.join("index.md");
+    atomic_write(&page, markdown(fit).as_bytes())?;
+    Ok(page)
+}
+
+/// The Markdown summary of a fit.
+pub fn markdown(fit: &HyperelasticFit) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "# Hyperelastic fit: {}\n", fit.model);
+    let files: Vec<String> = fit
+        .provenance
+        .files
+        .iter()
+        .map(|f| {
+            format!(
+                "`{}` ({} points, sha256 {}…)",
+                f.path,
+                f.points,
+                &f.sha256[..12]
+            )
+        })
+        .collect();
+    let _ = writeln!(s, "Data: {}\n", files.join(", "));
+    let _ = writeln!(s, "Status: **{:?}**\n", fit.status);
+    let _ = writeln!(
+        s,
+        "![data and model](fit.svg)\n\n![residuals](residuals.svg)\n"
+    );
+    let rows: Vec<Vec<String>> = fit
+        .parameters
+        .iter()
+        .map(|p| {
+            vec![
+                p.name.clone(),
+                si(p.value, &p.unit),
+                p.std_error.map(|e| si(e, &p.unit)).unwrap_or("n/a".into()),
+                p.ci95
+                    .map(|[a, b]| format!("[{}, {}]", si(a, &p.unit), si(b, &p.unit)))
+                    .unwrap_or("n/a".into()),
+            ]
+        })
+        .collect();
+    let _ = writeln!(
+        s,
+        "```\n{}```\n",
+        table(
+            &["parameter", "value", "std. error", "95 % interval"],
+            &rows
+        )
+    );
+    let _ = writeln!(
+        s,
+        "μ0 = {}, RMSE = {}, R² = {:.5}, %RMSE (seed Eq. 3.28) = {}, AICc = {}, BIC = {:.2}\n",
+        si(fit.initial_shear_modulus_pa, "Pa"),
+        si(fit.rmse_pa, "Pa"),
+        fit.r2,
+        fit.rmse_pct
+            .map(|v| format!("{v:.3} %"))
+            .unwrap_or("n/a".into()),
+        fit.aicc.map(|v| format!("{v:.2}")).unwrap_or("n/a".into()),
+        fit.bic
+    );
+    let _ = writeln!(s, "## Drucker stability (stretch 0.1–10)\n");
+    for d in &fit.drucker {
+        let _ = writeln!(
+            s,
+            "- {}: {} (stable {:.3}–{:.3})",
+            d.mode,
+            if d.stable { "stable" } else { "UNSTABLE" },
+            d.stretch_min,
+            d.stretch_max
+        );
+    }
+    if let Some(sel) = &fit.selection {
+        let _ = writeln!(
+            s,
+            "\n## Model selection\n\nRule: {}.\n\nChosen: {}.\n",
+            sel.rule, sel.reason
+        );
+        let rows: Vec<Vec<String>> = sel
+            .candidates
+            .iter()
+            .map(|c| {
+                vec![
+                    c.model.clone(),
+                    c.k.to_string(),
+                    si(c.rmse_pa, "Pa"),
+                    format!("{:.5}", c.r2),
+                    c.delta_aicc
+                        .map(|v| format!("{v:.2}"))
+                        .unwrap_or("n/a".into()),
+                    format!("{:?}", c.status),
+                ]
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "```\n{}```",
+            table(&["model", "k", "RMSE", "R²", "ΔAICc", "status"], &rows)
+        );
+    }
+    if !fit.warnings.is_empty() {
+        let _ = writeln!(s, "\n## Warnings\n");
+        for w in &fit.warnings {
+            let _ = writeln!(s, "- {w}");
+        }
+    }
+    let _ = writeln!(
+        s,
+        "\n## Solver\n\n{}; {} start(s), {} at the best objective; {} iterations, {} evaluations, {:.3} ms; {}.",
+        fit.solver.method,
+        fit.solver.starts,
+        fit.solver.starts_at_best,
+        fit.solver.iterations,
+        fit.solver.evaluations,
+        fit.solver.seconds * 1e3,
+        fit.solver.termination
+    );
+    s
+}

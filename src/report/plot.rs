@@ -1,0 +1,150 @@
+//! Line-and-scatter charts as SVG (plotters), shared by every report.
+
+use crate::error::{Error, Result};
+use plotters::prelude::*;
+use std::path::Path;
+
+/// One series of a chart.
+pub struct Series {
+    /// Legend label.
+    pub label: String,
+    /// Points (x, y).
+    pub points: Vec<(f64, f64)>,
+    /// Colour index into the palette.
+    pub color: usize,
+    /// How to draw it.
+    pub style: Style,
+}
+
+/// Drawing style of a series.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Style {
+    /// Markers only (data).
+    Points,
+    /// Solid line (model).
+    Line,
+    /// Dashed line (model outside its data).
+    Dashed,
+}
+
+/// A chart: title, axis labels, series, and whether x is logarithmic.
+pub struct Chart {
+    /// Title.
+    pub title: String,
+    /// X-axis label with unit.
+    pub x_label: String,
+    /// Y-axis label with unit.
+    pub y_label: String,
+    /// Series.
+    pub series: Vec<Series>,
+    /// Logarithmic x axis.
+    pub log_x: bool,
+}
+
+fn color(i: usize) -> RGBColor {
+    const P: [RGBColor; 8] = [
+        RGBColor(31, 119, 180),
+        RGBColor(214, 39, 40),
+        RGBColor(44, 160, 44),
+        RGBColor(148, 103, 189),
+        RGBColor(255, 127, 14),
+        RGBColor(140, 86, 75),
+        RGBColor(227, 119, 194),
+        RGBColor(23, 190, 207),
+    ];
+    P[i % P.len()]
+}
+
+fn range(vals: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
+    let (lo, hi) = vals
+        .filter(|v| v.is_finite() && (!log || *v > 0.0))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
+    if !lo.is_finite() {
+        return if log { (0.1, 10.0) } else { (0.0, 1.0) };
+    }
+    if log {
+        return (lo / 1.2, hi * 1.2);
+    }
+    let pad = if hi > lo {
+        0.05 * (hi - lo)
+    } else {
+        0.5 * lo.abs().max(1.0)
+    };
+    (lo - pad, hi + pad)
+}
+
+impl Chart {
+    /// Render to an SVG file (written atomically).
+    pub fn write_svg(&self, path: &Path) -> Result<()> {
+        let mut svg = String::new();
+        self.draw(&mut svg)
+            .map_err(|e| Error::settings(format!("could not draw {}: {e}", path.display())))?;
+        crate::io::write::atomic_write(path, svg.as_bytes())
+    }
+
+    fn draw(&self, out: &mut String) -> std::result::Result<(), Box<dyn std::error::Error + '_>> {
+        let root = SVGBackend::with_string(out, (900, 560)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let all = || self.series.iter().flat_map(|s| s.points.iter());
+        let (x0, x1) = range(all().map(|p| p.0), self.log_x);
+        let (y0, y1) = range(all().map(|p| p.1), false);
+        let mut builder = ChartBuilder::on(&root);
+        builder
+            .caption(&self.title, ("sans-serif", 22))
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(80);
+        macro_rules! body {
+            ($chart:expr) => {{
+                let mut chart = $chart;
+                chart
+                    .configure_mesh()
+                    .x_desc(self.x_label.as_str())
+                    .y_desc(self.y_label.as_str())
+                    .light_line_style(RGBColor(235, 235, 235))
+                    .draw()?;
+                for s in &self.series {
+                    let c = color(s.color);
+                    let pts = s
+                        .points
+                        .iter()
+                        .copied()
+                        .filter(|p| p.0.is_finite() && p.1.is_finite());
+                    match s.style {
+                        Style::Points => chart
+                            .draw_series(pts.map(|p| Circle::new(p, 3, c.filled())))?
+                            .label(s.label.as_str())
+                            .legend(move |(x, y)| Circle::new((x + 10, y), 3, c.filled())),
+                        Style::Line => chart
+                            .draw_series(LineSeries::new(pts, c.stroke_width(2)))?
+                            .label(s.label.as_str())
+                            .legend(move |(x, y)| {
+                                PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                            }),
+                        Style::Dashed => chart
+                            .draw_series(DashedLineSeries::new(pts, 6, 4, c.stroke_width(2)))?
+                            .label(s.label.as_str())
+                            .legend(move |(x, y)| {
+                                PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(1))
+                            }),
+                    };
+                }
+                chart
+                    .configure_series_labels()
+                    .background_style(WHITE.mix(0.85))
+                    .border_style(BLACK)
+                    .position(SeriesLabelPosition::UpperLeft)
+                    .draw()?;
+            }};
+        }
+        if self.log_x {
+            body!(builder.build_cartesian_2d((x0..x1).log_scale(), y0..y1)?);
+        } else {
+            body!(builder.build_cartesian_2d(x0..x1, y0..y1)?);
+        }
+        root.present()?;
+        Ok(())
+    }
+}

@@ -116,7 +116,7 @@ pub fn run(a: Args) -> Result<i32> {
     let noise_abs = parse_quantity(&a.noise_abs, Dimension::Stress)
         .map_err(|e| Error::settings(format!("--noise-abs: {e}")))?
         .value;
-    if !(a.noise >= 0.0) || noise_abs < 0.0 {
+    if a.noise.is_nan() || a.noise < 0.0 || noise_abs < 0.0 {
         return Err(Error::settings("noise must be ≥ 0"));
     }
     let mut rng = ChaCha8Rng::seed_from_u64(a.seed);

@@ -547,6 +547,16 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
             "{n} points for {k} parameters: no degrees of freedom left for uncertainty"
         ));
     }
+    for (info, (v, se)) in params_info.iter().zip(p.iter().zip(&unc.std_error)) {
+        if let Some(se) = se.filter(|se| *se > v.abs() && *v != 0.0) {
+            escalate(Status::IllPosed);
+            warnings.push(format!(
+                "{} is not determined by these data (standard error {:.0} % of its value)",
+                info.name,
+                100.0 * se / v.abs()
+            ));
+        }
+    }
     for a in 0..k {
         for b in a + 1..k {
             if let Some(c) = unc.correlation[a][b] {

@@ -146,7 +146,7 @@ impl LeastSquares for HyperProblem<'_> {
 pub fn svd_solve(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<(DVector<f64>, DMatrix<f64>)> {
     let svd = a.clone().svd(true, true);
     let smax = svd.singular_values.max();
-    if !(smax > 0.0) || !smax.is_finite() {
+    if smax.is_nan() || smax <= 0.0 || smax.is_infinite() {
         return None;
     }
     let tol = smax * 1e-13 * (a.nrows().max(a.ncols()) as f64);

@@ -6,7 +6,7 @@ pub fn si(v: f64, unit: &str) -> String {
         return format!("{v} {unit}");
     }
     if unit == "1" || unit.is_empty() {
-        return format!("{}", sig(v, 5));
+        return sig(v, 5);
     }
     let a = v.abs();
     let (f, p) = if a == 0.0 {

@@ -1,0 +1,305 @@
+//! Closed forms, derivatives and invariants of every hyperelastic model.
+
+use dea_fit::fit::diagnostics::drucker;
+use dea_fit::material::hyperelastic::ogden::Ogden;
+use dea_fit::material::hyperelastic::{Mode, ModelSpec, OgdenForm, StrainEnergy};
+use proptest::prelude::*;
+
+/// Every model with a representative, Drucker-stable parameter vector (SI).
+fn cases() -> Vec<(Box<dyn StrainEnergy>, Vec<f64>)> {
+    let b = |n: &str, f: OgdenForm| ModelSpec::new(n, f).build().unwrap();
+    vec![
+        (b("neo-hookean", OgdenForm::Seed), vec![4e5]),
+        (b("mooney-rivlin", OgdenForm::Seed), vec![1.5e5, 3e4]),
+        (b("yeoh", OgdenForm::Seed), vec![6.93e4, -888.0, 16.7]),
+        (b("gent", OgdenForm::Seed), vec![2e5, 40.0]),
+        (b("ogden1", OgdenForm::Seed), vec![3e5, 1.8]),
+        (b("ogden2", OgdenForm::Seed), vec![3e5, 1.5, 2e3, 5.0]),
+        (
+            b("ogden3", OgdenForm::Seed),
+            vec![3.3e5, 1.9, 3.0, 8.6, 7e3, -2.2],
+        ),
+        (
+            b("ogden4", OgdenForm::Seed),
+            vec![3e5, 1.3, 1e3, 5.0, 5e3, -2.0, 10.0, 0.5],
+        ),
+        (
+            b("ogden3", OgdenForm::Original),
+            vec![6.18e5, 1.3, 1.18e3, 5.0, -9.81e3, -2.0],
+        ),
+    ]
+}
+
+const STRETCHES: [f64; 7] = [0.35, 0.7, 0.95, 1.05, 1.6, 2.9, 4.5];
+
+#[test]
+fn zero_stress_in_the_reference_state() {
+    for (m, p) in cases() {
+        let mu0 = m.initial_shear_modulus(&p);
+        for mode in Mode::ALL {
+            let s = m.nominal_stress(&p, mode, 1.0);
+            // Exact cancellation up to rounding of O(μ0) terms.
+            assert!(s.abs() <= 1e-10 * mu0, "{} {mode}: P(1) = {s}", m.name());
+        }
+    }
+}
+
+#[test]
+fn initial_slopes_are_3_6_4_times_mu0() {
+    // Small-strain limit: dP/dλ at λ = 1 is 3μ0 (uniaxial, Young's modulus), 6μ0
+    // (equibiaxial) and 4μ0 (planar) for every incompressible isotropic model.
+    for (m, p) in cases() {
+        let mu0 = m.initial_shear_modulus(&p);
+        for (mode, k) in [
+            (Mode::Uniaxial, 3.0),
+            (Mode::Equibiaxial, 6.0),
+            (Mode::Planar, 4.0),
+        ] {
+            let t = m.tangent(&p, mode, 1.0);
+            assert!(
+                (t - k * mu0).abs() <= 1e-9 * k * mu0,
+                "{} {mode}: {t} vs {}",
+                m.name(),
+                k * mu0
+            );
+        }
+    }
+}
+
+fn central(f: impl Fn(f64) -> f64, x: f64) -> f64 {
+    let h = 1e-6 * x.abs().max(1e-3);
+    (f(x + h) - f(x - h)) / (2.0 * h)
+}
+
+#[test]
+fn tangent_matches_finite_differences() {
+    for (m, p) in cases() {
+        for mode in Mode::ALL {
+            for &l in &STRETCHES {
+                if !m.nominal_stress(&p, mode, l).is_finite() {
+                    continue; // beyond the Gent limit: no stress, no tangent
+                }
+                let fd = central(|x| m.nominal_stress(&p, mode, x), l);
+                let an = m.tangent(&p, mode, l);
+                // Central differences with h = 1e-6·λ: truncation ~1e-12, rounding
+                // ~ε·|P|/h; the bound allows 50× that rounding plus 1e-6 relative.
+                let tol = 1e-6 * an.abs() + 1e-8 * m.nominal_stress(&p, mode, l).abs() / l;
+                assert!(
+                    (fd - an).abs() <= tol.max(1e-9),
+                    "{} {mode} λ={l}: {an} vs {fd}",
+                    m.name()
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn parameter_jacobian_matches_finite_differences() {
+    for (m, p) in cases() {
+        let k = p.len();
+        let mut row = vec![0.0; k];
+        for mode in Mode::ALL {
+            for &l in &STRETCHES {
+                let stress = m.nominal_stress(&p, mode, l);
+                if !stress.is_finite() {
+                    continue;
+                }
+                m.stress_jacobian(&p, mode, l, &mut row);
+                for j in 0..k {
+                    let fd = central(
+                        |x| {
+                            let mut q = p.clone();
+                            q[j] = x;
+                            m.nominal_stress(&q, mode, l)
+                        },
+                        p[j],
+                    );
+                    // 1e-6 relative plus 50× the rounding bound ε·|P|/h of the difference.
+                    let tol = 1e-6 * row[j].abs() + 1e-8 * stress.abs() / p[j].abs();
+                    assert!(
+                        (fd - row[j]).abs() <= tol.max(1e-12),
+                        "{} {mode} λ={l} p{j}: {} vs {fd}",
+                        m.name(),
+                        row[j]
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn linear_models_are_linear_in_their_parameters() {
+    for (m, p) in cases().into_iter().filter(|(m, _)| m.linear_in_params()) {
+        let mut row = vec![0.0; p.len()];
+        for mode in Mode::ALL {
+            for &l in &STRETCHES {
+                m.stress_jacobian(&p, mode, l, &mut row);
+                let lin: f64 = row.iter().zip(&p).map(|(a, b)| a * b).sum();
+                let s = m.nominal_stress(&p, mode, l);
+                assert!((lin - s).abs() <= 1e-12 * s.abs().max(1.0));
+            }
+        }
+    }
+}
+
+fn same_stress(a: &dyn StrainEnergy, pa: &[f64], b: &dyn StrainEnergy, pb: &[f64], tol: f64) {
+    for mode in Mode::ALL {
+        for &l in &STRETCHES {
+            let (x, y) = (a.nominal_stress(pa, mode, l), b.nominal_stress(pb, mode, l));
+            assert!(
+                (x - y).abs() <= tol * x.abs().max(1.0),
+                "{} vs {} {mode} λ={l}: {x} vs {y}",
+                a.name(),
+                b.name()
+            );
+        }
+    }
+}
+
+#[test]
+fn models_agree_where_they_coincide() {
+    let b = |n: &str, f: OgdenForm| ModelSpec::new(n, f).build().unwrap();
+    let nh = b("neo-hookean", OgdenForm::Seed);
+    let mu = 4e5;
+    // Ogden-1 with α = 2 in the seed form is Neo-Hookean with μ.
+    same_stress(
+        nh.as_ref(),
+        &[mu],
+        b("ogden1", OgdenForm::Seed).as_ref(),
+        &[mu, 2.0],
+        1e-12,
+    );
+    // ... and in the original form with μ1 = μ (μ0 = ½·μ1·α1).
+    same_stress(
+        nh.as_ref(),
+        &[mu],
+        b("ogden1", OgdenForm::Original).as_ref(),
+        &[mu, 2.0],
+        1e-12,
+    );
+    // Mooney-Rivlin with C01 = 0 and Yeoh with C20 = C30 = 0 are Neo-Hookean with μ = 2C10.
+    same_stress(
+        nh.as_ref(),
+        &[mu],
+        b("mooney-rivlin", OgdenForm::Seed).as_ref(),
+        &[mu / 2.0, 0.0],
+        1e-12,
+    );
+    same_stress(
+        nh.as_ref(),
+        &[mu],
+        b("yeoh", OgdenForm::Seed).as_ref(),
+        &[mu / 2.0, 0.0, 0.0],
+        1e-12,
+    );
+    // Ogden-2 with α = (2, −2) in Ogden's form is Mooney-Rivlin, C10 = μ1/2, C01 = −μ2/2.
+    same_stress(
+        b("mooney-rivlin", OgdenForm::Seed).as_ref(),
+        &[1.5e5, 3e4],
+        b("ogden2", OgdenForm::Original).as_ref(),
+        &[3e5, 2.0, -6e4, -2.0],
+        1e-12,
+    );
+    // Gent tends to Neo-Hookean as Jm → ∞ (relative difference ~ (I1−3)/Jm).
+    same_stress(
+        nh.as_ref(),
+        &[mu],
+        b("gent", OgdenForm::Seed).as_ref(),
+        &[mu, 1e9],
+        1e-7,
+    );
+    // The two Ogden forms describe the same function after conversion.
+    let orig = [6.18e5, 1.3, 1.18e3, 5.0, -9.81e3, -2.0];
+    let seed = Ogden::convert(&orig, OgdenForm::Original, OgdenForm::Seed);
+    same_stress(
+        b("ogden3", OgdenForm::Original).as_ref(),
+        &orig,
+        b("ogden3", OgdenForm::Seed).as_ref(),
+        &seed,
+        1e-12,
+    );
+    let back = Ogden::convert(&seed, OgdenForm::Seed, OgdenForm::Original);
+    for (a, b) in orig.iter().zip(&back) {
+        assert!((a - b).abs() <= 1e-12 * a.abs());
+    }
+}
+
+#[test]
+fn published_values() {
+    let b = |n: &str, f: OgdenForm| ModelSpec::new(n, f).build().unwrap();
+    // Ogden (1972) for Treloar's rubber, original form, μ in N/mm² → Pa:
+    // μ0 = ½Σμiαi = ½(0.618·1.3 + 0.00118·5.0 + 0.00981·2.0) MPa = 0.4145 MPa.
+    let ogden = b("ogden3", OgdenForm::Original);
+    let p = [6.18e5, 1.3, 1.18e3, 5.0, -9.81e3, -2.0];
+    assert!((ogden.initial_shear_modulus(&p) - 0.41446e6).abs() < 50.0);
+    // Seed Table 3.2 (Wissler & Mazza 2005, VHB 4910 Yeoh): μ0 = 2·C10 = 0.1386 MPa,
+    // Y0 = 6·C10 = 0.416 MPa as the table states.
+    let yeoh = b("yeoh", OgdenForm::Seed);
+    let q = [0.0693e6, -8.88e-4 * 1e6, 16.7e-6 * 1e6];
+    assert!((3.0 * yeoh.initial_shear_modulus(&q) - 0.4158e6).abs() < 1.0);
+    // Neo-Hookean uniaxial closed form P = μ(λ − λ⁻²): at λ = 2, P = 1.75μ.
+    let nh = b("neo-hookean", OgdenForm::Seed);
+    assert!((nh.nominal_stress(&[1.0], Mode::Uniaxial, 2.0) - 1.75).abs() < 1e-15);
+    // Equibiaxial P = μ(λ − λ⁻⁵), planar P = μ(λ − λ⁻³).
+    assert!((nh.nominal_stress(&[1.0], Mode::Equibiaxial, 2.0) - (2.0 - 1.0 / 32.0)).abs() < 1e-15);
+    assert!((nh.nominal_stress(&[1.0], Mode::Planar, 2.0) - (2.0 - 0.125)).abs() < 1e-15);
+}
+
+#[test]
+fn drucker_check_finds_the_unstable_range() {
+    let b = |n: &str| ModelSpec::new(n, OgdenForm::Seed).build().unwrap();
+    for (m, p) in cases() {
+        // Every case above is stable over 0.1–10 except possibly where the Gent limit
+        // is reached (no finite stress there: reported as not stable).
+        let d = drucker(m.as_ref(), &p);
+        if m.name() != "gent" {
+            assert!(d.iter().all(|d| d.stable), "{}: {d:?}", m.name());
+        }
+    }
+    // Yeoh with a large negative C20 softens and loses stability in uniaxial tension:
+    // dP/dλ = 0 where the quadratic W1(x) has its minimum below zero.
+    let yeoh = b("yeoh");
+    let p = [1e5, -5e3, 50.0];
+    let d = drucker(yeoh.as_ref(), &p);
+    let u = d.iter().find(|d| d.mode == Mode::Uniaxial).unwrap();
+    assert!(
+        !u.stable && u.stretch_max > 1.5 && u.stretch_max < 10.0,
+        "{u:?}"
+    );
+    // The reported bound is where the tangent changes sign (to the grid's resolution).
+    assert!(yeoh.tangent(&p, Mode::Uniaxial, u.stretch_max * 0.99) > 0.0);
+    assert!(yeoh.tangent(&p, Mode::Uniaxial, u.stretch_max * 1.02) <= 0.0);
+    // Gent is undefined beyond its limit: reported, not hidden.
+    let gent = b("gent");
+    let d = drucker(gent.as_ref(), &[2e5, 10.0]);
+    assert!(d.iter().any(|d| !d.stable));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    #[test]
+    fn ogden_jacobian_is_right_for_any_exponent(alpha in -12.0f64..12.0, lam in 0.2f64..6.0, mode in 0usize..3) {
+        // Includes exponents near 0, where the seed form switches to its series.
+        let m = Ogden::new(1, OgdenForm::Seed);
+        let p = [1e5, alpha];
+        let mode = Mode::ALL[mode];
+        let mut row = [0.0; 2];
+        m.stress_jacobian(&p, mode, lam, &mut row);
+        let fd = central(|a| m.nominal_stress(&[1e5, a], mode, lam), alpha);
+        prop_assert!((fd - row[1]).abs() <= 1e-5 * row[1].abs().max(1e-3 * 1e5));
+        let fd = central(|x| m.nominal_stress(&p, mode, x), lam);
+        let t = m.tangent(&p, mode, lam);
+        prop_assert!((fd - t).abs() <= 1e-5 * t.abs().max(1.0));
+    }
+
+    #[test]
+    fn stress_vanishes_at_unit_stretch_for_random_parameters(c10 in 1e3f64..1e6, c20 in -1e4f64..1e4, c30 in 0.0f64..1e3) {
+        let m = ModelSpec::new("yeoh", OgdenForm::Seed).build().unwrap();
+        for mode in Mode::ALL {
+            prop_assert!(m.nominal_stress(&[c10, c20, c30], mode, 1.0).abs() <= 1e-9 * c10);
+        }
+    }
+}

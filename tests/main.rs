@@ -1,4 +1,5 @@
 //! One integration-test binary (fewer links on a 2-core CI): one module per area.
 
+mod datasets;
 mod estimation;
 mod models;

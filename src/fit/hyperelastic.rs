@@ -87,6 +87,7 @@ pub struct ModeStats {
     /// Largest stretch of the data.
     pub stretch_max: f64,
     /// Root-mean-square absolute error (Pa).
+    #[serde(rename = "rmse_Pa")]
     pub rmse_pa: f64,
     /// Coefficient of determination of this mode.
     pub r2: f64,
@@ -100,9 +101,14 @@ pub struct Extrapolation {
     /// Stretch.
     pub stretch: f64,
     /// Predicted nominal stress (Pa).
+    #[serde(rename = "stress_Pa")]
     pub stress_pa: f64,
     /// Range predicted by the other models fitted to the same data (Pa), when known.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        rename = "other_models_Pa",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub other_models_pa: Option<[f64; 2]>,
 }
 
@@ -702,7 +708,7 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         schema: SCHEMA.into(),
         tool_version: env!("CARGO_PKG_VERSION").into(),
         model: model.name(),
-        form: spec.build().ok().and(spec.form),
+        form: spec.form,
         parameters,
         initial_shear_modulus_pa: model.initial_shear_modulus(&p),
         rmse_pa: rmse,

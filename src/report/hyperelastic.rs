@@ -118,7 +118,7 @@ pub fn markdown(fit: &HyperelasticFit) -> String {
                 "`{}` ({} points, sha256 {}…)",
                 f.path,
                 f.points,
-                &f.sha256[..12]
+                f.sha256.get(..12).unwrap_or(&f.sha256)
             )
         })
         .collect();

@@ -1,0 +1,78 @@
+//! The shipped datasets: transcriptions agree with the reference copies, and the
+//! synthetic files are what their stated generator produces.
+
+use dea_fit::io::tensile::{read, TensileOptions};
+use dea_fit::material::hyperelastic::{Mode, ModelSpec, OgdenForm};
+use std::path::Path;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+#[test]
+fn treloar_transcription_matches_the_reference_copy() {
+    let shared = root().join("../shared/datasets/treloar");
+    if !shared.exists() {
+        eprintln!(
+            "skipped: {} is not present on this machine",
+            shared.display()
+        );
+        return;
+    }
+    for (ours, theirs, mode) in [
+        ("uniaxial", "uniaxial", Mode::Uniaxial),
+        ("equibiaxial", "equibiaxial", Mode::Equibiaxial),
+        ("planar", "pure_shear", Mode::Planar),
+    ] {
+        let opts = TensileOptions {
+            mode: Some(mode),
+            ..Default::default()
+        };
+        let a = read(&root().join(format!("datasets/treloar/{ours}.csv")), &opts).unwrap();
+        let b = read(&shared.join(format!("{theirs}.csv")), &opts).unwrap();
+        assert_eq!(a.samples.len(), b.samples.len(), "{ours}");
+        for (x, y) in a.samples.iter().zip(&b.samples) {
+            // A transcription must reproduce every printed digit.
+            assert_eq!(
+                (x.stretch, x.stress, x.mode),
+                (y.stretch, y.stress, y.mode),
+                "{ours}"
+            );
+        }
+    }
+}
+
+#[test]
+fn synthetic_vhb_data_scatter_about_their_generating_model() {
+    // Seed Table 3.2 Yeoh constants; noise 1 % + 0.5 kPa: every point lies within
+    // 5 standard deviations of the clean curve, and the noise is really there.
+    let model = ModelSpec::new("yeoh", OgdenForm::Seed).build().unwrap();
+    let p = [0.0693e6, -8.88e-4 * 1e6, 16.7e-6 * 1e6];
+    for (file, mode) in [
+        ("uniaxial", Mode::Uniaxial),
+        ("equibiaxial", Mode::Equibiaxial),
+        ("planar", Mode::Planar),
+    ] {
+        let d = read(
+            &root().join(format!("datasets/vhb4910/{file}.csv")),
+            &TensileOptions::default(),
+        )
+        .unwrap();
+        assert!(
+            d.samples.iter().all(|s| s.mode == mode),
+            "{file}: the file's # mode comment"
+        );
+        let mut any_noise = false;
+        for s in &d.samples {
+            let clean = model.nominal_stress(&p, mode, s.stretch);
+            let sigma = (0.01 * clean).hypot(500.0);
+            assert!(
+                (s.stress - clean).abs() <= 5.0 * sigma,
+                "{file} λ={}",
+                s.stretch
+            );
+            any_noise |= (s.stress - clean).abs() > 1.0;
+        }
+        assert!(any_noise);
+    }
+}

@@ -346,18 +346,33 @@ fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Es
     let mut results = Vec::with_capacity(starts.len());
     let mut iterations = 0;
     for start in &starts {
-        let mut full = vec![1.0; k];
-        for (&j, &v) in nonlin.iter().zip(start) {
-            full[j] = v;
-        }
-        let mut vp = VarPro::new(&mut prob, &full);
-        let res = lm::minimize(&mut vp, start, &theta_bounds, &lm_settings);
-        iterations += res.iterations;
-        // Recompute the projected linear coefficients at the final θ.
-        let mut r = DVector::zeros(n);
-        let ok = vp.eval(&res.x, &mut r, None);
-        if ok && res.cost.is_finite() {
-            results.push((res.cost, vp.full.clone()));
+        let mut theta = start.clone();
+        let mut escapes = 0;
+        loop {
+            let mut full = vec![1.0; k];
+            for (&j, &v) in nonlin.iter().zip(&theta) {
+                full[j] = v;
+            }
+            let mut vp = VarPro::new(&mut prob, &full);
+            let res = lm::minimize(&mut vp, &theta, &theta_bounds, &lm_settings);
+            iterations += res.iterations;
+            // Recompute the projected linear coefficients at the final θ.
+            let mut r = DVector::zeros(n);
+            let ok = vp.eval(&res.x, &mut r, None);
+            // Coinciding exponents make the basis (nearly) rank-deficient: an
+            // (N−1)-term model in disguise, a saddle of the N-term objective.
+            // Separate them and search on.
+            if ok && escapes < MAX_ESCAPES {
+                if let Some(split) = split_coincident(&res.x, &theta_bounds) {
+                    theta = split;
+                    escapes += 1;
+                    continue;
+                }
+            }
+            if ok && res.cost.is_finite() {
+                results.push((res.cost, vp.full.clone()));
+            }
+            break;
         }
     }
     if results.is_empty() {
@@ -440,6 +455,39 @@ fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Es
         termination: polish.termination,
         notes,
     })
+}
+
+/// Restarts allowed per start to escape a degenerate (coinciding-exponent) point.
+const MAX_ESCAPES: usize = 2;
+
+/// Move the second of each pair of coinciding nonlinear parameters to the candidate
+/// value farthest from all others (within bounds); None if nothing coincides.
+fn split_coincident(x: &[f64], bounds: &[(f64, f64)]) -> Option<Vec<f64>> {
+    const CANDIDATES: [f64; 5] = [-2.0, 1.0, 2.5, 5.0, 8.0];
+    let mut y = x.to_vec();
+    let mut changed = false;
+    for i in 0..y.len() {
+        for j in i + 1..y.len() {
+            if (y[i] - y[j]).abs() <= 1e-3 * (1.0 + y[i].abs()) {
+                let best = CANDIDATES
+                    .iter()
+                    .map(|&c| c.clamp(bounds[j].0, bounds[j].1))
+                    .max_by(|a, b| {
+                        let d = |c: f64| {
+                            y.iter()
+                                .enumerate()
+                                .filter(|&(m, _)| m != j)
+                                .map(|(_, v)| (v - c).abs())
+                                .fold(f64::INFINITY, f64::min)
+                        };
+                        d(*a).total_cmp(&d(*b))
+                    })?;
+                y[j] = best;
+                changed = true;
+            }
+        }
+    }
+    changed.then_some(y)
 }
 
 /// Unweighted absolute-residual statistics: (rmse, r²).

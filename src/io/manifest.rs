@@ -402,3 +402,40 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Manifest> {
         synthetic: spec.synthetic.map(Spanned::into_inner),
     })
 }
+
+/// The geometry sidecar of an export: `<stem>.geometry.toml` beside it, holding
+/// any of `area`, `diameter`, `thickness` (quantity strings). Returns the path and
+/// (area, diameter, thickness) when the sidecar exists.
+#[allow(clippy::type_complexity)]
+pub fn sidecar(
+    export: &Path,
+) -> Result<Option<(PathBuf, [Option<Quantity>; 3])>> {
+    let path = export.with_extension("geometry.toml");
+    let Ok(bytes) = std::fs::read(&path) else {
+        return Ok(None);
+    };
+    let text = std::str::from_utf8(&bytes)
+        .map_err(|_| Error::input(Location::file(&path), "the sidecar is not UTF-8 text"))?;
+    let cx = Ctx { path: &path, text };
+    let g: GeometrySpec = toml::from_str(text).map_err(|e| {
+        let msg = e.message().trim().to_string();
+        match e.span() {
+            Some(s) => cx.err(s, msg),
+            None => Error::input(Location::file(&path), msg),
+        }
+        .with_hint("a sidecar holds area or diameter, and thickness, e.g. thickness = \"2.2mm±0.05mm\"")
+    })?;
+    if g.stray.is_some() || g.edge.is_some() || g.pair.is_some() || g.frequencies.is_some() {
+        return Err(Error::input(
+            Location::file(&path),
+            "a geometry sidecar holds only area, diameter and thickness",
+        )
+        .with_hint("pass --stray, --edge, --pair and --frequencies as flags"));
+    }
+    let q = [
+        cx.quantity(&g.area, Dimension::Area, "area")?,
+        cx.quantity(&g.diameter, Dimension::Length, "diameter")?,
+        cx.quantity(&g.thickness, Dimension::Length, "thickness")?,
+    ];
+    Ok(Some((path, q)))
+}

@@ -44,7 +44,12 @@ pub fn parse_claim(s: &str) -> Result<(f64, f64, Option<Basis>)> {
             .with_hint("write the increase and the fraction, e.g. 400%@37.5% or 200%@10wt%")
     };
     let (inc, frac) = s.split_once('@').ok_or_else(bad)?;
-    let inc: f64 = inc.trim().trim_end_matches('%').trim().parse().map_err(|_| bad())?;
+    let inc: f64 = inc
+        .trim()
+        .trim_end_matches('%')
+        .trim()
+        .parse()
+        .map_err(|_| bad())?;
     let f = frac.trim();
     let (f, basis) = if let Some(x) = f.strip_suffix("wt%").or_else(|| f.strip_suffix("wt")) {
         (x, Some(Basis::Weight))
@@ -54,7 +59,12 @@ pub fn parse_claim(s: &str) -> Result<(f64, f64, Option<Basis>)> {
         (f, None)
     };
     let pct = f.ends_with('%') || frac.contains('%');
-    let v: f64 = f.trim().trim_end_matches('%').trim().parse().map_err(|_| bad())?;
+    let v: f64 = f
+        .trim()
+        .trim_end_matches('%')
+        .trim()
+        .parse()
+        .map_err(|_| bad())?;
     Ok((inc, if pct { v / 100.0 } else { v }, basis))
 }
 
@@ -98,7 +108,11 @@ pub fn run(a: Args) -> Result<i32> {
             println!("report: {}", p.display());
         }
     }
-    Ok(if a.strict && fit.status.is_blocking() { 1 } else { 0 })
+    Ok(if a.strict && fit.status.is_blocking() {
+        1
+    } else {
+        0
+    })
 }
 
 /// The human-readable output.
@@ -141,7 +155,10 @@ pub fn summary(fit: &CompositeFit) -> String {
     for c in &fit.claims {
         s.push_str(&format!("\nclaim: {}\n", c.verdict));
     }
-    s.push_str(&format!("status: {}\n", format!("{:?}", fit.status).to_lowercase()));
+    s.push_str(&format!(
+        "status: {}\n",
+        format!("{:?}", fit.status).to_lowercase()
+    ));
     for w in &fit.warnings {
         s.push_str(&format!("warning: {w}\n"));
     }

@@ -2,7 +2,9 @@
 //! exports, one file or a parallel batch with a progress bar.
 
 use clap::ValueEnum;
-use dea_fit::fit::permittivity::{self, EdgeCorrection, Geometry, Input, PermittivityRun, Settings};
+use dea_fit::fit::permittivity::{
+    self, EdgeCorrection, Geometry, Input, PermittivityRun, Settings,
+};
 use dea_fit::io::lcr::LcrOptions;
 use dea_fit::io::manifest::sidecar;
 use dea_fit::io::write::{write_fit, Replaced};
@@ -123,9 +125,8 @@ pub fn progress(n: usize) -> ProgressBar {
 /// Run the subcommand.
 pub fn run(a: Args) -> Result<i32> {
     if a.files.is_empty() {
-        return Err(Error::settings("no export files given").with_hint(
-            "dea-fit permittivity sweep.csv --area 1.439e-3 --thickness 2.2mm±0.05mm",
-        ));
+        return Err(Error::settings("no export files given")
+            .with_hint("dea-fit permittivity sweep.csv --area 1.439e-3 --thickness 2.2mm±0.05mm"));
     }
     let (opts, settings) = lcr_settings(&a.pair, &a.frequencies, &a.stray, a.edge)?;
     let flags = [

@@ -296,8 +296,11 @@ pub fn fit_rule(rule: MixingRule, phi: &[f64], eps: &[f64]) -> Option<RuleFit> {
         .min_by(|&a, &b| phi[a].total_cmp(&phi[b]))
         .expect("n > k ≥ 2");
     let em0 = eps[i0].clamp(1.0, 1e4).ln();
-    let bounds: Vec<(f64, f64)> = [(0.0, 1e4f64.ln()), (0.0, EPS_FILLER_MAX.ln()), (0.1f64.ln(), 1e4f64.ln())]
-        [..k]
+    let bounds: Vec<(f64, f64)> = [
+        (0.0, 1e4f64.ln()),
+        (0.0, EPS_FILLER_MAX.ln()),
+        (0.1f64.ln(), 1e4f64.ln()),
+    ][..k]
         .to_vec();
     let settings = LmSettings {
         max_iterations: 300,
@@ -306,7 +309,11 @@ pub fn fit_rule(rule: MixingRule, phi: &[f64], eps: &[f64]) -> Option<RuleFit> {
     let mut best: Option<lm::LmResult> = None;
     let mut iterations = 0;
     for ef in [10.0f64, 100.0, 1e3, 1e4] {
-        for shape in if k == 3 { vec![1.0f64, 3.0, 10.0] } else { vec![3.0] } {
+        for shape in if k == 3 {
+            vec![1.0f64, 3.0, 10.0]
+        } else {
+            vec![3.0]
+        } {
             let x0 = [em0, ef.ln(), shape.ln()];
             let res = lm::minimize(&mut prob, &x0[..k], &bounds, &settings);
             iterations += res.iterations;
@@ -489,10 +496,10 @@ pub fn check_claim(
     filler: &Phase,
 ) -> Result<ClaimCheck> {
     let (Some(em), Some(ef)) = (matrix.eps_r, filler.eps_r) else {
-        return Err(Error::settings(
-            "checking a claim needs the nominal εr of matrix and filler",
-        )
-        .with_hint("set eps_r under [matrix] and [filler] in the manifest"));
+        return Err(
+            Error::settings("checking a claim needs the nominal εr of matrix and filler")
+                .with_hint("set eps_r under [matrix] and [filler] in the manifest"),
+        );
     };
     if !(0.0..1.0).contains(&fraction) || increase_pct <= -100.0 {
         return Err(Error::settings(format!(
@@ -555,11 +562,10 @@ pub fn check_claim(
                 )
             })
             .collect();
-        let nearest = r
-            .rules
-            .iter()
-            .filter(|x| !x.explains)
-            .max_by(|a, b| a.predicted_increase_pct.total_cmp(&b.predicted_increase_pct));
+        let nearest = r.rules.iter().filter(|x| !x.explains).max_by(|a, b| {
+            a.predicted_increase_pct
+                .total_cmp(&b.predicted_increase_pct)
+        });
         let b = match r.basis {
             Basis::Weight => "weight",
             Basis::Volume => "volume",
@@ -764,7 +770,13 @@ fn three() -> f64 {
 }
 
 /// Export format of a synthetic sample file.
-pub const SYNTH_FORMATS: [&str; 5] = ["csv-cp-d", "csv-cs-rs", "csv-cp-rp", "e4990a-z-theta", "hioki"];
+pub const SYNTH_FORMATS: [&str; 5] = [
+    "csv-cp-d",
+    "csv-cs-rs",
+    "csv-cp-rp",
+    "e4990a-z-theta",
+    "hioki",
+];
 
 /// Generate the export files of a manifest's synthetic series: (path, contents) for
 /// every sample. ε′ from the rule with εm(f) = εm + s_m·log10(f/100 Hz) and
@@ -785,8 +797,8 @@ pub fn synthesize(m: &Manifest) -> Result<Vec<(std::path::PathBuf, String)>> {
     let freqs: Vec<f64> = (0..n)
         .map(|i| {
             let f = s.freq_min * 10f64.powf(i as f64 / s.points_per_decade as f64);
-            let mag = 10f64.powi(f.log10().floor() as i32 - 3);
-            (f / mag).round() * mag
+            // Four significant digits, as a meter's frequency list prints them.
+            format!("{f:.3e}").parse().unwrap_or(f)
         })
         .collect();
     let noise = Normal::new(0.0, s.noise_pct / 100.0)

@@ -443,10 +443,7 @@ pub fn analyse(
             freq_range(&below_stray)
         ));
     }
-    if let Some(&(f, d)) = leaky
-        .iter()
-        .max_by(|a, b| a.1.total_cmp(&b.1))
-    {
+    if let Some(&(f, d)) = leaky.iter().max_by(|a, b| a.1.total_cmp(&b.1)) {
         status = worst(status, Status::Warning);
         warnings.push(format!(
             "D > 1 at {} of {} frequencies (largest D = {d:.3} at {f} Hz): a leaky sample, not a capacitor there; εr from Cp is not meaningful where conduction dominates",
@@ -515,7 +512,11 @@ pub fn analyse(
 }
 
 /// Read and analyse one input.
-pub fn analyse_file(input: &Input, opts: &LcrOptions, settings: &Settings) -> Result<SamplePermittivity> {
+pub fn analyse_file(
+    input: &Input,
+    opts: &LcrOptions,
+    settings: &Settings,
+) -> Result<SamplePermittivity> {
     let sweep = lcr::read(&input.path, opts)?;
     let geom = input
         .geometry

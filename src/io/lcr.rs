@@ -92,9 +92,9 @@ pub fn read(path: &Path, opts: &LcrOptions) -> Result<Sweep> {
 pub fn parse(path: &Path, bytes: &[u8], opts: &LcrOptions) -> Result<Sweep> {
     let Ok(text) = std::str::from_utf8(bytes) else {
         // The table reader owns the located "not UTF-8" message.
-        return Err(Table::parse(path, bytes).err().unwrap_or_else(|| {
-            Error::input(Location::file(path), "the file is not UTF-8 text")
-        }));
+        return Err(Table::parse(path, bytes)
+            .err()
+            .unwrap_or_else(|| Error::input(Location::file(path), "the file is not UTF-8 text")));
     };
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let lines: Vec<&str> = text.lines().collect();
@@ -295,10 +295,16 @@ fn split_header(h: &str) -> (String, Option<String>) {
         .or_else(|| h.strip_suffix("-DATA"))
         .unwrap_or(h);
     if let Some(open) = h.find(['(', '[']) {
-        let close = h[open..].find([')', ']']).map(|c| open + c).unwrap_or(h.len());
+        let close = h[open..]
+            .find([')', ']'])
+            .map(|c| open + c)
+            .unwrap_or(h.len());
         let unit = h[open + 1..close].trim().to_string();
         let name = format!("{}{}", &h[..open], h.get(close + 1..).unwrap_or(""));
-        return (name.trim().to_string(), Some(unit).filter(|u| !u.is_empty()));
+        return (
+            name.trim().to_string(),
+            Some(unit).filter(|u| !u.is_empty()),
+        );
     }
     if let Some((name, unit)) = h.rsplit_once('_') {
         if Kind::of(name)
@@ -338,8 +344,7 @@ fn read_csv(
     let header_idx = (first..lines.len()).find(|&i| {
         let l = lines[i];
         !l.trim_start().starts_with('#')
-            && l
-                .split(delim(l))
+            && l.split(delim(l))
                 .any(|f| Kind::of(&split_header(f).0) == Some(Kind::Freq))
     });
     let Some(header_idx) = header_idx else {
@@ -378,11 +383,10 @@ fn read_csv(
             continue;
         };
         if cols.iter().any(|(k, _, _)| *k == kind) {
-            return Err(Error::input(
-                hloc(c),
-                format!("a second '{name}' column ('{h}')"),
-            )
-            .with_hint("keep one column per quantity"));
+            return Err(
+                Error::input(hloc(c), format!("a second '{name}' column ('{h}')"))
+                    .with_hint("keep one column per quantity"),
+            );
         }
         let factor = match (kind.dimension(), unit.as_deref()) {
             (None, None | Some("-") | Some("1")) => 1.0,
@@ -441,7 +445,9 @@ fn read_csv(
                     )
                 },
             )
-            .with_hint("export one of Cp–D, Cp–Rp, Cs–D, Cs–Rs, Z–θ, R–X, G–B (with units in the header)")
+            .with_hint(
+                "export one of Cp–D, Cp–Rp, Cs–D, Cs–Rs, Z–θ, R–X, G–B (with units in the header)",
+            )
         })?,
     };
     let (_, ka, kb) = *PAIRS.iter().find(|p| p.0 == pair).expect("listed");
@@ -539,23 +545,24 @@ fn read_e4980a(path: &Path, lines: &[&str], opts: &LcrOptions) -> Result<Sweep> 
             (k.trim().eq_ignore_ascii_case(key)).then(|| (i + 1, v.trim().to_string()))
         })
     };
-    let (pair, deg) = match (opts.pair, directive("function")) {
-        (Some(p), _) => p,
-        (None, Some((line, v))) => Pair::parse(&v).ok_or_else(|| {
-            Error::input(
-                Location::line(path, line),
-                format!("unknown measurement function '{v}'"),
-            )
-            .with_hint("use an E4980A function name such as CPD, CPRP, CSRS, ZTD, RX, GB")
-        })?,
-        (None, None) => {
-            return Err(Error::input(
+    let (pair, deg) =
+        match (opts.pair, directive("function")) {
+            (Some(p), _) => p,
+            (None, Some((line, v))) => Pair::parse(&v).ok_or_else(|| {
+                Error::input(
+                    Location::line(path, line),
+                    format!("unknown measurement function '{v}'"),
+                )
+                .with_hint("use an E4980A function name such as CPD, CPRP, CSRS, ZTD, RX, GB")
+            })?,
+            (None, None) => return Err(Error::input(
                 Location::file(path),
                 "headerless <A>,<B>,<status> data: the measured pair is not stated",
             )
-            .with_hint("pass --pair cp-d (or cp-rp, cs-rs, z-theta, ...) or add a '# function: CPD' line"))
-        }
-    };
+            .with_hint(
+                "pass --pair cp-d (or cp-rp, cs-rs, z-theta, ...) or add a '# function: CPD' line",
+            )),
+        };
     let freqs: Vec<f64> = match (&opts.frequencies, directive("frequencies")) {
         (Some(f), _) => f.clone(),
         (None, Some((line, v))) => v
@@ -738,7 +745,8 @@ pub fn write_e4990a(pair: Pair, points: &[(f64, Complex<f64>)]) -> String {
 /// Write points as a Hioki-style CSV: instrument preamble lines, then
 /// `FREQ[Hz],Z[ohm],PHASE[deg],Cp[F],D` (several pairs; the reader picks Cp–D).
 pub fn write_hioki(points: &[(f64, Complex<f64>)]) -> String {
-    let mut s = String::from("\"dea-fit synthetic export (Hioki LCR style)\"\n\"SPEED\",\"SLOW\"\n\n");
+    let mut s =
+        String::from("\"dea-fit synthetic export (Hioki LCR style)\"\n\"SPEED\",\"SLOW\"\n\n");
     s.push_str("FREQ[Hz],Z[ohm],PHASE[deg],Cp[F],D\n");
     for &(f, y) in points {
         let (z, th) = scaled(Pair::ZTheta, y, f);

@@ -185,7 +185,12 @@ impl Ctx<'_> {
         Error::input(Location::at(self.path, l, c), msg)
     }
 
-    fn quantity(&self, q: &Option<Spanned<Text>>, dim: Dimension, what: &str) -> Result<Option<Quantity>> {
+    fn quantity(
+        &self,
+        q: &Option<Spanned<Text>>,
+        dim: Dimension,
+        what: &str,
+    ) -> Result<Option<Quantity>> {
         let Some(q) = q else { return Ok(None) };
         let text = match q.get_ref() {
             Text::Num(v) => v.to_string(),
@@ -220,9 +225,8 @@ pub fn read(path: &Path) -> Result<Manifest> {
 
 /// Parse and check manifest bytes that came from `path`.
 pub fn parse(path: &Path, bytes: &[u8]) -> Result<Manifest> {
-    let text = std::str::from_utf8(bytes).map_err(|_| {
-        Error::input(Location::file(path), "the manifest is not UTF-8 text")
-    })?;
+    let text = std::str::from_utf8(bytes)
+        .map_err(|_| Error::input(Location::file(path), "the manifest is not UTF-8 text"))?;
     let cx = Ctx { path, text };
     let spec: Spec = toml::from_str(text).map_err(|e| {
         let msg = e.message().trim().to_string();
@@ -242,7 +246,10 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Manifest> {
         }
         if let Some(e) = &p.eps_r {
             if *e.get_ref() < 1.0 {
-                return Err(cx.err(e.span(), format!("eps_r must be ≥ 1, found {}", e.get_ref())));
+                return Err(cx.err(
+                    e.span(),
+                    format!("eps_r must be ≥ 1, found {}", e.get_ref()),
+                ));
             }
         }
         Ok(Phase {
@@ -315,7 +322,10 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Manifest> {
         let fraction = *s.fraction.get_ref();
         if !(0.0..1.0).contains(&fraction) {
             return Err(cx
-                .err(s.fraction.span(), format!("fraction must be in [0, 1), found {fraction}"))
+                .err(
+                    s.fraction.span(),
+                    format!("fraction must be in [0, 1), found {fraction}"),
+                )
                 .with_hint("write 10 % as 0.10"));
         }
         let basis = match &s.basis {
@@ -344,7 +354,9 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Manifest> {
         } else {
             (d_area, d_diam)
         };
-        let thickness = cx.quantity(&s.thickness, Dimension::Length, "thickness")?.or(d_thick);
+        let thickness = cx
+            .quantity(&s.thickness, Dimension::Length, "thickness")?
+            .or(d_thick);
         let geometry = Geometry::new(area, diameter, thickness)
             .map_err(|e| cx.err(s.name.span(), format!("sample '{name}': {e}")))?;
         let file = s.file.get_ref();
@@ -365,7 +377,10 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Manifest> {
     for c in &spec.claim {
         let fraction = *c.fraction.get_ref();
         if !(0.0..1.0).contains(&fraction) {
-            return Err(cx.err(c.fraction.span(), format!("fraction must be in [0, 1), found {fraction}")));
+            return Err(cx.err(
+                c.fraction.span(),
+                format!("fraction must be in [0, 1), found {fraction}"),
+            ));
         }
         claims.push(Claim {
             fraction,
@@ -377,8 +392,11 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Manifest> {
         });
     }
     if samples.is_empty() && claims.is_empty() {
-        return Err(Error::input(Location::file(path), "the manifest names no sample and no claim")
-            .with_hint("add [[sample]] tables (name, file, fraction) or [[claim]] tables"));
+        return Err(Error::input(
+            Location::file(path),
+            "the manifest names no sample and no claim",
+        )
+        .with_hint("add [[sample]] tables (name, file, fraction) or [[claim]] tables"));
     }
     if let Some(s) = &spec.synthetic {
         if s.get_ref().noise_pct < 0.0 {
@@ -407,9 +425,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Manifest> {
 /// any of `area`, `diameter`, `thickness` (quantity strings). Returns the path and
 /// (area, diameter, thickness) when the sidecar exists.
 #[allow(clippy::type_complexity)]
-pub fn sidecar(
-    export: &Path,
-) -> Result<Option<(PathBuf, [Option<Quantity>; 3])>> {
+pub fn sidecar(export: &Path) -> Result<Option<(PathBuf, [Option<Quantity>; 3])>> {
     let path = export.with_extension("geometry.toml");
     let Ok(bytes) = std::fs::read(&path) else {
         return Ok(None);
@@ -423,7 +439,9 @@ pub fn sidecar(
             Some(s) => cx.err(s, msg),
             None => Error::input(Location::file(&path), msg),
         }
-        .with_hint("a sidecar holds area or diameter, and thickness, e.g. thickness = \"2.2mm±0.05mm\"")
+        .with_hint(
+            "a sidecar holds area or diameter, and thickness, e.g. thickness = \"2.2mm±0.05mm\"",
+        )
     })?;
     if g.stray.is_some() || g.edge.is_some() || g.pair.is_some() || g.frequencies.is_some() {
         return Err(Error::input(

@@ -52,7 +52,10 @@ fn decade_rows(s: &SamplePermittivity) -> Vec<usize> {
     let (Some(lo), Some(hi)) = (s.points.first(), s.points.last()) else {
         return idx;
     };
-    let (a, b) = (lo.freq_hz.log10().floor() as i32, hi.freq_hz.log10().ceil() as i32);
+    let (a, b) = (
+        lo.freq_hz.log10().floor() as i32,
+        hi.freq_hz.log10().ceil() as i32,
+    );
     for e in a..=b {
         let target = 10f64.powi(e);
         if let Some(i) = (0..s.points.len()).min_by(|&x, &y| {
@@ -89,10 +92,7 @@ pub fn sample_table(s: &SamplePermittivity, decades: bool) -> String {
             ]
         })
         .collect();
-    table(
-        &["f (Hz)", "εr′", "± σ", "εr″", "tan δ", "σ (S/m)"],
-        &rows,
-    )
+    table(&["f (Hz)", "εr′", "± σ", "εr″", "tan δ", "σ (S/m)"], &rows)
 }
 
 fn samples_md(samples: &[SamplePermittivity], md: &mut String) {
@@ -117,11 +117,19 @@ fn samples_md(samples: &[SamplePermittivity], md: &mut String) {
 }
 
 /// Write `eps_r.svg`, `tan_delta.svg` and `index.md` for a batch; returns the page.
-pub fn write_samples(samples: &[SamplePermittivity], warnings: &[String], dir: &Path) -> Result<PathBuf> {
+pub fn write_samples(
+    samples: &[SamplePermittivity],
+    warnings: &[String],
+    dir: &Path,
+) -> Result<PathBuf> {
     freq_charts(samples, dir)?;
     let mut md = String::from("# Permittivity\n\n![εr](eps_r.svg)\n\n![tan δ](tan_delta.svg)\n");
     if samples.len() > MAX_DRAWN {
-        let _ = writeln!(md, "\nThe figures show the first {MAX_DRAWN} of {} samples.", samples.len());
+        let _ = writeln!(
+            md,
+            "\nThe figures show the first {MAX_DRAWN} of {} samples.",
+            samples.len()
+        );
     }
     for w in warnings {
         let _ = writeln!(md, "- warning: {w}");
@@ -154,7 +162,9 @@ pub fn ranking_table(f: &FrequencyFit) -> String {
                         format!(
                             "{}{}",
                             sig(p.value, 4),
-                            p.std_error.map(|s| format!(" ± {}", sig(s, 2))).unwrap_or_default()
+                            p.std_error
+                                .map(|s| format!(" ± {}", sig(s, 2)))
+                                .unwrap_or_default()
                         )
                     })
                     .unwrap_or_else(|| "–".into())
@@ -172,7 +182,16 @@ pub fn ranking_table(f: &FrequencyFit) -> String {
         })
         .collect();
     table(
-        &["rule", "εm", "εf (effective)", "n", "RMS %", "AICc", "Δ", "status"],
+        &[
+            "rule",
+            "εm",
+            "εf (effective)",
+            "n",
+            "RMS %",
+            "AICc",
+            "Δ",
+            "status",
+        ],
         &rows,
     )
 }
@@ -195,7 +214,11 @@ pub fn write_composite(fit: &CompositeFit, dir: &Path) -> Result<PathBuf> {
             * 1.2;
         let mut series = vec![Series {
             label: format!("data at {} Hz", sig(rf.freq_hz, 4)),
-            points: rf.data.iter().map(|d| (d.volume_fraction, d.eps_r)).collect(),
+            points: rf
+                .data
+                .iter()
+                .map(|d| (d.volume_fraction, d.eps_r))
+                .collect(),
             color: 0,
             style: Style::Points,
         }];
@@ -223,7 +246,10 @@ pub fn write_composite(fit: &CompositeFit, dir: &Path) -> Result<PathBuf> {
             });
         }
         Chart {
-            title: format!("εr against filler volume fraction at {} Hz", sig(rf.freq_hz, 4)),
+            title: format!(
+                "εr against filler volume fraction at {} Hz",
+                sig(rf.freq_hz, 4)
+            ),
             x_label: "filler volume fraction φ".into(),
             y_label: "εr′".into(),
             series,
@@ -259,7 +285,10 @@ pub fn write_composite(fit: &CompositeFit, dir: &Path) -> Result<PathBuf> {
             md,
             "\n## Over {} frequencies\n\n```\n{}```",
             fit.fits.len(),
-            table(&["rule", "best at", "median Δ", "εf effective", "unusable at"], &rows)
+            table(
+                &["rule", "best at", "median Δ", "εf effective", "unusable at"],
+                &rows
+            )
         );
     }
     let frows: Vec<Vec<String>> = fit
@@ -270,7 +299,9 @@ pub fn write_composite(fit: &CompositeFit, dir: &Path) -> Result<PathBuf> {
                 f.name.clone(),
                 format!("{} ({:?})", f.fraction, f.basis).to_lowercase(),
                 format!("{:.4}", f.volume_fraction),
-                f.weight_fraction.map(|w| format!("{w:.4}")).unwrap_or("n/a".into()),
+                f.weight_fraction
+                    .map(|w| format!("{w:.4}"))
+                    .unwrap_or("n/a".into()),
             ]
         })
         .collect();

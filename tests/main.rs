@@ -1,0 +1,3 @@
+//! The single integration-test binary; each subsystem is a module.
+
+mod permittivity;

@@ -422,7 +422,7 @@ fn bad_export_corpus() {
             "not_a_number.csv",
             ":3:2: expected a number for Cp_pF, found 'abc'",
         ),
-        ("freq_not_increasing.csv", ":4: frequency not increasing"),
+        ("freq_not_increasing.csv", ":3: frequency not increasing"),
         (
             "negative_capacitance.csv",
             "inductive at every frequency: not a capacitor",

@@ -307,10 +307,7 @@ fn split_header(h: &str) -> (String, Option<String>) {
         );
     }
     if let Some((name, unit)) = h.rsplit_once('_') {
-        if Kind::of(name)
-            .and_then(Kind::dimension)
-            .is_some_and(|d| d.factor(unit).is_some())
-        {
+        if Kind::of(name).is_some() && Kind::of(h).is_none() {
             return (name.to_string(), Some(unit.to_string()));
         }
     }
@@ -320,6 +317,8 @@ fn split_header(h: &str) -> (String, Option<String>) {
 struct Column {
     col: usize,
     factor: f64,
+    /// SI symbol a value may carry after its prefix (`15.7pF`).
+    symbol: &'static str,
 }
 
 fn read_csv(
@@ -408,7 +407,15 @@ fn read_csv(
                     .with_hint(format!("expected one of {}", d.accepted()))
             })?,
         };
-        cols.push((kind, Column { col: c, factor }, unit));
+        cols.push((
+            kind,
+            Column {
+                col: c,
+                factor,
+                symbol: kind.dimension().map(Dimension::si).unwrap_or(""),
+            },
+            unit,
+        ));
     }
     let find = |k: Kind| cols.iter().find(|(kk, _, _)| *kk == k).map(|(_, c, _)| c);
     let freq = find(Kind::Freq).expect("the header line names a frequency column");
@@ -517,16 +524,18 @@ fn value(table: &Table, row: &Row, c: &Column, what: &str) -> Result<f64> {
     } else {
         raw.clone()
     };
-    let v = parse_engineering(&text, "").ok_or_else(|| {
-        Error::input(
-            table.loc(row, c.col),
-            if raw.is_empty() {
-                format!("{what} is empty; expected a number")
-            } else {
-                format!("expected a number for {what}, found '{raw}'")
-            },
-        )
-    })?;
+    let v = parse_engineering(&text, c.symbol)
+        .or_else(|| parse_engineering(&text, "Ohm"))
+        .ok_or_else(|| {
+            Error::input(
+                table.loc(row, c.col),
+                if raw.is_empty() {
+                    format!("{what} is empty; expected a number")
+                } else {
+                    format!("expected a number for {what}, found '{raw}'")
+                },
+            )
+        })?;
     if v.abs() >= OVERLOAD {
         return Err(Error::input(
             table.loc(row, c.col),

@@ -466,7 +466,7 @@ pub fn analyse(
     };
     match settings.edge {
         EdgeCorrection::None => notes.push(format!(
-            "edge correction off: Kirchhoff's fringe capacitance of these plates is {ce:.4e} F, {gap_pct:.1} % of the empty-gap capacitance; on unguarded plates with the fringe in air εr would read up to {:.1} % high (--edge air), with the fringe in the coupon {:.1} % high (--edge filled)",
+            "edge correction off: Kirchhoff's fringe capacitance of these plates is {ce:.4e} F, {gap_pct:.1} % of the empty-gap capacitance; on unguarded plates with the fringe in air εr reads {:.1} % high (--edge air), with the fringe in the coupon {:.1} % high (--edge filled)",
             100.0 * rel_edge / median_eps,
             gap_pct
         )),

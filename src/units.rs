@@ -15,6 +15,20 @@ pub enum Dimension {
     Area,
     /// Time (SI: s).
     Time,
+    /// Capacitance (SI: F).
+    Capacitance,
+    /// Frequency (SI: Hz).
+    Frequency,
+    /// Resistance, reactance, impedance (SI: Ω).
+    Resistance,
+    /// Conductance, susceptance, admittance (SI: S).
+    Conductance,
+    /// Inductance (SI: H).
+    Inductance,
+    /// Plane angle (SI: rad).
+    Angle,
+    /// Mass density (SI: kg/m³).
+    Density,
 }
 
 impl Dimension {
@@ -42,6 +56,69 @@ impl Dimension {
                 ("mm²", 1e-6),
             ],
             Dimension::Time => &[("s", 1.0), ("ms", 1e-3), ("min", 60.0), ("h", 3600.0)],
+            Dimension::Capacitance => &[
+                ("F", 1.0),
+                ("mF", 1e-3),
+                ("uF", 1e-6),
+                ("µF", 1e-6),
+                ("nF", 1e-9),
+                ("pF", 1e-12),
+                ("fF", 1e-15),
+            ],
+            Dimension::Frequency => &[
+                ("Hz", 1.0),
+                ("mHz", 1e-3),
+                ("kHz", 1e3),
+                ("MHz", 1e6),
+                ("GHz", 1e9),
+            ],
+            Dimension::Resistance => &[
+                ("Ohm", 1.0),
+                ("ohm", 1.0),
+                ("Ω", 1.0),
+                ("mOhm", 1e-3),
+                ("mohm", 1e-3),
+                ("mΩ", 1e-3),
+                ("kOhm", 1e3),
+                ("kohm", 1e3),
+                ("kΩ", 1e3),
+                ("MOhm", 1e6),
+                ("Mohm", 1e6),
+                ("MΩ", 1e6),
+                ("GOhm", 1e9),
+                ("Gohm", 1e9),
+                ("GΩ", 1e9),
+            ],
+            Dimension::Conductance => &[
+                ("S", 1.0),
+                ("mS", 1e-3),
+                ("uS", 1e-6),
+                ("µS", 1e-6),
+                ("nS", 1e-9),
+                ("pS", 1e-12),
+            ],
+            Dimension::Inductance => &[
+                ("H", 1.0),
+                ("mH", 1e-3),
+                ("uH", 1e-6),
+                ("µH", 1e-6),
+                ("nH", 1e-9),
+            ],
+            Dimension::Angle => &[
+                ("rad", 1.0),
+                ("deg", std::f64::consts::PI / 180.0),
+                ("°", std::f64::consts::PI / 180.0),
+            ],
+            Dimension::Density => &[
+                ("kg/m3", 1.0),
+                ("kg/m^3", 1.0),
+                ("kg/m³", 1.0),
+                ("g/cm3", 1e3),
+                ("g/cm^3", 1e3),
+                ("g/cm³", 1e3),
+                ("g/cc", 1e3),
+                ("g/mL", 1e3),
+            ],
         }
     }
 
@@ -53,6 +130,13 @@ impl Dimension {
             Dimension::Length => "m",
             Dimension::Area => "m²",
             Dimension::Time => "s",
+            Dimension::Capacitance => "F",
+            Dimension::Frequency => "Hz",
+            Dimension::Resistance => "Ω",
+            Dimension::Conductance => "S",
+            Dimension::Inductance => "H",
+            Dimension::Angle => "rad",
+            Dimension::Density => "kg/m³",
         }
     }
 
@@ -147,6 +231,45 @@ fn parse_one(s: &str, dim: Dimension, default_unit: Option<&str>) -> Result<f64,
     })
 }
 
+/// Factor of an SI prefix letter (`p`, `n`, `u`, `µ`, `m`, `k`, `M`, `G`, `T`, `f`).
+pub fn si_prefix(c: char) -> Option<f64> {
+    Some(match c {
+        'f' => 1e-15,
+        'p' => 1e-12,
+        'n' => 1e-9,
+        'u' | 'µ' | 'μ' => 1e-6,
+        'm' => 1e-3,
+        'k' | 'K' => 1e3,
+        'M' => 1e6,
+        'G' => 1e9,
+        'T' => 1e12,
+        _ => return None,
+    })
+}
+
+/// A number as instruments print it, in SI: plain or engineering notation
+/// (`+2.00000000000e+001`, `1.5E-11`), or with an SI prefix and optionally the
+/// unit symbol `unit` (`15.75p`, `15.75pF`, `1.2k`, `3 MΩ`). `None` if unreadable
+/// or not finite.
+pub fn parse_engineering(text: &str, unit: &str) -> Option<f64> {
+    let t = text.trim();
+    let (num, rest) = split_number(t);
+    let v: f64 = num.parse().ok()?;
+    let rest = rest.trim();
+    let rest = if unit.is_empty() {
+        rest
+    } else {
+        rest.strip_suffix(unit).unwrap_or(rest)
+    };
+    let mut chars = rest.chars();
+    let f = match (chars.next(), chars.next()) {
+        (None, _) => 1.0,
+        (Some(c), None) => si_prefix(c)?,
+        _ => return None,
+    };
+    Some(v * f).filter(|x| x.is_finite())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -167,5 +290,22 @@ mod tests {
             .unwrap_err()
             .contains("unknown unit 'ksi'"));
         assert!(parse_quantity("abc", Dimension::Length).is_err());
+    }
+
+    #[test]
+    fn parses_instrument_numbers() {
+        assert_eq!(parse_engineering("+2.00000000000e+001", ""), Some(20.0));
+        assert!((parse_engineering("15.75p", "F").unwrap() - 15.75e-12).abs() < 1e-24);
+        assert!((parse_engineering("15.75pF", "F").unwrap() - 15.75e-12).abs() < 1e-24);
+        assert_eq!(parse_engineering("1.2k", "Ohm"), Some(1200.0));
+        assert_eq!(parse_engineering("3 MOhm", "Ohm"), Some(3e6));
+        assert_eq!(parse_engineering("2.5 F", "F"), Some(2.5));
+        assert_eq!(parse_engineering("1e999", ""), None);
+        assert_eq!(parse_engineering("1.0xy", ""), None);
+        assert_eq!(parse_engineering("abc", ""), None);
+        let q = parse_quantity("1.03 g/cm3", Dimension::Density).unwrap();
+        assert!((q.value - 1030.0).abs() < 1e-9);
+        let q = parse_quantity("0.3pF±0.05pF", Dimension::Capacitance).unwrap();
+        assert!((q.tolerance.unwrap() - 5e-14).abs() < 1e-26);
     }
 }

@@ -3,3 +3,4 @@
 mod datasets;
 mod estimation;
 mod models;
+mod permittivity;

@@ -1,7 +1,9 @@
 //! Subcommands, one file each.
 
 mod bench;
+mod composite;
 mod hyperelastic;
+mod permittivity;
 mod synth;
 
 use clap::{Parser, Subcommand};
@@ -19,6 +21,10 @@ pub struct Cli {
 enum Command {
     /// Fit hyperelastic strain-energy coefficients to tensile-test data.
     Hyperelastic(hyperelastic::Args),
+    /// Relative permittivity and loss per frequency from LCR-meter exports.
+    Permittivity(permittivity::Args),
+    /// Fit mixing rules to a composite series described by a TOML manifest.
+    Composite(composite::Args),
     /// Generate synthetic test data from known constants (with noise and seed).
     Synth(synth::Args),
     /// Measure speed against accuracy and write tables and charts under reports/.
@@ -30,6 +36,8 @@ pub fn run(cli: Cli) -> Result<i32> {
     match cli.command {
         Command::Hyperelastic(a) => hyperelastic::run(a),
         Command::Synth(a) => synth::run(a),
+        Command::Permittivity(a) => permittivity::run(a),
+        Command::Composite(a) => composite::run(a),
         Command::Bench(a) => bench::run(a),
     }
 }

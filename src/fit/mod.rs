@@ -1,10 +1,12 @@
 //! Estimation: least-squares machinery shared by every estimator, and the
 //! estimators themselves.
 
+pub mod composite;
 pub mod diagnostics;
 pub mod hyperelastic;
 pub mod linear;
 pub mod lm;
+pub mod permittivity;
 pub mod problem;
 
 use serde::{Deserialize, Serialize};

@@ -1,6 +1,8 @@
 //! Reading and writing files: a located delimited-table reader, the tensile-test
 //! reader, and atomic writes.
 
+pub mod lcr;
+pub mod manifest;
 pub mod table;
 pub mod tensile;
 pub mod write;

@@ -3,4 +3,5 @@
 
 pub mod format;
 pub mod hyperelastic;
+pub mod permittivity;
 pub mod plot;

@@ -1,0 +1,166 @@
+//! `dea-fit composite`: a composite series from a TOML manifest — εr of every
+//! sample, mixing rules fitted per frequency and ranked by AICc, claims checked;
+//! `--generate` writes the synthetic exports a manifest's `[synthetic]` table
+//! describes.
+
+use super::permittivity::progress;
+use dea_fit::fit::composite::{self, check_claim, Basis, CompositeFit};
+use dea_fit::io::manifest;
+use dea_fit::io::write::{atomic_write, write_fit, Replaced};
+use dea_fit::report::permittivity::{ranking_table, reference_fit, write_composite};
+use dea_fit::{Error, Result};
+use std::path::PathBuf;
+
+/// Fit mixing rules to a composite series.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The series manifest (TOML).
+    manifest: PathBuf,
+    /// Also check a claimed increase, e.g. 400%@37.5% (basis unknown: both are
+    /// read), 400%@37.5wt% or 400%@37.5vol%. Repeatable.
+    #[arg(long, value_name = "CLAIM")]
+    claim: Vec<String>,
+    /// Write the synthetic exports of the manifest's [synthetic] table and exit.
+    #[arg(long)]
+    generate: bool,
+    /// Write the fit (JSON) to this file.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Write a report (SVG + index.md) into this directory.
+    #[arg(long)]
+    report: Option<PathBuf>,
+    /// Print the fit as JSON.
+    #[arg(long)]
+    json: bool,
+    /// Exit 1 when the series' status is blocking.
+    #[arg(long)]
+    strict: bool,
+}
+
+/// Parse `400%@37.5%`, `400%@37.5wt%`, `400%@0.375vol`.
+pub fn parse_claim(s: &str) -> Result<(f64, f64, Option<Basis>)> {
+    let bad = || {
+        Error::settings(format!("--claim: cannot read '{s}'"))
+            .with_hint("write the increase and the fraction, e.g. 400%@37.5% or 200%@10wt%")
+    };
+    let (inc, frac) = s.split_once('@').ok_or_else(bad)?;
+    let inc: f64 = inc
+        .trim()
+        .trim_end_matches('%')
+        .trim()
+        .parse()
+        .map_err(|_| bad())?;
+    let f = frac.trim();
+    let (f, basis) = if let Some(x) = f.strip_suffix("wt%").or_else(|| f.strip_suffix("wt")) {
+        (x, Some(Basis::Weight))
+    } else if let Some(x) = f.strip_suffix("vol%").or_else(|| f.strip_suffix("vol")) {
+        (x, Some(Basis::Volume))
+    } else {
+        (f, None)
+    };
+    let pct = f.ends_with('%') || frac.contains('%');
+    let v: f64 = f
+        .trim()
+        .trim_end_matches('%')
+        .trim()
+        .parse()
+        .map_err(|_| bad())?;
+    Ok((inc, if pct { v / 100.0 } else { v }, basis))
+}
+
+/// Run the subcommand.
+pub fn run(a: Args) -> Result<i32> {
+    let m = manifest::read(&a.manifest)?;
+    if a.generate {
+        for (path, text) in composite::synthesize(&m)? {
+            atomic_write(&path, text.as_bytes())?;
+            println!("wrote {}", path.display());
+        }
+        return Ok(0);
+    }
+    let bar = progress(m.samples.len());
+    let mut fit = composite::fit_series(&m, &|| bar.inc(1))?;
+    bar.finish_and_clear();
+    for c in &a.claim {
+        let (inc, frac, basis) = parse_claim(c)?;
+        fit.claims
+            .push(check_claim(frac, inc, basis, &fit.matrix, &fit.filler)?);
+    }
+    let json = serde_json::to_string_pretty(&fit).expect("a fit serialises");
+    if let Some(out) = &a.out {
+        if let Replaced::KeptAs(p) = write_fit(out, json.as_bytes(), |old| old == json)? {
+            eprintln!(
+                "note: {} held a different fit; it was kept as {}",
+                out.display(),
+                p.display()
+            );
+        }
+    }
+    let page = match &a.report {
+        Some(d) => Some(write_composite(&fit, d)?),
+        None => None,
+    };
+    if a.json {
+        println!("{json}");
+    } else {
+        print!("{}", summary(&fit));
+        if let Some(p) = page {
+            println!("report: {}", p.display());
+        }
+    }
+    Ok(if a.strict && fit.status.is_blocking() {
+        1
+    } else {
+        0
+    })
+}
+
+/// The human-readable output.
+pub fn summary(fit: &CompositeFit) -> String {
+    let mut s = format!(
+        "{}: {} in {}, {} sample(s)\n",
+        fit.name,
+        fit.filler.name,
+        fit.matrix.name,
+        fit.samples.len()
+    );
+    for f in &fit.fractions {
+        s.push_str(&format!(
+            "  {:<12} {} {:?} → φ = {:.4}\n",
+            f.name, f.fraction, f.basis, f.volume_fraction
+        ));
+    }
+    if let Some(rf) = reference_fit(fit) {
+        s.push_str(&format!("\nmixing rules at {} Hz\n", rf.freq_hz));
+        s.push_str(&ranking_table(rf));
+    }
+    if !fit.summary.is_empty() {
+        s.push_str(&format!("\nover {} frequencies:\n", fit.fits.len()));
+        for r in &fit.summary {
+            s.push_str(&format!(
+                "  {:<18} best at {:>3}, median Δ {:>8.2}, εf effective {:.4}–{:.4}{}\n",
+                r.rule.name(),
+                r.best_at,
+                r.median_delta,
+                r.eps_filler_eff_range[0],
+                r.eps_filler_eff_range[1],
+                if r.unusable_at > 0 {
+                    format!(", unusable at {}", r.unusable_at)
+                } else {
+                    String::new()
+                }
+            ));
+        }
+    }
+    for c in &fit.claims {
+        s.push_str(&format!("\nclaim: {}\n", c.verdict));
+    }
+    s.push_str(&format!(
+        "status: {}\n",
+        format!("{:?}", fit.status).to_lowercase()
+    ));
+    for w in &fit.warnings {
+        s.push_str(&format!("warning: {w}\n"));
+    }
+    s
+}

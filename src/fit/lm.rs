@@ -94,7 +94,8 @@ pub fn minimize<P: LeastSquares + ?Sized>(
         };
     }
     let mut cost = 0.5 * r.norm_squared();
-    let mut mu = -1.0;
+    // Damping is relative to diag(JᵀJ) (Marquardt scaling), so it is dimensionless.
+    let mut mu = 1e-3;
     let mut nu = 2.0;
     let mut a = DMatrix::zeros(n, n);
     let mut g = DVector::zeros(n);
@@ -115,9 +116,6 @@ pub fn minimize<P: LeastSquares + ?Sized>(
             .fold(0.0, f64::max);
         if gnorm <= settings.gtol * (1.0 + cost) {
             return done(x, cost, it, evaluations, Termination::Converged("gradient"));
-        }
-        if mu < 0.0 {
-            mu = 1e-3 * (0..n).map(|i| a[(i, i)]).fold(0.0, f64::max).max(1e-300);
         }
         loop {
             let mut sys = a.clone();

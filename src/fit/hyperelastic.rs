@@ -60,6 +60,16 @@ pub enum Search {
     Full,
 }
 
+impl Search {
+    /// The method as the solver report names it.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Search::VarPro => "variable projection + bounded Levenberg-Marquardt",
+            Search::Full => "bounded Levenberg-Marquardt over all parameters",
+        }
+    }
+}
+
 impl Default for Settings {
     fn default() -> Self {
         Settings {
@@ -272,6 +282,34 @@ struct Estimate {
     notes: Vec<String>,
 }
 
+/// One start of the [`Search::Full`] baseline: LM over all parameters from the
+/// start's nonlinear values, the linear ones first solved exactly at them (so both
+/// methods begin at the same point). Returns (cost, parameters) if the search ended
+/// finite, and the iterations taken.
+fn full_search(
+    prob: &mut HyperProblem,
+    nonlin: &[usize],
+    start: &[f64],
+    bounds: &[(f64, f64)],
+    lm_settings: &LmSettings,
+) -> (Option<(f64, Vec<f64>)>, usize) {
+    let mut full = vec![1.0; bounds.len()];
+    for (&j, &v) in nonlin.iter().zip(start) {
+        full[j] = v;
+    }
+    let mut vp = VarPro::new(prob, &full);
+    let mut r = DVector::zeros(vp.inner.len());
+    if !vp.eval(start, &mut r, None) {
+        return (None, 0);
+    }
+    let p0 = vp.full.clone();
+    let res = lm::minimize(prob, &p0, bounds, lm_settings);
+    (
+        res.cost.is_finite().then_some((res.cost, res.x)),
+        res.iterations,
+    )
+}
+
 fn too_few(data: &Dataset, model: &dyn StrainEnergy) -> Option<Error> {
     let (n, k) = (data.samples.len(), model.params().len());
     (n < k).then(|| {
@@ -358,44 +396,30 @@ fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Es
     let mut results = Vec::with_capacity(starts.len());
     let mut iterations = 0;
     for start in &starts {
+        if s.method == Search::Full {
+            let (found, its) = full_search(&mut prob, &nonlin, start, &bounds, &lm_settings);
+            iterations += its;
+            results.extend(found);
+            continue;
+        }
         let mut full = vec![1.0; k];
         for (&j, &v) in nonlin.iter().zip(start) {
             full[j] = v;
         }
         let mut vp = VarPro::new(&mut prob, &full);
+        let res = lm::minimize(&mut vp, start, &theta_bounds, &lm_settings);
+        iterations += res.iterations;
+        // Recompute the projected linear coefficients at the final θ.
         let mut r = DVector::zeros(n);
-        match s.method {
-            Search::VarPro => {
-                let res = lm::minimize(&mut vp, start, &theta_bounds, &lm_settings);
-                iterations += res.iterations;
-                // Recompute the projected linear coefficients at the final θ.
-                let ok = vp.eval(&res.x, &mut r, None);
-                if ok && res.cost.is_finite() {
-                    results.push((res.cost, vp.full.clone()));
-                }
-            }
-            Search::Full => {
-                // The same start: θ from the list, c exactly projected at it.
-                if !vp.eval(start, &mut r, None) {
-                    continue;
-                }
-                let p0 = vp.full.clone();
-                let res = lm::minimize(&mut prob, &p0, &bounds, &lm_settings);
-                iterations += res.iterations;
-                if res.cost.is_finite() {
-                    results.push((res.cost, res.x));
-                }
-            }
+        let ok = vp.eval(&res.x, &mut r, None);
+        if ok && res.cost.is_finite() {
+            results.push((res.cost, vp.full.clone()));
         }
     }
-    let method = match s.method {
-        Search::VarPro => "variable projection + bounded Levenberg-Marquardt",
-        Search::Full => "bounded Levenberg-Marquardt over all parameters",
-    };
     if results.is_empty() {
         return Ok(Estimate {
             params: vec![f64::NAN; k],
-            method: method.into(),
+            method: s.method.describe().into(),
             starts: starts.len(),
             starts_at_best: 0,
             iterations,
@@ -463,7 +487,7 @@ fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Es
     };
     Ok(Estimate {
         params,
-        method: format!("{method}, multi-start, full LM polish"),
+        method: format!("{}, multi-start, full LM polish", s.method.describe()),
         starts: starts.len(),
         starts_at_best: at_best,
         iterations: iterations + polish.iterations,

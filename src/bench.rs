@@ -363,6 +363,45 @@ impl HyperPlan {
 mod tests {
     use super::*;
 
+    fn shipped() -> Vec<NamedData> {
+        shipped_datasets(&Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets")).unwrap()
+    }
+
+    #[test]
+    fn standard_plan_covers_every_study() {
+        let plan = HyperPlan::standard(shipped(), Budget::default()).unwrap();
+        let count = |s| plan.cases.iter().filter(|c| c.study == s).count();
+        assert_eq!(count(Study::Models), 3 * MODEL_NAMES.len());
+        assert_eq!(count(Study::Tolerance), FTOLS.len());
+        assert_eq!(count(Study::Method), 10);
+        // Ogden-3 has C(8, 3) = 56 starts: 1, 2, 4, …, 32 and all 56.
+        let starts: Vec<Option<usize>> = plan
+            .cases
+            .iter()
+            .filter(|c| c.study == Study::Starts)
+            .map(|c| c.settings.max_starts)
+            .collect();
+        let want = [1, 2, 4, 8, 16, 32, 56].map(Some);
+        assert_eq!(starts, want);
+        // Without Treloar's data only the per-model study remains.
+        let mut vhb = shipped();
+        vhb.truncate(2);
+        let plan = HyperPlan::standard(vhb, Budget::default()).unwrap();
+        assert!(plan.cases.iter().all(|c| c.study == Study::Models));
+    }
+
+    #[test]
+    fn objective_is_half_the_residual_sum_of_squares() {
+        // Unit weights and absolute residuals: ½‖r‖² = ½·n·RMSE².
+        let d = &shipped()[0];
+        let s = Settings::default();
+        let fit = hyperelastic::fit(&d.data, &ModelSpec::new("yeoh", s.ogden_form), &s).unwrap();
+        let n = d.data.samples.len() as f64;
+        let want = 0.5 * n * fit.rmse_pa.powi(2);
+        let got = objective(&fit, &d.data, &s).unwrap();
+        assert!((got - want).abs() <= 1e-12 * want, "{got} vs {want}");
+    }
+
     #[test]
     fn median_of_odd_even_and_empty() {
         assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);

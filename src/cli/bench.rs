@@ -74,12 +74,14 @@ fn progress_bar(len: usize) -> ProgressBar {
 
 fn hyperelastic(a: HyperArgs) -> Result<i32> {
     let budget = a.common.budget()?;
-    let data = bench::shipped_datasets(&a.data_dir).map_err(|e| {
-        e.with_hint(format!(
-            "--data-dir must hold vhb4910/ and treloar/ with uniaxial, equibiaxial and planar .csv (run from the repository root); looked in {}",
+    if !a.data_dir.join("vhb4910").is_dir() || !a.data_dir.join("treloar").is_dir() {
+        return Err(Error::settings(format!(
+            "{} does not hold the shipped datasets vhb4910/ and treloar/",
             a.data_dir.display()
         ))
-    })?;
+        .with_hint("run from the repository root or pass --data-dir path/to/datasets"));
+    }
+    let data = bench::shipped_datasets(&a.data_dir)?;
     let plan = HyperPlan::standard(data, budget)?;
     let bar = progress_bar(plan.cases.len());
     let rows = plan.run(&mut |r| {

@@ -1,0 +1,3 @@
+//! One integration-test binary (fewer links on a 2-core CI): one module per area.
+
+mod bench;

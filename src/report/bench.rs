@@ -184,12 +184,13 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
             .iter()
             .map(|r| r.objective)
             .fold(f64::INFINITY, f64::min);
+        let ppm = |o: f64| 1e6 * (o - best) / best;
         let mut series: Vec<Series> = sel
             .iter()
             .enumerate()
             .map(|(i, r)| Series {
                 label: format!("{} = {}", r.setting, r.value),
-                points: vec![(ms(r.fit_median_s), r.rmse_pa / 1e3)],
+                points: vec![(ms(r.fit_median_s), ppm(r.objective))],
                 color: i,
                 style: Style::Points,
             })
@@ -198,15 +199,15 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
             label: "in order".into(),
             points: sel
                 .iter()
-                .map(|r| (ms(r.fit_median_s), r.rmse_pa / 1e3))
+                .map(|r| (ms(r.fit_median_s), ppm(r.objective)))
                 .collect(),
             color: 7,
             style: Style::Dashed,
         });
         Chart {
-            title: format!("Ogden-3, {TRELOAR_ALL}: {title} vs RMSE vs time"),
+            title: format!("Ogden-3, {TRELOAR_ALL}: {title}, objective vs time"),
             x_label: "median time per fit [ms] (log)".into(),
-            y_label: "RMSE [kPa]".into(),
+            y_label: "objective above the best reached [ppm]".into(),
             series,
             log_x: true,
         }
@@ -255,6 +256,29 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
     let sel: Vec<&HyperRow> = rows.iter().filter(|r| r.study == Study::Method).collect();
     if !sel.is_empty() {
         let file = "hyperelastic-method.svg";
+        let point = |r: &HyperRow| {
+            (
+                ms(r.solver_median_s),
+                100.0 * r.starts_at_best as f64 / r.starts.max(1) as f64,
+            )
+        };
+        let mut models: Vec<&str> = Vec::new();
+        for r in &sel {
+            if !models.contains(&r.model.as_str()) {
+                models.push(&r.model);
+            }
+        }
+        // One dashed segment per model from its varpro point to its full-LM point.
+        let links = models.iter().enumerate().map(|(i, m)| Series {
+            label: format!("{m}: varpro → full"),
+            points: sel
+                .iter()
+                .filter(|r| r.model == *m)
+                .map(|r| point(r))
+                .collect(),
+            color: 2 + i,
+            style: Style::Dashed,
+        });
         let series = [("varpro", "variable projection"), ("full", "full LM")]
             .iter()
             .enumerate()
@@ -263,16 +287,12 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
                 points: sel
                     .iter()
                     .filter(|r| r.value == *v)
-                    .map(|r| {
-                        (
-                            ms(r.solver_median_s),
-                            100.0 * r.starts_at_best as f64 / r.starts.max(1) as f64,
-                        )
-                    })
+                    .map(|r| point(r))
                     .collect(),
                 color: i,
                 style: Style::Points,
             })
+            .chain(links)
             .collect();
         Chart {
             title: format!("{TRELOAR_ALL}: variable projection vs full LM, same starts"),

@@ -1,1 +1,119 @@
-fn main() {}
+//! Criterion benches of the hyperelastic estimator (`cargo bench --bench hyperelastic`).
+//!
+//! * `fit/vhb4910-uniaxial/<model>`: a whole `fit` call (search and diagnostics) of
+//!   every model on the shipped VHB 4910 uniaxial data.
+//! * `fit/treloar-3modes/ogden3-{varpro,full}`: the classic hard case, Ogden-3 on
+//!   Treloar's three modes, by variable projection and by the plain full-parameter
+//!   LM baseline from the same starts.
+//! * `search/vhb4910-uniaxial/yeoh-{svd,lm}`: the search alone for Yeoh, the exact
+//!   linear least-squares solve against the naive baseline of an iterative LM.
+//!
+//! Sample settings are modest (10 flat samples, 1 s) so the whole run takes a
+//! couple of minutes on a shared 2-core machine.
+
+use criterion::{criterion_group, criterion_main, Criterion, SamplingMode};
+use dea_fit::bench::{shipped_datasets, NamedData, TRELOAR_ALL, VHB_UNIAXIAL};
+use dea_fit::fit::hyperelastic::{fit, Search, Settings};
+use dea_fit::fit::lm::{self, LeastSquares, LmSettings};
+use dea_fit::fit::problem::{svd_solve, HyperProblem};
+use dea_fit::material::hyperelastic::{ModelSpec, MODEL_NAMES};
+use nalgebra::DMatrix;
+use std::hint::black_box;
+use std::path::Path;
+use std::time::Duration;
+
+fn data() -> Vec<NamedData> {
+    shipped_datasets(&Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets"))
+        .expect("the shipped datasets are readable")
+}
+
+fn get<'a>(sets: &'a [NamedData], name: &str) -> &'a NamedData {
+    sets.iter().find(|d| d.name == name).expect("shipped set")
+}
+
+fn fits(c: &mut Criterion) {
+    let sets = data();
+    let vhb = &get(&sets, VHB_UNIAXIAL).data;
+    let treloar = &get(&sets, TRELOAR_ALL).data;
+    let base = Settings::default();
+    let mut g = c.benchmark_group(format!("fit/{VHB_UNIAXIAL}"));
+    g.sampling_mode(SamplingMode::Flat);
+    for m in MODEL_NAMES {
+        let spec = ModelSpec::new(m, base.ogden_form);
+        g.bench_function(m, |b| {
+            b.iter(|| fit(black_box(vhb), &spec, &base).expect("fit"))
+        });
+    }
+    g.finish();
+
+    let mut g = c.benchmark_group(format!("fit/{TRELOAR_ALL}"));
+    g.sampling_mode(SamplingMode::Flat);
+    let spec = ModelSpec::new("ogden3", base.ogden_form);
+    for (label, method) in [
+        ("ogden3-varpro", Search::VarPro),
+        ("ogden3-full", Search::Full),
+    ] {
+        let s = Settings {
+            method,
+            ..base.clone()
+        };
+        g.bench_function(label, |b| {
+            b.iter(|| fit(black_box(treloar), &spec, &s).expect("fit"))
+        });
+    }
+    g.finish();
+}
+
+fn yeoh_search(c: &mut Criterion) {
+    let sets = data();
+    let vhb = &get(&sets, VHB_UNIAXIAL).data;
+    let base = Settings::default();
+    let model = ModelSpec::new("yeoh", base.ogden_form)
+        .build()
+        .expect("yeoh");
+    let mut g = c.benchmark_group(format!("search/{VHB_UNIAXIAL}"));
+    // Exact: the stress is linear in (C10, C20, C30), so one SVD solve of the
+    // design matrix (what the estimator does).
+    g.bench_function("yeoh-svd", |b| {
+        b.iter(|| {
+            let mut prob = HyperProblem::new(model.as_ref(), black_box(vhb), base.residual);
+            let (n, k) = prob.dims();
+            let mut a = DMatrix::zeros(n, k);
+            prob.jacobian(&vec![0.0; k], &mut a);
+            svd_solve(&a, &prob.scaled_targets()).expect("solvable")
+        })
+    });
+    // Naive: bounded LM over the same three coefficients from a neo-Hookean-sized start.
+    let bounds = model.bounds(0.0);
+    let settings = LmSettings::default();
+    // The baseline must reach the exact optimum, or the comparison means nothing.
+    let mut prob = HyperProblem::new(model.as_ref(), vhb, base.residual);
+    let naive = lm::minimize(&mut prob, &[1e5, 0.0, 0.0], &bounds, &settings);
+    let (n, k) = prob.dims();
+    let mut a = DMatrix::zeros(n, k);
+    prob.jacobian(&vec![0.0; k], &mut a);
+    let (c, _) = svd_solve(&a, &prob.scaled_targets()).expect("solvable");
+    let exact = 0.5 * (&a * &c - prob.scaled_targets()).norm_squared();
+    assert!(
+        (naive.cost - exact).abs() <= 1e-8 * exact,
+        "LM {} vs exact {exact}",
+        naive.cost
+    );
+    g.bench_function("yeoh-lm", |b| {
+        b.iter(|| {
+            let mut prob = HyperProblem::new(model.as_ref(), black_box(vhb), base.residual);
+            lm::minimize(&mut prob, &[1e5, 0.0, 0.0], &bounds, &settings)
+        })
+    });
+    g.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default()
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_secs(1));
+    targets = fits, yeoh_search
+}
+criterion_main!(benches);

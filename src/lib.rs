@@ -14,6 +14,7 @@
 //! ([`units`], CSV headers, CLI flags, fit files).
 #![warn(missing_docs)]
 
+pub mod bench;
 pub mod data;
 pub mod error;
 pub mod fit;

@@ -1,15 +1,110 @@
-//! `dea-fit bench`: speed against accuracy, written as CSV and SVG under reports/.
+//! `dea-fit bench <what>`: speed against accuracy, written as CSV, SVG and Markdown
+//! under `reports/bench/`. One subcommand per estimator.
 
-use dea_fit::Result;
+use dea_fit::bench::{self, Budget, HyperPlan};
+use dea_fit::report;
+use dea_fit::{Error, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::PathBuf;
 
-/// Benchmark a subsystem.
+/// Measure speed against accuracy.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// What to benchmark: hyperelastic.
-    what: String,
+    #[command(subcommand)]
+    what: What,
+}
+
+#[derive(Debug, clap::Subcommand)]
+enum What {
+    /// The hyperelastic estimator: every model on the shipped data; for Ogden-3 on
+    /// Treloar's three modes, multi-start points and LM tolerance against objective
+    /// and time, and variable projection against full LM.
+    Hyperelastic(HyperArgs),
+}
+
+/// Options every bench takes.
+#[derive(Debug, clap::Args)]
+struct Common {
+    /// Directory of the report.
+    #[arg(long, default_value = "reports/bench")]
+    out_dir: PathBuf,
+    /// Seconds spent repeating each case (at least --min-repeats runs).
+    #[arg(long, default_value_t = 0.2)]
+    budget: f64,
+    /// Fewest timed runs per case.
+    #[arg(long, default_value_t = 5)]
+    min_repeats: usize,
+}
+
+impl Common {
+    fn budget(&self) -> Result<Budget> {
+        let b = Budget {
+            min_repeats: self.min_repeats,
+            seconds: self.budget,
+            ..Budget::default()
+        };
+        b.check()?;
+        Ok(b)
+    }
+}
+
+#[derive(Debug, clap::Args)]
+struct HyperArgs {
+    #[command(flatten)]
+    common: Common,
+    /// Directory holding vhb4910/ and treloar/ (the shipped datasets).
+    #[arg(long, default_value = "datasets")]
+    data_dir: PathBuf,
 }
 
 /// Run the subcommand.
-pub fn run(_a: Args) -> Result<i32> {
+pub fn run(a: Args) -> Result<i32> {
+    match a.what {
+        What::Hyperelastic(h) => hyperelastic(h),
+    }
+}
+
+fn progress_bar(len: usize) -> ProgressBar {
+    let bar = ProgressBar::new(len as u64);
+    if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} {elapsed} {msg}") {
+        bar.set_style(style);
+    }
+    bar
+}
+
+fn hyperelastic(a: HyperArgs) -> Result<i32> {
+    let budget = a.common.budget()?;
+    if !a.data_dir.join("vhb4910").is_dir() || !a.data_dir.join("treloar").is_dir() {
+        return Err(Error::settings(format!(
+            "{} does not hold the shipped datasets vhb4910/ and treloar/",
+            a.data_dir.display()
+        ))
+        .with_hint("run from the repository root or pass --data-dir path/to/datasets"));
+    }
+    let data = bench::shipped_datasets(&a.data_dir)?;
+    let plan = HyperPlan::standard(data, budget)?;
+    let bar = progress_bar(plan.cases.len());
+    let rows = plan.run(&mut |r| {
+        bar.set_message(format!(
+            "{} {} {} {}",
+            r.dataset, r.model, r.setting, r.value
+        ));
+        bar.inc(1);
+    });
+    bar.finish_and_clear();
+    let rows = rows?;
+    let note = format!(
+        "dea-fit {}; budget {} s and at least {} runs per case; {} cases. Rerun: `dea-fit bench hyperelastic`.",
+        env!("CARGO_PKG_VERSION"),
+        budget.seconds,
+        budget.min_repeats,
+        rows.len()
+    );
+    let page = report::bench::write_hyperelastic(&rows, &note, &a.common.out_dir)
+        .map_err(|e: Error| e.with_hint("check that --out-dir is writable"))?;
+    for h in report::bench::headline(&rows) {
+        println!("{h}");
+    }
+    println!("report: {}", page.display());
     Ok(0)
 }

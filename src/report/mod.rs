@@ -1,6 +1,7 @@
 //! Reports: SVG charts (plotters) and a Markdown page linking them, plus aligned
 //! text tables and SI formatting for terminal output.
 
+pub mod bench;
 pub mod format;
 pub mod hyperelastic;
 pub mod permittivity;

@@ -76,6 +76,44 @@ fn range(vals: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
 }
 
 impl Chart {
+    /// The plot corner holding the fewest points (upper left on ties), where the
+    /// legend hides the least data.
+    fn emptiest_corner(&self, x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosition {
+        let fx = |v: f64| {
+            if self.log_x {
+                (v.ln() - x.0.ln()) / (x.1.ln() - x.0.ln())
+            } else {
+                (v - x.0) / (x.1 - x.0)
+            }
+        };
+        let fy = |v: f64| (v - y.0) / (y.1 - y.0);
+        // Corner regions: the outer 40 % of each axis.
+        let corners = [
+            (SeriesLabelPosition::UpperLeft, false, true),
+            (SeriesLabelPosition::UpperRight, true, true),
+            (SeriesLabelPosition::LowerLeft, false, false),
+            (SeriesLabelPosition::LowerRight, true, false),
+        ];
+        let count = |right: bool, upper: bool| {
+            self.series
+                .iter()
+                .flat_map(|s| s.points.iter())
+                .filter(|p| {
+                    let (u, v) = (fx(p.0), fy(p.1));
+                    u.is_finite()
+                        && v.is_finite()
+                        && (if right { u > 0.6 } else { u < 0.4 })
+                        && (if upper { v > 0.6 } else { v < 0.4 })
+                })
+                .count()
+        };
+        corners
+            .into_iter()
+            .min_by_key(|&(_, right, upper)| count(right, upper))
+            .map(|(c, ..)| c)
+            .unwrap_or(SeriesLabelPosition::UpperLeft)
+    }
+
     /// Render to an SVG file (written atomically).
     pub fn write_svg(&self, path: &Path) -> Result<()> {
         let mut svg = String::new();
@@ -90,6 +128,7 @@ impl Chart {
         let all = || self.series.iter().flat_map(|s| s.points.iter());
         let (x0, x1) = range(all().map(|p| p.0), self.log_x);
         let (y0, y1) = range(all().map(|p| p.1), false);
+        let legend_corner = self.emptiest_corner((x0, x1), (y0, y1));
         let mut builder = ChartBuilder::on(&root);
         builder
             .caption(&self.title, ("sans-serif", 22))
@@ -135,7 +174,7 @@ impl Chart {
                     .configure_series_labels()
                     .background_style(WHITE.mix(0.85))
                     .border_style(BLACK)
-                    .position(SeriesLabelPosition::UpperLeft)
+                    .position(legend_corner)
                     .draw()?;
             }};
         }

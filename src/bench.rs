@@ -1,0 +1,439 @@
+//! Speed against accuracy of the estimators (`dea-fit bench …`, criterion benches).
+//!
+//! Timing is wall clock ([`std::time::Instant`]) of whole library calls on one
+//! thread, repeated until a per-case [`Budget`] is spent, summarised by the median
+//! (robust to the odd descheduled run on a shared machine). Accuracy is what the
+//! fit reached: the objective ½‖r‖² of the estimator's own residuals, the RMSE, and
+//! how many multi-start points ended at the best objective.
+
+use crate::data::Dataset;
+use crate::error::{Error, Result};
+use crate::fit::hyperelastic::{self, HyperelasticFit, Search, Settings};
+use crate::fit::problem::HyperProblem;
+use crate::fit::Status;
+use crate::io::tensile::{self, TensileOptions};
+use crate::material::hyperelastic::{ModelSpec, MODEL_NAMES};
+use nalgebra::DVector;
+use serde::Serialize;
+use std::path::Path;
+use std::time::Instant;
+
+/// How long to measure one case.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Budget {
+    /// Repeat at least this often, whatever the time.
+    pub min_repeats: usize,
+    /// Never repeat more often than this.
+    pub max_repeats: usize,
+    /// Stop repeating once this many seconds have passed (after `min_repeats`).
+    pub seconds: f64,
+}
+
+impl Default for Budget {
+    fn default() -> Self {
+        Budget {
+            min_repeats: 5,
+            max_repeats: 20_000,
+            seconds: 0.2,
+        }
+    }
+}
+
+impl Budget {
+    /// Reject budgets that cannot measure anything.
+    pub fn check(&self) -> Result<()> {
+        if self.min_repeats == 0 || self.max_repeats < self.min_repeats {
+            return Err(Error::settings(format!(
+                "repeats must satisfy 1 ≤ min ({}) ≤ max ({})",
+                self.min_repeats, self.max_repeats
+            )));
+        }
+        if !(self.seconds >= 0.0 && self.seconds.is_finite()) {
+            return Err(Error::settings(format!(
+                "the time budget per case must be ≥ 0 s, found {}",
+                self.seconds
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Wall-clock statistics of repeated runs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Timing {
+    /// Median seconds per run.
+    pub median_s: f64,
+    /// Fastest run (s).
+    pub min_s: f64,
+    /// Number of runs.
+    pub repeats: usize,
+}
+
+/// Median of `v` (mean of the two middle values for even length; NaN if empty).
+pub fn median(v: &[f64]) -> f64 {
+    let mut s: Vec<f64> = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    match s.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => s[n / 2],
+        n => 0.5 * (s[n / 2 - 1] + s[n / 2]),
+    }
+}
+
+/// Run `f` repeatedly within `budget`; returns the timing and the last result.
+/// The first error stops the measurement and is returned.
+pub fn measure<T>(budget: &Budget, mut f: impl FnMut() -> Result<T>) -> Result<(Timing, T)> {
+    budget.check()?;
+    let start = Instant::now();
+    let mut times = Vec::new();
+    loop {
+        let t = Instant::now();
+        let out = f()?;
+        times.push(t.elapsed().as_secs_f64());
+        let enough =
+            times.len() >= budget.min_repeats && start.elapsed().as_secs_f64() >= budget.seconds;
+        if enough || times.len() >= budget.max_repeats {
+            let timing = Timing {
+                median_s: median(&times),
+                min_s: times.iter().copied().fold(f64::INFINITY, f64::min),
+                repeats: times.len(),
+            };
+            return Ok((timing, out));
+        }
+    }
+}
+
+/// Name of the shipped VHB 4910 uniaxial set.
+pub const VHB_UNIAXIAL: &str = "vhb4910-uniaxial";
+/// Name of the shipped VHB 4910 set with all three modes.
+pub const VHB_ALL: &str = "vhb4910-3modes";
+/// Name of Treloar's (1944) three modes together: the classic hard case.
+pub const TRELOAR_ALL: &str = "treloar-3modes";
+
+/// A named dataset.
+#[derive(Debug, Clone)]
+pub struct NamedData {
+    /// Short name used in tables and file names.
+    pub name: String,
+    /// The data.
+    pub data: Dataset,
+}
+
+/// The shipped data under `dir` (normally `datasets/`): [`VHB_UNIAXIAL`],
+/// [`VHB_ALL`] and [`TRELOAR_ALL`], in that order. Each file's mode comes from its
+/// `# mode:` line.
+pub fn shipped_datasets(dir: &Path) -> Result<Vec<NamedData>> {
+    let read = |set: &str, mode: &str| {
+        tensile::read(
+            &dir.join(set).join(format!("{mode}.csv")),
+            &TensileOptions::default(),
+        )
+    };
+    let modes = ["uniaxial", "equibiaxial", "planar"];
+    let all = |set: &str| -> Result<Dataset> {
+        let mut d = Dataset::default();
+        for m in modes {
+            d.extend(read(set, m)?);
+        }
+        Ok(d)
+    };
+    Ok(vec![
+        NamedData {
+            name: VHB_UNIAXIAL.into(),
+            data: read("vhb4910", "uniaxial")?,
+        },
+        NamedData {
+            name: VHB_ALL.into(),
+            data: all("vhb4910")?,
+        },
+        NamedData {
+            name: TRELOAR_ALL.into(),
+            data: all("treloar")?,
+        },
+    ])
+}
+
+/// Which question a benchmark row answers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Study {
+    /// Every model on every dataset with default settings: time vs RMSE.
+    Models,
+    /// Ogden-3 on [`TRELOAR_ALL`]: number of multi-start points vs objective vs time.
+    Starts,
+    /// Ogden-3 on [`TRELOAR_ALL`]: LM cost tolerance vs objective vs time.
+    Tolerance,
+    /// Nonlinear models on [`TRELOAR_ALL`]: variable projection vs full LM.
+    Method,
+}
+
+/// One measured case of the hyperelastic benchmark (one CSV row).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct HyperRow {
+    /// Which study.
+    pub study: Study,
+    /// Dataset name.
+    pub dataset: String,
+    /// Model name.
+    pub model: String,
+    /// The setting varied (`default`, `max_starts`, `ftol`, `method`).
+    pub setting: String,
+    /// Its value.
+    pub value: String,
+    /// Median wall time of a whole [`hyperelastic::fit`] call, diagnostics included (s).
+    pub fit_median_s: f64,
+    /// Fastest whole call (s).
+    pub fit_min_s: f64,
+    /// Median time of the search alone ([`crate::fit::SolverReport::seconds`], s).
+    pub solver_median_s: f64,
+    /// Number of timed runs.
+    pub repeats: usize,
+    /// Objective reached, ½‖r‖² of the scaled residuals (Pa² for absolute residuals).
+    pub objective: f64,
+    /// RMSE over all points (Pa).
+    pub rmse_pa: f64,
+    /// Multi-start points searched.
+    pub starts: usize,
+    /// Points whose search ended at the best objective of this run.
+    pub starts_at_best: usize,
+    /// LM iterations, summed over starts and polish.
+    pub iterations: usize,
+    /// Residual evaluations.
+    pub evaluations: usize,
+    /// Fit status.
+    pub status: Status,
+}
+
+/// The objective ½‖r‖² that `settings` minimise, at the fit's parameters.
+pub fn objective(fit: &HyperelasticFit, data: &Dataset, settings: &Settings) -> Result<f64> {
+    let model = fit.evaluator()?;
+    let prob = HyperProblem::new(model.as_ref(), data, settings.residual);
+    let mut r = DVector::zeros(prob.len());
+    prob.residuals(&fit.values(), &mut r);
+    Ok(0.5 * r.norm_squared())
+}
+
+/// One case: a model, data and settings, and the name of what was varied.
+#[derive(Debug, Clone)]
+pub struct HyperCase {
+    /// Study.
+    pub study: Study,
+    /// Index into the plan's datasets.
+    pub dataset: usize,
+    /// Model.
+    pub spec: ModelSpec,
+    /// Settings.
+    pub settings: Settings,
+    /// Setting varied.
+    pub setting: String,
+    /// Its value.
+    pub value: String,
+}
+
+/// What `dea-fit bench hyperelastic` measures.
+#[derive(Debug, Clone)]
+pub struct HyperPlan {
+    /// Datasets (the studies other than [`Study::Models`] use the one named [`TRELOAR_ALL`]).
+    pub datasets: Vec<NamedData>,
+    /// Cases, in run order.
+    pub cases: Vec<HyperCase>,
+    /// Measurement budget per case.
+    pub budget: Budget,
+}
+
+/// Tolerances of the [`Study::Tolerance`] sweep.
+pub const FTOLS: [f64; 7] = [1e-2, 1e-3, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12];
+
+impl HyperPlan {
+    /// The standard plan over `datasets` (see [`shipped_datasets`]): every model on
+    /// every dataset; then, on [`TRELOAR_ALL`] if present, Ogden-3 with 1, 2, 4, …
+    /// and all multi-start points, Ogden-3 at each of [`FTOLS`], and Gent and
+    /// Ogden-1…4 by variable projection and by full LM.
+    pub fn standard(datasets: Vec<NamedData>, budget: Budget) -> Result<Self> {
+        budget.check()?;
+        let base = Settings::default();
+        let case =
+            |study, dataset, name: &str, settings: &Settings, setting: &str, value| HyperCase {
+                study,
+                dataset,
+                spec: ModelSpec::new(name, settings.ogden_form),
+                settings: settings.clone(),
+                setting: setting.into(),
+                value,
+            };
+        let mut cases = Vec::new();
+        for d in 0..datasets.len() {
+            for m in MODEL_NAMES {
+                cases.push(case(Study::Models, d, m, &base, "default", "".into()));
+            }
+        }
+        if let Some(t) = datasets.iter().position(|d| d.name == TRELOAR_ALL) {
+            let ogden3 = ModelSpec::new("ogden3", base.ogden_form).build()?;
+            let prob = HyperProblem::new(ogden3.as_ref(), &datasets[t].data, base.residual);
+            let total = ogden3.nonlinear_starts(prob.max_i1_minus_3()).len();
+            let mut counts: Vec<usize> = (0..)
+                .map(|e| 1usize << e)
+                .take_while(|&c| c < total)
+                .collect();
+            counts.push(total);
+            for c in counts {
+                let s = Settings {
+                    max_starts: Some(c),
+                    ..base.clone()
+                };
+                cases.push(case(
+                    Study::Starts,
+                    t,
+                    "ogden3",
+                    &s,
+                    "max_starts",
+                    c.to_string(),
+                ));
+            }
+            for f in FTOLS {
+                let s = Settings {
+                    ftol: f,
+                    ..base.clone()
+                };
+                cases.push(case(
+                    Study::Tolerance,
+                    t,
+                    "ogden3",
+                    &s,
+                    "ftol",
+                    format!("{f:e}"),
+                ));
+            }
+            for m in ["gent", "ogden1", "ogden2", "ogden3", "ogden4"] {
+                for (method, label) in [(Search::VarPro, "varpro"), (Search::Full, "full")] {
+                    let s = Settings {
+                        method,
+                        ..base.clone()
+                    };
+                    cases.push(case(Study::Method, t, m, &s, "method", label.into()));
+                }
+            }
+        }
+        Ok(HyperPlan {
+            datasets,
+            cases,
+            budget,
+        })
+    }
+
+    /// Measure every case in order, calling `progress` after each.
+    pub fn run(&self, progress: &mut dyn FnMut(&HyperRow)) -> Result<Vec<HyperRow>> {
+        let mut rows = Vec::with_capacity(self.cases.len());
+        for c in &self.cases {
+            let d = self.datasets.get(c.dataset).ok_or_else(|| {
+                Error::settings(format!("case refers to dataset {} of none", c.dataset))
+            })?;
+            let mut solver = Vec::new();
+            let (timing, fit) = measure(&self.budget, || {
+                let f = hyperelastic::fit(&d.data, &c.spec, &c.settings)?;
+                solver.push(f.solver.seconds);
+                Ok(f)
+            })?;
+            let row = HyperRow {
+                study: c.study,
+                dataset: d.name.clone(),
+                model: fit.model.clone(),
+                setting: c.setting.clone(),
+                value: c.value.clone(),
+                fit_median_s: timing.median_s,
+                fit_min_s: timing.min_s,
+                solver_median_s: median(&solver),
+                repeats: timing.repeats,
+                objective: objective(&fit, &d.data, &c.settings)?,
+                rmse_pa: fit.rmse_pa,
+                starts: fit.solver.starts,
+                starts_at_best: fit.solver.starts_at_best,
+                iterations: fit.solver.iterations,
+                evaluations: fit.solver.evaluations,
+                status: fit.status,
+            };
+            progress(&row);
+            rows.push(row);
+        }
+        Ok(rows)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn shipped() -> Vec<NamedData> {
+        shipped_datasets(&Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets")).unwrap()
+    }
+
+    #[test]
+    fn standard_plan_covers_every_study() {
+        let plan = HyperPlan::standard(shipped(), Budget::default()).unwrap();
+        let count = |s| plan.cases.iter().filter(|c| c.study == s).count();
+        assert_eq!(count(Study::Models), 3 * MODEL_NAMES.len());
+        assert_eq!(count(Study::Tolerance), FTOLS.len());
+        assert_eq!(count(Study::Method), 10);
+        // Ogden-3 has C(8, 3) = 56 starts: 1, 2, 4, …, 32 and all 56.
+        let starts: Vec<Option<usize>> = plan
+            .cases
+            .iter()
+            .filter(|c| c.study == Study::Starts)
+            .map(|c| c.settings.max_starts)
+            .collect();
+        let want = [1, 2, 4, 8, 16, 32, 56].map(Some);
+        assert_eq!(starts, want);
+        // Without Treloar's data only the per-model study remains.
+        let mut vhb = shipped();
+        vhb.truncate(2);
+        let plan = HyperPlan::standard(vhb, Budget::default()).unwrap();
+        assert!(plan.cases.iter().all(|c| c.study == Study::Models));
+    }
+
+    #[test]
+    fn objective_is_half_the_residual_sum_of_squares() {
+        // Unit weights and absolute residuals: ½‖r‖² = ½·n·RMSE².
+        let d = &shipped()[0];
+        let s = Settings::default();
+        let fit = hyperelastic::fit(&d.data, &ModelSpec::new("yeoh", s.ogden_form), &s).unwrap();
+        let n = d.data.samples.len() as f64;
+        let want = 0.5 * n * fit.rmse_pa.powi(2);
+        let got = objective(&fit, &d.data, &s).unwrap();
+        assert!((got - want).abs() <= 1e-12 * want, "{got} vs {want}");
+    }
+
+    #[test]
+    fn median_of_odd_even_and_empty() {
+        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&[4.0, 1.0, 3.0, 2.0]), 2.5);
+        assert!(median(&[]).is_nan());
+    }
+
+    #[test]
+    fn measure_respects_repeat_limits_and_errors() {
+        let b = Budget {
+            min_repeats: 3,
+            max_repeats: 7,
+            seconds: 10.0,
+        };
+        let mut n = 0;
+        let (t, last) = measure(&b, || {
+            n += 1;
+            Ok(n)
+        })
+        .unwrap();
+        // The 10 s budget is never spent: max_repeats stops it.
+        assert_eq!((t.repeats, last), (7, 7));
+        assert!(t.min_s <= t.median_s);
+        let b = Budget { seconds: 0.0, ..b };
+        let (t, _) = measure(&b, || Ok(())).unwrap();
+        assert_eq!(t.repeats, 3);
+        let err = measure(&b, || Err::<(), _>(Error::settings("boom")));
+        assert!(err.is_err());
+        let bad = Budget {
+            min_repeats: 0,
+            ..b
+        };
+        assert!(measure(&bad, || Ok(())).is_err());
+    }
+}

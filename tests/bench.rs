@@ -1,0 +1,105 @@
+//! `dea-fit bench hyperelastic` and the full-LM baseline it compares against.
+
+use dea_fit::bench::{objective, shipped_datasets, TRELOAR_ALL};
+use dea_fit::fit::hyperelastic::{fit, Search, Settings};
+use dea_fit::material::hyperelastic::ModelSpec;
+use std::path::Path;
+use std::process::Command;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Variable projection and plain full-parameter LM from the same starts minimise the
+/// same objective, so on Treloar's three modes both must end at the same optimum
+/// (tolerance 1e-9 relative: both finish with the same full-LM polish, which stops
+/// on a relative cost change of 1e-12); the solver report names the method used.
+#[test]
+fn full_lm_and_varpro_reach_the_same_optimum() {
+    let sets = shipped_datasets(&root().join("datasets")).unwrap();
+    let treloar = &sets.iter().find(|d| d.name == TRELOAR_ALL).unwrap().data;
+    let spec = ModelSpec::new("ogden2", Default::default());
+    let vp = Settings::default();
+    let full = Settings {
+        method: Search::Full,
+        ..Settings::default()
+    };
+    let a = fit(treloar, &spec, &vp).unwrap();
+    let b = fit(treloar, &spec, &full).unwrap();
+    let (oa, ob) = (
+        objective(&a, treloar, &vp).unwrap(),
+        objective(&b, treloar, &full).unwrap(),
+    );
+    assert!((oa - ob).abs() <= 1e-9 * oa, "{oa} vs {ob}");
+    assert!(a.solver.method.starts_with("variable projection"));
+    assert!(b
+        .solver
+        .method
+        .starts_with("bounded Levenberg-Marquardt over all"));
+    assert_eq!(a.solver.starts, b.solver.starts);
+    assert!(a.solver.starts_at_best >= 1 && b.solver.starts_at_best >= 1);
+}
+
+fn bench(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_dea-fit"))
+        .current_dir(root())
+        .arg("bench")
+        .arg("hyperelastic")
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// One timed run per case: every study is written as CSV rows, charts and a page
+/// linking them, and the headline is printed.
+#[test]
+fn bench_hyperelastic_writes_csv_charts_and_page() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bench");
+    let o = bench(&[
+        "--budget",
+        "0",
+        "--min-repeats",
+        "1",
+        "--out-dir",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("Yeoh on vhb4910-uniaxial"), "{stdout}");
+    assert!(stdout.contains("Ogden-3 on treloar-3modes"), "{stdout}");
+    let csv = std::fs::read_to_string(out.join("hyperelastic.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert!(lines[0].starts_with("study,dataset,model,setting,value,fit_median_s"));
+    // 8 models × 3 datasets, 7 start counts, 7 tolerances, 5 models × 2 methods.
+    assert_eq!(lines.len() - 1, 24 + 7 + 7 + 10);
+    for study in ["models,", "starts,", "tolerance,", "method,"] {
+        assert!(
+            lines.iter().any(|l| l.starts_with(study)),
+            "no {study} rows"
+        );
+    }
+    let page = std::fs::read_to_string(out.join("hyperelastic.md")).unwrap();
+    let mut charts = 0;
+    for entry in std::fs::read_dir(&out).unwrap() {
+        let name = entry.unwrap().file_name().to_string_lossy().into_owned();
+        if name.ends_with(".svg") {
+            charts += 1;
+            assert!(page.contains(&format!("]({name})")), "{name} not linked");
+            let svg = std::fs::read_to_string(out.join(&name)).unwrap();
+            assert!(svg.contains("<svg"), "{name}");
+        }
+    }
+    assert_eq!(charts, 3 + 3, "one chart per dataset and per sweep");
+}
+
+#[test]
+fn bench_rejects_bad_settings_and_missing_data() {
+    let o = bench(&["--min-repeats", "0"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("repeats must satisfy"));
+    let o = bench(&["--data-dir", "no/such/dir"]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("no/such/dir") && err.contains("hint"), "{err}");
+}

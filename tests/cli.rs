@@ -785,3 +785,77 @@ fn readme_test_command_is_what_ci_runs() {
         ".ci/run does not run the README's test command '{test}'"
     );
 }
+
+// ---------------------------------------------------------------------------------
+// No panic on any input
+// ---------------------------------------------------------------------------------
+
+/// Pieces a tensile file is made of, plus the usual ways it goes wrong.
+const PIECES: &[&[u8]] = &[
+    b"stretch",
+    b"strain_pct",
+    b"nominal_stress_kPa",
+    b"true_stress_MPa",
+    b"force_N",
+    b"displacement_mm",
+    b"weight",
+    b"mode",
+    b"time_s",
+    b"nominal_stress [kPa]",
+    b"uniaxial",
+    b"planar",
+    b"# mode: equibiaxial",
+    b"# mode: bulge",
+    b"#",
+    b",",
+    b";",
+    b"\t",
+    b"\n",
+    b"\r\n",
+    b"\r",
+    b" ",
+    b"\"",
+    b"0",
+    b"1",
+    b"1.5",
+    b"-2",
+    b"1,5",
+    b"1e400",
+    b"NaN",
+    b"-inf",
+    b"\xef\xbb\xbf",
+    b"\xff",
+    b"\xc3",
+    b"\xc2\xb2",
+    b",,\n",
+    b" ; \n",
+];
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(512))]
+    /// Whatever the bytes, the reader returns data or an error naming the file, and
+    /// what it returns is physical: stretch > 0, finite stress, weight > 0.
+    #[test]
+    fn reader_never_panics(
+        header in proptest::bool::ANY,
+        picks in proptest::collection::vec(0..PIECES.len(), 0..30),
+    ) {
+        // Half the cases start with a good header, so that the rows get read too.
+        let mut bytes = if header { b"stretch,nominal_stress_kPa\n".to_vec() } else { Vec::new() };
+        bytes.extend(picks.iter().flat_map(|&i| PIECES[i].iter().copied()));
+        let path = Path::new("fuzz.csv");
+        let opts = TensileOptions { area: Some(22e-6), gauge_length: Some(0.08), mode: None };
+        let result = dea_fit::io::table::Table::parse(path, &bytes)
+            .and_then(|t| tensile::from_table(&t, &opts));
+        match result {
+            Ok(d) => {
+                proptest::prop_assert!(!d.samples.is_empty());
+                for s in &d.samples {
+                    proptest::prop_assert!(s.stretch > 0.0 && s.stretch.is_finite());
+                    proptest::prop_assert!(s.stress.is_finite() && s.weight > 0.0);
+                }
+            }
+            Err(e) => proptest::prop_assert!(e.to_string().starts_with("fuzz.csv"), "{e}"),
+        }
+    }
+}

@@ -35,7 +35,15 @@ impl Dimension {
     /// The units accepted for this dimension, with their factor to SI.
     pub fn units(self) -> &'static [(&'static str, f64)] {
         match self {
-            Dimension::Stress => &[("Pa", 1.0), ("kPa", 1e3), ("MPa", 1e6), ("GPa", 1e9)],
+            Dimension::Stress => &[
+                ("Pa", 1.0),
+                ("kPa", 1e3),
+                ("MPa", 1e6),
+                ("GPa", 1e9),
+                ("N/mm2", 1e6),
+                ("N/mm^2", 1e6),
+                ("N/mm²", 1e6),
+            ],
             Dimension::Force => &[("N", 1.0), ("mN", 1e-3), ("kN", 1e3)],
             Dimension::Length => &[
                 ("m", 1.0),
@@ -148,6 +156,16 @@ impl Dimension {
             .map(|(_, f)| *f)
     }
 
+    /// The accepted unit that `unit` would be if case did not matter (`mpa` → `MPa`),
+    /// for a "did you mean" hint. SI prefixes are case-sensitive (mPa ≠ MPa), so
+    /// this is a suggestion, never a silent correction.
+    pub fn suggest(self, unit: &str) -> Option<&'static str> {
+        self.units()
+            .iter()
+            .find(|(u, _)| u.eq_ignore_ascii_case(unit))
+            .map(|(u, _)| *u)
+    }
+
     /// The accepted unit names, for error messages.
     pub fn accepted(self) -> String {
         let mut names: Vec<&str> = self.units().iter().map(|(u, _)| *u).collect();
@@ -223,12 +241,17 @@ fn parse_one(s: &str, dim: Dimension, default_unit: Option<&str>) -> Result<f64,
     if unit.is_empty() {
         return Ok(v);
     }
-    dim.factor(unit).map(|f| v * f).ok_or_else(|| {
-        format!(
-            "unknown unit '{unit}' in '{s}'; expected one of {}",
-            dim.accepted()
-        )
-    })
+    dim.factor(unit)
+        .map(|f| v * f)
+        .ok_or_else(|| match dim.suggest(unit) {
+            Some(u) => format!(
+                "unknown unit '{unit}' in '{s}'; units are case-sensitive: did you mean '{u}'?"
+            ),
+            None => format!(
+                "unknown unit '{unit}' in '{s}'; expected one of {}",
+                dim.accepted()
+            ),
+        })
 }
 
 /// Factor of an SI prefix letter (`p`, `n`, `u`, `µ`, `m`, `k`, `M`, `G`, `T`, `f`).
@@ -290,6 +313,19 @@ mod tests {
             .unwrap_err()
             .contains("unknown unit 'ksi'"));
         assert!(parse_quantity("abc", Dimension::Length).is_err());
+        assert!(
+            (parse_quantity("0.5 N/mm²", Dimension::Stress)
+                .unwrap()
+                .value
+                - 5e5)
+                .abs()
+                < 1e-9
+        );
+        assert!(parse_quantity("22 MM2", Dimension::Area)
+            .unwrap_err()
+            .contains("did you mean 'mm2'?"));
+        assert_eq!(Dimension::Stress.suggest("mpa"), Some("MPa"));
+        assert_eq!(Dimension::Stress.suggest("ksi"), None);
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! One integration-test binary (fewer links on a 2-core CI): one module per area.
 
 mod bench;
+mod cli;
 mod datasets;
 mod estimation;
 mod models;

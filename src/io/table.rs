@@ -1,8 +1,10 @@
 //! A located reader for delimited text tables (CSV, `;`- or tab-separated).
 //!
 //! Accepts `#` comment lines (a `# key: value` comment is kept as a directive),
-//! blank lines, a UTF-8 BOM, CRLF line ends, and a decimal comma when the separator
-//! is `;`. Every field keeps its line and column so that errors can point at it.
+//! blank lines, a UTF-8 BOM, LF, CRLF or CR line ends, double-quoted fields, and a
+//! decimal comma when the separator is `;`. Lines whose fields are all empty count as
+//! blank. Every field keeps its line and column so that errors can point at it; a
+//! spreadsheet, UTF-16 or Latin-1 file is recognised and named as such.
 
 use crate::error::{Error, Location, Result};
 use std::path::{Path, PathBuf};
@@ -44,39 +46,35 @@ impl Table {
     /// Split bytes that came from `path`.
     pub fn parse(path: &Path, bytes: &[u8]) -> Result<Table> {
         let sha256 = super::sha256_hex(bytes);
-        let text = std::str::from_utf8(bytes).map_err(|e| {
-            let line = bytes[..e.valid_up_to()]
-                .iter()
-                .filter(|&&b| b == b'\n')
-                .count()
-                + 1;
-            Error::input(
-                Location::line(path, line),
-                "the file is not UTF-8 text (is it a spreadsheet or a binary export?)",
-            )
-            .with_hint("save it as CSV (UTF-8) and try again")
-        })?;
+        let text = decode(path, bytes)?;
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        // Lines end in LF or CRLF; a file without any LF may use classic-Mac CR ends.
+        let lines: Vec<&str> = if text.contains('\n') {
+            text.split('\n')
+                .map(|l| l.strip_suffix('\r').unwrap_or(l))
+                .collect()
+        } else {
+            text.split('\r').collect()
+        };
 
         let mut directives = Vec::new();
-        let mut first_data_line: Option<&str> = None;
-        for (i, line) in text.lines().enumerate() {
+        let mut content = Vec::new();
+        for (i, line) in lines.iter().enumerate() {
             let t = line.trim();
             if let Some(c) = t.strip_prefix('#') {
                 if let Some((k, v)) = c.split_once(':') {
                     directives.push((i + 1, k.trim().to_ascii_lowercase(), v.trim().to_string()));
                 }
-            } else if !t.is_empty() && first_data_line.is_none() {
-                first_data_line = Some(t);
+            } else if !t.is_empty() {
+                content.push((i + 1, t));
             }
         }
-        let Some(first) = first_data_line else {
-            return Err(Error::input(
-                Location::file(path),
-                "the file holds no header and no data",
+        let no_header = || {
+            Error::input(Location::file(path), "the file holds no header and no data").with_hint(
+                "the first non-comment line must name the columns, e.g. stretch,nominal_stress_kPa",
             )
-            .with_hint("the first non-comment line must name the columns, e.g. stretch,nominal_stress_kPa"));
         };
+        let &(_, first) = content.first().ok_or_else(no_header)?;
         let delimiter = if first.contains('\t') {
             b'\t'
         } else if first.contains(';') {
@@ -85,36 +83,43 @@ impl Table {
             b','
         };
 
-        let mut reader = csv::ReaderBuilder::new()
-            .delimiter(delimiter)
-            .has_headers(false)
-            .flexible(true)
-            .comment(Some(b'#'))
-            .trim(csv::Trim::All)
-            .from_reader(text.as_bytes());
         let mut header: Option<(usize, Vec<String>)> = None;
         let mut rows = Vec::new();
-        for rec in reader.records() {
-            let rec = rec.map_err(|e| {
-                let line = e.position().map(|p| p.line() as usize).unwrap_or(0);
-                Error::input(
-                    Location::line(path, line.max(1)),
-                    format!("unreadable line: {e}"),
-                )
-            })?;
-            let line = rec.position().map(|p| p.line() as usize).unwrap_or(0);
-            let fields: Vec<String> = rec.iter().map(str::to_string).collect();
+        for (line, text) in content {
+            let fields = split_fields(text, delimiter);
             if fields.iter().all(String::is_empty) {
                 continue;
             }
-            if header.is_none() {
+            let Some((header_line, header)) = &header else {
                 header = Some((line, fields));
-            } else {
-                rows.push(Row { line, fields });
+                continue;
+            };
+            if fields.len() != header.len() {
+                return Err(Error::input(
+                    Location::at(path, line, fields.len().min(header.len()) + 1),
+                    format!(
+                        "expected {} fields (as in the header on line {header_line}), found {}",
+                        header.len(),
+                        fields.len()
+                    ),
+                )
+                .with_hint(field_count_hint(
+                    text,
+                    delimiter,
+                    fields.len() > header.len(),
+                )));
             }
+            rows.push(Row { line, fields });
         }
-        let (header_line, header) = header.expect("a non-comment line exists");
-        let table = Table {
+        let (header_line, header) = header.ok_or_else(no_header)?;
+        if rows.is_empty() {
+            return Err(Error::input(
+                Location::line(path, header_line),
+                "the file has a header but no data rows",
+            )
+            .with_hint("add one line per measured point below the header"));
+        }
+        Ok(Table {
             path: path.to_path_buf(),
             sha256,
             header,
@@ -122,32 +127,7 @@ impl Table {
             rows,
             directives,
             delimiter,
-        };
-        for row in &table.rows {
-            if row.fields.len() != table.header.len() {
-                return Err(Error::input(
-                    Location::at(path, row.line, row.fields.len().min(table.header.len()) + 1),
-                    format!(
-                        "expected {} fields (as in the header on line {}), found {}",
-                        table.header.len(),
-                        table.header_line,
-                        row.fields.len()
-                    ),
-                )
-                .with_hint(if table.delimiter == b',' && row.fields.len() > table.header.len() {
-                    "a decimal comma in a comma-separated file? use '.' for decimals or ';' as the separator"
-                } else {
-                    "every data line needs one value per header column"
-                }));
-            }
-        }
-        if table.rows.is_empty() {
-            return Err(Error::input(
-                Location::line(path, table.header_line),
-                "the file has a header but no data rows",
-            ));
-        }
-        Ok(table)
+        })
     }
 
     /// The location of a field.
@@ -173,10 +153,81 @@ impl Table {
                 self.loc(row, col),
                 format!("{what} is empty; expected a number"),
             )),
-            Err(_) => Err(Error::input(
-                self.loc(row, col),
-                format!("expected a number for {what}, found '{raw}'"),
-            )),
+            Err(_) => {
+                let e = Error::input(
+                    self.loc(row, col),
+                    format!("expected a number for {what}, found '{raw}'"),
+                );
+                Err(if raw.contains('#') {
+                    e.with_hint("comments go on their own line, starting with '#'")
+                } else if raw.contains(',') {
+                    e.with_hint("a decimal comma is read only in ';'-separated files: use '.' for decimals or ';' as the separator")
+                } else {
+                    e
+                })
+            }
         }
+    }
+}
+
+/// The text of a file, or an error saying what kind of file it is instead.
+fn decode<'a>(path: &Path, bytes: &'a [u8]) -> Result<&'a str> {
+    let hint = "save it as CSV (UTF-8) and try again";
+    if bytes.starts_with(b"PK\x03\x04") {
+        return Err(Error::input(
+            Location::file(path),
+            "this is a ZIP container (an .xlsx or .ods spreadsheet?), not a text table",
+        )
+        .with_hint("export the sheet as CSV (UTF-8)"));
+    }
+    if bytes.starts_with(&[0xff, 0xfe]) || bytes.starts_with(&[0xfe, 0xff]) {
+        return Err(Error::input(
+            Location::file(path),
+            "the file is UTF-16 text (a spreadsheet's 'Unicode text' export?), not UTF-8",
+        )
+        .with_hint(hint));
+    }
+    std::str::from_utf8(bytes).map_err(|e| {
+        let bad = e.valid_up_to();
+        let line = bytes[..bad].iter().filter(|&&b| b == b'\n').count() + 1;
+        Error::input(
+            Location::line(path, line),
+            format!(
+                "the file is not UTF-8 text: byte 0x{:02X} cannot be read (Latin-1 or Windows-1252 text, or a binary export?)",
+                bytes[bad]
+            ),
+        )
+        .with_hint(hint)
+    })
+}
+
+/// Trimmed fields of one line (double quotes may wrap a field holding the separator).
+fn split_fields(line: &str, delimiter: u8) -> Vec<String> {
+    let mut reader = csv::ReaderBuilder::new()
+        .delimiter(delimiter)
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        // The caller split the lines: a stray CR is text, not a record end.
+        .terminator(csv::Terminator::Any(b'\n'))
+        .buffer_capacity(line.len() + 1)
+        .from_reader(line.as_bytes());
+    let mut record = csv::StringRecord::new();
+    match reader.read_record(&mut record) {
+        Ok(true) => record.iter().map(str::to_string).collect(),
+        // A &str holds valid UTF-8 and cannot fail to read; an empty line has no fields.
+        _ => Vec::new(),
+    }
+}
+
+/// What to suggest when a line has the wrong number of fields.
+fn field_count_hint(line: &str, delimiter: u8, too_many: bool) -> &'static str {
+    let other = [b',', b';', b'\t'].into_iter().find(|&d| {
+        d != delimiter && line.as_bytes().contains(&d) && !(d == b',' && delimiter == b';')
+    });
+    match (other, too_many) {
+        (Some(_), false) => "this line uses another separator than the header: use one separator (',', ';' or tab) throughout",
+        (_, true) if delimiter == b',' => "a decimal comma in a comma-separated file? use '.' for decimals or ';' as the separator",
+        _ => "every data line needs one value per header column",
     }
 }

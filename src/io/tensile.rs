@@ -62,11 +62,17 @@ fn split_header(h: &str) -> (String, Option<String>) {
         "displacement",
         "time",
     ] {
-        if let Some(rest) = lower.strip_prefix(prefix) {
-            let unit = rest
-                .strip_prefix('_')
-                .map(|_| h[prefix.len() + 1..].to_string());
-            return (prefix.to_string(), unit.filter(|u| !u.is_empty()));
+        // `force_N` or `force`, but not `forces` or `timestamp`.
+        match lower.strip_prefix(prefix) {
+            Some("") => return (prefix.to_string(), None),
+            Some(rest) if rest.starts_with('_') => {
+                let unit = &h[prefix.len() + 1..];
+                return (
+                    prefix.to_string(),
+                    (!unit.is_empty()).then(|| unit.to_string()),
+                );
+            }
+            _ => {}
         }
     }
     (lower.replace(' ', "_"), None)
@@ -85,8 +91,11 @@ fn unit_factor(
             .with_hint(format!("write it as e.g. '{header}_{}'", dim.units()[0].0)));
     };
     dim.factor(&unit).ok_or_else(|| {
-        Error::input(loc, format!("unknown unit '{unit}' in column '{header}'"))
-            .with_hint(format!("expected one of {}", dim.accepted()))
+        let e = Error::input(loc, format!("unknown unit '{unit}' in column '{header}'"));
+        match dim.suggest(&unit) {
+            Some(s) => e.with_hint(format!("units are case-sensitive: did you mean '{s}'?")),
+            None => e.with_hint(format!("expected one of {}", dim.accepted())),
+        }
     })
 }
 
@@ -113,11 +122,16 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
                 None | Some("-") | Some("1") => 1.0,
                 Some("%") | Some("pct") => 0.01,
                 Some(u) => {
-                    return Err(Error::input(
-                        hloc(c),
-                        format!("unknown unit '{u}' in column '{h}'"),
-                    )
-                    .with_hint("strain is a fraction ('strain') or a percentage ('strain_pct')"))
+                    let e = Error::input(hloc(c), format!("unknown unit '{u}' in column '{h}'"));
+                    return Err(if Dimension::Length.factor(u).is_some() {
+                        e.with_hint(format!(
+                            "a length is a displacement: name the column 'displacement_{u}' and pass --gauge-length"
+                        ))
+                    } else {
+                        e.with_hint(
+                            "strain is a fraction ('strain') or a percentage ('strain_pct')",
+                        )
+                    });
                 }
             })),
             "strain_pct" | "strain_percent" => Some(Kin::Strain(0.01)),
@@ -230,7 +244,7 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
     })?;
 
     // The file's own mode statement (a comment), checked against the caller's.
-    let mut file_mode = None;
+    let mut file_mode: Option<(Mode, usize)> = None;
     for (line, key, value) in &table.directives {
         if key == "mode" {
             let m = Mode::parse(value).ok_or_else(|| {
@@ -240,6 +254,13 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
                 )
                 .with_hint("use uniaxial, equibiaxial or planar")
             })?;
+            if let Some((m0, l0)) = file_mode.filter(|(m0, _)| *m0 != m) {
+                return Err(Error::input(
+                    Location::line(path, *line),
+                    format!("this '# mode:' line says {m}, but line {l0} says {m0}"),
+                )
+                .with_hint("keep one '# mode:' line; a file mixing modes needs a mode column"));
+            }
             file_mode = Some((m, *line));
         }
     }
@@ -254,6 +275,20 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
         (Some(want), _) => want,
         (None, Some((m, _))) => m,
         (None, None) => Mode::Uniaxial,
+    };
+    // What a mode column must agree with, if anything: the flag, else the comment.
+    let declared = match (opts.mode, file_mode) {
+        (Some(want), _) => Some((
+            want,
+            format!("a file given as {want} data"),
+            "a file passed with --equibiaxial or --planar holds that mode only; pass a file mixing modes without the flag",
+        )),
+        (None, Some((m, line))) => Some((
+            m,
+            format!("a file whose '# mode:' comment (line {line}) says {m}"),
+            "the mode column gives each row's mode: drop the '# mode:' line, or correct this row",
+        )),
+        (None, None) => None,
     };
 
     let mut samples = Vec::with_capacity(table.rows.len());
@@ -306,11 +341,11 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
                     )
                     .with_hint("use uniaxial, equibiaxial or planar")
                 })?;
-                if let Some(want) = opts.mode.filter(|w| *w != m) {
-                    return Err(Error::input(
-                        table.loc(row, c),
-                        format!("mode {m} in a file given as {want} data"),
-                    ));
+                if let Some((_, why, hint)) = declared.as_ref().filter(|d| d.0 != m) {
+                    return Err(
+                        Error::input(table.loc(row, c), format!("mode {m} in {why}"))
+                            .with_hint(*hint),
+                    );
                 }
                 m
             }

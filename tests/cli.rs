@@ -1,0 +1,861 @@
+//! The `dea-fit` binary as a user meets it: the bad-input corpus
+//! (`tests/data/bad/`), accepted input variants (`tests/data/ok/`), golden outputs
+//! (`tests/golden/`), fit-file and report behaviour, and the README's first command.
+//!
+//! Every run of the binary happens in a fresh temporary directory with `--out` and
+//! `--report` pointing into it, so the tests never write into the worktree (except
+//! when regenerating goldens, see [`golden`]).
+
+use dea_fit::data::Dataset;
+use dea_fit::io::tensile::{self, TensileOptions};
+use dea_fit::material::hyperelastic::Mode;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn data(dir: &str, file: &str) -> PathBuf {
+    repo().join("tests/data").join(dir).join(file)
+}
+
+/// Run `dea-fit` with `args` in `cwd`.
+fn run(cwd: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_dea-fit"))
+        .args(args)
+        .current_dir(cwd)
+        .output()
+        .expect("the dea-fit binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+/// Run `dea-fit hyperelastic ARGS --out DIR/fit.json --report DIR/report` in `dir`.
+fn hyperelastic(dir: &Path, args: &[&str]) -> Output {
+    hyperelastic_in(dir, dir, args)
+}
+
+/// Run `dea-fit hyperelastic ARGS --out OUT/fit.json --report OUT/report` in `cwd`.
+fn hyperelastic_in(cwd: &Path, out: &Path, args: &[&str]) -> Output {
+    let report = out.join("report");
+    let out = out.join("fit.json");
+    let mut all = vec!["hyperelastic"];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&[
+        "--out",
+        out.to_str().expect("utf-8 temp path"),
+        "--report",
+        report.to_str().expect("utf-8 temp path"),
+    ]);
+    run(cwd, &all)
+}
+
+/// Assert a successful run and return its stdout.
+fn ok(o: &Output) -> String {
+    assert!(
+        o.status.success(),
+        "exit {:?}\nstderr:\n{}",
+        o.status.code(),
+        stderr(o)
+    );
+    stdout(o)
+}
+
+fn tempdir() -> tempfile::TempDir {
+    tempfile::tempdir().expect("a temporary directory")
+}
+
+fn read_json(path: &Path) -> Value {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+fn names_in(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .expect("readable dir")
+        .map(|e| {
+            e.expect("dir entry")
+                .file_name()
+                .to_string_lossy()
+                .into_owned()
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+// ---------------------------------------------------------------------------------
+// Bad input: tests/data/bad/expected.tsv
+// ---------------------------------------------------------------------------------
+
+/// One line of `tests/data/bad/expected.tsv` (format documented in that file).
+struct BadCase {
+    file: String,
+    args: Vec<String>,
+    location: String,
+    expected: Vec<String>,
+}
+
+fn bad_cases() -> Vec<BadCase> {
+    let table = std::fs::read_to_string(data("bad", "expected.tsv")).expect("expected.tsv");
+    table
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .map(|l| {
+            let cols: Vec<&str> = l.split('\t').collect();
+            assert!(cols.len() >= 4, "expected.tsv: too few columns in {l:?}");
+            let path = data("bad", cols[0]);
+            let args = if cols[1] == "-" { "FILE" } else { cols[1] };
+            BadCase {
+                file: cols[0].to_string(),
+                args: args
+                    .split_whitespace()
+                    .map(|a| {
+                        if a == "FILE" {
+                            path.display().to_string()
+                        } else {
+                            a.to_string()
+                        }
+                    })
+                    .collect(),
+                location: cols[2].to_string(),
+                expected: cols[3..].iter().map(|s| s.to_string()).collect(),
+            }
+        })
+        .collect()
+}
+
+/// Every malformed file gets exit status 2, its own message at its own location,
+/// no panic, and leaves no fit file or report behind.
+#[test]
+fn bad_input_corpus() {
+    let cases = bad_cases();
+    assert!(cases.len() >= 24, "the corpus shrank to {}", cases.len());
+    // The table and the directory list the same files.
+    let mut listed: Vec<&str> = cases.iter().map(|c| c.file.as_str()).collect();
+    listed.sort();
+    let on_disk: Vec<String> = names_in(&data("bad", ""))
+        .into_iter()
+        .filter(|n| n != "expected.tsv")
+        .collect();
+    assert_eq!(listed, on_disk, "expected.tsv and tests/data/bad/ disagree");
+
+    let mut failures = Vec::new();
+    for case in &cases {
+        let dir = tempdir();
+        let args: Vec<&str> = case.args.iter().map(String::as_str).collect();
+        let o = hyperelastic(dir.path(), &args);
+        let err = stderr(&o);
+        let mut problems = Vec::new();
+        if o.status.code() != Some(2) {
+            problems.push(format!("exit status {:?}, expected 2", o.status.code()));
+        }
+        if err.contains("panicked") {
+            problems.push("panicked".into());
+        }
+        let path = data("bad", &case.file).display().to_string();
+        let prefix = match case.location.as_str() {
+            "-" => "error: ".to_string(),
+            "file" => format!("error: {path}: "),
+            loc => format!("error: {path}:{loc}: "),
+        };
+        if !err.starts_with(&prefix) {
+            problems.push(format!("message does not start with {prefix:?}"));
+        }
+        if case.location == "-" && err.contains(&path) {
+            problems.push("a non-file error names the file as its location".into());
+        }
+        for want in &case.expected {
+            if !err.contains(want.as_str()) {
+                problems.push(format!("missing {want:?}"));
+            }
+        }
+        let left = names_in(dir.path());
+        if !left.is_empty() {
+            problems.push(format!("wrote {left:?}"));
+        }
+        if !problems.is_empty() {
+            failures.push(format!(
+                "{}: {}\n  stderr: {err}",
+                case.file,
+                problems.join("; ")
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "\n{}", failures.join("\n"));
+}
+
+// ---------------------------------------------------------------------------------
+// Accepted variants: tests/data/ok/
+// ---------------------------------------------------------------------------------
+
+fn read_ok(file: &str, opts: &TensileOptions) -> Dataset {
+    tensile::read(&data("ok", file), opts).unwrap_or_else(|e| panic!("{file}: {e}"))
+}
+
+/// (mode, stretch, stress, weight) of every sample, sorted by mode then stretch.
+fn samples(d: &Dataset) -> Vec<(Mode, f64, f64, f64)> {
+    let mut v: Vec<_> = d
+        .samples
+        .iter()
+        .map(|s| (s.mode, s.stretch, s.stress, s.weight))
+        .collect();
+    v.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    v
+}
+
+/// Relative closeness; both zero counts as equal.
+fn close(a: f64, b: f64, rel: f64) -> bool {
+    a == b || (a - b).abs() <= rel * a.abs().max(b.abs())
+}
+
+/// Same samples in SI to 1e-12 relative (the variants write the same decimal values
+/// in other units, so only the floating-point unit conversion may differ: ~1e-16).
+fn assert_same_samples(name: &str, got: &Dataset, want: &Dataset) {
+    let (g, w) = (samples(got), samples(want));
+    assert_eq!(g.len(), w.len(), "{name}: number of samples");
+    for (a, b) in g.iter().zip(&w) {
+        assert!(
+            a.0 == b.0 && close(a.1, b.1, 1e-12) && close(a.2, b.2, 1e-12) && a.3 == b.3,
+            "{name}: {a:?} differs from {b:?}"
+        );
+    }
+}
+
+/// Each variant file holds the samples of `plain.csv`, read by the library and by the
+/// binary (which must accept it and fit the same Neo-Hookean μ).
+#[test]
+fn accepted_variants_match_the_plain_file() {
+    let none = TensileOptions::default();
+    let plain = read_ok("plain.csv", &none);
+    assert_eq!(plain.samples.len(), 7);
+    let variants: &[(&str, &[&str])] = &[
+        ("semicolon_decimal_comma.csv", &[]),
+        ("tab.tsv", &[]),
+        ("bom.csv", &[]),
+        ("crlf.csv", &[]),
+        ("cr_only.csv", &[]),
+        ("comments_blank_lines.csv", &[]),
+        ("quoted.csv", &[]),
+        ("strain.csv", &[]),
+        ("strain_pct.csv", &[]),
+        ("true_stress_MPa.csv", &[]),
+        ("force_N.csv", &["--area", "22mm2"]),
+        ("displacement_mm.csv", &["--gauge-length", "80mm"]),
+        ("bracket_header.csv", &[]),
+        ("n_per_mm2.csv", &[]),
+    ];
+    let dir = tempdir();
+    let mu = |file: &Path, extra: &[&str]| -> f64 {
+        let mut args = vec![file.to_str().expect("utf-8 path"), "--model", "neo-hookean"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--json", "--no-report"]);
+        let o = hyperelastic(dir.path(), &args);
+        let fit: Value = serde_json::from_str(&ok(&o)).expect("--json prints JSON");
+        fit["parameters"][0]["value"].as_f64().expect("mu")
+    };
+    let mu_plain = mu(&data("ok", "plain.csv"), &[]);
+    for (file, extra) in variants {
+        let opts = TensileOptions {
+            area: extra.contains(&"--area").then_some(22e-6),
+            gauge_length: extra.contains(&"--gauge-length").then_some(80e-3),
+            mode: None,
+        };
+        let got = read_ok(file, &opts);
+        assert_same_samples(file, &got, &plain);
+        if *file == "true_stress_MPa.csv" {
+            assert!(got.sources[0].conversions[0].contains("true stress / stretch"));
+        }
+        let m = mu(&data("ok", file), extra);
+        // The same samples to 1e-12 give the same exact linear solve to ~1e-12.
+        assert!(close(m, mu_plain, 1e-9), "{file}: μ {m} vs {mu_plain}");
+    }
+}
+
+/// A `mode` column mixing modes holds the same samples as the plain uniaxial file plus
+/// the plain equibiaxial file passed with `--equibiaxial`.
+#[test]
+fn mode_column_mixes_modes() {
+    let mixed = read_ok("mode_column.csv", &TensileOptions::default());
+    let mut separate = read_ok("plain.csv", &TensileOptions::default());
+    separate.extend(read_ok(
+        "plain_equibiaxial.csv",
+        &TensileOptions {
+            mode: Some(Mode::Equibiaxial),
+            ..TensileOptions::default()
+        },
+    ));
+    assert_eq!(
+        mixed.sources[0].modes,
+        vec![Mode::Uniaxial, Mode::Equibiaxial]
+    );
+    assert_same_samples("mode_column.csv", &mixed, &separate);
+}
+
+/// The `weight` column is read as written; everything else as in the plain file.
+#[test]
+fn weight_column_is_read() {
+    let got = read_ok("weight.csv", &TensileOptions::default());
+    let plain = read_ok("plain.csv", &TensileOptions::default());
+    let weights: Vec<f64> = got.samples.iter().map(|s| s.weight).collect();
+    assert_eq!(weights, [1.0, 2.0, 0.5, 1.0, 3.0, 1.0, 0.25]);
+    for (a, b) in got.samples.iter().zip(&plain.samples) {
+        assert!(close(a.stretch, b.stretch, 1e-12) && close(a.stress, b.stress, 1e-12));
+        assert_eq!(b.weight, 1.0);
+    }
+}
+
+/// End to end, weight w on a point is the same objective as the point written w
+/// times (the residual is scaled by √w), so both files give the same Yeoh fit.
+#[test]
+fn integer_weights_equal_repeated_points() {
+    let dir = tempdir();
+    let rows = [
+        ("1.0", "0", 1),
+        ("1.3", "40", 2),
+        ("1.7", "71", 1),
+        ("2.2", "93", 3),
+        ("3.0", "121", 1),
+        ("4.0", "170", 2),
+    ];
+    let mut weighted = String::from("stretch,nominal_stress_kPa,weight\n");
+    let mut repeated = String::from("stretch,nominal_stress_kPa\n");
+    for (l, p, w) in rows {
+        weighted.push_str(&format!("{l},{p},{w}\n"));
+        repeated.push_str(&format!("{l},{p}\n").repeat(w));
+    }
+    let fit = |name: &str, text: &str| -> Vec<f64> {
+        let f = dir.path().join(name);
+        std::fs::write(&f, text).expect("write");
+        let o = hyperelastic(
+            dir.path(),
+            &[
+                f.to_str().expect("utf-8"),
+                "--model",
+                "yeoh",
+                "--json",
+                "--no-report",
+            ],
+        );
+        let v: Value = serde_json::from_str(&ok(&o)).expect("json");
+        v["parameters"]
+            .as_array()
+            .expect("parameters")
+            .iter()
+            .map(|p| p["value"].as_f64().expect("value"))
+            .collect()
+    };
+    let a = fit("weighted.csv", &weighted);
+    let b = fit("repeated.csv", &repeated);
+    for (x, y) in a.iter().zip(&b) {
+        // Same normal equations up to summation order: exact linear solve, 1e-9.
+        assert!(close(*x, *y, 1e-9), "{a:?} vs {b:?}");
+    }
+}
+
+// ---------------------------------------------------------------------------------
+// Golden outputs: tests/golden/
+// ---------------------------------------------------------------------------------
+
+/// Relative tolerance for numbers in golden files: the linear models are solved
+/// exactly (SVD), so only floating-point rounding differs across platforms and
+/// compilers (~1e-15 relative, amplified by the condition number, here < 1e3).
+const GOLDEN_RTOL: f64 = 1e-9;
+
+/// Replace what changes from run to run or machine to machine: the wall-clock time,
+/// the tool version, and absolute paths (made relative to the repository).
+fn redact_json(v: &mut Value) {
+    v["tool_version"] = Value::from("<tool_version>");
+    v["solver"]["seconds"] = Value::from(0.0);
+    let root = format!("{}/", repo().display());
+    if let Some(files) = v["provenance"]["files"].as_array_mut() {
+        for f in files {
+            if let Some(p) = f["path"].as_str() {
+                f["path"] = Value::from(p.strip_prefix(&root).unwrap_or(p));
+            }
+        }
+    }
+}
+
+/// The same as [`redact_json`] for the human-readable summary.
+fn redact_text(s: &str) -> String {
+    s.lines()
+        .map(|l| {
+            if l.starts_with("fit: ") {
+                "fit: <out>".to_string()
+            } else if l.starts_with("report: ") {
+                "report: <report>".to_string()
+            } else if l.starts_with("solver: ") {
+                // "..., 0.036 ms, ..." → "..., <time> ms, ..."
+                l.split(", ")
+                    .map(|part| {
+                        if part.ends_with(" ms") {
+                            "<time> ms"
+                        } else {
+                            part
+                        }
+                    })
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            } else {
+                l.replace(&format!("{}/", repo().display()), "")
+            }
+        })
+        .map(|l| l + "\n")
+        .collect()
+}
+
+/// Structural equality, numbers to `rtol`; the path of the first difference.
+fn json_diff(got: &Value, want: &Value, path: &str, rtol: f64) -> Option<String> {
+    match (got, want) {
+        (Value::Number(a), Value::Number(b)) => {
+            let (a, b) = (a.as_f64()?, b.as_f64()?);
+            (!close(a, b, rtol)).then(|| format!("{path}: {a} vs golden {b}"))
+        }
+        (Value::Array(a), Value::Array(b)) => {
+            if a.len() != b.len() {
+                return Some(format!("{path}: length {} vs golden {}", a.len(), b.len()));
+            }
+            a.iter()
+                .zip(b)
+                .enumerate()
+                .find_map(|(i, (x, y))| json_diff(x, y, &format!("{path}[{i}]"), rtol))
+        }
+        (Value::Object(a), Value::Object(b)) => {
+            let (ka, kb): (Vec<_>, Vec<_>) = (a.keys().collect(), b.keys().collect());
+            if ka != kb {
+                return Some(format!("{path}: keys {ka:?} vs golden {kb:?}"));
+            }
+            a.iter()
+                .find_map(|(k, x)| json_diff(x, &b[k], &format!("{path}.{k}"), rtol))
+        }
+        _ => (got != want).then(|| format!("{path}: {got} vs golden {want}")),
+    }
+}
+
+/// Compare `got` with `tests/golden/<name>`, or (re)write the golden file when the
+/// environment variable `UPDATE_GOLDEN=1` is set:
+///
+/// ```text
+/// UPDATE_GOLDEN=1 cargo test --release golden   # then review `git diff tests/golden`
+/// ```
+///
+/// Regenerate only after a deliberate change of the output (a new field, a changed
+/// dataset, a better estimator), and say why in the commit.
+fn golden(name: &str, got: &str, same: impl Fn(&str) -> Option<String>) {
+    let path = repo().join("tests/golden").join(name);
+    if std::env::var("UPDATE_GOLDEN").is_ok_and(|v| v == "1") {
+        std::fs::create_dir_all(path.parent().expect("parent")).expect("mkdir");
+        std::fs::write(&path, got).expect("write golden");
+        return;
+    }
+    let want = std::fs::read_to_string(&path).unwrap_or_else(|e| {
+        panic!(
+            "{}: {e}; create it with UPDATE_GOLDEN=1 cargo test --release golden",
+            path.display()
+        )
+    });
+    if let Some(diff) = same(&want) {
+        panic!(
+            "output differs from {}: {diff}\nif the change is intended: UPDATE_GOLDEN=1 cargo test --release golden\n--- got ---\n{got}",
+            path.display()
+        );
+    }
+}
+
+fn golden_json(name: &str, args: &[&str]) {
+    // Run in the repository so that the data paths are relative, as a user types them.
+    let dir = tempdir();
+    let o = hyperelastic_in(
+        &repo(),
+        dir.path(),
+        &[args, &["--json", "--no-report"]].concat(),
+    );
+    let mut v: Value = serde_json::from_str(&ok(&o)).expect("--json prints JSON");
+    redact_json(&mut v);
+    let text = serde_json::to_string_pretty(&v).expect("serialise") + "\n";
+    golden(name, &text, |want| {
+        let want: Value = serde_json::from_str(want).expect("golden is JSON");
+        json_diff(&v, &want, "$", GOLDEN_RTOL)
+    });
+}
+
+/// `dea-fit hyperelastic datasets/vhb4910/uniaxial.csv --model yeoh --json`.
+#[test]
+fn golden_vhb4910_yeoh_json() {
+    golden_json(
+        "vhb4910-uniaxial-yeoh.json",
+        &["datasets/vhb4910/uniaxial.csv", "--model", "yeoh"],
+    );
+}
+
+/// Treloar's three modes, `--model mooney-rivlin --json`.
+#[test]
+fn golden_treloar_mooney_rivlin_json() {
+    golden_json(
+        "treloar-3modes-mooney-rivlin.json",
+        &[
+            "datasets/treloar/uniaxial.csv",
+            "--equibiaxial",
+            "datasets/treloar/equibiaxial.csv",
+            "--planar",
+            "datasets/treloar/planar.csv",
+            "--model",
+            "mooney-rivlin",
+        ],
+    );
+}
+
+/// The human-readable table for the VHB 4910 Yeoh fit (time redacted; the printed
+/// numbers are rounded to 5 digits, so they are compared as text).
+#[test]
+fn golden_vhb4910_yeoh_table() {
+    let dir = tempdir();
+    let o = hyperelastic_in(
+        &repo(),
+        dir.path(),
+        &[
+            "datasets/vhb4910/uniaxial.csv",
+            "--model",
+            "yeoh",
+            "--no-report",
+        ],
+    );
+    let text = redact_text(&ok(&o));
+    golden("vhb4910-uniaxial-yeoh.txt", &text, |want| {
+        (want != text).then(|| "the text differs".to_string())
+    });
+}
+
+// ---------------------------------------------------------------------------------
+// Fit files, --json, --strict, reports
+// ---------------------------------------------------------------------------------
+
+const VHB: &str = "datasets/vhb4910/uniaxial.csv";
+
+fn repo_file(rel: &str) -> String {
+    repo().join(rel).display().to_string()
+}
+
+/// The fit file is written (atomically: no temporary file is left beside it), and
+/// `--json` prints exactly the object it holds.
+#[test]
+fn json_is_the_fit_file() {
+    let dir = tempdir();
+    let o = hyperelastic(dir.path(), &[&repo_file(VHB), "--model", "yeoh", "--json"]);
+    let printed = ok(&o);
+    let file = std::fs::read_to_string(dir.path().join("fit.json")).expect("fit file");
+    assert_eq!(
+        printed.trim_end(),
+        file.trim_end(),
+        "--json and the fit file differ"
+    );
+    let v: Value = serde_json::from_str(&printed).expect("one JSON object on stdout");
+    assert_eq!(v["model"], "yeoh");
+    assert_eq!(v["schema"], "dea-fit/hyperelastic-fit/1");
+    // Nothing but the fit and the report: no leftover temporary file.
+    assert_eq!(names_in(dir.path()), ["fit.json", "report"]);
+}
+
+/// The report directory holds the figure of data vs model, the residuals and a page
+/// linking them.
+#[test]
+fn report_has_figures_and_index() {
+    let dir = tempdir();
+    let o = hyperelastic(dir.path(), &[&repo_file(VHB), "--model", "yeoh"]);
+    let text = ok(&o);
+    let report = dir.path().join("report");
+    assert_eq!(names_in(&report), ["fit.svg", "index.md", "residuals.svg"]);
+    for svg in ["fit.svg", "residuals.svg"] {
+        let s = std::fs::read_to_string(report.join(svg)).expect("svg");
+        assert!(s.trim_start().starts_with("<svg"), "{svg} is not SVG");
+    }
+    let index = std::fs::read_to_string(report.join("index.md")).expect("index.md");
+    assert!(index.contains("fit.svg") && index.contains("residuals.svg"));
+    assert!(text.contains(&format!("report: {}", report.join("index.md").display())));
+    // --no-report writes none.
+    let dir2 = tempdir();
+    ok(&hyperelastic(
+        dir2.path(),
+        &[&repo_file(VHB), "--model", "yeoh", "--no-report"],
+    ));
+    assert_eq!(names_in(dir2.path()), ["fit.json"]);
+}
+
+/// The same fit twice keeps one file and says nothing; a different fit on the same
+/// `--out` keeps the old one as `fit.previous-N.json` and says so on stderr.
+#[test]
+fn fits_are_never_silently_overwritten() {
+    let dir = tempdir();
+    let args = [
+        repo_file(VHB),
+        "--model".into(),
+        "yeoh".into(),
+        "--no-report".into(),
+    ];
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let first = hyperelastic(dir.path(), &args);
+    ok(&first);
+    let again = hyperelastic(dir.path(), &args);
+    ok(&again);
+    // The same fit is refreshed in place (only its solver time differs).
+    let original = std::fs::read_to_string(dir.path().join("fit.json")).expect("fit");
+    assert_eq!(names_in(dir.path()), ["fit.json"]);
+    assert!(!stderr(&again).contains("note:"), "{}", stderr(&again));
+
+    let other = repo_file("datasets/vhb4910/planar.csv");
+    let second = hyperelastic(dir.path(), &[&other, "--model", "yeoh", "--no-report"]);
+    ok(&second);
+    assert_eq!(names_in(dir.path()), ["fit.json", "fit.previous-1.json"]);
+    let kept = std::fs::read_to_string(dir.path().join("fit.previous-1.json")).expect("kept");
+    assert!(kept == original, "the earlier fit was not kept as it was");
+    let note = stderr(&second);
+    assert!(
+        note.contains("held a different fit; it was kept as")
+            && note.contains("fit.previous-1.json"),
+        "{note}"
+    );
+    let now = read_json(&dir.path().join("fit.json"));
+    assert!(now["provenance"]["files"][0]["path"]
+        .as_str()
+        .is_some_and(|p| p.ends_with("planar.csv")));
+
+    // A third, different fit takes the next free name.
+    let third = hyperelastic(
+        dir.path(),
+        &[&other, "--model", "neo-hookean", "--no-report"],
+    );
+    ok(&third);
+    assert_eq!(
+        names_in(dir.path()),
+        ["fit.json", "fit.previous-1.json", "fit.previous-2.json"]
+    );
+}
+
+/// `--strict` exits 1 on a blocking status (here ill-posed: 3 points for Yeoh's 3
+/// constants leave no degree of freedom) and still writes the fit; without it, 0.
+#[test]
+fn strict_exits_1_on_an_ill_posed_fit() {
+    let three = data("ok", "three_points.csv").display().to_string();
+    let dir = tempdir();
+    let o = hyperelastic(
+        dir.path(),
+        &[&three, "--model", "yeoh", "--strict", "--no-report"],
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("panicked"));
+    let fit = read_json(&dir.path().join("fit.json"));
+    assert_eq!(fit["status"], "ill_posed");
+    assert!(fit["warnings"]
+        .as_array()
+        .expect("warnings")
+        .iter()
+        .any(|w| w
+            .as_str()
+            .is_some_and(|w| w.contains("3 points for 3 parameters"))));
+    let dir = tempdir();
+    ok(&hyperelastic(
+        dir.path(),
+        &[&three, "--model", "yeoh", "--no-report"],
+    ));
+    // A fit that is fine passes --strict.
+    let dir = tempdir();
+    ok(&hyperelastic(
+        dir.path(),
+        &[
+            &repo_file(VHB),
+            "--model",
+            "yeoh",
+            "--strict",
+            "--no-report",
+        ],
+    ));
+}
+
+/// Ogden-3 on Treloar's uniaxial data alone is the issue's nearly ill-posed case.
+/// Whatever status the estimator reports, `--strict` must agree with it: exit 1
+/// exactly when the status is blocking (ill_posed, unstable, not_converged).
+#[test]
+fn strict_agrees_with_the_reported_status() {
+    let dir = tempdir();
+    let o = hyperelastic(
+        dir.path(),
+        &[
+            &repo_file("datasets/treloar/uniaxial.csv"),
+            "--model",
+            "ogden3",
+            "--strict",
+            "--json",
+            "--no-report",
+        ],
+    );
+    let fit: Value = serde_json::from_str(&stdout(&o)).expect("json");
+    let status = fit["status"].as_str().expect("status");
+    let blocking = matches!(status, "ill_posed" | "unstable" | "not_converged");
+    assert_eq!(
+        o.status.code(),
+        Some(if blocking { 1 } else { 0 }),
+        "status {status}"
+    );
+    // The fit must not pass silently: at least a warning, with the reason said.
+    assert_ne!(status, "ok");
+    let warnings: Vec<&str> = fit["warnings"]
+        .as_array()
+        .expect("warnings")
+        .iter()
+        .filter_map(Value::as_str)
+        .collect();
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.contains("correlated") || w.contains("bound") || w.contains("negligible")),
+        "{warnings:?}"
+    );
+}
+
+// ---------------------------------------------------------------------------------
+// The README
+// ---------------------------------------------------------------------------------
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).expect("mkdir");
+    for e in std::fs::read_dir(from).expect("read dir") {
+        let e = e.expect("entry");
+        let target = to.join(e.file_name());
+        if e.file_type().expect("type").is_dir() {
+            copy_dir(&e.path(), &target);
+        } else {
+            std::fs::copy(e.path(), &target).expect("copy");
+        }
+    }
+}
+
+/// The lines of the README's first fenced code block, comments stripped.
+fn readme_first_block() -> Vec<String> {
+    let readme = std::fs::read_to_string(repo().join("README.md")).expect("README.md");
+    readme
+        .lines()
+        .skip_while(|l| !l.starts_with("```"))
+        .skip(1)
+        .take_while(|l| !l.starts_with("```"))
+        .map(|l| l.split(" #").next().unwrap_or("").trim().to_string())
+        .filter(|l| !l.is_empty())
+        .collect()
+}
+
+/// The README's first command runs as written (from `hyperelastic` on), in a copy of
+/// the shipped datasets, and prints a fit; so the README cannot rot.
+#[test]
+fn readme_first_command_runs() {
+    let block = readme_first_block();
+    let first = block.first().expect("the README opens with a code block");
+    let words: Vec<&str> = first.split_whitespace().collect();
+    let at = words
+        .iter()
+        .position(|w| *w == "hyperelastic")
+        .unwrap_or_else(|| panic!("no 'hyperelastic' in the README's first command: {first}"));
+    let dir = tempdir();
+    copy_dir(&repo().join("datasets"), &dir.path().join("datasets"));
+    let o = hyperelastic(dir.path(), &words[at + 1..]);
+    let text = ok(&o);
+    assert!(
+        text.contains("chosen:") || text.contains("model:"),
+        "{text}"
+    );
+    assert!(dir.path().join("fit.json").exists());
+    assert!(dir.path().join("report/index.md").exists());
+}
+
+/// The README's second command is the test command, and CI runs exactly it.
+#[test]
+fn readme_test_command_is_what_ci_runs() {
+    let block = readme_first_block();
+    let test = block.get(1).expect("a second command: the tests");
+    let ci = std::fs::read_to_string(repo().join(".ci/run")).expect(".ci/run");
+    assert!(
+        ci.lines().any(|l| l.trim() == test),
+        ".ci/run does not run the README's test command '{test}'"
+    );
+}
+
+// ---------------------------------------------------------------------------------
+// No panic on any input
+// ---------------------------------------------------------------------------------
+
+/// Pieces a tensile file is made of, plus the usual ways it goes wrong.
+const PIECES: &[&[u8]] = &[
+    b"stretch",
+    b"strain_pct",
+    b"nominal_stress_kPa",
+    b"true_stress_MPa",
+    b"force_N",
+    b"displacement_mm",
+    b"weight",
+    b"mode",
+    b"time_s",
+    b"nominal_stress [kPa]",
+    b"uniaxial",
+    b"planar",
+    b"# mode: equibiaxial",
+    b"# mode: bulge",
+    b"#",
+    b",",
+    b";",
+    b"\t",
+    b"\n",
+    b"\r\n",
+    b"\r",
+    b" ",
+    b"\"",
+    b"0",
+    b"1",
+    b"1.5",
+    b"-2",
+    b"1,5",
+    b"1e400",
+    b"NaN",
+    b"-inf",
+    b"\xef\xbb\xbf",
+    b"\xff",
+    b"\xc3",
+    b"\xc2\xb2",
+    b",,\n",
+    b" ; \n",
+];
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(512))]
+    /// Whatever the bytes, the reader returns data or an error naming the file, and
+    /// what it returns is physical: stretch > 0, finite stress, weight > 0.
+    #[test]
+    fn reader_never_panics(
+        header in proptest::bool::ANY,
+        picks in proptest::collection::vec(0..PIECES.len(), 0..30),
+    ) {
+        // Half the cases start with a good header, so that the rows get read too.
+        let mut bytes = if header { b"stretch,nominal_stress_kPa\n".to_vec() } else { Vec::new() };
+        bytes.extend(picks.iter().flat_map(|&i| PIECES[i].iter().copied()));
+        let path = Path::new("fuzz.csv");
+        let opts = TensileOptions { area: Some(22e-6), gauge_length: Some(0.08), mode: None };
+        let result = dea_fit::io::table::Table::parse(path, &bytes)
+            .and_then(|t| tensile::from_table(&t, &opts));
+        match result {
+            Ok(d) => {
+                proptest::prop_assert!(!d.samples.is_empty());
+                for s in &d.samples {
+                    proptest::prop_assert!(s.stretch > 0.0 && s.stretch.is_finite());
+                    proptest::prop_assert!(s.stress.is_finite() && s.weight > 0.0);
+                }
+            }
+            Err(e) => proptest::prop_assert!(e.to_string().starts_with("fuzz.csv"), "{e}"),
+        }
+    }
+}

@@ -6,6 +6,7 @@ pub mod hyperelastic;
 pub mod linear;
 pub mod lm;
 pub mod problem;
+pub mod relaxation;
 
 use serde::{Deserialize, Serialize};
 

@@ -1,4 +1,5 @@
 //! Constitutive models: hyperelastic strain-energy functions (and, later,
-//! viscoelastic and dielectric laws).
+//! dielectric laws) and linear viscoelasticity (Prony series, Kelvin-Maxwell arms).
 
 pub mod hyperelastic;
+pub mod viscoelastic;

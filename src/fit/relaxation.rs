@@ -7,7 +7,7 @@
 //! instantaneous hyperelastic stress σₑ(λ(s)) in the QLV reading.
 //!
 //! Two stages:
-//! 1. Non-negative least squares over a log-spaced τ grid (default 10 per decade over
+//! 1. Non-negative least squares over a log-spaced τ grid (default 6 per decade over
 //!    the sampled window widened by ×3 at each end; Clarabel QP with E ≥ 0 as
 //!    constraints): where the relaxation spectrum lives.
 //! 2. For a term count N: the grid spectrum's peaks are merged or split into N terms
@@ -80,13 +80,16 @@ pub struct Settings {
     pub residual: Residual,
     /// Method (default refined).
     pub method: Method,
-    /// τ grid density of the NNLS stage, points per decade (default 10; range 2–50).
+    /// τ grid density of the NNLS stage, points per decade (default 6, which puts
+    /// about three grid points between VHB 4910's two modes half a decade apart; range
+    /// 2–50). The Clarabel QP's cost grows steeply with the grid size (≈0.8 ms at 6
+    /// per decade over 6 decades, ≈2 ms at 10).
     pub grid_per_decade: usize,
     /// Iteration limit of each LM search (default 200).
     pub max_iterations: usize,
     /// Relative cost tolerance of the LM searches (default 1e-10).
     pub ftol: f64,
-    /// Largest number of starts per term count (default 4).
+    /// Largest number of starts per term count (default 3).
     pub max_starts: usize,
 }
 
@@ -99,10 +102,10 @@ impl Default for Settings {
             tolerance: None,
             residual: Residual::Rel,
             method: Method::Refined,
-            grid_per_decade: 10,
+            grid_per_decade: 6,
             max_iterations: 200,
             ftol: 1e-10,
-            max_starts: 4,
+            max_starts: 3,
         }
     }
 }
@@ -496,6 +499,9 @@ fn merge(a: Peak, b: Peak) -> Peak {
 /// (`closest`) or fold the smallest peak into its nearer neighbour; split the largest
 /// into two a factor 3 apart while too few.
 fn reshape(mut peaks: Vec<Peak>, n: usize, closest: bool, window: (f64, f64)) -> Vec<Peak> {
+    if n == 0 {
+        return Vec::new();
+    }
     if peaks.is_empty() && n > 0 {
         peaks.push(Peak {
             e: 1.0,
@@ -764,7 +770,9 @@ fn nnls_at(prob: &mut Problem, taus: &[f64]) -> Result<(Vec<f64>, usize)> {
 /// Peaks of the grid spectrum: runs of consecutive non-zero grid moduli.
 fn peaks(taus: &[f64], c: &[f64]) -> Vec<Peak> {
     let total: f64 = c[1..].iter().sum();
-    let thr = 1e-6 * total.max(f64::MIN_POSITIVE);
+    // An interior-point solution is never exactly zero: 1 % of the largest grid
+    // modulus separates the spectrum from the solver's residue.
+    let thr = 1e-2 * c[1..].iter().copied().fold(0.0, f64::max);
     let mut out: Vec<Peak> = Vec::new();
     let mut open = false;
     for (j, &e) in c[1..].iter().enumerate() {

@@ -5,11 +5,14 @@ use dea_fit::Result;
 /// Benchmark a subsystem.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// What to benchmark: hyperelastic.
+    /// What to benchmark: hyperelastic, relaxation.
     what: String,
 }
 
 /// Run the subcommand.
-pub fn run(_a: Args) -> Result<i32> {
+pub fn run(a: Args) -> Result<i32> {
+    if a.what == "relaxation" {
+        return super::bench_relaxation::run();
+    }
     Ok(0)
 }

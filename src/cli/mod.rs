@@ -1,7 +1,9 @@
 //! Subcommands, one file each.
 
 mod bench;
+mod bench_relaxation;
 mod hyperelastic;
+mod relaxation;
 mod synth;
 
 use clap::{Parser, Subcommand};
@@ -19,6 +21,8 @@ pub struct Cli {
 enum Command {
     /// Fit hyperelastic strain-energy coefficients to tensile-test data.
     Hyperelastic(hyperelastic::Args),
+    /// Fit Prony / Kelvin-Maxwell constants to a stress-relaxation curve.
+    Relaxation(relaxation::Args),
     /// Generate synthetic test data from known constants (with noise and seed).
     Synth(synth::Args),
     /// Measure speed against accuracy and write tables and charts under reports/.
@@ -29,6 +33,7 @@ enum Command {
 pub fn run(cli: Cli) -> Result<i32> {
     match cli.command {
         Command::Hyperelastic(a) => hyperelastic::run(a),
+        Command::Relaxation(a) => relaxation::run(a),
         Command::Synth(a) => synth::run(a),
         Command::Bench(a) => bench::run(a),
     }

@@ -604,6 +604,13 @@ fn prepare(
                     .with_hint("drop --strain/--stretch (the recorded strain is used) or correct it"));
                 }
             }
+            if eps[0] != 0.0 && data.time[0] > 0.0 {
+                notes.push(format!(
+                    "the recorded strain is already {} at the first sample (t = {}): the loading before it is taken as a step at that time; start the file at t = 0 to fit the true history",
+                    eps[0],
+                    fmt_s(data.time[0])
+                ));
+            }
             let knots: Vec<(f64, f64)> = data.time.iter().copied().zip(eps.iter().copied()).collect();
             (
                 History::from_knots(knots)?,

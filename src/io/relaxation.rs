@@ -79,7 +79,15 @@ fn split(h: &str) -> (String, Option<String>) {
         );
     }
     let lower = h.to_ascii_lowercase();
-    for name in ["nominal_stress", "stress", "force", "time"] {
+    for name in [
+        "nominal_stress",
+        "true_stress",
+        "cauchy_stress",
+        "stress",
+        "force",
+        "time",
+        "strain",
+    ] {
         if let Some(rest) = lower.strip_prefix(name).and_then(|r| r.strip_prefix('_')) {
             let unit = &h[h.len() - rest.len()..];
             return (name.to_string(), Some(unit.to_string()).filter(|u| !u.is_empty()));
@@ -135,7 +143,7 @@ pub fn from_table(table: &Table, opts: &RelaxationOptions) -> Result<RelaxationD
             }
             "strain" => Col::Strain(match u.as_deref() {
                 None | Some("-") | Some("1") => 1.0,
-                Some("%") | Some("pct") => 0.01,
+                Some("%") | Some("pct") | Some("percent") => 0.01,
                 Some(other) => {
                     return Err(Error::input(
                         hloc(c),
@@ -144,7 +152,6 @@ pub fn from_table(table: &Table, opts: &RelaxationOptions) -> Result<RelaxationD
                     .with_hint("strain is a fraction ('strain') or a percentage ('strain_pct')"))
                 }
             }),
-            "strain_pct" | "strain_percent" => Col::Strain(0.01),
             "stretch" | "lambda" => Col::Stretch,
             "true_stress" | "cauchy_stress" => {
                 return Err(Error::input(
@@ -388,7 +395,7 @@ mod tests {
         assert_eq!(split("stress_kPa"), ("stress".into(), Some("kPa".into())));
         assert_eq!(split("Time [ms]"), ("time".into(), Some("ms".into())));
         assert_eq!(split("time_min"), ("time".into(), Some("min".into())));
-        assert_eq!(split("strain_pct"), ("strain_pct".into(), None));
+        assert_eq!(split("strain_pct"), ("strain".into(), Some("pct".into())));
         assert_eq!(split("stress"), ("stress".into(), None));
     }
 }

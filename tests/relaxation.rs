@@ -68,7 +68,11 @@ fn assert_recovers(f: &RelaxationFit, p: &Prony, tol: f64, what: &str) {
             want.modulus
         );
     }
-    assert!((f.long_term_modulus_pa / p.e_inf - 1.0).abs() < tol, "{what}: E∞ {}", f.long_term_modulus_pa);
+    assert!(
+        (f.long_term_modulus_pa / p.e_inf - 1.0).abs() < tol,
+        "{what}: E∞ {}",
+        f.long_term_modulus_pa
+    );
 }
 
 /// 2–5 terms spread over 6 decades (τ 0.01 s … 1000 s, data 1 ms … 10⁴ s, 200
@@ -91,14 +95,29 @@ fn recovers_known_constants_step_and_ramped() {
     for (i, taus) in cases.iter().enumerate() {
         let p = truth(taus);
         let times = log_times(1e-3, 1e4, 200, false);
-        let d = data(&synthetic(p.clone(), None, times.clone(), 0.003, 10 + i as u64));
+        let d = data(&synthetic(
+            p.clone(),
+            None,
+            times.clone(),
+            0.003,
+            10 + i as u64,
+        ));
         let f = fit(&d, None, Some(taus.len()));
         assert_recovers(&f, &p, 0.10, &format!("step {taus:?}"));
-        assert!(f.status == Status::Ok || f.status == Status::Warning, "{f:#?}");
+        assert!(
+            f.status == Status::Ok || f.status == Status::Warning,
+            "{f:#?}"
+        );
         // Ramped (0.5 s): the shortest τ ≥ 0.2 s so that it is not over within the ramp.
         let taus_r = ramp_cases[i];
         let p = truth(taus_r);
-        let d = data(&synthetic(p.clone(), Some(0.5), times, 0.003, 20 + i as u64));
+        let d = data(&synthetic(
+            p.clone(),
+            Some(0.5),
+            times,
+            0.003,
+            20 + i as u64,
+        ));
         let f = fit(&d, Some(0.5), Some(taus_r.len()));
         assert_recovers(&f, &p, 0.10, &format!("ramp {taus_r:?}"));
     }
@@ -108,7 +127,11 @@ fn recovers_known_constants_step_and_ramped() {
 /// more apart, and the seed's Table 3.3 with two modes half a decade apart).
 #[test]
 fn automatic_count_recovers_the_true_count_at_one_percent_noise() {
-    let cases: [&[f64]; 3] = [&[0.1, 100.0], &[0.03, 3.0, 300.0], &[0.01, 0.3, 10.0, 1000.0]];
+    let cases: [&[f64]; 3] = [
+        &[0.1, 100.0],
+        &[0.03, 3.0, 300.0],
+        &[0.01, 0.3, 10.0, 1000.0],
+    ];
     for (i, taus) in cases.iter().enumerate() {
         let d = data(&synthetic(
             truth(taus),
@@ -121,7 +144,13 @@ fn automatic_count_recovers_the_true_count_at_one_percent_noise() {
         assert_eq!(f.prony.len(), taus.len(), "{:#?}", f.selection);
     }
     let seed = preset("seed-table-3.3").unwrap().prony;
-    let d = data(&synthetic(seed, None, log_times(0.01, 1000.0, 200, false), 0.01, 7));
+    let d = data(&synthetic(
+        seed,
+        None,
+        log_times(0.01, 1000.0, 200, false),
+        0.01,
+        7,
+    ));
     let f = fit(&d, None, None);
     assert_eq!(f.prony.len(), 4, "{:#?}", f.selection);
 }
@@ -130,7 +159,13 @@ fn automatic_count_recovers_the_true_count_at_one_percent_noise() {
 #[test]
 fn an_ignored_ramp_is_flagged() {
     let p = truth(&[0.3, 30.0]);
-    let d = data(&synthetic(p.clone(), Some(1.0), log_times(0.01, 300.0, 150, false), 0.005, 5));
+    let d = data(&synthetic(
+        p.clone(),
+        Some(1.0),
+        log_times(0.01, 300.0, 150, false),
+        0.005,
+        5,
+    ));
     let with = fit(&d, Some(1.0), Some(2));
     assert_recovers(&with, &p, 0.05, "ramp given");
     let without = fit(&d, None, None);
@@ -147,14 +182,32 @@ fn an_ignored_ramp_is_flagged() {
 #[test]
 fn a_window_too_short_to_see_a_term() {
     let p = truth(&[0.5, 2000.0]);
-    let d = data(&synthetic(p, None, log_times(0.01, 20.0, 200, false), 0.01, 3));
+    let d = data(&synthetic(
+        p,
+        None,
+        log_times(0.01, 20.0, 200, false),
+        0.01,
+        3,
+    ));
     let f = fit(&d, None, None);
     assert!(f.prony.iter().all(|t| t.tau_s <= 20.0), "{:#?}", f.prony);
     assert!((f.prony[0].tau_s / 0.5 - 1.0).abs() < 0.2, "{:#?}", f.prony);
     // With the slow term forced in, the tool flags it.
     let f2 = fit(&d, None, Some(2));
-    assert!(f2.status.is_blocking() || f2.status == Status::Warning, "{f2:#?}");
-    assert!(f2.warnings.iter().any(|w| w.contains("longer than the test") || w.contains("two terms describe one") || w.contains("poorly determined") || w.contains("correlated")), "{:?}", f2.warnings);
+    assert!(
+        f2.status.is_blocking() || f2.status == Status::Warning,
+        "{f2:#?}"
+    );
+    assert!(
+        f2.warnings
+            .iter()
+            .any(|w| w.contains("longer than the test")
+                || w.contains("two terms describe one")
+                || w.contains("poorly determined")
+                || w.contains("correlated")),
+        "{:?}",
+        f2.warnings
+    );
 }
 
 #[test]
@@ -181,21 +234,40 @@ fn too_few_points_are_refused_or_fit_without_terms() {
 
 #[test]
 fn constant_stress_is_purely_elastic() {
-    let d = data(&synthetic(Prony::new(80e3, &[]).unwrap(), None, log_times(0.01, 100.0, 100, false), 0.01, 9));
+    let d = data(&synthetic(
+        Prony::new(80e3, &[]).unwrap(),
+        None,
+        log_times(0.01, 100.0, 100, false),
+        0.01,
+        9,
+    ));
     let f = fit(&d, None, None);
     assert_eq!(f.prony.len(), 0, "{:#?}", f.selection);
     assert!((f.long_term_modulus_pa / 80e3 - 1.0).abs() < 0.01);
-    assert!(f.warnings.iter().any(|w| w.contains("purely elastic")), "{:?}", f.warnings);
+    assert!(
+        f.warnings.iter().any(|w| w.contains("purely elastic")),
+        "{:?}",
+        f.warnings
+    );
 }
 
 #[test]
 fn noise_larger_than_the_relaxation_invents_no_terms() {
     // A 1 % relaxation under 5 % noise.
     let p = Prony::new(99e3, &[(1.0, 1e3)]).unwrap();
-    let d = data(&synthetic(p, None, log_times(0.01, 100.0, 100, false), 0.05, 11));
+    let d = data(&synthetic(
+        p,
+        None,
+        log_times(0.01, 100.0, 100, false),
+        0.05,
+        11,
+    ));
     let f = fit(&d, None, None);
     assert_eq!(f.prony.len(), 0, "{:#?}", f.selection);
-    assert!(f.warnings.iter().any(|w| w.contains("no relaxation resolved")));
+    assert!(f
+        .warnings
+        .iter()
+        .any(|w| w.contains("no relaxation resolved")));
 }
 
 /// Published numbers: Table 4.2's kⱼ = gⱼ × 0.222 MPa (Table 3.3's g), its τⱼ = nⱼ/kⱼ
@@ -212,9 +284,17 @@ fn seed_presets_match_their_tables() {
         .zip(t33.prony.terms.iter().zip(&t42.kelvin_maxwell.arms))
     {
         assert_eq!(term.tau, *tau);
-        assert!((arm.k - gi * 0.222e6).abs() < 1.0, "{} {}", arm.k, gi * 0.222e6);
+        assert!(
+            (arm.k - gi * 0.222e6).abs() < 1.0,
+            "{} {}",
+            arm.k,
+            gi * 0.222e6
+        );
     }
-    assert!(g.iter().zip(&TABLE_3_3).all(|(a, b)| (a - b.1).abs() < 1e-12));
+    assert!(g
+        .iter()
+        .zip(&TABLE_3_3)
+        .all(|(a, b)| (a - b.1).abs() < 1e-12));
     let taus: Vec<f64> = t42.prony.terms.iter().map(|t| t.tau).collect();
     for (got, want) in taus.iter().zip([0.32, 2.263, 440.5, 4386.0]) {
         assert!((got / want - 1.0).abs() < 2e-3, "{got} vs {want}");
@@ -222,7 +302,12 @@ fn seed_presets_match_their_tables() {
     assert_eq!(t42.kelvin_maxwell.n_v, 1875.0);
     // Table 3.3's own curve: E(t) = E0(g∞ + Σ gᵢ e^(−t/τᵢ)).
     for t in [0.0, 0.1, 1.0, 100.0, 1e4] {
-        let want = 0.222e6 * (0.1951 + TABLE_3_3.iter().map(|(tau, g)| g * (-t / tau).exp()).sum::<f64>());
+        let want = 0.222e6
+            * (0.1951
+                + TABLE_3_3
+                    .iter()
+                    .map(|(tau, g)| g * (-t / tau).exp())
+                    .sum::<f64>());
         assert!((t33.prony.relaxation_modulus(t) - want).abs() < 1e-9 * want);
     }
     assert!(preset("seed-table-9").is_err());
@@ -235,7 +320,13 @@ fn seed_presets_match_their_tables() {
 fn presets_reproduce_their_relaxation_curves() {
     for (name, t1) in [("seed-table-3.3", 1000.0), ("seed-table-4.2", 3e4)] {
         let p = preset(name).unwrap().prony;
-        let d = data(&synthetic(p.clone(), None, log_times(0.01, t1, 200, false), 0.0, 1));
+        let d = data(&synthetic(
+            p.clone(),
+            None,
+            log_times(0.01, t1, 200, false),
+            0.0,
+            1,
+        ));
         let f = fit(&d, None, Some(4));
         assert_recovers(&f, &p, 0.005, name);
         // Prony ↔ Kelvin-Maxwell round trip of the fit.
@@ -248,7 +339,12 @@ fn presets_reproduce_their_relaxation_curves() {
 }
 
 fn laplace_e(p: &Prony, n_v: f64, s: f64) -> f64 {
-    p.e_inf / s + n_v + p.terms.iter().map(|t| t.modulus / (s + 1.0 / t.tau)).sum::<f64>()
+    p.e_inf / s
+        + n_v
+        + p.terms
+            .iter()
+            .map(|t| t.modulus / (s + 1.0 / t.tau))
+            .sum::<f64>()
 }
 
 fn laplace_j(c: &dea_fit::material::viscoelastic::Creep, s: f64) -> f64 {
@@ -348,7 +444,12 @@ fn standard_linear_solid_closed_forms() {
 fn qlv_recovers_the_normalised_relaxation_function() {
     let path = Path::new("datasets/vhb4910/uniaxial.csv");
     let hd = dea_fit::io::tensile::read(path, &Default::default()).unwrap();
-    let hf = hyperelastic::fit(&hd, &ModelSpec::new("yeoh", OgdenForm::Seed), &Default::default()).unwrap();
+    let hf = hyperelastic::fit(
+        &hd,
+        &ModelSpec::new("yeoh", OgdenForm::Seed),
+        &Default::default(),
+    )
+    .unwrap();
     let model = hf.evaluator().unwrap();
     let lam0: f64 = 2.0;
     let se = model.nominal_stress(&hf.values(), Mode::Uniaxial, lam0);
@@ -387,9 +488,17 @@ fn qlv_recovers_the_normalised_relaxation_function() {
     assert!((info.instantaneous_scale - 1.0).abs() < 0.02, "{info:?}");
     assert!((f.g_inf - 0.1951).abs() < 0.01, "{}", f.g_inf);
     for (got, (tau, gi)) in f.prony.iter().zip(TABLE_3_3) {
-        assert!((got.tau_s / tau - 1.0).abs() < 0.05 && (got.g / gi - 1.0).abs() < 0.05, "{got:?}");
+        assert!(
+            (got.tau_s / tau - 1.0).abs() < 0.05 && (got.g / gi - 1.0).abs() < 0.05,
+            "{got:?}"
+        );
     }
-    assert!((f.instantaneous_modulus_pa / (3.0 * hf.initial_shear_modulus_pa) - info.instantaneous_scale).abs() < 1e-9);
+    assert!(
+        (f.instantaneous_modulus_pa / (3.0 * hf.initial_shear_modulus_pa)
+            - info.instantaneous_scale)
+            .abs()
+            < 1e-9
+    );
 }
 
 fn shipped() -> Synthetic {
@@ -454,18 +563,20 @@ fn bad_input_corpus() {
             .to_string();
         let (loc, msg) = expect.split_once(' ').unwrap();
         let opts = RelaxationOptions {
-            area: path
-                .to_string_lossy()
-                .contains("with_area")
-                .then_some(1e-5),
+            area: path.to_string_lossy().contains("with_area").then_some(1e-5),
         };
-        let err = read(&path, &opts).expect_err(&path.display().to_string()).to_string();
+        let err = read(&path, &opts)
+            .expect_err(&path.display().to_string())
+            .to_string();
         let want_loc = if loc == "-:" {
             format!("{}:", path.display())
         } else {
             format!("{}:{loc}", path.display())
         };
-        assert!(err.starts_with(&want_loc), "{err}\nexpected location {want_loc}");
+        assert!(
+            err.starts_with(&want_loc),
+            "{err}\nexpected location {want_loc}"
+        );
         assert!(err.contains(msg), "{err}\nexpected '{msg}'");
         assert!(err.contains("hint:") || !msg.is_empty(), "{err}");
         n += 1;
@@ -478,15 +589,37 @@ fn cli_fits_the_shipped_data_and_prints_the_fit_object() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("fit.json");
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_dea-fit"))
-        .args(["relaxation", "datasets/vhb4910/relaxation.csv", "--strain", "0.5", "--terms", "4", "--json", "--no-report", "--out"])
+        .args([
+            "relaxation",
+            "datasets/vhb4910/relaxation.csv",
+            "--strain",
+            "0.5",
+            "--terms",
+            "4",
+            "--json",
+            "--no-report",
+            "--out",
+        ])
         .arg(&out)
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     for key in [
-        "prony", "long_term_modulus_Pa", "instantaneous_modulus_Pa", "kelvin_maxwell",
-        "formulation", "rmse_Pa", "aicc", "bic", "warnings", "provenance", "solver", "schema", "tool_version", "status",
+        "prony",
+        "long_term_modulus_Pa",
+        "instantaneous_modulus_Pa",
+        "kelvin_maxwell",
+        "formulation",
+        "rmse_Pa",
+        "aicc",
+        "bic",
+        "warnings",
+        "provenance",
+        "solver",
+        "schema",
+        "tool_version",
+        "status",
     ] {
         assert!(v.get(key).is_some(), "missing {key}");
     }
@@ -494,13 +627,21 @@ fn cli_fits_the_shipped_data_and_prints_the_fit_object() {
     for k in ["tau_s", "modulus_Pa", "g"] {
         assert!(v["prony"][0].get(k).is_some());
     }
-    assert!(v["kelvin_maxwell"][0].get("k_Pa").is_some() && v["kelvin_maxwell"][0].get("n_Pa_s").is_some());
+    assert!(
+        v["kelvin_maxwell"][0].get("k_Pa").is_some()
+            && v["kelvin_maxwell"][0].get("n_Pa_s").is_some()
+    );
     assert_eq!(v["formulation"], "parallel");
     let file: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
     assert_eq!(file, v);
     // A missing strain is a clear error with exit status 2.
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_dea-fit"))
-        .args(["relaxation", "datasets/vhb4910/relaxation.csv", "--no-report", "--out"])
+        .args([
+            "relaxation",
+            "datasets/vhb4910/relaxation.csv",
+            "--no-report",
+            "--out",
+        ])
         .arg(tmp.path().join("x.json"))
         .output()
         .unwrap();

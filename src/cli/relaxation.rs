@@ -114,7 +114,9 @@ fn settings(a: &Args) -> Result<Settings> {
                 None => (t, 1.0),
             };
             v.parse::<f64>().map(|v| v * f).map_err(|_| {
-                Error::settings(format!("--tolerance: expected e.g. 0.01 or 1%, found '{t}'"))
+                Error::settings(format!(
+                    "--tolerance: expected e.g. 0.01 or 1%, found '{t}'"
+                ))
             })
         })
         .transpose()?;
@@ -144,7 +146,7 @@ fn quantity(flag: &str, text: Option<&str>, dim: Dimension) -> Result<Option<f64
         .map(|s| parse_quantity(s, dim).map(|q| q.value))
         .transpose()
         .map_err(|e| Error::settings(format!("{flag}: {e}")))?;
-    if let Some(v) = v.filter(|v| !(*v > 0.0)) {
+    if let Some(v) = v.filter(|v| v.is_nan() || *v <= 0.0) {
         return Err(Error::settings(format!("{flag} must be > 0, found {v}")));
     }
     Ok(v)
@@ -193,9 +195,8 @@ pub fn run(a: Args) -> Result<i32> {
         return Ok(0);
     }
     let Some(file) = a.file.clone() else {
-        return Err(Error::settings("no data file given").with_hint(
-            "dea-fit relaxation test.csv --strain 0.5   (or --preset seed-table-3.3)",
-        ));
+        return Err(Error::settings("no data file given")
+            .with_hint("dea-fit relaxation test.csv --strain 0.5   (or --preset seed-table-3.3)"));
     };
     let settings = settings(&a)?;
     let area = quantity("--area", a.area.as_deref(), Dimension::Area)?;
@@ -336,7 +337,15 @@ pub fn summary(fit: &RelaxationFit) -> String {
         s.push_str("\nterm-count comparison\n");
         s.push_str(&table(
             &[
-                "N", "k", "RMSE", "rel. RMSE", "AICc", "BIC", "Δ", "τ", "eligible",
+                "N",
+                "k",
+                "RMSE",
+                "rel. RMSE",
+                "AICc",
+                "BIC",
+                "Δ",
+                "τ",
+                "eligible",
             ],
             &rows,
         ));

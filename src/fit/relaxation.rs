@@ -114,8 +114,11 @@ impl Settings {
     /// Reject settings that cannot work.
     pub fn check(&self) -> Result<()> {
         if self.terms.is_some_and(|n| n > 12) || self.max_terms > 12 {
-            return Err(Error::settings("at most 12 Prony terms are supported")
-                .with_hint("real relaxation spectra rarely support more than one term per decade of data"));
+            return Err(
+                Error::settings("at most 12 Prony terms are supported").with_hint(
+                    "real relaxation spectra rarely support more than one term per decade of data",
+                ),
+            );
         }
         if !(2..=50).contains(&self.grid_per_decade) {
             return Err(Error::settings(format!(
@@ -349,11 +352,7 @@ pub struct RelaxationFit {
 impl RelaxationFit {
     /// The fitted Prony series (Pa).
     pub fn prony_series(&self) -> Result<Prony> {
-        let terms: Vec<(f64, f64)> = self
-            .prony
-            .iter()
-            .map(|p| (p.tau_s, p.modulus_pa))
-            .collect();
+        let terms: Vec<(f64, f64)> = self.prony.iter().map(|p| (p.tau_s, p.modulus_pa)).collect();
         Prony::new(self.long_term_modulus_pa, &terms)
     }
 
@@ -458,8 +457,7 @@ impl LeastSquares for Problem {
         for k in 0..self.len() {
             r[k] = self.w[k] * (s * r[k] - self.y[k]);
         }
-        r.iter().all(|v| v.is_finite())
-            && jac.map_or(true, |j| j.iter().all(|v| v.is_finite()))
+        r.iter().all(|v| v.is_finite()) && jac.is_none_or(|j| j.iter().all(|v| v.is_finite()))
     }
 }
 
@@ -592,7 +590,9 @@ fn prepare(
             return Err(Error::settings(
                 "the file records the strain history; --ramp-time would contradict it",
             )
-            .with_hint("drop --ramp-time (the recorded strain is used), or drop the strain column"))
+            .with_hint(
+                "drop --ramp-time (the recorded strain is used), or drop the strain column",
+            ))
         }
         (Some(eps), None) => {
             let held = *eps.last().expect("non-empty");
@@ -611,7 +611,8 @@ fn prepare(
                     fmt_s(data.time[0])
                 ));
             }
-            let knots: Vec<(f64, f64)> = data.time.iter().copied().zip(eps.iter().copied()).collect();
+            let knots: Vec<(f64, f64)> =
+                data.time.iter().copied().zip(eps.iter().copied()).collect();
             (
                 History::from_knots(knots)?,
                 held,
@@ -621,8 +622,9 @@ fn prepare(
         }
         (None, ramp) => {
             let Some(s) = loading.strain else {
-                return Err(Error::settings("the held strain is needed")
-                    .with_hint("pass --strain 0.5 or --stretch 1.5, or add a strain column to the file"));
+                return Err(Error::settings("the held strain is needed").with_hint(
+                    "pass --strain 0.5 or --stretch 1.5, or add a strain column to the file",
+                ));
             };
             match ramp {
                 Some(tr) => {
@@ -696,7 +698,7 @@ fn prepare(
     let y = data.stress.clone();
     let ymax = y.iter().map(|v| v.abs()).fold(0.0, f64::max);
     let xmax = sched.input().iter().map(|v| v.abs()).fold(0.0, f64::max);
-    if !(xmax > 0.0) {
+    if xmax.is_nan() || xmax <= 0.0 {
         return Err(Error::settings(
             "the loading is zero at every data point: nothing relaxes",
         ));
@@ -765,8 +767,9 @@ fn nnls_at(prob: &mut Problem, taus: &[f64]) -> Result<(Vec<f64>, usize)> {
     }
     let b = DVector::from_iterator(n, prob.y.iter().zip(&prob.w).map(|(y, w)| y * w));
     let g = DMatrix::identity(taus.len() + 1, taus.len() + 1);
-    let qp = constrained_least_squares(&a, &b, &g)
-        .map_err(|e| Error::settings(format!("the non-negative least-squares stage failed: {e}")))?;
+    let qp = constrained_least_squares(&a, &b, &g).map_err(|e| {
+        Error::settings(format!("the non-negative least-squares stage failed: {e}"))
+    })?;
     prob.evaluations += 1;
     Ok((
         qp.x.iter().map(|v| v.max(0.0)).collect(),
@@ -833,7 +836,11 @@ fn fit_terms(
     let (taus, c, _) = grid;
     let pk = peaks(taus, c);
     let win = (prep.window.0.ln(), prep.window.1.ln());
-    let total: f64 = pk.iter().map(|p| p.e).sum::<f64>().max(1e-3 * c[0].max(1e-12));
+    let total: f64 = pk
+        .iter()
+        .map(|p| p.e)
+        .sum::<f64>()
+        .max(1e-3 * c[0].max(1e-12));
     let mut starts: Vec<Vec<f64>> = vec![
         pack(c[0], &reshape(pk.clone(), n, true, win)),
         pack(c[0], &reshape(pk.clone(), n, false, win)),
@@ -872,7 +879,7 @@ fn fit_terms(
         });
     }
     let mut bounds = vec![(0.0, f64::INFINITY); 1 + n];
-    bounds.extend(std::iter::repeat(prep.bounds).take(n));
+    bounds.extend(std::iter::repeat_n(prep.bounds, n));
     let lms = LmSettings {
         max_iterations: settings.max_iterations,
         ftol: settings.ftol,
@@ -1233,8 +1240,7 @@ pub fn fit(
                 score(c) - best
             )
         };
-        if assessed[best_any].tf.n_terms > c.tf.n_terms && !assessed[best_any].problems.is_empty()
-        {
+        if assessed[best_any].tf.n_terms > c.tf.n_terms && !assessed[best_any].problems.is_empty() {
             let b = &assessed[best_any];
             reason.push_str(&format!(
                 "; {} terms score better ({name} {:.2} lower) but: {}",

@@ -90,7 +90,10 @@ fn split(h: &str) -> (String, Option<String>) {
     ] {
         if let Some(rest) = lower.strip_prefix(name).and_then(|r| r.strip_prefix('_')) {
             let unit = &h[h.len() - rest.len()..];
-            return (name.to_string(), Some(unit.to_string()).filter(|u| !u.is_empty()));
+            return (
+                name.to_string(),
+                Some(unit.to_string()).filter(|u| !u.is_empty()),
+            );
         }
     }
     (lower.replace(' ', "_"), None)
@@ -100,8 +103,13 @@ fn unit(table: &Table, c: usize, unit: Option<String>, dim: Dimension) -> Result
     let h = &table.header[c];
     let loc = Location::at(&table.path, table.header_line, c + 1);
     let Some(u) = unit else {
-        return Err(Error::input(loc, format!("column '{h}' has no unit"))
-            .with_hint(format!("write it as e.g. '{}_{}'", h.trim(), dim.units()[0].0)));
+        return Err(
+            Error::input(loc, format!("column '{h}' has no unit")).with_hint(format!(
+                "write it as e.g. '{}_{}'",
+                h.trim(),
+                dim.units()[0].0
+            )),
+        );
     };
     dim.factor(&u).ok_or_else(|| {
         Error::input(loc, format!("unknown unit '{u}' in column '{h}'"))
@@ -153,13 +161,13 @@ pub fn from_table(table: &Table, opts: &RelaxationOptions) -> Result<RelaxationD
                 }
             }),
             "stretch" | "lambda" => Col::Stretch,
-            "true_stress" | "cauchy_stress" => {
-                return Err(Error::input(
-                    hloc(c),
-                    format!("column '{h}' holds true stress; relaxation fits use nominal stress"),
-                )
-                .with_hint("convert to nominal stress (force / reference area) or give force_N with --area"))
-            }
+            "true_stress" | "cauchy_stress" => return Err(Error::input(
+                hloc(c),
+                format!("column '{h}' holds true stress; relaxation fits use nominal stress"),
+            )
+            .with_hint(
+                "convert to nominal stress (force / reference area) or give force_N with --area",
+            )),
             _ if h.trim().is_empty() => {
                 return Err(Error::input(hloc(c), "empty column name in the header")
                     .with_hint(format!("name every column; accepted: {ACCEPTED}")))
@@ -190,7 +198,9 @@ pub fn from_table(table: &Table, opts: &RelaxationOptions) -> Result<RelaxationD
                     table.header[c0]
                 ),
             )
-            .with_hint("keep one time, one stress (or force) and at most one strain or stretch column"));
+            .with_hint(
+                "keep one time, one stress (or force) and at most one strain or stretch column",
+            ));
         }
         *slot = Some((c, col));
     }

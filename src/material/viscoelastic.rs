@@ -282,11 +282,7 @@ impl Creep {
 }
 
 fn creep(e_inf: f64, terms: &[PronyTerm], n_v: f64) -> Creep {
-    let act: Vec<PronyTerm> = terms
-        .iter()
-        .copied()
-        .filter(|t| t.modulus > 0.0)
-        .collect();
+    let act: Vec<PronyTerm> = terms.iter().copied().filter(|t| t.modulus > 0.0).collect();
     let f = |s: f64| {
         e_inf
             + n_v * s
@@ -356,7 +352,11 @@ fn creep(e_inf: f64, terms: &[PronyTerm], n_v: f64) -> Creep {
     out.sort_by(|a, b| a.lambda.total_cmp(&b.lambda));
     let e0 = e_inf + act.iter().map(|t| t.modulus).sum::<f64>();
     Creep {
-        j_g: if n_v > 0.0 || e0 <= 0.0 { 0.0 } else { 1.0 / e0 },
+        j_g: if n_v > 0.0 || e0 <= 0.0 {
+            0.0
+        } else {
+            1.0 / e0
+        },
         terms: out,
         fluidity,
     }
@@ -390,7 +390,7 @@ impl History {
             return Err(Error::settings("a history needs at least one point"));
         }
         for w in knots.windows(2) {
-            if !(w[1].0 >= w[0].0) {
+            if w[1].0.is_nan() || w[1].0 < w[0].0 {
                 return Err(Error::settings(format!(
                     "history times must not decrease: {} after {}",
                     w[1].0, w[0].0
@@ -448,7 +448,7 @@ impl Schedule {
     /// Merge `history` with evaluation `times` (non-decreasing, s). The value at a jump
     /// time is taken after the jump.
     pub fn new(history: &History, times: &[f64]) -> Result<Schedule> {
-        if times.windows(2).any(|w| !(w[1] >= w[0])) || times.iter().any(|t| !t.is_finite()) {
+        if times.iter().any(|t| !t.is_finite()) || times.windows(2).any(|w| w[1] < w[0]) {
             return Err(Error::settings(
                 "evaluation times must be finite and non-decreasing",
             ));
@@ -621,8 +621,10 @@ pub fn preset(name: &str) -> Result<Preset> {
                 kelvin_maxwell: km,
             })
         }
-        other => Err(Error::settings(format!("unknown viscoelastic preset '{other}'"))
-            .with_hint(format!("use one of {}", PRESET_NAMES.join(", ")))),
+        other => Err(
+            Error::settings(format!("unknown viscoelastic preset '{other}'"))
+                .with_hint(format!("use one of {}", PRESET_NAMES.join(", "))),
+        ),
     }
 }
 

@@ -60,8 +60,7 @@ pub fn write(
                     let y = data.stress[i];
                     (
                         data.time[i],
-                        100.0 * (pred[i] - y)
-                            / y.abs().max(crate::fit::problem::REL_FLOOR * ymax),
+                        100.0 * (pred[i] - y) / y.abs().max(crate::fit::problem::REL_FLOOR * ymax),
                     )
                 })
                 .collect(),
@@ -116,13 +115,21 @@ pub fn write(
         series: vec![
             Series {
                 label: "storage E'".into(),
-                points: omegas.iter().zip(&sl).map(|(w, s)| (*w, s.0 / 1e3)).collect(),
+                points: omegas
+                    .iter()
+                    .zip(&sl)
+                    .map(|(w, s)| (*w, s.0 / 1e3))
+                    .collect(),
                 color: 0,
                 style: Style::Line,
             },
             Series {
                 label: "loss E''".into(),
-                points: omegas.iter().zip(&sl).map(|(w, s)| (*w, s.1 / 1e3)).collect(),
+                points: omegas
+                    .iter()
+                    .zip(&sl)
+                    .map(|(w, s)| (*w, s.1 / 1e3))
+                    .collect(),
                 color: 1,
                 style: Style::Line,
             },
@@ -179,10 +186,7 @@ pub fn markdown(fit: &RelaxationFit) -> String {
     let _ = writeln!(
         s,
         "```\n{}```\n",
-        table(
-            &["τ", "σ(τ)", "E = k", "σ(E)", "g", "n = k·τ"],
-            &rows
-        )
+        table(&["τ", "σ(τ)", "E = k", "σ(E)", "g", "n = k·τ"], &rows)
     );
     let _ = writeln!(
         s,

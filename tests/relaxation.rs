@@ -655,3 +655,26 @@ fn cli_fits_the_shipped_data_and_prints_the_fit_object() {
     assert!(o.status.success());
     assert!(String::from_utf8_lossy(&o.stdout).contains("Nv 1.8750 kPa·s"));
 }
+
+/// Data from a step fitted with a claimed 1 s ramp relax faster than the ramp allows:
+/// the tool says no Prony series is identifiable (ill-posed) rather than reporting
+/// terms at the search bounds.
+#[test]
+fn a_loading_that_contradicts_the_data_is_ill_posed() {
+    let d = data(&synthetic(
+        truth(&[0.05, 0.3]),
+        None,
+        log_times(0.01, 100.0, 150, false),
+        0.01,
+        8,
+    ));
+    let f = fit(&d, Some(1.0), None);
+    assert_eq!(f.status, Status::IllPosed, "{:#?}", f.warnings);
+    assert!(
+        f.warnings
+            .iter()
+            .any(|w| w.contains("no identifiable Prony series")),
+        "{:?}",
+        f.warnings
+    );
+}

@@ -1175,6 +1175,7 @@ pub fn fit(
         Criterion::Bic => a.bic,
     };
     let mut notes = std::mem::take(&mut prep.notes);
+    let mut unresolved: Option<String> = None;
     let (chosen, selection) = if settings.terms.is_some() {
         (0, None)
     } else {
@@ -1222,10 +1223,15 @@ pub fn fit(
         } else {
             "AICc"
         };
-        let mut reason = if settings.tolerance.is_some() {
+        let mut reason = if let Some(tol) = settings.tolerance {
             format!(
-                "{} term(s) reach a relative RMSE of {:.3} %",
+                "{} term(s) {} a relative RMSE of {:.3} %",
                 c.tf.n_terms,
+                if c.rel_rmse <= tol {
+                    "reach"
+                } else {
+                    "come closest to the tolerance, with"
+                },
                 100.0 * c.rel_rmse
             )
         } else if chosen == best_any {
@@ -1235,9 +1241,8 @@ pub fn fit(
             )
         } else {
             format!(
-                "{} term(s) are within Δ{name} = {:.2} of the best eligible count; more terms are not supported by the data",
-                c.tf.n_terms,
-                score(c) - best
+                "{} term(s): the fewest within Δ{name} ≤ 2 of the best eligible count; more terms are not supported by the data",
+                c.tf.n_terms
             )
         };
         if assessed[best_any].tf.n_terms > c.tf.n_terms && !assessed[best_any].problems.is_empty() {
@@ -1254,12 +1259,19 @@ pub fn fit(
             ));
         }
         if c.tf.n_terms == 0 {
-            notes.push(format!(
-                "no relaxation resolved: a constant modulus fits as well as any Prony series (relative RMSE {:.3} %) — purely elastic within the noise over {}–{}",
-                100.0 * c.rel_rmse,
-                fmt_s(prep.window.0),
-                fmt_s(prep.window.1)
-            ));
+            if score(c) <= score(&assessed[best_any]) + 2.0 {
+                notes.push(format!(
+                    "no relaxation resolved: a constant modulus fits as well as any Prony series (relative RMSE {:.3} %) — purely elastic within the noise over {}–{}",
+                    100.0 * c.rel_rmse,
+                    fmt_s(prep.window.0),
+                    fmt_s(prep.window.1)
+                ));
+            } else {
+                unresolved = Some(format!(
+                    "no identifiable Prony series: the data relax (a constant modulus leaves a relative RMSE of {:.3} %), but every fit with terms puts them where these data cannot determine them; check the loading (--ramp-time, a strain column) and the time window",
+                    100.0 * c.rel_rmse
+                ));
+            }
         }
         let candidates = assessed
             .iter()
@@ -1297,6 +1309,10 @@ pub fn fit(
     let mut warnings = Vec::new();
     for w in notes {
         escalate(Status::Warning);
+        warnings.push(w);
+    }
+    if let Some(w) = unresolved {
+        escalate(Status::IllPosed);
         warnings.push(w);
     }
     for (s, w) in a.problems.iter().chain(&a.warnings) {

@@ -121,7 +121,7 @@ impl Prony {
         self.e_inf + self.terms.iter().map(|t| t.modulus).sum::<f64>()
     }
 
-    /// Normalised fractions (g∞, [gᵢ]) with gᵢ = Eᵢ/E0 (all 0 if E0 = 0).
+    /// Normalised fractions (g∞, gᵢ for each term) with gᵢ = Eᵢ/E0 (all 0 if E0 = 0).
     pub fn normalized(&self) -> (f64, Vec<f64>) {
         let e0 = self.instantaneous();
         let f = |v: f64| if e0 > 0.0 { v / e0 } else { 0.0 };

@@ -6,3 +6,4 @@ mod datasets;
 mod estimation;
 mod models;
 mod permittivity;
+mod relaxation;

@@ -20,6 +20,9 @@ enum What {
     /// Treloar's three modes, multi-start points and LM tolerance against objective
     /// and time, and variable projection against full LM.
     Hyperelastic(HyperArgs),
+    /// The relaxation estimator: term count and method (grid NNLS only vs refined)
+    /// against error and time.
+    Relaxation,
 }
 
 /// Options every bench takes.
@@ -61,6 +64,7 @@ struct HyperArgs {
 pub fn run(a: Args) -> Result<i32> {
     match a.what {
         What::Hyperelastic(h) => hyperelastic(h),
+        What::Relaxation => super::bench_relaxation::run(),
     }
 }
 

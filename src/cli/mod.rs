@@ -1,9 +1,11 @@
 //! Subcommands, one file each.
 
 mod bench;
+mod bench_relaxation;
 mod composite;
 mod hyperelastic;
 mod permittivity;
+mod relaxation;
 mod synth;
 
 use clap::{Parser, Subcommand};
@@ -25,6 +27,8 @@ enum Command {
     Permittivity(permittivity::Args),
     /// Fit mixing rules to a composite series described by a TOML manifest.
     Composite(composite::Args),
+    /// Fit Prony / Kelvin-Maxwell constants to a stress-relaxation curve.
+    Relaxation(relaxation::Args),
     /// Generate synthetic test data from known constants (with noise and seed).
     Synth(synth::Args),
     /// Measure speed against accuracy and write tables and charts under reports/.
@@ -35,6 +39,7 @@ enum Command {
 pub fn run(cli: Cli) -> Result<i32> {
     match cli.command {
         Command::Hyperelastic(a) => hyperelastic::run(a),
+        Command::Relaxation(a) => relaxation::run(a),
         Command::Synth(a) => synth::run(a),
         Command::Permittivity(a) => permittivity::run(a),
         Command::Composite(a) => composite::run(a),

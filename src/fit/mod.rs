@@ -8,6 +8,7 @@ pub mod linear;
 pub mod lm;
 pub mod permittivity;
 pub mod problem;
+pub mod relaxation;
 
 use serde::{Deserialize, Serialize};
 

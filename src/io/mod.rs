@@ -3,6 +3,7 @@
 
 pub mod lcr;
 pub mod manifest;
+pub mod relaxation;
 pub mod table;
 pub mod tensile;
 pub mod write;

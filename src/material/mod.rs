@@ -1,5 +1,6 @@
 //! Constitutive models: hyperelastic strain-energy functions (and, later,
-//! viscoelastic and dielectric laws).
+//! dielectric laws) and linear viscoelasticity (Prony series, Kelvin-Maxwell arms).
 
 pub mod dielectric;
 pub mod hyperelastic;
+pub mod viscoelastic;

@@ -6,3 +6,4 @@ pub mod format;
 pub mod hyperelastic;
 pub mod permittivity;
 pub mod plot;
+pub mod relaxation;

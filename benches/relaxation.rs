@@ -1,0 +1,90 @@
+//! Criterion benches of the relaxation estimator on the seed's Table 3.3 curve
+//! (200 log-spaced points over 0.01–1000 s, step to strain 0.5, 1 % noise, seed 4910):
+//! a 4-term fit (refined and grid-only), the automatic term count, and the exact
+//! hereditary recursion against the naive closed form per point.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use dea_fit::fit::relaxation::{self, Loading, Method, Settings};
+use dea_fit::io::relaxation::{from_table, log_times, RelaxationOptions, Synthetic};
+use dea_fit::io::table::Table;
+use dea_fit::material::viscoelastic::{preset, History, Schedule};
+use std::hint::black_box;
+use std::path::Path;
+use std::time::Duration;
+
+fn bench(c: &mut Criterion) {
+    let syn = Synthetic {
+        prony: preset("seed-table-3.3").unwrap().prony,
+        strain: 0.5,
+        ramp_time: None,
+        times: log_times(0.01, 1000.0, 200, false),
+        noise: 0.01,
+        seed: 4910,
+        record_strain: false,
+    };
+    let csv = syn.csv(&["bench"]).unwrap();
+    let data = from_table(
+        &Table::parse(Path::new("bench.csv"), csv.as_bytes()).unwrap(),
+        &RelaxationOptions::default(),
+    )
+    .unwrap();
+    let loading = Loading {
+        strain: Some(0.5),
+        ramp_time: None,
+    };
+    let mut g = c.benchmark_group("relaxation");
+    g.sample_size(30)
+        .measurement_time(Duration::from_secs(3))
+        .warm_up_time(Duration::from_millis(500));
+    for (name, settings) in [
+        (
+            "fit_200pts_4terms_refined",
+            Settings {
+                terms: Some(4),
+                ..Settings::default()
+            },
+        ),
+        (
+            "fit_200pts_4terms_refined_1start",
+            Settings {
+                terms: Some(4),
+                max_starts: 1,
+                ..Settings::default()
+            },
+        ),
+        (
+            "fit_200pts_4terms_grid_only",
+            Settings {
+                terms: Some(4),
+                method: Method::Grid,
+                ..Settings::default()
+            },
+        ),
+        ("fit_200pts_auto_0to6", Settings::default()),
+    ] {
+        g.bench_function(name, |b| {
+            b.iter(|| relaxation::fit(black_box(&data), &loading, None, &settings).unwrap())
+        });
+    }
+    let times = log_times(0.01, 1000.0, 200, false);
+    let sched = Schedule::new(&History::step(0.5), &times).unwrap();
+    let mut h = vec![0.0; times.len()];
+    let mut dh = vec![0.0; times.len()];
+    g.bench_function("kernel_recursion_200pts_with_derivative", |b| {
+        b.iter(|| sched.kernel(black_box(0.464), &mut h, Some(&mut dh)))
+    });
+    g.bench_function("kernel_naive_closed_form_200pts_with_derivative", |b| {
+        b.iter(|| {
+            let tau = black_box(0.464);
+            for (k, &t) in times.iter().enumerate() {
+                let e = (-t / tau).exp();
+                h[k] = 0.5 * e;
+                dh[k] = 0.5 * e * t / (tau * tau);
+            }
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,1469 @@
+//! The viscoelastic estimator: Prony / Kelvin-Maxwell constants from a stress-relaxation
+//! curve (seed Chapter 3, Tables 3.3 and 4.2).
+//!
+//! Model: σ(t) = E∞·x(t) + Σ Eᵢ·hᵢ(t), with hᵢ the exact hereditary state of
+//! e^(−t/τᵢ) for the loading history x ([`Schedule`]): the strain in the small-strain
+//! reading ([`Formulation::Parallel`], modulus = stress/ε0 after a step), or the
+//! instantaneous hyperelastic stress σₑ(λ(s)) in the QLV reading.
+//!
+//! Two stages:
+//! 1. Non-negative least squares over a log-spaced τ grid (default 6 per decade over
+//!    the sampled window widened by ×3 at each end; Clarabel QP with E ≥ 0 as
+//!    constraints): where the relaxation spectrum lives.
+//! 2. For a term count N: the grid spectrum's peaks are merged or split into N terms
+//!    (several deterministic ways: the multi-start), and τᵢ, Eᵢ, E∞ are refined together
+//!    by bounded Levenberg-Marquardt over (E∞, Eᵢ ≥ 0, ln τᵢ within the window widened
+//!    ×10). E∞ and E0 are fitted, never pinned to the last and first points.
+//!
+//! Residuals are relative by default (floor: 1 % of the largest |stress|), so that the
+//! long-time tail counts as much as the first second. `terms = None` (auto) fits
+//! N = 0 … max_terms and takes the fewest terms whose fit is as good as more by AICc
+//! (or BIC, or a tolerance on the relative RMSE), among fits whose terms are
+//! identifiable and inside the sampled window.
+
+use super::diagnostics;
+use super::hyperelastic::HyperelasticFit;
+use super::linear::constrained_least_squares;
+use super::lm::{self, LeastSquares, LmSettings, Termination};
+use super::problem::{Residual, REL_FLOOR};
+use super::{Parameter, SolverReport, Status};
+use crate::error::{Error, Result};
+use crate::io::relaxation::{RelaxationData, RelaxationSource};
+use crate::material::hyperelastic::Mode;
+use crate::material::viscoelastic::{
+    Formulation, History, KelvinMaxwell, MaxwellArm, Prony, Schedule,
+};
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// Schema tag of relaxation fit files.
+pub const SCHEMA: &str = "dea-fit/relaxation-fit/1";
+
+/// How `auto` scores term counts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Criterion {
+    /// Corrected Akaike information criterion (default).
+    #[default]
+    Aicc,
+    /// Bayesian information criterion (stricter for n > 7).
+    Bic,
+}
+
+/// Estimation method.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Grid NNLS, merge/prune, then bounded LM refinement of τ and E (default).
+    #[default]
+    Refined,
+    /// Grid NNLS and merge/prune only: τ stay where the merged grid peaks put them,
+    /// moduli by NNLS at those τ (for comparison: `dea-fit bench relaxation`).
+    Grid,
+}
+
+/// Estimator settings (checked by [`Settings::check`] before use).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Settings {
+    /// Number of Prony terms, or `None` for automatic choice.
+    pub terms: Option<usize>,
+    /// Largest term count tried by the automatic choice (default 6).
+    pub max_terms: usize,
+    /// Score of the automatic choice (default AICc).
+    pub criterion: Criterion,
+    /// With a tolerance, `auto` takes the fewest terms whose relative RMSE is at most
+    /// this fraction (e.g. 0.01) instead of using the criterion.
+    pub tolerance: Option<f64>,
+    /// Residuals (default relative: the long-time tail counts).
+    pub residual: Residual,
+    /// Method (default refined).
+    pub method: Method,
+    /// τ grid density of the NNLS stage, points per decade (default 6, which puts
+    /// about three grid points between VHB 4910's two modes half a decade apart; range
+    /// 2–50). The Clarabel QP's cost grows steeply with the grid size (≈0.8 ms at 6
+    /// per decade over 6 decades, ≈2 ms at 10).
+    pub grid_per_decade: usize,
+    /// Iteration limit of each LM search (default 200).
+    pub max_iterations: usize,
+    /// Relative cost tolerance of the LM searches (default 1e-10).
+    pub ftol: f64,
+    /// Largest number of starts per term count (default 3).
+    pub max_starts: usize,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            terms: None,
+            max_terms: 6,
+            criterion: Criterion::Aicc,
+            tolerance: None,
+            residual: Residual::Rel,
+            method: Method::Refined,
+            grid_per_decade: 6,
+            max_iterations: 200,
+            ftol: 1e-10,
+            max_starts: 3,
+        }
+    }
+}
+
+impl Settings {
+    /// Reject settings that cannot work.
+    pub fn check(&self) -> Result<()> {
+        if self.terms.is_some_and(|n| n > 12) || self.max_terms > 12 {
+            return Err(
+                Error::settings("at most 12 Prony terms are supported").with_hint(
+                    "real relaxation spectra rarely support more than one term per decade of data",
+                ),
+            );
+        }
+        if !(2..=50).contains(&self.grid_per_decade) {
+            return Err(Error::settings(format!(
+                "the τ grid density must be 2–50 per decade, found {}",
+                self.grid_per_decade
+            )));
+        }
+        if self.max_iterations == 0 || self.max_starts == 0 {
+            return Err(Error::settings(
+                "the iteration limit and the number of starts must be at least 1",
+            ));
+        }
+        if !(self.ftol > 0.0 && self.ftol < 1.0) {
+            return Err(Error::settings(format!(
+                "tolerance must be in (0, 1), found {}",
+                self.ftol
+            )));
+        }
+        if let Some(t) = self.tolerance {
+            if !(t > 0.0 && t < 1.0) {
+                return Err(Error::settings(format!(
+                    "--tolerance is a relative RMSE in (0, 1), e.g. 0.01, found {t}"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The test's loading: held strain and how it was applied. A strain or stretch column
+/// in the file, when present, gives the history instead.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+pub struct Loading {
+    /// Held engineering strain ε0 (stretch λ0 = 1 + ε0); from the file when `None`.
+    pub strain: Option<f64>,
+    /// Duration of a linear loading ramp from t = 0 (s); `None`: an ideal step.
+    pub ramp_time: Option<f64>,
+}
+
+/// A file a fit depends on.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FileRef {
+    /// Path as given.
+    pub path: String,
+    /// SHA-256 of its bytes (hex).
+    pub sha256: String,
+}
+
+/// The hyperelastic fit that gives the instantaneous response of a QLV fit.
+#[derive(Debug, Clone)]
+pub struct QlvInput {
+    /// The hyperelastic fit (its uniaxial stress is σₑ).
+    pub fit: HyperelasticFit,
+    /// Its file.
+    pub file: FileRef,
+}
+
+/// One Prony term of a fit, in the units the fit file names.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PronyEntry {
+    /// Relaxation time τ (s).
+    pub tau_s: f64,
+    /// Modulus Eᵢ (Pa).
+    #[serde(rename = "modulus_Pa")]
+    pub modulus_pa: f64,
+    /// Normalised fraction gᵢ = Eᵢ/E0.
+    pub g: f64,
+    /// Standard error of τ (s).
+    pub tau_std_s: Option<f64>,
+    /// Standard error of Eᵢ (Pa).
+    #[serde(rename = "modulus_std_Pa")]
+    pub modulus_std_pa: Option<f64>,
+}
+
+/// One Maxwell arm of a fit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ArmEntry {
+    /// Spring kⱼ (Pa).
+    #[serde(rename = "k_Pa")]
+    pub k_pa: f64,
+    /// Dashpot nⱼ = kⱼ·τⱼ (Pa·s).
+    #[serde(rename = "n_Pa_s")]
+    pub n_pa_s: f64,
+}
+
+/// A point of the grid NNLS spectrum.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SpectrumPoint {
+    /// Grid relaxation time (s).
+    pub tau_s: f64,
+    /// Non-negative modulus at that τ (Pa).
+    #[serde(rename = "modulus_Pa")]
+    pub modulus_pa: f64,
+}
+
+/// QLV details of a fit with a hyperelastic instantaneous response.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct QlvInfo {
+    /// Hyperelastic model.
+    pub hyperelastic_model: String,
+    /// Its small-strain Young's modulus 3μ0 (Pa): the reference of the moduli.
+    #[serde(rename = "reference_modulus_Pa")]
+    pub reference_modulus_pa: f64,
+    /// G(0): the factor by which the hyperelastic stress must be scaled to be the
+    /// instantaneous response of these data (1 if the hyperelastic fit is it).
+    pub instantaneous_scale: f64,
+    /// Hyperelastic stress at the held stretch (Pa).
+    #[serde(rename = "held_stress_Pa")]
+    pub held_stress_pa: f64,
+}
+
+/// One row of the term-count comparison.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Candidate {
+    /// Number of Prony terms.
+    pub terms: usize,
+    /// Number of parameters (2N + 1).
+    pub k: usize,
+    /// RMSE (Pa).
+    #[serde(rename = "rmse_Pa")]
+    pub rmse_pa: f64,
+    /// Relative RMSE (fraction).
+    pub rel_rmse: f64,
+    /// AICc (None when n ≤ k + 1).
+    pub aicc: Option<f64>,
+    /// BIC.
+    pub bic: f64,
+    /// Score minus the smallest score.
+    pub delta: f64,
+    /// Relaxation times (s).
+    pub tau_s: Vec<f64>,
+    /// Whether the automatic choice may take it.
+    pub eligible: bool,
+    /// Why not, if not.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+}
+
+/// How the term count was chosen.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Selection {
+    /// The rule, in words.
+    pub rule: String,
+    /// Why this count.
+    pub reason: String,
+    /// Every count tried.
+    pub candidates: Vec<Candidate>,
+}
+
+/// Inputs and settings of a fit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Provenance {
+    /// The relaxation file.
+    pub files: Vec<RelaxationSource>,
+    /// The hyperelastic fit of a QLV fit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hyperelastic_fit: Option<FileRef>,
+    /// Loading.
+    pub loading: Loading,
+    /// Settings used.
+    pub settings: serde_json::Value,
+}
+
+/// A relaxation fit: what `--json` prints and what the fit file holds.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RelaxationFit {
+    /// Schema tag.
+    pub schema: String,
+    /// dea-fit version that wrote it.
+    pub tool_version: String,
+    /// Formulation the constants belong to.
+    pub formulation: Formulation,
+    /// Held engineering strain ε0.
+    pub held_strain: f64,
+    /// How the strain was applied (step, ramp, recorded history).
+    pub loading: String,
+    /// Prony terms, sorted by τ.
+    pub prony: Vec<PronyEntry>,
+    /// E∞ (Pa).
+    #[serde(rename = "long_term_modulus_Pa")]
+    pub long_term_modulus_pa: f64,
+    /// E0 = E∞ + ΣEᵢ (Pa).
+    #[serde(rename = "instantaneous_modulus_Pa")]
+    pub instantaneous_modulus_pa: f64,
+    /// g∞ = E∞/E0.
+    pub g_inf: f64,
+    /// The seed's Maxwell arms kⱼ = Eⱼ, nⱼ = Eⱼτⱼ (equilibrium spring E∞; the
+    /// Kelvin-Voigt dashpot Nv is not identifiable from a relaxation curve).
+    pub kelvin_maxwell: Vec<ArmEntry>,
+    /// QLV details (QLV fits only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub qlv: Option<QlvInfo>,
+    /// Parameters in SI (E_inf, E1…, tau1…).
+    pub parameters: Vec<Parameter>,
+    /// RMSE (Pa, unweighted).
+    #[serde(rename = "rmse_Pa")]
+    pub rmse_pa: f64,
+    /// Relative RMSE (fraction, same floor as the relative residuals).
+    pub rel_rmse: f64,
+    /// R².
+    pub r2: f64,
+    /// AICc of the fitted objective (None when n ≤ k + 1).
+    pub aicc: Option<f64>,
+    /// BIC of the fitted objective.
+    pub bic: f64,
+    /// Residual definition of the objective.
+    pub residual: Residual,
+    /// Number of points.
+    pub points: usize,
+    /// Sampled window [first positive time, last time] (s).
+    pub time_window_s: [f64; 2],
+    /// The grid NNLS spectrum (stage 1).
+    pub spectrum: Vec<SpectrumPoint>,
+    /// Parameter correlation matrix.
+    pub correlation: Vec<Vec<Option<f64>>>,
+    /// Condition number of the column-normalised Jacobian.
+    pub condition_number: Option<f64>,
+    /// Overall status.
+    pub status: Status,
+    /// Everything the user should know.
+    pub warnings: Vec<String>,
+    /// Solver report.
+    pub solver: SolverReport,
+    /// How the term count was chosen (auto only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub selection: Option<Selection>,
+    /// Inputs and settings.
+    pub provenance: Provenance,
+}
+
+impl RelaxationFit {
+    /// The fitted Prony series (Pa).
+    pub fn prony_series(&self) -> Result<Prony> {
+        let terms: Vec<(f64, f64)> = self.prony.iter().map(|p| (p.tau_s, p.modulus_pa)).collect();
+        Prony::new(self.long_term_modulus_pa, &terms)
+    }
+
+    /// The seed's Kelvin-Maxwell model of the fit (Nv = 0).
+    pub fn kelvin_maxwell_model(&self) -> KelvinMaxwell {
+        KelvinMaxwell {
+            k_inf: self.long_term_modulus_pa,
+            arms: self
+                .kelvin_maxwell
+                .iter()
+                .map(|a| MaxwellArm {
+                    k: a.k_pa,
+                    n: a.n_pa_s,
+                })
+                .collect(),
+            n_v: 0.0,
+        }
+    }
+}
+
+/// The fitting problem: p = [e∞, e₁…e_N, ln τ₁…ln τ_N] in scaled units (stress =
+/// S·(e∞·x + Σ eᵢ·hᵢ)), residuals rₖ = wₖ·(model − yₖ).
+#[derive(Clone)]
+struct Problem {
+    sched: Schedule,
+    y: Vec<f64>,
+    w: Vec<f64>,
+    scale: f64,
+    n_terms: usize,
+    h: Vec<f64>,
+    dh: Vec<f64>,
+    evaluations: usize,
+}
+
+impl Problem {
+    fn len(&self) -> usize {
+        self.y.len()
+    }
+
+    /// Model stress at every point, into `m`.
+    fn model(&mut self, p: &[f64], m: &mut [f64]) {
+        let n = self.n_terms;
+        for (mk, x) in m.iter_mut().zip(self.sched.input()) {
+            *mk = p[0] * x;
+        }
+        for i in 0..n {
+            self.sched.kernel(p[1 + n + i].exp(), &mut self.h, None);
+            for (mk, h) in m.iter_mut().zip(&self.h) {
+                *mk += p[1 + i] * h;
+            }
+        }
+        for mk in m.iter_mut() {
+            *mk *= self.scale;
+        }
+    }
+
+    /// Column k of the design for a fixed τ (NNLS stage), weighted and scaled.
+    fn column(&mut self, tau: Option<f64>, out: &mut [f64]) {
+        match tau {
+            None => out.copy_from_slice(self.sched.input()),
+            Some(t) => self.sched.kernel(t, out, None),
+        }
+        for (o, w) in out.iter_mut().zip(&self.w) {
+            *o *= w * self.scale;
+        }
+    }
+}
+
+impl LeastSquares for Problem {
+    fn dims(&self) -> (usize, usize) {
+        (self.len(), 1 + 2 * self.n_terms)
+    }
+    fn eval(&mut self, p: &[f64], r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>) -> bool {
+        self.evaluations += 1;
+        let n = self.n_terms;
+        let s = self.scale;
+        for k in 0..self.len() {
+            r[k] = p[0] * self.sched.input()[k];
+        }
+        let mut jac = jac;
+        if let Some(j) = jac.as_deref_mut() {
+            for k in 0..self.len() {
+                j[(k, 0)] = self.w[k] * s * self.sched.input()[k];
+            }
+        }
+        for i in 0..n {
+            let tau = p[1 + n + i].exp();
+            let want = jac.is_some();
+            self.sched
+                .kernel(tau, &mut self.h, want.then_some(&mut self.dh[..]));
+            for k in 0..self.len() {
+                r[k] += p[1 + i] * self.h[k];
+            }
+            if let Some(j) = jac.as_deref_mut() {
+                for k in 0..self.len() {
+                    let ws = self.w[k] * s;
+                    j[(k, 1 + i)] = ws * self.h[k];
+                    j[(k, 1 + n + i)] = ws * p[1 + i] * tau * self.dh[k];
+                }
+            }
+        }
+        for k in 0..self.len() {
+            r[k] = self.w[k] * (s * r[k] - self.y[k]);
+        }
+        r.iter().all(|v| v.is_finite()) && jac.is_none_or(|j| j.iter().all(|v| v.is_finite()))
+    }
+}
+
+/// A fit at one term count.
+#[derive(Debug, Clone)]
+struct TermFit {
+    n_terms: usize,
+    /// Scaled parameters, terms sorted by τ.
+    p: Vec<f64>,
+    iterations: usize,
+    evaluations: usize,
+    termination: Termination,
+    starts: usize,
+    at_best: usize,
+}
+
+/// A peak of the grid spectrum: total scaled modulus and its weighted mean ln τ.
+#[derive(Debug, Clone, Copy)]
+struct Peak {
+    e: f64,
+    ln_tau: f64,
+}
+
+fn merge(a: Peak, b: Peak) -> Peak {
+    let e = a.e + b.e;
+    Peak {
+        e,
+        ln_tau: if e > 0.0 {
+            (a.e * a.ln_tau + b.e * b.ln_tau) / e
+        } else {
+            0.5 * (a.ln_tau + b.ln_tau)
+        },
+    }
+}
+
+/// Bring a sorted list of peaks to exactly `n`: merge the closest adjacent pair in ln τ
+/// (`closest`) or fold the smallest peak into its nearer neighbour; split the largest
+/// into two a factor 3 apart while too few.
+fn reshape(mut peaks: Vec<Peak>, n: usize, closest: bool, window: (f64, f64)) -> Vec<Peak> {
+    if n == 0 {
+        return Vec::new();
+    }
+    if peaks.is_empty() && n > 0 {
+        peaks.push(Peak {
+            e: 1.0,
+            ln_tau: 0.5 * (window.0 + window.1),
+        });
+    }
+    while peaks.len() > n {
+        let i = if closest {
+            (0..peaks.len() - 1)
+                .min_by(|&a, &b| {
+                    (peaks[a + 1].ln_tau - peaks[a].ln_tau)
+                        .total_cmp(&(peaks[b + 1].ln_tau - peaks[b].ln_tau))
+                })
+                .expect("two peaks")
+        } else {
+            let j = (0..peaks.len())
+                .min_by(|&a, &b| peaks[a].e.total_cmp(&peaks[b].e))
+                .expect("a peak");
+            if j == 0 {
+                0
+            } else if j == peaks.len() - 1
+                || peaks[j].ln_tau - peaks[j - 1].ln_tau < peaks[j + 1].ln_tau - peaks[j].ln_tau
+            {
+                j - 1
+            } else {
+                j
+            }
+        };
+        let m = merge(peaks[i], peaks[i + 1]);
+        peaks[i] = m;
+        peaks.remove(i + 1);
+    }
+    while peaks.len() < n {
+        let j = (0..peaks.len())
+            .max_by(|&a, &b| peaks[a].e.total_cmp(&peaks[b].e))
+            .expect("a peak");
+        let p = peaks[j];
+        let d = 0.5 * 3f64.ln();
+        peaks[j] = Peak {
+            e: 0.5 * p.e,
+            ln_tau: p.ln_tau - d,
+        };
+        peaks.insert(
+            j + 1,
+            Peak {
+                e: 0.5 * p.e,
+                ln_tau: p.ln_tau + d,
+            },
+        );
+    }
+    peaks
+}
+
+/// Everything the estimator derives from data and loading before fitting.
+struct Prepared {
+    prob: Problem,
+    /// [first positive time, last time] (s).
+    window: (f64, f64),
+    /// ln τ search bounds.
+    bounds: (f64, f64),
+    /// Moduli unit: Pa per unit of the scaled coefficient·S (1 for the parallel
+    /// reading, 3μ0 for QLV).
+    unit: f64,
+    formulation: Formulation,
+    held_strain: f64,
+    loading: String,
+    qlv: Option<QlvInfo>,
+    notes: Vec<String>,
+}
+
+fn prepare(
+    data: &RelaxationData,
+    loading: &Loading,
+    qlv: Option<&QlvInput>,
+    settings: &Settings,
+) -> Result<Prepared> {
+    let n = data.time.len();
+    if n < 3 {
+        return Err(Error::settings(format!(
+            "{n} points cannot determine even a long-term modulus with an uncertainty"
+        ))
+        .with_hint("a relaxation curve needs at least 3 points, and 2N + 3 for N terms"));
+    }
+    let mut notes = Vec::new();
+    // The strain history: recorded, ramp, or step.
+    let (strain_hist, held, desc) = match (&data.strain, loading.ramp_time) {
+        (Some(_), Some(_)) => {
+            return Err(Error::settings(
+                "the file records the strain history; --ramp-time would contradict it",
+            )
+            .with_hint(
+                "drop --ramp-time (the recorded strain is used), or drop the strain column",
+            ))
+        }
+        (Some(eps), None) => {
+            let held = *eps.last().expect("non-empty");
+            if let Some(s) = loading.strain {
+                if (s - held).abs() > 0.01 * held.abs().max(1e-12) {
+                    return Err(Error::settings(format!(
+                        "the held strain is given as {s} but the file's strain column ends at {held:.6}"
+                    ))
+                    .with_hint("drop --strain/--stretch (the recorded strain is used) or correct it"));
+                }
+            }
+            if eps[0] != 0.0 && data.time[0] > 0.0 {
+                notes.push(format!(
+                    "the recorded strain is already {} at the first sample (t = {}): the loading before it is taken as a step at that time; start the file at t = 0 to fit the true history",
+                    eps[0],
+                    fmt_s(data.time[0])
+                ));
+            }
+            let knots: Vec<(f64, f64)> =
+                data.time.iter().copied().zip(eps.iter().copied()).collect();
+            (
+                History::from_knots(knots)?,
+                held,
+                "recorded strain history (piecewise linear between samples, 0 before the first)"
+                    .to_string(),
+            )
+        }
+        (None, ramp) => {
+            let Some(s) = loading.strain else {
+                return Err(Error::settings("the held strain is needed").with_hint(
+                    "pass --strain 0.5 or --stretch 1.5, or add a strain column to the file",
+                ));
+            };
+            match ramp {
+                Some(tr) => {
+                    if !(tr > 0.0 && tr.is_finite()) {
+                        return Err(Error::settings(format!(
+                            "--ramp-time must be > 0, found {tr}"
+                        )));
+                    }
+                    if tr >= data.time[n - 1] {
+                        return Err(Error::settings(format!(
+                            "the ramp ({tr} s) does not end before the last point ({} s): there is no hold to fit",
+                            data.time[n - 1]
+                        )));
+                    }
+                    (
+                        History::ramp(s, tr),
+                        s,
+                        format!("linear ramp over {tr} s from t = 0, then held"),
+                    )
+                }
+                None => (History::step(s), s, "ideal step at t = 0".to_string()),
+            }
+        }
+    };
+    if !(held.is_finite() && held != 0.0 && held > -1.0) {
+        return Err(Error::settings(format!(
+            "the held strain must be non-zero and > −1, found {held}"
+        )));
+    }
+    // Input of the hereditary integral.
+    let (history, formulation, unit, qlv_info) = match qlv {
+        None => (strain_hist, Formulation::Parallel, 1.0, None),
+        Some(q) => {
+            let model = q.fit.evaluator()?;
+            let p = q.fit.values();
+            let se = |e: f64| model.nominal_stress(&p, Mode::Uniaxial, 1.0 + e);
+            if let Some(w) = q.fit.range_warning(Mode::Uniaxial, 1.0 + held) {
+                notes.push(format!("hyperelastic fit: {w}"));
+            }
+            // A ramp in strain is not a ramp in σₑ: resolve it in 64 linear pieces.
+            let history = match loading.ramp_time.filter(|_| data.strain.is_none()) {
+                Some(tr) => History::from_knots(
+                    (0..=64)
+                        .map(|i| (tr * i as f64 / 64.0, se(held * i as f64 / 64.0)))
+                        .collect(),
+                )?,
+                None => strain_hist.map(se),
+            };
+            let e_ref = 3.0 * q.fit.initial_shear_modulus_pa;
+            let held_stress = se(held);
+            if !(held_stress.is_finite() && held_stress != 0.0 && e_ref > 0.0) {
+                return Err(Error::settings(format!(
+                    "the hyperelastic fit gives stress {held_stress} Pa at stretch {}: no QLV reference",
+                    1.0 + held
+                )));
+            }
+            (
+                history,
+                Formulation::Qlv,
+                e_ref,
+                Some(QlvInfo {
+                    hyperelastic_model: q.fit.model.clone(),
+                    reference_modulus_pa: e_ref,
+                    instantaneous_scale: f64::NAN,
+                    held_stress_pa: held_stress,
+                }),
+            )
+        }
+    };
+    let sched = Schedule::new(&history, &data.time)?;
+    let y = data.stress.clone();
+    let ymax = y.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    let xmax = sched.input().iter().map(|v| v.abs()).fold(0.0, f64::max);
+    if xmax.is_nan() || xmax <= 0.0 {
+        return Err(Error::settings(
+            "the loading is zero at every data point: nothing relaxes",
+        ));
+    }
+    let w: Vec<f64> = y
+        .iter()
+        .map(|v| match settings.residual {
+            Residual::Rel => 1.0 / v.abs().max(REL_FLOOR * ymax),
+            Residual::Abs => 1.0 / ymax,
+        })
+        .collect();
+    let t_pos = data
+        .time
+        .iter()
+        .copied()
+        .find(|&t| t > 0.0)
+        .expect("times increase from ≥ 0 and n ≥ 3");
+    let window = (t_pos, data.time[n - 1]);
+    let bounds = ((window.0 / 10.0).ln(), (window.1 * 10.0).ln());
+    Ok(Prepared {
+        prob: Problem {
+            sched,
+            y,
+            w,
+            scale: ymax / xmax,
+            n_terms: 0,
+            h: vec![0.0; n],
+            dh: vec![0.0; n],
+            evaluations: 0,
+        },
+        window,
+        bounds,
+        unit,
+        formulation,
+        held_strain: held,
+        loading: desc,
+        qlv: qlv_info,
+        notes,
+    })
+}
+
+/// Stage 1: NNLS over the τ grid. Returns (grid τ, scaled coefficients [e∞, e_grid…],
+/// QP iterations).
+fn grid_nnls(
+    prob: &mut Problem,
+    window: (f64, f64),
+    per_decade: usize,
+) -> Result<(Vec<f64>, Vec<f64>, usize)> {
+    let (a, b) = ((window.0 / 3.0).log10(), (window.1 * 3.0).log10());
+    let count = ((b - a) * per_decade as f64).ceil() as usize + 1;
+    let taus: Vec<f64> = (0..count)
+        .map(|i| 10f64.powf(a + (b - a) * i as f64 / (count - 1) as f64))
+        .collect();
+    let (c, it) = nnls_at(prob, &taus)?;
+    Ok((taus, c, it))
+}
+
+/// Non-negative least squares for E∞ and moduli at fixed τ (scaled units).
+fn nnls_at(prob: &mut Problem, taus: &[f64]) -> Result<(Vec<f64>, usize)> {
+    let n = prob.len();
+    let mut a = DMatrix::zeros(n, taus.len() + 1);
+    let mut col = vec![0.0; n];
+    for j in 0..=taus.len() {
+        prob.column(if j == 0 { None } else { Some(taus[j - 1]) }, &mut col);
+        a.column_mut(j).copy_from_slice(&col);
+    }
+    let b = DVector::from_iterator(n, prob.y.iter().zip(&prob.w).map(|(y, w)| y * w));
+    let g = DMatrix::identity(taus.len() + 1, taus.len() + 1);
+    let qp = constrained_least_squares(&a, &b, &g).map_err(|e| {
+        Error::settings(format!("the non-negative least-squares stage failed: {e}"))
+    })?;
+    prob.evaluations += 1;
+    Ok((
+        qp.x.iter().map(|v| v.max(0.0)).collect(),
+        qp.iterations as usize,
+    ))
+}
+
+/// Peaks of the grid spectrum: runs of consecutive non-zero grid moduli.
+fn peaks(taus: &[f64], c: &[f64]) -> Vec<Peak> {
+    let total: f64 = c[1..].iter().sum();
+    // An interior-point solution is never exactly zero: 1 % of the largest grid
+    // modulus separates the spectrum from the solver's residue.
+    let thr = 1e-2 * c[1..].iter().copied().fold(0.0, f64::max);
+    let mut out: Vec<Peak> = Vec::new();
+    let mut open = false;
+    for (j, &e) in c[1..].iter().enumerate() {
+        if e > thr {
+            let p = Peak {
+                e,
+                ln_tau: taus[j].ln(),
+            };
+            match (open, out.last_mut()) {
+                (true, Some(last)) => *last = merge(*last, p),
+                _ => out.push(p),
+            }
+            open = true;
+        } else {
+            open = false;
+        }
+    }
+    // Prune peaks below 0.1 % of the relaxing modulus: noise, not spectrum.
+    out.retain(|p| p.e >= 1e-3 * total);
+    out
+}
+
+fn pack(e_inf: f64, peaks: &[Peak]) -> Vec<f64> {
+    let mut p = vec![e_inf];
+    p.extend(peaks.iter().map(|q| q.e));
+    p.extend(peaks.iter().map(|q| q.ln_tau));
+    p
+}
+
+/// Sort the terms of a scaled parameter vector by τ.
+fn sort_terms(p: &mut [f64], n: usize) {
+    let mut idx: Vec<usize> = (0..n).collect();
+    idx.sort_by(|&a, &b| p[1 + n + a].total_cmp(&p[1 + n + b]));
+    let old = p.to_vec();
+    for (new, &o) in idx.iter().enumerate() {
+        p[1 + new] = old[1 + o];
+        p[1 + n + new] = old[1 + n + o];
+    }
+}
+
+/// Stage 2 for one term count.
+fn fit_terms(
+    prep: &Prepared,
+    grid: &(Vec<f64>, Vec<f64>, usize),
+    n: usize,
+    settings: &Settings,
+) -> Result<TermFit> {
+    let mut prob = prep.prob.clone();
+    prob.n_terms = n;
+    prob.evaluations = 0;
+    let (taus, c, _) = grid;
+    let pk = peaks(taus, c);
+    let win = (prep.window.0.ln(), prep.window.1.ln());
+    let total: f64 = pk
+        .iter()
+        .map(|p| p.e)
+        .sum::<f64>()
+        .max(1e-3 * c[0].max(1e-12));
+    let mut starts: Vec<Vec<f64>> = vec![
+        pack(c[0], &reshape(pk.clone(), n, true, win)),
+        pack(c[0], &reshape(pk.clone(), n, false, win)),
+    ];
+    if n > 0 {
+        let spread: Vec<Peak> = (0..n)
+            .map(|i| Peak {
+                e: total / n as f64,
+                ln_tau: win.0 + (win.1 - win.0) * (i as f64 + 0.5) / n as f64,
+            })
+            .collect();
+        starts.push(pack(c[0], &spread));
+        // The NNLS peaks shifted half a grid step apart: breaks ties between close modes.
+        let mut wide = reshape(pk.clone(), n, true, win);
+        for (i, q) in wide.iter_mut().enumerate() {
+            q.ln_tau += if i % 2 == 0 { -0.35 } else { 0.35 };
+        }
+        starts.push(pack(c[0], &wide));
+    }
+    starts.dedup_by(|a, b| a.iter().zip(b.iter()).all(|(x, y)| (x - y).abs() < 1e-9));
+    starts.truncate(settings.max_starts);
+    if settings.method == Method::Grid {
+        let p0 = &starts[0];
+        let ts: Vec<f64> = p0[1 + n..].iter().map(|l| l.exp()).collect();
+        let (e, it) = nnls_at(&mut prob, &ts)?;
+        let mut p = e;
+        p.extend(ts.iter().map(|t| t.ln()));
+        return Ok(TermFit {
+            n_terms: n,
+            p,
+            iterations: it,
+            evaluations: prob.evaluations,
+            termination: Termination::Converged("exact (NNLS at fixed τ)"),
+            starts: 1,
+            at_best: 1,
+        });
+    }
+    let mut bounds = vec![(0.0, f64::INFINITY); 1 + n];
+    bounds.extend(std::iter::repeat_n(prep.bounds, n));
+    let lms = LmSettings {
+        max_iterations: settings.max_iterations,
+        ftol: settings.ftol,
+        ..LmSettings::default()
+    };
+    let mut results = Vec::with_capacity(starts.len());
+    let mut iterations = 0;
+    for s in &starts {
+        let res = lm::minimize(&mut prob, s, &bounds, &lms);
+        iterations += res.iterations;
+        results.push(res);
+    }
+    let best = results
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.cost.is_finite())
+        .min_by(|a, b| a.1.cost.total_cmp(&b.1.cost))
+        .map(|(i, _)| i)
+        .unwrap_or(0);
+    let bc = results[best].cost;
+    let at_best = results
+        .iter()
+        .filter(|r| (r.cost - bc).abs() <= 1e-6 * bc.max(f64::MIN_POSITIVE))
+        .count();
+    let r = results.swap_remove(best);
+    let mut p = r.x;
+    sort_terms(&mut p, n);
+    Ok(TermFit {
+        n_terms: n,
+        p,
+        iterations,
+        evaluations: prob.evaluations,
+        termination: r.termination,
+        starts: starts.len(),
+        at_best,
+    })
+}
+
+/// Diagnostics of one term fit: statistics, uncertainty in SI, problems found.
+struct Assessed {
+    tf: TermFit,
+    /// SI parameters: [E∞, E₁…, τ₁…].
+    si: Vec<f64>,
+    unc: diagnostics::Uncertainty,
+    rmse: f64,
+    rel_rmse: f64,
+    r2: f64,
+    aicc: Option<f64>,
+    bic: f64,
+    /// Problems that make the count ineligible for auto (and raise the status).
+    problems: Vec<(Status, String)>,
+    /// Softer warnings.
+    warnings: Vec<(Status, String)>,
+}
+
+fn assess(prep: &Prepared, tf: TermFit) -> Assessed {
+    let mut prob = prep.prob.clone();
+    let n = tf.n_terms;
+    prob.n_terms = n;
+    let m = prob.len();
+    let k = 1 + 2 * n;
+    let mut r = DVector::zeros(m);
+    let mut jac = DMatrix::zeros(m, k);
+    let finite = prob.eval(&tf.p, &mut r, Some(&mut jac));
+    let rss = r.norm_squared();
+    let s = prob.scale * prep.unit;
+    let mut si = vec![tf.p[0] * s];
+    si.extend((0..n).map(|i| tf.p[1 + i] * s));
+    si.extend((0..n).map(|i| tf.p[1 + n + i].exp()));
+    // Jacobian with respect to the SI parameters.
+    for c in 0..=n {
+        jac.column_mut(c).scale_mut(1.0 / s);
+    }
+    for i in 0..n {
+        jac.column_mut(1 + n + i).scale_mut(1.0 / si[1 + n + i]);
+    }
+    let unc = diagnostics::uncertainty(&jac, rss);
+    let mut pred = vec![0.0; m];
+    prob.model(&tf.p, &mut pred);
+    let y = &prob.y;
+    let nf = m as f64;
+    let mean = y.iter().sum::<f64>() / nf;
+    let ss_res: f64 = pred.iter().zip(y).map(|(p, y)| (p - y).powi(2)).sum();
+    let ss_tot: f64 = y.iter().map(|v| (v - mean).powi(2)).sum();
+    let ymax = y.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    let rel: f64 = pred
+        .iter()
+        .zip(y)
+        .map(|(p, y)| ((p - y) / y.abs().max(REL_FLOOR * ymax)).powi(2))
+        .sum();
+    let (aicc, bic) = diagnostics::information_criteria(rss, m, k);
+
+    let mut problems = Vec::new();
+    let mut warnings = Vec::new();
+    match &tf.termination {
+        Termination::Converged(_) => {}
+        Termination::MaxIterations => problems.push((
+            Status::NotConverged,
+            "the search stopped at the iteration limit without converging".to_string(),
+        )),
+        Termination::Failed(w) => {
+            problems.push((Status::NotConverged, format!("the search failed: {w}")))
+        }
+    }
+    if !finite {
+        problems.push((
+            Status::NotConverged,
+            "the model is not finite at some data points".into(),
+        ));
+    }
+    let e0: f64 = si[..=n].iter().sum();
+    let (lo, hi) = (prep.bounds.0.exp(), prep.bounds.1.exp());
+    for i in 0..n {
+        let (tau, e) = (si[1 + n + i], si[1 + i]);
+        let name = format!("τ{} = {}", i + 1, fmt_s(tau));
+        if e <= 1e-3 * e0 {
+            problems.push((
+                Status::IllPosed,
+                format!("term {} ({name}) is negligible (E{} ≤ 0.1 % of E0): a term too many for these data", i + 1, i + 1),
+            ));
+        } else if tau <= lo * 1.0001 || tau >= hi / 1.0001 {
+            problems.push((
+                Status::IllPosed,
+                format!("{name} ran to its bound: the data do not determine it"),
+            ));
+        } else if tau < prep.window.0 {
+            problems.push((
+                Status::IllPosed,
+                format!(
+                    "{name} is shorter than the first sample ({}): this relaxation is over before the data see it, so its τ and modulus are not determined separately",
+                    fmt_s(prep.window.0)
+                ),
+            ));
+        } else if tau > prep.window.1 {
+            problems.push((
+                Status::IllPosed,
+                format!(
+                    "{name} is longer than the test ({}): the data show only the start of this relaxation, so its τ, its modulus and E∞ are not determined separately",
+                    fmt_s(prep.window.1)
+                ),
+            ));
+        }
+    }
+    for i in 1..n {
+        let ratio = si[1 + n + i] / si[n + i];
+        if ratio < 1.25 {
+            problems.push((
+                Status::IllPosed,
+                format!(
+                    "τ{} and τ{} are within a factor {ratio:.2}: two terms describe one relaxation",
+                    i,
+                    i + 1
+                ),
+            ));
+        }
+    }
+    if m <= k + 1 {
+        problems.push((
+            Status::IllPosed,
+            format!("{m} points for {k} parameters: no degrees of freedom left"),
+        ));
+    } else if unc.std_error.iter().any(Option::is_none) {
+        problems.push((
+            Status::IllPosed,
+            format!(
+                "parameters not identifiable from these data (condition number {:.2e})",
+                unc.condition
+            ),
+        ));
+    } else {
+        for i in 0..n {
+            if let Some(sd) = unc.std_error[1 + n + i] {
+                let rel_sd = sd / si[1 + n + i];
+                if rel_sd > 0.5 {
+                    warnings.push((
+                        Status::Warning,
+                        format!(
+                            "τ{} = {} is poorly determined (standard error {:.0} %)",
+                            i + 1,
+                            fmt_s(si[1 + n + i]),
+                            100.0 * rel_sd
+                        ),
+                    ));
+                }
+            }
+        }
+        if unc.condition > 1e8 {
+            warnings.push((
+                Status::Warning,
+                format!(
+                    "ill-conditioned: condition number {:.2e}; the parameters are poorly determined individually",
+                    unc.condition
+                ),
+            ));
+        }
+        let names = param_names(n);
+        for a in 0..k {
+            for b in a + 1..k {
+                if let Some(c) = unc.correlation[a][b] {
+                    if c.abs() > 0.995 {
+                        warnings.push((
+                            Status::Warning,
+                            format!(
+                                "{} and {} are correlated ({c:+.4}): the data pin down a combination, not each",
+                                names[a].0, names[b].0
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    Assessed {
+        tf,
+        si,
+        unc,
+        rmse: (ss_res / nf).sqrt(),
+        rel_rmse: (rel / nf).sqrt(),
+        r2: if ss_tot > 0.0 {
+            1.0 - ss_res / ss_tot
+        } else {
+            f64::NAN
+        },
+        aicc,
+        bic,
+        problems,
+        warnings,
+    }
+}
+
+fn param_names(n: usize) -> Vec<(String, &'static str)> {
+    let mut v = vec![("E_inf".to_string(), "Pa")];
+    v.extend((1..=n).map(|i| (format!("E{i}"), "Pa")));
+    v.extend((1..=n).map(|i| (format!("tau{i}"), "s")));
+    v
+}
+
+/// Seconds with an SI prefix, for messages.
+fn fmt_s(t: f64) -> String {
+    crate::report::format::si(t, "s")
+}
+
+/// The rule `auto` applies.
+pub fn auto_rule(settings: &Settings) -> String {
+    let base = "among term counts whose fit converged and whose terms are all identifiable, non-negligible, a factor 1.25 apart and inside the sampled time window";
+    match (settings.tolerance, settings.criterion) {
+        (Some(t), _) => format!(
+            "{base}, take the fewest whose relative RMSE is at most {:.3} %",
+            100.0 * t
+        ),
+        (None, Criterion::Aicc) => format!(
+            "{base}, take the fewest within ΔAICc ≤ 2 of the smallest AICc (BIC where AICc is undefined)"
+        ),
+        (None, Criterion::Bic) => format!("{base}, take the fewest within ΔBIC ≤ 2 of the smallest BIC"),
+    }
+}
+
+/// Fit a relaxation curve. `qlv`: the hyperelastic fit whose uniaxial stress is the
+/// instantaneous response (QLV reading); `None`: the small-strain (parallel) reading.
+pub fn fit(
+    data: &RelaxationData,
+    loading: &Loading,
+    qlv: Option<&QlvInput>,
+    settings: &Settings,
+) -> Result<RelaxationFit> {
+    settings.check()?;
+    let t0 = Instant::now();
+    let mut prep = prepare(data, loading, qlv, settings)?;
+    let m = data.time.len();
+    let max_by_points = (m.saturating_sub(3)) / 2;
+    if let Some(nt) = settings.terms {
+        if nt > max_by_points {
+            return Err(Error::settings(format!(
+                "{nt} term(s) need at least {} points, the file has {m}",
+                2 * nt + 3
+            ))
+            .with_hint("use fewer terms (--terms auto chooses what the data support)"));
+        }
+    }
+    let grid = grid_nnls(&mut prep.prob, prep.window, settings.grid_per_decade)?;
+    let counts: Vec<usize> = match settings.terms {
+        Some(nt) => vec![nt],
+        None => (0..=settings.max_terms.min(max_by_points)).collect(),
+    };
+    let fits: Vec<TermFit> = counts
+        .par_iter()
+        .map(|&nt| fit_terms(&prep, &grid, nt, settings))
+        .collect::<Result<Vec<_>>>()?;
+    let seconds = t0.elapsed().as_secs_f64();
+    let mut assessed: Vec<Assessed> = fits.into_iter().map(|f| assess(&prep, f)).collect();
+    let score = |a: &Assessed| match settings.criterion {
+        Criterion::Aicc => a.aicc.unwrap_or(a.bic),
+        Criterion::Bic => a.bic,
+    };
+    let mut notes = std::mem::take(&mut prep.notes);
+    let mut unresolved: Option<String> = None;
+    let (chosen, selection) = if settings.terms.is_some() {
+        (0, None)
+    } else {
+        let best = assessed.iter().map(score).fold(f64::INFINITY, f64::min);
+        let eligible: Vec<usize> = (0..assessed.len())
+            .filter(|&i| assessed[i].problems.is_empty())
+            .collect();
+        let pool = if eligible.is_empty() {
+            (0..assessed.len()).collect()
+        } else {
+            eligible
+        };
+        let chosen = match settings.tolerance {
+            Some(tol) => pool
+                .iter()
+                .copied()
+                .find(|&i| assessed[i].rel_rmse <= tol)
+                .unwrap_or_else(|| {
+                    notes.push(format!(
+                        "no term count reaches the relative RMSE tolerance {:.3} %; the best is used",
+                        100.0 * tol
+                    ));
+                    *pool
+                        .iter()
+                        .min_by(|&&a, &&b| assessed[a].rel_rmse.total_cmp(&assessed[b].rel_rmse))
+                        .expect("non-empty")
+                }),
+            None => {
+                let best_pool = pool
+                    .iter()
+                    .map(|&i| score(&assessed[i]))
+                    .fold(f64::INFINITY, f64::min);
+                *pool
+                    .iter()
+                    .find(|&&i| score(&assessed[i]) <= best_pool + 2.0)
+                    .expect("the best is in the pool")
+            }
+        };
+        let best_any = (0..assessed.len())
+            .min_by(|&a, &b| score(&assessed[a]).total_cmp(&score(&assessed[b])))
+            .expect("non-empty");
+        let c = &assessed[chosen];
+        let name = if settings.criterion == Criterion::Bic {
+            "BIC"
+        } else {
+            "AICc"
+        };
+        let mut reason = if let Some(tol) = settings.tolerance {
+            format!(
+                "{} term(s) {} a relative RMSE of {:.3} %",
+                c.tf.n_terms,
+                if c.rel_rmse <= tol {
+                    "reach"
+                } else {
+                    "come closest to the tolerance, with"
+                },
+                100.0 * c.rel_rmse
+            )
+        } else if chosen == best_any {
+            format!(
+                "{} term(s) have the smallest {name} and no fewer terms are within 2 of it",
+                c.tf.n_terms
+            )
+        } else {
+            format!(
+                "{} term(s): the fewest within Δ{name} ≤ 2 of the best eligible count; more terms are not supported by the data",
+                c.tf.n_terms
+            )
+        };
+        if assessed[best_any].tf.n_terms > c.tf.n_terms && !assessed[best_any].problems.is_empty() {
+            let b = &assessed[best_any];
+            reason.push_str(&format!(
+                "; {} terms score better ({name} {:.2} lower) but: {}",
+                b.tf.n_terms,
+                score(c) - score(b),
+                b.problems[0].1
+            ));
+            notes.push(format!(
+                "more relaxation may be present than these data resolve: with {} terms, {}",
+                b.tf.n_terms, b.problems[0].1
+            ));
+        }
+        if c.tf.n_terms == 0 {
+            if score(c) <= score(&assessed[best_any]) + 2.0 {
+                notes.push(format!(
+                    "no relaxation resolved: a constant modulus fits as well as any Prony series (relative RMSE {:.3} %) — purely elastic within the noise over {}–{}",
+                    100.0 * c.rel_rmse,
+                    fmt_s(prep.window.0),
+                    fmt_s(prep.window.1)
+                ));
+            } else {
+                unresolved = Some(format!(
+                    "no identifiable Prony series: the data relax (a constant modulus leaves a relative RMSE of {:.3} %), but every fit with terms puts them where these data cannot determine them; check the loading (--ramp-time, a strain column) and the time window",
+                    100.0 * c.rel_rmse
+                ));
+            }
+        }
+        let candidates = assessed
+            .iter()
+            .map(|a| Candidate {
+                terms: a.tf.n_terms,
+                k: 1 + 2 * a.tf.n_terms,
+                rmse_pa: a.rmse,
+                rel_rmse: a.rel_rmse,
+                aicc: a.aicc,
+                bic: a.bic,
+                delta: score(a) - best,
+                tau_s: a.si[1 + a.tf.n_terms..].to_vec(),
+                eligible: a.problems.is_empty(),
+                note: a.problems.first().map(|p| p.1.clone()),
+            })
+            .collect();
+        (
+            chosen,
+            Some(Selection {
+                rule: auto_rule(settings),
+                reason,
+                candidates,
+            }),
+        )
+    };
+    let a = assessed.swap_remove(chosen);
+    let solver_iterations = a.tf.iterations + grid.2;
+    let n = a.tf.n_terms;
+    let mut status = Status::Ok;
+    let mut escalate = |s: Status| {
+        if status == Status::Ok || (status == Status::Warning && s != Status::Warning) {
+            status = s;
+        }
+    };
+    let mut warnings = Vec::new();
+    for w in notes {
+        escalate(Status::Warning);
+        warnings.push(w);
+    }
+    if let Some(w) = unresolved {
+        escalate(Status::IllPosed);
+        warnings.push(w);
+    }
+    for (s, w) in a.problems.iter().chain(&a.warnings) {
+        escalate(*s);
+        warnings.push(w.clone());
+    }
+    // A step assumed while the stress builds up: the loading was not a step.
+    if data.strain.is_none() && loading.ramp_time.is_none() {
+        let y = &data.stress;
+        let peak = (0..m)
+            .max_by(|&i, &j| y[i].abs().total_cmp(&y[j].abs()))
+            .expect("non-empty");
+        if peak > 0 && y[peak].abs() > 1.05 * y[0].abs() && data.time[peak] < 0.2 * data.time[m - 1]
+        {
+            escalate(Status::Warning);
+            warnings.push(format!(
+                "the stress rises until t = {} although the loading is taken as an ideal step: give the ramp (--ramp-time) or a strain column, or the fit puts spurious stiff short-τ terms on the ramp",
+                fmt_s(data.time[peak])
+            ));
+        }
+    }
+    let si = &a.si;
+    let e0: f64 = si[..=n].iter().sum();
+    let mut qlv_info = prep.qlv.clone();
+    if let Some(q) = &mut qlv_info {
+        q.instantaneous_scale = e0 / prep.unit;
+        if (q.instantaneous_scale - 1.0).abs() > 0.1 {
+            escalate(Status::Warning);
+            warnings.push(format!(
+                "the hyperelastic fit is not the instantaneous response of these data: the relaxation starts at G(0) = {:.3} × its stress (a tensile test at a finite rate lies between the instantaneous and the long-term response); the instantaneous response is G(0) times the hyperelastic stress",
+                q.instantaneous_scale
+            ));
+        }
+    }
+    let names = param_names(n);
+    let parameters: Vec<Parameter> = names
+        .iter()
+        .zip(si)
+        .zip(&a.unc.std_error)
+        .map(|(((name, unit), &v), se)| Parameter {
+            name: name.clone(),
+            value: v,
+            unit: unit.to_string(),
+            std_error: *se,
+            ci95: se.zip(a.unc.t95).map(|(s, t)| [v - t * s, v + t * s]),
+        })
+        .collect();
+    let prony: Vec<PronyEntry> = (0..n)
+        .map(|i| PronyEntry {
+            tau_s: si[1 + n + i],
+            modulus_pa: si[1 + i],
+            g: if e0 > 0.0 { si[1 + i] / e0 } else { 0.0 },
+            tau_std_s: a.unc.std_error[1 + n + i],
+            modulus_std_pa: a.unc.std_error[1 + i],
+        })
+        .collect();
+    let kelvin_maxwell = prony
+        .iter()
+        .map(|p| ArmEntry {
+            k_pa: p.modulus_pa,
+            n_pa_s: p.modulus_pa * p.tau_s,
+        })
+        .collect();
+    let spectrum = grid
+        .0
+        .iter()
+        .zip(&grid.1[1..])
+        .map(|(&t, &e)| SpectrumPoint {
+            tau_s: t,
+            modulus_pa: e * prep.prob.scale * prep.unit,
+        })
+        .collect();
+    let termination = match &a.tf.termination {
+        Termination::Converged(w) => format!("converged ({w})"),
+        Termination::MaxIterations => "iteration limit".into(),
+        Termination::Failed(w) => format!("failed: {w}"),
+    };
+    let method = match settings.method {
+        Method::Refined => format!(
+            "grid NNLS ({} τ, {}/decade, Clarabel) + merge/prune + bounded Levenberg-Marquardt over (E∞, Eᵢ, ln τᵢ), multi-start",
+            grid.0.len(),
+            settings.grid_per_decade
+        ),
+        Method::Grid => format!(
+            "grid NNLS ({} τ, {}/decade, Clarabel) + merge/prune, moduli by NNLS at the merged τ (no refinement)",
+            grid.0.len(),
+            settings.grid_per_decade
+        ),
+    };
+    Ok(RelaxationFit {
+        schema: SCHEMA.into(),
+        tool_version: env!("CARGO_PKG_VERSION").into(),
+        formulation: prep.formulation,
+        held_strain: prep.held_strain,
+        loading: prep.loading.clone(),
+        prony,
+        long_term_modulus_pa: si[0],
+        instantaneous_modulus_pa: e0,
+        g_inf: if e0 > 0.0 { si[0] / e0 } else { 0.0 },
+        kelvin_maxwell,
+        qlv: qlv_info,
+        parameters,
+        rmse_pa: a.rmse,
+        rel_rmse: a.rel_rmse,
+        r2: a.r2,
+        aicc: a.aicc,
+        bic: a.bic,
+        residual: settings.residual,
+        points: m,
+        time_window_s: [prep.window.0, prep.window.1],
+        spectrum,
+        correlation: a.unc.correlation.clone(),
+        condition_number: a.unc.condition.is_finite().then_some(a.unc.condition),
+        status,
+        warnings,
+        solver: SolverReport {
+            method,
+            starts: a.tf.starts,
+            starts_at_best: a.tf.at_best,
+            iterations: solver_iterations,
+            evaluations: a.tf.evaluations,
+            seconds,
+            termination,
+        },
+        selection,
+        provenance: Provenance {
+            files: vec![data.source.clone()],
+            hyperelastic_fit: qlv.map(|q| q.file.clone()),
+            loading: *loading,
+            settings: serde_json::to_value(settings).unwrap_or_default(),
+        },
+    })
+}
+
+/// The model's stress at the data's times for a fit (Pa): what the report plots.
+pub fn predict(
+    fit: &RelaxationFit,
+    data: &RelaxationData,
+    qlv: Option<&QlvInput>,
+) -> Result<Vec<f64>> {
+    let loading = fit.provenance.loading;
+    let prep = prepare(data, &loading, qlv, &Settings::default())?;
+    let prony = fit.prony_series()?;
+    // In the prepared input, moduli are per unit of x scaled by `unit`.
+    let scaled = Prony::new(
+        prony.e_inf / prep.unit,
+        &prony
+            .terms
+            .iter()
+            .map(|t| (t.tau, t.modulus / prep.unit))
+            .collect::<Vec<_>>(),
+    )?;
+    Ok(scaled.response(&prep.prob.sched))
+}

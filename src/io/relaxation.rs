@@ -1,0 +1,411 @@
+//! Stress-relaxation files → [`RelaxationData`] in SI.
+//!
+//! Header columns are `name_unit` (also `name [unit]` or `name (unit)`): one time
+//! column (`time_s`, `time_ms`, `time_min`, `time_h`), one stress column
+//! (`stress_<Pa|kPa|MPa>`, also `nominal_stress_…`, or `force_<N|mN|kN>` with a
+//! reference area), and optionally one loading column that records the strain history
+//! (`strain`, `strain_pct` or `stretch`). Times must start at ≥ 0 (the start of
+//! loading) and increase strictly.
+
+use super::table::Table;
+use crate::error::{Error, Location, Result};
+use crate::material::viscoelastic::{History, Prony, Schedule};
+use crate::units::Dimension;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Where relaxation data came from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RelaxationSource {
+    /// Path as given by the user.
+    pub path: String,
+    /// SHA-256 of the file's bytes (hex).
+    pub sha256: String,
+    /// Number of points read.
+    pub points: usize,
+    /// First time (s).
+    pub time_min_s: f64,
+    /// Last time (s).
+    pub time_max_s: f64,
+    /// Columns as written in the header.
+    pub columns: Vec<String>,
+    /// Conversions applied on reading (e.g. force → stress).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub conversions: Vec<String>,
+}
+
+/// A relaxation curve in SI: nominal stress against time, with the recorded strain
+/// history when the file has one.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RelaxationData {
+    /// Times (s), strictly increasing, ≥ 0, measured from the start of loading.
+    pub time: Vec<f64>,
+    /// Nominal stress (Pa).
+    pub stress: Vec<f64>,
+    /// Engineering strain recorded at each time (from a strain or stretch column).
+    pub strain: Option<Vec<f64>>,
+    /// Source line of each point.
+    pub line: Vec<usize>,
+    /// The file.
+    pub source: RelaxationSource,
+}
+
+/// How to read a relaxation file.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RelaxationOptions {
+    /// Reference cross-section (m²) for force columns.
+    pub area: Option<f64>,
+}
+
+const ACCEPTED: &str = "time_s|ms|min|h, stress_Pa|kPa|MPa (or nominal_stress_…), force_N with --area, and optionally strain, strain_pct or stretch";
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Col {
+    Time(f64),
+    Stress(f64),
+    Strain(f64),
+    Stretch,
+}
+
+/// Split `stress_kPa`, `stress [kPa]`, `time (s)` into a lower-case name and a unit.
+fn split(h: &str) -> (String, Option<String>) {
+    let h = h.trim();
+    if let Some(open) = h.find(['[', '(']) {
+        let name = h[..open].trim().trim_end_matches('_');
+        let unit = h[open + 1..].trim_end_matches([']', ')']).trim();
+        return (
+            name.to_ascii_lowercase().replace(' ', "_"),
+            Some(unit.to_string()),
+        );
+    }
+    let lower = h.to_ascii_lowercase();
+    for name in [
+        "nominal_stress",
+        "true_stress",
+        "cauchy_stress",
+        "stress",
+        "force",
+        "time",
+        "strain",
+    ] {
+        if let Some(rest) = lower.strip_prefix(name).and_then(|r| r.strip_prefix('_')) {
+            let unit = &h[h.len() - rest.len()..];
+            return (
+                name.to_string(),
+                Some(unit.to_string()).filter(|u| !u.is_empty()),
+            );
+        }
+    }
+    (lower.replace(' ', "_"), None)
+}
+
+fn unit(table: &Table, c: usize, unit: Option<String>, dim: Dimension) -> Result<f64> {
+    let h = &table.header[c];
+    let loc = Location::at(&table.path, table.header_line, c + 1);
+    let Some(u) = unit else {
+        return Err(
+            Error::input(loc, format!("column '{h}' has no unit")).with_hint(format!(
+                "write it as e.g. '{}_{}'",
+                h.trim(),
+                dim.units()[0].0
+            )),
+        );
+    };
+    dim.factor(&u).ok_or_else(|| {
+        Error::input(loc, format!("unknown unit '{u}' in column '{h}'"))
+            .with_hint(format!("expected one of {}", dim.accepted()))
+    })
+}
+
+/// Read one relaxation file.
+pub fn read(path: &Path, opts: &RelaxationOptions) -> Result<RelaxationData> {
+    from_table(&Table::read(path)?, opts)
+}
+
+/// Interpret a parsed table as a relaxation curve.
+pub fn from_table(table: &Table, opts: &RelaxationOptions) -> Result<RelaxationData> {
+    let path = &table.path;
+    let hloc = |c: usize| Location::at(path, table.header_line, c + 1);
+    let mut time = None;
+    let mut stress = None;
+    let mut load = None;
+    let mut conversions = Vec::new();
+    for (c, h) in table.header.iter().enumerate() {
+        let (name, u) = split(h);
+        let col = match name.as_str() {
+            "time" => Col::Time(unit(table, c, u, Dimension::Time)?),
+            "stress" | "nominal_stress" | "engineering_stress" => {
+                Col::Stress(unit(table, c, u, Dimension::Stress)?)
+            }
+            "force" => {
+                let f = unit(table, c, u, Dimension::Force)?;
+                let a = opts.area.ok_or_else(|| {
+                    Error::input(
+                        hloc(c),
+                        format!("column '{h}' needs the reference cross-section to give a stress"),
+                    )
+                    .with_hint("pass --area, e.g. --area 22mm2")
+                })?;
+                conversions.push(format!("nominal stress = force / {a} m²"));
+                Col::Stress(f / a)
+            }
+            "strain" => Col::Strain(match u.as_deref() {
+                None | Some("-") | Some("1") => 1.0,
+                Some("%") | Some("pct") | Some("percent") => 0.01,
+                Some(other) => {
+                    return Err(Error::input(
+                        hloc(c),
+                        format!("unknown unit '{other}' in column '{h}'"),
+                    )
+                    .with_hint("strain is a fraction ('strain') or a percentage ('strain_pct')"))
+                }
+            }),
+            "stretch" | "lambda" => Col::Stretch,
+            "true_stress" | "cauchy_stress" => return Err(Error::input(
+                hloc(c),
+                format!("column '{h}' holds true stress; relaxation fits use nominal stress"),
+            )
+            .with_hint(
+                "convert to nominal stress (force / reference area) or give force_N with --area",
+            )),
+            _ if h.trim().is_empty() => {
+                return Err(Error::input(hloc(c), "empty column name in the header")
+                    .with_hint(format!("name every column; accepted: {ACCEPTED}")))
+            }
+            _ if h.trim().parse::<f64>().is_ok() => {
+                return Err(Error::input(
+                    hloc(c),
+                    format!("expected a header naming each column, found the number '{h}'"),
+                )
+                .with_hint("add a first line such as time_s,stress_kPa"))
+            }
+            _ => {
+                return Err(Error::input(hloc(c), format!("unknown column '{h}'"))
+                    .with_hint(format!("accepted columns: {ACCEPTED}")))
+            }
+        };
+        let slot = match col {
+            Col::Time(_) => &mut time,
+            Col::Stress(_) => &mut stress,
+            Col::Strain(_) | Col::Stretch => &mut load,
+        };
+        if let Some((c0, _)) = *slot {
+            return Err(Error::input(
+                hloc(c),
+                format!(
+                    "a second column of the same kind, '{h}' (column {} is '{}')",
+                    c0 + 1,
+                    table.header[c0]
+                ),
+            )
+            .with_hint(
+                "keep one time, one stress (or force) and at most one strain or stretch column",
+            ));
+        }
+        *slot = Some((c, col));
+    }
+    let hline = Location::line(path, table.header_line);
+    let (tc, tf) = match time {
+        Some((c, Col::Time(f))) => (c, f),
+        _ => {
+            return Err(Error::input(hline, "no time column")
+                .with_hint("name one column time_s, time_ms or time_min"))
+        }
+    };
+    let (sc, sf) = match stress {
+        Some((c, Col::Stress(f))) => (c, f),
+        _ => {
+            return Err(Error::input(hline, "no stress column")
+                .with_hint("name one column stress_<Pa|kPa|MPa> or force_N (with --area)"))
+        }
+    };
+    let mut t = Vec::with_capacity(table.rows.len());
+    let mut y = Vec::with_capacity(table.rows.len());
+    let mut eps = Vec::new();
+    let mut line = Vec::with_capacity(table.rows.len());
+    for row in &table.rows {
+        let tv = table.number(row, tc, &format!("'{}'", table.header[tc]))? * tf;
+        if tv < 0.0 {
+            return Err(Error::input(
+                table.loc(row, tc),
+                format!("time must be ≥ 0, found {}", row.fields[tc]),
+            )
+            .with_hint("measure time from the start of loading (t = 0)"));
+        }
+        if let Some(&prev) = t.last() {
+            if tv <= prev {
+                return Err(Error::input(
+                    table.loc(row, tc),
+                    format!(
+                        "times must increase: expected more than {prev} s (line {}), found {tv} s",
+                        line.last().copied().unwrap_or(0)
+                    ),
+                )
+                .with_hint("sort the file by time and remove repeated rows"));
+            }
+        }
+        let sv = table.number(row, sc, &format!("'{}'", table.header[sc]))? * sf;
+        if let Some((lc, kind)) = load {
+            let v = table.number(row, lc, &format!("'{}'", table.header[lc]))?;
+            let e = match kind {
+                Col::Strain(f) => v * f,
+                _ => {
+                    if v <= 0.0 {
+                        return Err(Error::input(
+                            table.loc(row, lc),
+                            format!("stretch must be > 0, found {v}"),
+                        )
+                        .with_hint("is this column a strain? name it 'strain' or 'strain_pct'"));
+                    }
+                    v - 1.0
+                }
+            };
+            if e <= -1.0 {
+                return Err(Error::input(
+                    table.loc(row, lc),
+                    format!("strain must be > −1, found {e}"),
+                ));
+            }
+            eps.push(e);
+        }
+        t.push(tv);
+        y.push(sv);
+        line.push(row.line);
+    }
+    if t.len() < 2 {
+        return Err(Error::input(
+            Location::line(path, line[0]),
+            format!(
+                "a relaxation curve needs at least 2 points, found {}",
+                t.len()
+            ),
+        ));
+    }
+    if y.iter().all(|v| *v == 0.0) {
+        return Err(Error::input(
+            Location::at(path, line[0], sc + 1),
+            "the stress is zero at every point: nothing to fit",
+        )
+        .with_hint("is the stress column in the right unit, or the right column?"));
+    }
+    Ok(RelaxationData {
+        source: RelaxationSource {
+            path: path.display().to_string(),
+            sha256: table.sha256.clone(),
+            points: t.len(),
+            time_min_s: t[0],
+            time_max_s: *t.last().expect("non-empty"),
+            columns: table.header.clone(),
+            conversions,
+        },
+        time: t,
+        stress: y,
+        strain: load.map(|_| eps),
+        line,
+    })
+}
+
+/// A synthetic relaxation test: known Prony constants, loading, sampling and noise.
+#[derive(Debug, Clone)]
+pub struct Synthetic {
+    /// The true series (Pa per unit strain: the small-strain reading).
+    pub prony: Prony,
+    /// Held engineering strain ε0.
+    pub strain: f64,
+    /// Linear ramp duration from t = 0 (s); `None`: ideal step.
+    pub ramp_time: Option<f64>,
+    /// Sample times (s), increasing.
+    pub times: Vec<f64>,
+    /// Relative Gaussian noise (standard deviation as a fraction of the stress).
+    pub noise: f64,
+    /// Seed of the noise generator (ChaCha8).
+    pub seed: u64,
+    /// Write the strain history as a `strain` column.
+    pub record_strain: bool,
+}
+
+/// Log-spaced times: `count` points from `t0` to `t1` (s), preceded by t = 0 when
+/// `with_zero`.
+pub fn log_times(t0: f64, t1: f64, count: usize, with_zero: bool) -> Vec<f64> {
+    let (a, b) = (t0.ln(), t1.ln());
+    let mut t: Vec<f64> = if with_zero { vec![0.0] } else { Vec::new() };
+    t.extend((0..count).map(|i| (a + (b - a) * i as f64 / (count.max(2) - 1) as f64).exp()));
+    t
+}
+
+impl Synthetic {
+    /// The CSV text (`time_s,stress_kPa[,strain]`), the generating parameters written
+    /// as `#` comments after `preamble` lines.
+    pub fn csv(&self, preamble: &[&str]) -> Result<String> {
+        use rand::SeedableRng;
+        use rand_distr::Distribution;
+        use std::fmt::Write as _;
+        let history = match self.ramp_time {
+            Some(tr) => History::ramp(self.strain, tr),
+            None => History::step(self.strain),
+        };
+        let sched = Schedule::new(&history, &self.times)?;
+        let clean = self.prony.response(&sched);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(self.seed);
+        let unit = rand_distr::Normal::new(0.0, 1.0).expect("valid");
+        let mut s = String::new();
+        for p in preamble {
+            let _ = writeln!(s, "# {p}");
+        }
+        let terms: Vec<String> = self
+            .prony
+            .terms
+            .iter()
+            .map(|t| format!("({:e} s, {:e} Pa)", t.tau, t.modulus))
+            .collect();
+        let _ = writeln!(
+            s,
+            "# prony (small-strain reading, Pa per unit strain): E_inf = {:e} Pa; (tau, E) = {}",
+            self.prony.e_inf,
+            terms.join(", ")
+        );
+        let _ = writeln!(
+            s,
+            "# loading: strain {} {}",
+            self.strain,
+            match self.ramp_time {
+                Some(tr) => format!("reached by a linear ramp over {tr} s from t = 0"),
+                None => "applied as an ideal step at t = 0".into(),
+            }
+        );
+        let _ = writeln!(
+            s,
+            "# noise: relative {} (Gaussian standard deviation), seed {} (ChaCha8)",
+            self.noise, self.seed
+        );
+        let _ = writeln!(
+            s,
+            "time_s,stress_kPa{}",
+            if self.record_strain { ",strain" } else { "" }
+        );
+        for (k, &t) in self.times.iter().enumerate() {
+            let e: f64 = unit.sample(&mut rng);
+            let y = clean[k] * (1.0 + self.noise * e);
+            let _ = write!(s, "{t:.6e},{:.6e}", y / 1e3);
+            if self.record_strain {
+                let _ = write!(s, ",{:.9}", sched.input()[k]);
+            }
+            s.push('\n');
+        }
+        Ok(s)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn splits_headers() {
+        assert_eq!(split("stress_kPa"), ("stress".into(), Some("kPa".into())));
+        assert_eq!(split("Time [ms]"), ("time".into(), Some("ms".into())));
+        assert_eq!(split("time_min"), ("time".into(), Some("min".into())));
+        assert_eq!(split("strain_pct"), ("strain".into(), Some("pct".into())));
+        assert_eq!(split("stress"), ("stress".into(), None));
+    }
+}

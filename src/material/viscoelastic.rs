@@ -1,0 +1,659 @@
+//! Linear viscoelasticity: Prony series, Kelvin-Maxwell arms, their conversions,
+//! the seed's presets, and the predictions a fit or a simulator needs (relaxation
+//! modulus, response to a strain history, creep compliance, storage/loss moduli).
+//!
+//! # Equations
+//! * Prony series (relaxation modulus): E(t) = E∞ + Σ Eᵢ·exp(−t/τᵢ); instantaneous
+//!   modulus E0 = E∞ + Σ Eᵢ; normalised fractions gᵢ = Eᵢ/E0, g∞ = E∞/E0.
+//! * Seed's generalized Kelvin-Maxwell rheology (Eq. 3.14–3.16): an equilibrium spring
+//!   in parallel with a Kelvin-Voigt dashpot Nv and N Maxwell arms (spring kⱼ in series
+//!   with dashpot nⱼ), dσⱼ/dt = kⱼ·dε/dt − σⱼ/τⱼ with τⱼ = nⱼ/kⱼ. Its relaxation
+//!   modulus is the Prony series with Eⱼ = kⱼ, τⱼ = nⱼ/kⱼ, E∞ = the equilibrium spring,
+//!   plus Nv·δ(t) (which no Prony term represents).
+//! * Hereditary integral (Boltzmann superposition): σ(t) = ∫ E(t − s) dx(s), with x the
+//!   strain (linear, [`Formulation::Parallel`]) or the instantaneous hyperelastic stress
+//!   (QLV, [`Formulation::Qlv`], Fung 1981). For a piecewise-linear x it is exact for
+//!   exponentials: over an interval Δ with constant rate r, each term's state hᵢ obeys
+//!   hᵢ ← hᵢ·e^(−Δ/τᵢ) + r·τᵢ·(1 − e^(−Δ/τᵢ)); after a linear ramp of duration t_r to x0
+//!   a term holds x0·(τᵢ/t_r)(1 − e^(−t_r/τᵢ)), i.e. the step response scaled by
+//!   (τᵢ/t_r)(e^(t_r/τᵢ) − 1) at t = t_r onwards.
+//! * Storage and loss moduli: E'(ω) = E∞ + Σ Eᵢ ω²τᵢ²/(1 + ω²τᵢ²),
+//!   E''(ω) = Σ Eᵢ ωτᵢ/(1 + ω²τᵢ²) + ω·Nv.
+//! * Creep compliance by exact interconversion (Laplace: s²Ē(s)·J̄(s) = 1): with
+//!   F(s) = sĒ(s) = E∞ + Nv·s + Σ Eᵢ sτᵢ/(1 + sτᵢ), the retardation rates are the real
+//!   negative zeros pⱼ of F (one between consecutive poles −1/τᵢ, one in (−1/τ_max, 0)
+//!   when E∞ > 0, one below −1/τ_min when Nv > 0), and
+//!   J(t) = 1/E0 + Σ Rⱼ·λⱼ·(1 − e^(−t/λⱼ)) (+ t/η0 when E∞ = 0), λⱼ = −1/pⱼ,
+//!   Rⱼ = 1/F'(pⱼ); 1/E0 is 0 when Nv > 0 (Park & Schapery 1999 give the same
+//!   interconversion by collocation; this is its exact form for a Prony series).
+
+use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+
+/// Which constitutive reading the constants belong to (`docs/model.md`): conversion
+/// between Prony and Kelvin-Maxwell constants is exact only within one formulation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Formulation {
+    /// The seed's parallel lumped model (Eq. 3.14–3.16): Maxwell arms driven by the
+    /// strain, in parallel with the equilibrium spring. In the small-strain reading
+    /// σ(t) = ∫E(t − s)dε(s) and E∞ is the equilibrium (secant) modulus at the tested
+    /// strain; at large strain the simulator puts the hyperelastic spring in its place.
+    Parallel,
+    /// Quasi-linear viscoelasticity (Fung; Abaqus-style normalised Prony series): the
+    /// normalised relaxation function g(t) relaxes the instantaneous hyperelastic
+    /// stress, σ(t) = ∫ g(t − s) dσₑ(λ(s)). Moduli are g·E0 with E0 the instantaneous
+    /// small-strain Young's modulus.
+    Qlv,
+}
+
+impl std::fmt::Display for Formulation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Formulation::Parallel => "parallel",
+            Formulation::Qlv => "qlv",
+        })
+    }
+}
+
+/// One Prony term: relaxation time τ (s) and modulus E (Pa).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PronyTerm {
+    /// Relaxation time τ (s).
+    pub tau: f64,
+    /// Modulus E (Pa).
+    pub modulus: f64,
+}
+
+/// A Prony series E(t) = E∞ + Σ Eᵢ·exp(−t/τᵢ) (Pa), terms sorted by τ.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Prony {
+    /// Long-term (equilibrium) modulus E∞ (Pa).
+    pub e_inf: f64,
+    /// Terms, sorted by increasing τ.
+    pub terms: Vec<PronyTerm>,
+}
+
+fn check_finite_nonneg(v: f64, what: &str) -> Result<()> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(Error::settings(format!(
+            "{what} must be a finite number ≥ 0, found {v}"
+        )))
+    }
+}
+
+impl Prony {
+    /// A checked series from E∞ and (τ, E) pairs (τ > 0, E ≥ 0, E∞ ≥ 0); terms are
+    /// sorted by τ.
+    pub fn new(e_inf: f64, terms: &[(f64, f64)]) -> Result<Prony> {
+        check_finite_nonneg(e_inf, "the long-term modulus")?;
+        let mut t = Vec::with_capacity(terms.len());
+        for (i, &(tau, e)) in terms.iter().enumerate() {
+            if !(tau.is_finite() && tau > 0.0) {
+                return Err(Error::settings(format!(
+                    "relaxation time {} must be > 0, found {tau}",
+                    i + 1
+                )));
+            }
+            check_finite_nonneg(e, &format!("modulus {}", i + 1))?;
+            t.push(PronyTerm { tau, modulus: e });
+        }
+        t.sort_by(|a, b| a.tau.total_cmp(&b.tau));
+        Ok(Prony { e_inf, terms: t })
+    }
+
+    /// From normalised fractions: Eᵢ = gᵢ·E0 and E∞ = (1 − Σgᵢ)·E0 (requires Σgᵢ ≤ 1).
+    pub fn from_normalized(e0: f64, g: &[(f64, f64)]) -> Result<Prony> {
+        let sum: f64 = g.iter().map(|p| p.1).sum();
+        if sum > 1.0 + 1e-12 {
+            return Err(Error::settings(format!(
+                "normalised Prony fractions sum to {sum} > 1: no non-negative long-term modulus"
+            )));
+        }
+        let terms: Vec<(f64, f64)> = g.iter().map(|&(tau, gi)| (tau, gi * e0)).collect();
+        Prony::new((1.0 - sum).max(0.0) * e0, &terms)
+    }
+
+    /// Instantaneous modulus E0 = E∞ + Σ Eᵢ (Pa).
+    pub fn instantaneous(&self) -> f64 {
+        self.e_inf + self.terms.iter().map(|t| t.modulus).sum::<f64>()
+    }
+
+    /// Normalised fractions (g∞, gᵢ for each term) with gᵢ = Eᵢ/E0 (all 0 if E0 = 0).
+    pub fn normalized(&self) -> (f64, Vec<f64>) {
+        let e0 = self.instantaneous();
+        let f = |v: f64| if e0 > 0.0 { v / e0 } else { 0.0 };
+        (
+            f(self.e_inf),
+            self.terms.iter().map(|t| f(t.modulus)).collect(),
+        )
+    }
+
+    /// Relaxation modulus E(t) (Pa), t ≥ 0 (s).
+    pub fn relaxation_modulus(&self, t: f64) -> f64 {
+        self.e_inf
+            + self
+                .terms
+                .iter()
+                .map(|p| p.modulus * (-t / p.tau).exp())
+                .sum::<f64>()
+    }
+
+    /// Storage and loss moduli (E', E'') in Pa at angular frequency ω (rad/s).
+    pub fn storage_loss(&self, omega: f64) -> (f64, f64) {
+        storage_loss(self.e_inf, &self.terms, 0.0, omega)
+    }
+
+    /// Creep compliance by exact interconversion (see the module docs).
+    pub fn creep(&self) -> Creep {
+        creep(self.e_inf, &self.terms, 0.0)
+    }
+
+    /// The seed's Kelvin-Maxwell arms of this series (kⱼ = Eⱼ, nⱼ = Eⱼ·τⱼ, equilibrium
+    /// spring E∞, Nv = 0: a relaxation curve cannot see a Kelvin-Voigt dashpot).
+    pub fn to_kelvin_maxwell(&self) -> KelvinMaxwell {
+        KelvinMaxwell {
+            k_inf: self.e_inf,
+            arms: self
+                .terms
+                .iter()
+                .map(|t| MaxwellArm {
+                    k: t.modulus,
+                    n: t.modulus * t.tau,
+                })
+                .collect(),
+            n_v: 0.0,
+        }
+    }
+
+    /// Stress response σ(tₖ) = E∞·x(tₖ) + Σ Eᵢ·hᵢ(tₖ) to a history at the schedule's
+    /// times (exact hereditary integral for piecewise-linear x).
+    pub fn response(&self, schedule: &Schedule) -> Vec<f64> {
+        let mut out: Vec<f64> = schedule.input().iter().map(|x| self.e_inf * x).collect();
+        let mut h = vec![0.0; out.len()];
+        for t in &self.terms {
+            schedule.kernel(t.tau, &mut h, None);
+            for (o, hv) in out.iter_mut().zip(&h) {
+                *o += t.modulus * hv;
+            }
+        }
+        out
+    }
+}
+
+/// One Maxwell arm of the seed's rheology: spring k (Pa) in series with dashpot n (Pa·s).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct MaxwellArm {
+    /// Spring constant kⱼ (Pa).
+    pub k: f64,
+    /// Dashpot viscosity nⱼ (Pa·s); τⱼ = nⱼ/kⱼ.
+    pub n: f64,
+}
+
+/// The seed's generalized Kelvin-Maxwell model (Eq. 3.14–3.16, Table 4.2), linear part:
+/// equilibrium spring, Kelvin-Voigt dashpot Nv and Maxwell arms.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct KelvinMaxwell {
+    /// Equilibrium spring (Pa): the small-strain modulus of the hyperelastic spring in
+    /// the seed's model, E∞ of the Prony series.
+    pub k_inf: f64,
+    /// Maxwell arms.
+    pub arms: Vec<MaxwellArm>,
+    /// Kelvin-Voigt dashpot Nv (Pa·s) in parallel with the spring (seed Eq. 3.14).
+    pub n_v: f64,
+}
+
+impl KelvinMaxwell {
+    /// The Prony series of the spring and arms (Eⱼ = kⱼ, τⱼ = nⱼ/kⱼ). Nv is not part of
+    /// it (it is an impulse Nv·δ(t) in the relaxation modulus): see [`Self::n_v`].
+    pub fn to_prony(&self) -> Result<Prony> {
+        let terms: Vec<(f64, f64)> = self.arms.iter().map(|a| (a.n / a.k, a.k)).collect();
+        Prony::new(self.k_inf, &terms)
+    }
+
+    /// Storage and loss moduli (Pa) at ω (rad/s), including ω·Nv in the loss.
+    pub fn storage_loss(&self, omega: f64) -> Result<(f64, f64)> {
+        let p = self.to_prony()?;
+        Ok(storage_loss(p.e_inf, &p.terms, self.n_v, omega))
+    }
+
+    /// Creep compliance including the Kelvin-Voigt dashpot (no instantaneous
+    /// compliance when Nv > 0).
+    pub fn creep(&self) -> Result<Creep> {
+        let p = self.to_prony()?;
+        Ok(creep(p.e_inf, &p.terms, self.n_v))
+    }
+}
+
+fn storage_loss(e_inf: f64, terms: &[PronyTerm], n_v: f64, omega: f64) -> (f64, f64) {
+    let mut s = e_inf;
+    let mut l = omega * n_v;
+    for t in terms {
+        let wt = omega * t.tau;
+        let d = 1.0 + wt * wt;
+        s += t.modulus * wt * wt / d;
+        l += t.modulus * wt / d;
+    }
+    (s, l)
+}
+
+/// One retardation term of a creep compliance: J·(1 − e^(−t/λ)).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RetardationTerm {
+    /// Retardation time λ (s).
+    pub lambda: f64,
+    /// Compliance J (1/Pa).
+    pub compliance: f64,
+}
+
+/// Creep compliance J(t) = J_g + Σ Jⱼ(1 − e^(−t/λⱼ)) + φ·t (1/Pa).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Creep {
+    /// Instantaneous (glassy) compliance J_g = 1/E0 (0 with a Kelvin-Voigt dashpot).
+    pub j_g: f64,
+    /// Retardation terms, sorted by λ.
+    pub terms: Vec<RetardationTerm>,
+    /// Steady flow term φ = 1/η0 (1/(Pa·s)); 0 unless E∞ = 0.
+    pub fluidity: f64,
+}
+
+impl Creep {
+    /// J(t) (1/Pa), t ≥ 0 (s).
+    pub fn compliance(&self, t: f64) -> f64 {
+        self.j_g
+            + self.fluidity * t
+            + self
+                .terms
+                .iter()
+                .map(|r| r.compliance * (1.0 - (-t / r.lambda).exp()))
+                .sum::<f64>()
+    }
+
+    /// Long-term compliance (1/E∞), ∞ for a fluid.
+    pub fn long_term(&self) -> f64 {
+        if self.fluidity > 0.0 {
+            f64::INFINITY
+        } else {
+            self.j_g + self.terms.iter().map(|r| r.compliance).sum::<f64>()
+        }
+    }
+}
+
+fn creep(e_inf: f64, terms: &[PronyTerm], n_v: f64) -> Creep {
+    let act: Vec<PronyTerm> = terms.iter().copied().filter(|t| t.modulus > 0.0).collect();
+    let f = |s: f64| {
+        e_inf
+            + n_v * s
+            + act
+                .iter()
+                .map(|t| t.modulus * s * t.tau / (1.0 + s * t.tau))
+                .sum::<f64>()
+    };
+    let fp = |s: f64| {
+        n_v + act
+            .iter()
+            .map(|t| t.modulus * t.tau / (1.0 + s * t.tau).powi(2))
+            .sum::<f64>()
+    };
+    // Poles of F at −1/τ, sorted increasingly (most negative first).
+    let mut poles: Vec<f64> = act.iter().map(|t| -1.0 / t.tau).collect();
+    poles.sort_by(f64::total_cmp);
+    poles.dedup();
+    // F increases between poles (F' > 0): one zero in each bracket where it changes
+    // sign. Brackets: (pᵢ, pᵢ₊₁); (p_last, 0] when E∞ > 0; (−∞, p_first) when Nv > 0.
+    let mut brackets: Vec<(f64, f64)> = poles.windows(2).map(|w| (w[0], w[1])).collect();
+    let mut fluidity = 0.0;
+    if let Some(&last) = poles.last() {
+        if e_inf > 0.0 {
+            brackets.push((last, 0.0));
+        } else if fp(0.0) > 0.0 {
+            fluidity = 1.0 / fp(0.0);
+        }
+    } else if e_inf <= 0.0 && n_v > 0.0 {
+        fluidity = 1.0 / n_v;
+    }
+    if n_v > 0.0 {
+        let first = poles.first().copied().unwrap_or(0.0);
+        // F(s) → −∞ as s → −∞: walk left until F < 0.
+        let mut lo = first - 1.0 / act.iter().map(|t| t.tau).fold(1.0, f64::min).max(1e-300);
+        while f(lo) > 0.0 && lo.is_finite() {
+            lo = first + 2.0 * (lo - first);
+        }
+        if !(poles.is_empty() && e_inf <= 0.0) {
+            brackets.insert(0, (lo, first));
+        }
+    }
+    let mut out = Vec::new();
+    for (a, b) in brackets {
+        // Bisection in the open bracket (F → −∞ just right of a pole, → +∞ just left).
+        let (mut lo, mut hi) = (a, b);
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if mid <= lo || mid >= hi {
+                break;
+            }
+            if f(mid) < 0.0 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let p = 0.5 * (lo + hi);
+        if p < 0.0 {
+            let lambda = -1.0 / p;
+            out.push(RetardationTerm {
+                lambda,
+                compliance: lambda / fp(p),
+            });
+        }
+    }
+    out.sort_by(|a, b| a.lambda.total_cmp(&b.lambda));
+    let e0 = e_inf + act.iter().map(|t| t.modulus).sum::<f64>();
+    Creep {
+        j_g: if n_v > 0.0 || e0 <= 0.0 {
+            0.0
+        } else {
+            1.0 / e0
+        },
+        terms: out,
+        fluidity,
+    }
+}
+
+/// A piecewise-linear input history x(s): zero before the first knot, linear between
+/// knots, constant after the last; two knots at the same time make a jump.
+#[derive(Debug, Clone, PartialEq)]
+pub struct History {
+    knots: Vec<(f64, f64)>,
+}
+
+impl History {
+    /// An ideal step to `x0` at t = 0.
+    pub fn step(x0: f64) -> History {
+        History {
+            knots: vec![(0.0, x0)],
+        }
+    }
+
+    /// A linear ramp from 0 at t = 0 to `x0` at t = `t_ramp` (> 0), then held.
+    pub fn ramp(x0: f64, t_ramp: f64) -> History {
+        History {
+            knots: vec![(0.0, 0.0), (t_ramp, x0)],
+        }
+    }
+
+    /// Knots (time s, value), times non-decreasing and finite.
+    pub fn from_knots(knots: Vec<(f64, f64)>) -> Result<History> {
+        if knots.is_empty() {
+            return Err(Error::settings("a history needs at least one point"));
+        }
+        for w in knots.windows(2) {
+            if w[1].0.is_nan() || w[1].0 < w[0].0 {
+                return Err(Error::settings(format!(
+                    "history times must not decrease: {} after {}",
+                    w[1].0, w[0].0
+                )));
+            }
+        }
+        if knots.iter().any(|k| !(k.0.is_finite() && k.1.is_finite())) {
+            return Err(Error::settings("history values must be finite"));
+        }
+        Ok(History { knots })
+    }
+
+    /// The knots.
+    pub fn knots(&self) -> &[(f64, f64)] {
+        &self.knots
+    }
+
+    /// Map the values through `f` (e.g. strain → hyperelastic stress), keeping times.
+    pub fn map(&self, f: impl Fn(f64) -> f64) -> History {
+        History {
+            knots: self.knots.iter().map(|&(t, x)| (t, f(x))).collect(),
+        }
+    }
+
+    /// Time at which the history reaches its final value (end of loading).
+    pub fn loading_end(&self) -> f64 {
+        let last = self.knots.last().expect("non-empty").1;
+        self.knots
+            .iter()
+            .find(|k| k.1 == last)
+            .map(|k| k.0)
+            .unwrap_or(0.0)
+    }
+}
+
+/// One interval of a [`Schedule`]: duration, input rate over it, jump at its end, and
+/// the output index recorded after the jump.
+#[derive(Debug, Clone, Copy)]
+struct Interval {
+    dt: f64,
+    rate: f64,
+    jump: f64,
+    out: Option<usize>,
+}
+
+/// A history merged with sorted evaluation times: evaluates the hereditary state of an
+/// exponential kernel exactly, in one pass (O(knots + times) per τ, no allocation).
+#[derive(Debug, Clone)]
+pub struct Schedule {
+    intervals: Vec<Interval>,
+    input: Vec<f64>,
+}
+
+impl Schedule {
+    /// Merge `history` with evaluation `times` (non-decreasing, s). The value at a jump
+    /// time is taken after the jump.
+    pub fn new(history: &History, times: &[f64]) -> Result<Schedule> {
+        if times.iter().any(|t| !t.is_finite()) || times.windows(2).any(|w| w[1] < w[0]) {
+            return Err(Error::settings(
+                "evaluation times must be finite and non-decreasing",
+            ));
+        }
+        let k = &history.knots;
+        let mut intervals = Vec::with_capacity(k.len() + times.len());
+        let (mut i, mut j) = (0, 0);
+        let mut now = k[0].0.min(times.first().copied().unwrap_or(k[0].0));
+        let mut rate = 0.0;
+        let mut x = 0.0;
+        let mut input = vec![0.0; times.len()];
+        while i < k.len() || j < times.len() {
+            // Knots come first at equal times, so outputs see the value after a jump.
+            let knot_next = i < k.len() && (j >= times.len() || k[i].0 <= times[j]);
+            let at = if knot_next { k[i].0 } else { times[j] };
+            let dt = at - now;
+            x += rate * dt;
+            if knot_next {
+                let jump = k[i].1 - x;
+                intervals.push(Interval {
+                    dt,
+                    rate,
+                    jump,
+                    out: None,
+                });
+                x = k[i].1;
+                rate = match k.get(i + 1) {
+                    Some(n) if n.0 > k[i].0 => (n.1 - k[i].1) / (n.0 - k[i].0),
+                    _ => 0.0,
+                };
+                i += 1;
+            } else {
+                intervals.push(Interval {
+                    dt,
+                    rate,
+                    jump: 0.0,
+                    out: Some(j),
+                });
+                input[j] = x;
+                j += 1;
+            }
+            now = at;
+        }
+        Ok(Schedule { intervals, input })
+    }
+
+    /// The input x at each evaluation time.
+    pub fn input(&self) -> &[f64] {
+        &self.input
+    }
+
+    /// Number of evaluation times.
+    pub fn len(&self) -> usize {
+        self.input.len()
+    }
+
+    /// True if there are no evaluation times.
+    pub fn is_empty(&self) -> bool {
+        self.input.is_empty()
+    }
+
+    /// State h(tₖ; τ) = ∫ e^(−(tₖ−s)/τ) dx(s) at every evaluation time into `h`, and
+    /// ∂h/∂τ into `dh` if given (exact recursion, see the module docs).
+    pub fn kernel(&self, tau: f64, h: &mut [f64], mut dh: Option<&mut [f64]>) {
+        let (mut s, mut d) = (0.0, 0.0);
+        let inv = 1.0 / tau;
+        for iv in &self.intervals {
+            if iv.dt > 0.0 {
+                let a = (-iv.dt * inv).exp();
+                let rt = iv.rate * tau;
+                if dh.is_some() {
+                    d = a * (d + (s - rt) * iv.dt * inv * inv) + iv.rate * (1.0 - a);
+                }
+                s = a * s + rt * (1.0 - a);
+            }
+            s += iv.jump;
+            if let Some(o) = iv.out {
+                h[o] = s;
+                if let Some(dh) = dh.as_deref_mut() {
+                    dh[o] = d;
+                }
+            }
+        }
+    }
+}
+
+/// A named set of published viscoelastic constants.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Preset {
+    /// Name (`seed-table-3.3`, `seed-table-4.2`).
+    pub name: &'static str,
+    /// Where the numbers come from and how they are read.
+    pub source: &'static str,
+    /// Formulation the constants belong to.
+    pub formulation: Formulation,
+    /// Reference modulus (Pa) that turns normalised fractions into moduli (the
+    /// instantaneous modulus E0 for QLV, the equilibrium spring for the parallel model).
+    pub reference_modulus: f64,
+    /// The Prony series in Pa.
+    pub prony: Prony,
+    /// The Kelvin-Maxwell arms (with Nv).
+    pub kelvin_maxwell: KelvinMaxwell,
+}
+
+/// Names accepted by [`preset`].
+pub const PRESET_NAMES: [&str; 2] = ["seed-table-3.3", "seed-table-4.2"];
+
+/// Table 3.3 relaxation times τᵢ (s) and fractions gᵢ (Wissler & Mazza 2007, VHB 4910).
+pub const TABLE_3_3: [(f64, f64); 4] = [
+    (0.153, 0.478),
+    (0.464, 0.205),
+    (32.021, 0.0727),
+    (215.85, 0.0492),
+];
+
+/// The reference modulus of the seed's Table 4.2: its kⱼ equal gⱼ × 0.222 MPa for all
+/// four arms (≈ Y0 = 220 kPa of Table 3.4).
+pub const TABLE_4_2_REFERENCE: f64 = 0.222e6;
+
+/// Table 4.2 Maxwell arms (kⱼ Pa, nⱼ Pa·s), tuned by hand by the seed's author.
+pub const TABLE_4_2_ARMS: [(f64, f64); 4] = [
+    (0.106116e6, 0.033966e6),
+    (0.045510e6, 0.103008e6),
+    (0.016139e6, 7.108662e6),
+    (0.010922e6, 47.91e6),
+];
+
+/// Table 4.2 Kelvin-Voigt dashpot Nv = 1875e-6 MPa·s.
+pub const TABLE_4_2_NV: f64 = 1875.0;
+
+/// Table 4.2 (= Table 3.2) Yeoh C10 (Pa); the seed's equilibrium spring has the
+/// small-strain Young's modulus 6·C10.
+pub const TABLE_4_2_C10: f64 = 0.0693e6;
+
+/// A named preset:
+/// * `seed-table-3.3`: Table 3.3's normalised Prony pairs in the QLV reading, with the
+///   reference E0 = 0.222 MPa that Table 4.2 multiplies them by; g∞ = 1 − Σgᵢ = 0.1951;
+///   Nv = 0 as the table says.
+/// * `seed-table-4.2`: Table 4.2's arms and Nv in the seed's parallel model, with the
+///   Yeoh spring's small-strain modulus 6·C10 = 415.8 kPa as the equilibrium spring.
+///   Its τⱼ = nⱼ/kⱼ (0.32, 2.26, 440, 4386 s) are not Table 3.3's.
+pub fn preset(name: &str) -> Result<Preset> {
+    match name {
+        "seed-table-3.3" => {
+            let prony = Prony::from_normalized(TABLE_4_2_REFERENCE, &TABLE_3_3)?;
+            Ok(Preset {
+                name: "seed-table-3.3",
+                source: "seed Table 3.3 (Wissler & Mazza 2007, VHB 4910): normalised Prony pairs (τᵢ, gᵢ); the table's 'MPa' on gᵢ is read as a fraction of E0 = 0.222 MPa (the multiplier of Table 4.2)",
+                formulation: Formulation::Qlv,
+                reference_modulus: TABLE_4_2_REFERENCE,
+                kelvin_maxwell: prony.to_kelvin_maxwell(),
+                prony,
+            })
+        }
+        "seed-table-4.2" => {
+            let km = KelvinMaxwell {
+                k_inf: 6.0 * TABLE_4_2_C10,
+                arms: TABLE_4_2_ARMS
+                    .iter()
+                    .map(|&(k, n)| MaxwellArm { k, n })
+                    .collect(),
+                n_v: TABLE_4_2_NV,
+            };
+            Ok(Preset {
+                name: "seed-table-4.2",
+                source: "seed Table 4.2 (hand-tuned by the seed's author): Maxwell arms kⱼ, nⱼ and Nv = 1875 Pa·s in the parallel model; equilibrium spring = Yeoh small-strain modulus 6·C10",
+                formulation: Formulation::Parallel,
+                reference_modulus: 6.0 * TABLE_4_2_C10,
+                prony: km.to_prony()?,
+                kelvin_maxwell: km,
+            })
+        }
+        other => Err(
+            Error::settings(format!("unknown viscoelastic preset '{other}'"))
+                .with_hint(format!("use one of {}", PRESET_NAMES.join(", "))),
+        ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn step_and_ramp_kernels_match_closed_forms() {
+        let times: Vec<f64> = (0..50).map(|i| 0.1 * i as f64).collect();
+        let tau = 0.7;
+        let s = Schedule::new(&History::step(2.0), &times).unwrap();
+        let mut h = vec![0.0; times.len()];
+        s.kernel(tau, &mut h, None);
+        for (t, v) in times.iter().zip(&h) {
+            assert!((v - 2.0 * (-t / tau).exp()).abs() < 1e-13, "{t} {v}");
+        }
+        let tr = 1.0;
+        let s = Schedule::new(&History::ramp(2.0, tr), &times).unwrap();
+        s.kernel(tau, &mut h, None);
+        for (t, v) in times.iter().zip(&h) {
+            let exact = if *t <= tr {
+                2.0 / tr * tau * (1.0 - (-t / tau).exp())
+            } else {
+                // Step response scaled by (τ/t_r)(e^(t_r/τ) − 1).
+                2.0 * (tau / tr) * ((tr / tau).exp() - 1.0) * (-t / tau).exp()
+            };
+            assert!((v - exact).abs() < 1e-12, "{t} {v} {exact}");
+        }
+        assert!((s.input()[20] - 2.0).abs() < 1e-15 && (s.input()[5] - 1.0).abs() < 1e-12);
+    }
+}

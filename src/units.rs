@@ -15,6 +15,16 @@ pub enum Dimension {
     Area,
     /// Time (SI: s).
     Time,
+    /// Voltage (SI: V).
+    Voltage,
+    /// Mass (SI: kg).
+    Mass,
+    /// Frequency (SI: Hz).
+    Frequency,
+    /// Dynamic viscosity (SI: Pa·s).
+    Viscosity,
+    /// Mass density (SI: kg/m³).
+    Density,
 }
 
 impl Dimension {
@@ -41,7 +51,34 @@ impl Dimension {
                 ("cm²", 1e-4),
                 ("mm²", 1e-6),
             ],
-            Dimension::Time => &[("s", 1.0), ("ms", 1e-3), ("min", 60.0), ("h", 3600.0)],
+            Dimension::Time => &[
+                ("s", 1.0),
+                ("ms", 1e-3),
+                ("us", 1e-6),
+                ("µs", 1e-6),
+                ("min", 60.0),
+                ("h", 3600.0),
+            ],
+            Dimension::Voltage => &[("V", 1.0), ("kV", 1e3), ("mV", 1e-3)],
+            Dimension::Mass => &[("kg", 1.0), ("g", 1e-3)],
+            Dimension::Frequency => &[("Hz", 1.0), ("kHz", 1e3), ("mHz", 1e-3)],
+            Dimension::Viscosity => &[
+                ("Pa s", 1.0),
+                ("Pa*s", 1.0),
+                ("Pa·s", 1.0),
+                ("kPa s", 1e3),
+                ("MPa s", 1e6),
+                ("MPa*s", 1e6),
+                ("MPa·s", 1e6),
+            ],
+            Dimension::Density => &[
+                ("kg/m3", 1.0),
+                ("kg/m^3", 1.0),
+                ("kg/m³", 1.0),
+                ("g/cm3", 1e3),
+                ("g/cm^3", 1e3),
+                ("g/cm³", 1e3),
+            ],
         }
     }
 
@@ -53,6 +90,11 @@ impl Dimension {
             Dimension::Length => "m",
             Dimension::Area => "m²",
             Dimension::Time => "s",
+            Dimension::Voltage => "V",
+            Dimension::Mass => "kg",
+            Dimension::Frequency => "Hz",
+            Dimension::Viscosity => "Pa·s",
+            Dimension::Density => "kg/m³",
         }
     }
 

@@ -2,6 +2,8 @@
 
 mod bench;
 mod hyperelastic;
+mod simulate;
+mod static_curve;
 mod synth;
 
 use clap::{Parser, Subcommand};
@@ -21,6 +23,10 @@ enum Command {
     Hyperelastic(hyperelastic::Args),
     /// Generate synthetic test data from known constants (with noise and seed).
     Synth(synth::Args),
+    /// Simulate an actuator scene: trajectory CSV, charts, summary.
+    Simulate(simulate::Args),
+    /// Static voltage–stretch curve and pull-in of a scene's actuator.
+    Static(static_curve::Args),
     /// Measure speed against accuracy and write tables and charts under reports/.
     Bench(bench::Args),
 }
@@ -31,5 +37,7 @@ pub fn run(cli: Cli) -> Result<i32> {
         Command::Hyperelastic(a) => hyperelastic::run(a),
         Command::Synth(a) => synth::run(a),
         Command::Bench(a) => bench::run(a),
+        Command::Simulate(a) => simulate::run(a),
+        Command::Static(a) => static_curve::run(a),
     }
 }

@@ -4,3 +4,4 @@
 pub mod format;
 pub mod hyperelastic;
 pub mod plot;
+pub mod simulation;

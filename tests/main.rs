@@ -2,3 +2,4 @@
 
 mod estimation;
 mod models;
+mod sim;

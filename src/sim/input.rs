@@ -42,7 +42,7 @@ pub enum Term {
         offset: f64,
     },
     /// `offset + amplitude·sin(2πf(t − start) + phase)` for t ≥ start, for `cycles`
-    /// periods (infinite if None); `offset` outside.
+    /// periods (infinite if None); holds its first value before and its last after.
     Sine {
         /// Start time (s).
         start: f64,
@@ -119,10 +119,13 @@ impl Term {
                 cycles,
             } => {
                 let s = (t - start) * frequency;
-                if s < 0.0 || cycles.is_some_and(|c| s >= c) {
-                    return (offset, 0.0);
-                }
                 let w = 2.0 * PI * frequency;
+                if s < 0.0 {
+                    return (offset + amplitude * phase.sin(), 0.0);
+                }
+                if let Some(c) = cycles.filter(|&c| s >= c) {
+                    return (offset + amplitude * (2.0 * PI * c + phase).sin(), 0.0);
+                }
                 let a = w * (t - start) + phase;
                 (offset + amplitude * a.sin(), amplitude * w * a.cos())
             }

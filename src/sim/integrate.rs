@@ -6,7 +6,8 @@
 //! * [`Method::TrBdf2`]: the L-stable one-step TR-BDF2 of Hosea & Shampine (1996),
 //!   written as a 3-stage ESDIRK (γ = 2 − √2) with its embedded 3rd-order error
 //!   estimate, filtered through (I − γ/2·hJ)⁻¹ as in MATLAB's ode23tb; simplified
-//!   Newton with a finite-difference Jacobian; cubic Hermite dense output.
+//!   Newton with a finite-difference Jacobian; steps land on the output times; events
+//!   are located on the quadratic through the last three accepted values.
 //!   For stiff scenes (Kelvin-Voigt dashpot, fast source, arms of ms to ks).
 //!
 //! Why our own and not diffsol: diffsol 0.18 builds here (7 min wall on the shared
@@ -107,6 +108,9 @@ pub struct Workspace {
     rhs_c: Vec<f64>,
     h: f64,
     err_old: f64,
+    yprev: Vec<f64>,
+    h_prev: f64,
+    dense_r: f64,
 }
 
 impl Workspace {
@@ -127,6 +131,9 @@ impl Workspace {
             rhs_c: v(),
             h: 0.0,
             err_old: 1e-4,
+            yprev: v(),
+            h_prev: 0.0,
+            dense_r: 0.0,
         }
     }
 }
@@ -190,7 +197,7 @@ fn wrms(e: &[f64], y0: &[f64], y1: &[f64], scale: &[f64], o: &Options, nc: usize
 }
 
 /// Dense output of the last accepted step into `out` at θ ∈ [0, 1].
-fn dense_eval(m: Method, w: &Workspace, theta: f64, h: f64, out: &mut [f64]) {
+fn dense_eval(m: Method, w: &Workspace, theta: f64, out: &mut [f64]) {
     let d = &w.dense;
     match m {
         Method::Dp54 => {
@@ -201,14 +208,20 @@ fn dense_eval(m: Method, w: &Workspace, theta: f64, h: f64, out: &mut [f64]) {
             }
         }
         Method::TrBdf2 => {
-            // cubic Hermite: d0 = y0, d1 = f0, d2 = y1, d3 = f1
-            let (t2, t3) = (theta * theta, theta * theta * theta);
-            let h00 = 2.0 * t3 - 3.0 * t2 + 1.0;
-            let h10 = t3 - 2.0 * t2 + theta;
-            let h01 = -2.0 * t3 + 3.0 * t2;
-            let h11 = t3 - t2;
+            // Used for event location only (samples are stepped onto). Quadratic
+            // through y(n−1) (θ = −r), y(n) (θ = 0), y(n+1) (θ = 1): accepted values only. Stage values (the trapezoidal stage is not L-stable) and
+            // derivatives (a stiff f amplifies tiny deviations) are not used. Linear
+            // on the first step after a restart.
+            let r = w.dense_r;
             for i in 0..w.n {
-                out[i] = h00 * d[0][i] + h10 * h * d[1][i] + h01 * d[2][i] + h11 * h * d[3][i];
+                out[i] = if r > 0.0 {
+                    let lp = theta * (theta - 1.0) / (r * (r + 1.0));
+                    let l0 = -(theta + r) * (theta - 1.0) / r;
+                    let l1 = (theta + r) * theta / (1.0 + r);
+                    lp * d[3][i] + l0 * d[0][i] + l1 * d[2][i]
+                } else {
+                    (1.0 - theta) * d[0][i] + theta * d[2][i]
+                };
             }
         }
     }
@@ -265,6 +278,24 @@ fn lu_solve(a: &[f64], piv: &[usize], n: usize, b: &mut [f64]) {
     }
 }
 
+struct Left<'a, S> {
+    sys: &'a S,
+    t_end: f64,
+}
+
+impl<S: System> System for Left<'_, S> {
+    fn dim(&self) -> usize {
+        self.sys.dim()
+    }
+    fn n_ctrl(&self) -> usize {
+        self.sys.n_ctrl()
+    }
+    #[inline]
+    fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) {
+        self.sys.rhs(t.min(self.t_end), y, dy)
+    }
+}
+
 /// Integrate `y` from `t0` to `t1` (one segment between restarts).
 ///
 /// `samples` are output times in (t0, t1] (sorted); `out(t, y)` is called for each.
@@ -284,6 +315,13 @@ pub fn segment<S: System>(
     out: &mut dyn FnMut(f64, &[f64]),
     event: Option<&dyn Fn(f64, &[f64]) -> f64>,
 ) -> End {
+    // The segment ends at an input kink: evaluate the right-hand side with the left
+    // limit there (inputs are right-continuous).
+    let left = Left {
+        sys,
+        t_end: t1 - 1e-12 * (t1 - t0),
+    };
+    let sys = &left;
     let nc = sys.n_ctrl();
     let mut t = t0;
     let mut next_sample = 0;
@@ -312,15 +350,22 @@ pub fn segment<S: System>(
     if let Some(h) = o.fixed_step {
         w.h = h;
     }
+    w.h_prev = 0.0;
     let mut g_old = event.map(|g| g(t, y));
     while t < t1 {
         if stats.steps + stats.rejected >= o.max_steps {
             return End::Failed("step budget exhausted");
         }
         let mut h = w.h.min(o.h_max);
-        let last = t + h >= t1 - 1e-12 * (t1 - t0);
+        // TR-BDF2 steps onto every sample time (its step values are what its error
+        // control vouches for); DP54 interpolates with its 4th-order extension.
+        let target = match m {
+            Method::TrBdf2 if next_sample < samples.len() => samples[next_sample].min(t1),
+            _ => t1,
+        };
+        let last = t + h >= target - 1e-12 * (t1 - t0);
         if last {
-            h = t1 - t;
+            h = target - t;
         }
         if h < 1e-14 * t1.abs().max(1.0) {
             return End::Failed("step size underflow");
@@ -354,7 +399,7 @@ pub fn segment<S: System>(
             return End::Failed("Newton iteration failed at the fixed step");
         }
         stats.steps += 1;
-        let t_new = if last { t1 } else { t + h };
+        let t_new = if last { target } else { t + h };
         // event: sign change of g over the step, located on the dense output
         if let (Some(g), Some(g0)) = (event, g_old) {
             let g1 = g(t_new, &w.y1);
@@ -363,7 +408,7 @@ pub fn segment<S: System>(
                 for _ in 0..60 {
                     let mid = 0.5 * (a + b);
                     let mut tmp = std::mem::take(&mut w.ytmp);
-                    dense_eval(m, w, mid, h, &mut tmp);
+                    dense_eval(m, w, mid, &mut tmp);
                     let gm = g(t + mid * h, &tmp);
                     w.ytmp = tmp;
                     if gm > 0.0 {
@@ -375,11 +420,11 @@ pub fn segment<S: System>(
                 let te = t + b * h;
                 while next_sample < samples.len() && samples[next_sample] < te {
                     let ts = samples[next_sample];
-                    dense_eval(m, w, (ts - t) / h, h, y);
+                    dense_eval(m, w, (ts - t) / h, y);
                     out(ts, y);
                     next_sample += 1;
                 }
-                dense_eval(m, w, b, h, y);
+                dense_eval(m, w, b, y);
                 return End::Event(te);
             }
             g_old = Some(g1);
@@ -387,11 +432,13 @@ pub fn segment<S: System>(
         while next_sample < samples.len() && samples[next_sample] <= t_new {
             let ts = samples[next_sample];
             let mut tmp = std::mem::take(&mut w.ytmp);
-            dense_eval(m, w, ((ts - t) / h).clamp(0.0, 1.0), h, &mut tmp);
+            dense_eval(m, w, ((ts - t) / h).clamp(0.0, 1.0), &mut tmp);
             out(ts, &tmp);
             w.ytmp = tmp;
             next_sample += 1;
         }
+        w.yprev.copy_from_slice(y);
+        w.h_prev = t_new - t;
         y.copy_from_slice(&w.y1);
         t = t_new;
         // FSAL: k[0] ← f(t_new, y)
@@ -574,13 +621,12 @@ fn trbdf2_step<S: System>(
     }
     lu_solve(&w.lu, &w.piv, n, &mut w.err);
     let err = wrms(&w.err, y, &w.y1, scale, o, nc);
+    w.dense_r = w.h_prev / h;
     for i in 0..n {
         w.dense[0][i] = y[i];
-        w.dense[1][i] = w.k[0][i];
         w.dense[2][i] = w.y1[i];
-        w.dense[3][i] = w.k[2][i];
+        w.dense[3][i] = w.yprev[i];
     }
-    // FSAL convention of the driver: k[2] is f(t+h, y1); move it to k[2] (already)
     (
         err.is_finite(),
         if err.is_finite() { err } else { f64::MAX },

@@ -278,6 +278,9 @@ fn lu_solve(a: &[f64], piv: &[usize], n: usize, b: &mut [f64]) {
     }
 }
 
+/// An event function g(t, y); the event is its first change from > 0 to ≤ 0.
+pub type EventFn<'a> = &'a dyn Fn(f64, &[f64]) -> f64;
+
 struct Left<'a, S> {
     sys: &'a S,
     t_end: f64,
@@ -313,7 +316,7 @@ pub fn segment<S: System>(
     y: &mut [f64],
     samples: &[f64],
     out: &mut dyn FnMut(f64, &[f64]),
-    event: Option<&dyn Fn(f64, &[f64]) -> f64>,
+    event: Option<EventFn>,
 ) -> End {
     // The segment ends at an input kink: evaluate the right-hand side with the left
     // limit there (inputs are right-continuous).
@@ -517,6 +520,7 @@ const DD: f64 = 1.0 - SQ2 / 2.0;
 const WW: f64 = SQ2 / 4.0;
 
 /// Solve Z − h·d·f(tz, Z) = rhs_c by simplified Newton; Z starts in `w.z`.
+#[allow(clippy::too_many_arguments)]
 fn newton<S: System>(
     sys: &S,
     w: &mut Workspace,

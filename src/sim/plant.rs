@@ -23,7 +23,7 @@ use crate::material::hyperelastic::{Mode, StrainEnergy};
 use std::sync::Arc;
 
 /// Vacuum permittivity (F/m).
-pub const EPS0: f64 = 8.854_187_8128e-12;
+pub const EPS0: f64 = 8.854_187_812_8e-12;
 
 /// The plant: a scene turned into numbers and a state layout. `Send + Sync`.
 #[derive(Clone)]

@@ -25,6 +25,8 @@ pub enum Dimension {
     Viscosity,
     /// Mass density (SI: kg/m³).
     Density,
+    /// A dimensionless fraction (SI: 1), e.g. `0.5 %`.
+    Fraction,
 }
 
 impl Dimension {
@@ -71,6 +73,7 @@ impl Dimension {
                 ("MPa*s", 1e6),
                 ("MPa·s", 1e6),
             ],
+            Dimension::Fraction => &[("%", 0.01)],
             Dimension::Density => &[
                 ("kg/m3", 1.0),
                 ("kg/m^3", 1.0),
@@ -95,6 +98,7 @@ impl Dimension {
             Dimension::Frequency => "Hz",
             Dimension::Viscosity => "Pa·s",
             Dimension::Density => "kg/m³",
+            Dimension::Fraction => "1",
         }
     }
 

@@ -489,3 +489,35 @@ fn scene_errors_name_the_place_and_the_fix() {
     );
     assert!(simulate(&scene(&bad), &RunOptions::default()).is_err());
 }
+
+#[test]
+fn pid_tracks_the_reference_with_capacitance_feedback() {
+    let s = Scene::read(Path::new("datasets/scenes/stack_pid_triangle.toml")).unwrap();
+    let o = simulate(&s, &RunOptions::default()).unwrap();
+    assert_eq!(
+        o.integrator.status,
+        RunStatus::Completed,
+        "{}",
+        o.integrator.message
+    );
+    let r = o.tracking_rmse_pct.unwrap();
+    assert!(r > 0.5 && r < 15.0, "%RMSE {r}");
+    // the command never leaves [0, V_max] and the sensor reads the stack exactly
+    assert!(o
+        .samples
+        .iter()
+        .all(|x| x.input_v >= 0.0 && x.input_v <= 8e3));
+    for x in &o.samples {
+        let true_c = 1.0 - x.length_m / o.rest_length_m;
+        assert!((x.sensed_contraction - true_c).abs() < 1e-12);
+    }
+    // a closed loop with an ideal source is refused
+    let text = std::fs::read_to_string("datasets/scenes/stack_pid_triangle.toml")
+        .unwrap()
+        .replace("rise_time = \"1 ms\"", "");
+    let e = Scene::parse(&text, Path::new("p.toml"))
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("closed loop needs a real source"), "{e}");
+}

@@ -71,6 +71,7 @@ pub fn run(a: Args) -> Result<i32> {
         "extremes": o.extremes(),
         "rest": { "stretch": o.rest_stretch, "length_m": o.rest_length_m },
         "energy": o.energy,
+        "tracking_rmse_pct": o.tracking_rmse_pct,
         "warnings": o.warnings,
         "run_time_s": run_time,
         "trajectory": csv,

@@ -9,15 +9,23 @@ use crate::sim::Outcome;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+fn opt(v: f64) -> String {
+    if v.is_nan() {
+        String::new()
+    } else {
+        v.to_string()
+    }
+}
+
 /// The trajectory as CSV text (SI units in the header).
 pub fn trajectory_csv(o: &Outcome) -> String {
     let mut s = String::from(
-        "time_s,input_V,voltage_V,stretch,length_m,stroke_m,capacitance_F,current_A,power_W,leakage_power_W,alpha_rad\n",
+        "time_s,input_V,voltage_V,stretch,length_m,stroke_m,capacitance_F,current_A,power_W,leakage_power_W,alpha_rad,reference,sensed_contraction\n",
     );
     for x in &o.samples {
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{}",
             x.time_s,
             x.input_v,
             x.voltage_v,
@@ -28,11 +36,9 @@ pub fn trajectory_csv(o: &Outcome) -> String {
             x.current_a,
             x.power_w,
             x.leakage_w,
-            if x.alpha_rad.is_nan() {
-                String::new()
-            } else {
-                x.alpha_rad.to_string()
-            }
+            opt(x.alpha_rad),
+            opt(x.reference),
+            x.sensed_contraction
         );
     }
     s
@@ -157,6 +163,9 @@ pub fn write(o: &Outcome, dir: &Path) -> Result<PathBuf> {
         si(en.kinetic_j, "J"), si(en.load_j, "J"), si(en.viscous_j, "J"), si(en.leakage_j, "J"),
         si(en.source_j, "J"), si(en.residual_j, "J")
     );
+    if let Some(r) = o.tracking_rmse_pct {
+        let _ = writeln!(md, "- tracking %RMSE (Eq. 3.28): {r:.2} %");
+    }
     for w in &o.warnings {
         let _ = writeln!(md, "- warning: {w}");
     }

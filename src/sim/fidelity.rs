@@ -92,7 +92,10 @@ pub struct Fidelity {
 
 /// The input's shortest time scale (s), including the source's rise time; 0 for a jump.
 pub fn input_time_scale(scene: &Scene, c0: f64) -> f64 {
-    let t = scene.input.time_scale();
+    let t = match &scene.control {
+        Some(pid) => pid.reference.time_scale().min(pid.tau_d),
+        None => scene.input.time_scale(),
+    };
     match scene.source {
         Source::Ideal => t,
         Source::RiseTime { tau_s } => t.max(tau_s),
@@ -152,6 +155,10 @@ pub fn choose(scene: &Scene) -> Result<Fidelity> {
             err += qs_err;
             (false, format!("quasi-static: requested by the scene (input/resonance ratio {r:.2e}, ζ = {z:.3}, est. error {qs_err:.1e})"))
         }
+        FidelityChoice::Auto if scene.control.is_some() => (
+            true,
+            "dynamic: closed loop (the controller acts on the motion)".to_string(),
+        ),
         FidelityChoice::Auto => {
             if z >= 0.5 && lumped.nv > 0.0 && qs_err <= 1e-3 {
                 err += qs_err;

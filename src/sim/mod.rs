@@ -48,6 +48,10 @@ pub struct Sample {
     pub leakage_w: f64,
     /// Helix complementary angle α (rad); NaN for a stack.
     pub alpha_rad: f64,
+    /// Reference contraction of a closed loop (NaN without one).
+    pub reference: f64,
+    /// Contraction sensed from the capacitance (1 − sqrt(C_rest/C)).
+    pub sensed_contraction: f64,
 }
 
 /// An event during the run.
@@ -137,6 +141,9 @@ pub struct Outcome {
     pub rest_stretch: f64,
     /// Rest length (m).
     pub rest_length_m: f64,
+    /// Closed loop: %RMSE of the true contraction against the reference, normalised
+    /// by the reference's range (seed Eq. 3.28).
+    pub tracking_rmse_pct: Option<f64>,
     /// Warnings (extrapolated material model, undetermined damping, ...).
     pub warnings: Vec<String>,
     /// Samples (not in the JSON summary).
@@ -172,6 +179,12 @@ fn sample(p: &Plant, t: f64, y: &[f64]) -> Sample {
             Actuator::Helix(h) => h.alpha(y[0]),
             Actuator::Stack(_) => f64::NAN,
         },
+        reference: p
+            .control
+            .as_ref()
+            .map(|c| c.reference.eval(t).0)
+            .unwrap_or(f64::NAN),
+        sensed_contraction: p.sensed_contraction(y[0]),
     }
 }
 
@@ -210,7 +223,10 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
         ),
     };
     let span = scene.time.span;
-    let v_max = scene.input.max_abs(0.0, span);
+    let v_max = match &scene.control {
+        Some(pid) => pid.v_max,
+        None => scene.input.max_abs(0.0, span),
+    };
     let o = Options {
         rtol,
         atol: scene.time.atol * rtol / scene.time.rtol,
@@ -225,7 +241,11 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
     let mut stats = Stats::default();
     let mut samples = Vec::with_capacity(scene.time.samples.len() + 1);
     samples.push(sample(&p, 0.0, &y));
-    let kinks = scene.input.kinks(0.0, span);
+    let mut kinks = match &scene.control {
+        Some(pid) => pid.reference.kinks(0.0, span),
+        None => scene.input.kinks(0.0, span),
+    };
+    kinks.dedup();
     let mut bounds = vec![0.0];
     bounds.extend(kinks.iter().copied());
     bounds.push(span);
@@ -362,7 +382,19 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
     if matches!(scene.source, Source::Ideal) && scene.input.time_scale() == 0.0 {
         warnings.push("ideal voltage step: a real supply has a finite rise time (give source.rise_time or source.resistance_ohm)".into());
     }
+    let tracking_rmse_pct = scene.control.as_ref().map(|_| {
+        let rest = p.length(p.lam0);
+        let (mut ss, mut lo, mut hi) = (0.0, f64::INFINITY, f64::NEG_INFINITY);
+        for s in &samples {
+            let y = 1.0 - s.length_m / rest;
+            ss += (y - s.reference).powi(2);
+            lo = lo.min(s.reference);
+            hi = hi.max(s.reference);
+        }
+        100.0 * (ss / samples.len() as f64).sqrt() / (hi - lo)
+    });
     Ok(Outcome {
+        tracking_rmse_pct,
         scene: scene.name.clone(),
         fidelity: fid,
         mode,

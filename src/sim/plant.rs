@@ -18,7 +18,7 @@
 //! and source losses, for the energy balance.
 
 use super::input::Waveform;
-use super::scene::{Actuator, Scene, Source};
+use super::scene::{Actuator, Pid, Scene, Source};
 use crate::material::hyperelastic::{Mode, StrainEnergy};
 use std::sync::Arc;
 
@@ -65,6 +65,10 @@ pub struct Plant {
     pub input: Waveform,
     /// Initial (loaded, relaxed) stretch.
     pub lam0: f64,
+    /// Closed loop, if any.
+    pub control: Option<Pid>,
+    /// Capacitance at the rest state (the self-sensing calibration).
+    pub c_rest: f64,
 }
 
 /// Indices into the state vector.
@@ -76,6 +80,8 @@ pub struct Layout {
     pub sig: usize,
     /// Source state (lag voltage or charge).
     pub src: Option<usize>,
+    /// Controller states (integral of the error, derivative filter).
+    pub ctl: Option<usize>,
     /// First quadrature: E_in, D_visc, D_leak, D_src.
     pub quad: usize,
     /// Total.
@@ -143,10 +149,38 @@ impl Plant {
             source: scene.source,
             input: scene.input.clone(),
             lam0: 1.0,
+            control: scene.control.clone(),
+            c_rest: 0.0,
         };
         p.lam0 = p.static_stretch(0.0, 1.0).unwrap_or(1.0);
         p.lam_f = p.lam0;
+        p.c_rest = p.capacitance(p.lam0).0;
         p
+    }
+
+    /// PID (Eq. 3.29): (clamped command in V, error, unclamped output).
+    #[inline]
+    pub fn pid(&self, pid: &Pid, t: f64, y: &[f64]) -> (f64, f64, f64) {
+        let i = self.layout().ctl.unwrap_or(0);
+        let e = pid.reference.eval(t).0 - self.sensed_contraction(y[0]);
+        let u = pid.kp * e + pid.ki * y[i] + pid.kd * (e - y[i + 1]) / pid.tau_d;
+        (u.clamp(0.0, pid.v_max), e, u)
+    }
+
+    /// Contraction estimated from the capacitance with the stack law C ∝ λ⁻²
+    /// (self-sensing, Eq. 3.22): 1 − sqrt(C_rest/C).
+    #[inline]
+    pub fn sensed_contraction(&self, lam: f64) -> f64 {
+        1.0 - (self.c_rest / self.capacitance(lam).0).sqrt()
+    }
+
+    /// The source's open-circuit voltage and its rate: the input or the PID command.
+    #[inline]
+    pub fn command(&self, t: f64, y: &[f64]) -> (f64, f64) {
+        match &self.control {
+            Some(pid) => (self.pid(pid, t, y).0, 0.0),
+            None => self.input.eval(t),
+        }
     }
 
     /// Nominal stress P(λ) of the layer (Pa).
@@ -214,11 +248,14 @@ impl Plant {
         let sig = if self.inertia { 2 } else { 1 };
         let after = sig + self.arms.len();
         let src = (!matches!(self.source, Source::Ideal)).then_some(after);
-        let quad = after + src.is_some() as usize;
+        let after = after + src.is_some() as usize;
+        let ctl = self.control.is_some().then_some(after);
+        let quad = after + 2 * ctl.is_some() as usize;
         Layout {
             v,
             sig,
             src,
+            ctl,
             quad,
             n: quad + 4,
         }
@@ -229,8 +266,11 @@ impl Plant {
         let l = self.layout();
         let mut y = vec![0.0; l.n];
         y[0] = self.lam0;
+        if let (Some(i), Some(pid)) = (l.ctl, &self.control) {
+            y[i + 1] = pid.reference.eval(0.0).0 - self.sensed_contraction(self.lam0);
+        }
         if let Some(i) = l.src {
-            let u = self.input.eval(0.0).0;
+            let u = self.command(0.0, &y).0;
             y[i] = match self.source {
                 Source::RiseTime { .. } => u,
                 Source::Resistance { .. } => u * self.capacitance(self.lam0).0,
@@ -271,7 +311,7 @@ impl Plant {
         let lam = y[0];
         let (c, dc, _) = self.capacitance(lam);
         let g = self.g_per_c * c;
-        let (u, du) = self.input.eval(t);
+        let (u, du) = self.command(t, y);
         let (v, dv, current) = match self.source {
             Source::Ideal => (u, du, dc * lam_dot * u + c * du + g * u),
             Source::RiseTime { tau_s } => {
@@ -366,6 +406,12 @@ impl super::integrate::System for Plant {
                 Source::Resistance { .. } => e.current - self.g_per_c * e.capacitance * e.voltage,
                 Source::Ideal => 0.0,
             };
+        }
+        if let (Some(i), Some(pid)) = (l.ctl, &self.control) {
+            let (_, e, u) = self.pid(pid, t, y);
+            let wind = (u > pid.v_max && e > 0.0) || (u < 0.0 && e < 0.0);
+            dy[i] = if wind { 0.0 } else { e };
+            dy[i + 1] = (e - y[i + 1]) / pid.tau_d;
         }
         let q = l.quad;
         match self.source {

@@ -149,6 +149,26 @@ pub enum FidelityChoice {
     QuasiStatic,
 }
 
+/// PID on the contraction estimated from the capacitance (seed §3.6, Eq. 3.29):
+/// u = Kp·e + Ki·∫e dt + Kd·de/dt, e = reference − ŷ, ŷ = 1 − sqrt(C(λ0)/C) (the
+/// stack's self-sensing law C ∝ λ⁻², Eq. 3.22), the derivative through a first-order
+/// filter, the output clamped to [0, V_max] with conditional-integration anti-windup.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pid {
+    /// Proportional gain (V per unit contraction).
+    pub kp: f64,
+    /// Integral gain (V/s per unit contraction).
+    pub ki: f64,
+    /// Derivative gain (V·s per unit contraction).
+    pub kd: f64,
+    /// Derivative filter time constant (s).
+    pub tau_d: f64,
+    /// Output limit (V).
+    pub v_max: f64,
+    /// Reference contraction (fraction of the rest length).
+    pub reference: Waveform,
+}
+
 /// Time span, samples and tolerances.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TimeSpec {
@@ -180,8 +200,10 @@ pub struct Scene {
     pub load: Load,
     /// Voltage source.
     pub source: Source,
-    /// Input voltage (V).
+    /// Input voltage (V); unused when `control` is set.
     pub input: Waveform,
+    /// Closed loop (seed Eq. 3.29), replacing the input.
+    pub control: Option<Pid>,
     /// Time and tolerances.
     pub time: TimeSpec,
 }
@@ -306,7 +328,7 @@ impl Scene {
             &root,
             "scene",
             &[
-                "name", "actuator", "material", "load", "source", "input", "time",
+                "name", "actuator", "material", "load", "source", "input", "control", "time",
             ],
         )?;
         let name = c
@@ -322,7 +344,20 @@ impl Scene {
         let load = read_load(&c, root.get("load"), actuator_mass)?;
         let source = read_source(&c, root.get("source"))?;
         let time = read_time(&c, c.table(&root, "time")?)?;
-        let input = read_input(&c, root.get("input"), &dir)?;
+        let control = match root.get("control") {
+            None => None,
+            Some(toml::Value::Table(t)) => Some(read_pid(&c, t, &dir)?),
+            Some(_) => return Err(c.err("[control] must be a table")),
+        };
+        if control.is_some() && source == Source::Ideal {
+            return Err(c
+                .err("a closed loop needs a real source")
+                .with_hint("give source.rise_time or source.resistance_ohm"));
+        }
+        let input = match (&control, root.get("input")) {
+            (Some(_), None) => Waveform::default(),
+            (_, v) => read_input(&c, v, &dir, "input", Dimension::Voltage)?,
+        };
         Ok(Scene {
             name,
             actuator,
@@ -330,6 +365,7 @@ impl Scene {
             load,
             source,
             input,
+            control,
             time,
         })
     }
@@ -676,7 +712,58 @@ fn read_time(c: &Ctx, t: &toml::Table) -> Result<TimeSpec> {
     })
 }
 
-fn read_input(c: &Ctx, v: Option<&toml::Value>, dir: &Path) -> Result<Waveform> {
+fn read_pid(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<Pid> {
+    let s = "control";
+    c.unknown_keys(
+        t,
+        s,
+        &[
+            "kind",
+            "kp",
+            "ki",
+            "kd",
+            "derivative_filter",
+            "max_voltage",
+            "reference",
+        ],
+    )?;
+    match c.string(t, s, "kind")? {
+        Some("pid") => {}
+        _ => return Err(c.err("control.kind must be \"pid\"")),
+    }
+    let g = |k: &str| -> Result<f64> {
+        let v = c.number(t, s, k)?.unwrap_or(0.0);
+        if v < 0.0 || !v.is_finite() {
+            return Err(c.err(format!("control.{k} must be ≥ 0, found {v}")));
+        }
+        Ok(v)
+    };
+    Ok(Pid {
+        kp: g("kp")?,
+        ki: g("ki")?,
+        kd: g("kd")?,
+        tau_d: c
+            .quantity(t, s, "derivative_filter", Dimension::Time)?
+            .unwrap_or(1e-3)
+            .max(1e-9),
+        v_max: c.positive(t, s, "max_voltage", Dimension::Voltage)?,
+        reference: read_input(
+            c,
+            t.get("reference"),
+            dir,
+            "control.reference",
+            Dimension::Fraction,
+        )?,
+    })
+}
+
+fn read_input(
+    c: &Ctx,
+    v: Option<&toml::Value>,
+    dir: &Path,
+    sec: &str,
+    dim: Dimension,
+) -> Result<Waveform> {
     let list: Vec<&toml::Table> = match v {
         None => {
             return Err(c
@@ -695,14 +782,14 @@ fn read_input(c: &Ctx, v: Option<&toml::Value>, dir: &Path) -> Result<Waveform> 
     };
     let mut terms = Vec::new();
     for (i, t) in list.into_iter().enumerate() {
-        let s = format!("input[{i}]");
+        let s = format!("{sec}[{i}]");
         let s = s.as_str();
-        let vq = |k: &str| c.quantity(t, s, k, Dimension::Voltage);
+        let vq = |k: &str| c.quantity(t, s, k, dim);
         let tq = |k: &str| c.quantity(t, s, k, Dimension::Time);
         let term = match c.string(t, s, "kind")? {
             Some("step") => Term::Step {
                 at: tq("at")?.unwrap_or(0.0),
-                amplitude: c.need(t, s, "amplitude", Dimension::Voltage)?,
+                amplitude: c.need(t, s, "amplitude", dim)?,
             },
             Some("ramp") => {
                 let (start, end) = (
@@ -716,19 +803,19 @@ fn read_input(c: &Ctx, v: Option<&toml::Value>, dir: &Path) -> Result<Waveform> 
                     start,
                     end,
                     from: vq("from")?.unwrap_or(0.0),
-                    to: c.need(t, s, "to", Dimension::Voltage)?,
+                    to: c.need(t, s, "to", dim)?,
                 }
             }
             Some("triangle") => Term::Triangle {
                 start: tq("start")?.unwrap_or(0.0),
-                amplitude: c.need(t, s, "amplitude", Dimension::Voltage)?,
+                amplitude: c.need(t, s, "amplitude", dim)?,
                 frequency: c.positive(t, s, "frequency", Dimension::Frequency)?,
                 cycles: c.number(t, s, "cycles")?.unwrap_or(1.0),
                 offset: vq("offset")?.unwrap_or(0.0),
             },
             Some("sine") => Term::Sine {
                 start: tq("start")?.unwrap_or(0.0),
-                amplitude: c.need(t, s, "amplitude", Dimension::Voltage)?,
+                amplitude: c.need(t, s, "amplitude", dim)?,
                 frequency: c.positive(t, s, "frequency", Dimension::Frequency)?,
                 phase: c.number(t, s, "phase_rad")?.unwrap_or(0.0),
                 offset: vq("offset")?.unwrap_or(0.0),

@@ -5,11 +5,14 @@ use dea_fit::Result;
 /// Benchmark a subsystem.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// What to benchmark: hyperelastic.
+    /// What to benchmark: hyperelastic or simulate.
     what: String,
 }
 
 /// Run the subcommand.
-pub fn run(_a: Args) -> Result<i32> {
+pub fn run(a: Args) -> Result<i32> {
+    if a.what == "simulate" {
+        return super::bench_simulate::run(std::path::Path::new("datasets/scenes"));
+    }
     Ok(0)
 }

@@ -1,6 +1,7 @@
 //! Subcommands, one file each.
 
 mod bench;
+mod bench_simulate;
 mod hyperelastic;
 mod simulate;
 mod static_curve;

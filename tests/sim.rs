@@ -231,6 +231,12 @@ fn energy_balances_over_a_cycle() {
         assert!(e > 0.0);
         assert!(r.abs() < 1e-7 * e, "{src}: residual {r} of {e}");
     }
+    // a step at t = 0 through a real source starts from 0 V (no hidden jump)
+    let (r, e) = energy_residual(
+        "[source]\nrise_time = \"2 ms\"",
+        "[[input]]\nkind = \"step\"\namplitude = \"3 kV\"",
+    );
+    assert!(r.abs() < 1e-7 * e, "rise-time step: residual {r} of {e}");
     // an ideal step: the wiring loss ½CΔV² is booked
     let (r, e) = energy_residual(
         "",

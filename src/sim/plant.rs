@@ -270,7 +270,12 @@ impl Plant {
             y[i + 1] = pid.reference.eval(0.0).0 - self.sensed_contraction(self.lam0);
         }
         if let Some(i) = l.src {
-            let u = self.command(0.0, &y).0;
+            // the source starts from the input's value just before t = 0, so a step
+            // at t = 0 goes through the source's rise time / resistance
+            let u = match self.control {
+                Some(_) => self.command(0.0, &y).0,
+                None => self.input.eval(-f64::MIN_POSITIVE).0,
+            };
             y[i] = match self.source {
                 Source::RiseTime { .. } => u,
                 Source::Resistance { .. } => u * self.capacitance(self.lam0).0,

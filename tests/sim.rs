@@ -527,3 +527,65 @@ fn pid_tracks_the_reference_with_capacitance_feedback() {
         .to_string();
     assert!(e.contains("closed loop needs a real source"), "{e}");
 }
+
+#[test]
+fn a_fit_file_drives_the_stack_and_extrapolation_is_reported() {
+    use dea_fit::fit::hyperelastic::{fit, Settings};
+    use dea_fit::io::tensile::{read, TensileOptions};
+    use dea_fit::material::hyperelastic::{Mode, ModelSpec, OgdenForm};
+    // Yeoh fitted to uniaxial tension only: a stack is equibiaxial, so extrapolated
+    let d = read(
+        Path::new("datasets/vhb4910/uniaxial.csv"),
+        &TensileOptions {
+            mode: Some(Mode::Uniaxial),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let f = fit(
+        &d,
+        &ModelSpec::new("yeoh", OgdenForm::Seed),
+        &Settings::default(),
+    )
+    .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("yeoh.json");
+    std::fs::write(&path, serde_json::to_string(&f).unwrap()).unwrap();
+    let text = seed_stack(
+        "{ preset = \"seed-table-4.2\" }",
+        "[[input]]\nkind = \"ramp\"\nstart = 0\nend = \"50 ms\"\nto = \"5 kV\"",
+        "span = \"0.1 s\"",
+    )
+    .replace(
+        "hyperelastic = { preset = \"vhb4910-yeoh\" }",
+        &format!("hyperelastic = {{ fit = \"{}\" }}", path.display()),
+    );
+    let s = Scene::parse(&text, Path::new("scene.toml")).unwrap();
+    assert_eq!(s.material.params, f.values());
+    let o = simulate(&s, &RunOptions::default()).unwrap();
+    assert!(
+        o.warnings.iter().any(|w| w.contains("extrapolated")),
+        "{:?}",
+        o.warnings
+    );
+    // the same constants inline give the same trajectory
+    let inline = seed_stack(
+        "{ preset = \"seed-table-4.2\" }",
+        "[[input]]\nkind = \"ramp\"\nstart = 0\nend = \"50 ms\"\nto = \"5 kV\"",
+        "span = \"0.1 s\"",
+    )
+    .replace(
+        "hyperelastic = { preset = \"vhb4910-yeoh\" }",
+        &format!(
+            "hyperelastic = {{ model = \"yeoh\", parameters = {{ C10 = {}, C20 = {}, C30 = {} }} }}",
+            f.values()[0],
+            f.values()[1],
+            f.values()[2]
+        ),
+    );
+    let p = simulate(&scene(&inline), &RunOptions::default()).unwrap();
+    assert_eq!(
+        o.samples.last().unwrap().stretch,
+        p.samples.last().unwrap().stretch
+    );
+}

@@ -6,7 +6,8 @@
 //! * [`Method::TrBdf2`]: the L-stable one-step TR-BDF2 of Hosea & Shampine (1996),
 //!   written as a 3-stage ESDIRK (γ = 2 − √2) with its embedded 3rd-order error
 //!   estimate, filtered through (I − γ/2·hJ)⁻¹ as in MATLAB's ode23tb; simplified
-//!   Newton with a finite-difference Jacobian; steps land on the output times; events
+//!   Newton with a finite-difference Jacobian kept across steps (refreshed when
+//!   Newton fails with a stale one); steps land on the output times; events
 //!   are located on the quadratic through the last three accepted values.
 //!   For stiff scenes (Kelvin-Voigt dashpot, fast source, arms of ms to ks).
 //!
@@ -111,6 +112,8 @@ pub struct Workspace {
     yprev: Vec<f64>,
     h_prev: f64,
     dense_r: f64,
+    jac_fresh: bool,
+    jac_valid: bool,
 }
 
 impl Workspace {
@@ -134,6 +137,8 @@ impl Workspace {
             yprev: v(),
             h_prev: 0.0,
             dense_r: 0.0,
+            jac_fresh: false,
+            jac_valid: false,
         }
     }
 }
@@ -354,6 +359,7 @@ pub fn segment<S: System>(
         w.h = h;
     }
     w.h_prev = 0.0;
+    w.jac_valid = false;
     let mut g_old = event.map(|g| g(t, y));
     while t < t1 {
         if stats.steps + stats.rejected >= o.max_steps {
@@ -563,20 +569,16 @@ fn newton<S: System>(
     false
 }
 
-#[allow(clippy::too_many_arguments)]
-fn trbdf2_step<S: System>(
+fn fd_jacobian<S: System>(
     sys: &S,
     w: &mut Workspace,
     t: f64,
-    h: f64,
     y: &[f64],
     scale: &[f64],
     o: &Options,
-    nc: usize,
     stats: &mut Stats,
-) -> (bool, f64) {
+) {
     let n = w.n;
-    // finite-difference Jacobian at (t, y); k[0] = f(t, y)
     w.ytmp.copy_from_slice(y);
     for j in 0..n {
         let dj = 1e-7
@@ -593,30 +595,58 @@ fn trbdf2_step<S: System>(
     }
     stats.rhs_evals += n;
     stats.jacobians += 1;
-    for i in 0..n {
-        for j in 0..n {
-            w.lu[i * n + j] = if i == j { 1.0 } else { 0.0 } - h * DD * w.jac[i * n + j];
+    w.jac_valid = true;
+    w.jac_fresh = true;
+}
+
+#[allow(clippy::too_many_arguments)]
+fn trbdf2_step<S: System>(
+    sys: &S,
+    w: &mut Workspace,
+    t: f64,
+    h: f64,
+    y: &[f64],
+    scale: &[f64],
+    o: &Options,
+    nc: usize,
+    stats: &mut Stats,
+) -> (bool, f64) {
+    let n = w.n;
+    // The Jacobian is kept across steps and refreshed only when Newton fails with a
+    // stale one (or after a restart); the iteration matrix is refactored each step.
+    loop {
+        if !w.jac_valid {
+            fd_jacobian(sys, w, t, y, scale, o, stats);
         }
-    }
-    stats.factorizations += 1;
-    if !lu_factor(&mut w.lu, &mut w.piv, n) {
-        return (false, f64::MAX);
-    }
-    // stage 2 (trapezoid to t + γh)
-    for i in 0..n {
-        w.rhs_c[i] = y[i] + h * DD * w.k[0][i];
-        w.z[i] = y[i] + GAMMA * h * w.k[0][i];
-    }
-    if !newton(sys, w, t + GAMMA * h, h, scale, o, nc, stats, 1) {
-        return (false, f64::MAX);
-    }
-    // stage 3 (BDF2 to t + h)
-    for i in 0..n {
-        w.rhs_c[i] = y[i] + h * WW * (w.k[0][i] + w.k[1][i]);
-        w.z[i] += (1.0 - GAMMA) * h * w.k[1][i];
-    }
-    if !newton(sys, w, t + h, h, scale, o, nc, stats, 2) {
-        return (false, f64::MAX);
+        for i in 0..n {
+            for j in 0..n {
+                w.lu[i * n + j] = if i == j { 1.0 } else { 0.0 } - h * DD * w.jac[i * n + j];
+            }
+        }
+        stats.factorizations += 1;
+        let ok = lu_factor(&mut w.lu, &mut w.piv, n) && {
+            // stage 2 (trapezoid to t + γh)
+            for i in 0..n {
+                w.rhs_c[i] = y[i] + h * DD * w.k[0][i];
+                w.z[i] = y[i] + GAMMA * h * w.k[0][i];
+            }
+            newton(sys, w, t + GAMMA * h, h, scale, o, nc, stats, 1) && {
+                // stage 3 (BDF2 to t + h)
+                for i in 0..n {
+                    w.rhs_c[i] = y[i] + h * WW * (w.k[0][i] + w.k[1][i]);
+                    w.z[i] += (1.0 - GAMMA) * h * w.k[1][i];
+                }
+                newton(sys, w, t + h, h, scale, o, nc, stats, 2)
+            }
+        };
+        if ok {
+            w.jac_fresh = false;
+            break;
+        }
+        if w.jac_fresh {
+            return (false, f64::MAX);
+        }
+        w.jac_valid = false;
     }
     w.y1.copy_from_slice(&w.z);
     let (b1, b2, b3) = ((1.0 - WW) / 3.0, (3.0 * WW + 1.0) / 3.0, DD / 3.0);

@@ -342,21 +342,28 @@ impl Plant {
         }
     }
 
-    /// λ̇ and the generalised acceleration force at a state.
+    /// λ̇, the generalised acceleration force and the electrical state (with the
+    /// current evaluated at λ̇) at a state.
     #[inline]
-    fn kinematics(&self, t: f64, y: &[f64], l: &Layout) -> (f64, f64) {
+    fn kinematics(&self, t: f64, y: &[f64], l: &Layout) -> (f64, f64, Electrical) {
         let lam = y[0];
         let sig: f64 = y[l.sig..l.sig + self.arms.len()].iter().sum();
         let elastic = self.stress(lam) + sig + self.frozen_k * (lam - self.lam_f);
-        // the voltage does not depend on λ̇ except through the resistive source's
-        // charge, which is a state: evaluate with λ̇ = 0 for V
-        let e = self.electrical(t, y, 0.0);
-        let (_, dc, _) = self.capacitance(lam);
-        let drive = -self.vol * elastic + self.f_load * self.l0 + 0.5 * e.voltage * e.voltage * dc;
-        match l.v {
+        // the terminal voltage does not depend on λ̇; the current does (dC/dt·V)
+        let mut e = self.electrical(t, y, 0.0);
+        let drive =
+            -self.vol * elastic + self.f_load * self.l0 + 0.5 * e.voltage * e.voltage * e.dc;
+        let (lam_dot, force) = match l.v {
             Some(i) => (y[i], drive - self.vol * self.nv * y[i]),
             None => (drive / (self.vol * self.nv), 0.0),
+        };
+        match self.source {
+            Source::Resistance { .. } => {
+                e.voltage_rate -= e.dc * lam_dot * e.voltage / e.capacitance
+            }
+            _ => e.current += e.dc * lam_dot * e.voltage,
         }
+        (lam_dot, force, e)
     }
 
     /// λ̇ at a state (both fidelities).
@@ -393,7 +400,7 @@ impl super::integrate::System for Plant {
     }
     fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) {
         let l = self.layout();
-        let (lam_dot, force) = self.kinematics(t, y, &l);
+        let (lam_dot, force, e) = self.kinematics(t, y, &l);
         dy[0] = lam_dot;
         if let Some(i) = l.v {
             dy[i] = force / self.mass;
@@ -404,7 +411,6 @@ impl super::integrate::System for Plant {
             dy[l.sig + j] = k * lam_dot - s / tau;
             d_visc += s * s / (k * tau);
         }
-        let e = self.electrical(t, y, lam_dot);
         if let Some(i) = l.src {
             dy[i] = match self.source {
                 Source::RiseTime { .. } => e.voltage_rate,

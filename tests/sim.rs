@@ -589,3 +589,36 @@ fn a_fit_file_drives_the_stack_and_extrapolation_is_reported() {
         p.samples.last().unwrap().stretch
     );
 }
+
+#[test]
+fn a_step_above_pull_in_stops_cleanly_and_one_below_does_not() {
+    let lc = 4f64.powf(-1.0 / 3.0);
+    let vc = 1e-3 * (1e5 / (4.0 * EPS0)).sqrt() * (lc - lc.powi(4)).sqrt();
+    let run = |v: f64| {
+        let s = scene(&nh_layer(
+            "{ nv = \"20 Pa s\" }",
+            &format!("[[input]]\nkind = \"step\"\namplitude = {v}"),
+            "span = \"10 ms\"\nsamples = 100",
+        ));
+        simulate(&s, &RunOptions::default()).unwrap()
+    };
+    let o = run(1.05 * vc);
+    assert_eq!(
+        o.integrator.status,
+        RunStatus::PullIn,
+        "{}",
+        o.integrator.message
+    );
+    let e = &o.events[0];
+    assert!(
+        e.time_s > 0.0 && e.stretch > 0.3 && e.stretch < 0.9,
+        "{e:?}"
+    );
+    assert!(o
+        .samples
+        .iter()
+        .all(|s| s.stretch.is_finite() && s.stretch > 0.3));
+    let o = run(0.9 * vc);
+    assert_eq!(o.integrator.status, RunStatus::Completed);
+    assert!(o.events.is_empty());
+}

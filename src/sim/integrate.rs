@@ -361,6 +361,10 @@ pub fn segment<S: System>(
     w.h_prev = 0.0;
     w.jac_valid = false;
     let mut g_old = event.map(|g| g(t, y));
+    if g_old.is_some_and(|g| g <= 0.0) {
+        // already past the event (e.g. an input jump at the restart)
+        return End::Event(t);
+    }
     while t < t1 {
         if stats.steps + stats.rejected >= o.max_steps {
             return End::Failed("step budget exhausted");

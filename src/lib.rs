@@ -21,6 +21,7 @@ pub mod fit;
 pub mod io;
 pub mod material;
 pub mod report;
+pub mod sim;
 pub mod units;
 
 pub use error::{Error, Result};

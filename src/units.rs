@@ -29,6 +29,14 @@ pub enum Dimension {
     Angle,
     /// Mass density (SI: kg/m³).
     Density,
+    /// Voltage (SI: V).
+    Voltage,
+    /// Mass (SI: kg).
+    Mass,
+    /// Dynamic viscosity (SI: Pa·s).
+    Viscosity,
+    /// A dimensionless fraction (SI: 1), e.g. `0.5 %`.
+    Fraction,
 }
 
 impl Dimension {
@@ -63,7 +71,14 @@ impl Dimension {
                 ("cm²", 1e-4),
                 ("mm²", 1e-6),
             ],
-            Dimension::Time => &[("s", 1.0), ("ms", 1e-3), ("min", 60.0), ("h", 3600.0)],
+            Dimension::Time => &[
+                ("s", 1.0),
+                ("ms", 1e-3),
+                ("us", 1e-6),
+                ("µs", 1e-6),
+                ("min", 60.0),
+                ("h", 3600.0),
+            ],
             Dimension::Capacitance => &[
                 ("F", 1.0),
                 ("mF", 1e-3),
@@ -117,6 +132,18 @@ impl Dimension {
                 ("deg", std::f64::consts::PI / 180.0),
                 ("°", std::f64::consts::PI / 180.0),
             ],
+            Dimension::Voltage => &[("V", 1.0), ("kV", 1e3), ("mV", 1e-3)],
+            Dimension::Mass => &[("kg", 1.0), ("g", 1e-3)],
+            Dimension::Viscosity => &[
+                ("Pa s", 1.0),
+                ("Pa*s", 1.0),
+                ("Pa·s", 1.0),
+                ("kPa s", 1e3),
+                ("MPa s", 1e6),
+                ("MPa*s", 1e6),
+                ("MPa·s", 1e6),
+            ],
+            Dimension::Fraction => &[("%", 0.01)],
             Dimension::Density => &[
                 ("kg/m3", 1.0),
                 ("kg/m^3", 1.0),
@@ -145,6 +172,10 @@ impl Dimension {
             Dimension::Inductance => "H",
             Dimension::Angle => "rad",
             Dimension::Density => "kg/m³",
+            Dimension::Voltage => "V",
+            Dimension::Mass => "kg",
+            Dimension::Viscosity => "Pa·s",
+            Dimension::Fraction => "1",
         }
     }
 

@@ -7,3 +7,4 @@ mod estimation;
 mod models;
 mod permittivity;
 mod relaxation;
+mod sim;

@@ -23,6 +23,16 @@ enum What {
     /// The relaxation estimator: term count and method (grid NNLS only vs refined)
     /// against error and time.
     Relaxation,
+    /// The simulator: error against run time over tolerances, integrators and
+    /// fidelity levels for the seed's scenes.
+    Simulate(SimArgs),
+}
+
+#[derive(Debug, clap::Args)]
+struct SimArgs {
+    /// Directory of the scenes to run.
+    #[arg(long, default_value = "datasets/scenes")]
+    scenes: PathBuf,
 }
 
 /// Options every bench takes.
@@ -65,6 +75,7 @@ pub fn run(a: Args) -> Result<i32> {
     match a.what {
         What::Hyperelastic(h) => hyperelastic(h),
         What::Relaxation => super::bench_relaxation::run(),
+        What::Simulate(a) => super::bench_simulate::run(&a.scenes),
     }
 }
 

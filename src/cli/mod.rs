@@ -2,10 +2,13 @@
 
 mod bench;
 mod bench_relaxation;
+mod bench_simulate;
 mod composite;
 mod hyperelastic;
 mod permittivity;
 mod relaxation;
+mod simulate;
+mod static_curve;
 mod synth;
 
 use clap::{Parser, Subcommand};
@@ -31,6 +34,10 @@ enum Command {
     Relaxation(relaxation::Args),
     /// Generate synthetic test data from known constants (with noise and seed).
     Synth(synth::Args),
+    /// Simulate an actuator scene: trajectory CSV, charts, summary.
+    Simulate(simulate::Args),
+    /// Static voltage–stretch curve and pull-in of a scene's actuator.
+    Static(static_curve::Args),
     /// Measure speed against accuracy and write tables and charts under reports/.
     Bench(bench::Args),
 }
@@ -44,5 +51,7 @@ pub fn run(cli: Cli) -> Result<i32> {
         Command::Permittivity(a) => permittivity::run(a),
         Command::Composite(a) => composite::run(a),
         Command::Bench(a) => bench::run(a),
+        Command::Simulate(a) => simulate::run(a),
+        Command::Static(a) => static_curve::run(a),
     }
 }

@@ -7,3 +7,4 @@ pub mod hyperelastic;
 pub mod permittivity;
 pub mod plot;
 pub mod relaxation;
+pub mod simulation;

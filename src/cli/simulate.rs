@@ -1,0 +1,103 @@
+//! `dea-fit simulate`: run a scene; trajectory CSV, charts and summary.
+
+use dea_fit::io::write::atomic_write;
+use dea_fit::report::simulation;
+use dea_fit::sim::{self, scene::Scene, RunOptions};
+use dea_fit::{Error, Result};
+use std::path::PathBuf;
+
+/// Simulate an actuator scene (TOML, see docs/scenes.md).
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Scene file.
+    scene: PathBuf,
+    /// Trajectory CSV to write (default reports/sim-<scene>/trajectory.csv).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Print the JSON summary on stdout.
+    #[arg(long)]
+    json: bool,
+    /// Override the scene's relative tolerance.
+    #[arg(long)]
+    rtol: Option<f64>,
+    /// Report directory (default reports/sim-<scene>).
+    #[arg(long)]
+    report: Option<PathBuf>,
+    /// Do not write the report (charts, index.md).
+    #[arg(long)]
+    no_report: bool,
+}
+
+/// Run the subcommand.
+pub fn run(a: Args) -> Result<i32> {
+    let scene = Scene::read(&a.scene)?;
+    if let Some(r) = a.rtol {
+        if !(r > 0.0 && r < 0.1) {
+            return Err(Error::settings(format!(
+                "--rtol must be in (0, 0.1), found {r}"
+            )));
+        }
+    }
+    let t = std::time::Instant::now();
+    let o = sim::simulate(
+        &scene,
+        &RunOptions {
+            rtol: a.rtol,
+            ..Default::default()
+        },
+    )?;
+    let run_time = t.elapsed().as_secs_f64();
+    let dir = a
+        .report
+        .unwrap_or_else(|| PathBuf::from(format!("reports/sim-{}", scene.name)));
+    let csv = a.out.unwrap_or_else(|| dir.join("trajectory.csv"));
+    atomic_write(&csv, simulation::trajectory_csv(&o).as_bytes())?;
+    if !a.no_report {
+        simulation::write(&o, &dir)?;
+    }
+    let last = o.samples.last().copied();
+    let summary = serde_json::json!({
+        "scene": o.scene,
+        "status": o.integrator.status,
+        "events": o.events,
+        "fidelity": o.fidelity,
+        "axial_mode": o.mode,
+        "integrator": o.integrator,
+        "final": last.map(|s| serde_json::json!({
+            "time_s": s.time_s, "voltage_V": s.voltage_v, "stretch": s.stretch,
+            "length_m": s.length_m, "stroke_m": o.rest_length_m - s.length_m,
+            "capacitance_F": s.capacitance_f, "current_A": s.current_a, "power_W": s.power_w,
+        })),
+        "extremes": o.extremes(),
+        "rest": { "stretch": o.rest_stretch, "length_m": o.rest_length_m },
+        "energy": o.energy,
+        "tracking_rmse_pct": o.tracking_rmse_pct,
+        "warnings": o.warnings,
+        "run_time_s": run_time,
+        "trajectory": csv,
+    });
+    if a.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&summary).expect("serialisable")
+        );
+    } else {
+        let x = o.extremes();
+        println!(
+            "{}: {} ({}), {} steps, stretch {:.5}…{:.5}, {} event(s); {:.3} ms; trajectory {}",
+            o.scene,
+            o.fidelity.model,
+            o.integrator.message,
+            o.integrator.stats.steps,
+            x.stretch_min,
+            x.stretch_max,
+            o.events.len(),
+            run_time * 1e3,
+            csv.display()
+        );
+        for w in &o.warnings {
+            println!("warning: {w}");
+        }
+    }
+    Ok(0)
+}

@@ -1,0 +1,179 @@
+//! Report of a simulation: trajectory charts (stroke and voltage, current and power)
+//! and a Markdown summary; and the trajectory CSV.
+
+use super::format::si;
+use super::plot::{Chart, Series, Style};
+use crate::error::Result;
+use crate::io::write::atomic_write;
+use crate::sim::Outcome;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+fn opt(v: f64) -> String {
+    if v.is_nan() {
+        String::new()
+    } else {
+        v.to_string()
+    }
+}
+
+/// The trajectory as CSV text (SI units in the header).
+pub fn trajectory_csv(o: &Outcome) -> String {
+    let mut s = String::from(
+        "time_s,input_V,voltage_V,stretch,length_m,stroke_m,capacitance_F,current_A,power_W,leakage_power_W,alpha_rad,reference,sensed_contraction\n",
+    );
+    for x in &o.samples {
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            x.time_s,
+            x.input_v,
+            x.voltage_v,
+            x.stretch,
+            x.length_m,
+            o.rest_length_m - x.length_m,
+            x.capacitance_f,
+            x.current_a,
+            x.power_w,
+            x.leakage_w,
+            opt(x.alpha_rad),
+            opt(x.reference),
+            x.sensed_contraction
+        );
+    }
+    s
+}
+
+/// Write `stroke.svg`, `electrical.svg` and `index.md` into `dir`.
+pub fn write(o: &Outcome, dir: &Path) -> Result<PathBuf> {
+    let pts = |f: &dyn Fn(&crate::sim::Sample) -> f64| -> Vec<(f64, f64)> {
+        o.samples.iter().map(|s| (s.time_s, f(s))).collect()
+    };
+    Chart {
+        title: format!("{}: stroke", o.scene),
+        x_label: "time (s)".into(),
+        y_label: "contraction (mm)".into(),
+        series: vec![Series {
+            label: "stroke".into(),
+            points: pts(&|s| (o.rest_length_m - s.length_m) * 1e3),
+            color: 0,
+            style: Style::Line,
+        }],
+        log_x: false,
+    }
+    .write_svg(&dir.join("stroke.svg"))?;
+    Chart {
+        title: format!("{}: voltage", o.scene),
+        x_label: "time (s)".into(),
+        y_label: "voltage (kV)".into(),
+        series: vec![
+            Series {
+                label: "terminal".into(),
+                points: pts(&|s| s.voltage_v * 1e-3),
+                color: 1,
+                style: Style::Line,
+            },
+            Series {
+                label: "input".into(),
+                points: pts(&|s| s.input_v * 1e-3),
+                color: 2,
+                style: Style::Dashed,
+            },
+        ],
+        log_x: false,
+    }
+    .write_svg(&dir.join("voltage.svg"))?;
+    Chart {
+        title: format!("{}: power", o.scene),
+        x_label: "time (s)".into(),
+        y_label: "power (W)".into(),
+        series: vec![
+            Series {
+                label: "total V·I".into(),
+                points: pts(&|s| s.power_w),
+                color: 3,
+                style: Style::Line,
+            },
+            Series {
+                label: "leakage".into(),
+                points: pts(&|s| s.leakage_w),
+                color: 4,
+                style: Style::Dashed,
+            },
+        ],
+        log_x: false,
+    }
+    .write_svg(&dir.join("power.svg"))?;
+    let x = o.extremes();
+    let mut md = String::new();
+    let _ = writeln!(md, "# Simulation: {}\n", o.scene);
+    let _ = writeln!(
+        md,
+        "- fidelity: **{}** — {}",
+        o.fidelity.model, o.fidelity.reason
+    );
+    for a in &o.fidelity.arms {
+        let _ = writeln!(md, "  - {a}");
+    }
+    let _ = writeln!(
+        md,
+        "- axial mode: {} , ζ = {:.3e}, Q = {:.3e}",
+        si(o.mode.frequency_hz, "Hz"),
+        o.mode.damping_ratio,
+        o.mode.q_factor
+    );
+    let i = &o.integrator;
+    let _ = writeln!(
+        md,
+        "- integrator: {:?} (rtol {:.0e}; {}): {} steps, {} rejected, {} restarts, {} f-evals — {}",
+        i.method,
+        i.rtol,
+        i.reason,
+        i.stats.steps,
+        i.stats.rejected,
+        i.stats.restarts,
+        i.stats.rhs_evals,
+        i.message
+    );
+    let _ = writeln!(
+        md,
+        "- stretch {:.6} … {:.6} (rest {:.6}); max current {}, max power {} (leakage up to {})",
+        x.stretch_min,
+        x.stretch_max,
+        o.rest_stretch,
+        si(x.current_max_a, "A"),
+        si(x.power_max_w, "W"),
+        si(x.leakage_max_w, "W")
+    );
+    for e in &o.events {
+        let _ = writeln!(
+            md,
+            "- **{}** at t = {:.6} s, V = {}, λ = {:.5}",
+            e.kind,
+            e.time_s,
+            si(e.voltage_v, "V"),
+            e.stretch
+        );
+    }
+    let en = &o.energy;
+    let _ = writeln!(
+        md,
+        "- energy: in {} = field {} + elastic {} + arms {} + kinetic {} + load {} + viscous {} + leakage {} + source {} (residual {})",
+        si(en.input_j, "J"), si(en.field_j, "J"), si(en.elastic_j, "J"), si(en.arms_j, "J"),
+        si(en.kinetic_j, "J"), si(en.load_j, "J"), si(en.viscous_j, "J"), si(en.leakage_j, "J"),
+        si(en.source_j, "J"), si(en.residual_j, "J")
+    );
+    if let Some(r) = o.tracking_rmse_pct {
+        let _ = writeln!(md, "- tracking %RMSE (Eq. 3.28): {r:.2} %");
+    }
+    for w in &o.warnings {
+        let _ = writeln!(md, "- warning: {w}");
+    }
+    let _ = writeln!(
+        md,
+        "\n![stroke](stroke.svg)\n![voltage](voltage.svg)\n![power](power.svg)"
+    );
+    let page = dir.join("index.md");
+    atomic_write(&page, md.as_bytes())?;
+    Ok(page)
+}

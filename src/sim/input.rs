@@ -1,0 +1,235 @@
+//! Input waveforms: step, ramp, triangle, sine, piecewise-linear (from CSV) and sums.
+//!
+//! A waveform is plain data; [`Waveform::eval`] returns the value and its time
+//! derivative, [`Waveform::kinks`] the times where either is discontinuous (the
+//! integrator restarts there).
+
+use std::f64::consts::PI;
+
+/// One term of an input signal (SI units: V for voltages, 1 for a PID reference).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Term {
+    /// `amplitude` from time `at` on (0 before).
+    Step {
+        /// Switching time (s).
+        at: f64,
+        /// Level after the step.
+        amplitude: f64,
+    },
+    /// Linear from `from` at `start` to `to` at `end`; constant outside.
+    Ramp {
+        /// Start time (s).
+        start: f64,
+        /// End time (s).
+        end: f64,
+        /// Level before and at `start`.
+        from: f64,
+        /// Level at and after `end`.
+        to: f64,
+    },
+    /// Symmetric triangle between `offset` and `offset + amplitude`, starting at its
+    /// low point at `start`, for `cycles` periods (then back at `offset`).
+    Triangle {
+        /// Start time (s).
+        start: f64,
+        /// Peak-to-valley height.
+        amplitude: f64,
+        /// Frequency (Hz).
+        frequency: f64,
+        /// Number of periods (peaks).
+        cycles: f64,
+        /// Base level.
+        offset: f64,
+    },
+    /// `offset + amplitude·sin(2πf(t − start) + phase)` for t ≥ start, for `cycles`
+    /// periods (infinite if None); holds its first value before and its last after.
+    Sine {
+        /// Start time (s).
+        start: f64,
+        /// Amplitude.
+        amplitude: f64,
+        /// Frequency (Hz).
+        frequency: f64,
+        /// Phase (rad).
+        phase: f64,
+        /// Mean level.
+        offset: f64,
+        /// Number of periods, or unlimited.
+        cycles: Option<f64>,
+    },
+    /// Piecewise linear through (t, value) points (sorted, constant outside).
+    Pwl {
+        /// Points (s, value).
+        points: Vec<(f64, f64)>,
+    },
+}
+
+/// A sum of terms.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Waveform {
+    /// The terms, summed.
+    pub terms: Vec<Term>,
+}
+
+impl Term {
+    /// Value and time derivative at `t` (right-continuous at kinks).
+    pub fn eval(&self, t: f64) -> (f64, f64) {
+        match *self {
+            Term::Step { at, amplitude } => (if t >= at { amplitude } else { 0.0 }, 0.0),
+            Term::Ramp {
+                start,
+                end,
+                from,
+                to,
+            } => {
+                if t < start {
+                    (from, 0.0)
+                } else if t >= end {
+                    (to, 0.0)
+                } else {
+                    let r = (to - from) / (end - start);
+                    (from + r * (t - start), r)
+                }
+            }
+            Term::Triangle {
+                start,
+                amplitude,
+                frequency,
+                cycles,
+                offset,
+            } => {
+                let s = (t - start) * frequency;
+                if s < 0.0 || s >= cycles {
+                    return (offset, 0.0);
+                }
+                let ph = s - s.floor();
+                let r = 2.0 * amplitude * frequency;
+                if ph < 0.5 {
+                    (offset + 2.0 * amplitude * ph, r)
+                } else {
+                    (offset + 2.0 * amplitude * (1.0 - ph), -r)
+                }
+            }
+            Term::Sine {
+                start,
+                amplitude,
+                frequency,
+                phase,
+                offset,
+                cycles,
+            } => {
+                let s = (t - start) * frequency;
+                let w = 2.0 * PI * frequency;
+                if s < 0.0 {
+                    return (offset + amplitude * phase.sin(), 0.0);
+                }
+                if let Some(c) = cycles.filter(|&c| s >= c) {
+                    return (offset + amplitude * (2.0 * PI * c + phase).sin(), 0.0);
+                }
+                let a = w * (t - start) + phase;
+                (offset + amplitude * a.sin(), amplitude * w * a.cos())
+            }
+            Term::Pwl { ref points } => {
+                let i = points.partition_point(|p| p.0 <= t);
+                if i == 0 {
+                    (points[0].1, 0.0)
+                } else if i == points.len() {
+                    (points[i - 1].1, 0.0)
+                } else {
+                    let (a, b) = (points[i - 1], points[i]);
+                    let r = (b.1 - a.1) / (b.0 - a.0);
+                    (a.1 + r * (t - a.0), r)
+                }
+            }
+        }
+    }
+
+    /// Times where the value or its derivative jumps.
+    pub fn kinks(&self) -> Vec<f64> {
+        match *self {
+            Term::Step { at, .. } => vec![at],
+            Term::Ramp { start, end, .. } => vec![start, end],
+            Term::Triangle {
+                start,
+                frequency,
+                cycles,
+                ..
+            } => {
+                let n = (2.0 * cycles).ceil() as usize;
+                let mut k: Vec<f64> = (0..=n)
+                    .map(|i| start + 0.5 * i as f64 / frequency)
+                    .collect();
+                k.push(start + cycles / frequency);
+                k
+            }
+            Term::Sine {
+                start,
+                frequency,
+                cycles,
+                ..
+            } => match cycles {
+                Some(c) => vec![start, start + c / frequency],
+                None => vec![start],
+            },
+            Term::Pwl { ref points } => points.iter().map(|p| p.0).collect(),
+        }
+    }
+
+    /// The shortest time scale of the term (s): ramp duration, quarter period,
+    /// shortest PWL segment; zero for a step (a jump).
+    pub fn time_scale(&self) -> f64 {
+        match *self {
+            Term::Step { .. } => 0.0,
+            Term::Ramp { start, end, .. } => end - start,
+            Term::Triangle { frequency, .. } => 0.5 / frequency,
+            Term::Sine { frequency, .. } => 1.0 / (2.0 * PI * frequency),
+            Term::Pwl { ref points } => points
+                .windows(2)
+                .map(|w| w[1].0 - w[0].0)
+                .fold(f64::INFINITY, f64::min),
+        }
+    }
+}
+
+impl Waveform {
+    /// Value and derivative of the sum at `t`.
+    #[inline]
+    pub fn eval(&self, t: f64) -> (f64, f64) {
+        self.terms.iter().fold((0.0, 0.0), |(v, d), term| {
+            let (a, b) = term.eval(t);
+            (v + a, d + b)
+        })
+    }
+
+    /// Sorted, deduplicated kink times strictly inside (t0, t1).
+    pub fn kinks(&self, t0: f64, t1: f64) -> Vec<f64> {
+        let tol = 1e-12 * (t1 - t0).abs().max(1e-300);
+        let mut k: Vec<f64> = self
+            .terms
+            .iter()
+            .flat_map(|t| t.kinks())
+            .filter(|&x| x > t0 + tol && x < t1 - tol)
+            .collect();
+        k.sort_by(f64::total_cmp);
+        k.dedup_by(|a, b| (*a - *b).abs() <= tol);
+        k
+    }
+
+    /// Shortest time scale over the terms (0 if any term jumps).
+    pub fn time_scale(&self) -> f64 {
+        self.terms
+            .iter()
+            .map(Term::time_scale)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Largest absolute value, sampled at the kinks and densely in between.
+    pub fn max_abs(&self, t0: f64, t1: f64) -> f64 {
+        let n = 20_000;
+        (0..=n)
+            .map(|i| t0 + (t1 - t0) * i as f64 / n as f64)
+            .chain(self.kinks(t0, t1))
+            .map(|t| self.eval(t).0.abs())
+            .fold(0.0, f64::max)
+    }
+}

@@ -1,0 +1,460 @@
+//! Forward simulation of stacked (seed Chapter 3) and helical (Chapter 4) dielectric
+//! elastomer actuators.
+//!
+//! ```text
+//! scene.toml ──scene::Scene::read (units → SI, validation)──► Scene (Send + Sync)
+//! Scene ──fidelity::choose──► Fidelity ──plant::Plant──► ODE ──integrate──► Outcome
+//! Plant ──static_curve──► static V(λ) and pull-in
+//! ```
+//! [`simulate`] is a pure function of the scene: identification can run many scenes
+//! in parallel (rayon) and re-run one with changed `scene.material.params`.
+
+pub mod fidelity;
+pub mod helix;
+pub mod input;
+pub mod integrate;
+pub mod plant;
+pub mod presets;
+pub mod scene;
+pub mod stack;
+pub mod static_curve;
+
+use fidelity::{AxialMode, Fidelity};
+use integrate::{End, Method, Options, Stats, Workspace};
+use plant::Plant;
+use scene::{Actuator, Scene, Source};
+use serde::Serialize;
+
+/// One output sample.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Sample {
+    /// Time (s).
+    pub time_s: f64,
+    /// Input (open-circuit source) voltage (V).
+    pub input_v: f64,
+    /// Terminal voltage (V).
+    pub voltage_v: f64,
+    /// Thickness stretch λ.
+    pub stretch: f64,
+    /// Actuator length (m).
+    pub length_m: f64,
+    /// Capacitance (F).
+    pub capacitance_f: f64,
+    /// Current into the actuator incl. dC/dt·V and leakage (A).
+    pub current_a: f64,
+    /// Electrical power V·I (W).
+    pub power_w: f64,
+    /// Leakage part of the power (W).
+    pub leakage_w: f64,
+    /// Helix complementary angle α (rad); NaN for a stack.
+    pub alpha_rad: f64,
+    /// Reference contraction of a closed loop (NaN without one).
+    pub reference: f64,
+    /// Contraction sensed from the capacitance (1 − sqrt(C_rest/C)).
+    pub sensed_contraction: f64,
+}
+
+/// An event during the run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Event {
+    /// `pull_in`.
+    pub kind: String,
+    /// Time (s).
+    pub time_s: f64,
+    /// Terminal voltage (V).
+    #[serde(rename = "voltage_V")]
+    pub voltage_v: f64,
+    /// Stretch.
+    pub stretch: f64,
+}
+
+/// Energy bookkeeping (J) from t = 0 to the end of the run.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Energy {
+    /// Electrical work delivered by the source.
+    pub input_j: f64,
+    /// Electrostatic energy ½CV² at the end minus at the start.
+    pub field_j: f64,
+    /// Hyperelastic energy change.
+    pub elastic_j: f64,
+    /// Energy stored in Maxwell arm springs (and frozen springs).
+    pub arms_j: f64,
+    /// Kinetic energy at the end.
+    pub kinetic_j: f64,
+    /// Work done against the load (F_load·ΔZ shortening).
+    pub load_j: f64,
+    /// Dissipated in dashpots.
+    pub viscous_j: f64,
+    /// Dissipated by leakage.
+    pub leakage_j: f64,
+    /// Dissipated in the source (resistance, ideal-step charging).
+    pub source_j: f64,
+    /// input − everything else.
+    pub residual_j: f64,
+}
+
+/// Status of a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RunStatus {
+    /// Reached the end time.
+    Completed,
+    /// Stopped at pull-in.
+    PullIn,
+    /// The integrator failed.
+    Failed,
+}
+
+/// Integrator report.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct IntegratorReport {
+    /// Method.
+    pub method: Method,
+    /// Why it was chosen.
+    pub reason: String,
+    /// Relative tolerance.
+    pub rtol: f64,
+    /// Counts.
+    pub stats: Stats,
+    /// Status.
+    pub status: RunStatus,
+    /// Reason of the status.
+    pub message: String,
+}
+
+/// Result of [`simulate`].
+#[derive(Debug, Clone, Serialize)]
+pub struct Outcome {
+    /// Scene name.
+    pub scene: String,
+    /// What model ran.
+    pub fidelity: Fidelity,
+    /// Axial mode about the rest state.
+    pub mode: AxialMode,
+    /// Events (pull-in).
+    pub events: Vec<Event>,
+    /// Integrator report.
+    pub integrator: IntegratorReport,
+    /// Energy balance.
+    pub energy: Energy,
+    /// Rest stretch under the load.
+    pub rest_stretch: f64,
+    /// Rest length (m).
+    pub rest_length_m: f64,
+    /// Closed loop: %RMSE of the true contraction against the reference, normalised
+    /// by the reference's range (seed Eq. 3.28).
+    pub tracking_rmse_pct: Option<f64>,
+    /// Warnings (extrapolated material model, undetermined damping, ...).
+    pub warnings: Vec<String>,
+    /// Samples (not in the JSON summary).
+    #[serde(skip)]
+    pub samples: Vec<Sample>,
+}
+
+/// Run settings that are not part of the scene.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct RunOptions {
+    /// Override the scene's integrator.
+    pub method: Option<Method>,
+    /// Override the scene's relative tolerance.
+    pub rtol: Option<f64>,
+    /// Fixed step (convergence tests only).
+    pub fixed_step: Option<f64>,
+}
+
+fn sample(p: &Plant, t: f64, y: &[f64]) -> Sample {
+    let ld = p.lam_dot(t, y);
+    let e = p.electrical(t, y, ld);
+    Sample {
+        time_s: t,
+        input_v: e.u,
+        voltage_v: e.voltage,
+        stretch: y[0],
+        length_m: p.length(y[0]),
+        capacitance_f: e.capacitance,
+        current_a: e.current,
+        power_w: e.voltage * e.current,
+        leakage_w: e.leakage,
+        alpha_rad: match p.actuator {
+            Actuator::Helix(h) => h.alpha(y[0]),
+            Actuator::Stack(_) => f64::NAN,
+        },
+        reference: p
+            .control
+            .as_ref()
+            .map(|c| c.reference.eval(t).0)
+            .unwrap_or(f64::NAN),
+        sensed_contraction: p.sensed_contraction(y[0]),
+    }
+}
+
+/// Hyperelastic energy Vol·∫P dλ from a to b (20-point composite Gauss–Legendre).
+fn elastic_energy(p: &Plant, a: f64, b: f64) -> f64 {
+    const X: [f64; 3] = [-0.774_596_669_241_483_4, 0.0, 0.774_596_669_241_483_4];
+    const W: [f64; 3] = [5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0];
+    let n = 200;
+    let h = (b - a) / n as f64;
+    let mut s = 0.0;
+    for i in 0..n {
+        let m = a + (i as f64 + 0.5) * h;
+        for k in 0..3 {
+            s += W[k] * p.stress(m + 0.5 * h * X[k]);
+        }
+    }
+    p.vol * s * 0.5 * h
+}
+
+/// Simulate a scene.
+pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
+    let fid = fidelity::choose(scene)?;
+    let p = Plant::new(scene, fid.inertia, &fid.keep);
+    let full = Plant::new(scene, true, &vec![true; scene.material.viscous.arms.len()]);
+    let mode = fidelity::axial_mode(&full);
+    let rtol = opts.rtol.unwrap_or(scene.time.rtol);
+    let (method, mreason) = match opts.method.or(scene.time.method) {
+        Some(m) => (m, "requested".to_string()),
+        None if p.inertia && mode.damping_ratio < 0.3 => (
+            Method::Dp54,
+            "auto: lightly damped oscillation, explicit Dormand–Prince".into(),
+        ),
+        None => (
+            Method::TrBdf2,
+            "auto: damped/stiff, L-stable TR-BDF2".into(),
+        ),
+    };
+    let span = scene.time.span;
+    let v_max = match &scene.control {
+        Some(pid) => pid.v_max,
+        None => scene.input.max_abs(0.0, span),
+    };
+    let o = Options {
+        rtol,
+        atol: scene.time.atol * rtol / scene.time.rtol,
+        h_max: span / 10.0,
+        max_steps: 20_000_000,
+        fixed_step: opts.fixed_step,
+    };
+    let scale = p.scales(v_max);
+    let mut y = p.initial_state();
+    let l = p.layout();
+    let mut w = Workspace::new(l.n);
+    let mut stats = Stats::default();
+    let mut samples = Vec::with_capacity(scene.time.samples.len() + 1);
+    samples.push(sample(&p, 0.0, &y));
+    let mut kinks = match &scene.control {
+        Some(pid) => pid.reference.kinks(0.0, span),
+        None => scene.input.kinks(0.0, span),
+    };
+    kinks.dedup();
+    let mut bounds = vec![0.0];
+    bounds.extend(kinks.iter().copied());
+    bounds.push(span);
+    let e_scale = p.vol * p.tangent(p.lam0).abs().max(1.0);
+    let event = |t: f64, y: &[f64]| {
+        let v = p.electrical(t, y, 0.0).voltage;
+        p.instant_stiffness(y[0], v) / e_scale
+    };
+    let (c0, _, _) = p.capacitance(y[0]);
+    let v_start = p.electrical(0.0, &y, 0.0).voltage;
+    let mut status = RunStatus::Completed;
+    let mut message = "reached the end time".to_string();
+    let mut events = Vec::new();
+    let mut t_end = span;
+    let all_samples = &scene.time.samples;
+    let mut si = 0;
+    for (k, win) in bounds.windows(2).enumerate() {
+        let (a, b) = (win[0], win[1]);
+        if k > 0 {
+            stats.restarts += 1;
+            if let Source::Ideal = scene.source {
+                // an ideal source jumping by ΔV charges C through zero resistance:
+                // it delivers V⁺·C·ΔV, of which ½C·ΔV² is lost in the wiring
+                let vm = scene.input.eval(a - 1e-12 * span.max(1.0)).0;
+                let vp = scene.input.eval(a).0;
+                let (c, _, _) = p.capacitance(y[0]);
+                if (vp - vm).abs() > 0.0 {
+                    y[l.quad] += vp * c * (vp - vm);
+                    y[l.quad + 3] += 0.5 * c * (vp - vm).powi(2);
+                }
+            }
+        } else if let Source::Ideal = scene.source {
+            let v0 = scene.input.eval(0.0).0;
+            y[l.quad] += v0 * c0 * v0;
+            y[l.quad + 3] += 0.5 * c0 * v0 * v0;
+        }
+        let s_end = all_samples[si..].partition_point(|&t| t <= b) + si;
+        let seg_samples = &all_samples[si..s_end];
+        si = s_end;
+        let mut out = |t: f64, y: &[f64]| samples.push(sample(&p, t, y));
+        let end = integrate::segment(
+            &p,
+            method,
+            &o,
+            &scale,
+            &mut w,
+            &mut stats,
+            a,
+            b,
+            &mut y,
+            seg_samples,
+            &mut out,
+            Some(&event),
+        );
+        match end {
+            End::Done => {}
+            End::Event(te) => {
+                let v = p.electrical(te, &y, 0.0).voltage;
+                events.push(Event {
+                    kind: "pull_in".into(),
+                    time_s: te,
+                    voltage_v: v,
+                    stretch: y[0],
+                });
+                samples.push(sample(&p, te, &y));
+                status = RunStatus::PullIn;
+                message = format!("pull-in at t = {te:.6} s: the instantaneous stiffness vanished");
+                t_end = te;
+                break;
+            }
+            End::Failed(why) => {
+                status = RunStatus::Failed;
+                message = why.to_string();
+                t_end = samples.last().map(|s| s.time_s).unwrap_or(a);
+                break;
+            }
+        }
+    }
+    // energy balance
+    let e = p.electrical(t_end, &y, p.lam_dot(t_end, &y));
+    let kinetic = l.v.map(|i| 0.5 * p.mass * y[i] * y[i]).unwrap_or(0.0);
+    let arms_j: f64 = p
+        .arms
+        .iter()
+        .enumerate()
+        .map(|(j, &(k, _))| p.vol * y[l.sig + j].powi(2) / (2.0 * k))
+        .sum::<f64>()
+        + p.vol * 0.5 * p.frozen_k * (y[0] - p.lam_f).powi(2);
+    let field = 0.5 * e.capacitance * e.voltage.powi(2) - 0.5 * c0 * v_start * v_start;
+    let elastic = elastic_energy(&p, p.lam0, y[0]);
+    let load = -p.f_load * p.l0 * (y[0] - p.lam0);
+    let q = l.quad;
+    let mut energy = Energy {
+        input_j: y[q],
+        field_j: field + 0.5 * c0 * v_start * v_start,
+        elastic_j: elastic,
+        arms_j,
+        kinetic_j: kinetic,
+        load_j: load,
+        viscous_j: y[q + 1],
+        leakage_j: y[q + 2],
+        source_j: y[q + 3],
+        residual_j: 0.0,
+    };
+    energy.residual_j = energy.input_j
+        - energy.field_j
+        - energy.elastic_j
+        - energy.arms_j
+        - energy.kinetic_j
+        - energy.load_j
+        - energy.viscous_j
+        - energy.leakage_j
+        - energy.source_j;
+    let mut warnings = Vec::new();
+    if let Some(fit) = &scene.material.fit {
+        let (lo, hi) = samples
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| {
+                (a.min(s.stretch), b.max(s.stretch))
+            });
+        for lam in [lo, hi] {
+            if let Some(wr) = fit.range_warning(p.mode, lam) {
+                warnings.push(wr);
+            }
+        }
+        warnings.dedup();
+    }
+    if mode.damping_ratio < 0.05 && mode.dashpot_share < 0.5 {
+        warnings.push(format!(
+            "the axial mode ({:.0} Hz) is damped only by Maxwell arms far above their relaxation frequencies (ζ = {:.1e}, Q = {:.0}); relaxation tests do not pin this damping down, so ringing after fast inputs depends on a number the data do not determine",
+            mode.frequency_hz, mode.damping_ratio, mode.q_factor
+        ));
+    }
+    if matches!(scene.source, Source::Ideal) && scene.input.time_scale() == 0.0 {
+        warnings.push("ideal voltage step: a real supply has a finite rise time (give source.rise_time or source.resistance_ohm)".into());
+    }
+    let tracking_rmse_pct = scene.control.as_ref().map(|_| {
+        let rest = p.length(p.lam0);
+        let (mut ss, mut lo, mut hi) = (0.0, f64::INFINITY, f64::NEG_INFINITY);
+        for s in &samples {
+            let y = 1.0 - s.length_m / rest;
+            ss += (y - s.reference).powi(2);
+            lo = lo.min(s.reference);
+            hi = hi.max(s.reference);
+        }
+        100.0 * (ss / samples.len() as f64).sqrt() / (hi - lo)
+    });
+    Ok(Outcome {
+        tracking_rmse_pct,
+        scene: scene.name.clone(),
+        fidelity: fid,
+        mode,
+        events,
+        integrator: IntegratorReport {
+            method,
+            reason: mreason,
+            rtol,
+            stats,
+            status,
+            message,
+        },
+        energy,
+        rest_stretch: p.lam0,
+        rest_length_m: p.length(p.lam0),
+        warnings,
+        samples,
+    })
+}
+
+/// The plant a scene runs with (full model, all arms, with inertia).
+pub fn full_plant(scene: &Scene) -> Plant {
+    Plant::new(scene, true, &vec![true; scene.material.viscous.arms.len()])
+}
+
+impl Outcome {
+    /// Largest and smallest sampled values: (stretch min, stretch max, |current| max, power max).
+    pub fn extremes(&self) -> Extremes {
+        let mut x = Extremes {
+            stretch_min: f64::INFINITY,
+            stretch_max: f64::NEG_INFINITY,
+            current_max_a: 0.0,
+            power_max_w: f64::NEG_INFINITY,
+            leakage_max_w: 0.0,
+        };
+        for s in &self.samples {
+            x.stretch_min = x.stretch_min.min(s.stretch);
+            x.stretch_max = x.stretch_max.max(s.stretch);
+            x.current_max_a = x.current_max_a.max(s.current_a.abs());
+            x.power_max_w = x.power_max_w.max(s.power_w);
+            x.leakage_max_w = x.leakage_max_w.max(s.leakage_w);
+        }
+        x
+    }
+}
+
+/// Extreme sampled values.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Extremes {
+    /// Smallest stretch.
+    pub stretch_min: f64,
+    /// Largest stretch.
+    pub stretch_max: f64,
+    /// Largest |current| (A).
+    #[serde(rename = "current_max_A")]
+    pub current_max_a: f64,
+    /// Largest power (W).
+    #[serde(rename = "power_max_W")]
+    pub power_max_w: f64,
+    /// Largest leakage power (W).
+    #[serde(rename = "leakage_max_W")]
+    pub leakage_max_w: f64,
+}

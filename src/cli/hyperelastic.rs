@@ -246,7 +246,7 @@ pub fn summary(fit: &HyperelasticFit) -> String {
                         .map(|v| format!("{v:.2}"))
                         .unwrap_or("n/a".into()),
                     format!("{:.2}", c.bic),
-                    format!("{:?}", c.status),
+                    c.status.to_string(),
                 ]
             })
             .collect();
@@ -319,7 +319,7 @@ pub fn summary(fit: &HyperelasticFit) -> String {
         fit.solver.seconds * 1e3,
         fit.solver.termination
     ));
-    s.push_str(&format!("status: {:?}\n", fit.status).to_lowercase());
+    s.push_str(&format!("status: {}\n", fit.status));
     for w in &fit.warnings {
         s.push_str(&format!("warning: {w}\n"));
     }

@@ -399,7 +399,7 @@ pub fn summary(fit: &RelaxationFit) -> String {
         fit.solver.seconds * 1e3,
         fit.solver.termination
     ));
-    s.push_str(&format!("status: {:?}\n", fit.status).to_lowercase());
+    s.push_str(&format!("status: {}\n", fit.status));
     for w in &fit.warnings {
         s.push_str(&format!("warning: {w}\n"));
     }

@@ -45,6 +45,19 @@ pub enum Status {
     NotConverged,
 }
 
+impl std::fmt::Display for Status {
+    /// The same name the JSON uses (`ok`, `warning`, `ill_posed`, `unstable`, `not_converged`).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Status::Ok => "ok",
+            Status::Warning => "warning",
+            Status::IllPosed => "ill_posed",
+            Status::Unstable => "unstable",
+            Status::NotConverged => "not_converged",
+        })
+    }
+}
+
 impl Status {
     /// Statuses that `--strict` turns into exit status 1.
     pub fn is_blocking(self) -> bool {

@@ -123,7 +123,7 @@ pub fn markdown(fit: &HyperelasticFit) -> String {
         })
         .collect();
     let _ = writeln!(s, "Data: {}\n", files.join(", "));
-    let _ = writeln!(s, "Status: **{:?}**\n", fit.status);
+    let _ = writeln!(s, "Status: **{}**\n", fit.status);
     let _ = writeln!(
         s,
         "![data and model](fit.svg)\n\n![residuals](residuals.svg)\n"
@@ -191,7 +191,7 @@ pub fn markdown(fit: &HyperelasticFit) -> String {
                     c.delta_aicc
                         .map(|v| format!("{v:.2}"))
                         .unwrap_or("n/a".into()),
-                    format!("{:?}", c.status),
+                    c.status.to_string(),
                 ]
             })
             .collect();

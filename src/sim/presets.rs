@@ -1,73 +1,64 @@
-//! The seed's material presets needed by the shipped scenes, in ONE place.
-//!
-//! **Merge note:** the viscous sets below are plain data for the simulator. They will
-//! be replaced by the `material::viscoelastic` presets (Prony series / Kelvin-Maxwell
-//! arms, written on another branch) when the branches are merged; nothing else in
-//! `sim` defines viscoelastic constants.
+//! The seed's material presets used by scenes. The viscoelastic constants live in
+//! one place, [`crate::material::viscoelastic::preset`]; this module only turns them
+//! into the simulator's plain [`Viscous`] data and adds the hyperelastic spring.
 
 use super::scene::{Arm, Viscous};
+use crate::material::viscoelastic::{self, PRESET_NAMES};
 
 /// Yeoh constants of VHB4910 (seed Table 3.2 = Table 4.2): C10, C20, C30 in Pa.
 pub const VHB4910_YEOH_PA: [f64; 3] = [69.3e3, -888.0, 16.7];
 
-/// Reference modulus (Pa) that turns the normalised Prony fractions gi of Table 3.3
-/// into arm stiffnesses kj = gi·E_ref. 0.222 MPa is the value Table 4.2's kj imply
-/// (k1/g1 = 0.106116/0.478), ≈ Y0 of Table 3.4; the seed's text ("kj = gj in MPa")
-/// would give moduli larger than the material's own (see `docs/scenes.md`).
-pub const TABLE_3_3_REFERENCE_MODULUS_PA: f64 = 0.222e6;
+/// Names accepted by `viscous = { preset = ... }`: the viscoelastic presets and
+/// `elastic` (no dashpot, no arms).
+pub fn viscous_preset_names() -> Vec<&'static str> {
+    PRESET_NAMES.iter().copied().chain(["elastic"]).collect()
+}
 
-/// Table 3.3 (Wissler & Mazza 2007): (τi in s, gi dimensionless), Nv = 0.
-pub const TABLE_3_3_PRONY: [(f64, f64); 4] = [
-    (0.153, 0.478),
-    (0.464, 0.205),
-    (32.021, 0.0727),
-    (215.85, 0.0492),
-];
-
-/// Table 4.2 (hand-tuned by the seed's author): (kj in Pa, nj in Pa·s).
-pub const TABLE_4_2_ARMS: [(f64, f64); 4] = [
-    (0.106116e6, 0.033966e6),
-    (0.045510e6, 0.103008e6),
-    (0.016139e6, 7.108662e6),
-    (0.010922e6, 47.91e6),
-];
-
-/// Table 4.2 Kelvin-Voigt dashpot Nv = 1875e-6 MPa·s.
-pub const TABLE_4_2_NV_PA_S: f64 = 1875.0;
-
-/// Names accepted by `viscous = { preset = ... }`.
-pub const VISCOUS_PRESETS: [&str; 3] = ["seed-table-3.3", "seed-table-4.2", "elastic"];
-
-/// A named viscous preset, or `None` if the name is unknown.
+/// A named viscous preset, or `None` if the name is unknown. Table 3.3's normalised
+/// gi become arms kj = gi·0.222 MPa with nj = kj·τj, Nv = 0; Table 4.2's arms and
+/// Nv are taken as printed (see `material::viscoelastic::preset`).
 pub fn viscous(name: &str) -> Option<Viscous> {
-    match name {
-        "seed-table-3.3" | "wissler-mazza-2007" => Some(Viscous {
-            nv_pa_s: 0.0,
-            arms: TABLE_3_3_PRONY
-                .iter()
-                .map(|&(tau, g)| {
-                    let k = g * TABLE_3_3_REFERENCE_MODULUS_PA;
-                    Arm {
-                        k_pa: k,
-                        eta_pa_s: k * tau,
-                    }
-                })
-                .collect(),
-        }),
-        "seed-table-4.2" => Some(Viscous {
-            nv_pa_s: TABLE_4_2_NV_PA_S,
-            arms: TABLE_4_2_ARMS
-                .iter()
-                .map(|&(k, n)| Arm {
-                    k_pa: k,
-                    eta_pa_s: n,
-                })
-                .collect(),
-        }),
-        "elastic" => Some(Viscous {
+    let name = if name == "wissler-mazza-2007" {
+        "seed-table-3.3"
+    } else {
+        name
+    };
+    if name == "elastic" {
+        return Some(Viscous {
             nv_pa_s: 0.0,
             arms: Vec::new(),
-        }),
-        _ => None,
+        });
+    }
+    let km = viscoelastic::preset(name).ok()?.kelvin_maxwell;
+    Some(Viscous {
+        nv_pa_s: km.n_v,
+        arms: km
+            .arms
+            .iter()
+            .map(|a| Arm {
+                k_pa: a.k,
+                eta_pa_s: a.n,
+            })
+            .collect(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn table_presets_give_the_seed_arms() {
+        // Table 3.3: k1 = 0.478 × 0.222 MPa, n1 = k1 × 0.153 s.
+        let v = viscous("seed-table-3.3").unwrap();
+        assert_eq!(v.nv_pa_s, 0.0);
+        assert!((v.arms[0].k_pa - 0.478 * 0.222e6).abs() < 1e-6);
+        assert!((v.arms[0].eta_pa_s - 0.478 * 0.222e6 * 0.153).abs() < 1e-6);
+        // Table 4.2 as printed.
+        let v = viscous("seed-table-4.2").unwrap();
+        assert_eq!(v.nv_pa_s, 1875.0);
+        assert_eq!((v.arms[3].k_pa, v.arms[3].eta_pa_s), (0.010922e6, 47.91e6));
+        assert!(viscous("nonsense").is_none());
+        assert!(viscous_preset_names().contains(&"elastic"));
     }
 }

@@ -538,7 +538,10 @@ fn read_material(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<(Material, Opti
             if let Some(p) = c.string(v, vs, "preset")? {
                 presets::viscous(p).ok_or_else(|| {
                     c.err(format!("{vs}.preset: unknown '{p}'"))
-                        .with_hint(format!("known: {}", presets::VISCOUS_PRESETS.join(", ")))
+                        .with_hint(format!(
+                            "known: {}",
+                            presets::viscous_preset_names().join(", ")
+                        ))
                 })?
             } else {
                 let nv = c

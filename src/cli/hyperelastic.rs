@@ -1,11 +1,12 @@
 //! `dea-fit hyperelastic`: fit strain-energy coefficients to tensile-test files.
 
+use super::{finish, Finish};
 use clap::ValueEnum;
 use dea_fit::data::Dataset;
 use dea_fit::fit::hyperelastic::{self, HyperelasticFit, Settings};
 use dea_fit::fit::problem::Residual;
 use dea_fit::io::tensile::{self, TensileOptions};
-use dea_fit::io::write::{write_fit, Replaced};
+use dea_fit::io::write::write_fit;
 use dea_fit::material::hyperelastic::{Mode, ModelSpec, OgdenForm};
 use dea_fit::report::format::{si, table};
 use dea_fit::units::{parse_quantity, Dimension};
@@ -174,27 +175,14 @@ pub fn run(a: Args) -> Result<i32> {
             .unwrap_or_else(|| Path::new("reports").join(&name));
         Some(dea_fit::report::hyperelastic::write(&fit, &data, &dir)?)
     };
-    if a.json {
-        println!("{json}");
-    } else {
-        print!("{}", summary(&fit));
-        println!("fit: {}", out.display());
-        if let Some(r) = &report {
-            println!("report: {}", r.display());
-        }
-    }
-    if let Replaced::KeptAs(p) = &replaced {
-        eprintln!(
-            "note: {} held a different fit; it was kept as {}",
-            out.display(),
-            p.display()
-        );
-    }
-    Ok(if a.strict && fit.status.is_blocking() {
-        1
-    } else {
-        0
-    })
+    Ok(finish(Finish {
+        json: &json,
+        summary: (!a.json).then(|| summary(&fit)),
+        out: &out,
+        report: report.as_deref(),
+        replaced: &replaced,
+        exit_1: a.strict && fit.status.is_blocking(),
+    }))
 }
 
 /// Same model, parameters and inputs: the file holds this very fit.

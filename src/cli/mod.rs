@@ -55,3 +55,43 @@ pub fn run(cli: Cli) -> Result<i32> {
         Command::Static(a) => static_curve::run(a),
     }
 }
+
+/// What a fitting command has to tell at its end.
+pub struct Finish<'a> {
+    /// The fit as JSON (printed with `--json`).
+    json: &'a str,
+    /// The human summary (None with `--json`).
+    summary: Option<String>,
+    /// Where the fit file went.
+    out: &'a std::path::Path,
+    /// The report page, if one was written.
+    report: Option<&'a std::path::Path>,
+    /// What happened to an older fit file there.
+    replaced: &'a dea_fit::io::write::Replaced,
+    /// `--strict` and a blocking status.
+    exit_1: bool,
+}
+
+/// The common end of every fitting command: the summary (with where the fit and the
+/// report went) or the JSON on stdout, a note on stderr if an older, different fit
+/// was kept aside, and the exit status.
+fn finish(f: Finish) -> i32 {
+    match f.summary {
+        None => println!("{}", f.json),
+        Some(s) => {
+            print!("{s}");
+            println!("fit: {}", f.out.display());
+            if let Some(r) = f.report {
+                println!("report: {}", r.display());
+            }
+        }
+    }
+    if let dea_fit::io::write::Replaced::KeptAs(p) = f.replaced {
+        eprintln!(
+            "note: {} held a different fit; it was kept as {}",
+            f.out.display(),
+            p.display()
+        );
+    }
+    i32::from(f.exit_1)
+}

@@ -1,5 +1,6 @@
 //! `dea-fit relaxation`: Prony / Kelvin-Maxwell constants from a stress-relaxation curve.
 
+use super::{finish, Finish};
 use clap::ValueEnum;
 use dea_fit::fit::hyperelastic::HyperelasticFit;
 use dea_fit::fit::problem::Residual;
@@ -7,7 +8,7 @@ use dea_fit::fit::relaxation::{
     self, Criterion, FileRef, Loading, Method, QlvInput, RelaxationFit, Settings,
 };
 use dea_fit::io::relaxation::{self as reader, RelaxationOptions};
-use dea_fit::io::write::{write_fit, Replaced};
+use dea_fit::io::write::write_fit;
 use dea_fit::material::viscoelastic::{preset, Preset};
 use dea_fit::report::format::{si, table};
 use dea_fit::units::{parse_quantity, Dimension};
@@ -248,27 +249,14 @@ pub fn run(a: Args) -> Result<i32> {
             &dir,
         )?)
     };
-    if a.json {
-        println!("{json}");
-    } else {
-        print!("{}", summary(&fit));
-        println!("fit: {}", out.display());
-        if let Some(r) = &report {
-            println!("report: {}", r.display());
-        }
-    }
-    if let Replaced::KeptAs(p) = &replaced {
-        eprintln!(
-            "note: {} held a different fit; it was kept as {}",
-            out.display(),
-            p.display()
-        );
-    }
-    Ok(if a.strict && fit.status.is_blocking() {
-        1
-    } else {
-        0
-    })
+    Ok(finish(Finish {
+        json: &json,
+        summary: (!a.json).then(|| summary(&fit)),
+        out: &out,
+        report: report.as_deref(),
+        replaced: &replaced,
+        exit_1: a.strict && fit.status.is_blocking(),
+    }))
 }
 
 /// Same formulation, inputs and constants: the file holds this very fit.

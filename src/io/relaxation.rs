@@ -7,7 +7,7 @@
 //! (`strain`, `strain_pct` or `stretch`). Times must start at ≥ 0 (the start of
 //! loading) and increase strictly.
 
-use super::table::Table;
+use super::table::{split_header, Table};
 use crate::error::{Error, Location, Result};
 use crate::material::viscoelastic::{History, Prony, Schedule};
 use crate::units::Dimension;
@@ -59,44 +59,23 @@ pub struct RelaxationOptions {
 
 const ACCEPTED: &str = "time_s|ms|min|h, stress_Pa|kPa|MPa (or nominal_stress_…), force_N with --area, and optionally strain, strain_pct or stretch";
 
+/// Columns that take a `_unit` suffix.
+const COLUMNS: &[&str] = &[
+    "nominal_stress",
+    "true_stress",
+    "cauchy_stress",
+    "stress",
+    "force",
+    "time",
+    "strain",
+];
+
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Col {
     Time(f64),
     Stress(f64),
     Strain(f64),
     Stretch,
-}
-
-/// Split `stress_kPa`, `stress [kPa]`, `time (s)` into a lower-case name and a unit.
-fn split(h: &str) -> (String, Option<String>) {
-    let h = h.trim();
-    if let Some(open) = h.find(['[', '(']) {
-        let name = h[..open].trim().trim_end_matches('_');
-        let unit = h[open + 1..].trim_end_matches([']', ')']).trim();
-        return (
-            name.to_ascii_lowercase().replace(' ', "_"),
-            Some(unit.to_string()),
-        );
-    }
-    let lower = h.to_ascii_lowercase();
-    for name in [
-        "nominal_stress",
-        "true_stress",
-        "cauchy_stress",
-        "stress",
-        "force",
-        "time",
-        "strain",
-    ] {
-        if let Some(rest) = lower.strip_prefix(name).and_then(|r| r.strip_prefix('_')) {
-            let unit = &h[h.len() - rest.len()..];
-            return (
-                name.to_string(),
-                Some(unit.to_string()).filter(|u| !u.is_empty()),
-            );
-        }
-    }
-    (lower.replace(' ', "_"), None)
 }
 
 fn unit(table: &Table, c: usize, unit: Option<String>, dim: Dimension) -> Result<f64> {
@@ -131,7 +110,7 @@ pub fn from_table(table: &Table, opts: &RelaxationOptions) -> Result<RelaxationD
     let mut load = None;
     let mut conversions = Vec::new();
     for (c, h) in table.header.iter().enumerate() {
-        let (name, u) = split(h);
+        let (name, u) = split_header(h, COLUMNS);
         let col = match name.as_str() {
             "time" => Col::Time(unit(table, c, u, Dimension::Time)?),
             "stress" | "nominal_stress" | "engineering_stress" => {
@@ -402,6 +381,7 @@ mod tests {
 
     #[test]
     fn splits_headers() {
+        let split = |h| split_header(h, COLUMNS);
         assert_eq!(split("stress_kPa"), ("stress".into(), Some("kPa".into())));
         assert_eq!(split("Time [ms]"), ("time".into(), Some("ms".into())));
         assert_eq!(split("time_min"), ("time".into(), Some("min".into())));

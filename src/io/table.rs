@@ -231,3 +231,34 @@ fn field_count_hint(line: &str, delimiter: u8, too_many: bool) -> &'static str {
         _ => "every data line needs one value per header column",
     }
 }
+
+/// Split a header like `nominal_stress_kPa`, `stress [kPa]` or `time (s)` into a
+/// lower-case name and a unit. `names` are the column names that take a `_unit`
+/// suffix (`force_N`, but not `forces` or `timestamp`).
+pub fn split_header(h: &str, names: &[&str]) -> (String, Option<String>) {
+    let h = h.trim();
+    if let Some(open) = h.find(['[', '(']) {
+        let name = h[..open].trim().trim_end_matches('_');
+        let unit = h[open + 1..].trim_end_matches([']', ')']).trim();
+        return (
+            name.to_ascii_lowercase().replace(' ', "_"),
+            Some(unit.to_string()),
+        );
+    }
+    let lower = h.to_ascii_lowercase();
+    for &prefix in names {
+        // `force_N` or `force`, but not `forces` or `timestamp`.
+        match lower.strip_prefix(prefix) {
+            Some("") => return (prefix.to_string(), None),
+            Some(rest) if rest.starts_with('_') => {
+                let unit = &h[prefix.len() + 1..];
+                return (
+                    prefix.to_string(),
+                    (!unit.is_empty()).then(|| unit.to_string()),
+                );
+            }
+            _ => {}
+        }
+    }
+    (lower.replace(' ', "_"), None)
+}

@@ -7,7 +7,7 @@
 //! with a reference area), and optionally `weight`, `mode` and `time_<time>` (ignored).
 //! The mode comes from a `mode` column, a `# mode: …` comment, or the caller.
 
-use super::table::Table;
+use super::table::{split_header, Table};
 use crate::data::{Dataset, Sample, Source};
 use crate::error::{Error, Location, Result};
 use crate::material::hyperelastic::Mode;
@@ -41,42 +41,6 @@ enum Stress {
 }
 
 const ACCEPTED: &str = "stretch, strain, strain_pct, displacement_mm, nominal_stress_Pa|kPa|MPa, true_stress_Pa|kPa|MPa, force_N, weight, mode, time_s";
-
-/// Split a header like `nominal_stress_kPa`, `nominal_stress [kPa]` or `stress (MPa)`
-/// into a lower-case name and a unit.
-fn split_header(h: &str) -> (String, Option<String>) {
-    let h = h.trim();
-    if let Some(open) = h.find(['[', '(']) {
-        let name = h[..open].trim().trim_end_matches('_');
-        let unit = h[open + 1..].trim_end_matches([']', ')']).trim();
-        return (
-            name.to_ascii_lowercase().replace(' ', "_"),
-            Some(unit.to_string()),
-        );
-    }
-    let lower = h.to_ascii_lowercase();
-    for prefix in [
-        "nominal_stress",
-        "true_stress",
-        "force",
-        "displacement",
-        "time",
-    ] {
-        // `force_N` or `force`, but not `forces` or `timestamp`.
-        match lower.strip_prefix(prefix) {
-            Some("") => return (prefix.to_string(), None),
-            Some(rest) if rest.starts_with('_') => {
-                let unit = &h[prefix.len() + 1..];
-                return (
-                    prefix.to_string(),
-                    (!unit.is_empty()).then(|| unit.to_string()),
-                );
-            }
-            _ => {}
-        }
-    }
-    (lower.replace(' ', "_"), None)
-}
 
 fn unit_factor(
     table: &Table,
@@ -115,7 +79,16 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
     let mut mode_col = None;
     let mut conversions = Vec::new();
     for (c, h) in table.header.iter().enumerate() {
-        let (name, unit) = split_header(h);
+        let (name, unit) = split_header(
+            h,
+            &[
+                "nominal_stress",
+                "true_stress",
+                "force",
+                "displacement",
+                "time",
+            ],
+        );
         let k = match name.as_str() {
             "stretch" | "lambda" => Some(Kin::Stretch),
             "strain" => Some(Kin::Strain(match unit.as_deref() {

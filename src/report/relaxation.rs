@@ -228,22 +228,6 @@ pub fn markdown(fit: &RelaxationFit) -> String {
             table(&["N", "rel. RMSE", "Δ", "eligible"], &rows)
         );
     }
-    if !fit.warnings.is_empty() {
-        let _ = writeln!(s, "\n## Warnings\n");
-        for w in &fit.warnings {
-            let _ = writeln!(s, "- {w}");
-        }
-    }
-    let _ = writeln!(
-        s,
-        "\n## Solver\n\n{}; {} start(s), {} at the best objective; {} iterations, {} evaluations, {:.3} ms; {}.",
-        fit.solver.method,
-        fit.solver.starts,
-        fit.solver.starts_at_best,
-        fit.solver.iterations,
-        fit.solver.evaluations,
-        fit.solver.seconds * 1e3,
-        fit.solver.termination
-    );
+    s.push_str(&super::warnings_and_solver(&fit.warnings, &fit.solver));
     s
 }

@@ -1,17 +1,16 @@
 //! `dea-fit hyperelastic`: fit strain-energy coefficients to tensile-test files.
 
-use super::{finish, Finish};
+use super::Output;
 use clap::ValueEnum;
 use dea_fit::data::Dataset;
 use dea_fit::fit::hyperelastic::{self, HyperelasticFit, Settings};
 use dea_fit::fit::problem::Residual;
 use dea_fit::io::tensile::{self, TensileOptions};
-use dea_fit::io::write::write_fit;
 use dea_fit::material::hyperelastic::{Mode, ModelSpec, OgdenForm};
 use dea_fit::report::format::{si, table};
 use dea_fit::units::{parse_quantity, Dimension};
 use dea_fit::{Error, Result};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum Form {
@@ -55,21 +54,8 @@ pub struct Args {
     /// Gauge length for displacement columns, e.g. 80mm (bare number: m).
     #[arg(long)]
     gauge_length: Option<String>,
-    /// Fit file to write (default fits/<data>-<model>.json).
-    #[arg(long)]
-    out: Option<PathBuf>,
-    /// Report directory (default reports/<data>-<model>/).
-    #[arg(long)]
-    report: Option<PathBuf>,
-    /// Do not write a report.
-    #[arg(long)]
-    no_report: bool,
-    /// Print the fit as JSON on stdout (the fit file's object).
-    #[arg(long)]
-    json: bool,
-    /// Exit with status 1 when the fit is ill-posed, unstable or not converged.
-    #[arg(long)]
-    strict: bool,
+    #[command(flatten)]
+    output: Output,
     /// Use at most N multi-start points (default: all).
     #[arg(long, value_name = "N")]
     max_starts: Option<usize>,
@@ -160,29 +146,14 @@ pub fn run(a: Args) -> Result<i32> {
         )?
     };
     let name = run_name(&a, &fit.model);
-    let out = a
-        .out
-        .clone()
-        .unwrap_or_else(|| Path::new("fits").join(format!("{name}.json")));
-    let json = serde_json::to_string_pretty(&fit).expect("a fit serialises");
-    let replaced = write_fit(&out, json.as_bytes(), |old| same_fit(old, &fit))?;
-    let report = if a.no_report {
-        None
-    } else {
-        let dir = a
-            .report
-            .clone()
-            .unwrap_or_else(|| Path::new("reports").join(&name));
-        Some(dea_fit::report::hyperelastic::write(&fit, &data, &dir)?)
-    };
-    Ok(finish(Finish {
-        json: &json,
-        summary: (!a.json).then(|| summary(&fit)),
-        out: &out,
-        report: report.as_deref(),
-        replaced: &replaced,
-        exit_1: a.strict && fit.status.is_blocking(),
-    }))
+    a.output.deliver(
+        &name,
+        &fit,
+        fit.status,
+        |old| same_fit(old, &fit),
+        || summary(&fit),
+        |dir| dea_fit::report::hyperelastic::write(&fit, &data, dir),
+    )
 }
 
 /// Same model, parameters and inputs: the file holds this very fit.

@@ -56,42 +56,71 @@ pub fn run(cli: Cli) -> Result<i32> {
     }
 }
 
-/// What a fitting command has to tell at its end.
-pub struct Finish<'a> {
-    /// The fit as JSON (printed with `--json`).
-    json: &'a str,
-    /// The human summary (None with `--json`).
-    summary: Option<String>,
-    /// Where the fit file went.
-    out: &'a std::path::Path,
-    /// The report page, if one was written.
-    report: Option<&'a std::path::Path>,
-    /// What happened to an older fit file there.
-    replaced: &'a dea_fit::io::write::Replaced,
-    /// `--strict` and a blocking status.
-    exit_1: bool,
+/// Output flags every fitting command shares.
+#[derive(Debug, clap::Args)]
+pub struct Output {
+    /// Fit file to write (default fits/<data>-<model>.json).
+    #[arg(long)]
+    out: Option<std::path::PathBuf>,
+    /// Report directory (default reports/<data>-<model>/).
+    #[arg(long)]
+    report: Option<std::path::PathBuf>,
+    /// Do not write a report.
+    #[arg(long)]
+    no_report: bool,
+    /// Print the fit as JSON on stdout (the fit file's object).
+    #[arg(long)]
+    pub json: bool,
+    /// Exit with status 1 when the fit is ill-posed, unstable or not converged.
+    #[arg(long)]
+    strict: bool,
 }
 
-/// The common end of every fitting command: the summary (with where the fit and the
-/// report went) or the JSON on stdout, a note on stderr if an older, different fit
-/// was kept aside, and the exit status.
-fn finish(f: Finish) -> i32 {
-    match f.summary {
-        None => println!("{}", f.json),
-        Some(s) => {
-            print!("{s}");
-            println!("fit: {}", f.out.display());
-            if let Some(r) = f.report {
+impl Output {
+    /// The common end of every fitting command: write the fit file (keeping an older,
+    /// different fit aside, `same` tells them apart), the report, then print the
+    /// summary with where both went, or the JSON; returns the exit status.
+    pub fn deliver<T: serde::Serialize>(
+        &self,
+        name: &str,
+        fit: &T,
+        status: dea_fit::fit::Status,
+        same: impl Fn(&str) -> bool,
+        summary: impl FnOnce() -> String,
+        report: impl FnOnce(&std::path::Path) -> Result<std::path::PathBuf>,
+    ) -> Result<i32> {
+        use std::path::Path;
+        let out = self
+            .out
+            .clone()
+            .unwrap_or_else(|| Path::new("fits").join(format!("{name}.json")));
+        let json = serde_json::to_string_pretty(fit).expect("a fit serialises");
+        let replaced = dea_fit::io::write::write_fit(&out, json.as_bytes(), same)?;
+        let page = if self.no_report {
+            None
+        } else {
+            let dir = self
+                .report
+                .clone()
+                .unwrap_or_else(|| Path::new("reports").join(name));
+            Some(report(&dir)?)
+        };
+        if self.json {
+            println!("{json}");
+        } else {
+            print!("{}", summary());
+            println!("fit: {}", out.display());
+            if let Some(r) = &page {
                 println!("report: {}", r.display());
             }
         }
+        if let dea_fit::io::write::Replaced::KeptAs(p) = &replaced {
+            eprintln!(
+                "note: {} held a different fit; it was kept as {}",
+                out.display(),
+                p.display()
+            );
+        }
+        Ok(i32::from(self.strict && status.is_blocking()))
     }
-    if let dea_fit::io::write::Replaced::KeptAs(p) = f.replaced {
-        eprintln!(
-            "note: {} held a different fit; it was kept as {}",
-            f.out.display(),
-            p.display()
-        );
-    }
-    i32::from(f.exit_1)
 }

@@ -1,6 +1,6 @@
 //! `dea-fit relaxation`: Prony / Kelvin-Maxwell constants from a stress-relaxation curve.
 
-use super::{finish, Finish};
+use super::Output;
 use clap::ValueEnum;
 use dea_fit::fit::hyperelastic::HyperelasticFit;
 use dea_fit::fit::problem::Residual;
@@ -8,7 +8,6 @@ use dea_fit::fit::relaxation::{
     self, Criterion, FileRef, Loading, Method, QlvInput, RelaxationFit, Settings,
 };
 use dea_fit::io::relaxation::{self as reader, RelaxationOptions};
-use dea_fit::io::write::write_fit;
 use dea_fit::material::viscoelastic::{preset, Preset};
 use dea_fit::report::format::{si, table};
 use dea_fit::units::{parse_quantity, Dimension};
@@ -81,21 +80,8 @@ pub struct Args {
     /// (seed-table-3.3, seed-table-4.2).
     #[arg(long, value_name = "NAME")]
     preset: Option<String>,
-    /// Fit file to write (default fits/<data>-prony<N>.json).
-    #[arg(long)]
-    out: Option<PathBuf>,
-    /// Report directory (default reports/<data>-prony<N>/).
-    #[arg(long)]
-    report: Option<PathBuf>,
-    /// Do not write a report.
-    #[arg(long)]
-    no_report: bool,
-    /// Print the fit as JSON on stdout (the fit file's object).
-    #[arg(long)]
-    json: bool,
-    /// Exit with status 1 when the fit is ill-posed or not converged.
-    #[arg(long)]
-    strict: bool,
+    #[command(flatten)]
+    output: Output,
 }
 
 fn settings(a: &Args) -> Result<Settings> {
@@ -185,7 +171,7 @@ fn load_qlv(path: &Path) -> Result<QlvInput> {
 pub fn run(a: Args) -> Result<i32> {
     if let Some(name) = &a.preset {
         let p = preset(name)?;
-        if a.json {
+        if a.output.json {
             println!(
                 "{}",
                 serde_json::to_string_pretty(&p).expect("a preset serialises")
@@ -229,34 +215,14 @@ pub fn run(a: Args) -> Result<i32> {
         if qlv.is_some() { "qlv" } else { "prony" },
         fit.prony.len()
     );
-    let out = a
-        .out
-        .clone()
-        .unwrap_or_else(|| Path::new("fits").join(format!("{name}.json")));
-    let json = serde_json::to_string_pretty(&fit).expect("a fit serialises");
-    let replaced = write_fit(&out, json.as_bytes(), |old| same_fit(old, &fit))?;
-    let report = if a.no_report {
-        None
-    } else {
-        let dir = a
-            .report
-            .clone()
-            .unwrap_or_else(|| Path::new("reports").join(&name));
-        Some(dea_fit::report::relaxation::write(
-            &fit,
-            &data,
-            qlv.as_ref(),
-            &dir,
-        )?)
-    };
-    Ok(finish(Finish {
-        json: &json,
-        summary: (!a.json).then(|| summary(&fit)),
-        out: &out,
-        report: report.as_deref(),
-        replaced: &replaced,
-        exit_1: a.strict && fit.status.is_blocking(),
-    }))
+    a.output.deliver(
+        &name,
+        &fit,
+        fit.status,
+        |old| same_fit(old, &fit),
+        || summary(&fit),
+        |dir| dea_fit::report::relaxation::write(&fit, &data, qlv.as_ref(), dir),
+    )
 }
 
 /// Same formulation, inputs and constants: the file holds this very fit.

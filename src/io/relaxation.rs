@@ -147,21 +147,7 @@ pub fn from_table(table: &Table, opts: &RelaxationOptions) -> Result<RelaxationD
             .with_hint(
                 "convert to nominal stress (force / reference area) or give force_N with --area",
             )),
-            _ if h.trim().is_empty() => {
-                return Err(Error::input(hloc(c), "empty column name in the header")
-                    .with_hint(format!("name every column; accepted: {ACCEPTED}")))
-            }
-            _ if h.trim().parse::<f64>().is_ok() => {
-                return Err(Error::input(
-                    hloc(c),
-                    format!("expected a header naming each column, found the number '{h}'"),
-                )
-                .with_hint("add a first line such as time_s,stress_kPa"))
-            }
-            _ => {
-                return Err(Error::input(hloc(c), format!("unknown column '{h}'"))
-                    .with_hint(format!("accepted columns: {ACCEPTED}")))
-            }
+            _ => return Err(table.unknown_column(c, ACCEPTED, "time_s,stress_kPa")),
         };
         let slot = match col {
             Col::Time(_) => &mut time,

@@ -130,6 +130,27 @@ impl Table {
         })
     }
 
+    /// The error for a header field that names no accepted column: empty, a number
+    /// (the header line is missing) or an unknown name. `example` is a valid header
+    /// line to suggest, `accepted` the list of column names.
+    pub fn unknown_column(&self, col: usize, accepted: &str, example: &str) -> Error {
+        let h = &self.header[col];
+        let loc = Location::at(&self.path, self.header_line, col + 1);
+        if h.trim().is_empty() {
+            Error::input(loc, "empty column name in the header")
+                .with_hint(format!("name every column; accepted: {accepted}"))
+        } else if h.trim().parse::<f64>().is_ok() {
+            Error::input(
+                loc,
+                format!("expected a header naming each column, found the number '{h}'"),
+            )
+            .with_hint(format!("add a first line such as {example}"))
+        } else {
+            Error::input(loc, format!("unknown column '{h}'"))
+                .with_hint(format!("accepted columns: {accepted}"))
+        }
+    }
+
     /// The location of a field.
     pub fn loc(&self, row: &Row, col: usize) -> Location {
         Location::at(&self.path, row.line, col + 1)

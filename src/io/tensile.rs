@@ -190,21 +190,7 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
             "time" => {
                 unit_factor(table, c, h, unit, Dimension::Time)?;
             }
-            _ if h.trim().is_empty() => {
-                return Err(Error::input(hloc(c), "empty column name in the header")
-                    .with_hint(format!("name every column; accepted: {ACCEPTED}")))
-            }
-            _ if h.trim().parse::<f64>().is_ok() => {
-                return Err(Error::input(
-                    hloc(c),
-                    format!("expected a header naming each column, found the number '{h}'"),
-                )
-                .with_hint("add a first line such as stretch,nominal_stress_MPa"))
-            }
-            _ => {
-                return Err(Error::input(hloc(c), format!("unknown column '{h}'"))
-                    .with_hint(format!("accepted columns: {ACCEPTED}")))
-            }
+            _ => return Err(table.unknown_column(c, ACCEPTED, "stretch,nominal_stress_MPa")),
         }
     }
     let (kc, kin) = kin.ok_or_else(|| {

@@ -124,3 +124,32 @@ impl Output {
         Ok(i32::from(self.strict && status.is_blocking()))
     }
 }
+
+/// The closing lines of every fit summary: the solver report (with its method when
+/// `with_method`), the status, and one line per warning.
+fn solver_and_status(
+    solver: &dea_fit::fit::SolverReport,
+    status: dea_fit::fit::Status,
+    warnings: &[String],
+    with_method: bool,
+) -> String {
+    let method = if with_method {
+        format!("{}; ", solver.method)
+    } else {
+        String::new()
+    };
+    let mut s = format!(
+        "solver: {method}{} start(s), {} at best, {} iterations, {} evaluations, {:.3} ms, {}\n",
+        solver.starts,
+        solver.starts_at_best,
+        solver.iterations,
+        solver.evaluations,
+        solver.seconds * 1e3,
+        solver.termination
+    );
+    s.push_str(&format!("status: {status}\n"));
+    for w in warnings {
+        s.push_str(&format!("warning: {w}\n"));
+    }
+    s
+}

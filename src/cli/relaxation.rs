@@ -343,20 +343,12 @@ pub fn summary(fit: &RelaxationFit) -> String {
             si(q.reference_modulus_pa, "Pa")
         ));
     }
-    s.push_str(&format!(
-        "solver: {}; {} start(s), {} at best, {} iterations, {} evaluations, {:.3} ms, {}\n",
-        fit.solver.method,
-        fit.solver.starts,
-        fit.solver.starts_at_best,
-        fit.solver.iterations,
-        fit.solver.evaluations,
-        fit.solver.seconds * 1e3,
-        fit.solver.termination
+    s.push_str(&super::solver_and_status(
+        &fit.solver,
+        fit.status,
+        &fit.warnings,
+        true,
     ));
-    s.push_str(&format!("status: {}\n", fit.status));
-    for w in &fit.warnings {
-        s.push_str(&format!("warning: {w}\n"));
-    }
     s
 }
 

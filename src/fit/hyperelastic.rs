@@ -957,7 +957,10 @@ pub fn fit_auto(
         .iter()
         .rfind(|e| e.mode == Mode::Equibiaxial)
     {
-        if let Some([lo, hi]) = e.other_models_pa {
+        if let Some([lo, hi]) = e
+            .other_models_pa
+            .filter(|[lo, hi]| hi - lo > 1e-6 * hi.abs())
+        {
             out.warnings.push(format!(
                 "the models that fit these data equally well disagree in equibiaxial: {:.4}–{:.4} MPa at λ = {:.2}",
                 lo / 1e6,

@@ -57,9 +57,12 @@ pub fn run(dir: &Path) -> Result<i32> {
             .fold(1e-300, f64::max);
         let mut series = Vec::new();
         for (ci, (method, fid)) in [
-            (Method::Dp54, FidelityChoice::Dynamic),
+            (Method::Bdf, FidelityChoice::Dynamic),
+            (Method::Esdirk34, FidelityChoice::Dynamic),
             (Method::TrBdf2, FidelityChoice::Dynamic),
-            (Method::TrBdf2, FidelityChoice::Auto),
+            (Method::Tsit45, FidelityChoice::Dynamic),
+            (Method::Dp54, FidelityChoice::Dynamic),
+            (Method::Bdf, FidelityChoice::Auto),
         ]
         .into_iter()
         .enumerate()
@@ -85,13 +88,15 @@ pub fn run(dir: &Path) -> Result<i32> {
                     / stroke;
                 let _ = writeln!(
                     csv,
-                    "{name},{method:?},{},{rtol:e},{t:e},{},{err:e}",
-                    o.fidelity.model, o.integrator.stats.steps
+                    "{name},{},{},{rtol:e},{t:e},{},{err:e}",
+                    method.name(),
+                    o.fidelity.model,
+                    o.integrator.stats.steps
                 );
                 pts.push((t, err.max(1e-16).log10()));
             }
             series.push(Series {
-                label: format!("{method:?} {fid:?}"),
+                label: format!("{} {fid:?}", method.name()),
                 points: pts,
                 color: ci,
                 style: Style::Line,

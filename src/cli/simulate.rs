@@ -2,7 +2,7 @@
 
 use dea_fit::io::write::atomic_write;
 use dea_fit::report::simulation;
-use dea_fit::sim::{self, scene::Scene, RunOptions};
+use dea_fit::sim::{self, integrate::Method, scene::Scene, RunOptions};
 use dea_fit::{Error, Result};
 use std::path::PathBuf;
 
@@ -20,12 +20,21 @@ pub struct Args {
     /// Override the scene's relative tolerance.
     #[arg(long)]
     rtol: Option<f64>,
+    /// Override the scene's integrator: bdf, esdirk34, tr-bdf2, tsit45 or dp54.
+    #[arg(long, value_parser = parse_method)]
+    method: Option<Method>,
     /// Report directory (default reports/sim-<scene>).
     #[arg(long)]
     report: Option<PathBuf>,
     /// Do not write the report (charts, index.md).
     #[arg(long)]
     no_report: bool,
+}
+
+fn parse_method(s: &str) -> std::result::Result<Method, String> {
+    Method::parse(s).ok_or_else(|| {
+        format!("unknown integrator '{s}': use bdf, esdirk34, tr-bdf2, tsit45 or dp54")
+    })
 }
 
 /// Run the subcommand.
@@ -43,6 +52,7 @@ pub fn run(a: Args) -> Result<i32> {
         &scene,
         &RunOptions {
             rtol: a.rtol,
+            method: a.method,
             ..Default::default()
         },
     )?;

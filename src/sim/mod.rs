@@ -20,7 +20,7 @@ pub mod stack;
 pub mod static_curve;
 
 use fidelity::{AxialMode, Fidelity};
-use integrate::{End, Method, Options, Stats, Workspace};
+use integrate::{End, Method, Options, Stats};
 use plant::Plant;
 use scene::{Actuator, Scene, Source};
 use serde::Serialize;
@@ -214,13 +214,10 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
     let (method, mreason) = match opts.method.or(scene.time.method) {
         Some(m) => (m, "requested".to_string()),
         None if p.inertia && mode.damping_ratio < 0.3 => (
-            Method::Dp54,
-            "auto: lightly damped oscillation, explicit Dormand–Prince".into(),
+            Method::Tsit45,
+            "auto: lightly damped oscillation, explicit Tsitouras 5(4)".into(),
         ),
-        None => (
-            Method::TrBdf2,
-            "auto: damped/stiff, L-stable TR-BDF2".into(),
-        ),
+        None => (Method::Bdf, "auto: damped/stiff, variable-order BDF".into()),
     };
     let span = scene.time.span;
     let v_max = match &scene.control {
@@ -231,13 +228,19 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
         rtol,
         atol: scene.time.atol * rtol / scene.time.rtol,
         h_max: span / 10.0,
+        h_init: 0.01
+            * span
+                .min(1.0 / mode.frequency_hz)
+                .min(match scene.input.time_scale() {
+                    t if t > 0.0 => t,
+                    _ => f64::INFINITY,
+                }),
         max_steps: 20_000_000,
         fixed_step: opts.fixed_step,
     };
     let scale = p.scales(v_max);
     let mut y = p.initial_state();
     let l = p.layout();
-    let mut w = Workspace::new(l.n);
     let mut stats = Stats::default();
     let mut samples = Vec::with_capacity(scene.time.samples.len() + 1);
     samples.push(sample(&p, 0.0, &y));
@@ -256,74 +259,66 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
     };
     let (c0, _, _) = p.capacitance(y[0]);
     let v_start = p.electrical(0.0, &y, 0.0).voltage;
-    let mut status = RunStatus::Completed;
-    let mut message = "reached the end time".to_string();
-    let mut events = Vec::new();
-    let mut t_end = span;
-    let all_samples = &scene.time.samples;
-    let mut si = 0;
-    for (k, win) in bounds.windows(2).enumerate() {
-        let (a, b) = (win[0], win[1]);
-        if k > 0 {
-            stats.restarts += 1;
-            if let Source::Ideal = scene.source {
-                // an ideal source jumping by ΔV charges C through zero resistance:
-                // it delivers V⁺·C·ΔV, of which ½C·ΔV² is lost in the wiring
-                let vm = scene.input.eval(a - 1e-12 * span.max(1.0)).0;
-                let vp = scene.input.eval(a).0;
-                let (c, _, _) = p.capacitance(y[0]);
-                if (vp - vm).abs() > 0.0 {
-                    y[l.quad] += vp * c * (vp - vm);
-                    y[l.quad + 3] += 0.5 * c * (vp - vm).powi(2);
-                }
-            }
-        } else if let Source::Ideal = scene.source {
-            let v0 = scene.input.eval(0.0).0;
-            y[l.quad] += v0 * c0 * v0;
-            y[l.quad + 3] += 0.5 * c0 * v0 * v0;
+    // An ideal source jumping by ΔV charges C through zero resistance: it delivers
+    // V⁺·C·ΔV, of which ½C·ΔV² is lost in the wiring (also at t = 0 from 0 V).
+    let ideal = matches!(scene.source, Source::Ideal);
+    let jump = |y: &mut [f64], vm: f64, vp: f64| {
+        let (c, _, _) = p.capacitance(y[0]);
+        y[l.quad] += vp * c * (vp - vm);
+        y[l.quad + 3] += 0.5 * c * (vp - vm).powi(2);
+    };
+    if ideal {
+        let v0 = scene.input.eval(0.0).0;
+        jump(&mut y, 0.0, v0);
+    }
+    let mut at_kink = |t: f64, y: &mut [f64]| {
+        if ideal {
+            let vm = scene.input.eval(t - 1e-12 * span.max(1.0)).0;
+            let vp = scene.input.eval(t).0;
+            jump(y, vm, vp);
         }
-        let s_end = all_samples[si..].partition_point(|&t| t <= b) + si;
-        let seg_samples = &all_samples[si..s_end];
-        si = s_end;
-        let mut out = |t: f64, y: &[f64]| samples.push(sample(&p, t, y));
-        let end = integrate::segment(
-            &p,
-            method,
-            &o,
-            &scale,
-            &mut w,
-            &mut stats,
-            a,
-            b,
-            &mut y,
-            seg_samples,
-            &mut out,
-            Some(&event),
-        );
-        match end {
-            End::Done => {}
-            End::Event(te) => {
-                let v = p.electrical(te, &y, 0.0).voltage;
-                events.push(Event {
+    };
+    let mut out = |t: f64, y: &[f64]| samples.push(sample(&p, t, y));
+    let end = integrate::run(
+        &p,
+        method,
+        &o,
+        &scale,
+        &bounds,
+        &mut y,
+        &scene.time.samples,
+        &mut out,
+        Some(&event),
+        &mut at_kink,
+        &mut stats,
+    );
+    let (status, message, t_end, events) = match end {
+        End::Done => (
+            RunStatus::Completed,
+            "reached the end time".to_string(),
+            span,
+            Vec::new(),
+        ),
+        End::Event(te) => {
+            let v = p.electrical(te, &y, 0.0).voltage;
+            samples.push(sample(&p, te, &y));
+            (
+                RunStatus::PullIn,
+                format!("pull-in at t = {te:.6} s: the instantaneous stiffness vanished"),
+                te,
+                vec![Event {
                     kind: "pull_in".into(),
                     time_s: te,
                     voltage_v: v,
                     stretch: y[0],
-                });
-                samples.push(sample(&p, te, &y));
-                status = RunStatus::PullIn;
-                message = format!("pull-in at t = {te:.6} s: the instantaneous stiffness vanished");
-                t_end = te;
-                break;
-            }
-            End::Failed(why) => {
-                status = RunStatus::Failed;
-                message = why.to_string();
-                t_end = samples.last().map(|s| s.time_s).unwrap_or(a);
-                break;
-            }
+                }],
+            )
         }
-    }
+        End::Failed(why) => {
+            let t = samples.last().map(|s| s.time_s).unwrap_or(0.0);
+            (RunStatus::Failed, why, t, Vec::new())
+        }
+    };
     // energy balance
     let e = p.electrical(t_end, &y, p.lam_dot(t_end, &y));
     let kinetic = l.v.map(|i| 0.5 * p.mass * y[i] * y[i]).unwrap_or(0.0);

@@ -306,6 +306,11 @@ impl Plant {
                 _ => v_max.max(1.0),
             };
         }
+        // energy quadratures: the field energy at the largest voltage
+        let energy = 0.5 * self.capacitance(self.lam0).0 * v_max.max(1.0).powi(2);
+        for q in l.quad..l.n {
+            s[q] = energy;
+        }
         s
     }
 
@@ -395,9 +400,6 @@ impl super::integrate::System for Plant {
     fn dim(&self) -> usize {
         self.layout().n
     }
-    fn n_ctrl(&self) -> usize {
-        self.layout().quad
-    }
     fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) {
         let l = self.layout();
         let (lam_dot, force, e) = self.kinematics(t, y, &l);
@@ -437,5 +439,23 @@ impl super::integrate::System for Plant {
         }
         dy[q + 1] = self.vol * d_visc;
         dy[q + 2] = e.leakage;
+    }
+    fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) {
+        // TEMPORARY central differences (replaced by the analytic Jacobian)
+        let n = y.len();
+        let mut yp = y.to_vec();
+        let mut fp = vec![0.0; n];
+        let mut fm = vec![0.0; n];
+        for j in 0..n {
+            let d = 1e-7 * y[j].abs().max(1e-6);
+            yp[j] = y[j] + d;
+            self.rhs(t, &yp, &mut fp);
+            yp[j] = y[j] - d;
+            self.rhs(t, &yp, &mut fm);
+            yp[j] = y[j];
+            for i in 0..n {
+                jac[i * n + j] = (fp[i] - fm[i]) / (2.0 * d);
+            }
+        }
     }
 }

@@ -687,13 +687,14 @@ fn read_time(c: &Ctx, t: &toml::Table) -> Result<TimeSpec> {
     }
     let method = match c.string(t, s, "integrator")? {
         None | Some("auto") => None,
-        Some("dp54") => Some(Method::Dp54),
-        Some("tr-bdf2") | Some("trbdf2") => Some(Method::TrBdf2),
-        Some(o) => {
-            return Err(c
-                .err(format!("time.integrator: unknown '{o}'"))
-                .with_hint("use auto, dp54 or tr-bdf2"))
-        }
+        Some(o) => match Method::parse(o) {
+            Some(m) => Some(m),
+            None => {
+                return Err(c
+                    .err(format!("time.integrator: unknown '{o}'"))
+                    .with_hint("use auto, bdf, esdirk34, tr-bdf2, tsit45 or dp54"))
+            }
+        },
     };
     let fidelity = match c.string(t, s, "fidelity")? {
         None | Some("auto") => FidelityChoice::Auto,

@@ -1,0 +1,261 @@
+//! The diffsol adapter: one [`OdeBuilder`] problem per run, built from closures over
+//! the [`System`] (right-hand side with the input's left limit at the segment end,
+//! the analytic Jacobian applied to a vector, the event as a root function), and one
+//! driver loop shared by every diffsol method.
+//!
+//! Restarts: at each interior bound the solver stops exactly there (`set_stop_time`),
+//! the caller's `restart` may change the state, the derivative is re-evaluated with
+//! the input's right limit, and diffsol reinitialises the method to first order
+//! (it does so whenever the state is touched through `state_mut`).
+
+use super::{End, EventFn, Method, Options, Stats, System};
+use ::diffsol::{
+    NalgebraLU, NalgebraMat, NalgebraVec, OdeBuilder, OdeEquations, OdeSolverMethod,
+    OdeSolverStopReason, Vector, VectorCommon,
+};
+use std::cell::{Cell, RefCell};
+
+type M = NalgebraMat<f64>;
+type LS = NalgebraLU<f64>;
+
+/// Mutable slice of a diffsol nalgebra vector.
+fn slice_mut(v: &mut NalgebraVec<f64>) -> &mut [f64] {
+    v.inner_mut().as_mut_slice()
+}
+
+/// Slice of a diffsol nalgebra vector.
+fn slice(v: &NalgebraVec<f64>) -> &[f64] {
+    v.inner().as_slice()
+}
+
+/// The time just before `b` at which the right-hand side of the interval [a, b]
+/// is evaluated for t ≥ b: inputs are right-continuous, and `b` is a kink.
+fn left_limit(a: f64, b: f64) -> f64 {
+    b - 1e-12 * (b - a)
+}
+
+/// Counters the closures update (they only get `&self`).
+#[derive(Default)]
+struct Counts {
+    rhs: Cell<usize>,
+    jac: Cell<usize>,
+}
+
+/// The closures' shared view of the system: right-hand side with the left limit
+/// at `t_end`, Jacobian-vector product through a scratch matrix.
+struct Adapter<'s, S> {
+    sys: &'s S,
+    t_end: Cell<f64>,
+    jac: RefCell<Vec<f64>>,
+    counts: Counts,
+}
+
+impl<S: System> Adapter<'_, S> {
+    #[inline]
+    fn rhs(&self, t: f64, x: &[f64], dy: &mut [f64]) {
+        self.counts.rhs.set(self.counts.rhs.get() + 1);
+        self.sys.rhs(t.min(self.t_end.get()), x, dy);
+    }
+
+    /// J(x)·v. diffsol builds its dense Jacobian column by column from this, so the
+    /// matrix is evaluated once per call; it stays cheap for the few states we have.
+    #[inline]
+    fn jac_vec(&self, t: f64, x: &[f64], v: &[f64], out: &mut [f64]) {
+        self.counts.jac.set(self.counts.jac.get() + 1);
+        let mut j = self.jac.borrow_mut();
+        self.sys.jacobian(t.min(self.t_end.get()), x, &mut j);
+        let n = x.len();
+        for i in 0..n {
+            let row = &j[i * n..(i + 1) * n];
+            out[i] = row.iter().zip(v).map(|(a, b)| a * b).sum();
+        }
+    }
+}
+
+/// Integrate with a diffsol method (see [`super::run`]).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn run<S: System>(
+    sys: &S,
+    m: Method,
+    o: &Options,
+    scale: &[f64],
+    bounds: &[f64],
+    y: &mut [f64],
+    samples: &[f64],
+    out: &mut dyn FnMut(f64, &[f64]),
+    event: Option<EventFn>,
+    restart: &mut dyn FnMut(f64, &mut [f64]),
+    stats: &mut Stats,
+) -> End {
+    let n = y.len();
+    let ad = Adapter {
+        sys,
+        t_end: Cell::new(left_limit(bounds[0], bounds[1])),
+        jac: RefCell::new(vec![0.0; n * n]),
+        counts: Counts::default(),
+    };
+    if let Some(g) = event {
+        if g(bounds[0], y) <= 0.0 {
+            return End::Event(bounds[0]);
+        }
+    }
+    let y0 = y.to_vec();
+    let atol: Vec<f64> = scale.iter().map(|s| o.atol * s).collect();
+    let problem = OdeBuilder::<M>::new()
+        .t0(bounds[0])
+        .rtol(o.rtol)
+        .atol(atol)
+        .rhs_implicit(
+            |x: &[f64], _p: &[f64], t: f64, dy: &mut [f64]| ad.rhs(t, x, dy),
+            |x: &[f64], _p: &[f64], t: f64, v: &[f64], jv: &mut [f64]| ad.jac_vec(t, x, v, jv),
+        )
+        .init(
+            move |_p: &[f64], _t: f64, y: &mut [f64]| y.copy_from_slice(&y0),
+            n,
+        )
+        .root(
+            |x: &[f64], _p: &[f64], t: f64, g: &mut [f64]| {
+                g[0] = event.map_or(1.0, |e| e(t.min(ad.t_end.get()), x))
+            },
+            1,
+        )
+        .build();
+    let mut problem = match problem {
+        Ok(p) => p,
+        Err(e) => return End::Failed(format!("diffsol problem setup: {e}")),
+    };
+    // diffsol counts Newton failures over the whole run, not per step; a long run
+    // recovers from many (each costs a Jacobian update and a smaller step), so the
+    // run's step budget is the limit, as for the error test.
+    problem.ode_options.max_nonlinear_solver_failures = o.max_steps;
+    let mut drv = Driver {
+        ad: &ad,
+        o,
+        bounds,
+        samples,
+        out,
+        restart,
+        stats,
+    };
+    let end = match m {
+        Method::Bdf => problem.bdf::<LS>().map(|s| drv.drive(s, y)),
+        Method::Esdirk34 => problem.esdirk34::<LS>().map(|s| drv.drive(s, y)),
+        Method::TrBdf2 => problem.tr_bdf2::<LS>().map(|s| drv.drive(s, y)),
+        Method::Tsit45 => problem.tsit45().map(|s| drv.drive(s, y)),
+        Method::Dp54 => unreachable!("dp54 is not a diffsol method"),
+    };
+    let end = end.unwrap_or_else(|e| End::Failed(format!("diffsol solver setup: {e}")));
+    stats.rhs_evals += ad.counts.rhs.get();
+    stats.jacobians += ad.counts.jac.get() / n.max(1);
+    end
+}
+
+/// The driver loop over restart intervals, for any diffsol method.
+struct Driver<'d, 's, S> {
+    ad: &'d Adapter<'s, S>,
+    o: &'d Options,
+    bounds: &'d [f64],
+    samples: &'d [f64],
+    out: &'d mut dyn FnMut(f64, &[f64]),
+    restart: &'d mut dyn FnMut(f64, &mut [f64]),
+    stats: &'d mut Stats,
+}
+
+impl<S: System> Driver<'_, '_, S> {
+    fn drive<'a, Eqn, Sv>(&mut self, mut s: Sv, y: &mut [f64]) -> End
+    where
+        Eqn: OdeEquations<T = f64, V = NalgebraVec<f64>> + 'a,
+        Sv: OdeSolverMethod<'a, Eqn>,
+    {
+        let end = self.segments(&mut s, y);
+        let st = s.get_statistics();
+        self.stats.steps += st.number_of_steps;
+        self.stats.rejected +=
+            st.number_of_error_test_failures + st.number_of_nonlinear_solver_fails;
+        self.stats.factorizations += st.number_of_linear_solver_setups;
+        end
+    }
+
+    fn segments<'a, Eqn, Sv>(&mut self, s: &mut Sv, y: &mut [f64]) -> End
+    where
+        Eqn: OdeEquations<T = f64, V = NalgebraVec<f64>> + 'a,
+        Sv: OdeSolverMethod<'a, Eqn>,
+    {
+        let mut buf = s.state().y.clone();
+        let h = s.state().h.min(self.o.h_init);
+        *s.state_mut().h = h;
+        let mut next = 0;
+        for k in 1..self.bounds.len() {
+            let b = self.bounds[k];
+            if k > 1 {
+                let a = self.bounds[k - 1];
+                self.stats.restarts += 1;
+                self.ad.t_end.set(left_limit(a, b));
+                let st = s.state_mut();
+                (self.restart)(a, slice_mut(st.y));
+                self.ad.rhs(a, slice(st.y), slice_mut(st.dy));
+                *st.h = st.h.min(self.o.h_init);
+            }
+            if let Err(e) = s.set_stop_time(b) {
+                return self.fail(s, y, format!("cannot stop at t = {b:.6e} s: {e}"));
+            }
+            loop {
+                if s.get_statistics().number_of_steps >= self.o.max_steps {
+                    return self.fail(s, y, "step budget exhausted".into());
+                }
+                let reason = match s.step() {
+                    Ok(r) => r,
+                    Err(e) => {
+                        let t = s.state().t;
+                        return self.fail(
+                            s,
+                            y,
+                            format!("{} failed at t = {t:.6e} s: {e}", "diffsol"),
+                        );
+                    }
+                };
+                let t_now = s.state().t;
+                let upto = match reason {
+                    OdeSolverStopReason::RootFound(tr, _) => tr,
+                    _ => t_now,
+                };
+                while next < self.samples.len()
+                    && (self.samples[next] < upto
+                        || (self.samples[next] <= upto
+                            && !matches!(reason, OdeSolverStopReason::RootFound(..))))
+                {
+                    let ts = self.samples[next];
+                    if ts == t_now {
+                        buf.copy_from(s.state().y);
+                    } else if s.interpolate_inplace(ts, &mut buf).is_err() {
+                        break;
+                    }
+                    (self.out)(ts, slice(&buf));
+                    next += 1;
+                }
+                match reason {
+                    OdeSolverStopReason::InternalTimestep => {}
+                    OdeSolverStopReason::TstopReached => break,
+                    OdeSolverStopReason::RootFound(tr, _) => {
+                        if s.interpolate_inplace(tr, &mut buf).is_err() {
+                            buf.copy_from(s.state().y);
+                        }
+                        y.copy_from_slice(slice(&buf));
+                        return End::Event(tr);
+                    }
+                }
+            }
+        }
+        y.copy_from_slice(slice(s.state().y));
+        End::Done
+    }
+
+    fn fail<'a, Eqn, Sv>(&mut self, s: &Sv, y: &mut [f64], why: String) -> End
+    where
+        Eqn: OdeEquations<T = f64, V = NalgebraVec<f64>> + 'a,
+        Sv: OdeSolverMethod<'a, Eqn>,
+    {
+        y.copy_from_slice(slice(s.state().y));
+        End::Failed(why)
+    }
+}

@@ -1,0 +1,175 @@
+//! Adaptive integrators behind one thin interface ([`run`]).
+//!
+//! * diffsol 0.18 (pinned; Robinson et al. 2026, JOSS 11(117) 9384):
+//!   [`Method::Bdf`] (variable-order NDF/BDF after ode15s, for stiff scenes: a
+//!   Kelvin-Voigt dashpot, a fast source, arms from ms to ks), [`Method::Esdirk34`]
+//!   and [`Method::TrBdf2`] (L-stable singly diagonally implicit Runge–Kutta), and
+//!   [`Method::Tsit45`] (Tsitouras 5(4), for lightly damped, oscillatory scenes). The
+//!   implicit ones use the system's analytic Jacobian ([`System::jacobian`]).
+//! * [`Method::Dp54`]: our own explicit Dormand–Prince 5(4) ([`dopri`]), kept as an
+//!   independent test oracle and for fixed-step convergence tests.
+//!
+//! Every method integrates between *restart times* (input kinks: triangle corners,
+//! ramp ends, steps), where the caller may change the state (energy bookkeeping of
+//! an ideal source's jump) and the method restarts from first order; writes the state
+//! at requested sample times from its dense output; and stops at the first change of
+//! an event function from positive to non-positive (pull-in), with the state at the
+//! event. The right-hand side and the Jacobian allocate nothing.
+
+mod diffsol;
+mod dopri;
+
+/// A first-order system y' = f(t, y).
+pub trait System {
+    /// Number of states.
+    fn dim(&self) -> usize;
+    /// Right-hand side; must not allocate.
+    fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]);
+    /// Jacobian ∂f/∂y, row-major `dim × dim`; must not allocate.
+    fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]);
+}
+
+/// Integration method.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// diffsol's variable-order BDF (NDF), orders 1–5.
+    Bdf,
+    /// diffsol's ESDIRK3(4) (Jørgensen et al. 2018).
+    Esdirk34,
+    /// diffsol's TR-BDF2 (Hosea & Shampine 1996).
+    TrBdf2,
+    /// diffsol's explicit Tsitouras 5(4).
+    Tsit45,
+    /// Our explicit Dormand–Prince 5(4) (test oracle).
+    Dp54,
+}
+
+impl Method {
+    /// Every method, in the order benches chart them.
+    pub const ALL: [Method; 5] = [
+        Method::Bdf,
+        Method::Esdirk34,
+        Method::TrBdf2,
+        Method::Tsit45,
+        Method::Dp54,
+    ];
+
+    /// Name as written in scene files and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Bdf => "bdf",
+            Method::Esdirk34 => "esdirk34",
+            Method::TrBdf2 => "tr-bdf2",
+            Method::Tsit45 => "tsit45",
+            Method::Dp54 => "dp54",
+        }
+    }
+
+    /// Parse a scene-file name.
+    pub fn parse(s: &str) -> Option<Method> {
+        Method::ALL
+            .into_iter()
+            .find(|m| m.name() == s || (s == "trbdf2" && *m == Method::TrBdf2))
+    }
+
+    /// Classical order of the propagated solution (BDF: its largest order).
+    pub fn order(self) -> u32 {
+        match self {
+            Method::Bdf => 5,
+            Method::Esdirk34 => 3,
+            Method::TrBdf2 => 2,
+            Method::Tsit45 | Method::Dp54 => 5,
+        }
+    }
+
+    /// Implicit (uses the Jacobian; suits stiff scenes).
+    pub fn implicit(self) -> bool {
+        matches!(self, Method::Bdf | Method::Esdirk34 | Method::TrBdf2)
+    }
+}
+
+/// Tolerances and limits.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Options {
+    /// Relative tolerance.
+    pub rtol: f64,
+    /// Absolute tolerance per state, multiplied by the caller's state scales.
+    pub atol: f64,
+    /// Largest step (s); our Dormand–Prince only (diffsol has no such limit).
+    pub h_max: f64,
+    /// Largest first step after every (re)start (s): a method started from rest
+    /// must not step over an input that starts smoothly from zero.
+    pub h_init: f64,
+    /// Step budget over the whole run.
+    pub max_steps: usize,
+    /// Fixed step without error control (Dormand–Prince only; convergence-order tests).
+    pub fixed_step: Option<f64>,
+}
+
+/// Counts of a run.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Stats {
+    /// Accepted steps.
+    pub steps: usize,
+    /// Rejected steps (error test or Newton failure).
+    pub rejected: usize,
+    /// Right-hand-side evaluations.
+    pub rhs_evals: usize,
+    /// Jacobian evaluations (implicit methods).
+    pub jacobians: usize,
+    /// LU factorisations (implicit methods).
+    pub factorizations: usize,
+    /// Restarts at input kinks.
+    pub restarts: usize,
+}
+
+/// How a run ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum End {
+    /// Reached the last restart bound.
+    Done,
+    /// The event function crossed zero at this time (state left in `y`).
+    Event(f64),
+    /// The method failed (reason); `y` holds the last accepted state.
+    Failed(String),
+}
+
+/// An event function g(t, y); the event is its first change from > 0 to ≤ 0.
+pub type EventFn<'a> = &'a dyn Fn(f64, &[f64]) -> f64;
+
+/// Integrate `y` over `bounds` = [t0, kink1, …, t_end] with method `m`.
+///
+/// `samples` are output times in (t0, t_end] (sorted); `out(t, y)` is called for each
+/// one reached. At each interior bound `restart(t, y)` may change the state before the
+/// method restarts. `event(t, y)` (if any) stops the run where it turns non-positive.
+/// `scale[i]` multiplies `o.atol` for state i.
+#[allow(clippy::too_many_arguments)]
+pub fn run<S: System>(
+    sys: &S,
+    m: Method,
+    o: &Options,
+    scale: &[f64],
+    bounds: &[f64],
+    y: &mut [f64],
+    samples: &[f64],
+    out: &mut dyn FnMut(f64, &[f64]),
+    event: Option<EventFn>,
+    restart: &mut dyn FnMut(f64, &mut [f64]),
+    stats: &mut Stats,
+) -> End {
+    if o.fixed_step.is_some() && m != Method::Dp54 {
+        return End::Failed(format!(
+            "a fixed step is available with dp54 only, not {}",
+            m.name()
+        ));
+    }
+    match m {
+        Method::Dp54 => dopri::run(
+            sys, o, scale, bounds, y, samples, out, event, restart, stats,
+        ),
+        _ => diffsol::run(
+            sys, m, o, scale, bounds, y, samples, out, event, restart, stats,
+        ),
+    }
+}

@@ -59,7 +59,7 @@ impl Mode {
     pub fn kinematics(self, lam: f64) -> Kinematics {
         match self {
             Mode::Uniaxial => {
-                let s = lam.powf(-0.5);
+                let s = 1.0 / lam.sqrt();
                 let ds = -0.5 * s / lam;
                 Kinematics {
                     l: [lam, s, s],
@@ -134,7 +134,7 @@ impl Kinematics {
         let mut d2 = 0.0;
         for i in 0..3 {
             d1 += 2.0 * self.l[i] * self.dl[i];
-            d2 -= 2.0 * self.dl[i] / self.l[i].powi(3);
+            d2 -= 2.0 * self.dl[i] / (self.l[i] * self.l[i] * self.l[i]);
         }
         (d1, d2)
     }

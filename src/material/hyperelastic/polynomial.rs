@@ -27,10 +27,14 @@ pub struct Polynomial {
 /// x^n with x^0 = 1 and x^(negative) = 0 (those terms carry a zero coefficient).
 #[inline]
 fn pw(x: f64, n: i32) -> f64 {
-    if n < 0 {
-        0.0
-    } else {
-        x.powi(n)
+    // the small exponents of these models, without a call to the generic powi
+    match n {
+        ..0 => 0.0,
+        0 => 1.0,
+        1 => x,
+        2 => x * x,
+        3 => x * x * x,
+        _ => x.powi(n),
     }
 }
 

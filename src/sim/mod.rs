@@ -9,6 +9,7 @@
 //! [`simulate`] is a pure function of the scene: identification can run many scenes
 //! in parallel (rayon) and re-run one with changed `scene.material.params`.
 
+pub mod derivatives;
 pub mod fidelity;
 pub mod helix;
 pub mod input;

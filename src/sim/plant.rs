@@ -2,7 +2,8 @@
 //! Lagrange equation in the thickness stretch λ (one axial degree of freedom):
 //!
 //! ```text
-//! M·λ̈ = −Vol·[P(λ) + Nv·λ̇ + Σσj + kf·(λ − λf)] + F_load·L0 + ½·V²·dC/dλ
+//! M·λ̈ = D(λ, σ, V) − Vol·Nv·λ̇
+//! D   = −Vol·[P(λ) + Σσj + kf·(λ − λf)] + F_load·L0 + ½·V²·dC/dλ      (the drive)
 //! dσj/dt = kj·λ̇ − σj/τj                                   (seed Eq. 3.16)
 //! ```
 //! with M = m_eff·L0² (Z = L0·λ), P the nominal stress of the hyperelastic model in
@@ -11,19 +12,36 @@
 //! ½V²·dC/dλ the electrostatic generalised force, which for the stack is exactly the
 //! Maxwell pressure ε(V/z)² on the current area (Eq. 3.1, 3.7) and for the helix
 //! contains the projection on z (Eq. 4.24). kf, λf: Maxwell arms lumped as frozen
-//! springs by the fidelity choice. Quasi-static fidelity drops M and solves the force
-//! balance for λ̇ (needs Nv > 0).
+//! springs by the fidelity choice.
+//!
+//! Quasi-static fidelity drops M. With a dashpot (Nv > 0) the force balance gives
+//! λ̇ = D/(Vol·Nv). Without one, D = 0 is an algebraic constraint, integrated as its
+//! time derivative (index reduction, see [`Plant::constrained_rate`]).
 //!
 //! Quadrature states accumulate electrical work in, viscous and leakage dissipation
 //! and source losses, for the energy balance.
+//!
+//! The right-hand side is written once, generic over the number type ([`Num`]) and
+//! over where it reads parameters and material/geometry functions ([`Eval`]): in
+//! `f64` it is the ODE, in dual numbers ([`super::derivatives`]) it gives the exact
+//! Jacobian and parameter derivatives of the same code.
 
 use super::input::Waveform;
 use super::scene::{Actuator, Pid, Scene, Source};
 use crate::material::hyperelastic::{Mode, StrainEnergy};
+use std::ops::{Add, Div, Mul, Neg, Sub};
 use std::sync::Arc;
 
 /// Vacuum permittivity (F/m).
 pub const EPS0: f64 = 8.854_187_812_8e-12;
+
+/// Baumgarte time constant of the quasi-static constraint without dashpot, as a
+/// fraction of the scene's shortest time scale (see [`Plant::tau_c`]).
+pub const BAUMGARTE_FRACTION: f64 = 0.1;
+
+/// Quasi-static without dashpot: the denominator K − V·C'·b of λ̇ is floored at this
+/// fraction of the elastic stiffness Vol·(P' + Σkj + kf) (see [`Plant::constrained_rate`]).
+pub const PULL_IN_FLOOR: f64 = 1e-3;
 
 /// The plant: a scene turned into numbers and a state layout. `Send + Sync`.
 #[derive(Clone)]
@@ -45,28 +63,39 @@ pub struct Plant {
     pub m_eff: f64,
     /// Axial load (N, tensile positive).
     pub f_load: f64,
-    /// Absolute permittivity (F/m).
-    pub eps: f64,
-    /// Leakage conductance per capacitance 1/(ρ·ε) (1/s); 0 without leakage.
-    pub g_per_c: f64,
+    /// Relative permittivity εr.
+    pub eps_r: f64,
+    /// Volume resistivity ρ (Ω·m); None = no leakage.
+    pub resistivity: Option<f64>,
     /// Kelvin-Voigt dashpot (Pa·s), including arms lumped as dashpots.
     pub nv: f64,
     /// Active arms (k in Pa, τ in s).
     pub arms: Vec<(f64, f64)>,
     /// Stiffness of arms lumped as frozen springs (Pa), about `lam_f`.
     pub frozen_k: f64,
-    /// Reference stretch of the frozen springs.
-    pub lam_f: f64,
     /// With inertia (dynamic) or without (quasi-static).
     pub inertia: bool,
     /// Source model.
     pub source: Source,
     /// Input voltage.
     pub input: Waveform,
-    /// Initial (loaded, relaxed) stretch.
-    pub lam0: f64,
     /// Closed loop, if any.
     pub control: Option<Pid>,
+    /// Baumgarte time constant τc (s) of the quasi-static constraint without
+    /// dashpot: [`BAUMGARTE_FRACTION`] × the shortest of the integrated arms' τj, the
+    /// input's time scale (incl. the source's, `fidelity::input_time_scale`) and the
+    /// span. A numerical setting fixed when the plant is built (not a model quantity:
+    /// the exact solution keeps D = 0 whatever τc), so [`Plant::with_theta`] keeps it.
+    pub tau_c: f64,
+    // Derived from the above by `derive` (the one place computing them):
+    /// Absolute permittivity ε0·εr (F/m).
+    pub eps: f64,
+    /// Leakage conductance per capacitance 1/(ρ·ε) (1/s); 0 without leakage.
+    pub g_per_c: f64,
+    /// Initial (loaded, relaxed) stretch: static equilibrium at V = 0.
+    pub lam0: f64,
+    /// Reference stretch of the frozen springs (= `lam0`).
+    pub lam_f: f64,
     /// Capacitance at the rest state (the self-sensing calibration).
     pub c_rest: f64,
 }
@@ -86,6 +115,170 @@ pub struct Layout {
     pub quad: usize,
     /// Total.
     pub n: usize,
+}
+
+/// The numbers the right-hand side is written in: `f64` for the ODE, a dual number
+/// (value and one directional derivative) for its exact derivatives.
+pub(crate) trait Num:
+    Copy
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+    + Add<f64, Output = Self>
+    + Sub<f64, Output = Self>
+    + Mul<f64, Output = Self>
+    + Div<f64, Output = Self>
+{
+    /// A constant.
+    fn cst(v: f64) -> Self;
+    /// The value.
+    fn val(self) -> f64;
+    /// Square root.
+    fn sqrt(self) -> Self;
+}
+
+impl Num for f64 {
+    #[inline]
+    fn cst(v: f64) -> f64 {
+        v
+    }
+    #[inline]
+    fn val(self) -> f64 {
+        self
+    }
+    #[inline]
+    fn sqrt(self) -> f64 {
+        f64::sqrt(self)
+    }
+}
+
+/// Where the right-hand side reads states, the parameters θ (and what is derived
+/// from them) and the material and geometry functions: plainly ([`Plain`]) or seeded
+/// with a derivative direction (`derivatives::Seeded`).
+pub(crate) trait Eval {
+    /// The number type.
+    type T: Num;
+    /// State `i` of `y`.
+    fn y(&self, y: &[f64], i: usize) -> Self::T;
+    /// Integrated arm j: (kj in Pa, τj in s).
+    fn arm(&self, j: usize) -> (Self::T, Self::T);
+    /// Kelvin-Voigt dashpot Nv (Pa·s).
+    fn nv(&self) -> Self::T;
+    /// Leakage conductance per capacitance 1/(ρε) (1/s).
+    fn g_per_c(&self) -> Self::T;
+    /// Reference stretch λf of the frozen springs.
+    fn lam_f(&self) -> Self::T;
+    /// Capacitance at rest C_rest (F).
+    fn c_rest(&self) -> Self::T;
+    /// Nominal stress P(λ) (Pa).
+    fn stress(&self, lam: Self::T) -> Self::T;
+    /// Tangent P'(λ) (Pa).
+    fn tangent(&self, lam: Self::T) -> Self::T;
+    /// C(λ), C'(λ), C''(λ) (F).
+    fn capacitance(&self, lam: Self::T) -> [Self::T; 3];
+}
+
+/// The plant's own values, in `f64`.
+pub(crate) struct Plain<'a>(pub &'a Plant);
+
+impl Eval for Plain<'_> {
+    type T = f64;
+    #[inline]
+    fn y(&self, y: &[f64], i: usize) -> f64 {
+        y[i]
+    }
+    #[inline]
+    fn arm(&self, j: usize) -> (f64, f64) {
+        self.0.arms[j]
+    }
+    #[inline]
+    fn nv(&self) -> f64 {
+        self.0.nv
+    }
+    #[inline]
+    fn g_per_c(&self) -> f64 {
+        self.0.g_per_c
+    }
+    #[inline]
+    fn lam_f(&self) -> f64 {
+        self.0.lam_f
+    }
+    #[inline]
+    fn c_rest(&self) -> f64 {
+        self.0.c_rest
+    }
+    #[inline]
+    fn stress(&self, lam: f64) -> f64 {
+        self.0.stress(lam)
+    }
+    #[inline]
+    fn tangent(&self, lam: f64) -> f64 {
+        self.0.tangent(lam)
+    }
+    #[inline]
+    fn capacitance(&self, lam: f64) -> [f64; 3] {
+        let (c, dc, d2c) = self.0.capacitance(lam);
+        [c, dc, d2c]
+    }
+}
+
+/// The controller's output at a state (seed Eq. 3.29 as coded: e = r(t) − ŷ(λ),
+/// u = Kp·e + Ki·I + Kd·(e − D)/τd with the filtered error D, Ḋ = (e − D)/τd, so that
+/// (e − D)/τd is the filtered de/dt; u clamped to [0, V_max]; conditional-integration
+/// anti-windup İ = 0 while the clamp is active and the error pushes further into it).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PidOut<T> {
+    /// Clamped command (V).
+    pub u: T,
+    /// The command's rate is u̇ = a + b·λ̇ (V/s; a, b zero while clamped).
+    pub a: T,
+    /// See `a` (V per unit λ̇·s).
+    pub b: T,
+    /// İ (1/s).
+    pub i_dot: T,
+    /// Ḋ (1/s).
+    pub d_dot: T,
+}
+
+/// The source side at a state, before λ̇ is known: the terminal voltage's rate is
+/// V̇ = a + b·λ̇ with a, b independent of λ̇.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Terminal<T> {
+    /// Source open-circuit voltage u (V).
+    pub u: T,
+    /// Terminal voltage V (V).
+    pub v: T,
+    /// a (V/s).
+    pub a: T,
+    /// b (V·s⁻¹ per unit λ̇).
+    pub b: T,
+    /// Rate of the source state: V̇ (rise time) or q̇ (resistance); 0 for ideal.
+    pub src_rate: T,
+    /// C(λ) (F).
+    pub c: T,
+    /// C'(λ) (F).
+    pub dc: T,
+    /// C''(λ) (F).
+    pub d2c: T,
+    /// Leakage conductance G = C/(ρε) (S).
+    pub g: T,
+    /// Controller output, if any.
+    pub pid: Option<PidOut<T>>,
+}
+
+/// λ̇, the generalised force on the velocity, the electrical state at λ̇.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Kinematics<T> {
+    /// λ̇ (1/s).
+    pub lam_dot: T,
+    /// M·λ̈ (N·m); 0 quasi-static.
+    pub force: T,
+    /// Source side.
+    pub terminal: Terminal<T>,
+    /// Electrical quantities at λ̇.
+    pub elec: Electrical<T>,
 }
 
 impl Plant {
@@ -112,7 +305,6 @@ impl Plant {
         let m_act = scene.load.actuator_mass_kg.unwrap_or(m_act);
         let m_eff = scene.load.mass_kg + scene.load.fraction * m_act;
         let f_load = m_eff * scene.load.gravity + scene.load.force_n;
-        let eps = EPS0 * m.eps_r;
         let mut nv = m.viscous.nv_pa_s;
         let mut arms = Vec::new();
         let mut frozen_k = 0.0;
@@ -139,48 +331,57 @@ impl Plant {
             mass: m_eff * l0 * l0,
             m_eff,
             f_load,
-            eps,
-            g_per_c: m.resistivity.map(|r| 1.0 / (r * eps)).unwrap_or(0.0),
+            eps_r: m.eps_r,
+            resistivity: m.resistivity,
             nv,
             arms,
             frozen_k,
-            lam_f: 1.0,
             inertia,
             source: scene.source,
             input: scene.input.clone(),
-            lam0: 1.0,
             control: scene.control.clone(),
+            tau_c: 0.0,
+            eps: 0.0,
+            g_per_c: 0.0,
+            lam0: 1.0,
+            lam_f: 1.0,
             c_rest: 0.0,
         };
-        p.lam0 = p.static_stretch(0.0, 1.0).unwrap_or(1.0);
-        p.lam_f = p.lam0;
-        p.c_rest = p.capacitance(p.lam0).0;
+        p.derive();
+        let t_in = super::fidelity::input_time_scale(scene, p.c_rest);
+        p.tau_c = BAUMGARTE_FRACTION
+            * p.arms
+                .iter()
+                .map(|a| a.1)
+                .chain((t_in > 0.0).then_some(t_in))
+                .fold(scene.time.span, f64::min);
         p
     }
 
-    /// PID (Eq. 3.29): (clamped command in V, error, unclamped output).
-    #[inline]
-    pub fn pid(&self, pid: &Pid, t: f64, y: &[f64]) -> (f64, f64, f64) {
-        let i = self.layout().ctl.unwrap_or(0);
-        let e = pid.reference.eval(t).0 - self.sensed_contraction(y[0]);
-        let u = pid.kp * e + pid.ki * y[i] + pid.kd * (e - y[i + 1]) / pid.tau_d;
-        (u.clamp(0.0, pid.v_max), e, u)
+    /// The quantities derived from the parameters θ (the one place computing them):
+    /// ε = ε0·εr, G/C = 1/(ρε), λ0 = static equilibrium at V = 0 (from λ = 1),
+    /// λf = λ0, C_rest = C(λ0).
+    pub(super) fn derive(&mut self) {
+        self.eps = EPS0 * self.eps_r;
+        self.g_per_c = self
+            .resistivity
+            .map(|r| 1.0 / (r * self.eps))
+            .unwrap_or(0.0);
+        self.lam0 = self.static_stretch(0.0, 1.0).unwrap_or(1.0);
+        self.lam_f = self.lam0;
+        self.c_rest = self.capacitance(self.lam0).0;
+    }
+
+    /// The hyperelastic model.
+    pub(super) fn model(&self) -> &dyn StrainEnergy {
+        self.model.as_ref()
     }
 
     /// Contraction estimated from the capacitance with the stack law C ∝ λ⁻²
     /// (self-sensing, Eq. 3.22): 1 − sqrt(C_rest/C).
     #[inline]
     pub fn sensed_contraction(&self, lam: f64) -> f64 {
-        1.0 - (self.c_rest / self.capacitance(lam).0).sqrt()
-    }
-
-    /// The source's open-circuit voltage and its rate: the input or the PID command.
-    #[inline]
-    pub fn command(&self, t: f64, y: &[f64]) -> (f64, f64) {
-        match &self.control {
-            Some(pid) => (self.pid(pid, t, y).0, 0.0),
-            None => self.input.eval(t),
-        }
+        sensed(self.c_rest, self.capacitance(lam).0)
     }
 
     /// Nominal stress P(λ) of the layer (Pa).
@@ -207,19 +408,35 @@ impl Plant {
     }
     /// Static (fully relaxed) generalised force at (λ, V): zero at equilibrium.
     pub fn static_force(&self, lam: f64, v: f64) -> f64 {
-        let (_, dc, _) = self.capacitance(lam);
-        -self.vol * self.stress(lam) + self.f_load * self.l0 + 0.5 * v * v * dc
+        self.relaxed_force(&Plain(self), lam, v, self.capacitance(lam).1)
     }
     /// Long-term stiffness −∂(static force)/∂λ at (λ, V).
     pub fn static_stiffness(&self, lam: f64, v: f64) -> f64 {
-        let (_, _, d2c) = self.capacitance(lam);
-        self.vol * self.tangent(lam) - 0.5 * v * v * d2c
+        self.stiffness(&Plain(self), lam, v, self.capacitance(lam).2, 0.0)
     }
     /// Instantaneous stiffness (arms act as springs): pull-in when it reaches zero.
     pub fn instant_stiffness(&self, lam: f64, v: f64) -> f64 {
-        let k: f64 = self.arms.iter().map(|a| a.0).sum::<f64>() + self.frozen_k;
-        self.static_stiffness(lam, v) + self.vol * k
+        let e = Plain(self);
+        self.stiffness(&e, lam, v, self.capacitance(lam).2, self.springs(&e))
     }
+
+    /// Fully relaxed generalised force −Vol·P(λ) + F_load·L0 + ½V²·C'(λ) (N·m).
+    #[inline]
+    fn relaxed_force<E: Eval>(&self, e: &E, lam: E::T, v: E::T, dc: E::T) -> E::T {
+        e.stress(lam) * -self.vol + v * v * dc * 0.5 + self.f_load * self.l0
+    }
+    /// Stiffness Vol·(P'(λ) + springs) − ½V²·C''(λ) (N·m): the static one with
+    /// springs = 0, the instantaneous one with springs = Σkj + kf.
+    #[inline]
+    fn stiffness<E: Eval>(&self, e: &E, lam: E::T, v: E::T, d2c: E::T, springs: E::T) -> E::T {
+        (e.tangent(lam) + springs) * self.vol - v * v * d2c * 0.5
+    }
+    /// Σkj + kf (Pa).
+    #[inline]
+    fn springs<E: Eval>(&self, e: &E) -> E::T {
+        (0..self.arms.len()).fold(E::T::cst(self.frozen_k), |s, j| s + e.arm(j).0)
+    }
+
     /// Stable static equilibrium reached from `start` at voltage `v` (fully relaxed),
     /// by damped Newton along the stable branch; None if none exists there.
     pub fn static_stretch(&self, v: f64, start: f64) -> Option<f64> {
@@ -272,13 +489,14 @@ impl Plant {
         if let Some(i) = l.src {
             // the source starts from the input's value just before t = 0, so a step
             // at t = 0 goes through the source's rise time / resistance
-            let u = match self.control {
-                Some(_) => self.command(0.0, &y).0,
+            let (c, dc, _) = self.capacitance(self.lam0);
+            let u = match &self.control {
+                Some(pid) => self.pid_out(&Plain(self), pid, 0.0, &y, &l, c, dc).u,
                 None => self.input.eval(-f64::MIN_POSITIVE).0,
             };
             y[i] = match self.source {
                 Source::RiseTime { .. } => u,
-                Source::Resistance { .. } => u * self.capacitance(self.lam0).0,
+                Source::Resistance { .. } => u * c,
                 Source::Ideal => 0.0,
             };
         }
@@ -314,86 +532,286 @@ impl Plant {
         s
     }
 
-    /// Terminal voltage, its rate, and the current into the actuator (incl. leakage).
+    /// The controller (Eq. 3.29, see [`PidOut`]) at a state with capacitance C and
+    /// C' at λ. Its rate, while not clamped: u̇ = Kp·ė + Ki·İ + Kd·(ė − Ḋ)/τd with
+    /// ė = ṙ − ŷ'(λ)·λ̇, ŷ' = ½(1 − ŷ)·C'/C, so a = (Kp + Kd/τd)·ṙ + Ki·İ − Kd·Ḋ/τd
+    /// and b = −(Kp + Kd/τd)·ŷ'.
+    #[allow(clippy::too_many_arguments)]
     #[inline]
-    pub fn electrical(&self, t: f64, y: &[f64], lam_dot: f64) -> Electrical {
-        let l = self.layout();
-        let lam = y[0];
-        let (c, dc, _) = self.capacitance(lam);
-        let g = self.g_per_c * c;
-        let (u, du) = self.command(t, y);
-        let (v, dv, current) = match self.source {
-            Source::Ideal => (u, du, dc * lam_dot * u + c * du + g * u),
-            Source::RiseTime { tau_s } => {
-                let v = y[l.src.unwrap_or(0)];
-                let dv = (u - v) / tau_s;
-                (v, dv, dc * lam_dot * v + c * dv + g * v)
-            }
-            Source::Resistance { ohm } => {
-                let v = y[l.src.unwrap_or(0)] / c;
-                let i = (u - v) / ohm;
-                let dv = (i - g * v - dc * lam_dot * v) / c;
-                (v, dv, i)
+    pub(crate) fn pid_out<E: Eval>(
+        &self,
+        e: &E,
+        pid: &Pid,
+        t: f64,
+        y: &[f64],
+        l: &Layout,
+        c: E::T,
+        dc: E::T,
+    ) -> PidOut<E::T> {
+        let zero = E::T::cst(0.0);
+        let i = l.ctl.unwrap_or(0);
+        let (r, r_dot) = pid.reference.eval(t);
+        let s = sensed(e.c_rest(), c);
+        let err = -s + r;
+        let d = e.y(y, i + 1);
+        let raw = err * pid.kp + e.y(y, i) * pid.ki + (err - d) * (pid.kd / pid.tau_d);
+        let (rv, ev) = (raw.val(), err.val());
+        let wind = (rv > pid.v_max && ev > 0.0) || (rv < 0.0 && ev < 0.0);
+        let i_dot = if wind { zero } else { err };
+        let d_dot = (err - d) / pid.tau_d;
+        let gain = pid.kp + pid.kd / pid.tau_d;
+        let (u, a, b) = if rv < 0.0 {
+            (zero, zero, zero)
+        } else if rv > pid.v_max {
+            (E::T::cst(pid.v_max), zero, zero)
+        } else {
+            let s_lam = (-s + 1.0) * dc / c * 0.5;
+            (
+                raw,
+                i_dot * pid.ki - d_dot * (pid.kd / pid.tau_d) + gain * r_dot,
+                s_lam * -gain,
+            )
+        };
+        PidOut {
+            u,
+            a,
+            b,
+            i_dot,
+            d_dot,
+        }
+    }
+
+    /// The source side at a state (see [`Terminal`]):
+    /// * ideal: V = u, V̇ = u̇ (the input's rate, or the PID's a + b·λ̇);
+    /// * rise time τ: V the state, V̇ = (u − V)/τ;
+    /// * resistance R: charge q the state, V = q/C, q̇ = (u − V)/R − G·V, so
+    ///   V̇ = q̇/C − V·C'·λ̇/C: a = q̇/C, b = −V·C'/C.
+    #[inline]
+    pub(crate) fn terminal<E: Eval>(&self, e: &E, t: f64, y: &[f64], l: &Layout) -> Terminal<E::T> {
+        let zero = E::T::cst(0.0);
+        let [c, dc, d2c] = e.capacitance(e.y(y, 0));
+        let g = e.g_per_c() * c;
+        let pid = self
+            .control
+            .as_ref()
+            .map(|pid| self.pid_out(e, pid, t, y, l, c, dc));
+        let (u, ua, ub) = match &pid {
+            Some(o) => (o.u, o.a, o.b),
+            None => {
+                let (u, du) = self.input.eval(t);
+                (E::T::cst(u), E::T::cst(du), zero)
             }
         };
-        Electrical {
+        let src = l.src.unwrap_or(0);
+        let (v, a, b, src_rate) = match self.source {
+            Source::Ideal => (u, ua, ub, zero),
+            Source::RiseTime { tau_s } => {
+                let v = e.y(y, src);
+                let dv = (u - v) / tau_s;
+                (v, dv, zero, dv)
+            }
+            Source::Resistance { ohm } => {
+                let v = e.y(y, src) / c;
+                let dq = (u - v) / ohm - g * v;
+                (v, dq / c, -(v * dc / c), dq)
+            }
+        };
+        Terminal {
             u,
-            voltage: v,
-            voltage_rate: dv,
-            capacitance: c,
+            v,
+            a,
+            b,
+            src_rate,
+            c,
             dc,
-            current,
-            leakage: g * v * v,
+            d2c,
+            g,
+            pid,
         }
+    }
+
+    /// Electrical quantities at λ̇: V̇ = a + b·λ̇; current I = (u − V)/R behind a
+    /// resistance, else d(CV)/dt + G·V = C'·λ̇·V + C·V̇ + G·V.
+    #[inline]
+    fn rates<T: Num>(&self, s: &Terminal<T>, lam_dot: T) -> Electrical<T> {
+        let v_dot = s.a + s.b * lam_dot;
+        let current = match self.source {
+            Source::Resistance { ohm } => (s.u - s.v) / ohm,
+            _ => s.dc * lam_dot * s.v + s.c * v_dot + s.g * s.v,
+        };
+        Electrical {
+            u: s.u,
+            voltage: s.v,
+            voltage_rate: v_dot,
+            capacitance: s.c,
+            dc: s.dc,
+            current,
+            leakage: s.g * s.v * s.v,
+        }
+    }
+
+    /// The drive D = −Vol·[P(λ) + Σσj + kf·(λ − λf)] + F_load·L0 + ½V²·C'(λ) (N·m):
+    /// the generalised force without inertia and dashpot.
+    #[inline]
+    fn drive_with<E: Eval>(&self, e: &E, y: &[f64], l: &Layout, s: &Terminal<E::T>) -> E::T {
+        let lam = e.y(y, 0);
+        let sig = (0..self.arms.len()).fold(E::T::cst(0.0), |a, j| a + e.y(y, l.sig + j));
+        self.relaxed_force(e, lam, s.v, s.dc) - (sig + (lam - e.lam_f()) * self.frozen_k) * self.vol
+    }
+
+    /// λ̇ of the quasi-static plant without dashpot, by index reduction of the force
+    /// balance D(λ, σ, V) = 0. With σ̇j = kj·λ̇ − σj/τj and V̇ = a + b·λ̇:
+    /// dD/dt = −K·λ̇ + Vol·Σσj/τj + V·C'·(a + b·λ̇), K the instantaneous stiffness
+    /// Vol·(P' + Σkj + kf) − ½V²C''. Baumgarte stabilisation asks dD/dt = −D/τc, so
+    ///
+    /// λ̇ = (Vol·Σσj/τj + V·C'·a + D/τc) / (K − V·C'·b).
+    ///
+    /// D decays as e^(−t/τc) from any drift; on the constraint the solution does not
+    /// depend on τc. K → 0 is pull-in (for a voltage-driven source the denominator is
+    /// K itself): the denominator is floored at [`PULL_IN_FLOOR`] × the elastic
+    /// stiffness Vol·(P' + Σkj + kf), so λ̇ stays finite and keeps its sign through
+    /// K = 0, the solution crosses it and the pull-in event (K = 0) fires; the floor
+    /// changes the solution only within that fraction of the stiffness of the fold.
+    #[inline]
+    fn constrained_rate<E: Eval>(
+        &self,
+        e: &E,
+        y: &[f64],
+        l: &Layout,
+        s: &Terminal<E::T>,
+        drive: E::T,
+    ) -> E::T {
+        let lam = e.y(y, 0);
+        let relax = (0..self.arms.len()).fold(E::T::cst(0.0), |acc, j| {
+            acc + e.y(y, l.sig + j) / e.arm(j).1
+        });
+        let k = self.stiffness(e, lam, s.v, s.d2c, self.springs(e));
+        let k_el = k + s.v * s.v * s.d2c * 0.5;
+        let floor = (if k_el.val() < 0.0 { -k_el } else { k_el }) * PULL_IN_FLOOR;
+        let den = k - s.v * s.dc * s.b;
+        let den = if den.val() >= floor.val() { den } else { floor };
+        (relax * self.vol + s.v * s.dc * s.a + drive / self.tau_c) / den
     }
 
     /// λ̇, the generalised acceleration force and the electrical state (with the
     /// current evaluated at λ̇) at a state.
     #[inline]
-    fn kinematics(&self, t: f64, y: &[f64], l: &Layout) -> (f64, f64, Electrical) {
-        let lam = y[0];
-        let sig: f64 = y[l.sig..l.sig + self.arms.len()].iter().sum();
-        let elastic = self.stress(lam) + sig + self.frozen_k * (lam - self.lam_f);
-        // the terminal voltage does not depend on λ̇; the current does (dC/dt·V)
-        let mut e = self.electrical(t, y, 0.0);
-        let drive =
-            -self.vol * elastic + self.f_load * self.l0 + 0.5 * e.voltage * e.voltage * e.dc;
+    pub(crate) fn kinematics<E: Eval>(
+        &self,
+        e: &E,
+        t: f64,
+        y: &[f64],
+        l: &Layout,
+    ) -> Kinematics<E::T> {
+        let s = self.terminal(e, t, y, l);
+        let drive = self.drive_with(e, y, l, &s);
         let (lam_dot, force) = match l.v {
-            Some(i) => (y[i], drive - self.vol * self.nv * y[i]),
-            None => (drive / (self.vol * self.nv), 0.0),
-        };
-        match self.source {
-            Source::Resistance { .. } => {
-                e.voltage_rate -= e.dc * lam_dot * e.voltage / e.capacitance
+            Some(i) => {
+                let w = e.y(y, i);
+                (w, drive - e.nv() * w * self.vol)
             }
-            _ => e.current += e.dc * lam_dot * e.voltage,
+            None if self.nv > 0.0 => (drive / (e.nv() * self.vol), E::T::cst(0.0)),
+            None => (self.constrained_rate(e, y, l, &s, drive), E::T::cst(0.0)),
+        };
+        Kinematics {
+            lam_dot,
+            force,
+            terminal: s,
+            elec: self.rates(&s, lam_dot),
         }
-        (lam_dot, force, e)
+    }
+
+    /// The right-hand side, written once for every number type: `out(i, dy_i)` for
+    /// every state i.
+    #[inline]
+    pub(crate) fn rhs_with<E: Eval>(
+        &self,
+        e: &E,
+        t: f64,
+        y: &[f64],
+        mut out: impl FnMut(usize, E::T),
+    ) {
+        let l = self.layout();
+        let k = self.kinematics(e, t, y, &l);
+        let (ld, el) = (k.lam_dot, k.elec);
+        out(0, ld);
+        if let Some(i) = l.v {
+            out(i, k.force / self.mass);
+        }
+        let mut d_visc = e.nv() * ld * ld;
+        for j in 0..self.arms.len() {
+            let (kj, tau) = e.arm(j);
+            let s = e.y(y, l.sig + j);
+            out(l.sig + j, kj * ld - s / tau);
+            d_visc = d_visc + s * s / (kj * tau);
+        }
+        if let Some(i) = l.src {
+            out(i, k.terminal.src_rate);
+        }
+        if let (Some(i), Some(o)) = (l.ctl, k.terminal.pid) {
+            out(i, o.i_dot);
+            out(i + 1, o.d_dot);
+        }
+        let q = l.quad;
+        match self.source {
+            Source::Resistance { ohm } => {
+                let drop = el.u - el.voltage;
+                out(q, el.u * el.current);
+                out(q + 3, drop * drop / ohm);
+            }
+            _ => {
+                out(q, el.voltage * el.current);
+                out(q + 3, E::T::cst(0.0));
+            }
+        }
+        out(q + 1, d_visc * self.vol);
+        out(q + 2, el.leakage);
+    }
+
+    /// Terminal voltage, its rate, and the current into the actuator (incl. leakage),
+    /// at a given λ̇.
+    #[inline]
+    pub fn electrical(&self, t: f64, y: &[f64], lam_dot: f64) -> Electrical {
+        let e = Plain(self);
+        self.rates(&self.terminal(&e, t, y, &self.layout()), lam_dot)
+    }
+
+    /// The drive D (N·m): the generalised force without inertia and dashpot (see
+    /// the module documentation). Zero along a quasi-static run without dashpot.
+    pub fn drive(&self, t: f64, y: &[f64]) -> f64 {
+        let (e, l) = (Plain(self), self.layout());
+        self.drive_with(&e, y, &l, &self.terminal(&e, t, y, &l))
     }
 
     /// λ̇ at a state (both fidelities).
     pub fn lam_dot(&self, t: f64, y: &[f64]) -> f64 {
-        self.kinematics(t, y, &self.layout()).0
+        self.kinematics(&Plain(self), t, y, &self.layout()).lam_dot
     }
+}
+
+/// Sensed contraction ŷ = 1 − sqrt(C_rest/C) (Eq. 3.22).
+#[inline]
+fn sensed<T: Num>(c_rest: T, c: T) -> T {
+    -(c_rest / c).sqrt() + 1.0
 }
 
 /// Electrical quantities at an instant.
 #[derive(Debug, Clone, Copy)]
-pub struct Electrical {
+pub struct Electrical<T = f64> {
     /// Input (source open-circuit) voltage (V).
-    pub u: f64,
+    pub u: T,
     /// Terminal voltage (V).
-    pub voltage: f64,
+    pub voltage: T,
     /// Its rate (V/s).
-    pub voltage_rate: f64,
+    pub voltage_rate: T,
     /// Capacitance (F).
-    pub capacitance: f64,
+    pub capacitance: T,
     /// dC/dλ (F).
-    pub dc: f64,
+    pub dc: T,
     /// Current into the actuator incl. dC/dt·V and leakage (A).
-    pub current: f64,
+    pub current: T,
     /// Leakage power G·V² (W).
-    pub leakage: f64,
+    pub leakage: T,
 }
 
 impl super::integrate::System for Plant {
@@ -401,44 +819,7 @@ impl super::integrate::System for Plant {
         self.layout().n
     }
     fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) {
-        let l = self.layout();
-        let (lam_dot, force, e) = self.kinematics(t, y, &l);
-        dy[0] = lam_dot;
-        if let Some(i) = l.v {
-            dy[i] = force / self.mass;
-        }
-        let mut d_visc = self.nv * lam_dot * lam_dot;
-        for (j, &(k, tau)) in self.arms.iter().enumerate() {
-            let s = y[l.sig + j];
-            dy[l.sig + j] = k * lam_dot - s / tau;
-            d_visc += s * s / (k * tau);
-        }
-        if let Some(i) = l.src {
-            dy[i] = match self.source {
-                Source::RiseTime { .. } => e.voltage_rate,
-                Source::Resistance { .. } => e.current - self.g_per_c * e.capacitance * e.voltage,
-                Source::Ideal => 0.0,
-            };
-        }
-        if let (Some(i), Some(pid)) = (l.ctl, &self.control) {
-            let (_, e, u) = self.pid(pid, t, y);
-            let wind = (u > pid.v_max && e > 0.0) || (u < 0.0 && e < 0.0);
-            dy[i] = if wind { 0.0 } else { e };
-            dy[i + 1] = (e - y[i + 1]) / pid.tau_d;
-        }
-        let q = l.quad;
-        match self.source {
-            Source::Resistance { ohm } => {
-                dy[q] = e.u * e.current;
-                dy[q + 3] = (e.u - e.voltage).powi(2) / ohm;
-            }
-            _ => {
-                dy[q] = e.voltage * e.current;
-                dy[q + 3] = 0.0;
-            }
-        }
-        dy[q + 1] = self.vol * d_visc;
-        dy[q + 2] = e.leakage;
+        self.rhs_with(&Plain(self), t, y, |i, v| dy[i] = v);
     }
     fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) {
         // TEMPORARY central differences (replaced by the analytic Jacobian)

@@ -145,7 +145,7 @@ pub enum FidelityChoice {
     Auto,
     /// Full model with inertia and every arm.
     Dynamic,
-    /// No inertia (needs Nv > 0).
+    /// No inertia (without a dashpot: not through a jump of an ideal source).
     QuasiStatic,
 }
 

@@ -672,3 +672,117 @@ fn adaptive_work_precision_slope_is_the_methods_order() {
         }
     }
 }
+
+/// The scene with parameter j of the full plant's θ (hyperelastic constants, each
+/// arm's k and τ, Nv, εr) multiplied by (1 + rel).
+fn perturbed(s: &Scene, j: usize, rel: f64) -> Scene {
+    let mut s = s.clone();
+    let m = &mut s.material;
+    let np = m.params.len();
+    let na = m.viscous.arms.len();
+    if j < np {
+        m.params[j] *= 1.0 + rel;
+    } else if j < np + 2 * na {
+        let a = &mut m.viscous.arms[(j - np) / 2];
+        let tau = a.eta_pa_s / a.k_pa;
+        if (j - np).is_multiple_of(2) {
+            a.k_pa *= 1.0 + rel; // τ kept: η follows k
+            a.eta_pa_s = tau * a.k_pa;
+        } else {
+            a.eta_pa_s = a.k_pa * tau * (1.0 + rel);
+        }
+    } else if j == np + 2 * na {
+        m.viscous.nv_pa_s *= 1.0 + rel;
+    } else {
+        m.eps_r *= 1.0 + rel;
+    }
+    s
+}
+
+/// Forward sensitivities (diffsol, with the plant's exact ∂f/∂y and ∂f/∂θ) agree
+/// with central differences of whole runs, for every parameter, at every sample.
+#[test]
+fn forward_sensitivities_match_finite_differences_of_runs() {
+    let text = std::fs::read_to_string("datasets/scenes/stack_step_5kV_damped.toml").unwrap();
+    // a step, and a triangle whose corners restart the integration (the
+    // sensitivities must carry through the restarts)
+    let triangle = text.replace(
+        "kind = \"step\"\nat = \"0 s\"\namplitude = \"5 kV\"",
+        "kind = \"triangle\"\namplitude = \"5 kV\"\nfrequency = \"2 Hz\"\ncycles = 3",
+    );
+    assert_ne!(text, triangle);
+    sensitivities_match_differences(scene(&text));
+    sensitivities_match_differences(scene(&triangle));
+}
+
+fn sensitivities_match_differences(mut s: Scene) {
+    s.time.fidelity = dea_fit::sim::scene::FidelityChoice::Dynamic;
+    s.time.span = 2.0;
+    s.time.samples = (1..=40).map(|i| 0.05 * i as f64).collect();
+    let tight = |sens: bool| RunOptions {
+        method: Some(Method::Bdf),
+        rtol: Some(1e-10),
+        sensitivities: sens,
+        ..Default::default()
+    };
+    let o = simulate(&s, &tight(true)).unwrap();
+    let se = o.sensitivities.as_ref().unwrap();
+    assert_eq!(se.params.len(), se.theta.len());
+    assert_eq!(se.stretch.len(), o.samples.len());
+    let h = 1e-5;
+    let runs: Vec<_> = (0..se.params.len())
+        .map(|j| {
+            let up = simulate(&perturbed(&s, j, h), &tight(false)).unwrap();
+            let dn = simulate(&perturbed(&s, j, -h), &tight(false)).unwrap();
+            (up, dn)
+        })
+        .collect();
+    // one absolute scale: the largest effect of any parameter (a parameter with a
+    // tiny effect, e.g. Yeoh's C30 at small strain, is compared on that scale too)
+    let fd = |j: usize, k: usize| {
+        (runs[j].0.samples[k].stretch - runs[j].1.samples[k].stretch) / (2.0 * h)
+    };
+    let n = o.samples.len();
+    let scale = (0..se.params.len())
+        .flat_map(|j| (0..n).map(move |k| (j, k)))
+        .fold(0.0_f64, |m, (j, k)| m.max(fd(j, k).abs()));
+    let mut worst = 0.0_f64;
+    for j in 0..se.params.len() {
+        for k in 0..n {
+            let an = se.theta[j] * se.stretch[k][j];
+            let d = (an - fd(j, k)).abs() / scale;
+            worst = worst.max(d);
+            // rtol 1e-10 runs, h = 1e-5: the difference quotient is good to ≈1e-5 of
+            // the largest effect; 1e-4 leaves room for the step pattern
+            assert!(
+                d <= 1e-4,
+                "{} at t = {}: forward {an:e}, differences {:e}",
+                se.params[j],
+                o.samples[k].time_s,
+                fd(j, k)
+            );
+        }
+        // the capacitance sensitivity C'(λ)·∂λ/∂θ + ∂C/∂θ at the last sample
+        let k = n - 1;
+        let (up, dn) = &runs[j];
+        let fdc = (up.samples[k].capacitance_f - dn.samples[k].capacitance_f) / (2.0 * h);
+        let anc = se.theta[j] * se.capacitance[k][j];
+        assert!(
+            (anc - fdc).abs() <= 1e-4 * o.samples[k].capacitance_f,
+            "{}: dC forward {anc:e}, differences {fdc:e}",
+            se.params[j]
+        );
+    }
+    eprintln!("sensitivities vs differences: worst {worst:.1e} of the largest effect {scale:.3e}");
+    // Dormand–Prince has no sensitivities: an error, not silence
+    let o = simulate(
+        &s,
+        &RunOptions {
+            method: Some(Method::Dp54),
+            sensitivities: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(o.integrator.status, RunStatus::Failed);
+}

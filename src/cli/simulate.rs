@@ -23,6 +23,11 @@ pub struct Args {
     /// Override the scene's integrator: bdf, esdirk34, tr-bdf2, tsit45 or dp54.
     #[arg(long, value_parser = parse_method)]
     method: Option<Method>,
+    /// Also integrate the forward sensitivities to the material parameters: adds
+    /// dstretch_d_<param> and dC_d_<param> columns to the trajectory, a chart, and
+    /// the scaled sensitivities to the summary.
+    #[arg(long)]
+    sensitivities: bool,
     /// Report directory (default reports/sim-<scene>).
     #[arg(long)]
     report: Option<PathBuf>,
@@ -53,6 +58,7 @@ pub fn run(a: Args) -> Result<i32> {
         &RunOptions {
             rtol: a.rtol,
             method: a.method,
+            sensitivities: a.sensitivities,
             ..Default::default()
         },
     )?;
@@ -83,6 +89,7 @@ pub fn run(a: Args) -> Result<i32> {
         "energy": o.energy,
         "tracking_rmse_pct": o.tracking_rmse_pct,
         "warnings": o.warnings,
+        "sensitivities": o.sensitivities.as_ref().map(simulation::scaled_sensitivities),
         "run_time_s": run_time,
         "trajectory": csv,
     });

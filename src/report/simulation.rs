@@ -5,7 +5,7 @@ use super::format::si;
 use super::plot::{Chart, Series, Style};
 use crate::error::Result;
 use crate::io::write::atomic_write;
-use crate::sim::Outcome;
+use crate::sim::{Outcome, Sensitivities};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -17,13 +17,63 @@ fn opt(v: f64) -> String {
     }
 }
 
-/// The trajectory as CSV text (SI units in the header).
+/// Column key of a sensitivity parameter: its name without the unit.
+fn param_key(name: &str) -> &str {
+    name.split(' ').next().unwrap_or(name)
+}
+
+/// Scaled sensitivity of a parameter: over the run, the largest |θj·∂λ/∂θj| (the
+/// first-order change of the stretch for a 100 % change of θj) and of |θj·∂C/∂θj| (F).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ScaledSensitivity {
+    /// Parameter name with unit.
+    pub param: String,
+    /// Its value (SI).
+    pub value: f64,
+    /// max over samples of |θj·∂λ/∂θj|.
+    pub stretch: f64,
+    /// max over samples of |θj·∂C/∂θj| (F).
+    #[serde(rename = "capacitance_F")]
+    pub capacitance_f: f64,
+}
+
+/// Scaled sensitivities of every parameter, largest stretch effect first.
+pub fn scaled_sensitivities(se: &Sensitivities) -> Vec<ScaledSensitivity> {
+    let big = |rows: &[Vec<f64>], j: usize| {
+        rows.iter()
+            .map(|r| (se.theta[j] * r[j]).abs())
+            .filter(|v| v.is_finite())
+            .fold(0.0, f64::max)
+    };
+    let mut v: Vec<ScaledSensitivity> = (0..se.params.len())
+        .map(|j| ScaledSensitivity {
+            param: se.params[j].clone(),
+            value: se.theta[j],
+            stretch: big(&se.stretch, j),
+            capacitance_f: big(&se.capacitance, j),
+        })
+        .collect();
+    v.sort_by(|a, b| b.stretch.total_cmp(&a.stretch));
+    v
+}
+
+/// The trajectory as CSV text (SI units in the header); with sensitivities, the
+/// columns `dstretch_d_<param>` and `dC_d_<param>` (per SI unit of the parameter).
 pub fn trajectory_csv(o: &Outcome) -> String {
     let mut s = String::from(
-        "time_s,input_V,voltage_V,stretch,length_m,stroke_m,capacitance_F,current_A,power_W,leakage_power_W,alpha_rad,reference,sensed_contraction\n",
+        "time_s,input_V,voltage_V,stretch,length_m,stroke_m,capacitance_F,current_A,power_W,leakage_power_W,alpha_rad,reference,sensed_contraction",
     );
-    for x in &o.samples {
-        let _ = writeln!(
+    if let Some(se) = &o.sensitivities {
+        for p in &se.params {
+            let _ = write!(s, ",dstretch_d_{}", param_key(p));
+        }
+        for p in &se.params {
+            let _ = write!(s, ",dC_d_{}", param_key(p));
+        }
+    }
+    s.push('\n');
+    for (k, x) in o.samples.iter().enumerate() {
+        let _ = write!(
             s,
             "{},{},{},{},{},{},{},{},{},{},{},{},{}",
             x.time_s,
@@ -40,6 +90,12 @@ pub fn trajectory_csv(o: &Outcome) -> String {
             opt(x.reference),
             x.sensed_contraction
         );
+        if let Some(se) = &o.sensitivities {
+            for v in se.stretch[k].iter().chain(&se.capacitance[k]) {
+                let _ = write!(s, ",{}", opt(*v));
+            }
+        }
+        s.push('\n');
     }
     s
 }
@@ -173,6 +229,44 @@ pub fn write(o: &Outcome, dir: &Path) -> Result<PathBuf> {
         md,
         "\n![stroke](stroke.svg)\n![voltage](voltage.svg)\n![power](power.svg)"
     );
+    if let Some(se) = &o.sensitivities {
+        let _ = writeln!(
+            md,
+            "\n## Sensitivities\n\nLargest first-order change over the run for a 100 % change of each parameter (θ·∂/∂θ):\n\n| parameter | value | stretch | capacitance |\n|---|---|---|---|"
+        );
+        for r in scaled_sensitivities(se) {
+            let _ = writeln!(
+                md,
+                "| {} | {:.4e} | {:.3e} | {} |",
+                r.param,
+                r.value,
+                r.stretch,
+                si(r.capacitance_f, "F")
+            );
+        }
+        Chart {
+            title: format!("{}: stretch sensitivities θ·∂λ/∂θ", o.scene),
+            x_label: "time (s)".into(),
+            y_label: "θ·∂λ/∂θ".into(),
+            series: (0..se.params.len())
+                .map(|j| Series {
+                    label: se.params[j].clone(),
+                    points: o
+                        .samples
+                        .iter()
+                        .zip(&se.stretch)
+                        .filter(|(_, r)| r[j].is_finite())
+                        .map(|(s, r)| (s.time_s, se.theta[j] * r[j]))
+                        .collect(),
+                    color: j,
+                    style: Style::Line,
+                })
+                .collect(),
+            log_x: false,
+        }
+        .write_svg(&dir.join("sensitivities.svg"))?;
+        let _ = writeln!(md, "\n![sensitivities](sensitivities.svg)");
+    }
     let page = dir.join("index.md");
     atomic_write(&page, md.as_bytes())?;
     Ok(page)

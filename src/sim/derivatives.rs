@@ -366,6 +366,17 @@ impl Plant {
         th
     }
 
+    /// ∂ln C/∂θ at fixed λ: C ∝ ε (Eq. 3.22, 4.47), so 1/εr for εr and zero for the
+    /// mechanical parameters.
+    pub fn capacitance_log_sensitivity(&self) -> Vec<f64> {
+        (0..self.n_theta())
+            .map(|k| match self.theta_kind(k) {
+                Theta::EpsR => 1.0 / self.eps_r,
+                _ => 0.0,
+            })
+            .collect()
+    }
+
     /// The plant with parameters θ, every derived quantity (ε, G/C, λ0, λf, C_rest)
     /// recomputed as [`Plant::new`] does; τc is kept.
     pub fn with_theta(&self, theta: &[f64]) -> Plant {

@@ -21,7 +21,7 @@ pub mod stack;
 pub mod static_curve;
 
 use fidelity::{AxialMode, Fidelity};
-use integrate::{End, Method, Options, Stats};
+use integrate::{End, Extra, Method, Options, Stats};
 use plant::Plant;
 use scene::{Actuator, Scene, Source};
 use serde::Serialize;
@@ -150,6 +150,26 @@ pub struct Outcome {
     /// Samples (not in the JSON summary).
     #[serde(skip)]
     pub samples: Vec<Sample>,
+    /// Forward sensitivities at the samples, if asked for ([`RunOptions::sensitivities`]).
+    #[serde(skip)]
+    pub sensitivities: Option<Sensitivities>,
+}
+
+/// Forward sensitivities of the sampled trajectory to the parameters θ of the plant
+/// that ran (`Plant::sensitivity_params`): the hyperelastic constants, each
+/// integrated arm's k and τ, the dashpot Nv and εr. Arms lumped away by the
+/// fidelity choice are not parameters of that plant.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Sensitivities {
+    /// Parameter names with units.
+    pub params: Vec<String>,
+    /// Parameter values θ (SI).
+    pub theta: Vec<f64>,
+    /// ∂λ/∂θj, one row per sample (NaN at a pull-in sample: the event time itself
+    /// moves with θ).
+    pub stretch: Vec<Vec<f64>>,
+    /// ∂C/∂θj (F per unit of θj), one row per sample.
+    pub capacitance: Vec<Vec<f64>>,
 }
 
 /// Run settings that are not part of the scene.
@@ -161,6 +181,8 @@ pub struct RunOptions {
     pub rtol: Option<f64>,
     /// Fixed step (convergence tests only).
     pub fixed_step: Option<f64>,
+    /// Integrate the forward sensitivities to the plant's parameters too.
+    pub sensitivities: bool,
 }
 
 fn sample(p: &Plant, t: f64, y: &[f64]) -> Sample {
@@ -279,7 +301,36 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
             jump(y, vm, vp);
         }
     };
-    let mut out = |t: f64, y: &[f64]| samples.push(sample(&p, t, y));
+    let theta = p.theta();
+    let np = theta.len();
+    let n = l.n;
+    let mut sens = opts.sensitivities.then(|| Sensitivities {
+        params: p.sensitivity_params(),
+        theta: theta.clone(),
+        stretch: Vec::new(),
+        capacitance: Vec::new(),
+    });
+    let dlnc = p.capacitance_log_sensitivity();
+    let record = |sens: &mut Option<Sensitivities>, lam: f64, s: &[f64]| {
+        if let Some(se) = sens {
+            let (c, dc, _) = p.capacitance(lam);
+            let dl: Vec<f64> = (0..np).map(|j| s[j * n]).collect();
+            se.capacitance
+                .push((0..np).map(|j| dc * dl[j] + c * dlnc[j]).collect());
+            se.stretch.push(dl);
+        }
+    };
+    {
+        let mut s0 = vec![0.0; n * np];
+        p.initial_state_sensitivity(&mut s0);
+        // row-major n × np → column per parameter
+        let cols: Vec<f64> = (0..np * n).map(|k| s0[(k % n) * np + k / n]).collect();
+        record(&mut sens, y[0], &cols);
+    }
+    let mut out = |t: f64, y: &[f64], s: &[f64]| {
+        samples.push(sample(&p, t, y));
+        record(&mut sens, y[0], s);
+    };
     let end = integrate::run(
         &p,
         method,
@@ -288,6 +339,10 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
         &bounds,
         &mut y,
         &scene.time.samples,
+        match opts.sensitivities {
+            true => Extra::Sensitivities(&theta),
+            false => Extra::None,
+        },
         &mut out,
         Some(&event),
         &mut at_kink,
@@ -303,6 +358,10 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
         End::Event(te) => {
             let v = p.electrical(te, &y, 0.0).voltage;
             samples.push(sample(&p, te, &y));
+            if let Some(se) = &mut sens {
+                se.stretch.push(vec![f64::NAN; np]);
+                se.capacitance.push(vec![f64::NAN; np]);
+            }
             (
                 RunStatus::PullIn,
                 format!("pull-in at t = {te:.6} s: the instantaneous stiffness vanished"),
@@ -408,6 +467,7 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
         rest_length_m: p.length(p.lam0),
         warnings,
         samples,
+        sensitivities: sens,
     })
 }
 

@@ -822,21 +822,15 @@ impl super::integrate::System for Plant {
         self.rhs_with(&Plain(self), t, y, |i, v| dy[i] = v);
     }
     fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) {
-        // TEMPORARY central differences (replaced by the analytic Jacobian)
-        let n = y.len();
-        let mut yp = y.to_vec();
-        let mut fp = vec![0.0; n];
-        let mut fm = vec![0.0; n];
-        for j in 0..n {
-            let d = 1e-7 * y[j].abs().max(1e-6);
-            yp[j] = y[j] + d;
-            self.rhs(t, &yp, &mut fp);
-            yp[j] = y[j] - d;
-            self.rhs(t, &yp, &mut fm);
-            yp[j] = y[j];
-            for i in 0..n {
-                jac[i * n + j] = (fp[i] - fm[i]) / (2.0 * d);
-            }
-        }
+        Plant::jacobian(self, t, y, jac)
+    }
+    fn n_params(&self) -> usize {
+        self.n_theta()
+    }
+    fn param_jacobian(&self, t: f64, y: &[f64], dfdp: &mut [f64]) {
+        Plant::param_jacobian(self, t, y, dfdp)
+    }
+    fn initial_sensitivity(&self, out: &mut [f64]) {
+        self.initial_state_sensitivity(out)
     }
 }

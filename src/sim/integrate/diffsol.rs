@@ -8,7 +8,7 @@
 //! the input's right limit, and diffsol reinitialises the method to first order
 //! (it does so whenever the state is touched through `state_mut`).
 
-use super::{End, EventFn, Method, Options, Stats, System};
+use super::{End, EventFn, Extra, Method, Options, SampleFn, Stats, System};
 use ::diffsol::{
     NalgebraLU, NalgebraMat, NalgebraVec, OdeBuilder, OdeEquations, OdeSolverMethod,
     OdeSolverStopReason, Vector, VectorCommon,
@@ -47,6 +47,7 @@ struct Adapter<'s, S> {
     sys: &'s S,
     t_end: Cell<f64>,
     jac: RefCell<Vec<f64>>,
+    dfdp: RefCell<Vec<f64>>,
     counts: Counts,
 }
 
@@ -70,6 +71,34 @@ impl<S: System> Adapter<'_, S> {
             out[i] = row.iter().zip(v).map(|(a, b)| a * b).sum();
         }
     }
+
+    /// (∂f/∂θ)·v, one parameter direction per call, like [`Self::jac_vec`].
+    #[inline]
+    fn sens_vec(&self, t: f64, x: &[f64], v: &[f64], out: &mut [f64]) {
+        let mut d = self.dfdp.borrow_mut();
+        self.sys.param_jacobian(t.min(self.t_end.get()), x, &mut d);
+        let np = v.len();
+        for i in 0..x.len() {
+            let row = &d[i * np..(i + 1) * np];
+            out[i] = row.iter().zip(v).map(|(a, b)| a * b).sum();
+        }
+    }
+
+    /// ds = J·s + ∂f/∂θ for every parameter column of `s` (after a restart).
+    fn sens_rate(&self, t: f64, x: &[f64], s: &[f64], ds: &mut [f64]) {
+        let n = x.len();
+        let np = self.sys.n_params();
+        let mut j = self.jac.borrow_mut();
+        let mut d = self.dfdp.borrow_mut();
+        self.sys.jacobian(t, x, &mut j);
+        self.sys.param_jacobian(t, x, &mut d);
+        for p in 0..np {
+            for i in 0..n {
+                let js: f64 = (0..n).map(|k| j[i * n + k] * s[p * n + k]).sum();
+                ds[p * n + i] = js + d[i * np + p];
+            }
+        }
+    }
 }
 
 /// Integrate with a diffsol method (see [`super::run`]).
@@ -82,16 +111,19 @@ pub(super) fn run<S: System>(
     bounds: &[f64],
     y: &mut [f64],
     samples: &[f64],
-    out: &mut dyn FnMut(f64, &[f64]),
+    extra: Extra,
+    out: &mut SampleFn,
     event: Option<EventFn>,
     restart: &mut dyn FnMut(f64, &mut [f64]),
     stats: &mut Stats,
 ) -> End {
     let n = y.len();
+    let np = sys.n_params();
     let ad = Adapter {
         sys,
         t_end: Cell::new(left_limit(bounds[0], bounds[1])),
         jac: RefCell::new(vec![0.0; n * n]),
+        dfdp: RefCell::new(vec![0.0; n * np]),
         counts: Counts::default(),
     };
     if let Some(g) = event {
@@ -100,24 +132,37 @@ pub(super) fn run<S: System>(
         }
     }
     let y0 = y.to_vec();
+    let mut s0 = vec![0.0; n * np];
+    sys.initial_sensitivity(&mut s0);
     let atol: Vec<f64> = scale.iter().map(|s| o.atol * s).collect();
+    // The parameters live in the system; p only tells diffsol how many there are
+    // and their magnitudes (each sensitivity's absolute tolerance is the state's
+    // divided by its parameter's magnitude).
+    let magnitudes: Vec<f64> = match extra {
+        Extra::Sensitivities(m) => m.iter().map(|v| v.abs().max(1e-300)).collect(),
+        Extra::None => vec![1.0; np],
+    };
     let problem = OdeBuilder::<M>::new()
         .t0(bounds[0])
         .rtol(o.rtol)
-        .atol(atol)
-        .rhs_implicit(
+        .atol(atol.clone())
+        .sens_rtol(o.rtol)
+        .sens_atol(atol)
+        .p(magnitudes.clone())
+        .param_scales(magnitudes)
+        .rhs_sens_implicit(
             |x: &[f64], _p: &[f64], t: f64, dy: &mut [f64]| ad.rhs(t, x, dy),
             |x: &[f64], _p: &[f64], t: f64, v: &[f64], jv: &mut [f64]| ad.jac_vec(t, x, v, jv),
+            |x: &[f64], _p: &[f64], t: f64, v: &[f64], sv: &mut [f64]| ad.sens_vec(t, x, v, sv),
         )
-        .init(
+        .init_sens(
             move |_p: &[f64], _t: f64, y: &mut [f64]| y.copy_from_slice(&y0),
-            n,
-        )
-        .root(
-            |x: &[f64], _p: &[f64], t: f64, g: &mut [f64]| {
-                g[0] = event.map_or(1.0, |e| e(t.min(ad.t_end.get()), x))
+            move |_p: &[f64], _t: f64, v: &[f64], out: &mut [f64]| {
+                for i in 0..n {
+                    out[i] = (0..np).map(|j| s0[i * np + j] * v[j]).sum();
+                }
             },
-            1,
+            n,
         )
         .build();
     let mut problem = match problem {
@@ -128,8 +173,11 @@ pub(super) fn run<S: System>(
     // recovers from many (each costs a Jacobian update and a smaller step), so the
     // run's step budget is the limit, as for the error test.
     problem.ode_options.max_nonlinear_solver_failures = o.max_steps;
+    let sens = matches!(extra, Extra::Sensitivities(_));
     let mut drv = Driver {
         ad: &ad,
+        sens,
+        event,
         o,
         bounds,
         samples,
@@ -137,12 +185,16 @@ pub(super) fn run<S: System>(
         restart,
         stats,
     };
-    let end = match m {
-        Method::Bdf => problem.bdf::<LS>().map(|s| drv.drive(s, y)),
-        Method::Esdirk34 => problem.esdirk34::<LS>().map(|s| drv.drive(s, y)),
-        Method::TrBdf2 => problem.tr_bdf2::<LS>().map(|s| drv.drive(s, y)),
-        Method::Tsit45 => problem.tsit45().map(|s| drv.drive(s, y)),
-        Method::Dp54 => unreachable!("dp54 is not a diffsol method"),
+    let end = match (m, sens) {
+        (Method::Bdf, false) => problem.bdf::<LS>().map(|s| drv.drive(s, y)),
+        (Method::Bdf, true) => problem.bdf_sens::<LS>().map(|s| drv.drive(s, y)),
+        (Method::Esdirk34, false) => problem.esdirk34::<LS>().map(|s| drv.drive(s, y)),
+        (Method::Esdirk34, true) => problem.esdirk34_sens::<LS>().map(|s| drv.drive(s, y)),
+        (Method::TrBdf2, false) => problem.tr_bdf2::<LS>().map(|s| drv.drive(s, y)),
+        (Method::TrBdf2, true) => problem.tr_bdf2_sens::<LS>().map(|s| drv.drive(s, y)),
+        (Method::Tsit45, false) => problem.tsit45().map(|s| drv.drive(s, y)),
+        (Method::Tsit45, true) => problem.tsit45_sens().map(|s| drv.drive(s, y)),
+        (Method::Dp54, _) => unreachable!("dp54 is not a diffsol method"),
     };
     let end = end.unwrap_or_else(|e| End::Failed(format!("diffsol solver setup: {e}")));
     stats.rhs_evals += ad.counts.rhs.get();
@@ -153,10 +205,12 @@ pub(super) fn run<S: System>(
 /// The driver loop over restart intervals, for any diffsol method.
 struct Driver<'d, 's, S> {
     ad: &'d Adapter<'s, S>,
+    sens: bool,
+    event: Option<EventFn<'d>>,
     o: &'d Options,
     bounds: &'d [f64],
     samples: &'d [f64],
-    out: &'d mut dyn FnMut(f64, &[f64]),
+    out: &'d mut SampleFn<'d>,
     restart: &'d mut dyn FnMut(f64, &mut [f64]),
     stats: &'d mut Stats,
 }
@@ -182,9 +236,12 @@ impl<S: System> Driver<'_, '_, S> {
         Sv: OdeSolverMethod<'a, Eqn>,
     {
         let mut buf = s.state().y.clone();
+        let mut sbuf = s.state().s.clone();
         let h = s.state().h.min(self.o.h_init);
         *s.state_mut().h = h;
         let mut next = 0;
+        let mut t_prev = self.bounds[0];
+        let mut g_old = self.event.map_or(1.0, |g| g(t_prev, slice(s.state().y)));
         for k in 1..self.bounds.len() {
             let b = self.bounds[k];
             if k > 1 {
@@ -194,7 +251,19 @@ impl<S: System> Driver<'_, '_, S> {
                 let st = s.state_mut();
                 (self.restart)(a, slice_mut(st.y));
                 self.ad.rhs(a, slice(st.y), slice_mut(st.dy));
+                if self.sens {
+                    self.ad
+                        .sens_rate(a, slice(st.y), slice(st.s), slice_mut(st.ds));
+                }
                 *st.h = st.h.min(self.o.h_init);
+                if let Some(g) = self.event {
+                    g_old = g(a, slice(st.y));
+                    if g_old <= 0.0 {
+                        // the input's jump at the restart is already past the event
+                        y.copy_from_slice(slice(st.y));
+                        return End::Event(a);
+                    }
+                }
             }
             if let Err(e) = s.set_stop_time(b) {
                 return self.fail(s, y, format!("cannot stop at t = {b:.6e} s: {e}"));
@@ -215,34 +284,60 @@ impl<S: System> Driver<'_, '_, S> {
                     }
                 };
                 let t_now = s.state().t;
-                let upto = match reason {
-                    OdeSolverStopReason::RootFound(tr, _) => tr,
-                    _ => t_now,
-                };
+                // event: a sign change of g over the step, located by bisection on
+                // the method's dense output
+                let mut event_at = None;
+                if let Some(g) = self.event {
+                    let g1 = g(t_now.min(self.ad.t_end.get()), slice(s.state().y));
+                    if g_old > 0.0 && g1 <= 0.0 {
+                        let (mut lo, mut hi) = (t_prev, t_now);
+                        for _ in 0..60 {
+                            let mid = 0.5 * (lo + hi);
+                            if mid <= lo
+                                || mid >= hi
+                                || s.interpolate_inplace(mid, &mut buf).is_err()
+                            {
+                                break;
+                            }
+                            if g(mid, slice(&buf)) > 0.0 {
+                                lo = mid;
+                            } else {
+                                hi = mid;
+                            }
+                        }
+                        event_at = Some(hi);
+                    }
+                    g_old = g1;
+                }
+                let upto = event_at.unwrap_or(t_now);
                 while next < self.samples.len()
                     && (self.samples[next] < upto
-                        || (self.samples[next] <= upto
-                            && !matches!(reason, OdeSolverStopReason::RootFound(..))))
+                        || (self.samples[next] <= upto && event_at.is_none()))
                 {
                     let ts = self.samples[next];
                     if ts == t_now {
                         buf.copy_from(s.state().y);
-                    } else if s.interpolate_inplace(ts, &mut buf).is_err() {
+                        if self.sens {
+                            sbuf.copy_from(s.state().s);
+                        }
+                    } else if s.interpolate_inplace(ts, &mut buf).is_err()
+                        || (self.sens && s.interpolate_sens_inplace(ts, &mut sbuf).is_err())
+                    {
                         break;
                     }
-                    (self.out)(ts, slice(&buf));
+                    (self.out)(ts, slice(&buf), slice(&sbuf));
                     next += 1;
                 }
-                match reason {
-                    OdeSolverStopReason::InternalTimestep => {}
-                    OdeSolverStopReason::TstopReached => break,
-                    OdeSolverStopReason::RootFound(tr, _) => {
-                        if s.interpolate_inplace(tr, &mut buf).is_err() {
-                            buf.copy_from(s.state().y);
-                        }
-                        y.copy_from_slice(slice(&buf));
-                        return End::Event(tr);
+                if let Some(te) = event_at {
+                    if te == t_now || s.interpolate_inplace(te, &mut buf).is_err() {
+                        buf.copy_from(s.state().y);
                     }
+                    y.copy_from_slice(slice(&buf));
+                    return End::Event(te);
+                }
+                t_prev = t_now;
+                if reason == OdeSolverStopReason::TstopReached {
+                    break;
                 }
             }
         }

@@ -27,6 +27,12 @@ pub trait System {
     fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]);
     /// Jacobian ∂f/∂y, row-major `dim × dim`; must not allocate.
     fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]);
+    /// Number of parameters θ for forward sensitivities.
+    fn n_params(&self) -> usize;
+    /// ∂f/∂θ at fixed y, row-major `dim × n_params`; must not allocate.
+    fn param_jacobian(&self, t: f64, y: &[f64], dfdp: &mut [f64]);
+    /// ∂y0/∂θ, row-major `dim × n_params`.
+    fn initial_sensitivity(&self, out: &mut [f64]);
 }
 
 /// Integration method.
@@ -135,13 +141,29 @@ pub enum End {
     Failed(String),
 }
 
+/// The sample callback: (t, y, ∂y/∂θ column by column, empty without them).
+pub type SampleFn<'a> = dyn FnMut(f64, &[f64], &[f64]) + 'a;
+
 /// An event function g(t, y); the event is its first change from > 0 to ≤ 0.
 pub type EventFn<'a> = &'a dyn Fn(f64, &[f64]) -> f64;
 
+/// What to integrate besides the state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Extra<'a> {
+    /// The state only.
+    None,
+    /// Forward sensitivities ∂y/∂θ (diffsol methods), with the parameters' magnitudes
+    /// (each sensitivity's absolute tolerance is the state's divided by it).
+    Sensitivities(&'a [f64]),
+}
+
 /// Integrate `y` over `bounds` = [t0, kink1, …, t_end] with method `m`.
 ///
-/// `samples` are output times in (t0, t_end] (sorted); `out(t, y)` is called for each
-/// one reached. At each interior bound `restart(t, y)` may change the state before the
+/// `samples` are output times in (t0, t_end] (sorted); `out(t, y, s)` is called for
+/// each one reached, `s` the sensitivities ∂y/∂θ column by column (`s[j·n + i]` =
+/// ∂yi/∂θj; empty without them). At a restart the sensitivities carry on unchanged
+/// (the caller's `restart` may only change states that do not feed back, such as
+/// quadratures, whose sensitivities are then not meaningful). At each interior bound `restart(t, y)` may change the state before the
 /// method restarts. `event(t, y)` (if any) stops the run where it turns non-positive.
 /// `scale[i]` multiplies `o.atol` for state i.
 #[allow(clippy::too_many_arguments)]
@@ -153,11 +175,18 @@ pub fn run<S: System>(
     bounds: &[f64],
     y: &mut [f64],
     samples: &[f64],
-    out: &mut dyn FnMut(f64, &[f64]),
+    extra: Extra,
+    out: &mut SampleFn,
     event: Option<EventFn>,
     restart: &mut dyn FnMut(f64, &mut [f64]),
     stats: &mut Stats,
 ) -> End {
+    if m == Method::Dp54 && extra != Extra::None {
+        return End::Failed(
+            "forward sensitivities need a diffsol method (bdf, esdirk34, tr-bdf2, tsit45), not dp54"
+                .into(),
+        );
+    }
     if o.fixed_step.is_some() && m != Method::Dp54 {
         return End::Failed(format!(
             "a fixed step is available with dp54 only, not {}",
@@ -166,10 +195,19 @@ pub fn run<S: System>(
     }
     match m {
         Method::Dp54 => dopri::run(
-            sys, o, scale, bounds, y, samples, out, event, restart, stats,
+            sys,
+            o,
+            scale,
+            bounds,
+            y,
+            samples,
+            &mut |t, y| out(t, y, &[]),
+            event,
+            restart,
+            stats,
         ),
         _ => diffsol::run(
-            sys, m, o, scale, bounds, y, samples, out, event, restart, stats,
+            sys, m, o, scale, bounds, y, samples, extra, out, event, restart, stats,
         ),
     }
 }

@@ -8,3 +8,4 @@ mod models;
 mod permittivity;
 mod relaxation;
 mod sim;
+mod sim_derivatives;

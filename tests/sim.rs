@@ -491,12 +491,25 @@ fn scene_errors_name_the_place_and_the_fix() {
         .unwrap()
         .to_string();
     assert!(e.contains("hint: known: seed-table-3.3"), "{e}");
+    // quasi-static without a dashpot is a constraint: it cannot follow an ideal jump
     let bad = seed_stack(
         "{ preset = \"elastic\" }",
         "[[input]]\nkind = \"step\"\namplitude = \"5 kV\"",
         "span = \"1 s\"\nfidelity = \"quasi-static\"",
     );
-    assert!(simulate(&scene(&bad), &RunOptions::default()).is_err());
+    let e = simulate(&scene(&bad), &RunOptions::default())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("cannot follow a jump") && e.contains("source.rise_time"),
+        "{e}"
+    );
+    // through a real source it runs
+    let ok = bad.replace("[time]", "[source]\nrise_time = \"1 ms\"\n[time]");
+    let o = simulate(&scene(&ok), &RunOptions::default()).unwrap();
+    assert_eq!(o.fidelity.model, "quasi-static");
+    assert_eq!(o.integrator.status, RunStatus::Completed);
 }
 
 #[test]

@@ -16,13 +16,13 @@
 //!
 //! Quasi-static fidelity drops M. With a dashpot (Nv > 0) the force balance gives
 //! λ̇ = D/(Vol·Nv). Without one, D = 0 is an algebraic constraint, integrated as its
-//! time derivative (index reduction, see [`Plant::constrained_rate`]).
+//! time derivative (index reduction, see `Plant::constrained_rate`).
 //!
 //! Quadrature states accumulate electrical work in, viscous and leakage dissipation
 //! and source losses, for the energy balance.
 //!
-//! The right-hand side is written once, generic over the number type ([`Num`]) and
-//! over where it reads parameters and material/geometry functions ([`Eval`]): in
+//! The right-hand side is written once, generic over the number type (`Num`) and
+//! over where it reads parameters and material/geometry functions (`Eval`): in
 //! `f64` it is the ODE, in dual numbers ([`super::derivatives`]) it gives the exact
 //! Jacobian and parameter derivatives of the same code.
 
@@ -40,7 +40,7 @@ pub const EPS0: f64 = 8.854_187_812_8e-12;
 pub const BAUMGARTE_FRACTION: f64 = 0.1;
 
 /// Quasi-static without dashpot: the denominator K − V·C'·b of λ̇ is floored at this
-/// fraction of the elastic stiffness Vol·(P' + Σkj + kf) (see [`Plant::constrained_rate`]).
+/// fraction of the elastic stiffness Vol·(P' + Σkj + kf) (see `Plant::constrained_rate`).
 pub const PULL_IN_FLOOR: f64 = 1e-3;
 
 /// The plant: a scene turned into numbers and a state layout. `Send + Sync`.
@@ -82,10 +82,21 @@ pub struct Plant {
     /// Closed loop, if any.
     pub control: Option<Pid>,
     /// Baumgarte time constant τc (s) of the quasi-static constraint without
-    /// dashpot: [`BAUMGARTE_FRACTION`] × the shortest of the integrated arms' τj, the
-    /// input's time scale (incl. the source's, `fidelity::input_time_scale`) and the
-    /// span. A numerical setting fixed when the plant is built (not a model quantity:
-    /// the exact solution keeps D = 0 whatever τc), so [`Plant::with_theta`] keeps it.
+    /// dashpot: [`BAUMGARTE_FRACTION`] × the scene's shortest time scale, the least of
+    /// * 1/s of the arms' fastest relaxation rate s in the quasi-static plant at rest
+    ///   (`fastest_arm_rate`): between the two largest 1/τj, and for one arm its
+    ///   retardation time τ·K/(K − Vol·k) (100·τ for an arm 100× stiffer than the
+    ///   rest) — the arms' rates there, not the 1/τj;
+    /// * the input's time scale incl. the source's (`fidelity::input_time_scale`);
+    /// * the span.
+    ///
+    /// The constraint D = 0 then recovers from drift ten times faster than anything
+    /// in the solution moves (the drift, of the order of the integration error, is
+    /// held at a tenth of it), while the added eigenvalue −1/τc is only ten times the
+    /// fastest physical rate: no stiffer than the arms make the problem by more than
+    /// that factor. A numerical setting fixed when the plant is built (not a model
+    /// quantity: the exact solution keeps D = 0 whatever τc), so [`Plant::with_theta`]
+    /// keeps it.
     pub tau_c: f64,
     // Derived from the above by `derive` (the one place computing them):
     /// Absolute permittivity ε0·εr (F/m).
@@ -350,12 +361,55 @@ impl Plant {
         p.derive();
         let t_in = super::fidelity::input_time_scale(scene, p.c_rest);
         p.tau_c = BAUMGARTE_FRACTION
-            * p.arms
-                .iter()
-                .map(|a| a.1)
-                .chain((t_in > 0.0).then_some(t_in))
+            * [1.0 / p.fastest_arm_rate(), t_in]
+                .into_iter()
+                .filter(|&t| t > 0.0)
                 .fold(scene.time.span, f64::min);
         p
+    }
+
+    /// Fastest relaxation rate s (1/s) of the integrated arms in the quasi-static
+    /// plant at rest (0 without arms). Linearised at (λ0, V = 0) without inertia and
+    /// dashpot, K·λ̇ = Vol·Σσj/τj and σ̇j = kj·λ̇ − σj/τj, so σ̇ = −(T − u·1ᵀT)·σ with
+    /// T = diag(1/τj), uj = Vol·kj/K, K the instantaneous stiffness. Its rates are
+    /// the roots of the secular equation Σj wj/(1 − s·τj) = 1, wj = Vol·kj/K, which
+    /// interlace with the 1/τj: the largest lies between the two largest 1/τj (for one
+    /// arm s = (1 − w)/τ, the retardation rate), found by bisection.
+    fn fastest_arm_rate(&self) -> f64 {
+        let k = self.instant_stiffness(self.lam0, 0.0);
+        let mut rates: Vec<f64> = self.arms.iter().map(|a| 1.0 / a.1).collect();
+        rates.sort_by(f64::total_cmp);
+        let Some(&hi) = rates.last() else {
+            return 0.0;
+        };
+        let lo = if rates.len() > 1 {
+            rates[rates.len() - 2]
+        } else {
+            0.0
+        };
+        let secular = |s: f64| {
+            1.0 - self
+                .arms
+                .iter()
+                .map(|&(kj, tau)| self.vol * kj / k / (1.0 - s * tau))
+                .sum::<f64>()
+        };
+        // secular(0) = static stiffness / K; the bracket's ends are poles
+        if k <= 0.0 || secular(0.0) <= 0.0 {
+            return hi; // unstable at rest: the bound 1/τmin
+        }
+        let (mut a, mut b) = (lo, hi);
+        for _ in 0..200 {
+            let m = 0.5 * (a + b);
+            if m <= a || m >= b {
+                break;
+            }
+            match secular(m) > 0.0 {
+                true => a = m,
+                false => b = m,
+            }
+        }
+        0.5 * (a + b)
     }
 
     /// The quantities derived from the parameters θ (the one place computing them):
@@ -832,5 +886,57 @@ impl super::integrate::System for Plant {
     }
     fn initial_sensitivity(&self, out: &mut [f64]) {
         self.initial_state_sensitivity(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    fn layer(arms: &str) -> Plant {
+        let text = format!(
+            r#"
+[actuator]
+kind = "stack"
+radius = "5 mm"
+layer_thickness = "1 mm"
+layers = 1
+[material]
+hyperelastic = {{ model = "neo-hookean", parameters = {{ mu = "100 kPa" }} }}
+viscous = {{ arms = [ {arms} ] }}
+relative_permittivity = 4.0
+density = "1000 kg/m3"
+[[input]]
+kind = "step"
+amplitude = "1 kV"
+[time]
+span = "1 s"
+"#
+        );
+        let s = Scene::parse(&text, Path::new("t.toml")).unwrap();
+        Plant::new(&s, false, &vec![true; s.material.viscous.arms.len()])
+    }
+
+    #[test]
+    fn fastest_arm_rate_is_the_largest_eigenvalue_of_the_quasi_static_arms() {
+        // one arm: the retardation rate (1 − w)/τ, w = Vol·k/K
+        let p = layer(r#"{ k = "1 MPa", tau = "10 ms" }"#);
+        let w = p.vol * 1e6 / p.instant_stiffness(p.lam0, 0.0);
+        let s = p.fastest_arm_rate();
+        assert!((s / ((1.0 - w) / 0.01) - 1.0).abs() < 1e-12, "{s}");
+        // two arms: the largest eigenvalue of T − u·1ᵀT (2×2, quadratic formula)
+        let p = layer(r#"{ k = "300 kPa", tau = "10 ms" }, { k = "200 kPa", tau = "30 ms" }"#);
+        let k = p.instant_stiffness(p.lam0, 0.0);
+        let (t1, t2) = (1.0 / 0.01, 1.0 / 0.03);
+        let (u1, u2) = (p.vol * 3e5 / k, p.vol * 2e5 / k);
+        let (a, b, c, d) = (t1 - u1 * t1, -u1 * t2, -u2 * t1, t2 - u2 * t2);
+        let (tr, det) = (a + d, a * d - b * c);
+        let largest = 0.5 * (tr + (tr * tr - 4.0 * det).sqrt());
+        let s = p.fastest_arm_rate();
+        assert!((s / largest - 1.0).abs() < 1e-12, "{s} vs {largest}");
+        assert!(s > t2 && s < t1);
+        // τc: a tenth of 1/s here (the step input has no time scale, the span is 1 s)
+        assert!((p.tau_c * s / BAUMGARTE_FRACTION - 1.0).abs() < 1e-12);
     }
 }

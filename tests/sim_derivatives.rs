@@ -536,6 +536,20 @@ fn jacobian_matches_finite_differences() {
         for y in &c.states {
             let mut jac = vec![f64::NAN; n * n];
             p.jacobian(c.t, y, &mut jac);
+            // J·v in one directional evaluation is the same linear map (to rounding)
+            let v: Vec<f64> = (0..n).map(|i| (i as f64 + 1.0).sin()).collect();
+            let mut jv = vec![f64::NAN; n];
+            p.jacobian_times(c.t, y, &v, &mut jv);
+            for i in 0..n {
+                let row: f64 = (0..n).map(|k| jac[i * n + k] * v[k]).sum();
+                let mag: f64 = (0..n).map(|k| (jac[i * n + k] * v[k]).abs()).sum();
+                assert!(
+                    (jv[i] - row).abs() <= 1e-12 * mag.max(1e-300),
+                    "{}: J·v row {i}: {} vs {row}",
+                    c.name,
+                    jv[i]
+                );
+            }
             let s = state_scale(p, y);
             let fd = fd_jacobian(p, c.t, y, &s);
             let f = rhs(p, c.t, y);

@@ -158,12 +158,23 @@ const H_STRESS: f64 = 1e-5;
 /// Relative step of the central difference of the helix's C'' (see module doc).
 const H_CAP: f64 = 1e-3;
 
-/// The plant read with one derivative direction: a state (∂/∂y_k) or a parameter
-/// (∂/∂θ_k, with the chain through λ0 into λf and C_rest).
+/// Direction in state space of a seed.
+#[derive(Clone, Copy)]
+enum StateSeed<'a> {
+    /// No state direction.
+    None,
+    /// ∂/∂y_k.
+    Unit(usize),
+    /// The directional derivative along v (J·v in one evaluation).
+    Along(&'a [f64]),
+}
+
+/// The plant read with one derivative direction: in state space (∂/∂y_k or along a
+/// vector) or a parameter (∂/∂θ_k, with the chain through λ0 into λf and C_rest).
 struct Seeded<'a> {
     p: &'a Plant,
-    /// Seeded state.
-    state: Option<usize>,
+    /// Seeded state direction.
+    state: StateSeed<'a>,
     /// Seeded parameter.
     theta: Option<Theta>,
     /// dλ0/dθ along the seed (= dλf/dθ).
@@ -176,10 +187,17 @@ impl<'a> Seeded<'a> {
     fn state(p: &'a Plant, k: usize) -> Seeded<'a> {
         Seeded {
             p,
-            state: Some(k),
+            state: StateSeed::Unit(k),
             theta: None,
             dlam0: 0.0,
             dc_rest: 0.0,
+        }
+    }
+
+    fn along(p: &'a Plant, v: &'a [f64]) -> Seeded<'a> {
+        Seeded {
+            state: StateSeed::Along(v),
+            ..Seeded::state(p, 0)
         }
     }
 
@@ -193,7 +211,7 @@ impl<'a> Seeded<'a> {
             };
         Seeded {
             p,
-            state: None,
+            state: StateSeed::None,
             theta: Some(th),
             dlam0,
             dc_rest,
@@ -210,7 +228,12 @@ impl Eval for Seeded<'_> {
     type T = Dual;
     #[inline]
     fn y(&self, y: &[f64], i: usize) -> Dual {
-        Dual::new(y[i], (self.state == Some(i)) as u8 as f64)
+        let d = match self.state {
+            StateSeed::None => 0.0,
+            StateSeed::Unit(k) => (k == i) as u8 as f64,
+            StateSeed::Along(v) => v[i],
+        };
+        Dual::new(y[i], d)
     }
     #[inline]
     fn arm(&self, j: usize) -> (Dual, Dual) {
@@ -407,6 +430,12 @@ impl Plant {
                 (0..n).for_each(|i| jac[i * n + k] = 0.0);
             }
         }
+    }
+
+    /// J·v, the Jacobian applied to `v`, in one forward evaluation (what implicit
+    /// integrators need); `out` has n entries. No allocation.
+    pub fn jacobian_times(&self, t: f64, y: &[f64], v: &[f64], out: &mut [f64]) {
+        self.rhs_with(&Seeded::along(self, v), t, y, |i, d| out[i] = d.d);
     }
 
     /// ∂f/∂θ at fixed (t, y), row-major n×nθ into `dfdp` (∂f_i/∂θ_k at

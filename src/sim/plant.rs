@@ -875,8 +875,8 @@ impl super::integrate::System for Plant {
     fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) {
         self.rhs_with(&Plain(self), t, y, |i, v| dy[i] = v);
     }
-    fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) {
-        Plant::jacobian(self, t, y, jac)
+    fn jacobian_times(&self, t: f64, y: &[f64], v: &[f64], out: &mut [f64]) {
+        Plant::jacobian_times(self, t, y, v, out)
     }
     fn n_params(&self) -> usize {
         self.n_theta()

@@ -46,7 +46,6 @@ struct Counts {
 struct Adapter<'s, S> {
     sys: &'s S,
     t_end: Cell<f64>,
-    jac: RefCell<Vec<f64>>,
     dfdp: RefCell<Vec<f64>>,
     counts: Counts,
 }
@@ -58,18 +57,11 @@ impl<S: System> Adapter<'_, S> {
         self.sys.rhs(t.min(self.t_end.get()), x, dy);
     }
 
-    /// J(x)·v. diffsol builds its dense Jacobian column by column from this, so the
-    /// matrix is evaluated once per call; it stays cheap for the few states we have.
+    /// J(x)·v (diffsol builds its dense Jacobian column by column from this).
     #[inline]
     fn jac_vec(&self, t: f64, x: &[f64], v: &[f64], out: &mut [f64]) {
         self.counts.jac.set(self.counts.jac.get() + 1);
-        let mut j = self.jac.borrow_mut();
-        self.sys.jacobian(t.min(self.t_end.get()), x, &mut j);
-        let n = x.len();
-        for i in 0..n {
-            let row = &j[i * n..(i + 1) * n];
-            out[i] = row.iter().zip(v).map(|(a, b)| a * b).sum();
-        }
+        self.sys.jacobian_times(t.min(self.t_end.get()), x, v, out);
     }
 
     /// (∂f/∂θ)·v, one parameter direction per call, like [`Self::jac_vec`].
@@ -88,14 +80,13 @@ impl<S: System> Adapter<'_, S> {
     fn sens_rate(&self, t: f64, x: &[f64], s: &[f64], ds: &mut [f64]) {
         let n = x.len();
         let np = self.sys.n_params();
-        let mut j = self.jac.borrow_mut();
         let mut d = self.dfdp.borrow_mut();
-        self.sys.jacobian(t, x, &mut j);
         self.sys.param_jacobian(t, x, &mut d);
         for p in 0..np {
+            let col = &mut ds[p * n..(p + 1) * n];
+            self.sys.jacobian_times(t, x, &s[p * n..(p + 1) * n], col);
             for i in 0..n {
-                let js: f64 = (0..n).map(|k| j[i * n + k] * s[p * n + k]).sum();
-                ds[p * n + i] = js + d[i * np + p];
+                col[i] += d[i * np + p];
             }
         }
     }
@@ -122,7 +113,6 @@ pub(super) fn run<S: System>(
     let ad = Adapter {
         sys,
         t_end: Cell::new(left_limit(bounds[0], bounds[1])),
-        jac: RefCell::new(vec![0.0; n * n]),
         dfdp: RefCell::new(vec![0.0; n * np]),
         counts: Counts::default(),
     };

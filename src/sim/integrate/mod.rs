@@ -5,7 +5,8 @@
 //!   Kelvin-Voigt dashpot, a fast source, arms from ms to ks), [`Method::Esdirk34`]
 //!   and [`Method::TrBdf2`] (L-stable singly diagonally implicit Runge–Kutta), and
 //!   [`Method::Tsit45`] (Tsitouras 5(4), for lightly damped, oscillatory scenes). The
-//!   implicit ones use the system's analytic Jacobian ([`System::jacobian`]).
+//!   implicit ones use the system's exact Jacobian-vector product
+//!   ([`System::jacobian_times`]).
 //! * [`Method::Dp54`]: our own explicit Dormand–Prince 5(4) ([`dopri`]), kept as an
 //!   independent test oracle and for fixed-step convergence tests.
 //!
@@ -25,8 +26,8 @@ pub trait System {
     fn dim(&self) -> usize;
     /// Right-hand side; must not allocate.
     fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]);
-    /// Jacobian ∂f/∂y, row-major `dim × dim`; must not allocate.
-    fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]);
+    /// The Jacobian applied to a vector, (∂f/∂y)·v; must not allocate.
+    fn jacobian_times(&self, t: f64, y: &[f64], v: &[f64], out: &mut [f64]);
     /// Number of parameters θ for forward sensitivities.
     fn n_params(&self) -> usize;
     /// ∂f/∂θ at fixed y, row-major `dim × n_params`; must not allocate.

@@ -1,4 +1,6 @@
-//! Simulator speed on seed scenes at the scenes' tolerance (rtol 1e-6).
+//! Simulator speed on seed scenes at the scenes' tolerance (rtol 1e-6), with the
+//! scenes' own sample counts and with 10 samples (the integration without most of the
+//! output), and the damped step with forward sensitivities.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use dea_fit::sim::{scene::Scene, simulate, RunOptions};
@@ -14,7 +16,20 @@ fn bench(c: &mut Criterion) {
         c.bench_function(name, |b| {
             b.iter(|| simulate(&s, &RunOptions::default()).expect("runs"))
         });
+        let mut few = s.clone();
+        few.time.samples = (1..=10).map(|i| s.time.span * i as f64 / 10.0).collect();
+        c.bench_function(&format!("{name} (10 samples)"), |b| {
+            b.iter(|| simulate(&few, &RunOptions::default()).expect("runs"))
+        });
     }
+    let s = Scene::read(Path::new("datasets/scenes/stack_step_5kV_damped.toml")).expect("scene");
+    let o = RunOptions {
+        sensitivities: true,
+        ..Default::default()
+    };
+    c.bench_function("stack_step_5kV_damped (sensitivities)", |b| {
+        b.iter(|| simulate(&s, &o).expect("runs"))
+    });
 }
 
 criterion_group! {

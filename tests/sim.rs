@@ -13,7 +13,7 @@ fn scene(text: &str) -> Scene {
 }
 
 /// One Neo-Hookean layer (μ = 100 kPa, H = 1 mm), no electrodes, no gravity.
-fn nh_layer(viscous: &str, input: &str, time: &str) -> String {
+pub(crate) fn nh_layer(viscous: &str, input: &str, time: &str) -> String {
     format!(
         r#"
 [actuator]

@@ -103,25 +103,7 @@ span = "1 s"
 
 /// One Neo-Hookean layer (μ = 100 kPa, H = 1 mm), no load (tests/sim.rs).
 fn nh_layer(viscous: &str, input: &str, time: &str) -> Scene {
-    scene(&format!(
-        r#"
-[actuator]
-kind = "stack"
-radius = "5 mm"
-layer_thickness = "1 mm"
-layers = 1
-[material]
-hyperelastic = {{ model = "neo-hookean", parameters = {{ mu = "100 kPa" }} }}
-viscous = {viscous}
-relative_permittivity = 4.0
-density = "1000 kg/m3"
-[load]
-gravity = 0.0
-{input}
-[time]
-{time}
-"#
-    ))
+    scene(&super::sim::nh_layer(viscous, input, time))
 }
 
 /// Closed-form Neo-Hookean pull-in of `nh_layer`: (λc, Vc) (Zhao & Suo 2007).

@@ -116,7 +116,7 @@ pub fn input_time_scale(scene: &Scene, c0: f64) -> f64 {
 /// Choose the fidelity of a scene.
 pub fn choose(scene: &Scene) -> Result<Fidelity> {
     let n = scene.material.viscous.arms.len();
-    let full = Plant::new(scene, true, &vec![true; n]);
+    let full = super::full_plant(scene);
     let mode = axial_mode(&full);
     let t_in = input_time_scale(scene, full.capacitance(full.lam0).0);
     let e_inst = full.tangent(full.lam0) + full.arms.iter().map(|a| a.0).sum::<f64>();

@@ -231,7 +231,7 @@ fn elastic_energy(p: &Plant, a: f64, b: f64) -> f64 {
 pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
     let fid = fidelity::choose(scene)?;
     let p = Plant::new(scene, fid.inertia, &fid.keep);
-    let full = Plant::new(scene, true, &vec![true; scene.material.viscous.arms.len()]);
+    let full = full_plant(scene);
     let mode = fidelity::axial_mode(&full);
     let rtol = opts.rtol.unwrap_or(scene.time.rtol);
     let (method, mreason) = match opts.method.or(scene.time.method) {

@@ -8,7 +8,7 @@
 //! the input's right limit, and diffsol reinitialises the method to first order
 //! (it does so whenever the state is touched through `state_mut`).
 
-use super::{End, EventFn, Extra, Method, Options, SampleFn, Stats, System};
+use super::{left_limit, End, EventFn, Extra, Method, Options, SampleFn, Stats, System};
 use ::diffsol::{
     NalgebraLU, NalgebraMat, NalgebraVec, OdeBuilder, OdeEquations, OdeSolverMethod,
     OdeSolverStopReason, Vector, VectorCommon,
@@ -26,12 +26,6 @@ fn slice_mut(v: &mut NalgebraVec<f64>) -> &mut [f64] {
 /// Slice of a diffsol nalgebra vector.
 fn slice(v: &NalgebraVec<f64>) -> &[f64] {
     v.inner().as_slice()
-}
-
-/// The time just before `b` at which the right-hand side of the interval [a, b]
-/// is evaluated for t ≥ b: inputs are right-continuous, and `b` is a kink.
-fn left_limit(a: f64, b: f64) -> f64 {
-    b - 1e-12 * (b - a)
 }
 
 /// Counters the closures update (they only get `&self`).

@@ -8,7 +8,7 @@
 //! non-positive by bisection on the dense output, and allocates nothing per step:
 //! all buffers live in a [`Workspace`] created once per run.
 
-use super::{End, EventFn, Options, Stats, System};
+use super::{left_limit, End, EventFn, Options, Stats, System};
 
 /// Buffers reused by every step.
 struct Workspace {
@@ -181,7 +181,7 @@ fn segment<S: System>(
 ) -> End {
     let sys = Left {
         sys,
-        t_end: t1 - 1e-12 * (t1 - t0),
+        t_end: left_limit(t0, t1),
     };
     let n = y.len();
     let mut t = t0;
@@ -217,7 +217,7 @@ fn segment<S: System>(
             return End::Failed("step budget exhausted".into());
         }
         let mut h = w.h.min(o.h_max);
-        let last = t + h >= t1 - 1e-12 * (t1 - t0);
+        let last = t + h >= left_limit(t0, t1);
         if last {
             h = t1 - t;
         }

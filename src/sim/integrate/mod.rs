@@ -142,6 +142,12 @@ pub enum End {
     Failed(String),
 }
 
+/// The time just before `b` at which the right-hand side of the interval [a, b]
+/// is evaluated for t ≥ b: inputs are right-continuous, and `b` is a kink.
+fn left_limit(a: f64, b: f64) -> f64 {
+    b - 1e-12 * (b - a)
+}
+
 /// The sample callback: (t, y, ∂y/∂θ column by column, empty without them).
 pub type SampleFn<'a> = dyn FnMut(f64, &[f64], &[f64]) + 'a;
 

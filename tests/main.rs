@@ -1,5 +1,6 @@
 //! One integration-test binary (fewer links on a 2-core CI): one module per area.
 
+mod bad_cli;
 mod bench;
 mod cli;
 mod datasets;

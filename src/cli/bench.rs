@@ -115,6 +115,7 @@ fn hyperelastic(a: HyperArgs) -> Result<i32> {
         budget.min_repeats,
         rows.len()
     );
+    super::claim_dir(&a.common.out_dir)?;
     let page = report::bench::write_hyperelastic(&rows, &note, &a.common.out_dir)
         .map_err(|e: Error| e.with_hint("check that --out-dir is writable"))?;
     for h in report::bench::headline(&rows) {

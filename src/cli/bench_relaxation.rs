@@ -71,7 +71,7 @@ pub fn run() -> Result<i32> {
                     ((p.relaxation_modulus(t) - e) / e).abs()
                 })
                 .fold(0.0, f64::max);
-            let name = format!("{method:?}").to_lowercase();
+            let name = ["grid", "refined"][mi].to_string();
             let _ = writeln!(
                 csv_out,
                 "{name},{terms},{best:.6e},{:.6e},{err:.6e}",
@@ -83,13 +83,14 @@ pub fn run() -> Result<i32> {
                 format!("{:.3}", best * 1e3),
                 format!("{:.3}", 100.0 * fit.rel_rmse),
                 format!("{:.3}", 100.0 * err),
-                format!("{:?}", fit.status).to_lowercase(),
+                fit.status.to_string(),
             ]);
             err_series[mi].push((terms as f64, 100.0 * err));
             time_series[mi].push((terms as f64, best * 1e3));
         }
     }
     let dir = Path::new("reports").join("bench");
+    super::claim_dir(&dir)?;
     atomic_write(&dir.join("relaxation.csv"), csv_out.as_bytes())?;
     let labels = ["grid NNLS only", "grid NNLS + LM refinement"];
     let series = |data: &[Vec<(f64, f64)>]| -> Vec<Series> {

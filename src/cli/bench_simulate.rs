@@ -6,7 +6,7 @@ use dea_fit::io::write::atomic_write;
 use dea_fit::report::plot::{Chart, Series, Style};
 use dea_fit::sim::integrate::Method;
 use dea_fit::sim::scene::{FidelityChoice, Scene};
-use dea_fit::sim::{simulate, Outcome, RunOptions};
+use dea_fit::sim::{simulate, Outcome, RunOptions, RunStatus};
 use dea_fit::Result;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -33,8 +33,11 @@ fn timed(s: &Scene, o: &RunOptions) -> Result<(Outcome, f64)> {
 /// Run the benchmark.
 pub fn run(dir: &Path) -> Result<i32> {
     let out_dir: PathBuf = PathBuf::from("reports/bench-simulate");
+    super::claim_dir(&out_dir)?;
     let mut csv =
-        String::from("scene,method,fidelity,rtol,run_time_s,steps,max_error_rel_stroke\n");
+        String::from("scene,method,fidelity,rtol,run_time_s,steps,status,max_error_rel_stroke\n");
+    // A failed run has no trajectory to compare: it is counted, and the bench exits 1.
+    let mut failed = 0;
     for name in SCENES {
         let mut scene = Scene::read(&dir.join(format!("{name}.toml")))?;
         scene.time.samples = (1..=200)
@@ -88,15 +91,20 @@ pub fn run(dir: &Path) -> Result<i32> {
                     / stroke;
                 let _ = writeln!(
                     csv,
-                    "{name},{},{},{rtol:e},{t:e},{},{err:e}",
-                    method.name(),
-                    o.fidelity.model,
-                    o.integrator.stats.steps
+                    "{name},{method},{},{rtol:e},{t:e},{},{},{err:e}",
+                    o.fidelity.model, o.integrator.stats.steps, o.integrator.status
                 );
+                if o.integrator.status == RunStatus::Failed {
+                    failed += 1;
+                    continue;
+                }
                 pts.push((t, err.max(1e-16).log10()));
             }
             series.push(Series {
-                label: format!("{} {fid:?}", method.name()),
+                label: match fid {
+                    FidelityChoice::Auto => format!("{method} auto fidelity"),
+                    _ => format!("{method} dynamic"),
+                },
                 points: pts,
                 color: ci,
                 style: Style::Line,
@@ -115,5 +123,10 @@ pub fn run(dir: &Path) -> Result<i32> {
     atomic_write(&path, csv.as_bytes())?;
     print!("{csv}");
     println!("wrote {}", path.display());
+    if failed > 0 {
+        println!("status: failed ({failed} run(s) did not complete; see the status column)");
+        return Ok(1);
+    }
+    println!("status: ok");
     Ok(0)
 }

@@ -6,7 +6,6 @@
 use super::permittivity::progress;
 use dea_fit::fit::composite::{self, check_claim, Basis, CompositeFit};
 use dea_fit::io::manifest;
-use dea_fit::io::write::{atomic_write, write_fit, Replaced};
 use dea_fit::report::permittivity::{ranking_table, reference_fit, write_composite};
 use dea_fit::{Error, Result};
 use std::path::PathBuf;
@@ -73,7 +72,7 @@ pub fn run(a: Args) -> Result<i32> {
     let m = manifest::read(&a.manifest)?;
     if a.generate {
         for (path, text) in composite::synthesize(&m)? {
-            atomic_write(&path, text.as_bytes())?;
+            super::write_noted(&path, text.as_bytes())?;
             println!("wrote {}", path.display());
         }
         return Ok(0);
@@ -87,19 +86,17 @@ pub fn run(a: Args) -> Result<i32> {
             .push(check_claim(frac, inc, basis, &fit.matrix, &fit.filler)?);
     }
     let json = serde_json::to_string_pretty(&fit).expect("a fit serialises");
-    if let Some(out) = &a.out {
-        if let Replaced::KeptAs(p) = write_fit(out, json.as_bytes(), |old| old == json)? {
-            eprintln!(
-                "note: {} held a different fit; it was kept as {}",
-                out.display(),
-                p.display()
-            );
-        }
+    if let Some(d) = &a.report {
+        super::claim_dir(d)?;
     }
-    let page = match &a.report {
-        Some(d) => Some(write_composite(&fit, d)?),
-        None => None,
-    };
+    if let Some(out) = &a.out {
+        super::write_fit_noted(out, json.as_bytes(), |old| old == json)?;
+    }
+    let page = a
+        .report
+        .as_ref()
+        .map(|d| write_composite(&fit, d))
+        .transpose()?;
     if a.json {
         println!("{json}");
     } else {
@@ -108,11 +105,7 @@ pub fn run(a: Args) -> Result<i32> {
             println!("report: {}", p.display());
         }
     }
-    Ok(if a.strict && fit.status.is_blocking() {
-        1
-    } else {
-        0
-    })
+    Ok(fit.status.exit_code(a.strict))
 }
 
 /// The human-readable output.
@@ -126,7 +119,7 @@ pub fn summary(fit: &CompositeFit) -> String {
     );
     for f in &fit.fractions {
         s.push_str(&format!(
-            "  {:<12} {} {:?} → φ = {:.4}\n",
+            "  {:<12} {} {} → φ = {:.4}\n",
             f.name, f.fraction, f.basis, f.volume_fraction
         ));
     }
@@ -155,10 +148,7 @@ pub fn summary(fit: &CompositeFit) -> String {
     for c in &fit.claims {
         s.push_str(&format!("\nclaim: {}\n", c.verdict));
     }
-    s.push_str(&format!(
-        "status: {}\n",
-        format!("{:?}", fit.status).to_lowercase()
-    ));
+    s.push_str(&format!("status: {}\n", fit.status));
     for w in &fit.warnings {
         s.push_str(&format!("warning: {w}\n"));
     }

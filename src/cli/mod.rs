@@ -71,15 +71,17 @@ pub struct Output {
     /// Print the fit as JSON on stdout (the fit file's object).
     #[arg(long)]
     pub json: bool,
-    /// Exit with status 1 when the fit is ill-posed, unstable or not converged.
+    /// Exit with status 1 when the fit is ill-posed, unstable or not converged
+    /// (`warning` never blocks).
     #[arg(long)]
     strict: bool,
 }
 
 impl Output {
-    /// The common end of every fitting command: write the fit file (keeping an older,
-    /// different fit aside, `same` tells them apart), the report, then print the
-    /// summary with where both went, or the JSON; returns the exit status.
+    /// The common end of every fitting command: take the report directory, write the
+    /// fit file (keeping an older, different fit aside, `same` tells them apart), the
+    /// report, then print the summary with where both went, or the JSON; returns the
+    /// exit status.
     pub fn deliver<T: serde::Serialize>(
         &self,
         name: &str,
@@ -95,16 +97,16 @@ impl Output {
             .clone()
             .unwrap_or_else(|| Path::new("fits").join(format!("{name}.json")));
         let json = serde_json::to_string_pretty(fit).expect("a fit serialises");
-        let replaced = dea_fit::io::write::write_fit(&out, json.as_bytes(), same)?;
-        let page = if self.no_report {
-            None
-        } else {
-            let dir = self
-                .report
+        let dir = (!self.no_report).then(|| {
+            self.report
                 .clone()
-                .unwrap_or_else(|| Path::new("reports").join(name));
-            Some(report(&dir)?)
-        };
+                .unwrap_or_else(|| Path::new("reports").join(name))
+        });
+        if let Some(d) = &dir {
+            claim_dir(d)?;
+        }
+        write_fit_noted(&out, json.as_bytes(), same)?;
+        let page = dir.map(|d| report(&d)).transpose()?;
         if self.json {
             println!("{json}");
         } else {
@@ -114,16 +116,42 @@ impl Output {
                 println!("report: {}", r.display());
             }
         }
-        if let dea_fit::io::write::Replaced::KeptAs(p) = &replaced {
-            eprintln!(
-                "note: {} held a different fit; it was kept as {}",
-                out.display(),
-                p.display()
-            );
-        }
-        Ok(i32::from(self.strict && status.is_blocking()))
+        Ok(status.exit_code(self.strict))
     }
 }
+
+/// Write a fit or result file by the one file policy ([`dea_fit::io::write`]): a
+/// different old file is kept aside, and stderr says where.
+pub fn write_fit_noted(
+    path: &std::path::Path,
+    bytes: &[u8],
+    same: impl Fn(&str) -> bool,
+) -> Result<()> {
+    note(path, &dea_fit::io::write::write_fit(path, bytes, same)?);
+    Ok(())
+}
+
+/// Write any other single output file (trajectory, synthetic data, generated
+/// export) by the same policy: a different old file is kept aside.
+pub fn write_noted(path: &std::path::Path, bytes: &[u8]) -> Result<()> {
+    note(
+        path,
+        &dea_fit::io::write::write_keeping(path, bytes, |old| old == bytes)?,
+    );
+    Ok(())
+}
+
+fn note(path: &std::path::Path, r: &dea_fit::io::write::Replaced) {
+    if let dea_fit::io::write::Replaced::KeptAs(p) = r {
+        eprintln!(
+            "note: {} held something else; it was kept as {}",
+            path.display(),
+            p.display()
+        );
+    }
+}
+
+pub use dea_fit::io::write::claim_dir;
 
 /// The closing lines of every fit summary: the solver report (with its method when
 /// `with_method`), the status, and one line per warning.

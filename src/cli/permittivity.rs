@@ -7,8 +7,8 @@ use dea_fit::fit::permittivity::{
 };
 use dea_fit::io::lcr::LcrOptions;
 use dea_fit::io::manifest::sidecar;
-use dea_fit::io::write::{write_fit, Replaced};
 use dea_fit::material::dielectric::Pair;
+use dea_fit::report::format::tolerance;
 use dea_fit::report::permittivity::{sample_table, write_samples};
 use dea_fit::units::{parse_quantity, Dimension, Quantity};
 use dea_fit::{Error, Result};
@@ -166,20 +166,22 @@ pub fn run(a: Args) -> Result<i32> {
     let run = permittivity::analyse_batch(&inputs, &opts, &settings, &|| bar.inc(1))?;
     bar.finish_and_clear();
     let json = serde_json::to_string_pretty(&run).expect("a result serialises");
-    if let Some(out) = &a.out {
-        let replaced = write_fit(out, json.as_bytes(), |old| old == json)?;
-        if let Replaced::KeptAs(p) = replaced {
-            eprintln!(
-                "note: {} held a different result; it was kept as {}",
-                out.display(),
-                p.display()
-            );
+    // A file that could not be used is a refused input: exit 2, and (like every
+    // refusal) nothing is written; the other files' results are still printed.
+    let refused = !run.failed.is_empty();
+    let page = match (&a.report, refused) {
+        (Some(dir), false) => {
+            super::claim_dir(dir)?;
+            Some(dir)
         }
-    }
-    let page = match &a.report {
-        Some(dir) => Some(write_samples(&run.samples, &run.warnings, dir)?),
-        None => None,
+        _ => None,
     };
+    if let (Some(out), false) = (&a.out, refused) {
+        super::write_fit_noted(out, json.as_bytes(), |old| old == json)?;
+    }
+    let page = page
+        .map(|dir| write_samples(&run.samples, &run.warnings, dir))
+        .transpose()?;
     if a.json {
         println!("{json}");
     } else {
@@ -187,19 +189,20 @@ pub fn run(a: Args) -> Result<i32> {
         if let Some(p) = page {
             println!("report: {}", p.display());
         }
-        if let Some(o) = &a.out {
+        if let (Some(o), false) = (&a.out, refused) {
             println!("result: {}", o.display());
         }
     }
     for f in &run.failed {
         eprintln!("error: {}", f.error);
     }
-    Ok(if !run.failed.is_empty() {
+    if refused && (a.out.is_some() || a.report.is_some()) {
+        eprintln!("note: nothing was written; fix or leave out the file(s) that failed");
+    }
+    Ok(if refused {
         2
-    } else if a.strict && run.status.is_blocking() {
-        1
     } else {
-        0
+        run.status.exit_code(a.strict)
     })
 }
 
@@ -209,15 +212,15 @@ pub fn summary(run: &PermittivityRun) -> String {
     let brief = run.samples.len() > 10;
     for smp in &run.samples {
         s.push_str(&format!(
-            "\n{} ({}, {:?} {}), A = {:.4e} m² ± {:.1e}, d = {:.4e} m ± {:.1e}\n",
+            "\n{} ({}, {} {}), A = {:.4e} m² ± {}, d = {:.4e} m ± {}\n",
             smp.name,
             smp.provenance.path,
             smp.provenance.format,
             smp.provenance.pair.name(),
             smp.geometry.area,
-            smp.geometry.area_std,
+            tolerance(smp.geometry.area_std, |v| format!("{v:.1e}")),
             smp.geometry.thickness,
-            smp.geometry.thickness_std
+            tolerance(smp.geometry.thickness_std, |v| format!("{v:.1e}"))
         ));
         s.push_str(&sample_table(smp, brief));
         for n in &smp.notes {
@@ -228,7 +231,7 @@ pub fn summary(run: &PermittivityRun) -> String {
         "\n{} sample(s), {} failed, status: {}\n",
         run.samples.len(),
         run.failed.len(),
-        format!("{:?}", run.status).to_lowercase()
+        run.status
     ));
     for w in &run.warnings {
         s.push_str(&format!("warning: {w}\n"));

@@ -1,8 +1,13 @@
 //! `dea-fit simulate`: run a scene; trajectory CSV, charts and summary.
+//!
+//! Status: `completed` (the whole span, every state and output finite), `pull_in`
+//! (stopped at pull-in: a result; exit 1 under `--strict`), `failed` (integrator
+//! failure, step budget, non-finite state or output, with the time: no result past
+//! it, exit 1 whatever `--strict` says; the partial trajectory is still written for
+//! diagnosis).
 
-use dea_fit::io::write::atomic_write;
 use dea_fit::report::simulation;
-use dea_fit::sim::{self, integrate::Method, scene::Scene, RunOptions};
+use dea_fit::sim::{self, integrate::Method, scene::Scene, RunOptions, RunStatus};
 use dea_fit::{Error, Result};
 use std::path::PathBuf;
 
@@ -34,6 +39,9 @@ pub struct Args {
     /// Do not write the report (charts, index.md).
     #[arg(long)]
     no_report: bool,
+    /// Exit with status 1 at pull-in too (a failed run always exits 1).
+    #[arg(long)]
+    strict: bool,
 }
 
 fn parse_method(s: &str) -> std::result::Result<Method, String> {
@@ -66,8 +74,23 @@ pub fn run(a: Args) -> Result<i32> {
     let dir = a
         .report
         .unwrap_or_else(|| PathBuf::from(format!("reports/sim-{}", scene.name)));
-    let csv = a.out.unwrap_or_else(|| dir.join("trajectory.csv"));
-    atomic_write(&csv, simulation::trajectory_csv(&o).as_bytes())?;
+    // Claim the report directory before writing anything, so that a refusal
+    // writes nothing.
+    if !a.no_report || a.out.is_none() {
+        super::claim_dir(&dir)?;
+    }
+    let trajectory = simulation::trajectory_csv(&o);
+    let csv = match a.out {
+        Some(out) => {
+            super::write_noted(&out, trajectory.as_bytes())?;
+            out
+        }
+        None => {
+            let csv = dir.join("trajectory.csv");
+            dea_fit::io::write::atomic_write(&csv, trajectory.as_bytes())?;
+            csv
+        }
+    };
     if !a.no_report {
         simulation::write(&o, &dir)?;
     }
@@ -112,9 +135,14 @@ pub fn run(a: Args) -> Result<i32> {
             run_time * 1e3,
             csv.display()
         );
+        println!("status: {}", o.integrator.status);
         for w in &o.warnings {
             println!("warning: {w}");
         }
     }
-    Ok(0)
+    Ok(match o.integrator.status {
+        RunStatus::Completed => 0,
+        RunStatus::PullIn => i32::from(a.strict),
+        RunStatus::Failed => 1,
+    })
 }

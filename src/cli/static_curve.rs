@@ -1,7 +1,13 @@
 //! `dea-fit static`: static voltage–stretch curve of a scene's actuator and its peak.
+//!
+//! Status: `ok` (the curve and its peak, or no peak down to `--stretch-min`, and the
+//! scene's input stays below any pull-in), `pull_in` (the scene's largest input
+//! voltage reaches the pull-in voltage: exit 1 under `--strict`), `failed` (the
+//! search could not look: exit 1).
 
-use dea_fit::sim::{full_plant, scene::Scene, static_curve};
-use dea_fit::Result;
+use dea_fit::sim::static_curve::{self, Search, MIN_POINTS};
+use dea_fit::sim::{full_plant, scene::Scene};
+use dea_fit::{Error, Result};
 use std::path::PathBuf;
 
 /// Static (fully relaxed) voltage–stretch curve and pull-in of a scene's actuator.
@@ -9,41 +15,85 @@ use std::path::PathBuf;
 pub struct Args {
     /// Scene file.
     scene: PathBuf,
-    /// Print JSON (`curve`, `pull_in`).
+    /// Print JSON (`status`, `search`, `curve`, `pull_in`).
     #[arg(long)]
     json: bool,
-    /// Number of curve points.
+    /// Number of curve points (at least 10).
     #[arg(long, default_value_t = 200)]
     points: usize,
     /// Smallest stretch examined.
     #[arg(long, default_value_t = 0.3)]
     stretch_min: f64,
+    /// Exit with status 1 when the scene's input reaches the pull-in voltage.
+    #[arg(long)]
+    strict: bool,
 }
 
 /// Run the subcommand.
 pub fn run(a: Args) -> Result<i32> {
     let scene = Scene::read(&a.scene)?;
     if !(a.stretch_min > 0.0 && a.stretch_min < 1.0) {
-        return Err(dea_fit::Error::settings("--stretch-min must be in (0, 1)"));
+        return Err(Error::settings("--stretch-min must be in (0, 1)"));
+    }
+    if a.points < MIN_POINTS {
+        return Err(Error::settings(format!(
+            "--points {} is too few to look for a peak: the pull-in must be bracketed by curve points",
+            a.points
+        ))
+        .with_hint(format!("use --points {MIN_POINTS} or more (default 200)")));
     }
     let p = full_plant(&scene);
     let c = static_curve::static_curve(&p, a.points, a.stretch_min);
+    let v_in = match &scene.control {
+        Some(pid) => pid.v_max,
+        None => scene.input.max_abs(0.0, scene.time.span),
+    };
+    let (status, line) = match (c.search, c.pull_in) {
+        (Search::PullIn, Some(pi)) if v_in >= pi.voltage_v => (
+            "pull_in",
+            format!(
+                "pull-in at stretch {:.6}, {:.1} V (rest stretch {:.6}); the scene's input reaches {v_in:.1} V, at or above it",
+                pi.stretch, pi.voltage_v, p.lam0
+            ),
+        ),
+        (Search::PullIn, Some(pi)) => (
+            "ok",
+            format!(
+                "pull-in at stretch {:.6}, {:.1} V (rest stretch {:.6}); the scene's input peaks at {v_in:.1} V",
+                pi.stretch, pi.voltage_v, p.lam0
+            ),
+        ),
+        (Search::Rising, _) => (
+            "ok",
+            format!(
+                "no pull-in down to stretch {} (V still rises there)",
+                a.stretch_min
+            ),
+        ),
+        _ => (
+            "failed",
+            format!(
+                "pull-in not determined: {} of {} curve points have a real voltage and the largest is not inside the range",
+                c.curve.len(),
+                a.points
+            ),
+        ),
+    };
     if a.json {
+        let mut v = serde_json::to_value(&c).expect("serialisable");
+        v["status"] = status.into();
+        v["message"] = line.clone().into();
         println!(
             "{}",
-            serde_json::to_string_pretty(&c).expect("serialisable")
+            serde_json::to_string_pretty(&v).expect("serialisable")
         );
     } else {
-        match c.pull_in {
-            Some(pi) => println!(
-                "{}: pull-in at stretch {:.6}, {:.1} V (rest stretch {:.6})",
-                scene.name, pi.stretch, pi.voltage_v, p.lam0
-            ),
-            None => println!(
-                "{}: no pull-in down to stretch {} (V rises monotonically)",
-                scene.name, a.stretch_min
-            ),
-        }
+        println!("{}: {line}", scene.name);
+        println!("status: {status}");
     }
-    Ok(0)
+    Ok(match status {
+        "failed" => 1,
+        "pull_in" => i32::from(a.strict),
+        _ => 0,
+    })
 }

@@ -2,7 +2,6 @@
 //! Gaussian noise from a seeded generator, the generating parameters written into the
 //! file's comment lines.
 
-use dea_fit::io::write::atomic_write;
 use dea_fit::material::hyperelastic::{Mode, ModelSpec, OgdenForm};
 use dea_fit::units::{parse_quantity, Dimension};
 use dea_fit::{Error, Result};
@@ -149,9 +148,17 @@ pub fn run(a: Args) -> Result<i32> {
         let e1: f64 = unit.sample(&mut rng);
         let e2: f64 = unit.sample(&mut rng);
         let y = clean * (1.0 + a.noise * e1) + noise_abs * e2;
+        if !y.is_finite() {
+            return Err(Error::settings(format!(
+                "the model gives a non-finite stress ({y}) at stretch {l}: no data written"
+            ))
+            .with_hint(
+                "keep --stretch inside the model's domain (e.g. below Gent's locking stretch)",
+            ));
+        }
         let _ = writeln!(s, "{l:.6},{:.6}", y / 1e3);
     }
-    atomic_write(&a.out, s.as_bytes())?;
+    super::write_noted(&a.out, s.as_bytes())?;
     eprintln!("wrote {} ({count} points)", a.out.display());
     Ok(0)
 }

@@ -39,6 +39,16 @@ pub enum Basis {
     Volume,
 }
 
+impl std::fmt::Display for Basis {
+    /// The name the JSON uses (`weight`, `volume`).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Basis::Weight => "weight",
+            Basis::Volume => "volume",
+        })
+    }
+}
+
 /// A phase of the composite.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Phase {
@@ -704,6 +714,25 @@ pub fn fit_series(m: &Manifest, on_done: &(dyn Fn() + Sync)) -> Result<Composite
             .collect()
     };
     let summary = summarise(&fits);
+    // The series is only as good as its usable fits: ill-posed when no rule is usable
+    // at any frequency, a warning when some frequencies have none.
+    let unusable = fits
+        .iter()
+        .filter(|f| f.rules.iter().all(|r| r.status.is_blocking()))
+        .count();
+    if !fits.is_empty() && unusable == fits.len() {
+        status = worst(status, Status::IllPosed);
+        warnings.push(format!(
+            "no mixing rule is usable at any of the {} frequencies (every fit is ill-posed or did not converge): the series does not determine the rules' constants",
+            fits.len()
+        ));
+    } else if unusable > 0 {
+        status = worst(status, Status::Warning);
+        warnings.push(format!(
+            "no mixing rule is usable at {unusable} of {} frequencies",
+            fits.len()
+        ));
+    }
     let claims = m
         .claims
         .iter()

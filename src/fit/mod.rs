@@ -43,10 +43,13 @@ pub enum Status {
     Unstable,
     /// The search did not converge.
     NotConverged,
+    /// No result: an input could not be used (a batch with a file that failed).
+    Failed,
 }
 
 impl std::fmt::Display for Status {
-    /// The same name the JSON uses (`ok`, `warning`, `ill_posed`, `unstable`, `not_converged`).
+    /// The same name the JSON uses (`ok`, `warning`, `ill_posed`, `unstable`,
+    /// `not_converged`, `failed`): the one spelling of a status in every output.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
             Status::Ok => "ok",
@@ -54,6 +57,7 @@ impl std::fmt::Display for Status {
             Status::IllPosed => "ill_posed",
             Status::Unstable => "unstable",
             Status::NotConverged => "not_converged",
+            Status::Failed => "failed",
         })
     }
 }
@@ -63,8 +67,14 @@ impl Status {
     pub fn is_blocking(self) -> bool {
         matches!(
             self,
-            Status::IllPosed | Status::Unstable | Status::NotConverged
+            Status::IllPosed | Status::Unstable | Status::NotConverged | Status::Failed
         )
+    }
+
+    /// The exit status of a command that ends with this status: 1 for a blocking
+    /// status under `--strict`, else 0 (README, "Exit status and statuses").
+    pub fn exit_code(self, strict: bool) -> i32 {
+        i32::from(strict && self.is_blocking())
     }
 }
 

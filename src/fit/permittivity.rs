@@ -276,11 +276,12 @@ pub struct Input {
     pub geometry_from: String,
 }
 
-/// A status that outranks the other (Ok < Warning < the blocking ones).
+/// A status that outranks the other (Ok < Warning < the blocking ones < Failed).
 pub fn worst(a: Status, b: Status) -> Status {
     let rank = |s: Status| match s {
         Status::Ok => 0,
         Status::Warning => 1,
+        Status::Failed => 3,
         _ => 2,
     };
     if rank(b) > rank(a) {
@@ -370,6 +371,7 @@ pub fn analyse(
     let mut leaky = Vec::new();
     let mut below_stray = Vec::new();
     let mut below_one = Vec::new();
+    let mut negative_d = Vec::new();
     for p in sweep.points.iter().filter(|p| p.y.im > 0.0) {
         let omega = 2.0 * PI * p.freq;
         let (cp, d) = (p.y.im / omega, p.y.re / p.y.im);
@@ -379,6 +381,9 @@ pub fn analyse(
         }
         if d > 1.0 {
             leaky.push((p.freq, d));
+        }
+        if d < 0.0 {
+            negative_d.push((p.freq, d));
         }
         let f = |g: &Geometry, s: f64| eps_at(p.y, omega, g, s, settings.edge);
         let (eps, loss) = f(geom, stray);
@@ -449,6 +454,17 @@ pub fn analyse(
             "D > 1 at {} of {} frequencies (largest D = {d:.3} at {f} Hz): a leaky sample, not a capacitor there; εr from Cp is not meaningful where conduction dominates",
             leaky.len(),
             points.len()
+        ));
+    }
+    if let Some(&(f, d)) = negative_d.iter().min_by(|a, b| a.1.total_cmp(&b.1)) {
+        // The reader refuses D below −D_NOISE; what is left is within the meter's
+        // accuracy, but a negative loss is not a material's.
+        status = worst(status, Status::Warning);
+        warnings.push(format!(
+            "D slightly negative at {} of {} frequencies (most negative D = {d:.2e} at {f} Hz), within an LCR meter's accuracy of about ±{}: the loss there (ε″, tan δ, σ) is below what the meter resolves and is not a material value",
+            negative_d.len(),
+            points.len(),
+            crate::io::lcr::D_NOISE
         ));
     }
     if let Some(&(f, e)) = below_one.iter().min_by(|a, b| a.1.total_cmp(&b.1)) {
@@ -601,6 +617,9 @@ pub fn analyse_batch(
     if !grid.is_empty() {
         status = worst(status, Status::Warning);
         warnings.extend(grid);
+    }
+    if !failed.is_empty() {
+        status = Status::Failed;
     }
     Ok(PermittivityRun {
         schema: RUN_SCHEMA.into(),

@@ -40,6 +40,42 @@ pub enum Format {
     Csv,
 }
 
+impl std::fmt::Display for Format {
+    /// The name the JSON uses (`e4990a`, `e4980a`, `csv`).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Format::E4990a => "e4990a",
+            Format::E4980a => "e4980a",
+            Format::Csv => "csv",
+        })
+    }
+}
+
+/// The most negative dissipation factor D = G/|B| read as measurement noise: an LCR
+/// meter's D accuracy is about ±5e-4 to ±1e-3 (E4980A basic accuracy), so a D just
+/// below zero on a low-loss coupon is noise (the analysis warns), while anything
+/// more negative is a sign error in the data.
+pub const D_NOISE: f64 = 1e-3;
+
+/// Refuse a point with clearly negative loss (G < 0: D < −[`D_NOISE`], θ beyond
+/// −90°): a passive sample dissipates power, it cannot deliver it.
+fn passive(path: &Path, line: usize, f: f64, y: Complex<f64>) -> Result<()> {
+    let d = y.re / y.im.abs();
+    if y.re < 0.0 && !(d >= -D_NOISE) {
+        let theta = y.im.atan2(y.re).to_degrees();
+        return Err(Error::input(
+            Location::line(path, line),
+            format!(
+                "negative loss at {f} Hz: D = {d:.4} (conductance G = {:.4e} S < 0, impedance angle {:.2}° beyond ±90°); a passive sample dissipates, D ≥ 0",
+                y.re,
+                -theta
+            ),
+        )
+        .with_hint("check the sign of the D, Rp or θ column (a capacitor's impedance angle is about −89°, not −91°) and the open/short compensation"));
+    }
+    Ok(())
+}
+
 /// How to read exports whose files do not say everything.
 #[derive(Debug, Clone, Default)]
 pub struct LcrOptions {
@@ -475,9 +511,11 @@ fn read_csv(
         check_frequency(&table, row, freq.col, f)?;
         let a = value(&table, row, ca, &table.header[ca.col])?;
         let b = value(&table, row, cb, &table.header[cb.col])?;
+        let y = pair.to_admittance(a, b, 2.0 * PI * f);
+        passive(path, row.line, f, y)?;
         points.push(LcrPoint {
             freq: f,
-            y: pair.to_admittance(a, b, 2.0 * PI * f),
+            y,
             line: row.line,
         });
     }
@@ -658,9 +696,11 @@ fn read_e4980a(path: &Path, lines: &[&str], opts: &LcrOptions) -> Result<Sweep> 
                 "frequency must be > 0 Hz, found {f}"
             )));
         }
+        let y = pair.to_admittance(a, b * angle, 2.0 * PI * f);
+        passive(path, *line, f, y)?;
         points.push(LcrPoint {
             freq: f,
-            y: pair.to_admittance(a, b * angle, 2.0 * PI * f),
+            y,
             line: *line,
         });
     }

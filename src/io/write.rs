@@ -29,37 +29,92 @@ pub fn atomic_write(path: &Path, bytes: &[u8]) -> Result<()> {
     })
 }
 
-/// What happened to an existing file when a fit was written.
+/// What happened to an existing file when a result was written.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Replaced {
     /// There was no file.
     New,
     /// The file held the same result and was refreshed.
     Same,
-    /// The file held a different result; it was kept under this name.
+    /// The file held something else; it was kept under this name.
     KeptAs(PathBuf),
 }
 
-/// Write a fit file without ever losing an earlier, different fit: if `path` exists
-/// and `same(old_text)` is false, the old file is first renamed to
-/// `<stem>.previous-<n>.json` (first free n).
-pub fn write_fit(path: &Path, bytes: &[u8], same: impl Fn(&str) -> bool) -> Result<Replaced> {
-    let replaced = match std::fs::read_to_string(path) {
+/// Write a single output file (fit, result, trajectory, synthetic data, generated
+/// export) without ever losing what was there: if `path` exists and `same(old_bytes)`
+/// is false (including an old file that is not UTF-8 text, or not ours at all), the
+/// old file is first renamed to `<stem>.previous-<n>.<ext>` (first free n). An
+/// existing path that cannot be read is an error, never taken for "no file".
+pub fn write_keeping(path: &Path, bytes: &[u8], same: impl Fn(&[u8]) -> bool) -> Result<Replaced> {
+    let replaced = match std::fs::read(path) {
         Ok(old) if same(&old) => Replaced::Same,
         Ok(_) => {
-            let stem = path
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            let keep = (1..)
-                .map(|n| path.with_file_name(format!("{stem}.previous-{n}.json")))
-                .find(|p| !p.exists())
-                .expect("an unused name exists");
+            let keep = previous_name(path);
             std::fs::rename(path, &keep).map_err(|e| Error::io(path, e))?;
             Replaced::KeptAs(keep)
         }
-        Err(_) => Replaced::New,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Replaced::New,
+        Err(e) => return Err(Error::io(path, e)),
     };
     atomic_write(path, bytes)?;
     Ok(replaced)
+}
+
+/// A fit file: as [`write_keeping`], `same` comparing the old text with the new fit
+/// (an old file that is not UTF-8 is not the same fit).
+pub fn write_fit(path: &Path, bytes: &[u8], same: impl Fn(&str) -> bool) -> Result<Replaced> {
+    write_keeping(path, bytes, |old| {
+        std::str::from_utf8(old).is_ok_and(|old| same(old))
+    })
+}
+
+/// The first free `<stem>.previous-<n>.<ext>` beside `path`.
+fn previous_name(path: &Path) -> PathBuf {
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let ext = path
+        .extension()
+        .map(|e| format!(".{}", e.to_string_lossy()))
+        .unwrap_or_default();
+    (1u64..)
+        .map(|n| path.with_file_name(format!("{stem}.previous-{n}{ext}")))
+        .find(|p| !p.exists())
+        .unwrap_or_else(|| path.with_extension("previous"))
+}
+
+/// The file that marks a directory as dea-fit's own output.
+pub const MARKER: &str = ".dea-fit-output";
+
+/// Take `dir` as an output directory (report, bench tables): a directory that does
+/// not exist or is empty is created and marked with [`MARKER`]; one that holds the
+/// marker is dea-fit's own, and its files are replaced; any other directory is
+/// refused, since writing `index.md` and charts into it could replace files dea-fit
+/// did not write.
+pub fn claim_dir(dir: &Path) -> Result<()> {
+    let marker = dir.join(MARKER);
+    if marker.is_file() {
+        return Ok(());
+    }
+    if dir.exists() {
+        if !dir.is_dir() {
+            return Err(
+                Error::settings(format!("output directory {} is a file", dir.display()))
+                    .with_hint("choose another directory"),
+            );
+        }
+        let mut entries = std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))?;
+        if entries.next().is_some() {
+            return Err(Error::settings(format!(
+                "output directory {} holds files dea-fit did not write (it has no {MARKER} file); writing there could replace them",
+                dir.display()
+            ))
+            .with_hint("choose another directory, or move those files away"));
+        }
+    }
+    atomic_write(
+        &marker,
+        b"dea-fit writes into this directory and replaces its own files here on the next run.\n",
+    )
 }

@@ -138,7 +138,7 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
                     r.repeats.to_string(),
                     si(r.rmse_pa, "Pa"),
                     format!("{}/{}", r.starts_at_best, r.starts),
-                    format!("{:?}", r.status),
+                    r.status.to_string(),
                 ]
             })
             .collect();
@@ -228,7 +228,7 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
                     si(r.rmse_pa, "Pa"),
                     format!("{}/{}", r.starts_at_best, r.starts),
                     r.iterations.to_string(),
-                    format!("{:?}", r.status),
+                    r.status.to_string(),
                 ]
             })
             .collect();
@@ -323,7 +323,7 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
                     format!("{}/{}", r.starts_at_best, r.starts),
                     r.iterations.to_string(),
                     r.evaluations.to_string(),
-                    format!("{:?}", r.status),
+                    r.status.to_string(),
                 ]
             })
             .collect();

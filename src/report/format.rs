@@ -42,6 +42,17 @@ pub fn sig(v: f64, n: usize) -> String {
     format!("{v:.decimals$}")
 }
 
+/// A standard deviation for a `±` column: "—" when it is zero, which is what every
+/// propagation gives when no tolerance was given (a printed `± 0.0000` would claim
+/// an exact value).
+pub fn tolerance(std: f64, fmt: impl Fn(f64) -> String) -> String {
+    if std == 0.0 {
+        "—".into()
+    } else {
+        fmt(std)
+    }
+}
+
 /// Render rows as a left-aligned text table with a header rule.
 pub fn table(header: &[&str], rows: &[Vec<String>]) -> String {
     let mut w: Vec<usize> = header.iter().map(|h| h.chars().count()).collect();
@@ -81,5 +92,11 @@ mod tests {
         assert_eq!(si(-888.0, "Pa"), "-888.00 Pa");
         assert_eq!(si(1.5e-5, "m"), "15.000 µm");
         assert_eq!(si(2.5, "1"), "2.5000");
+    }
+
+    #[test]
+    fn tolerance_without_one_is_a_dash() {
+        assert_eq!(tolerance(0.0, |v| format!("{v:.4}")), "—");
+        assert_eq!(tolerance(0.0123, |v| format!("{v:.4}")), "0.0123");
     }
 }

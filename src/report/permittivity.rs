@@ -2,7 +2,7 @@
 //! frequency (log axis) for all samples on one figure each, εr against filler volume
 //! fraction with the fitted mixing rules, and a Markdown page with the tables.
 
-use super::format::{sig, table};
+use super::format::{sig, table, tolerance};
 use super::plot::{Chart, Series, Style};
 use crate::error::Result;
 use crate::fit::composite::{CompositeFit, FrequencyFit};
@@ -85,7 +85,7 @@ pub fn sample_table(s: &SamplePermittivity, decades: bool) -> String {
             vec![
                 sig(p.freq_hz, 6),
                 format!("{:.4}", p.eps_r),
-                format!("{:.4}", p.eps_r_std),
+                tolerance(p.eps_r_std, |v| format!("{v:.4}")),
                 format!("{:.4e}", p.eps_loss),
                 format!("{:.4e}", p.tan_delta),
                 format!("{:.3e}", p.conductivity),
@@ -99,7 +99,7 @@ fn samples_md(samples: &[SamplePermittivity], md: &mut String) {
     for s in samples {
         let _ = writeln!(
             md,
-            "\n## {}\n\n`{}` ({:?}, {}), status {:?}\n",
+            "\n## {}\n\n`{}` ({}, {}), status {}\n",
             s.name,
             s.provenance.path,
             s.provenance.format,
@@ -177,7 +177,7 @@ pub fn ranking_table(f: &FrequencyFit) -> String {
                 format!("{:.3}", r.rms_rel_pct),
                 r.aicc.map(|a| format!("{a:.2}")).unwrap_or("n/a".into()),
                 format!("{:.2}", r.delta),
-                format!("{:?}", r.status).to_lowercase(),
+                r.status.to_string(),
             ]
         })
         .collect();
@@ -297,7 +297,7 @@ pub fn write_composite(fit: &CompositeFit, dir: &Path) -> Result<PathBuf> {
         .map(|f| {
             vec![
                 f.name.clone(),
-                format!("{} ({:?})", f.fraction, f.basis).to_lowercase(),
+                format!("{} ({})", f.fraction, f.basis),
                 format!("{:.4}", f.volume_fraction),
                 f.weight_fraction
                     .map(|w| format!("{w:.4}"))

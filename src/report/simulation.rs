@@ -181,7 +181,7 @@ pub fn write(o: &Outcome, dir: &Path) -> Result<PathBuf> {
     let i = &o.integrator;
     let _ = writeln!(
         md,
-        "- integrator: {:?} (rtol {:.0e}; {}): {} steps, {} rejected, {} restarts, {} f-evals — {}",
+        "- integrator: {} (rtol {:.0e}; {}): {} steps, {} rejected, {} restarts, {} f-evals — {}",
         i.method,
         i.rtol,
         i.reason,

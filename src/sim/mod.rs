@@ -98,12 +98,24 @@ pub struct Energy {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum RunStatus {
-    /// Reached the end time.
+    /// Reached the end time with a finite state throughout.
     Completed,
-    /// Stopped at pull-in.
+    /// Stopped at pull-in: a result (the actuator does not survive this input).
     PullIn,
-    /// The integrator failed.
+    /// No result past the failure time: the integrator failed, ran out of its step
+    /// budget, or the state or an output became non-finite.
     Failed,
+}
+
+impl std::fmt::Display for RunStatus {
+    /// The name the JSON uses (`completed`, `pull_in`, `failed`).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            RunStatus::Completed => "completed",
+            RunStatus::PullIn => "pull_in",
+            RunStatus::Failed => "failed",
+        })
+    }
 }
 
 /// Integrator report.
@@ -209,6 +221,24 @@ fn sample(p: &Plant, t: f64, y: &[f64]) -> Sample {
             .unwrap_or(f64::NAN),
         sensed_contraction: p.sensed_contraction(y[0]),
     }
+}
+
+/// The quantities every run reports are finite (α and the reference are NaN by
+/// design where they do not apply).
+fn sample_finite(s: &Sample) -> bool {
+    [
+        s.time_s,
+        s.input_v,
+        s.voltage_v,
+        s.stretch,
+        s.length_m,
+        s.capacitance_f,
+        s.current_a,
+        s.power_w,
+        s.leakage_w,
+    ]
+    .iter()
+    .all(|v| v.is_finite())
 }
 
 /// Hyperelastic energy Vol·∫P dλ from a to b (20-point composite Gauss–Legendre).
@@ -378,6 +408,18 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
             let t = samples.last().map(|s| s.time_s).unwrap_or(0.0);
             (RunStatus::Failed, why, t, Vec::new())
         }
+    };
+    // A finite state can still give a non-finite output (a stretch outside the
+    // model's domain): such a run has no result either.
+    let (status, message) = match samples.iter().find(|s| !sample_finite(s)) {
+        Some(bad) if status != RunStatus::Failed => (
+            RunStatus::Failed,
+            format!(
+                "a non-finite output at t = {:.6e} s (stretch {}, voltage {} V, capacitance {} F)",
+                bad.time_s, bad.stretch, bad.voltage_v, bad.capacitance_f
+            ),
+        ),
+        _ => (status, message),
     };
     // energy balance
     let e = p.electrical(t_end, &y, p.lam_dot(t_end, &y));

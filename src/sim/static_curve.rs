@@ -19,12 +19,27 @@ pub struct Point {
     pub voltage_v: f64,
 }
 
+/// What the peak search found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Search {
+    /// A peak inside the examined range: the pull-in.
+    PullIn,
+    /// V(λ) still rises at the smallest stretch examined: no pull-in down to it.
+    Rising,
+    /// Too few points with a real voltage, or the largest voltage at the rest state:
+    /// the search could not look, and claims nothing.
+    Undetermined,
+}
+
 /// The static curve and its peak.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct StaticCurve {
     /// Points from the loaded rest state towards thinner layers.
     pub curve: Vec<Point>,
-    /// The peak (pull-in), or None if V(λ) rises monotonically down to `stretch_min`.
+    /// What the search found.
+    pub search: Search,
+    /// The peak (pull-in), if `search` is `pull_in`.
     pub pull_in: Option<Point>,
     /// Smallest stretch examined.
     pub stretch_min: f64,
@@ -37,11 +52,17 @@ pub fn voltage_at(p: &Plant, lam: f64) -> Option<f64> {
     (v2 >= 0.0 && v2.is_finite()).then(|| v2.sqrt())
 }
 
-/// The curve on `n` points from the rest stretch down to `stretch_min`, and the peak
-/// refined by golden-section search to 1e-10 in λ.
+/// Fewest curve points a search may use: the peak must be bracketed by grid points.
+pub const MIN_POINTS: usize = 10;
+
+/// The curve on `n` (at least [`MIN_POINTS`]) points from the rest stretch down to
+/// `stretch_min`, and the peak refined by golden-section search to 1e-10 in λ. The
+/// curve is unimodal for every shipped model; a grid maximum at the thinnest point
+/// is a pull-in only if V already falls there (checked on a step of 1e-7 in λ),
+/// otherwise V still rises and there is no pull-in down to `stretch_min`.
 pub fn static_curve(p: &Plant, n: usize, stretch_min: f64) -> StaticCurve {
     let lam0 = p.lam0;
-    let n = n.max(3);
+    let n = n.max(MIN_POINTS);
     let grid: Vec<f64> = (0..n)
         .map(|i| lam0 + (stretch_min - lam0) * i as f64 / (n - 1) as f64)
         .collect();
@@ -54,13 +75,27 @@ pub fn static_curve(p: &Plant, n: usize, stretch_min: f64) -> StaticCurve {
             })
         })
         .collect();
+    let f = |l: f64| voltage_at(p, l).unwrap_or(0.0);
     let imax = (0..curve.len()).max_by(|&a, &b| curve[a].voltage_v.total_cmp(&curve[b].voltage_v));
-    let pull_in = imax.and_then(|i| {
-        if i == 0 || i + 1 >= curve.len() {
-            return None;
+    let last = curve.len().saturating_sub(1);
+    let bracket = match imax {
+        _ if curve.len() < 3 => None,
+        Some(i) if i > 0 && i < last => Some((curve[i + 1].stretch, curve[i - 1].stretch)),
+        Some(i) if i == last => {
+            let l = curve[i].stretch;
+            if f(l) >= f(l + 1e-7) {
+                return StaticCurve {
+                    curve,
+                    search: Search::Rising,
+                    pull_in: None,
+                    stretch_min,
+                };
+            }
+            Some((l, curve[i - 1].stretch))
         }
-        let f = |l: f64| voltage_at(p, l).unwrap_or(0.0);
-        let (mut a, mut b) = (curve[i + 1].stretch, curve[i - 1].stretch);
+        _ => None,
+    };
+    let pull_in = bracket.map(|(mut a, mut b)| {
         let g = 0.5 * (5f64.sqrt() - 1.0);
         let mut c = b - g * (b - a);
         let mut d = a + g * (b - a);
@@ -74,13 +109,17 @@ pub fn static_curve(p: &Plant, n: usize, stretch_min: f64) -> StaticCurve {
             d = a + g * (b - a);
         }
         let l = 0.5 * (a + b);
-        Some(Point {
+        Point {
             stretch: l,
             voltage_v: f(l),
-        })
+        }
     });
     StaticCurve {
         curve,
+        search: match pull_in {
+            Some(_) => Search::PullIn,
+            None => Search::Undetermined,
+        },
         pull_in,
         stretch_min,
     }

@@ -8,7 +8,10 @@
 //! the input's right limit, and diffsol reinitialises the method to first order
 //! (it does so whenever the state is touched through `state_mut`).
 
-use super::{left_limit, End, EventFn, Extra, Method, Options, SampleFn, Stats, System};
+use super::{
+    budget_exhausted, left_limit, non_finite, End, EventFn, Extra, Method, Options, SampleFn,
+    Stats, System,
+};
 use ::diffsol::{
     NalgebraLU, NalgebraMat, NalgebraVec, OdeBuilder, OdeEquations, OdeSolverMethod,
     OdeSolverStopReason, Vector, VectorCommon,
@@ -220,6 +223,8 @@ impl<S: System> Driver<'_, '_, S> {
         Sv: OdeSolverMethod<'a, Eqn>,
     {
         let mut buf = s.state().y.clone();
+        // The last accepted finite state (what `y` holds if the state goes non-finite).
+        let mut last_ok = slice(s.state().y).to_vec();
         let mut sbuf = s.state().s.clone();
         let h = s.state().h.min(self.o.h_init);
         *s.state_mut().h = h;
@@ -254,7 +259,8 @@ impl<S: System> Driver<'_, '_, S> {
             }
             loop {
                 if s.get_statistics().number_of_steps >= self.o.max_steps {
-                    return self.fail(s, y, "step budget exhausted".into());
+                    y.copy_from_slice(slice(s.state().y));
+                    return budget_exhausted(s.state().t, self.o.max_steps);
                 }
                 let reason = match s.step() {
                     Ok(r) => r,
@@ -268,6 +274,12 @@ impl<S: System> Driver<'_, '_, S> {
                     }
                 };
                 let t_now = s.state().t;
+                // diffsol's error test accepts a step whose norm is NaN: stop here.
+                if let Some(end) = non_finite(t_now, slice(s.state().y)) {
+                    y.copy_from_slice(&last_ok);
+                    return end;
+                }
+                last_ok.copy_from_slice(slice(s.state().y));
                 // event: a sign change of g over the step, located by bisection on
                 // the method's dense output
                 let mut event_at = None;

@@ -8,7 +8,7 @@
 //! non-positive by bisection on the dense output, and allocates nothing per step:
 //! all buffers live in a [`Workspace`] created once per run.
 
-use super::{left_limit, End, EventFn, Options, Stats, System};
+use super::{budget_exhausted, left_limit, non_finite, End, EventFn, Options, Stats, System};
 
 /// Buffers reused by every step.
 struct Workspace {
@@ -214,7 +214,7 @@ fn segment<S: System>(
     }
     while t < t1 {
         if stats.steps + stats.rejected >= o.max_steps {
-            return End::Failed("step budget exhausted".into());
+            return budget_exhausted(t, o.max_steps);
         }
         let mut h = w.h.min(o.h_max);
         let last = t + h >= left_limit(t0, t1);
@@ -222,7 +222,9 @@ fn segment<S: System>(
             h = t1 - t;
         }
         if h < 1e-14 * t1.abs().max(1.0) {
-            return End::Failed(format!("step size underflow at t = {t:.6e} s"));
+            // Rejections down to underflow: say why, when it was a non-finite trial.
+            return non_finite(t + h, &w.y1)
+                .unwrap_or_else(|| End::Failed(format!("step size underflow at t = {t:.6e} s")));
         }
         let err = dp54_step(&sys, w, t, h, y, scale, o, stats);
         if o.fixed_step.is_none() {
@@ -238,8 +240,10 @@ fn segment<S: System>(
             if !last {
                 w.h = h * fac.clamp(0.2, 5.0);
             }
-        } else if !err.is_finite() {
-            return End::Failed("non-finite state at the fixed step".into());
+        }
+        // An infinite state passes the error test (its tolerance is infinite too).
+        if let Some(end) = non_finite(t + h, &w.y1) {
+            return end;
         }
         stats.steps += 1;
         let t_new = if last { t1 } else { t + h };

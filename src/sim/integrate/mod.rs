@@ -62,7 +62,7 @@ impl Method {
         Method::Dp54,
     ];
 
-    /// Name as written in scene files and reports.
+    /// Name as written in scene files and reports (also its `Display`).
     pub fn name(self) -> &'static str {
         match self {
             Method::Bdf => "bdf",
@@ -93,6 +93,12 @@ impl Method {
     /// Implicit (uses the Jacobian; suits stiff scenes).
     pub fn implicit(self) -> bool {
         matches!(self, Method::Bdf | Method::Esdirk34 | Method::TrBdf2)
+    }
+}
+
+impl std::fmt::Display for Method {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
     }
 }
 
@@ -138,8 +144,28 @@ pub enum End {
     Done,
     /// The event function crossed zero at this time (state left in `y`).
     Event(f64),
-    /// The method failed (reason); `y` holds the last accepted state.
+    /// The method failed or the state went non-finite (reason, with the time);
+    /// `y` holds the last accepted finite state.
     Failed(String),
+}
+
+/// The first state that is not finite, if any: a run whose state has gone NaN or
+/// infinite has no result past that point, so every method stops there with
+/// [`End::Failed`] (an error test on a NaN norm would otherwise accept the step).
+fn non_finite(t: f64, y: &[f64]) -> Option<End> {
+    y.iter().position(|v| !v.is_finite()).map(|i| {
+        End::Failed(format!(
+            "the state became non-finite at t = {t:.6e} s (state {i} = {})",
+            y[i]
+        ))
+    })
+}
+
+/// The step-budget failure, with where the run stood.
+fn budget_exhausted(t: f64, max_steps: usize) -> End {
+    End::Failed(format!(
+        "step budget exhausted at t = {t:.6e} s ({max_steps} steps)"
+    ))
 }
 
 /// The time just before `b` at which the right-hand side of the interval [a, b]

@@ -127,7 +127,7 @@ pub fn write_fit_noted(
     bytes: &[u8],
     same: impl Fn(&str) -> bool,
 ) -> Result<()> {
-    note(path, &dea_fit::io::write::write_fit(path, bytes, same)?);
+    note(path, "fit", &dea_fit::io::write::write_fit(path, bytes, same)?);
     Ok(())
 }
 
@@ -136,15 +136,16 @@ pub fn write_fit_noted(
 pub fn write_noted(path: &std::path::Path, bytes: &[u8]) -> Result<()> {
     note(
         path,
+        "file",
         &dea_fit::io::write::write_keeping(path, bytes, |old| old == bytes)?,
     );
     Ok(())
 }
 
-fn note(path: &std::path::Path, r: &dea_fit::io::write::Replaced) {
+fn note(path: &std::path::Path, what: &str, r: &dea_fit::io::write::Replaced) {
     if let dea_fit::io::write::Replaced::KeptAs(p) = r {
         eprintln!(
-            "note: {} held something else; it was kept as {}",
+            "note: {} held a different {what}; it was kept as {}",
             path.display(),
             p.display()
         );

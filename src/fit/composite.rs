@@ -131,7 +131,7 @@ pub struct FrequencyFit {
 pub struct RuleSummary {
     /// The rule.
     pub rule: MixingRule,
-    /// Frequencies at which it ranked first.
+    /// Frequencies at which it ranked first with a usable (not blocking) fit.
     pub best_at: usize,
     /// Median ΔAICc over the frequencies.
     pub median_delta: f64,
@@ -431,11 +431,19 @@ pub fn fit_frequency(freq_hz: f64, data: Vec<FractionPoint>) -> FrequencyFit {
             .cmp(&b.status.is_blocking())
             .then(score(a).total_cmp(&score(b)))
     });
-    let best = rules
-        .iter()
-        .filter(|f| !f.status.is_blocking())
-        .map(score)
-        .fold(f64::INFINITY, f64::min);
+    // Δ against the best usable rule; where none is usable, against the best of all
+    // (the ranking stays readable, and every row says `ill_posed`).
+    let best_of = |usable: bool| {
+        rules
+            .iter()
+            .filter(|f| !usable || !f.status.is_blocking())
+            .map(score)
+            .fold(f64::INFINITY, f64::min)
+    };
+    let best = match best_of(true) {
+        b if b.is_finite() => b,
+        _ => best_of(false),
+    };
     for f in &mut rules {
         f.delta = score(f) - best;
     }
@@ -465,7 +473,11 @@ pub fn summarise(fits: &[FrequencyFit]) -> Vec<RuleSummary> {
                 rule,
                 best_at: fits
                     .iter()
-                    .filter(|f| f.rules.first().is_some_and(|r| r.rule == rule))
+                    .filter(|f| {
+                        f.rules
+                            .first()
+                            .is_some_and(|r| r.rule == rule && !r.status.is_blocking())
+                    })
                     .count(),
                 median_delta: d[d.len() / 2],
                 eps_filler_eff_range: [

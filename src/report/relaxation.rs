@@ -162,7 +162,7 @@ pub fn markdown(fit: &RelaxationFit) -> String {
             fit.loading
         );
     }
-    let _ = writeln!(s, "Status: **{:?}**\n", fit.status);
+    let _ = writeln!(s, "Status: **{}**\n", fit.status);
     let _ = writeln!(
         s,
         "![data and fit](fit.svg)\n\n![residuals](residuals.svg)\n\n![spectrum](spectrum.svg)\n\n![storage and loss](dynamic.svg)\n"

@@ -573,7 +573,10 @@ fn report_has_figures_and_index() {
     let o = hyperelastic(dir.path(), &[&repo_file(VHB), "--model", "yeoh"]);
     let text = ok(&o);
     let report = dir.path().join("report");
-    assert_eq!(names_in(&report), ["fit.svg", "index.md", "residuals.svg"]);
+    assert_eq!(
+        names_in(&report),
+        [".dea-fit-output", "fit.svg", "index.md", "residuals.svg"]
+    );
     for svg in ["fit.svg", "residuals.svg"] {
         let s = std::fs::read_to_string(report.join(svg)).expect("svg");
         assert!(s.trim_start().starts_with("<svg"), "{svg} is not SVG");

@@ -50,7 +50,7 @@ fn printed_status(o: &Output) -> Option<String> {
     }
     out.lines()
         .rev()
-        .find_map(|l| l.trim().strip_prefix("status: "))
+        .find_map(|l| l.rsplit_once("status: ").map(|(_, s)| s))
         .map(|s| s.split_whitespace().next().unwrap_or("").to_string())
 }
 

@@ -734,3 +734,34 @@ fn cli_composite_json_report_and_claims() {
     }
     assert!(std::fs::read_to_string(&out).unwrap() == stdout.trim_end());
 }
+
+/// Negative loss is not a passive sample's: D < −0.001 (or θ beyond −90°) is refused
+/// at its line, in every export family that gives D or θ; a D within the meter's
+/// accuracy below zero reads with a warning (issue 9, class 10).
+#[test]
+fn negative_loss_is_refused_at_its_line() {
+    use dea_fit::io::lcr::{parse, LcrOptions};
+    let opts = LcrOptions::default();
+    let p = std::path::Path::new("sweep.csv");
+    for (text, line) in [
+        ("freq_Hz,Cp_F,D\n100,1.6e-11,0.001\n1000,1.6e-11,-0.05\n", 3),
+        ("freq_Hz,Z_Ohm,theta_deg\n100,9.9e7,-91\n", 2),
+        ("freq_Hz,G_S,B_S\n100,-1e-9,1e-8\n", 2),
+    ] {
+        let e = parse(p, text.as_bytes(), &opts)
+            .expect_err("negative loss must be refused")
+            .to_string();
+        assert!(
+            e.contains(&format!("sweep.csv:{line}:")) && e.contains("negative loss"),
+            "{e}"
+        );
+    }
+    // −2e-4 is within an LCR meter's D accuracy: read, with a warning.
+    let s = parse(
+        p,
+        b"freq_Hz,Cp_F,D\n100,1.6e-11,0.001\n1000,1.6e-11,-0.0002\n",
+        &opts,
+    )
+    .expect("a D within the meter's accuracy is read");
+    assert_eq!(s.points.len(), 2);
+}

@@ -127,7 +127,11 @@ pub fn write_fit_noted(
     bytes: &[u8],
     same: impl Fn(&str) -> bool,
 ) -> Result<()> {
-    note(path, "fit", &dea_fit::io::write::write_fit(path, bytes, same)?);
+    note(
+        path,
+        "fit",
+        &dea_fit::io::write::write_fit(path, bytes, same)?,
+    );
     Ok(())
 }
 

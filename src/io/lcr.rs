@@ -61,7 +61,7 @@ pub const D_NOISE: f64 = 1e-3;
 /// −90°): a passive sample dissipates power, it cannot deliver it.
 fn passive(path: &Path, line: usize, f: f64, y: Complex<f64>) -> Result<()> {
     let d = y.re / y.im.abs();
-    if y.re < 0.0 && !(d >= -D_NOISE) {
+    if y.re < 0.0 && d < -D_NOISE {
         let theta = y.im.atan2(y.re).to_degrees();
         return Err(Error::input(
             Location::line(path, line),

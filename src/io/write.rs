@@ -63,9 +63,7 @@ pub fn write_keeping(path: &Path, bytes: &[u8], same: impl Fn(&[u8]) -> bool) ->
 /// A fit file: as [`write_keeping`], `same` comparing the old text with the new fit
 /// (an old file that is not UTF-8 is not the same fit).
 pub fn write_fit(path: &Path, bytes: &[u8], same: impl Fn(&str) -> bool) -> Result<Replaced> {
-    write_keeping(path, bytes, |old| {
-        std::str::from_utf8(old).is_ok_and(|old| same(old))
-    })
+    write_keeping(path, bytes, |old| std::str::from_utf8(old).is_ok_and(&same))
 }
 
 /// The first free `<stem>.previous-<n>.<ext>` beside `path`.

@@ -321,8 +321,11 @@ pub const ARM_TIME: Domain = d(
     "1 ns to 30 000 years",
 );
 
+/// The loaded rest stretch λ0 (a result, checked before a run).
+pub const REST_STRETCH: Domain = d("rest stretch under the load", "", 0.05, 10.0, false, "beyond 10 (or below 0.05) the load is far past what the material can carry and the model is extrapolated without limit");
+
 /// Every domain, in the order of docs/scenes.md's table.
-pub const TABLE: [&Domain; 32] = [
+pub const TABLE: [&Domain; 33] = [
     &LENGTH,
     &ELECTRODE,
     &COUNT,
@@ -355,6 +358,7 @@ pub const TABLE: [&Domain; 32] = [
     &DASHPOT,
     &ARM_MODULUS,
     &ARM_TIME,
+    &REST_STRETCH,
 ];
 
 /// Most kinks (restarts) a run may have; more are refused before anything is listed.
@@ -406,14 +410,17 @@ impl Domain {
             key: key.to_string(),
             msg: match v.is_finite() {
                 true => format!(
-                    "{} {}{u} is outside the plausible range {range} of a {}",
+                    "{} = {}{u} is not a plausible {}: expected {range}",
                     key_leaf(key),
                     fmt_g(v),
                     self.what
                 ),
                 false => format!("{} must be a finite number, found {v}", key_leaf(key)),
             },
-            hint: format!("{} ({}); is the unit right?", self.reason, range),
+            hint: match self.unit.is_empty() {
+                true => self.reason.to_string(),
+                false => format!("{}; is the unit right?", self.reason),
+            },
         })
     }
 }
@@ -422,10 +429,16 @@ fn key_leaf(key: &str) -> &str {
     key.rsplit('.').next().unwrap_or(key)
 }
 
-/// A number in short engineering form (1e-7, 0.5, 2.25e6).
+/// A number in short form, 4 significant digits at most (1e-7, 0.5, 2.25e6, 8.44e8).
 pub fn fmt_g(v: f64) -> String {
-    if v != 0.0 && (v.abs() >= 1e5 || v.abs() < 1e-3) {
-        format!("{v:e}")
+    if v != 0.0 && v.is_finite() && (v.abs() >= 1e5 || v.abs() < 1e-3) {
+        let s = format!("{v:.3e}");
+        let (m, e) = s.split_once('e').unwrap_or((&s, "0"));
+        let m = match m.contains('.') {
+            true => m.trim_end_matches('0').trim_end_matches('.'),
+            false => m,
+        };
+        format!("{m}e{e}")
     } else {
         format!("{v}")
     }
@@ -658,10 +671,23 @@ fn validate_input(
 /// The loaded rest state (stable static equilibrium at 0 V from λ = 1), or why
 /// there is none (a load beyond the material, constants outside the model).
 pub fn rest_state(s: &Scene) -> std::result::Result<f64, Violation> {
-    super::full_plant(s).static_stretch(0.0, 1.0).map_err(|why| Violation {
-        key: "load".into(),
-        msg: format!("no stable rest state under the load at 0 V: {why}"),
-        hint: "lower the load (load.mass, load.weight, load.force) or check the hyperelastic constants".into(),
+    let hint =
+        "lower the load (load.mass, load.weight, load.force) or check the hyperelastic constants";
+    let lam0 = super::full_plant(s)
+        .static_stretch(0.0, 1.0)
+        .map_err(|why| Violation {
+            key: "load".into(),
+            msg: format!("no stable rest state under the load at 0 V: {why}"),
+            hint: hint.into(),
+        })?;
+    REST_STRETCH.check("load", lam0).map_err(|mut v| {
+        v.msg = format!(
+            "the rest stretch under the load is {}: {}",
+            fmt_g(lam0),
+            REST_STRETCH.reason
+        );
+        v.hint = hint.into();
+        v
     })
 }
 
@@ -765,7 +791,7 @@ pub fn check(s: &Scene) -> Result<Cost> {
             && c.ring_periods * STEPS_PER_PERIOD >= STEPS_PER_RESTART * c.kinks
         {
             format!(
-                "span {} s rings through {} periods of the {:.3e} Hz axial mode (ζ = {:.1e})",
+                "span {} s rings through {} periods of the {:.0} Hz axial mode (ζ = {:.1e})",
                 fmt_g(s.time.span),
                 fmt_g(c.ring_periods),
                 mode.frequency_hz,
@@ -786,8 +812,9 @@ pub fn check(s: &Scene) -> Result<Cost> {
         };
         return refuse(
             format!(
-                "{why}: about {:.1e} steps, more than the budget of {:.0e}",
-                c.steps, MAX_STEPS as f64
+                "{why}: about {} steps, more than the budget of {}",
+                fmt_g(c.steps),
+                fmt_g(MAX_STEPS as f64)
             ),
             "shorten time.span, add damping (material.viscous) or lower the input frequency",
         );

@@ -617,10 +617,10 @@ fn read_hyperelastic(
     dir: &Path,
 ) -> Result<(String, Vec<f64>, Option<Arc<HyperelasticFit>>)> {
     let hs = "material.hyperelastic";
+    c.known(h, hs, &["preset", "fit", "model", "parameters"])?;
     c.one_of(h, hs, &["preset", "fit", "model"])?;
     if let Some(p) = c.string(h, hs, "preset")? {
         c.one_of(h, hs, &["preset", "parameters"])?;
-        c.known(h, hs, &["preset"])?;
         return match p {
             "vhb4910-yeoh" => Ok(("yeoh".to_string(), presets::VHB4910_YEOH_PA.to_vec(), None)),
             o => Err(c.unknown_name(&format!("{hs}.preset"), o, &["vhb4910-yeoh"])),
@@ -628,7 +628,6 @@ fn read_hyperelastic(
     }
     if let Some(f) = c.string(h, hs, "fit")? {
         c.one_of(h, hs, &["fit", "parameters"])?;
-        c.known(h, hs, &["fit"])?;
         let fit = fitfile::read_hyperelastic(&c.file_ref(dir, &format!("{hs}.fit"), f)?)?;
         return Ok((fit.model.clone(), fit.values(), Some(Arc::new(fit))));
     }
@@ -637,7 +636,6 @@ fn read_hyperelastic(
             .err(hs, "needs preset, fit or model")
             .with_hint("e.g. hyperelastic = { preset = \"vhb4910-yeoh\" }"));
     };
-    c.known(h, hs, &["model", "parameters"])?;
     if !MODEL_NAMES.contains(&m) {
         return Err(c.unknown_name(&format!("{hs}.model"), m, &MODEL_NAMES));
     }
@@ -673,10 +671,10 @@ fn read_viscous(c: &Ctx, v: Option<&toml::Table>, dir: &Path) -> Result<Viscous>
     let Some(v) = v else {
         return Ok(presets::viscous("elastic").expect("preset exists"));
     };
+    c.known(v, vs, &["preset", "fit", "nv", "arms"])?;
     c.one_of(v, vs, &["preset", "fit", "arms"])?;
     if let Some(p) = c.string(v, vs, "preset")? {
         c.one_of(v, vs, &["preset", "nv"])?;
-        c.known(v, vs, &["preset"])?;
         let names = presets::viscous_preset_names();
         return presets::viscous(p)
             .ok_or_else(|| c.unknown_name(&format!("{vs}.preset"), p, &names));
@@ -685,7 +683,6 @@ fn read_viscous(c: &Ctx, v: Option<&toml::Table>, dir: &Path) -> Result<Viscous>
         .quantity(v, vs, "nv", Dimension::Viscosity)?
         .unwrap_or(0.0);
     if let Some(f) = c.string(v, vs, "fit")? {
-        c.known(v, vs, &["fit", "nv"])?;
         let (_, arms) = fitfile::read_relaxation(&c.file_ref(dir, &format!("{vs}.fit"), f)?)?;
         return Ok(Viscous {
             nv_pa_s: nv,
@@ -698,7 +695,6 @@ fn read_viscous(c: &Ctx, v: Option<&toml::Table>, dir: &Path) -> Result<Viscous>
                 .collect(),
         });
     }
-    c.known(v, vs, &["nv", "arms"])?;
     let mut arms = Vec::new();
     if let Some(a) = v.get("arms") {
         let list = a

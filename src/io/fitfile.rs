@@ -258,7 +258,12 @@ pub fn read_relaxation(path: &Path) -> Result<(RelaxationFit, Vec<MaxwellArm>)> 
             )
             .with_hint("the file was edited: fit the data again"));
         }
-        arms.push(MaxwellArm { k: e, n: e * tau });
+        // the file's own arms (checked above to be Eⱼ and Eⱼ·τⱼ)
+        let a = &fit.kelvin_maxwell[j];
+        arms.push(MaxwellArm {
+            k: a.k_pa,
+            n: a.n_pa_s,
+        });
     }
     Ok((fit, arms))
 }

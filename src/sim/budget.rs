@@ -12,13 +12,16 @@
 //! [`STEPS_PER_PERIOD`] ≈ 20 per period resolved, scaled by (10⁻⁶/rtol)^(1/5) for
 //! a 5th-order method, at least 4):
 //!
-//!   steps ≈ spp·[f_mode·T_ring + Σ sine periods in the span] + 10·kinks
+//!   steps ≈ max(spp·[f_mode·T_ring + Σ sine periods in the span], span·ω/3.3) + 10·kinks
 //!
 //! with T_ring = min(span, (kinks + 1)·ln(1/rtol)/(ζ·ω)) the time the axial mode
 //! rings after the kinks of the input (an undamped mode rings through the whole
-//! span; with ζ ≥ 1 or without inertia it does not ring), plus 10 steps per restart.
+//! span; with ζ ≥ 1 or without inertia it does not ring), span·ω/3.3 the stability
+//! limit of an explicit method (the scene's, or `auto`'s for a lightly damped mode),
+//! plus 10 steps per restart.
 //! Memory: one [`super::Sample`] per output time and one f64 per kink.
 
+use super::integrate::Method;
 use super::scene::{Actuator, Scene, Source};
 use super::{fidelity, Sample};
 use crate::error::{Error, Result};
@@ -370,6 +373,9 @@ pub const MAX_MEMORY: f64 = 2e9;
 /// Steps per resolved period at rtol 10⁻⁶ (Tsit45 on the ringing stack: 196–202 k
 /// steps for 10 s at 1.0 kHz, docs/scenes.md).
 pub const STEPS_PER_PERIOD: f64 = 20.0;
+/// Stability limit h·ω of the explicit 5(4) pairs on the imaginary axis (≈ 3.3
+/// for Dormand–Prince and Tsitouras, Hairer & Wanner).
+pub const EXPLICIT_STABILITY: f64 = 3.3;
 /// Steps for each restart at a kink (a method starts again from first order).
 pub const STEPS_PER_RESTART: f64 = 10.0;
 
@@ -704,6 +710,8 @@ pub struct Cost {
     pub ring_periods: f64,
     /// Periods of smooth periodic input in the span.
     pub input_periods: f64,
+    /// Steps an explicit method needs for stability alone (0 for an implicit one).
+    pub stability_steps: f64,
 }
 
 /// Estimate the cost of a scene's run (see the module documentation).
@@ -742,7 +750,18 @@ pub fn estimate(s: &Scene) -> Result<Cost> {
     };
     let ring_periods = ring_time * mode.frequency_hz;
     let spp = (STEPS_PER_PERIOD * (1e-6 / rtol).powf(0.2)).max(4.0);
-    let steps = spp * (ring_periods + input_periods) + STEPS_PER_RESTART * kinks;
+    // an explicit method (the scene's, or auto's choice for a lightly damped mode
+    // with inertia, as in `sim::simulate`) cannot step past its stability limit
+    // h·ω ≈ 3.3 even after the ringing has died away
+    let explicit = match s.time.method {
+        Some(m) => matches!(m, Method::Tsit45 | Method::Dp54),
+        None => fid.inertia && mode.damping_ratio < 0.3,
+    };
+    let stability = match explicit && fid.inertia && omega.is_finite() {
+        true => span * omega / EXPLICIT_STABILITY,
+        false => 0.0,
+    };
+    let steps = (spp * (ring_periods + input_periods)).max(stability) + STEPS_PER_RESTART * kinks;
     let memory =
         (s.time.samples.len() as f64 + 2.0) * std::mem::size_of::<Sample>() as f64 + 8.0 * kinks;
     Ok(Cost {
@@ -751,6 +770,7 @@ pub fn estimate(s: &Scene) -> Result<Cost> {
         kinks,
         ring_periods,
         input_periods,
+        stability_steps: stability,
     })
 }
 
@@ -787,7 +807,14 @@ pub fn check(s: &Scene) -> Result<Cost> {
     }
     if c.steps > MAX_STEPS as f64 {
         let mode = fidelity::axial_mode(&super::full_plant(s));
-        let why = if c.ring_periods >= c.input_periods
+        let why = if c.stability_steps >= c.steps / 2.0 {
+            format!(
+                "span {} s is {} periods of the {:.0} Hz axial mode, which an explicit method must resolve for stability",
+                fmt_g(s.time.span),
+                fmt_g(s.time.span * mode.frequency_hz),
+                mode.frequency_hz
+            )
+        } else if c.ring_periods >= c.input_periods
             && c.ring_periods * STEPS_PER_PERIOD >= STEPS_PER_RESTART * c.kinks
         {
             format!(

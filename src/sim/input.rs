@@ -146,7 +146,7 @@ impl Term {
     }
 
     /// Times in [t0, t1] where the value or its derivative jumps, at most
-    /// [`MAX_KINKS`] + 1 of them: the allocation never follows a user's count (a
+    /// [`MAX_KINKS`] + 2 of them: the allocation never follows a user's count (a
     /// triangle of 1e30 cycles); [`Term::kink_count`] says how many there are, and
     /// `sim::budget` refuses a run with more than `MAX_KINKS` before it starts.
     pub fn kinks(&self, t0: f64, t1: f64) -> Vec<f64> {

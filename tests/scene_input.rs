@@ -36,8 +36,7 @@ fn static_stretch_and_simulate_never_panic_on_parameters_changed_without_the_rea
         // the plant itself answers with a status, never a panic
         let _ = full_plant(&s).static_stretch(0.0, 1.0);
         let e = simulate(&s, &RunOptions::default())
-            .err()
-            .expect("refused")
+            .expect_err("refused")
             .to_string();
         assert!(e.contains("material.hyperelastic.parameters.Jm"), "{e}");
     }

@@ -188,7 +188,8 @@ pub fn read_hyperelastic(path: &Path) -> Result<HyperelasticFit> {
         .map_err(|e| violation(path, e))?;
     let mu0 = model.initial_shear_modulus(&values);
     let stated = fit.initial_shear_modulus_pa;
-    if !((mu0 - stated).abs() <= 1e-6 * stated.abs().max(mu0.abs())) {
+    let agrees = (mu0 - stated).abs() <= 1e-6 * stated.abs().max(mu0.abs());
+    if !agrees {
         return Err(err(
             path,
             "initial_shear_modulus_Pa",

@@ -217,7 +217,7 @@ pub const CYCLES: Domain = d(
     1e-6,
     1e9,
     false,
-    "the kinks of 1e9 cycles could not be stored; the step estimate then decides",
+    "beyond 1e9 cycles is a slip of the exponent; the kink count and the step estimate then decide",
 );
 /// Phase of a sine.
 pub const PHASE: Domain = d(
@@ -289,12 +289,12 @@ pub const SHEAR_MODULUS: Domain = d(
 );
 /// |αi| of an Ogden term.
 pub const OGDEN_EXPONENT: Domain = d(
-    "Ogden exponent |αi|",
+    "Ogden exponent magnitude",
     "",
     1e-2,
     20.0,
     false,
-    "a term with α ≈ 0 stores no energy; the fitter bounds |α| by 20",
+    "a term with α ≈ 0 stores no energy; the fitter bounds the magnitude of α by 20",
 );
 /// Kelvin-Voigt dashpot Nv.
 pub const DASHPOT: Domain = d(

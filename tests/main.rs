@@ -9,5 +9,6 @@ mod exit_status;
 mod models;
 mod permittivity;
 mod relaxation;
+mod scene_input;
 mod sim;
 mod sim_derivatives;

@@ -4,6 +4,7 @@
 //! derivative, [`Waveform::kinks`] the times where either is discontinuous (the
 //! integrator restarts there).
 
+use super::budget::MAX_KINKS;
 use std::f64::consts::PI;
 
 /// One term of an input signal (SI units: V for voltages, 1 for a PID reference).
@@ -144,22 +145,30 @@ impl Term {
         }
     }
 
-    /// Times where the value or its derivative jumps.
-    pub fn kinks(&self) -> Vec<f64> {
+    /// Times in [t0, t1] where the value or its derivative jumps, at most
+    /// [`MAX_KINKS`] + 2 of them: the allocation never follows a user's count (a
+    /// triangle of 1e30 cycles); [`Term::kink_count`] says how many there are, and
+    /// `sim::budget` refuses a run with more than `MAX_KINKS` before it starts.
+    pub fn kinks(&self, t0: f64, t1: f64) -> Vec<f64> {
+        let inside = |x: &f64| *x >= t0 && *x <= t1;
         match *self {
-            Term::Step { at, .. } => vec![at],
-            Term::Ramp { start, end, .. } => vec![start, end],
+            Term::Step { at, .. } => [at].into_iter().filter(inside).collect(),
+            Term::Ramp { start, end, .. } => [start, end].into_iter().filter(inside).collect(),
             Term::Triangle {
                 start,
                 frequency,
                 cycles,
                 ..
             } => {
-                let n = (2.0 * cycles).ceil() as usize;
-                let mut k: Vec<f64> = (0..=n)
-                    .map(|i| start + 0.5 * i as f64 / frequency)
+                // corners start + i/(2f), i = 0 … ⌈2·cycles⌉, then the end at cycles/f
+                let (lo, hi) = self.corner_range(t0, t1);
+                let mut k: Vec<f64> = (0..=MAX_KINKS as u64)
+                    .map(|j| lo + j as f64)
+                    .take_while(|&i| i <= hi)
+                    .map(|i| start + 0.5 * i / frequency)
+                    .filter(inside)
                     .collect();
-                k.push(start + cycles / frequency);
+                k.extend([start + cycles / frequency].into_iter().filter(inside));
                 k
             }
             Term::Sine {
@@ -168,10 +177,49 @@ impl Term {
                 cycles,
                 ..
             } => match cycles {
-                Some(c) => vec![start, start + c / frequency],
-                None => vec![start],
+                Some(c) => [start, start + c / frequency]
+                    .into_iter()
+                    .filter(inside)
+                    .collect(),
+                None => [start].into_iter().filter(inside).collect(),
             },
-            Term::Pwl { ref points } => points.iter().map(|p| p.0).collect(),
+            Term::Pwl { ref points } => points
+                .iter()
+                .map(|p| p.0)
+                .filter(inside)
+                .take(MAX_KINKS + 1)
+                .collect(),
+        }
+    }
+
+    /// Corner indices [lo, hi] of a triangle within [t0, t1] (empty if lo > hi).
+    fn corner_range(&self, t0: f64, t1: f64) -> (f64, f64) {
+        match *self {
+            Term::Triangle {
+                start,
+                frequency,
+                cycles,
+                ..
+            } => (
+                ((t0 - start) * 2.0 * frequency).ceil().max(0.0),
+                ((t1 - start) * 2.0 * frequency)
+                    .floor()
+                    .min((2.0 * cycles).ceil()),
+            ),
+            _ => (1.0, 0.0),
+        }
+    }
+
+    /// How many kinks lie in [t0, t1], counted without listing them (as f64: a
+    /// user's count may exceed any integer type).
+    pub fn kink_count(&self, t0: f64, t1: f64) -> f64 {
+        match self {
+            Term::Triangle { .. } => {
+                let (lo, hi) = self.corner_range(t0, t1);
+                (hi - lo + 1.0).max(0.0) + 1.0
+            }
+            Term::Pwl { points } => points.iter().filter(|p| p.0 >= t0 && p.0 <= t1).count() as f64,
+            _ => self.kinks(t0, t1).len() as f64,
         }
     }
 
@@ -207,12 +255,17 @@ impl Waveform {
         let mut k: Vec<f64> = self
             .terms
             .iter()
-            .flat_map(|t| t.kinks())
+            .flat_map(|t| t.kinks(t0, t1))
             .filter(|&x| x > t0 + tol && x < t1 - tol)
             .collect();
         k.sort_by(f64::total_cmp);
         k.dedup_by(|a, b| (*a - *b).abs() <= tol);
         k
+    }
+
+    /// How many kinks the terms have in [t0, t1] (see [`Term::kink_count`]).
+    pub fn kink_count(&self, t0: f64, t1: f64) -> f64 {
+        self.terms.iter().map(|t| t.kink_count(t0, t1)).sum()
     }
 
     /// Shortest time scale over the terms (0 if any term jumps).

@@ -9,6 +9,7 @@
 //! [`simulate`] is a pure function of the scene: identification can run many scenes
 //! in parallel (rayon) and re-run one with changed `scene.material.params`.
 
+pub mod budget;
 pub mod derivatives;
 pub mod fidelity;
 pub mod helix;
@@ -259,6 +260,7 @@ fn elastic_energy(p: &Plant, a: f64, b: f64) -> f64 {
 
 /// Simulate a scene.
 pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
+    budget::check(scene)?;
     let fid = fidelity::choose(scene)?;
     let p = Plant::new(scene, fid.inertia, &fid.keep);
     let full = full_plant(scene);
@@ -288,7 +290,7 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
                     t if t > 0.0 => t,
                     _ => f64::INFINITY,
                 }),
-        max_steps: 20_000_000,
+        max_steps: budget::MAX_STEPS,
         fixed_step: opts.fixed_step,
     };
     let scale = p.scales(v_max);

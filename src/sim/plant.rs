@@ -292,6 +292,35 @@ pub(crate) struct Kinematics<T> {
     pub elec: Electrical<T>,
 }
 
+/// Stretch below which a layer counts as collapsed (the static search stops).
+const LAM_COLLAPSE: f64 = 0.05;
+
+/// Why [`Plant::static_stretch`] found no stable static equilibrium.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NoEquilibrium {
+    /// The stiffness reached zero on the way (past pull-in, or a load beyond the
+    /// material's strength).
+    Unstable,
+    /// The stretch fell below 0.05: the layer collapses.
+    Collapsed,
+    /// Force or stiffness is not a finite number (parameters outside the model's
+    /// domain).
+    NotFinite,
+    /// Newton did not settle in 200 steps.
+    NoConvergence,
+}
+
+impl std::fmt::Display for NoEquilibrium {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            NoEquilibrium::Unstable => "the stiffness vanishes before an equilibrium is reached",
+            NoEquilibrium::Collapsed => "the layer collapses (stretch below 0.05)",
+            NoEquilibrium::NotFinite => "the stress or stiffness is not a finite number",
+            NoEquilibrium::NoConvergence => "the equilibrium search did not converge",
+        })
+    }
+}
+
 impl Plant {
     /// Build the plant of a scene with given lumping (arms kept, Nv add, frozen k).
     pub fn new(scene: &Scene, inertia: bool, keep: &[bool]) -> Plant {
@@ -421,6 +450,7 @@ impl Plant {
             .resistivity
             .map(|r| 1.0 / (r * self.eps))
             .unwrap_or(0.0);
+        // a plant without rest state keeps λ0 = 1; `sim::budget::check` refuses it
         self.lam0 = self.static_stretch(0.0, 1.0).unwrap_or(1.0);
         self.lam_f = self.lam0;
         self.c_rest = self.capacitance(self.lam0).0;
@@ -492,25 +522,37 @@ impl Plant {
     }
 
     /// Stable static equilibrium reached from `start` at voltage `v` (fully relaxed),
-    /// by damped Newton along the stable branch; None if none exists there.
-    pub fn static_stretch(&self, v: f64, start: f64) -> Option<f64> {
+    /// by damped Newton along the stable branch (steps limited to 5 % of λ). Never
+    /// panics: any parameters give either λ or why there is none (a non-finite
+    /// force or stiffness, e.g. Gent with Jm ≤ 0, is [`NoEquilibrium::NotFinite`]).
+    pub fn static_stretch(&self, v: f64, start: f64) -> Result<f64, NoEquilibrium> {
+        if !(start.is_finite() && start > LAM_COLLAPSE) {
+            return Err(NoEquilibrium::Collapsed);
+        }
         let mut lam = start;
         for _ in 0..200 {
             let f = self.static_force(lam, v);
             let k = self.static_stiffness(lam, v);
-            if k <= 0.0 {
-                return None;
+            if !(f.is_finite() && k.is_finite()) {
+                return Err(NoEquilibrium::NotFinite);
             }
+            if k <= 0.0 {
+                return Err(NoEquilibrium::Unstable);
+            }
+            // k > 0 and f finite: the step is a number (±∞ clamps to the limit)
             let step = (f / k).clamp(-0.05 * lam, 0.05 * lam);
             lam += step;
-            if lam <= 0.05 {
-                return None;
+            if lam <= LAM_COLLAPSE {
+                return Err(NoEquilibrium::Collapsed);
             }
             if step.abs() < 1e-14 * lam {
-                return (self.static_stiffness(lam, v) > 0.0).then_some(lam);
+                return match self.static_stiffness(lam, v) > 0.0 {
+                    true => Ok(lam),
+                    false => Err(NoEquilibrium::Unstable),
+                };
             }
         }
-        None
+        Err(NoEquilibrium::NoConvergence)
     }
 
     /// State layout.

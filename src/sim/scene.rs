@@ -2,13 +2,16 @@
 //! `docs/scenes.md`. Quantities are strings with a unit (`"2.25 mm"`, `"5 kV"`) or
 //! bare SI numbers; keys that carry no unit table name the unit (`resistivity_ohm_m`).
 
+use super::budget::{self, Domain, Violation};
 use super::input::{Term, Waveform};
 use super::integrate::Method;
 use super::presets;
 use crate::error::{Error, Location, Result};
 use crate::fit::hyperelastic::HyperelasticFit;
-use crate::material::hyperelastic::{ModelSpec, OgdenForm, StrainEnergy};
+use crate::io::fitfile;
+use crate::material::hyperelastic::{ModelSpec, OgdenForm, StrainEnergy, MODEL_NAMES};
 use crate::units::{parse_quantity, Dimension};
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -208,24 +211,120 @@ pub struct Scene {
     pub time: TimeSpec,
 }
 
+/// The reader's context: the file, its text, and the byte offset of every key and
+/// array element by key path (`material.viscous.arms[1].k`), from toml's spanned
+/// parser, so that every error points at the offending key's line and column.
 struct Ctx<'a> {
     file: &'a Path,
+    text: &'a str,
+    spans: HashMap<String, usize>,
+}
+
+fn collect_spans(prefix: &str, t: &toml::de::DeTable, out: &mut HashMap<String, usize>) {
+    for (k, v) in t.iter() {
+        let path = match prefix {
+            "" => k.get_ref().to_string(),
+            p => format!("{p}.{}", k.get_ref()),
+        };
+        out.insert(path.clone(), k.span().start);
+        collect_value(&path, v, out);
+    }
+}
+
+fn collect_value(
+    path: &str,
+    v: &toml::Spanned<toml::de::DeValue>,
+    out: &mut HashMap<String, usize>,
+) {
+    match v.get_ref() {
+        toml::de::DeValue::Table(t) => collect_spans(path, t, out),
+        toml::de::DeValue::Array(a) => {
+            for (i, x) in a.iter().enumerate() {
+                let p = format!("{path}[{i}]");
+                out.insert(p.clone(), x.span().start);
+                collect_value(&p, x, out);
+            }
+        }
+        _ => {}
+    }
+}
+
+/// 1-based line and column (in characters) of a byte offset.
+fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let start = before.rfind('\n').map(|i| i + 1).unwrap_or(0);
+    (line, before[start..].chars().count() + 1)
+}
+
+/// The known name closest to `word` if it is a near miss (edit distance ≤ 2, and
+/// less than half the word): `presett` → `preset`.
+pub(crate) fn did_you_mean<'k>(word: &str, known: &[&'k str]) -> Option<&'k str> {
+    let lev = |a: &str, b: &str| {
+        let b: Vec<char> = b.chars().collect();
+        let mut row: Vec<usize> = (0..=b.len()).collect();
+        for (i, ca) in a.chars().enumerate() {
+            let mut prev = row[0];
+            row[0] = i + 1;
+            for j in 0..b.len() {
+                let cur = row[j + 1];
+                row[j + 1] = (prev + usize::from(ca != b[j]))
+                    .min(row[j] + 1)
+                    .min(cur + 1);
+                prev = cur;
+            }
+        }
+        row[b.len()]
+    };
+    let w = word.to_lowercase();
+    known
+        .iter()
+        .map(|k| (lev(&w, &k.to_lowercase()), *k))
+        .filter(|&(d, _)| d <= 2 && 2 * d < w.chars().count().max(1))
+        .min_by_key(|&(d, _)| d)
+        .map(|(_, k)| k)
 }
 
 impl Ctx<'_> {
-    fn err(&self, msg: impl Into<String>) -> Error {
-        Error::input(Location::file(self.file), msg)
+    /// Where `key` is: the key itself, else its closest enclosing table, else the file.
+    fn loc(&self, key: &str) -> Location {
+        let mut p = key.to_string();
+        loop {
+            for q in [p.clone(), p.replace("[0]", "")] {
+                if let Some(&o) = self.spans.get(&q) {
+                    let (l, c) = line_col(self.text, o);
+                    return Location::at(self.file, l, c);
+                }
+            }
+            match p.rfind(['.', '[']) {
+                Some(i) => p.truncate(i),
+                None => return Location::file(self.file),
+            }
+        }
+    }
+    /// An error at `key`, its message starting with the key path.
+    fn err(&self, key: &str, msg: impl std::fmt::Display) -> Error {
+        Error::input(self.loc(key), format!("{key}: {msg}"))
+    }
+    fn violation(&self, v: Violation) -> Error {
+        self.err(&v.key, v.msg).with_hint(v.hint)
     }
     fn table<'t>(&self, t: &'t toml::Table, key: &str) -> Result<&'t toml::Table> {
         match t.get(key) {
             Some(toml::Value::Table(x)) => Ok(x),
-            Some(_) => Err(self.err(format!("[{key}] must be a table"))),
+            Some(_) => Err(self.err(key, "must be a table")),
             None => Err(self
-                .err(format!("missing [{key}] section"))
+                .err(key, format!("missing [{key}] section"))
                 .with_hint("see docs/scenes.md for the scene format")),
         }
     }
-    /// A quantity: a string with a unit, or a bare SI number.
+    fn opt_table<'t>(&self, t: &'t toml::Table, key: &str) -> Result<Option<&'t toml::Table>> {
+        match t.get(key) {
+            None => Ok(None),
+            Some(_) => self.table(t, key).map(Some),
+        }
+    }
+    /// A quantity: a string with a unit, or a bare SI number; always finite.
     fn quantity(
         &self,
         t: &toml::Table,
@@ -233,69 +332,132 @@ impl Ctx<'_> {
         key: &str,
         dim: Dimension,
     ) -> Result<Option<f64>> {
-        match t.get(key) {
-            None => Ok(None),
-            Some(toml::Value::Float(x)) => Ok(Some(*x)),
-            Some(toml::Value::Integer(x)) => Ok(Some(*x as f64)),
+        let k = format!("{sec}.{key}");
+        let v = match t.get(key) {
+            None => return Ok(None),
+            Some(toml::Value::Float(x)) => *x,
+            Some(toml::Value::Integer(x)) => *x as f64,
             Some(toml::Value::String(s)) => parse_quantity(s, dim)
-                .map(|q| Some(q.value))
-                .map_err(|e| self.err(format!("{sec}.{key}: {e}"))),
-            Some(v) => Err(self.err(format!(
-                "{sec}.{key}: expected a quantity such as \"1 {}\", found {v}",
-                dim.si()
-            ))),
+                .map(|q| q.value)
+                .map_err(|e| self.err(&k, e))?,
+            Some(v) => {
+                return Err(self.err(
+                    &k,
+                    format!("expected a quantity such as \"1 {}\", found {v}", dim.si()),
+                ))
+            }
+        };
+        match v.is_finite() {
+            true => Ok(Some(v)),
+            false => Err(self
+                .err(&k, format!("must be a finite number, found {v}"))
+                .with_hint(format!(
+                    "give it with a unit, e.g. {key} = \"1 {}\"",
+                    dim.si()
+                ))),
         }
     }
     fn need(&self, t: &toml::Table, sec: &str, key: &str, dim: Dimension) -> Result<f64> {
         self.quantity(t, sec, key, dim)?.ok_or_else(|| {
-            self.err(format!("{sec}.{key} is missing"))
+            self.err(&format!("{sec}.{key}"), "is missing")
                 .with_hint(format!(
                     "give it with a unit, e.g. {key} = \"1 {}\"",
                     dim.si()
                 ))
         })
     }
-    fn positive(&self, t: &toml::Table, sec: &str, key: &str, dim: Dimension) -> Result<f64> {
-        let v = self.need(t, sec, key, dim)?;
-        if v > 0.0 && v.is_finite() {
-            Ok(v)
-        } else {
-            Err(self.err(format!("{sec}.{key} must be positive, found {v}")))
+    /// A plain (dimensionless or unit-in-the-name) number; always finite.
+    fn number(&self, t: &toml::Table, sec: &str, key: &str) -> Result<Option<f64>> {
+        let k = format!("{sec}.{key}");
+        let v = match t.get(key) {
+            None => return Ok(None),
+            Some(toml::Value::Float(x)) => *x,
+            Some(toml::Value::Integer(x)) => *x as f64,
+            Some(v) => return Err(self.err(&k, format!("expected a number, found {v}"))),
+        };
+        match v.is_finite() {
+            true => Ok(Some(v)),
+            false => Err(self.err(&k, format!("must be a finite number, found {v}"))),
         }
     }
-    fn number(&self, t: &toml::Table, sec: &str, key: &str) -> Result<Option<f64>> {
+    /// An integer count inside `dom` (checked before anything is sized by it).
+    fn count(&self, t: &toml::Table, sec: &str, key: &str, dom: &Domain) -> Result<Option<usize>> {
+        let k = format!("{sec}.{key}");
         match t.get(key) {
             None => Ok(None),
-            Some(toml::Value::Float(x)) => Ok(Some(*x)),
-            Some(toml::Value::Integer(x)) => Ok(Some(*x as f64)),
-            Some(v) => Err(self.err(format!("{sec}.{key}: expected a number, found {v}"))),
+            Some(toml::Value::Integer(x)) => dom
+                .check(&k, *x as f64)
+                .map(|_| Some(*x as usize))
+                .map_err(|v| self.violation(v)),
+            Some(v) => Err(self.err(&k, format!("expected an integer, found {v}"))),
         }
     }
-    fn count(&self, t: &toml::Table, sec: &str, key: &str, min: i64) -> Result<usize> {
-        match t.get(key) {
-            Some(toml::Value::Integer(x)) if *x >= min => Ok(*x as usize),
-            Some(v) => Err(self.err(format!(
-                "{sec}.{key}: expected an integer ≥ {min}, found {v}"
-            ))),
-            None => Err(self.err(format!("{sec}.{key} is missing"))),
-        }
+    fn need_count(&self, t: &toml::Table, sec: &str, key: &str, dom: &Domain) -> Result<usize> {
+        self.count(t, sec, key, dom)?
+            .ok_or_else(|| self.err(&format!("{sec}.{key}"), "is missing"))
     }
     fn string<'t>(&self, t: &'t toml::Table, sec: &str, key: &str) -> Result<Option<&'t str>> {
         match t.get(key) {
             None => Ok(None),
             Some(toml::Value::String(s)) => Ok(Some(s)),
-            Some(v) => Err(self.err(format!("{sec}.{key}: expected a string, found {v}"))),
+            Some(v) => Err(self.err(
+                &format!("{sec}.{key}"),
+                format!("expected a string, found {v}"),
+            )),
         }
     }
-    fn unknown_keys(&self, t: &toml::Table, sec: &str, known: &[&str]) -> Result<()> {
+    /// Refuse keys outside `known`, with the list and a near miss.
+    fn known(&self, t: &toml::Table, sec: &str, known: &[&str]) -> Result<()> {
         for k in t.keys() {
             if !known.contains(&k.as_str()) {
-                return Err(self
-                    .err(format!("{sec}: unknown key '{k}'"))
-                    .with_hint(format!("known keys: {}", known.join(", "))));
+                let hint = match did_you_mean(k, known) {
+                    Some(m) => format!("did you mean '{m}'? known keys: {}", known.join(", ")),
+                    None => format!("known keys: {}", known.join(", ")),
+                };
+                let path = match sec {
+                    "" => k.clone(),
+                    s => format!("{s}.{k}"),
+                };
+                return Err(self.err(&path, "unknown key").with_hint(hint));
             }
         }
         Ok(())
+    }
+    /// Refuse more than one of `keys` (alternatives that would silently override
+    /// each other).
+    fn one_of(&self, t: &toml::Table, sec: &str, keys: &[&str]) -> Result<()> {
+        let given: Vec<&str> = keys
+            .iter()
+            .copied()
+            .filter(|k| t.contains_key(*k))
+            .collect();
+        if given.len() > 1 {
+            return Err(self
+                .err(
+                    &format!("{sec}.{}", given[1]),
+                    format!("conflicts with {sec}.{}", given[0]),
+                )
+                .with_hint(format!("give one of {}", keys.join(", "))));
+        }
+        Ok(())
+    }
+    /// A name from a fixed list, with a near miss in the hint.
+    fn unknown_name(&self, key: &str, found: &str, known: &[&str]) -> Error {
+        let hint = match did_you_mean(found, known) {
+            Some(m) => format!("did you mean '{m}'? known: {}", known.join(", ")),
+            None => format!("known: {}", known.join(", ")),
+        };
+        self.err(key, format!("unknown '{found}'")).with_hint(hint)
+    }
+    /// A file named by `key`, relative to the scene; read errors name the key.
+    fn file_ref(&self, dir: &Path, key: &str, f: &str) -> Result<PathBuf> {
+        let p = dir.join(f);
+        match p.is_file() {
+            true => Ok(p),
+            false => Err(self
+                .err(key, format!("cannot read '{}'", p.display()))
+                .with_hint("the path is relative to the scene file")),
+        }
     }
 }
 
@@ -307,26 +469,27 @@ impl Scene {
     }
 
     /// Parse and validate scene text; `path` names it in errors and anchors
-    /// relative file references.
+    /// relative file references. Every quantity is checked against the simulator's
+    /// table of plausible ranges (`sim::budget`), located at its key.
     pub fn parse(text: &str, path: &Path) -> Result<Scene> {
         let root: toml::Table = text.parse().map_err(|e: toml::de::Error| {
-            let (line, col) = e
-                .span()
-                .map(|s| {
-                    let before = &text[..s.start.min(text.len())];
-                    let line = before.matches('\n').count() + 1;
-                    let col = before.len() - before.rfind('\n').map(|i| i + 1).unwrap_or(0) + 1;
-                    (line, col)
-                })
-                .unwrap_or((1, 1));
+            let (line, col) = e.span().map(|s| line_col(text, s.start)).unwrap_or((1, 1));
             Error::input(Location::at(path, line, col), e.message().to_string())
                 .with_hint("the scene must be valid TOML; see docs/scenes.md")
         })?;
-        let c = Ctx { file: path };
+        let mut spans = HashMap::new();
+        if let Ok(t) = toml::de::DeTable::parse(text) {
+            collect_spans("", t.get_ref(), &mut spans);
+        }
+        let c = Ctx {
+            file: path,
+            text,
+            spans,
+        };
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        c.unknown_keys(
+        c.known(
             &root,
-            "scene",
+            "",
             &[
                 "name", "actuator", "material", "load", "source", "input", "control", "time",
             ],
@@ -341,24 +504,31 @@ impl Scene {
             });
         let actuator = read_actuator(&c, c.table(&root, "actuator")?)?;
         let (material, actuator_mass) = read_material(&c, c.table(&root, "material")?, &dir)?;
-        let load = read_load(&c, root.get("load"), actuator_mass)?;
-        let source = read_source(&c, root.get("source"))?;
+        let load = read_load(&c, c.opt_table(&root, "load")?, actuator_mass)?;
+        let source = read_source(&c, c.opt_table(&root, "source")?)?;
         let time = read_time(&c, c.table(&root, "time")?)?;
-        let control = match root.get("control") {
+        let control = match c.opt_table(&root, "control")? {
             None => None,
-            Some(toml::Value::Table(t)) => Some(read_pid(&c, t, &dir)?),
-            Some(_) => return Err(c.err("[control] must be a table")),
+            Some(t) => Some(read_pid(&c, t, &dir)?),
         };
         if control.is_some() && source == Source::Ideal {
             return Err(c
-                .err("a closed loop needs a real source")
+                .err("control", "a closed loop needs a real source")
                 .with_hint("give source.rise_time or source.resistance_ohm"));
         }
         let input = match (&control, root.get("input")) {
             (Some(_), None) => Waveform::default(),
-            (_, v) => read_input(&c, v, &dir, "input", Dimension::Voltage)?,
+            (Some(_), Some(_)) => {
+                return Err(c
+                    .err(
+                        "input",
+                        "conflicts with [control]: a closed loop sets the voltage",
+                    )
+                    .with_hint("drop [[input]] or [control]"))
+            }
+            (None, v) => read_input(&c, v, &dir, "input", Dimension::Voltage)?,
         };
-        Ok(Scene {
+        let scene = Scene {
             name,
             actuator,
             material,
@@ -367,7 +537,10 @@ impl Scene {
             input,
             control,
             time,
-        })
+        };
+        budget::validate(&scene).map_err(|v| c.violation(v))?;
+        budget::rest_state(&scene).map_err(|v| c.violation(v))?;
+        Ok(scene)
     }
 }
 
@@ -375,7 +548,7 @@ fn read_actuator(c: &Ctx, t: &toml::Table) -> Result<Actuator> {
     let s = "actuator";
     match c.string(t, s, "kind")? {
         Some("stack") => {
-            c.unknown_keys(
+            c.known(
                 t,
                 s,
                 &[
@@ -388,21 +561,19 @@ fn read_actuator(c: &Ctx, t: &toml::Table) -> Result<Actuator> {
                 ],
             )?;
             Ok(Actuator::Stack(StackGeometry {
-                radius_m: c.positive(t, s, "radius", Dimension::Length)?,
-                layer_m: c.positive(t, s, "layer_thickness", Dimension::Length)?,
+                radius_m: c.need(t, s, "radius", Dimension::Length)?,
+                layer_m: c.need(t, s, "layer_thickness", Dimension::Length)?,
                 electrode_m: c
                     .quantity(t, s, "electrode_thickness", Dimension::Length)?
-                    .unwrap_or(0.0)
-                    .max(0.0),
-                layers: c.count(t, s, "layers", 1)?,
-                electrodes: match t.get("electrodes") {
-                    None => 0,
-                    Some(_) => c.count(t, s, "electrodes", 0)?,
-                },
+                    .unwrap_or(0.0),
+                layers: c.need_count(t, s, "layers", &budget::COUNT)?,
+                electrodes: c
+                    .count(t, s, "electrodes", &budget::ELECTRODE_COUNT)?
+                    .unwrap_or(0),
             }))
         }
         Some("helix") => {
-            c.unknown_keys(
+            c.known(
                 t,
                 s,
                 &[
@@ -415,43 +586,142 @@ fn read_actuator(c: &Ctx, t: &toml::Table) -> Result<Actuator> {
                     "lateral",
                 ],
             )?;
-            let outer = c.positive(t, s, "outer_radius", Dimension::Length)?;
-            let inner = c.positive(t, s, "inner_radius", Dimension::Length)?;
-            if inner >= outer {
-                return Err(c.err(format!(
-                    "actuator.inner_radius ({inner} m) must be smaller than outer_radius ({outer} m)"
-                )));
-            }
             let lateral = match c.string(t, s, "lateral")? {
                 None | Some("planar") => Lateral::Planar,
                 Some("free") => Lateral::Free,
                 Some(o) => {
                     return Err(c
-                        .err(format!("actuator.lateral: unknown '{o}'"))
+                        .unknown_name("actuator.lateral", o, &["planar", "free"])
                         .with_hint("use planar (seed Eq. 4.18) or free"))
                 }
             };
             Ok(Actuator::Helix(HelixGeometry {
-                outer_m: outer,
-                inner_m: inner,
-                thickness_m: c.positive(t, s, "thickness", Dimension::Length)?,
-                periods: c.count(t, s, "periods", 1)?,
-                per_period: c.count(t, s, "per_period", 1)?,
+                outer_m: c.need(t, s, "outer_radius", Dimension::Length)?,
+                inner_m: c.need(t, s, "inner_radius", Dimension::Length)?,
+                thickness_m: c.need(t, s, "thickness", Dimension::Length)?,
+                periods: c.need_count(t, s, "periods", &budget::COUNT)?,
+                per_period: c.need_count(t, s, "per_period", &budget::COUNT)?,
                 lateral,
             }))
         }
-        Some(o) => Err(c
-            .err(format!("actuator.kind: unknown '{o}'"))
-            .with_hint("use stack or helix")),
+        Some(o) => Err(c.unknown_name("actuator.kind", o, &["stack", "helix"])),
         None => Err(c
-            .err("actuator.kind is missing")
+            .err("actuator.kind", "is missing")
             .with_hint("use stack or helix")),
     }
 }
 
+fn read_hyperelastic(
+    c: &Ctx,
+    h: &toml::Table,
+    dir: &Path,
+) -> Result<(String, Vec<f64>, Option<Arc<HyperelasticFit>>)> {
+    let hs = "material.hyperelastic";
+    c.known(h, hs, &["preset", "fit", "model", "parameters"])?;
+    c.one_of(h, hs, &["preset", "fit", "model"])?;
+    if let Some(p) = c.string(h, hs, "preset")? {
+        c.one_of(h, hs, &["preset", "parameters"])?;
+        return match p {
+            "vhb4910-yeoh" => Ok(("yeoh".to_string(), presets::VHB4910_YEOH_PA.to_vec(), None)),
+            o => Err(c.unknown_name(&format!("{hs}.preset"), o, &["vhb4910-yeoh"])),
+        };
+    }
+    if let Some(f) = c.string(h, hs, "fit")? {
+        c.one_of(h, hs, &["fit", "parameters"])?;
+        let fit = fitfile::read_hyperelastic(&c.file_ref(dir, &format!("{hs}.fit"), f)?)?;
+        return Ok((fit.model.clone(), fit.values(), Some(Arc::new(fit))));
+    }
+    let Some(m) = c.string(h, hs, "model")? else {
+        return Err(c
+            .err(hs, "needs preset, fit or model")
+            .with_hint("e.g. hyperelastic = { preset = \"vhb4910-yeoh\" }"));
+    };
+    if !MODEL_NAMES.contains(&m) {
+        return Err(c.unknown_name(&format!("{hs}.model"), m, &MODEL_NAMES));
+    }
+    let model = ModelSpec::new(m, OgdenForm::Seed).build()?;
+    let ps = format!("{hs}.parameters");
+    let pt = match h.get("parameters") {
+        Some(toml::Value::Table(x)) => x,
+        Some(_) => return Err(c.err(&ps, "must be a table of name = value")),
+        None => {
+            return Err(c
+                .err(&ps, "is missing")
+                .with_hint(fitfile::expected_params(model.as_ref())))
+        }
+    };
+    let names: Vec<&str> = model.params().iter().map(|p| p.name.as_str()).collect();
+    c.known(pt, &ps, &names)?;
+    let mut vals = Vec::new();
+    for info in model.params() {
+        let v = match info.unit {
+            "Pa" => c.quantity(pt, &ps, &info.name, Dimension::Stress)?,
+            _ => c.number(pt, &ps, &info.name)?,
+        };
+        vals.push(v.ok_or_else(|| {
+            c.err(&format!("{ps}.{}", info.name), "is missing")
+                .with_hint(fitfile::expected_params(model.as_ref()))
+        })?);
+    }
+    Ok((m.to_string(), vals, None))
+}
+
+fn read_viscous(c: &Ctx, v: Option<&toml::Table>, dir: &Path) -> Result<Viscous> {
+    let vs = "material.viscous";
+    let Some(v) = v else {
+        return Ok(presets::viscous("elastic").expect("preset exists"));
+    };
+    c.known(v, vs, &["preset", "fit", "nv", "arms"])?;
+    c.one_of(v, vs, &["preset", "fit", "arms"])?;
+    if let Some(p) = c.string(v, vs, "preset")? {
+        c.one_of(v, vs, &["preset", "nv"])?;
+        let names = presets::viscous_preset_names();
+        return presets::viscous(p)
+            .ok_or_else(|| c.unknown_name(&format!("{vs}.preset"), p, &names));
+    }
+    let nv = c
+        .quantity(v, vs, "nv", Dimension::Viscosity)?
+        .unwrap_or(0.0);
+    if let Some(f) = c.string(v, vs, "fit")? {
+        let (_, arms) = fitfile::read_relaxation(&c.file_ref(dir, &format!("{vs}.fit"), f)?)?;
+        return Ok(Viscous {
+            nv_pa_s: nv,
+            arms: arms
+                .iter()
+                .map(|a| Arm {
+                    k_pa: a.k,
+                    eta_pa_s: a.n,
+                })
+                .collect(),
+        });
+    }
+    let mut arms = Vec::new();
+    if let Some(a) = v.get("arms") {
+        let list = a
+            .as_array()
+            .ok_or_else(|| c.err(&format!("{vs}.arms"), "must be an array of tables"))?;
+        for (i, a) in list.iter().enumerate() {
+            let sec = format!("{vs}.arms[{i}]");
+            let at = a.as_table().ok_or_else(|| c.err(&sec, "must be a table"))?;
+            c.known(at, &sec, &["k", "eta", "tau"])?;
+            c.one_of(at, &sec, &["eta", "tau"])?;
+            let k = c.need(at, &sec, "k", Dimension::Stress)?;
+            let eta = match c.quantity(at, &sec, "eta", Dimension::Viscosity)? {
+                Some(e) => e,
+                None => k * c.need(at, &sec, "tau", Dimension::Time)?,
+            };
+            arms.push(Arm {
+                k_pa: k,
+                eta_pa_s: eta,
+            });
+        }
+    }
+    Ok(Viscous { nv_pa_s: nv, arms })
+}
+
 fn read_material(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<(Material, Option<f64>)> {
     let s = "material";
-    c.unknown_keys(
+    c.known(
         t,
         s,
         &[
@@ -467,57 +737,11 @@ fn read_material(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<(Material, Opti
         Some(toml::Value::Table(h)) => h,
         _ => {
             return Err(c
-                .err("material.hyperelastic is missing")
+                .err("material.hyperelastic", "is missing or not a table")
                 .with_hint("give { preset = \"vhb4910-yeoh\" }, { fit = \"fits/x.json\" } or { model = \"yeoh\", parameters = { C10 = \"69.3 kPa\", ... } }"))
         }
     };
-    let hs = "material.hyperelastic";
-    let (model_name, params, fit) = if let Some(p) = c.string(h, hs, "preset")? {
-        match p {
-            "vhb4910-yeoh" => ("yeoh".to_string(), presets::VHB4910_YEOH_PA.to_vec(), None),
-            o => {
-                return Err(c
-                    .err(format!("{hs}.preset: unknown '{o}'"))
-                    .with_hint("known: vhb4910-yeoh"))
-            }
-        }
-    } else if let Some(f) = c.string(h, hs, "fit")? {
-        let p: PathBuf = dir.join(f);
-        let text = std::fs::read_to_string(&p).map_err(|e| Error::io(&p, e))?;
-        let fit: HyperelasticFit = serde_json::from_str(&text).map_err(|e| {
-            Error::input(
-                Location::line(&p, e.line()),
-                format!("not a hyperelastic fit file: {e}"),
-            )
-        })?;
-        (fit.model.clone(), fit.values(), Some(Arc::new(fit)))
-    } else if let Some(m) = c.string(h, hs, "model")? {
-        let spec = ModelSpec::new(m, OgdenForm::Seed);
-        let model = spec.build()?;
-        let pt = match h.get("parameters") {
-            Some(toml::Value::Table(x)) => x,
-            _ => return Err(c.err(format!("{hs}.parameters is missing"))),
-        };
-        let mut vals = Vec::new();
-        for info in model.params() {
-            let dim = if info.unit == "Pa" {
-                Dimension::Stress
-            } else {
-                Dimension::Time
-            };
-            let v = if info.unit == "Pa" {
-                c.quantity(pt, hs, &info.name, dim)?
-            } else {
-                c.number(pt, hs, &info.name)?
-            };
-            vals.push(v.ok_or_else(|| c.err(format!("{hs}.parameters.{} is missing", info.name)))?);
-        }
-        (m.to_string(), vals, None)
-    } else {
-        return Err(c
-            .err(format!("{hs} needs preset, fit or model"))
-            .with_hint("e.g. hyperelastic = { preset = \"vhb4910-yeoh\" }"));
-    };
+    let (model_name, params, fit) = read_hyperelastic(c, h, dir)?;
     let model: Arc<dyn StrainEnergy> = Arc::from(
         ModelSpec {
             name: model_name.clone(),
@@ -528,70 +752,13 @@ fn read_material(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<(Material, Opti
         }
         .build()?,
     );
-    if model.initial_shear_modulus(&params) <= 0.0 {
-        return Err(c.err("material.hyperelastic: the initial shear modulus is not positive"));
-    }
-    let viscous = match t.get("viscous") {
-        None => presets::viscous("elastic").expect("preset exists"),
-        Some(toml::Value::Table(v)) => {
-            let vs = "material.viscous";
-            if let Some(p) = c.string(v, vs, "preset")? {
-                presets::viscous(p).ok_or_else(|| {
-                    c.err(format!("{vs}.preset: unknown '{p}'"))
-                        .with_hint(format!(
-                            "known: {}",
-                            presets::viscous_preset_names().join(", ")
-                        ))
-                })?
-            } else {
-                let nv = c
-                    .quantity(v, vs, "nv", Dimension::Viscosity)?
-                    .unwrap_or(0.0);
-                let mut arms = Vec::new();
-                if let Some(a) = v.get("arms") {
-                    let list = a
-                        .as_array()
-                        .ok_or_else(|| c.err(format!("{vs}.arms must be an array of tables")))?;
-                    for (i, a) in list.iter().enumerate() {
-                        let at = a
-                            .as_table()
-                            .ok_or_else(|| c.err(format!("{vs}.arms[{i}] must be a table")))?;
-                        let sec = format!("{vs}.arms[{i}]");
-                        let k = c.positive(at, &sec, "k", Dimension::Stress)?;
-                        let eta = match c.quantity(at, &sec, "eta", Dimension::Viscosity)? {
-                            Some(e) => e,
-                            None => k * c.positive(at, &sec, "tau", Dimension::Time)?,
-                        };
-                        if eta <= 0.0 {
-                            return Err(c.err(format!("{sec}.eta must be positive")));
-                        }
-                        arms.push(Arm {
-                            k_pa: k,
-                            eta_pa_s: eta,
-                        });
-                    }
-                }
-                if nv < 0.0 {
-                    return Err(c.err(format!("{vs}.nv must not be negative")));
-                }
-                Viscous { nv_pa_s: nv, arms }
-            }
-        }
-        Some(_) => return Err(c.err("material.viscous must be a table")),
-    };
-    let eps_r = c
-        .number(t, s, "relative_permittivity")?
-        .ok_or_else(|| c.err("material.relative_permittivity is missing"))?;
-    if eps_r < 1.0 {
-        return Err(c.err(format!(
-            "material.relative_permittivity must be ≥ 1, found {eps_r}"
-        )));
-    }
-    let density = c.positive(t, s, "density", Dimension::Density)?;
+    let viscous = read_viscous(c, c.opt_table(t, "viscous")?, dir)?;
+    let eps_r = c.number(t, s, "relative_permittivity")?.ok_or_else(|| {
+        c.err("material.relative_permittivity", "is missing")
+            .with_hint("e.g. relative_permittivity = 4.7")
+    })?;
+    let density = c.need(t, s, "density", Dimension::Density)?;
     let resistivity = c.number(t, s, "resistivity_ohm_m")?;
-    if resistivity.is_some_and(|r| r <= 0.0) {
-        return Err(c.err("material.resistivity_ohm_m must be positive"));
-    }
     let mass = c.quantity(t, s, "actuator_mass", Dimension::Mass)?;
     Ok((
         Material {
@@ -608,15 +775,11 @@ fn read_material(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<(Material, Opti
     ))
 }
 
-fn read_load(c: &Ctx, v: Option<&toml::Value>, actuator_mass_kg: Option<f64>) -> Result<Load> {
+fn read_load(c: &Ctx, t: Option<&toml::Table>, actuator_mass_kg: Option<f64>) -> Result<Load> {
     let empty = toml::Table::new();
-    let t = match v {
-        None => &empty,
-        Some(toml::Value::Table(t)) => t,
-        Some(_) => return Err(c.err("[load] must be a table")),
-    };
+    let t = t.unwrap_or(&empty);
     let s = "load";
-    c.unknown_keys(
+    c.known(
         t,
         s,
         &[
@@ -631,68 +794,64 @@ fn read_load(c: &Ctx, v: Option<&toml::Value>, actuator_mass_kg: Option<f64>) ->
     let mut mass = c.quantity(t, s, "mass", Dimension::Mass)?.unwrap_or(0.0);
     if let Some(w) = c.quantity(t, s, "weight", Dimension::Force)? {
         if gravity <= 0.0 {
-            return Err(c.err("load.weight needs gravity > 0"));
+            return Err(c
+                .err("load.weight", "needs gravity > 0")
+                .with_hint("give the hanging mass instead"));
         }
+        budget::FORCE
+            .check("load.weight", w)
+            .map_err(|v| c.violation(v))?;
         mass += w / gravity;
-    }
-    let fraction = c.number(t, s, "effective_mass_fraction")?.unwrap_or(0.5);
-    if !(0.0..=1.0).contains(&fraction) || mass < 0.0 {
-        return Err(c.err("load: mass must be ≥ 0 and effective_mass_fraction in [0, 1]"));
     }
     Ok(Load {
         mass_kg: mass,
         force_n: c.quantity(t, s, "force", Dimension::Force)?.unwrap_or(0.0),
-        fraction,
+        fraction: c.number(t, s, "effective_mass_fraction")?.unwrap_or(0.5),
         gravity,
         actuator_mass_kg,
     })
 }
 
-fn read_source(c: &Ctx, v: Option<&toml::Value>) -> Result<Source> {
-    let t = match v {
-        None => return Ok(Source::Ideal),
-        Some(toml::Value::Table(t)) => t,
-        Some(_) => return Err(c.err("[source] must be a table")),
+fn read_source(c: &Ctx, t: Option<&toml::Table>) -> Result<Source> {
+    let Some(t) = t else {
+        return Ok(Source::Ideal);
     };
-    c.unknown_keys(t, "source", &["rise_time", "resistance_ohm"])?;
+    c.known(t, "source", &["rise_time", "resistance_ohm"])?;
+    c.one_of(t, "source", &["rise_time", "resistance_ohm"])?;
     let rise = c.quantity(t, "source", "rise_time", Dimension::Time)?;
     let r = c.number(t, "source", "resistance_ohm")?;
-    match (rise, r) {
-        (Some(_), Some(_)) => Err(c.err("source: give rise_time or resistance_ohm, not both")),
-        (Some(tau), None) if tau > 0.0 => Ok(Source::RiseTime { tau_s: tau }),
-        (None, Some(ohm)) if ohm > 0.0 => Ok(Source::Resistance { ohm }),
-        (None, None) => Ok(Source::Ideal),
-        _ => Err(c.err("source: rise_time and resistance_ohm must be positive")),
-    }
+    Ok(match (rise, r) {
+        (Some(tau), _) => Source::RiseTime { tau_s: tau },
+        (None, Some(ohm)) => Source::Resistance { ohm },
+        (None, None) => Source::Ideal,
+    })
 }
 
 fn read_time(c: &Ctx, t: &toml::Table) -> Result<TimeSpec> {
     let s = "time";
-    c.unknown_keys(
+    c.known(
         t,
         s,
         &["span", "samples", "rtol", "atol", "integrator", "fidelity"],
     )?;
-    let span = c.positive(t, s, "span", Dimension::Time)?;
-    let n = match t.get("samples") {
-        None => 1000,
-        Some(_) => c.count(t, s, "samples", 1)?,
-    };
+    let span = c.need(t, s, "span", Dimension::Time)?;
+    budget::SPAN
+        .check("time.span", span)
+        .map_err(|v| c.violation(v))?;
+    // checked before the sample times are allocated
+    let n = c.count(t, s, "samples", &budget::SAMPLES)?.unwrap_or(1000);
     let rtol = c.number(t, s, "rtol")?.unwrap_or(1e-6);
     let atol = c.number(t, s, "atol")?.unwrap_or(rtol * 1e-3);
-    if !(rtol > 0.0 && rtol < 0.1 && atol > 0.0) {
-        return Err(c.err(format!(
-            "time.rtol must be in (0, 0.1) and atol > 0, found {rtol}, {atol}"
-        )));
-    }
     let method = match c.string(t, s, "integrator")? {
         None | Some("auto") => None,
         Some(o) => match Method::parse(o) {
             Some(m) => Some(m),
             None => {
-                return Err(c
-                    .err(format!("time.integrator: unknown '{o}'"))
-                    .with_hint("use auto, bdf, esdirk34, tr-bdf2, tsit45 or dp54"))
+                return Err(c.unknown_name(
+                    "time.integrator",
+                    o,
+                    &["auto", "bdf", "esdirk34", "tr-bdf2", "tsit45", "dp54"],
+                ))
             }
         },
     };
@@ -701,9 +860,7 @@ fn read_time(c: &Ctx, t: &toml::Table) -> Result<TimeSpec> {
         Some("dynamic") => FidelityChoice::Dynamic,
         Some("quasi-static") => FidelityChoice::QuasiStatic,
         Some(o) => {
-            return Err(c
-                .err(format!("time.fidelity: unknown '{o}'"))
-                .with_hint("use auto, dynamic or quasi-static"))
+            return Err(c.unknown_name("time.fidelity", o, &["auto", "dynamic", "quasi-static"]))
         }
     };
     Ok(TimeSpec {
@@ -718,7 +875,7 @@ fn read_time(c: &Ctx, t: &toml::Table) -> Result<TimeSpec> {
 
 fn read_pid(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<Pid> {
     let s = "control";
-    c.unknown_keys(
+    c.known(
         t,
         s,
         &[
@@ -733,24 +890,21 @@ fn read_pid(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<Pid> {
     )?;
     match c.string(t, s, "kind")? {
         Some("pid") => {}
-        _ => return Err(c.err("control.kind must be \"pid\"")),
-    }
-    let g = |k: &str| -> Result<f64> {
-        let v = c.number(t, s, k)?.unwrap_or(0.0);
-        if v < 0.0 || !v.is_finite() {
-            return Err(c.err(format!("control.{k} must be ≥ 0, found {v}")));
+        Some(o) => return Err(c.unknown_name("control.kind", o, &["pid"])),
+        None => {
+            return Err(c
+                .err("control.kind", "is missing")
+                .with_hint("kind = \"pid\""))
         }
-        Ok(v)
-    };
+    }
     Ok(Pid {
-        kp: g("kp")?,
-        ki: g("ki")?,
-        kd: g("kd")?,
+        kp: c.number(t, s, "kp")?.unwrap_or(0.0),
+        ki: c.number(t, s, "ki")?.unwrap_or(0.0),
+        kd: c.number(t, s, "kd")?.unwrap_or(0.0),
         tau_d: c
             .quantity(t, s, "derivative_filter", Dimension::Time)?
-            .unwrap_or(1e-3)
-            .max(1e-9),
-        v_max: c.positive(t, s, "max_voltage", Dimension::Voltage)?,
+            .unwrap_or(1e-3),
+        v_max: c.need(t, s, "max_voltage", Dimension::Voltage)?,
         reference: read_input(
             c,
             t.get("reference"),
@@ -761,6 +915,36 @@ fn read_pid(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<Pid> {
     })
 }
 
+/// Keys of each input kind.
+const INPUT_KEYS: [(&str, &[&str]); 5] = [
+    ("step", &["kind", "at", "amplitude"]),
+    ("ramp", &["kind", "start", "end", "from", "to"]),
+    (
+        "triangle",
+        &[
+            "kind",
+            "start",
+            "amplitude",
+            "frequency",
+            "cycles",
+            "offset",
+        ],
+    ),
+    (
+        "sine",
+        &[
+            "kind",
+            "start",
+            "amplitude",
+            "frequency",
+            "phase_rad",
+            "offset",
+            "cycles",
+        ],
+    ),
+    ("csv", &["kind", "file"]),
+];
+
 fn read_input(
     c: &Ctx,
     v: Option<&toml::Value>,
@@ -768,88 +952,87 @@ fn read_input(
     sec: &str,
     dim: Dimension,
 ) -> Result<Waveform> {
-    let list: Vec<&toml::Table> = match v {
+    let list: Vec<(String, &toml::Table)> = match v {
         None => {
             return Err(c
-                .err("missing [[input]]")
+                .err(sec, "is missing")
                 .with_hint("e.g. [[input]] kind = \"step\", amplitude = \"5 kV\""))
         }
-        Some(toml::Value::Table(t)) => vec![t],
+        Some(toml::Value::Table(t)) => vec![(sec.to_string(), t)],
         Some(toml::Value::Array(a)) => a
             .iter()
-            .map(|x| {
+            .enumerate()
+            .map(|(i, x)| {
+                let s = format!("{sec}[{i}]");
                 x.as_table()
-                    .ok_or_else(|| c.err("[[input]] entries must be tables"))
+                    .map(|t| (s.clone(), t))
+                    .ok_or_else(|| c.err(&s, "must be a table"))
             })
             .collect::<Result<_>>()?,
-        Some(_) => return Err(c.err("[[input]] must be a table or array of tables")),
+        Some(_) => return Err(c.err(sec, "must be a table or an array of tables")),
     };
+    let kinds: Vec<&str> = INPUT_KEYS.iter().map(|k| k.0).collect();
     let mut terms = Vec::new();
-    for (i, t) in list.into_iter().enumerate() {
-        let s = format!("{sec}[{i}]");
+    for (s, t) in &list {
         let s = s.as_str();
+        let kind = match c.string(t, s, "kind")? {
+            Some(k) => k,
+            None => {
+                return Err(c
+                    .err(&format!("{s}.kind"), "is missing")
+                    .with_hint(format!("use one of {}", kinds.join(", "))))
+            }
+        };
+        let Some((_, keys)) = INPUT_KEYS.iter().find(|k| k.0 == kind) else {
+            return Err(c.unknown_name(&format!("{s}.kind"), kind, &kinds));
+        };
+        c.known(t, s, keys)?;
         let vq = |k: &str| c.quantity(t, s, k, dim);
         let tq = |k: &str| c.quantity(t, s, k, Dimension::Time);
-        let term = match c.string(t, s, "kind")? {
-            Some("step") => Term::Step {
+        let term = match kind {
+            "step" => Term::Step {
                 at: tq("at")?.unwrap_or(0.0),
                 amplitude: c.need(t, s, "amplitude", dim)?,
             },
-            Some("ramp") => {
-                let (start, end) = (
-                    c.need(t, s, "start", Dimension::Time)?,
-                    c.need(t, s, "end", Dimension::Time)?,
-                );
-                if end <= start {
-                    return Err(c.err(format!("{s}: end must be after start")));
-                }
-                Term::Ramp {
-                    start,
-                    end,
-                    from: vq("from")?.unwrap_or(0.0),
-                    to: c.need(t, s, "to", dim)?,
-                }
-            }
-            Some("triangle") => Term::Triangle {
+            "ramp" => Term::Ramp {
+                start: c.need(t, s, "start", Dimension::Time)?,
+                end: c.need(t, s, "end", Dimension::Time)?,
+                from: vq("from")?.unwrap_or(0.0),
+                to: c.need(t, s, "to", dim)?,
+            },
+            "triangle" => Term::Triangle {
                 start: tq("start")?.unwrap_or(0.0),
                 amplitude: c.need(t, s, "amplitude", dim)?,
-                frequency: c.positive(t, s, "frequency", Dimension::Frequency)?,
+                frequency: c.need(t, s, "frequency", Dimension::Frequency)?,
                 cycles: c.number(t, s, "cycles")?.unwrap_or(1.0),
                 offset: vq("offset")?.unwrap_or(0.0),
             },
-            Some("sine") => Term::Sine {
+            "sine" => Term::Sine {
                 start: tq("start")?.unwrap_or(0.0),
                 amplitude: c.need(t, s, "amplitude", dim)?,
-                frequency: c.positive(t, s, "frequency", Dimension::Frequency)?,
+                frequency: c.need(t, s, "frequency", Dimension::Frequency)?,
                 phase: c.number(t, s, "phase_rad")?.unwrap_or(0.0),
                 offset: vq("offset")?.unwrap_or(0.0),
                 cycles: c.number(t, s, "cycles")?,
             },
-            Some("csv") => {
+            _ => {
+                let key = format!("{s}.file");
                 let f = c
                     .string(t, s, "file")?
-                    .ok_or_else(|| c.err(format!("{s}.file is missing")))?;
+                    .ok_or_else(|| c.err(&key, "is missing").with_hint("file = \"v.csv\""))?;
                 Term::Pwl {
-                    points: read_pwl(&dir.join(f))?,
+                    points: read_pwl(&c.file_ref(dir, &key, f)?)?,
                 }
             }
-            Some(o) => {
-                return Err(c
-                    .err(format!("{s}.kind: unknown '{o}'"))
-                    .with_hint("use step, ramp, triangle, sine or csv"))
-            }
-            None => return Err(c.err(format!("{s}.kind is missing"))),
         };
-        if term.kinks().iter().any(|k| !k.is_finite()) {
-            return Err(c.err(format!("{s}: times must be finite")));
-        }
         terms.push(term);
     }
     Ok(Waveform { terms })
 }
 
 /// Piecewise-linear input: a table with columns `time` and `voltage` (units in the
-/// header, e.g. `time_s,voltage_kV` or `time [ms], voltage [V]`).
+/// header, e.g. `time_s,voltage_kV` or `time [ms], voltage [V]`). Every point is
+/// checked at its line against the time and voltage ranges of `sim::budget`.
 fn read_pwl(path: &Path) -> Result<Vec<(f64, f64)>> {
     let table = crate::io::table::Table::read(path)?;
     let find = |what: &str, dim: Dimension| -> Result<(usize, f64)> {
@@ -882,13 +1065,18 @@ fn read_pwl(path: &Path) -> Result<Vec<(f64, f64)>> {
     let (ct, ft) = find("time", Dimension::Time)?;
     let (cv, fv) = find("voltage", Dimension::Voltage)?;
     let mut pts: Vec<(f64, f64)> = Vec::with_capacity(table.rows.len());
-    for r in 0..table.rows.len() {
-        let t = table.number(&table.rows[r], ct, "time")? * ft;
-        let v = table.number(&table.rows[r], cv, "voltage")? * fv;
+    for row in &table.rows {
+        let t = table.number(row, ct, "time")? * ft;
+        let v = table.number(row, cv, "voltage")? * fv;
+        for (col, dom, x) in [(ct, &budget::INSTANT, t), (cv, &budget::VOLTAGE, v)] {
+            dom.check(&table.header[col], x).map_err(|e| {
+                Error::input(Location::at(path, row.line, col + 1), e.msg).with_hint(e.hint)
+            })?;
+        }
         if let Some(&(tp, _)) = pts.last() {
             if t <= tp {
                 return Err(Error::input(
-                    Location::at(path, table.rows[r].line, ct + 1),
+                    Location::at(path, row.line, ct + 1),
                     format!("time {t} s is not after the previous {tp} s"),
                 )
                 .with_hint("times must increase strictly"));

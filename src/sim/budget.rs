@@ -1,0 +1,850 @@
+//! The simulator's own guards: one table of plausible ranges per physical quantity
+//! (with the reason), the check of a whole [`Scene`] against it, and the cost of a
+//! run estimated before it starts.
+//!
+//! The scene reader reports a violation at the offending key (file:line:col);
+//! [`check`], called by `sim::simulate`, reports it as a settings error, because a
+//! library caller (identification changes parameters thousands of times) builds
+//! and changes scenes without the reader. No wall-clock timeout is involved: a
+//! run is refused when its *estimated* step count or memory is absurd.
+//!
+//! Cost estimate (steps of an adaptive method at rtol 10⁻⁶, measured
+//! [`STEPS_PER_PERIOD`] ≈ 20 per period resolved, scaled by (10⁻⁶/rtol)^(1/5) for
+//! a 5th-order method, at least 4):
+//!
+//!   steps ≈ max(spp·[f_mode·T_ring + Σ sine periods in the span], span·ω/3.3) + 10·kinks
+//!
+//! with T_ring = min(span, (kinks + 1)·ln(1/rtol)/(ζ·ω)) the time the axial mode
+//! rings after the kinks of the input (an undamped mode rings through the whole
+//! span; with ζ ≥ 1 or without inertia it does not ring), span·ω/3.3 the stability
+//! limit of an explicit method (the scene's, or `auto`'s for a lightly damped mode),
+//! plus 10 steps per restart.
+//! Memory: one [`super::Sample`] per output time and one f64 per kink.
+
+use super::integrate::Method;
+use super::scene::{Actuator, Scene, Source};
+use super::{fidelity, Sample};
+use crate::error::{Error, Result};
+use crate::material::hyperelastic::StrainEnergy;
+
+/// A plausible range of a physical quantity (SI).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Domain {
+    /// What the quantity is (for messages).
+    pub what: &'static str,
+    /// SI unit.
+    pub unit: &'static str,
+    /// Smallest plausible value.
+    pub min: f64,
+    /// Largest plausible value.
+    pub max: f64,
+    /// Whether exactly 0 is allowed too (an absent part: no electrode, no load).
+    pub zero: bool,
+    /// Why these bounds.
+    pub reason: &'static str,
+}
+
+const fn d(
+    what: &'static str,
+    unit: &'static str,
+    min: f64,
+    max: f64,
+    zero: bool,
+    reason: &'static str,
+) -> Domain {
+    Domain {
+        what,
+        unit,
+        min,
+        max,
+        zero,
+        reason,
+    }
+}
+
+/// Geometric lengths (radii, layer and element thickness).
+pub const LENGTH: Domain = d("length", "m", 1e-7, 10.0, false, "the thinnest elastomer films are ≈ 1 µm and actuators are smaller than metres; outside, a unit is wrong (um for mm?)");
+/// Electrode thickness (0: no electrode layer).
+pub const ELECTRODE: Domain = d(
+    "electrode thickness",
+    "m",
+    1e-9,
+    1.0,
+    true,
+    "compliant electrodes are 10 nm to 100 µm thick; 0 for none",
+);
+/// Layer, element and period counts.
+pub const COUNT: Domain = d("count", "", 1.0, 1e6, false, "printed stacks reach thousands of layers; the product of helix periods and elements must stay a count");
+/// Electrode-layer count (0: not counted in the length).
+pub const ELECTRODE_COUNT: Domain = d(
+    "electrode count",
+    "",
+    1.0,
+    1e6,
+    true,
+    "one more than the layers at most, 0 to leave the electrodes out of the length",
+);
+/// Relative permittivity εr.
+pub const PERMITTIVITY: Domain = d(
+    "relative permittivity",
+    "",
+    1.0,
+    1e5,
+    false,
+    "vacuum has εr = 1, elastomers 2–10, ceramic-filled composites up to ≈ 1e4",
+);
+/// Mass density.
+pub const DENSITY: Domain = d(
+    "density",
+    "kg/m³",
+    10.0,
+    3e4,
+    false,
+    "between light foams and the densest metals (osmium 22.6 t/m³)",
+);
+/// Volume resistivity.
+pub const RESISTIVITY: Domain = d(
+    "volume resistivity",
+    "Ω·m",
+    1e3,
+    1e22,
+    false,
+    "a dielectric: below 1e3 Ω·m the layer is a conductor and its leakage time ρε is below 10 ns",
+);
+/// Actuator mass given explicitly.
+pub const ACTUATOR_MASS: Domain = d(
+    "actuator mass",
+    "kg",
+    1e-12,
+    1e4,
+    false,
+    "a microgram film to a ten-tonne machine",
+);
+/// Hanging load mass.
+pub const LOAD_MASS: Domain = d(
+    "load mass",
+    "kg",
+    1e-12,
+    1e5,
+    true,
+    "0 for none; 100 t is beyond any actuator",
+);
+/// Constant load force (tension positive).
+pub const FORCE: Domain = d(
+    "force",
+    "N",
+    -1e7,
+    1e7,
+    true,
+    "10 MN is beyond any elastomer actuator",
+);
+/// Gravity.
+pub const GRAVITY: Domain = d(
+    "gravity",
+    "m/s²",
+    1e-6,
+    1e4,
+    true,
+    "Earth 9.81, 0 for a horizontal set-up, a centrifuge 1e4 at most",
+);
+/// Effective-mass fraction f.
+pub const FRACTION: Domain = d(
+    "effective-mass fraction",
+    "",
+    0.0,
+    1.0,
+    true,
+    "f in m_eff = m_load + f·m_actuator is a share (seed Eq. 3.10: ½)",
+);
+/// Input and set-point voltages.
+pub const VOLTAGE: Domain = d(
+    "voltage",
+    "V",
+    -1e6,
+    1e6,
+    true,
+    "DEAs run below 100 kV; 1 MV is beyond any supply",
+);
+/// The controller's output limit.
+pub const MAX_VOLTAGE: Domain = d(
+    "voltage limit",
+    "V",
+    1e-3,
+    1e6,
+    false,
+    "DEAs run below 100 kV; 1 MV is beyond any supply",
+);
+/// A closed loop's reference contraction (fraction of the rest length).
+pub const CONTRACTION: Domain = d(
+    "contraction",
+    "",
+    -1.0,
+    1.0,
+    true,
+    "a share of the rest length",
+);
+/// Instants (step time, ramp and term start/end, CSV times).
+pub const INSTANT: Domain = d(
+    "time",
+    "s",
+    -1e9,
+    1e9,
+    true,
+    "30 years either side of t = 0",
+);
+/// The simulated span.
+pub const SPAN: Domain = d(
+    "time span",
+    "s",
+    1e-9,
+    1e9,
+    false,
+    "1 ns to 30 years; the step estimate then decides",
+);
+/// Input frequencies.
+pub const FREQUENCY: Domain = d(
+    "frequency",
+    "Hz",
+    1e-9,
+    1e9,
+    false,
+    "1 GHz is beyond any high-voltage drive",
+);
+/// Number of periods of a triangle or sine.
+pub const CYCLES: Domain = d(
+    "number of cycles",
+    "",
+    1e-6,
+    1e9,
+    false,
+    "beyond 1e9 cycles is a slip of the exponent; the kink count and the step estimate then decide",
+);
+/// Phase of a sine.
+pub const PHASE: Domain = d(
+    "phase",
+    "rad",
+    -1e3,
+    1e3,
+    true,
+    "a phase is an angle; beyond ±1000 rad a unit is wrong",
+);
+/// Output samples.
+pub const SAMPLES: Domain = d(
+    "sample count",
+    "",
+    1.0,
+    1e6,
+    false,
+    "a trajectory row is 96 bytes in memory and ≈ 200 in the CSV: 1e6 samples are 100 MB",
+);
+/// Relative tolerance.
+pub const RTOL: Domain = d(
+    "relative tolerance",
+    "",
+    1e-14,
+    0.1,
+    false,
+    "below 1e-14 is below double-precision rounding; above 0.1 nothing is resolved",
+);
+/// Absolute tolerance (relative to each state's scale).
+pub const ATOL: Domain = d(
+    "absolute tolerance",
+    "",
+    1e-20,
+    1.0,
+    false,
+    "relative to each state's scale: 1 would accept any value",
+);
+/// PID gains (V per unit contraction, ·s or /s).
+pub const GAIN: Domain = d(
+    "controller gain",
+    "",
+    1e-12,
+    1e12,
+    true,
+    "gains are volts per unit contraction (seed-like loops: 1e5–1e7); 1e12 saturates at any error",
+);
+/// Time constants (derivative filter, supply rise time).
+pub const TIME_CONSTANT: Domain = d("time constant", "s", 1e-9, 1e4, false, "1 ns to hours");
+/// Source output resistance.
+pub const SOURCE_RESISTANCE: Domain =
+    d("source resistance", "Ω", 1e-3, 1e15, false, "1 mΩ to 1 PΩ");
+/// Hyperelastic stress coefficients (C10, μi, …; may be negative).
+pub const MODULUS: Domain = d(
+    "stress coefficient",
+    "Pa",
+    -1e10,
+    1e10,
+    true,
+    "elastomers have moduli of 1 kPa–100 MPa; 10 GPa is a metal",
+);
+/// Small-strain shear modulus μ0 of the hyperelastic model.
+pub const SHEAR_MODULUS: Domain = d(
+    "initial shear modulus",
+    "Pa",
+    1.0,
+    1e10,
+    false,
+    "a solid resists shear (μ0 > 0); gels have ≈ 100 Pa, elastomers 10 kPa–10 MPa",
+);
+/// |αi| of an Ogden term.
+pub const OGDEN_EXPONENT: Domain = d(
+    "Ogden exponent magnitude",
+    "",
+    1e-2,
+    20.0,
+    false,
+    "a term with α ≈ 0 stores no energy; the fitter bounds the magnitude of α by 20",
+);
+/// Kelvin-Voigt dashpot Nv.
+pub const DASHPOT: Domain = d(
+    "dashpot viscosity",
+    "Pa·s",
+    1e-9,
+    1e12,
+    true,
+    "0 for none; Table 4.2: 1875 Pa·s",
+);
+/// Maxwell arm modulus kj.
+pub const ARM_MODULUS: Domain = d(
+    "arm modulus",
+    "Pa",
+    1e-3,
+    1e10,
+    false,
+    "relaxation moduli of elastomers are 1 kPa–100 MPa",
+);
+/// Maxwell arm relaxation time τj = ηj/kj.
+pub const ARM_TIME: Domain = d(
+    "relaxation time",
+    "s",
+    1e-9,
+    1e12,
+    false,
+    "1 ns to 30 000 years",
+);
+
+/// The loaded rest stretch λ0 (a result, checked before a run).
+pub const REST_STRETCH: Domain = d("rest stretch under the load", "", 0.05, 10.0, false, "beyond 10 (or below 0.05) the load is far past what the material can carry and the model is extrapolated without limit");
+
+/// Every domain, in the order of docs/scenes.md's table.
+pub const TABLE: [&Domain; 33] = [
+    &LENGTH,
+    &ELECTRODE,
+    &COUNT,
+    &ELECTRODE_COUNT,
+    &PERMITTIVITY,
+    &DENSITY,
+    &RESISTIVITY,
+    &ACTUATOR_MASS,
+    &LOAD_MASS,
+    &FORCE,
+    &GRAVITY,
+    &FRACTION,
+    &VOLTAGE,
+    &MAX_VOLTAGE,
+    &CONTRACTION,
+    &INSTANT,
+    &SPAN,
+    &FREQUENCY,
+    &CYCLES,
+    &PHASE,
+    &SAMPLES,
+    &RTOL,
+    &ATOL,
+    &GAIN,
+    &TIME_CONSTANT,
+    &SOURCE_RESISTANCE,
+    &MODULUS,
+    &SHEAR_MODULUS,
+    &OGDEN_EXPONENT,
+    &DASHPOT,
+    &ARM_MODULUS,
+    &ARM_TIME,
+    &REST_STRETCH,
+];
+
+/// Most kinks (restarts) a run may have; more are refused before anything is listed.
+pub const MAX_KINKS: usize = 1_000_000;
+/// Step budget of a run (`sim::simulate` gives the integrator this many).
+pub const MAX_STEPS: usize = 20_000_000;
+/// Largest memory a run's outputs may take (bytes).
+pub const MAX_MEMORY: f64 = 2e9;
+/// Steps per resolved period at rtol 10⁻⁶ (Tsit45 on the ringing stack: 196–202 k
+/// steps for 10 s at 1.0 kHz, docs/scenes.md).
+pub const STEPS_PER_PERIOD: f64 = 20.0;
+/// Stability limit h·ω of the explicit 5(4) pairs on the imaginary axis (≈ 3.3
+/// for Dormand–Prince and Tsitouras, Hairer & Wanner).
+pub const EXPLICIT_STABILITY: f64 = 3.3;
+/// Steps for each restart at a kink (a method starts again from first order).
+pub const STEPS_PER_RESTART: f64 = 10.0;
+
+/// A value outside its domain: the scene key, what is wrong, what to do.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Violation {
+    /// Key path in the scene format (`material.relative_permittivity`, `input[0].cycles`).
+    pub key: String,
+    /// What was found and why it is refused.
+    pub msg: String,
+    /// What to do.
+    pub hint: String,
+}
+
+impl Domain {
+    /// Accept `v` if finite and inside the range (or 0 where allowed).
+    pub fn check(&self, key: &str, v: f64) -> std::result::Result<f64, Violation> {
+        let ok = v.is_finite() && ((self.zero && v == 0.0) || (v >= self.min && v <= self.max));
+        if ok {
+            return Ok(v);
+        }
+        let u = if self.unit.is_empty() {
+            String::new()
+        } else {
+            format!(" {}", self.unit)
+        };
+        let range = format!(
+            "{}{}{u} … {}{u}",
+            if self.zero && self.min > 0.0 {
+                "0 or "
+            } else {
+                ""
+            },
+            fmt_g(self.min),
+            fmt_g(self.max)
+        );
+        Err(Violation {
+            key: key.to_string(),
+            msg: match v.is_finite() {
+                true => format!(
+                    "{} = {}{u} is not a plausible {}: expected {range}",
+                    key_leaf(key),
+                    fmt_g(v),
+                    self.what
+                ),
+                false => format!("{} must be a finite number, found {v}", key_leaf(key)),
+            },
+            hint: match self.unit.is_empty() {
+                true => self.reason.to_string(),
+                false => format!("{}; is the unit right?", self.reason),
+            },
+        })
+    }
+}
+
+fn key_leaf(key: &str) -> &str {
+    key.rsplit('.').next().unwrap_or(key)
+}
+
+/// A number in short form, 4 significant digits at most (1e-7, 0.5, 2.25e6, 8.44e8).
+pub fn fmt_g(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && (v.abs() >= 1e5 || v.abs() < 1e-3) {
+        let s = format!("{v:.3e}");
+        let (m, e) = s.split_once('e').unwrap_or((&s, "0"));
+        let m = match m.contains('.') {
+            true => m.trim_end_matches('0').trim_end_matches('.'),
+            false => m,
+        };
+        format!("{m}e{e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// Check the parameters of a hyperelastic model: the count, each value finite and
+/// plausible (Pa coefficients by [`MODULUS`], dimensionless ones within the model's
+/// own bounds (Gent Jm ∈ [1e-3, 1e6]), Ogden exponents by [`OGDEN_EXPONENT`]), and
+/// a positive initial shear modulus. `key` prefixes the parameter names.
+pub fn check_hyperelastic(
+    model: &dyn StrainEnergy,
+    params: &[f64],
+    key: &str,
+) -> std::result::Result<(), Violation> {
+    let info = model.params();
+    if params.len() != info.len() {
+        return Err(Violation {
+            key: key.to_string(),
+            msg: format!(
+                "{} needs {} parameters ({}), found {}",
+                model.name(),
+                info.len(),
+                info.iter()
+                    .map(|p| p.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                params.len()
+            ),
+            hint: "give every parameter of the model by name".into(),
+        });
+    }
+    for (p, &v) in info.iter().zip(params) {
+        let k = format!("{key}.{}", p.name);
+        if p.unit == "Pa" {
+            MODULUS.check(&k, v)?;
+        } else if p.name.starts_with("alpha") {
+            OGDEN_EXPONENT.check(&k, v.abs()).map_err(|mut e| {
+                e.msg = format!("{}: {} = {v}: |α| {}", model.name(), p.name, e.msg);
+                e
+            })?;
+        } else {
+            let dom = Domain {
+                what: "dimensionless parameter",
+                unit: "",
+                min: p.lower,
+                max: p.upper,
+                zero: false,
+                reason: "the model's own bounds (the fitter's search range)",
+            };
+            dom.check(&k, v)?;
+        }
+    }
+    SHEAR_MODULUS
+        .check(
+            &format!("{key}.initial_shear_modulus"),
+            model.initial_shear_modulus(params),
+        )
+        .map(|_| ())
+}
+
+/// Check every quantity of a scene against its domain (no location: the reader
+/// maps the key to its line and column).
+pub fn validate(s: &Scene) -> std::result::Result<(), Violation> {
+    match s.actuator {
+        Actuator::Stack(g) => {
+            LENGTH.check("actuator.radius", g.radius_m)?;
+            LENGTH.check("actuator.layer_thickness", g.layer_m)?;
+            ELECTRODE.check("actuator.electrode_thickness", g.electrode_m)?;
+            COUNT.check("actuator.layers", g.layers as f64)?;
+            ELECTRODE_COUNT.check("actuator.electrodes", g.electrodes as f64)?;
+        }
+        Actuator::Helix(h) => {
+            LENGTH.check("actuator.outer_radius", h.outer_m)?;
+            LENGTH.check("actuator.inner_radius", h.inner_m)?;
+            LENGTH.check("actuator.thickness", h.thickness_m)?;
+            COUNT.check("actuator.periods", h.periods as f64)?;
+            COUNT.check("actuator.per_period", h.per_period as f64)?;
+            if h.inner_m >= h.outer_m {
+                return Err(Violation {
+                    key: "actuator.inner_radius".into(),
+                    msg: format!(
+                        "inner_radius {} m must be smaller than outer_radius {} m",
+                        h.inner_m, h.outer_m
+                    ),
+                    hint: "the helix is an annulus between the two radii".into(),
+                });
+            }
+        }
+    }
+    let m = &s.material;
+    check_hyperelastic(
+        m.model.as_ref(),
+        &m.params,
+        "material.hyperelastic.parameters",
+    )?;
+    DASHPOT.check("material.viscous.nv", m.viscous.nv_pa_s)?;
+    for (i, a) in m.viscous.arms.iter().enumerate() {
+        ARM_MODULUS.check(&format!("material.viscous.arms[{i}].k"), a.k_pa)?;
+        ARM_TIME.check(
+            &format!("material.viscous.arms[{i}].tau"),
+            a.eta_pa_s / a.k_pa,
+        )?;
+    }
+    PERMITTIVITY.check("material.relative_permittivity", m.eps_r)?;
+    DENSITY.check("material.density", m.density)?;
+    if let Some(r) = m.resistivity {
+        RESISTIVITY.check("material.resistivity_ohm_m", r)?;
+    }
+    if let Some(ma) = s.load.actuator_mass_kg {
+        ACTUATOR_MASS.check("material.actuator_mass", ma)?;
+    }
+    LOAD_MASS.check("load.mass", s.load.mass_kg)?;
+    FORCE.check("load.force", s.load.force_n)?;
+    GRAVITY.check("load.gravity", s.load.gravity)?;
+    FRACTION.check("load.effective_mass_fraction", s.load.fraction)?;
+    match s.source {
+        Source::Ideal => {}
+        Source::RiseTime { tau_s } => {
+            TIME_CONSTANT.check("source.rise_time", tau_s)?;
+        }
+        Source::Resistance { ohm } => {
+            SOURCE_RESISTANCE.check("source.resistance_ohm", ohm)?;
+        }
+    }
+    let t = &s.time;
+    SPAN.check("time.span", t.span)?;
+    SAMPLES.check("time.samples", t.samples.len() as f64)?;
+    RTOL.check("time.rtol", t.rtol)?;
+    ATOL.check("time.atol", t.atol)?;
+    if let Some(bad) = t.samples.iter().position(|&x| !(x > 0.0 && x <= t.span)) {
+        return Err(Violation {
+            key: "time.samples".into(),
+            msg: format!(
+                "sample time {} s is not in (0, span = {} s]",
+                t.samples[bad], t.span
+            ),
+            hint: "samples are times after the start and up to the span".into(),
+        });
+    }
+    match &s.control {
+        Some(pid) => {
+            GAIN.check("control.kp", pid.kp)?;
+            GAIN.check("control.ki", pid.ki)?;
+            GAIN.check("control.kd", pid.kd)?;
+            TIME_CONSTANT.check("control.derivative_filter", pid.tau_d)?;
+            MAX_VOLTAGE.check("control.max_voltage", pid.v_max)?;
+            validate_input(&pid.reference, "control.reference", &CONTRACTION)?;
+        }
+        None => validate_input(&s.input, "input", &VOLTAGE)?,
+    }
+    Ok(())
+}
+
+fn validate_input(
+    w: &super::input::Waveform,
+    sec: &str,
+    level: &Domain,
+) -> std::result::Result<(), Violation> {
+    use super::input::Term;
+    for (i, term) in w.terms.iter().enumerate() {
+        let k = |name: &str| format!("{sec}[{i}].{name}");
+        match *term {
+            Term::Step { at, amplitude } => {
+                INSTANT.check(&k("at"), at)?;
+                level.check(&k("amplitude"), amplitude)?;
+            }
+            Term::Ramp {
+                start,
+                end,
+                from,
+                to,
+            } => {
+                INSTANT.check(&k("start"), start)?;
+                INSTANT.check(&k("end"), end)?;
+                level.check(&k("from"), from)?;
+                level.check(&k("to"), to)?;
+                if end <= start {
+                    return Err(Violation {
+                        key: k("end"),
+                        msg: format!("end {end} s must be after start {start} s"),
+                        hint: "a ramp runs from start to a later end".into(),
+                    });
+                }
+            }
+            Term::Triangle {
+                start,
+                amplitude,
+                frequency,
+                cycles,
+                offset,
+            } => {
+                INSTANT.check(&k("start"), start)?;
+                level.check(&k("amplitude"), amplitude)?;
+                FREQUENCY.check(&k("frequency"), frequency)?;
+                CYCLES.check(&k("cycles"), cycles)?;
+                level.check(&k("offset"), offset)?;
+            }
+            Term::Sine {
+                start,
+                amplitude,
+                frequency,
+                phase,
+                offset,
+                cycles,
+            } => {
+                INSTANT.check(&k("start"), start)?;
+                level.check(&k("amplitude"), amplitude)?;
+                FREQUENCY.check(&k("frequency"), frequency)?;
+                PHASE.check(&k("phase_rad"), phase)?;
+                level.check(&k("offset"), offset)?;
+                if let Some(c) = cycles {
+                    CYCLES.check(&k("cycles"), c)?;
+                }
+            }
+            Term::Pwl { ref points } => {
+                for (j, &(t, v)) in points.iter().enumerate() {
+                    let point = |mut e: Violation| {
+                        e.msg = format!("point {}: {}", j + 1, e.msg);
+                        e
+                    };
+                    INSTANT.check(&k("file"), t).map_err(point)?;
+                    level.check(&k("file"), v).map_err(point)?;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The loaded rest state (stable static equilibrium at 0 V from λ = 1), or why
+/// there is none (a load beyond the material, constants outside the model).
+pub fn rest_state(s: &Scene) -> std::result::Result<f64, Violation> {
+    let hint =
+        "lower the load (load.mass, load.weight, load.force) or check the hyperelastic constants";
+    let lam0 = super::full_plant(s)
+        .static_stretch(0.0, 1.0)
+        .map_err(|why| Violation {
+            key: "load".into(),
+            msg: format!("no stable rest state under the load at 0 V: {why}"),
+            hint: hint.into(),
+        })?;
+    REST_STRETCH.check("load", lam0).map_err(|mut v| {
+        v.msg = format!(
+            "the rest stretch under the load is {}: {}",
+            fmt_g(lam0),
+            REST_STRETCH.reason
+        );
+        v.hint = hint.into();
+        v
+    })
+}
+
+/// The estimated cost of a run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Cost {
+    /// Estimated integration steps.
+    pub steps: f64,
+    /// Estimated memory of the outputs (bytes).
+    pub memory: f64,
+    /// Kinks (restarts) in the span.
+    pub kinks: f64,
+    /// Periods of the axial mode that ring (resolved) during the span.
+    pub ring_periods: f64,
+    /// Periods of smooth periodic input in the span.
+    pub input_periods: f64,
+    /// Steps an explicit method needs for stability alone (0 for an implicit one).
+    pub stability_steps: f64,
+}
+
+/// Estimate the cost of a scene's run (see the module documentation).
+pub fn estimate(s: &Scene) -> Result<Cost> {
+    let span = s.time.span;
+    let w = match &s.control {
+        Some(pid) => &pid.reference,
+        None => &s.input,
+    };
+    let kinks = w.kink_count(0.0, span);
+    let input_periods: f64 = w
+        .terms
+        .iter()
+        .map(|t| match *t {
+            super::input::Term::Sine {
+                start,
+                frequency,
+                cycles,
+                ..
+            } => {
+                let active = (span - start.max(0.0)).max(0.0) * frequency;
+                cycles.map_or(active, |c| active.min(c))
+            }
+            _ => 0.0,
+        })
+        .sum();
+    let fid = fidelity::choose(s)?;
+    let mode = fidelity::axial_mode(&super::full_plant(s));
+    let rtol = s.time.rtol;
+    let omega = 2.0 * std::f64::consts::PI * mode.frequency_hz;
+    let ring_time = if !fid.inertia || mode.damping_ratio >= 1.0 || !omega.is_finite() {
+        0.0
+    } else {
+        let decay = (1.0 / rtol).ln() / (mode.damping_ratio.max(0.0) * omega);
+        span.min((kinks + 1.0) * decay)
+    };
+    let ring_periods = ring_time * mode.frequency_hz;
+    let spp = (STEPS_PER_PERIOD * (1e-6 / rtol).powf(0.2)).max(4.0);
+    // an explicit method (the scene's, or auto's choice for a lightly damped mode
+    // with inertia, as in `sim::simulate`) cannot step past its stability limit
+    // h·ω ≈ 3.3 even after the ringing has died away
+    let explicit = match s.time.method {
+        Some(m) => matches!(m, Method::Tsit45 | Method::Dp54),
+        None => fid.inertia && mode.damping_ratio < 0.3,
+    };
+    let stability = match explicit && fid.inertia && omega.is_finite() {
+        true => span * omega / EXPLICIT_STABILITY,
+        false => 0.0,
+    };
+    let steps = (spp * (ring_periods + input_periods)).max(stability) + STEPS_PER_RESTART * kinks;
+    let memory =
+        (s.time.samples.len() as f64 + 2.0) * std::mem::size_of::<Sample>() as f64 + 8.0 * kinks;
+    Ok(Cost {
+        steps,
+        memory,
+        kinks,
+        ring_periods,
+        input_periods,
+        stability_steps: stability,
+    })
+}
+
+/// The guard `sim::simulate` runs first: every quantity in its domain, a stable
+/// rest state under the load, and an estimated cost within the budgets.
+pub fn check(s: &Scene) -> Result<Cost> {
+    validate(s).map_err(|v| {
+        Error::settings(format!("scene '{}': {}: {}", s.name, v.key, v.msg)).with_hint(v.hint)
+    })?;
+    rest_state(s)
+        .map_err(|v| Error::settings(format!("scene '{}': {}", s.name, v.msg)).with_hint(v.hint))?;
+    let c = estimate(s)?;
+    let refuse = |msg: String, hint: &str| {
+        Err(Error::settings(format!("scene '{}': {msg}", s.name)).with_hint(hint.to_string()))
+    };
+    if c.kinks > MAX_KINKS as f64 {
+        return refuse(
+            format!(
+                "the input has {} kinks (restarts) in the span, more than {MAX_KINKS}",
+                fmt_g(c.kinks)
+            ),
+            "fewer cycles, a lower frequency or a shorter time.span",
+        );
+    }
+    if c.memory > MAX_MEMORY {
+        return refuse(
+            format!(
+                "the outputs would take about {} bytes, more than {}",
+                fmt_g(c.memory),
+                fmt_g(MAX_MEMORY)
+            ),
+            "ask for fewer time.samples",
+        );
+    }
+    if c.steps > MAX_STEPS as f64 {
+        let mode = fidelity::axial_mode(&super::full_plant(s));
+        let why = if c.stability_steps >= c.steps / 2.0 {
+            format!(
+                "span {} s is {} periods of the {:.0} Hz axial mode, which an explicit method must resolve for stability",
+                fmt_g(s.time.span),
+                fmt_g(s.time.span * mode.frequency_hz),
+                mode.frequency_hz
+            )
+        } else if c.ring_periods >= c.input_periods
+            && c.ring_periods * STEPS_PER_PERIOD >= STEPS_PER_RESTART * c.kinks
+        {
+            format!(
+                "span {} s rings through {} periods of the {:.0} Hz axial mode (ζ = {:.1e})",
+                fmt_g(s.time.span),
+                fmt_g(c.ring_periods),
+                mode.frequency_hz,
+                mode.damping_ratio
+            )
+        } else if c.input_periods >= c.kinks {
+            format!(
+                "span {} s holds {} periods of the input sine",
+                fmt_g(s.time.span),
+                fmt_g(c.input_periods)
+            )
+        } else {
+            format!(
+                "span {} s holds {} input kinks, each a restart",
+                fmt_g(s.time.span),
+                fmt_g(c.kinks)
+            )
+        };
+        return refuse(
+            format!(
+                "{why}: about {} steps, more than the budget of {}",
+                fmt_g(c.steps),
+                fmt_g(MAX_STEPS as f64)
+            ),
+            "shorten time.span, add damping (material.viscous) or lower the input frequency",
+        );
+    }
+    Ok(c)
+}

@@ -5,6 +5,7 @@ mod bench;
 mod cli;
 mod datasets;
 mod estimation;
+mod fuzz;
 mod models;
 mod permittivity;
 mod relaxation;

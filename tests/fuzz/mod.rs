@@ -25,7 +25,7 @@ use std::time::Duration;
 /// Cases per reader when `DEA_FIT_FUZZ_CASES` is not set (CI: a few seconds).
 const CI_CASES: u64 = 40;
 /// Reproducers written per failure class.
-const REPRODUCERS_PER_CLASS: usize = 3;
+const REPRODUCERS_PER_CLASS: usize = 5;
 /// Address space of a child (KiB), so that an absurd allocation fails (and aborts
 /// the child) instead of taking the machine's memory.
 const CHILD_MEMORY_KIB: u64 = 4 << 20;
@@ -91,6 +91,34 @@ fn masked(s: &str) -> String {
     out.chars().take(90).collect()
 }
 
+/// A source path without the registry's or the toolchain's prefix
+/// (`nalgebra-0.35.0/src/...`, `core/src/...`).
+fn crate_path(file: &str) -> &str {
+    if let Some((_, rest)) = file.split_once("registry/src/") {
+        return rest.split_once('/').map_or(rest, |(_, p)| p);
+    }
+    match file.split_once("/library/") {
+        Some((_, rest)) if file.starts_with("/rustc/") => rest,
+        _ => file,
+    }
+}
+
+/// For a panic outside the crate (`f64::clamp` in core, an SVD in nalgebra), the
+/// innermost frame of dea-fit's own `src/` that led to it.
+fn caller_in_crate(at: &str) -> Option<String> {
+    if at.starts_with("src/") {
+        return None;
+    }
+    let bt = std::backtrace::Backtrace::force_capture().to_string();
+    let src = concat!(env!("CARGO_MANIFEST_DIR"), "/src/");
+    bt.lines().find_map(|l| {
+        let p = l.trim().strip_prefix("at ")?;
+        let p = p.strip_prefix(src).or_else(|| p.strip_prefix("./src/"))?;
+        // `file:line:column` → `src/file:line`
+        Some(format!("src/{}", p.rsplit_once(':').map_or(p, |(f, _)| f)))
+    })
+}
+
 /// The last panic of the child: location and message.
 static PANIC: Mutex<Option<String>> = Mutex::new(None);
 
@@ -108,8 +136,12 @@ fn child(cfg: &Config, spec: &str) {
             .unwrap_or_default();
         let at = info
             .location()
-            .map(|l| format!("{}:{}", l.file(), l.line()))
+            .map(|l| format!("{}:{}", crate_path(l.file()), l.line()))
             .unwrap_or_default();
+        let at = match caller_in_crate(&at) {
+            Some(c) => format!("{c} (in {at})"),
+            None => at,
+        };
         *PANIC.lock().unwrap() = Some(format!("{at}\t{msg}"));
     }));
     let seeds = readers::seeds(r);
@@ -144,6 +176,7 @@ struct Tally {
     hangs: u64,
     aborts: u64,
     lies: u64,
+    seconds: f64,
 }
 
 /// Failures of one class.
@@ -174,7 +207,7 @@ fn record(
     let g = groups.entry(class.clone()).or_insert(Group {
         count: 0,
         reproducers: Vec::new(),
-        example: format!("{}: {detail}", c.what),
+        example: format!("{}: {detail}", c.what).chars().take(300).collect(),
     });
     g.count += 1;
     if g.reproducers.len() < REPRODUCERS_PER_CLASS {
@@ -201,6 +234,7 @@ fn record(
 fn supervise(r: Reader, cfg: &Config) -> (Tally, Groups) {
     let _ = std::fs::remove_dir_all(failures_dir().join(r.name()));
     let seeds = readers::seeds(r);
+    let start = std::time::Instant::now();
     let (mut tally, mut groups) = (Tally::default(), Groups::new());
     let mut next = 0;
     while next < cfg.cases {
@@ -218,6 +252,8 @@ fn supervise(r: Reader, cfg: &Config) -> (Tally, Groups) {
                 "--test-threads=1",
             ])
             .env("DEA_FIT_FUZZ_CHILD", format!("{}:{next}", r.name()))
+            // The last line of stderr is then the reason of an abort.
+            .env("RUST_BACKTRACE", "0")
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
             .spawn()
@@ -283,17 +319,16 @@ fn supervise(r: Reader, cfg: &Config) -> (Tally, Groups) {
             tally.cases += 1;
             let (class, detail) = if stuck {
                 tally.hangs += 1;
-                let c = case(r, &seeds, cfg.seed, next);
                 (
-                    format!("{}: hang (over {:?}) after {}", r.name(), cfg.wall, c.kind),
-                    String::new(),
+                    format!("{}: hang (over {:?})", r.name(), cfg.wall),
+                    "no answer within the wall bound".to_string(),
                 )
             } else {
                 tally.aborts += 1;
                 let last = stderr
                     .lines()
                     .rev()
-                    .find(|l| !l.trim().is_empty())
+                    .find(|l| !l.trim().is_empty() && !l.starts_with("note:"))
                     .unwrap_or("");
                 (
                     format!("{}: abort: {}", r.name(), masked(last)),
@@ -304,6 +339,7 @@ fn supervise(r: Reader, cfg: &Config) -> (Tally, Groups) {
             next += 1;
         }
     }
+    tally.seconds = start.elapsed().as_secs_f64();
     (tally, groups)
 }
 
@@ -314,10 +350,10 @@ fn report(cfg: &Config, results: &[(Reader, Tally, Groups)]) -> String {
         "fuzz: seed {}, {} case(s) per reader, wall bound {:?} per case\n\n",
         cfg.seed, cfg.cases, cfg.wall
     );
-    s.push_str("| reader | cases | accepted | refused | panics | hangs | aborts | non-finite or wrong but usable |\n|---|---|---|---|---|---|---|---|\n");
+    s.push_str("| reader | cases | accepted | refused | panics | hangs | aborts | non-finite or wrong but usable | seconds |\n|---|---|---|---|---|---|---|---|---|\n");
     for (r, t, _) in results {
         s.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {:.1} |\n",
             r.name(),
             t.cases,
             t.accepted,
@@ -325,7 +361,8 @@ fn report(cfg: &Config, results: &[(Reader, Tally, Groups)]) -> String {
             t.panics,
             t.hangs,
             t.aborts,
-            t.lies
+            t.lies,
+            t.seconds
         ));
     }
     let mut all: Vec<(&String, &Group)> = results.iter().flat_map(|(_, _, g)| g).collect();

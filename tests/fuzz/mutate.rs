@@ -203,6 +203,9 @@ fn show(path: &[PathStep]) -> String {
             PathStep::Index(i) => s.push_str(&format!("[{i}]")),
         }
     }
+    if s.is_empty() {
+        s.push_str("top level");
+    }
     s
 }
 
@@ -267,7 +270,8 @@ const UNKNOWN_KEYS: [&str; 5] = ["colour", "presett", "damping", "spann", "fit_f
 
 /// A structure-aware mutation of a scene: a value or its unit changed, a key
 /// removed, an unknown or misspelt key added, a kind swapped. The string is the reason
-/// the scene must be refused, if the mutation makes it invalid whatever the numbers.
+/// the scene must be refused (without values, it names a class of failures), if the
+/// mutation makes it invalid whatever the numbers.
 pub fn scene(text: &str, rng: &mut ChaCha8Rng) -> (Mutated, Option<String>) {
     let mut doc: toml::Value = text.parse::<toml::Table>().expect("a shipped scene").into();
     let (mut tables, mut keys) = (Vec::new(), Vec::new());
@@ -330,11 +334,10 @@ pub fn scene(text: &str, rng: &mut ChaCha8Rng) -> (Mutated, Option<String>) {
                 .as_table_mut()
                 .unwrap()
                 .insert(k.to_string(), toml::Value::String("1".into()));
-            let at = show(&[p.as_slice(), &[PathStep::Key(k.to_string())]].concat());
             (
-                format!("unknown key {at} added"),
+                format!("unknown key {k} added to {}", show(p)),
                 "unknown key added".into(),
-                Some(format!("unknown key {at}")),
+                Some(format!("unknown key in [{}]", show(p))),
             )
         }
         4 => {
@@ -345,7 +348,8 @@ pub fn scene(text: &str, rng: &mut ChaCha8Rng) -> (Mutated, Option<String>) {
             };
             let t = get_mut(&mut doc, parent).as_table_mut().unwrap();
             let new = typo(k, rng);
-            let refuse = (!t.contains_key(&new)).then(|| format!("misspelt key {new}"));
+            let refuse =
+                (!t.contains_key(&new)).then(|| format!("misspelt key in [{}]", show(parent)));
             if refuse.is_some() {
                 let v = t.remove(k).unwrap();
                 t.insert(new.clone(), v);

@@ -69,7 +69,7 @@ pub struct Case {
 pub enum Oracle {
     /// Nothing more: refusing and accepting are both fine.
     Any,
-    /// Refuse it, for this reason.
+    /// Refuse it, for this reason (a class of failures: no values).
     Refuse(String),
     /// If accepted, the scene's material parameters are these (a fit file read by
     /// name gives its values in model order, whatever order the file lists them in).
@@ -174,11 +174,11 @@ fn fit_oracle(json: &[u8]) -> Oracle {
     };
     let form = serde_json::from_value(v["form"].clone()).unwrap_or(OgdenForm::Seed);
     let Ok(m) = ModelSpec::new(model, form).build() else {
-        return Oracle::Refuse(format!("unknown model {model}"));
+        return Oracle::Refuse("unknown model".into());
     };
     let want = m.params();
     if params.len() != want.len() {
-        return Oracle::Refuse(format!("{} parameters for {model}", params.len()));
+        return Oracle::Refuse("parameter count does not match the model".into());
     }
     let mut values = Vec::new();
     for w in want {
@@ -188,8 +188,8 @@ fn fit_oracle(json: &[u8]) -> Oracle {
                 Some(x) => values.push(x),
                 None => return Oracle::Any,
             },
-            [p] => return Oracle::Refuse(format!("{} in {}, not {}", w.name, p["unit"], w.unit)),
-            _ => return Oracle::Refuse(format!("{} given {} times", w.name, found.len())),
+            [_] => return Oracle::Refuse("parameter unit does not match the model".into()),
+            _ => return Oracle::Refuse("parameter name missing or repeated".into()),
         }
     }
     Oracle::Params(values)
@@ -334,7 +334,7 @@ pub fn run(r: Reader, case: &Case, dir: &Path) -> Verdict {
             let out = finite("parameter", f.parameters.iter().map(|p| p.value))
                 .and(finite("rmse_Pa", [f.rmse_pa, f.rel_rmse]))
                 .and(finite("E_inf", [f.long_term_modulus_pa]));
-            check_fit("relaxation", f.status, f.r2, out)
+            check_fit("fit", f.status, f.r2, out)
         }
         Reader::Lcr => {
             let Ok(sweep) = lcr::read(&path, &LcrOptions::default()) else {
@@ -399,8 +399,8 @@ fn simulate(path: &Path, oracle: &Oracle) -> Verdict {
     match oracle {
         Oracle::Refuse(why) => {
             return Verdict::Failed {
-                class: "accepted what must be refused".into(),
-                detail: why.clone(),
+                class: format!("accepted: {why}"),
+                detail: "the scene was read".into(),
             }
         }
         // Exact: both sides parse the same decimal text with serde_json.

@@ -74,11 +74,13 @@ fn case(r: Reader, seeds: &[Vec<(String, Vec<u8>)>], seed: u64, i: u64) -> Case 
     readers::generate(r, seeds, &mut rng)
 }
 
-/// One line of a report: replace line breaks, mask digits so that messages group.
+/// `s` on one line of the child's report (no line breaks, no tabs).
 fn one_line(s: &str) -> String {
     s.replace(['\n', '\t'], " ")
 }
 
+/// A message as a class: on one line, each run of digits masked as `#`, so that
+/// messages differing only in their numbers group together.
 fn masked(s: &str) -> String {
     let mut out = String::new();
     for c in one_line(s).chars() {

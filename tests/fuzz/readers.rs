@@ -238,7 +238,10 @@ pub fn replay(r: Reader, case: &Case, dir: &Path) -> String {
         Reader::Relaxation => format!("dea-fit relaxation {f} --strain 0.5 --max-terms 3"),
         Reader::Lcr => format!("dea-fit permittivity {f} --diameter 42.8mm --thickness 2.2mm"),
         Reader::Manifest => format!("dea-fit composite {f}"),
-        Reader::Scene | Reader::Fit => format!("dea-fit simulate {f} --no-report"),
+        Reader::Scene | Reader::Fit => format!(
+            "dea-fit simulate {f} --no-report --out {}",
+            dir.join("trajectory.csv").display()
+        ),
     }
 }
 

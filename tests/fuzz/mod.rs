@@ -61,7 +61,7 @@ impl Config {
         Config {
             cases: env_number("DEA_FIT_FUZZ_CASES", CI_CASES),
             seed: env_number("DEA_FIT_FUZZ_SEED", 9),
-            wall: Duration::from_secs(env_number("DEA_FIT_FUZZ_WALL_S", 5)),
+            wall: Duration::from_secs(env_number("DEA_FIT_FUZZ_WALL_S", 10)),
             readers,
         }
     }
@@ -79,11 +79,12 @@ fn one_line(s: &str) -> String {
     s.replace(['\n', '\t'], " ")
 }
 
-/// A message as a class: on one line, each run of digits masked as `#`, so that
-/// messages differing only in their numbers group together.
+/// A message as a class: its part before the first `:` or `=` (what comes after is
+/// mostly values), on one line, each run of digits masked as `#`, so that messages
+/// differing only in their numbers group together.
 fn masked(s: &str) -> String {
     let mut out = String::new();
-    for c in one_line(s).chars() {
+    for c in one_line(s.split([':', '=']).next().unwrap_or("")).chars() {
         if !c.is_ascii_digit() {
             out.push(c);
         } else if !out.ends_with('#') {

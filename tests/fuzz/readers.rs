@@ -226,16 +226,17 @@ pub fn generate(r: Reader, seeds: &[Vec<(String, Vec<u8>)>], rng: &mut ChaCha8Rn
 /// The models tensile cases are fitted with (one per case, chosen with the case).
 const MODELS: [&str; 5] = ["neo-hookean", "yeoh", "gent", "ogden1", "ogden2"];
 
-/// The command that replays a case written to `dir`.
+/// The command that replays a case written to `dir` (writing only into `dir`).
 pub fn replay(r: Reader, case: &Case, dir: &Path) -> String {
     let f = dir.join(&case.files[0].0);
     let f = f.display();
+    let out = format!("--no-report --out {}", dir.join("out.json").display());
     match r {
         Reader::Tensile => format!(
-            "dea-fit hyperelastic {f} --area 22mm2 --gauge-length 80mm --max-starts 2 --model {}",
+            "dea-fit hyperelastic {f} --area 22mm2 --gauge-length 80mm --max-starts 2 --model {} {out}",
             case.model
         ),
-        Reader::Relaxation => format!("dea-fit relaxation {f} --strain 0.5 --max-terms 3"),
+        Reader::Relaxation => format!("dea-fit relaxation {f} --strain 0.5 --max-terms 3 {out}"),
         Reader::Lcr => format!("dea-fit permittivity {f} --diameter 42.8mm --thickness 2.2mm"),
         Reader::Manifest => format!("dea-fit composite {f}"),
         Reader::Scene | Reader::Fit => format!(

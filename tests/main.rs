@@ -6,6 +6,7 @@ mod cli;
 mod datasets;
 mod estimation;
 mod exit_status;
+mod fuzz;
 mod models;
 mod permittivity;
 mod relaxation;

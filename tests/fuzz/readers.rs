@@ -1,0 +1,440 @@
+//! The readers under test: their seeds (shipped files), how a case is made from a
+//! seed, and how a case is run — read, then for an accepted input the cheap numerics
+//! downstream, whose outputs must be finite unless the status says the result is not
+//! to be used.
+
+use super::mutate::{self, Mutated};
+use dea_fit::fit::{composite, hyperelastic, permittivity, relaxation, Status};
+use dea_fit::io::lcr::{self, LcrOptions};
+use dea_fit::io::relaxation::RelaxationOptions;
+use dea_fit::io::tensile::{self, TensileOptions};
+use dea_fit::io::{manifest, relaxation as relaxation_io};
+use dea_fit::material::hyperelastic::{ModelSpec, OgdenForm};
+use dea_fit::sim::{self, scene::Scene, RunOptions, RunStatus};
+use dea_fit::units::{parse_quantity, Dimension};
+use rand::seq::SliceRandom;
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Reader {
+    Tensile,
+    Relaxation,
+    Lcr,
+    Manifest,
+    Scene,
+    /// A hyperelastic fit file as a scene's material.
+    Fit,
+}
+
+impl Reader {
+    pub const ALL: [Reader; 6] = [
+        Reader::Tensile,
+        Reader::Relaxation,
+        Reader::Lcr,
+        Reader::Manifest,
+        Reader::Scene,
+        Reader::Fit,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Reader::Tensile => "tensile",
+            Reader::Relaxation => "relaxation",
+            Reader::Lcr => "lcr",
+            Reader::Manifest => "manifest",
+            Reader::Scene => "scene",
+            Reader::Fit => "fit",
+        }
+    }
+
+    pub fn parse(name: &str) -> Option<Reader> {
+        Reader::ALL.into_iter().find(|r| r.name() == name.trim())
+    }
+}
+
+/// One input: files written side by side into one directory; the first is the one
+/// the reader opens.
+pub struct Case {
+    pub files: Vec<(String, Vec<u8>)>,
+    pub what: String,
+    pub kind: String,
+    pub oracle: Oracle,
+    /// The model a tensile case is fitted with.
+    pub model: &'static str,
+}
+
+/// What a correct reader must do with a case besides not failing.
+pub enum Oracle {
+    /// Nothing more: refusing and accepting are both fine.
+    Any,
+    /// Refuse it, for this reason (a class of failures: no values).
+    Refuse(String),
+    /// If accepted, the scene's material parameters are these (a fit file read by
+    /// name gives its values in model order, whatever order the file lists them in).
+    Params(Vec<f64>),
+}
+
+/// How a case ended.
+pub enum Verdict {
+    Refused,
+    Accepted,
+    /// Accepted with a result that breaks a promise; `class` groups failures.
+    Failed {
+        class: String,
+        detail: String,
+    },
+}
+
+fn repo(p: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(p)
+}
+
+fn file(rel: &str) -> (String, Vec<u8>) {
+    let name = rel.rsplit('/').next().unwrap().to_string();
+    let bytes = std::fs::read(repo(rel)).unwrap_or_else(|e| panic!("{rel}: {e}"));
+    (name, bytes)
+}
+
+fn dir(rel: &str) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(repo(rel))
+        .unwrap_or_else(|e| panic!("{rel}: {e}"))
+        .map(|e| format!("{rel}/{}", e.unwrap().file_name().to_string_lossy()))
+        .collect();
+    v.sort();
+    v
+}
+
+/// The scene a fit file is the material of (a fast one: 10 ms).
+const FIT_HOST: &str = "datasets/scenes/stack_step_5kV_damped.toml";
+
+/// The shipped files a reader's cases start from; each seed is the file set of a
+/// case before mutation.
+pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
+    let paths: Vec<String> = match r {
+        Reader::Tensile => ["datasets/treloar", "datasets/vhb4910", "tests/data/ok"]
+            .iter()
+            .flat_map(|d| dir(d))
+            .filter(|p| !p.ends_with("relaxation.csv") && !p.ends_with(".md"))
+            .collect(),
+        Reader::Relaxation => vec!["datasets/vhb4910/relaxation.csv".into()],
+        Reader::Lcr => dir("datasets/composites/sylgard_batio3"),
+        Reader::Manifest => vec![
+            "datasets/composites/sylgard_batio3.toml".into(),
+            "datasets/composites/seed_bjb_batio3_claims.toml".into(),
+        ],
+        Reader::Scene => dir("datasets/scenes"),
+        Reader::Fit => dir("tests/golden")
+            .into_iter()
+            .filter(|p| p.ends_with(".json"))
+            .collect(),
+    };
+    paths
+        .iter()
+        .map(|p| {
+            let mut set = vec![file(p)];
+            match r {
+                Reader::Manifest if p.ends_with("sylgard_batio3.toml") => {
+                    set.extend(dir("datasets/composites/sylgard_batio3").iter().map(|e| {
+                        let (n, b) = file(e);
+                        (format!("sylgard_batio3/{n}"), b)
+                    }))
+                }
+                Reader::Fit => {
+                    let host = String::from_utf8(file(FIT_HOST).1).unwrap().replace(
+                        "hyperelastic = { preset = \"vhb4910-yeoh\" }",
+                        "hyperelastic = { fit = \"fit.json\" }",
+                    );
+                    assert!(
+                        host.contains("fit.json"),
+                        "{FIT_HOST}: no preset to replace"
+                    );
+                    set = vec![
+                        ("scene.toml".into(), host.into_bytes()),
+                        ("fit.json".into(), set[0].1.clone()),
+                    ];
+                }
+                _ => {}
+            }
+            set
+        })
+        .collect()
+}
+
+/// What a fit file must read as: its parameters by name in model order, or the
+/// reason it must be refused (unknown model, a name, unit or count that does not
+/// match the model). `Any` when it is not shaped like a fit file at all.
+fn fit_oracle(json: &[u8]) -> Oracle {
+    let Ok(v) = serde_json::from_slice::<serde_json::Value>(json) else {
+        return Oracle::Any;
+    };
+    let (Some(model), Some(params)) = (v["model"].as_str(), v["parameters"].as_array()) else {
+        return Oracle::Any;
+    };
+    let form = serde_json::from_value(v["form"].clone()).unwrap_or(OgdenForm::Seed);
+    let Ok(m) = ModelSpec::new(model, form).build() else {
+        return Oracle::Refuse("unknown model".into());
+    };
+    let want = m.params();
+    if params.len() != want.len() {
+        return Oracle::Refuse("parameter count does not match the model".into());
+    }
+    let mut values = Vec::new();
+    for w in want {
+        let found: Vec<_> = params.iter().filter(|p| p["name"] == w.name).collect();
+        match found.as_slice() {
+            [p] if p["unit"] == w.unit => match p["value"].as_f64() {
+                Some(x) => values.push(x),
+                None => return Oracle::Any,
+            },
+            [_] => return Oracle::Refuse("parameter unit does not match the model".into()),
+            _ => return Oracle::Refuse("parameter name missing or repeated".into()),
+        }
+    }
+    Oracle::Params(values)
+}
+
+/// A case from a seed: text mutations for every reader, structure-aware ones for
+/// scenes and fit files half of the time.
+pub fn generate(r: Reader, seeds: &[Vec<(String, Vec<u8>)>], rng: &mut ChaCha8Rng) -> Case {
+    let mut files = seeds.choose(rng).unwrap().clone();
+    let main = usize::from(r == Reader::Fit);
+    let structured = matches!(r, Reader::Scene | Reader::Fit) && rng.gen_bool(0.5);
+    let seed_text = String::from_utf8_lossy(&files[main].1).into_owned();
+    let (m, refuse) = match r {
+        Reader::Scene if structured => mutate::scene(&seed_text, rng),
+        Reader::Fit if structured => (mutate::fit(&seed_text, rng), None),
+        _ => (mutate::text(&files[main].1, rng), None),
+    };
+    let Mutated { bytes, what, kind } = m;
+    let oracle = match (r, refuse) {
+        (_, Some(why)) => Oracle::Refuse(why),
+        (Reader::Fit, None) => fit_oracle(&bytes),
+        _ => Oracle::Any,
+    };
+    files[main].1 = bytes;
+    Case {
+        what: format!("{} ({what})", files[main].0),
+        files,
+        kind,
+        oracle,
+        model: MODELS.choose(rng).unwrap(),
+    }
+}
+
+/// The models tensile cases are fitted with (one per case, chosen with the case).
+const MODELS: [&str; 5] = ["neo-hookean", "yeoh", "gent", "ogden1", "ogden2"];
+
+/// The command that replays a case written to `dir` (writing only into `dir`).
+pub fn replay(r: Reader, case: &Case, dir: &Path) -> String {
+    let f = dir.join(&case.files[0].0);
+    let f = f.display();
+    let out = format!("--no-report --out {}", dir.join("out.json").display());
+    match r {
+        Reader::Tensile => format!(
+            "dea-fit hyperelastic {f} --area 22mm2 --gauge-length 80mm --max-starts 2 --model {} {out}",
+            case.model
+        ),
+        Reader::Relaxation => format!("dea-fit relaxation {f} --strain 0.5 --max-terms 3 {out}"),
+        Reader::Lcr => format!("dea-fit permittivity {f} --diameter 42.8mm --thickness 2.2mm"),
+        Reader::Manifest => format!("dea-fit composite {f}"),
+        Reader::Scene | Reader::Fit => format!(
+            "dea-fit simulate {f} --no-report --out {}",
+            dir.join("trajectory.csv").display()
+        ),
+    }
+}
+
+fn finite(what: &str, values: impl IntoIterator<Item = f64>) -> Result<(), String> {
+    match values.into_iter().find(|v| !v.is_finite()) {
+        Some(v) => Err(format!("{what} = {v}")),
+        None => Ok(()),
+    }
+}
+
+/// A usable status (not blocking) with non-finite outputs is a lie, and so is one on
+/// a fit that explains less than the data's mean (R² < 0).
+fn check_fit(reader: &str, status: Status, r2: f64, outputs: Result<(), String>) -> Verdict {
+    if status.is_blocking() {
+        return Verdict::Accepted;
+    }
+    let failure = match outputs {
+        Err(e) => Some((
+            format!("{reader}: status {status} with a non-finite output"),
+            e,
+        )),
+        Ok(()) if r2 < 0.0 => Some((
+            format!("{reader}: status {status} with R² < 0"),
+            format!("R² = {r2}"),
+        )),
+        Ok(()) => None,
+    };
+    match failure {
+        Some((class, detail)) => Verdict::Failed { class, detail },
+        None => Verdict::Accepted,
+    }
+}
+
+fn geometry() -> permittivity::Geometry {
+    let q = |s, d| Some(parse_quantity(s, d).unwrap());
+    permittivity::Geometry::new(
+        None,
+        q("42.8mm", Dimension::Length),
+        q("2.2mm", Dimension::Length),
+    )
+    .unwrap()
+}
+
+/// Write the case into `dir`, read it, and run what follows an accepted input.
+pub fn run(r: Reader, case: &Case, dir: &Path) -> Verdict {
+    for (name, bytes) in &case.files {
+        let p = dir.join(name);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(&p, bytes).unwrap();
+    }
+    let path = dir.join(&case.files[0].0);
+    match r {
+        Reader::Tensile => {
+            let opts = TensileOptions {
+                area: Some(22e-6),
+                gauge_length: Some(0.08),
+                mode: None,
+            };
+            let Ok(data) = tensile::read(&path, &opts) else {
+                return Verdict::Refused;
+            };
+            let settings = hyperelastic::Settings {
+                max_starts: Some(2),
+                ..Default::default()
+            };
+            let spec = ModelSpec::new(case.model, settings.ogden_form);
+            let Ok(f) = hyperelastic::fit(&data, &spec, &settings) else {
+                return Verdict::Refused;
+            };
+            let out = finite("parameter", f.values())
+                .and(finite("rmse_Pa", [f.rmse_pa]))
+                .and(finite(
+                    "initial_shear_modulus_Pa",
+                    [f.initial_shear_modulus_pa],
+                ));
+            check_fit(&format!("hyperelastic {}", f.model), f.status, f.r2, out)
+        }
+        Reader::Relaxation => {
+            let Ok(data) = relaxation_io::read(&path, &RelaxationOptions::default()) else {
+                return Verdict::Refused;
+            };
+            let loading = relaxation::Loading {
+                strain: data.strain.is_none().then_some(0.5),
+                ramp_time: None,
+            };
+            let settings = relaxation::Settings {
+                max_terms: 3,
+                ..Default::default()
+            };
+            let Ok(f) = relaxation::fit(&data, &loading, None, &settings) else {
+                return Verdict::Refused;
+            };
+            let out = finite("parameter", f.parameters.iter().map(|p| p.value))
+                .and(finite("rmse_Pa", [f.rmse_pa, f.rel_rmse]))
+                .and(finite("E_inf", [f.long_term_modulus_pa]));
+            check_fit("fit", f.status, f.r2, out)
+        }
+        Reader::Lcr => {
+            let Ok(sweep) = lcr::read(&path, &LcrOptions::default()) else {
+                return Verdict::Refused;
+            };
+            let settings = permittivity::Settings::default();
+            let Ok(s) = permittivity::analyse(&sweep, "fuzz", &geometry(), &settings, "fuzz")
+            else {
+                return Verdict::Refused;
+            };
+            let out = points_finite(&s);
+            check_fit("permittivity", s.status, 0.0, out)
+        }
+        Reader::Manifest => {
+            let Ok(m) = manifest::read(&path) else {
+                return Verdict::Refused;
+            };
+            let Ok(f) = composite::fit_series(&m, &|| {}) else {
+                return Verdict::Refused;
+            };
+            let usable: Vec<_> = f
+                .fits
+                .iter()
+                .flat_map(|x| &x.rules)
+                .filter(|x| !x.status.is_blocking())
+                .collect();
+            let out = f.samples.iter().try_for_each(points_finite).and_then(|()| {
+                usable.iter().try_for_each(|x| {
+                    finite(
+                        &format!("{} parameter", x.rule.name()),
+                        x.parameters.iter().map(|p| p.value),
+                    )
+                    .and(finite("rms_rel_pct", [x.rms_rel_pct]))
+                })
+            });
+            if !f.status.is_blocking() && !f.fits.is_empty() && usable.is_empty() {
+                return Verdict::Failed {
+                    class: format!("composite: status {} with no usable rule", f.status),
+                    detail: format!("{} frequencies", f.fits.len()),
+                };
+            }
+            check_fit("composite", f.status, 0.0, out)
+        }
+        Reader::Scene | Reader::Fit => simulate(&path, &case.oracle),
+    }
+}
+
+fn points_finite(s: &permittivity::SamplePermittivity) -> Result<(), String> {
+    let p = &s.points;
+    finite("eps_r", p.iter().map(|p| p.eps_r))
+        .and(finite("eps_loss", p.iter().map(|p| p.eps_loss)))
+        .and(finite("tan_delta", p.iter().map(|p| p.tan_delta)))
+        .and(finite("conductivity", p.iter().map(|p| p.conductivity)))
+}
+
+/// Read a scene, hold it to the oracle and simulate it with its own settings: a
+/// completed run has a finite trajectory.
+fn simulate(path: &Path, oracle: &Oracle) -> Verdict {
+    let Ok(scene) = Scene::read(path) else {
+        return Verdict::Refused;
+    };
+    match oracle {
+        Oracle::Refuse(why) => {
+            return Verdict::Failed {
+                class: format!("accepted: {why}"),
+                detail: "the scene was read".into(),
+            }
+        }
+        // Exact: both sides parse the same decimal text with serde_json.
+        Oracle::Params(want) if *want != scene.material.params => {
+            return Verdict::Failed {
+                class: "fit file: parameters not read by name".into(),
+                detail: format!("read {:?}, the file says {want:?}", scene.material.params),
+            }
+        }
+        _ => {}
+    }
+    let Ok(o) = sim::simulate(&scene, &RunOptions::default()) else {
+        return Verdict::Refused;
+    };
+    if o.integrator.status != RunStatus::Completed {
+        return Verdict::Accepted;
+    }
+    let s = &o.samples;
+    let out = finite("stretch", s.iter().map(|s| s.stretch))
+        .and(finite("length_m", s.iter().map(|s| s.length_m)))
+        .and(finite("voltage_V", s.iter().map(|s| s.voltage_v)))
+        .and(finite("capacitance_F", s.iter().map(|s| s.capacitance_f)))
+        .and(finite("current_A", s.iter().map(|s| s.current_a)))
+        .and(finite("rest_stretch", [o.rest_stretch, o.rest_length_m]))
+        .and(finite("energy", [o.energy.input_j, o.energy.residual_j]));
+    match out {
+        Ok(()) => Verdict::Accepted,
+        Err(detail) => Verdict::Failed {
+            class: "simulate: completed with a non-finite output".into(),
+            detail,
+        },
+    }
+}

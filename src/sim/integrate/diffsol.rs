@@ -8,7 +8,9 @@
 //! the input's right limit, and diffsol reinitialises the method to first order
 //! (it does so whenever the state is touched through `state_mut`).
 
-use super::{left_limit, End, EventFn, Extra, Method, Options, SampleFn, Stats, System};
+use super::{
+    left_limit, End, EventFn, Extra, Method, Options, SampleFn, Stats, StepFn, System,
+};
 use ::diffsol::{
     NalgebraLU, NalgebraMat, NalgebraVec, OdeBuilder, OdeEquations, OdeSolverMethod,
     OdeSolverStopReason, Vector, VectorCommon,
@@ -98,6 +100,7 @@ pub(super) fn run<S: System>(
     samples: &[f64],
     extra: Extra,
     out: &mut SampleFn,
+    step: &mut StepFn,
     event: Option<EventFn>,
     restart: &mut dyn FnMut(f64, &mut [f64]),
     stats: &mut Stats,
@@ -166,6 +169,7 @@ pub(super) fn run<S: System>(
         bounds,
         samples,
         out,
+        step,
         restart,
         stats,
     };
@@ -195,6 +199,7 @@ struct Driver<'d, 's, S> {
     bounds: &'d [f64],
     samples: &'d [f64],
     out: &'d mut SampleFn<'d>,
+    step: &'d mut StepFn<'d>,
     restart: &'d mut dyn FnMut(f64, &mut [f64]),
     stats: &'d mut Stats,
 }
@@ -319,6 +324,7 @@ impl<S: System> Driver<'_, '_, S> {
                     y.copy_from_slice(slice(&buf));
                     return End::Event(te);
                 }
+                (self.step)(t_now, slice(s.state().y));
                 t_prev = t_now;
                 if reason == OdeSolverStopReason::TstopReached {
                     break;

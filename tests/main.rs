@@ -8,5 +8,6 @@ mod estimation;
 mod models;
 mod permittivity;
 mod relaxation;
+mod sampling;
 mod sim;
 mod sim_derivatives;

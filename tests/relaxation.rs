@@ -734,7 +734,12 @@ fn a_load_unload_cycle_is_fitted_with_absolute_residuals() {
     assert_eq!(f.residual, dea_fit::fit::problem::Residual::Abs);
     assert!(f.loading.contains("peak stretch 2.0000"), "{}", f.loading);
     assert_eq!(f.prony.len(), 1, "{:#?}", f.selection);
-    assert_recovers(&f, &Prony::new(50e3, &[(20.0, 100e3)]).unwrap(), 0.05, "cycle");
+    assert_recovers(
+        &f,
+        &Prony::new(50e3, &[(20.0, 100e3)]).unwrap(),
+        0.05,
+        "cycle",
+    );
     assert_eq!(f.status, Status::Ok, "{:?}", f.warnings);
     let forced = relaxation::fit(
         &d,

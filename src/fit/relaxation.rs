@@ -1049,7 +1049,11 @@ fn assess(prep: &Prepared, tf: TermFit) -> Assessed {
     // own weighting.
     let null: f64 = y.iter().zip(&prob.w).map(|(y, w)| (y * w).powi(2)).sum();
     let lag1 = if rss > 0.0 {
-        r.iter().zip(r.iter().skip(1)).map(|(a, b)| a * b).sum::<f64>() / rss
+        r.iter()
+            .zip(r.iter().skip(1))
+            .map(|(a, b)| a * b)
+            .sum::<f64>()
+            / rss
     } else {
         0.0
     };

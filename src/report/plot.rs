@@ -180,14 +180,18 @@ impl Chart {
                                 outline.clone(),
                                 c.stroke_width(1),
                             )))?;
-                            chart.draw_series(std::iter::once(Polygon::new(
-                                outline,
-                                c.mix(0.45).filled(),
-                            )))?
-                            .label(s.label.as_str())
-                            .legend(move |(x, y)| {
-                                Rectangle::new([(x, y - 4), (x + 20, y + 4)], c.mix(0.45).filled())
-                            })
+                            chart
+                                .draw_series(std::iter::once(Polygon::new(
+                                    outline,
+                                    c.mix(0.45).filled(),
+                                )))?
+                                .label(s.label.as_str())
+                                .legend(move |(x, y)| {
+                                    Rectangle::new(
+                                        [(x, y - 4), (x + 20, y + 4)],
+                                        c.mix(0.45).filled(),
+                                    )
+                                })
                         }
                         Style::Dashed => chart
                             .draw_series(DashedLineSeries::new(pts, 6, 4, c.stroke_width(2)))?

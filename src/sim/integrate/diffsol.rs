@@ -8,9 +8,7 @@
 //! the input's right limit, and diffsol reinitialises the method to first order
 //! (it does so whenever the state is touched through `state_mut`).
 
-use super::{
-    left_limit, End, EventFn, Extra, Method, Options, SampleFn, Stats, StepFn, System,
-};
+use super::{left_limit, End, EventFn, Extra, Method, Options, SampleFn, Stats, StepFn, System};
 use ::diffsol::{
     NalgebraLU, NalgebraMat, NalgebraVec, OdeBuilder, OdeEquations, OdeSolverMethod,
     OdeSolverStopReason, Vector, VectorCommon,

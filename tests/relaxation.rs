@@ -859,3 +859,14 @@ fn systematic_residuals_are_not_called_elastic() {
     );
     assert!(!f.warnings.iter().any(|w| w.contains("purely elastic")));
 }
+
+/// A history unloads when it falls below 90 % of its peak after reaching it: a held
+/// strain with a small overshoot does not, a cycle, a recovery or a second cycle do.
+#[test]
+fn which_histories_unload() {
+    assert!(!relaxation::unloads(&[0.0, 0.5, 1.02, 1.0, 0.98]));
+    assert!(relaxation::unloads(&[0.0, 1.0, 0.5]));
+    assert!(relaxation::unloads(&[0.0, 1.0, 0.0, 1.0]));
+    assert!(relaxation::unloads(&[0.0, -1.0, 0.0]));
+    assert!(!relaxation::unloads(&[]));
+}

@@ -594,12 +594,15 @@ struct Prepared {
     notes: Vec<String>,
 }
 
-/// Whether a recorded strain history unloads: it ends below half its peak |strain|.
-/// A relaxation test holds its strain to the end (within the machine's control error
-/// of a few %); a load-unload cycle or a recovery returns towards zero.
+/// Whether a recorded strain history unloads: after its peak |strain| it falls below
+/// 90 % of it. A relaxation test holds its strain (within the machine's control
+/// error of a few %); a load-unload cycle, a recovery or a second cycle returns
+/// towards zero, and its stress with it.
 pub fn unloads(strain: &[f64]) -> bool {
     let peak = strain.iter().map(|e| e.abs()).fold(0.0, f64::max);
-    strain.last().is_some_and(|e| e.abs() < 0.5 * peak)
+    // From the first time the peak is reached.
+    let first = strain.iter().position(|e| e.abs() == peak).unwrap_or(0);
+    strain[first..].iter().any(|e| e.abs() < 0.9 * peak)
 }
 
 /// The residual weights wₖ: 1/max(|yₖ|, floor) (relative) or 1/max|y| (absolute).

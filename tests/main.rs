@@ -10,6 +10,7 @@ mod fuzz;
 mod models;
 mod permittivity;
 mod relaxation;
+mod sampling;
 mod scene_input;
 mod sim;
 mod sim_derivatives;

@@ -687,3 +687,186 @@ fn a_loading_that_contradicts_the_data_is_ill_posed() {
         f.warnings
     );
 }
+
+/// A synthetic load-unload cycle in the small-strain reading: E∞ = 50 kPa and one
+/// term (τ = 20 s, 100 kPa), strain 0 → 1 → 0 at 0.01 s⁻¹ (stretch 1 → 2 → 1), one
+/// sample a second, 0.3 kPa absolute Gaussian noise (ChaCha8, seed 9). It is the
+/// corpus file `tests/data/bad_cli/files/relaxation_cycle.csv`.
+fn cycle_csv() -> String {
+    use rand::SeedableRng;
+    use rand_distr::Distribution;
+    use std::fmt::Write as _;
+    let truth = Prony::new(50e3, &[(20.0, 100e3)]).unwrap();
+    let h = History::from_knots(vec![(0.0, 0.0), (100.0, 1.0), (200.0, 0.0)]).unwrap();
+    let times: Vec<f64> = (0..=200).map(f64::from).collect();
+    let sched = Schedule::new(&h, &times).unwrap();
+    let clean = truth.response(&sched);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+    let noise = rand_distr::Normal::new(0.0, 0.3).unwrap();
+    let mut s = String::from(
+        "# synthetic load-unload cycle made by dea-fit (tests/relaxation.rs: cycle_csv(), regenerate with DEA_FIT_REGENERATE=1)\n\
+         # small-strain reading: E_inf = 50 kPa, (tau, E) = (20 s, 100 kPa); strain 0 -> 1 -> 0 at 0.01 1/s; noise 0.3 kPa absolute, seed 9 (ChaCha8)\n\
+         time_s,stretch,stress_kPa\n",
+    );
+    for (k, &t) in times.iter().enumerate() {
+        let y = clean[k] / 1e3 + noise.sample(&mut rng);
+        let _ = writeln!(s, "{t},{:.4},{y:.4}", 1.0 + sched.input()[k]);
+    }
+    s
+}
+
+/// Class 9 of issue 9, on data we make: a recorded history that unloads is fitted
+/// with absolute residuals (chosen automatically), the summary names the peak of the
+/// history, and the constants come back (5 %: 0.3 kPa noise on a 100 kPa peak over
+/// 201 points gives standard errors near 1 %). Forcing relative residuals is
+/// flagged.
+#[test]
+fn a_load_unload_cycle_is_fitted_with_absolute_residuals() {
+    let path = Path::new("tests/data/bad_cli/files/relaxation_cycle.csv");
+    let csv = cycle_csv();
+    if std::env::var_os("DEA_FIT_REGENERATE").is_some() {
+        std::fs::write(path, &csv).unwrap();
+    }
+    assert_eq!(std::fs::read_to_string(path).unwrap(), csv);
+    let d = read(path, &RelaxationOptions::default()).unwrap();
+    assert!(relaxation::unloads(d.strain.as_deref().unwrap()));
+    let f = relaxation::fit(&d, &Loading::default(), None, &Settings::default()).unwrap();
+    assert_eq!(f.residual, dea_fit::fit::problem::Residual::Abs);
+    assert!(f.loading.contains("peak stretch 2.0000"), "{}", f.loading);
+    assert_eq!(f.prony.len(), 1, "{:#?}", f.selection);
+    assert_recovers(
+        &f,
+        &Prony::new(50e3, &[(20.0, 100e3)]).unwrap(),
+        0.05,
+        "cycle",
+    );
+    assert_eq!(f.status, Status::Ok, "{:?}", f.warnings);
+    let forced = relaxation::fit(
+        &d,
+        &Loading::default(),
+        None,
+        &Settings {
+            residual: Some(dea_fit::fit::problem::Residual::Rel),
+            ..Settings::default()
+        },
+    )
+    .unwrap();
+    assert!(forced
+        .warnings
+        .iter()
+        .any(|w| w.contains("relative residuals on a history that unloads")));
+}
+
+/// Class 9 of issue 9, on the measured cycle: VHB 4910 at 0.01 s⁻¹ to λ = 3 and back
+/// (`../shared/datasets/vhb4910/`, not shipped: its source repository states no
+/// licence), QLV with an Ogden-1 fit of the equilibrium curve. Before the fix it gave
+/// R² −2.55 at status `warning` (relative residuals fitted the slack end of the
+/// cycle). R² ≥ 0.95: the one-term QLV reaches 0.972 (RMSE 2.5 kPa, 5 % of the
+/// peak); the rest is model error (the specimen goes slack below λ ≈ 1.3 on
+/// unloading, a QLV solid goes into compression), so 0.95 allows solver and platform
+/// differences and still fails any fit that misses the shape of either branch. The
+/// status is `warning`, not `ok`: the equilibrium fit is not the instantaneous
+/// response (G(0) ≈ 3), which the fit must say.
+#[test]
+fn measured_vhb_cycle_is_fitted_by_qlv() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/datasets/vhb4910");
+    let cycle = dir.join("uniaxial_cycle_rate0p01_per_s_full.csv");
+    if !cycle.exists() {
+        eprintln!("skipped: {} not present", cycle.display());
+        return;
+    }
+    let eq = dea_fit::io::tensile::read(
+        &dir.join("uniaxial_equilibrium_hossain2012_digitized.csv"),
+        &Default::default(),
+    )
+    .unwrap();
+    let hf = hyperelastic::fit(
+        &eq,
+        &ModelSpec::new("ogden1", OgdenForm::Seed),
+        &Default::default(),
+    )
+    .unwrap();
+    let q = QlvInput {
+        fit: hf,
+        file: FileRef {
+            path: "mem".into(),
+            sha256: "0".into(),
+        },
+    };
+    let d = read(&cycle, &RelaxationOptions::default()).unwrap();
+    assert_eq!(
+        d.source.sha256,
+        "68bb3883c1940455aa57f37f6864126d5cf689aa8a00e6daac41e389404ac7e7"
+    );
+    let f = relaxation::fit(&d, &Loading::default(), Some(&q), &Settings::default()).unwrap();
+    assert!(f.r2 >= 0.95, "R² {} {:#?}", f.r2, f.warnings);
+    assert!(f.rel_rmse < 0.08, "{}", f.rel_rmse);
+    assert!(
+        f.loading.contains("recorded history") && f.loading.contains("peak stretch 2.99"),
+        "{}",
+        f.loading
+    );
+    assert_eq!(f.status, Status::Warning, "{:?}", f.warnings);
+    assert!(f.warnings.iter().any(|w| w.contains("G(0) = 3.")));
+    let forced = relaxation::fit(
+        &d,
+        &Loading::default(),
+        Some(&q),
+        &Settings {
+            residual: Some(dea_fit::fit::problem::Residual::Rel),
+            ..Settings::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(forced.status, Status::IllPosed, "{:?}", forced.warnings);
+}
+
+/// Class 4 of issue 9: stress of the wrong sign (compression positive) leaves every
+/// modulus at 0, a 100 % misfit. It used to be "purely elastic" at status `warning`;
+/// a fit that explains nothing is `ill_posed` and says so.
+#[test]
+fn a_fit_that_explains_nothing_is_ill_posed() {
+    let path = Path::new("tests/data/bad_cli/files/relaxation_negative_stress.csv");
+    let d = read(path, &RelaxationOptions::default()).unwrap();
+    let f = relaxation::fit(
+        &d,
+        &Loading {
+            strain: Some(0.5),
+            ramp_time: None,
+        },
+        None,
+        &Settings::default(),
+    )
+    .unwrap();
+    assert_eq!(f.status, Status::IllPosed, "{:?}", f.warnings);
+    assert!(f.warnings.iter().any(|w| w.contains("explains nothing")));
+    assert!(!f.warnings.iter().any(|w| w.contains("purely elastic")));
+}
+
+/// A stress that rises in time after a step is no relaxation and no elastic
+/// constant either: the constant modulus leaves systematic residuals, and the fit
+/// says so instead of "purely elastic".
+#[test]
+fn systematic_residuals_are_not_called_elastic() {
+    let path = Path::new("tests/data/bad_cli/files/relaxation_rising_stress.csv");
+    let d = read(path, &RelaxationOptions::default()).unwrap();
+    let f = fit(&d, None, None);
+    assert_eq!(f.prony.len(), 0, "{:#?}", f.selection);
+    assert!(
+        f.warnings.iter().any(|w| w.contains("systematic")),
+        "{:?}",
+        f.warnings
+    );
+    assert!(!f.warnings.iter().any(|w| w.contains("purely elastic")));
+}
+
+/// A history unloads when it falls below 90 % of its peak after reaching it: a held
+/// strain with a small overshoot does not, a cycle, a recovery or a second cycle do.
+#[test]
+fn which_histories_unload() {
+    assert!(!relaxation::unloads(&[0.0, 0.5, 1.02, 1.0, 0.98]));
+    assert!(relaxation::unloads(&[0.0, 1.0, 0.5]));
+    assert!(relaxation::unloads(&[0.0, 1.0, 0.0, 1.0]));
+    assert!(relaxation::unloads(&[0.0, -1.0, 0.0]));
+    assert!(!relaxation::unloads(&[]));
+}

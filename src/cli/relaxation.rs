@@ -16,6 +16,7 @@ use std::path::{Path, PathBuf};
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum ResidualArg {
+    Auto,
     Rel,
     Abs,
 }
@@ -67,8 +68,9 @@ pub struct Args {
     /// Auto: the fewest terms whose relative RMSE is at most this (e.g. 0.01 or 1%).
     #[arg(long)]
     tolerance: Option<String>,
-    /// Residuals: rel (default: the long-time tail counts) or abs.
-    #[arg(long, value_enum, default_value = "rel")]
+    /// Residuals: auto (default: rel for a held strain, so the long-time tail counts;
+    /// abs for a recorded history that unloads, e.g. a load-unload cycle), rel or abs.
+    #[arg(long, value_enum, default_value = "auto")]
     residual: ResidualArg,
     /// Method: refined (grid NNLS + LM) or grid (grid NNLS only).
     #[arg(long, value_enum, default_value = "refined")]
@@ -116,8 +118,9 @@ fn settings(a: &Args) -> Result<Settings> {
         },
         tolerance,
         residual: match a.residual {
-            ResidualArg::Rel => Residual::Rel,
-            ResidualArg::Abs => Residual::Abs,
+            ResidualArg::Auto => None,
+            ResidualArg::Rel => Some(Residual::Rel),
+            ResidualArg::Abs => Some(Residual::Abs),
         },
         method: match a.method {
             MethodArg::Refined => Method::Refined,
@@ -259,8 +262,13 @@ pub fn summary(fit: &RelaxationFit) -> String {
         ));
     }
     s.push_str(&format!(
-        "loading: strain {} ({}); formulation: {}\n",
-        fit.held_strain, fit.loading, fit.formulation
+        "loading: {}; formulation: {}; residuals: {}\n",
+        fit.loading,
+        fit.formulation,
+        match fit.residual {
+            Residual::Rel => "relative",
+            Residual::Abs => "absolute",
+        }
     ));
     if let Some(sel) = &fit.selection {
         let rows: Vec<Vec<String>> = sel

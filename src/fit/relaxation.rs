@@ -15,8 +15,12 @@
 //!    by bounded Levenberg-Marquardt over (E∞, Eᵢ ≥ 0, ln τᵢ within the window widened
 //!    ×10). E∞ and E0 are fitted, never pinned to the last and first points.
 //!
-//! Residuals are relative by default (floor: 1 % of the largest |stress|), so that the
-//! long-time tail counts as much as the first second. `terms = None` (auto) fits
+//! Residuals are chosen by the loading unless the settings name them ([`Settings::residual`]):
+//! relative (floor: 1 % of the largest |stress|) for a relaxation test, whose strain is
+//! held, so that the long-time tail counts as much as the first second; absolute for a
+//! recorded history that unloads (a load-unload cycle), whose stress passes through
+//! zero where 1/|σ| would weight the slack end of the cycle 100 × its peak. The fit's
+//! misfit (`rel_rmse`) is the RMS of those same scaled residuals. `terms = None` (auto) fits
 //! N = 0 … max_terms and takes the fewest terms whose fit is as good as more by AICc
 //! (or BIC, or a tolerance on the relative RMSE), among fits whose terms are
 //! identifiable and inside the sampled window.
@@ -37,6 +41,18 @@ use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
+
+/// A fit that leaves more than half of the data's weighted sum of squares (against
+/// zero stress, the series with all moduli 0) explains nothing: its residual RMS is
+/// above 1/√2 ≈ 71 % of the data's, so no constant of it can be trusted. A fit of
+/// real data leaves a few % (0.1 % of the sum of squares); noise alone never leaves
+/// half unless it is as large as the stress.
+const EXPLAINS_NOTHING: f64 = 0.5;
+
+/// Lag-1 autocorrelation of residuals above which they are systematic rather than
+/// noise: white noise gives 0 ± 1/√n (±0.1 for 100 points), a misfit left by the
+/// model gives values near 1; 0.5 is halfway.
+const SYSTEMATIC: f64 = 0.5;
 
 /// Schema tag of relaxation fit files.
 pub const SCHEMA: &str = "dea-fit/relaxation-fit/1";
@@ -76,8 +92,10 @@ pub struct Settings {
     /// With a tolerance, `auto` takes the fewest terms whose relative RMSE is at most
     /// this fraction (e.g. 0.01) instead of using the criterion.
     pub tolerance: Option<f64>,
-    /// Residuals (default relative: the long-time tail counts).
-    pub residual: Residual,
+    /// Residuals; `None` (default): chosen by the loading, relative for a held strain
+    /// (the long-time tail counts), absolute for a recorded history that unloads
+    /// ([`unloads`]).
+    pub residual: Option<Residual>,
     /// Method (default refined).
     pub method: Method,
     /// τ grid density of the NNLS stage, points per decade (default 6, which puts
@@ -100,7 +118,7 @@ impl Default for Settings {
             max_terms: 6,
             criterion: Criterion::Aicc,
             tolerance: None,
-            residual: Residual::Rel,
+            residual: None,
             method: Method::Refined,
             grid_per_decade: 6,
             max_iterations: 200,
@@ -225,7 +243,8 @@ pub struct QlvInfo {
     /// G(0): the factor by which the hyperelastic stress must be scaled to be the
     /// instantaneous response of these data (1 if the hyperelastic fit is it).
     pub instantaneous_scale: f64,
-    /// Hyperelastic stress at the held stretch (Pa).
+    /// Hyperelastic stress at the held stretch (at the peak stretch of a history that
+    /// unloads) (Pa).
     #[serde(rename = "held_stress_Pa")]
     pub held_stress_pa: f64,
 }
@@ -291,9 +310,10 @@ pub struct RelaxationFit {
     pub tool_version: String,
     /// Formulation the constants belong to.
     pub formulation: Formulation,
-    /// Held engineering strain ε0.
+    /// Engineering strain at the end of the record: the held strain ε0 of a relaxation
+    /// test (the loading describes a history that unloads).
     pub held_strain: f64,
-    /// How the strain was applied (step, ramp, recorded history).
+    /// How the strain was applied (step, ramp, recorded history with its peak).
     pub loading: String,
     /// Prony terms, sorted by τ.
     pub prony: Vec<PronyEntry>,
@@ -316,7 +336,9 @@ pub struct RelaxationFit {
     /// RMSE (Pa, unweighted).
     #[serde(rename = "rmse_Pa")]
     pub rmse_pa: f64,
-    /// Relative RMSE (fraction, same floor as the relative residuals).
+    /// Relative RMSE (fraction): the RMS of the fit's own scaled residuals, i.e. of
+    /// (model − data)/max(|data|, 1 % of the peak) for relative residuals and of
+    /// (model − data)/peak |data| for absolute ones.
     pub rel_rmse: f64,
     /// R².
     pub r2: f64,
@@ -566,8 +588,32 @@ struct Prepared {
     formulation: Formulation,
     held_strain: f64,
     loading: String,
+    /// The residuals used (the settings' or the loading's choice).
+    residual: Residual,
     qlv: Option<QlvInfo>,
     notes: Vec<String>,
+}
+
+/// Whether a recorded strain history unloads: after its peak |strain| it falls below
+/// 90 % of it. A relaxation test holds its strain (within the machine's control
+/// error of a few %); a load-unload cycle, a recovery or a second cycle returns
+/// towards zero, and its stress with it.
+pub fn unloads(strain: &[f64]) -> bool {
+    let peak = strain.iter().map(|e| e.abs()).fold(0.0, f64::max);
+    // From the first time the peak is reached.
+    let first = strain.iter().position(|e| e.abs() == peak).unwrap_or(0);
+    strain[first..].iter().any(|e| e.abs() < 0.9 * peak)
+}
+
+/// The residual weights wₖ: 1/max(|yₖ|, floor) (relative) or 1/max|y| (absolute).
+fn weights(y: &[f64], residual: Residual) -> Vec<f64> {
+    let ymax = y.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    y.iter()
+        .map(|v| match residual {
+            Residual::Rel => 1.0 / v.abs().max(REL_FLOOR * ymax),
+            Residual::Abs => 1.0 / ymax,
+        })
+        .collect()
 }
 
 fn prepare(
@@ -584,8 +630,8 @@ fn prepare(
         .with_hint("a relaxation curve needs at least 3 points, and 2N + 3 for N terms"));
     }
     let mut notes = Vec::new();
-    // The strain history: recorded, ramp, or step.
-    let (strain_hist, held, desc) = match (&data.strain, loading.ramp_time) {
+    // The strain history: recorded, ramp, or step; `peak` is the largest |strain|.
+    let (strain_hist, held, peak, desc, unloading) = match (&data.strain, loading.ramp_time) {
         (Some(_), Some(_)) => {
             return Err(Error::settings(
                 "the file records the strain history; --ramp-time would contradict it",
@@ -596,10 +642,20 @@ fn prepare(
         }
         (Some(eps), None) => {
             let held = *eps.last().expect("non-empty");
+            let ip = (0..n)
+                .max_by(|&i, &j| eps[i].abs().total_cmp(&eps[j].abs()))
+                .expect("non-empty");
+            let peak = eps[ip];
+            let unloading = unloads(eps);
             if let Some(s) = loading.strain {
-                if (s - held).abs() > 0.01 * held.abs().max(1e-12) {
+                let (what, v) = if unloading {
+                    ("peaks", peak)
+                } else {
+                    ("ends", held)
+                };
+                if (s - v).abs() > 0.01 * v.abs().max(1e-12) {
                     return Err(Error::settings(format!(
-                        "the held strain is given as {s} but the file's strain column ends at {held:.6}"
+                        "the held strain is given as {s} but the file's strain column {what} at {v:.6}"
                     ))
                     .with_hint("drop --strain/--stretch (the recorded strain is used) or correct it"));
                 }
@@ -613,12 +669,20 @@ fn prepare(
             }
             let knots: Vec<(f64, f64)> =
                 data.time.iter().copied().zip(eps.iter().copied()).collect();
-            (
-                History::from_knots(knots)?,
-                held,
-                "recorded strain history (piecewise linear between samples, 0 before the first)"
-                    .to_string(),
-            )
+            let desc = if unloading {
+                format!(
+                    "recorded history (piecewise linear between samples), peak stretch {:.4} at t = {}, unloaded to stretch {:.4}",
+                    1.0 + peak,
+                    fmt_s(data.time[ip]),
+                    1.0 + held
+                )
+            } else {
+                format!(
+                    "recorded history (piecewise linear between samples), held at strain {held:.6} (stretch {:.4})",
+                    1.0 + held
+                )
+            };
+            (History::from_knots(knots)?, held, peak, desc, unloading)
         }
         (None, ramp) => {
             let Some(s) = loading.strain else {
@@ -642,18 +706,38 @@ fn prepare(
                     (
                         History::ramp(s, tr),
                         s,
-                        format!("linear ramp over {tr} s from t = 0, then held"),
+                        s,
+                        format!("linear ramp to strain {s} over {tr} s from t = 0, then held"),
+                        false,
                     )
                 }
-                None => (History::step(s), s, "ideal step at t = 0".to_string()),
+                None => (
+                    History::step(s),
+                    s,
+                    s,
+                    format!("ideal step to strain {s} at t = 0"),
+                    false,
+                ),
             }
         }
     };
-    if !(held.is_finite() && held != 0.0 && held > -1.0) {
+    if !(peak.is_finite() && peak != 0.0 && peak > -1.0) {
         return Err(Error::settings(format!(
-            "the held strain must be non-zero and > −1, found {held}"
+            "the held (or peak) strain must be non-zero and > −1, found {peak}"
         )));
     }
+    let residual = match settings.residual {
+        Some(r) => {
+            if r == Residual::Rel && unloading {
+                notes.push(
+                    "relative residuals on a history that unloads: its stress passes through zero, where 1/|σ| (floored at 1 % of the peak) weights the slack end of the cycle 100 × its peak; drop --residual (absolute residuals are the automatic choice here)".into(),
+                );
+            }
+            r
+        }
+        None if unloading => Residual::Abs,
+        None => Residual::Rel,
+    };
     // Input of the hereditary integral.
     let (history, formulation, unit, qlv_info) = match qlv {
         None => (strain_hist, Formulation::Parallel, 1.0, None),
@@ -661,7 +745,7 @@ fn prepare(
             let model = q.fit.evaluator()?;
             let p = q.fit.values();
             let se = |e: f64| model.nominal_stress(&p, Mode::Uniaxial, 1.0 + e);
-            if let Some(w) = q.fit.range_warning(Mode::Uniaxial, 1.0 + held) {
+            if let Some(w) = q.fit.range_warning(Mode::Uniaxial, 1.0 + peak) {
                 notes.push(format!("hyperelastic fit: {w}"));
             }
             // A ramp in strain is not a ramp in σₑ: resolve it in 64 linear pieces.
@@ -674,11 +758,11 @@ fn prepare(
                 None => strain_hist.map(se),
             };
             let e_ref = 3.0 * q.fit.initial_shear_modulus_pa;
-            let held_stress = se(held);
+            let held_stress = se(peak);
             if !(held_stress.is_finite() && held_stress != 0.0 && e_ref > 0.0) {
                 return Err(Error::settings(format!(
                     "the hyperelastic fit gives stress {held_stress} Pa at stretch {}: no QLV reference",
-                    1.0 + held
+                    1.0 + peak
                 )));
             }
             (
@@ -703,13 +787,7 @@ fn prepare(
             "the loading is zero at every data point: nothing relaxes",
         ));
     }
-    let w: Vec<f64> = y
-        .iter()
-        .map(|v| match settings.residual {
-            Residual::Rel => 1.0 / v.abs().max(REL_FLOOR * ymax),
-            Residual::Abs => 1.0 / ymax,
-        })
-        .collect();
+    let w = weights(&y, residual);
     let t_pos = data
         .time
         .iter()
@@ -735,6 +813,7 @@ fn prepare(
         formulation,
         held_strain: held,
         loading: desc,
+        residual,
         qlv: qlv_info,
         notes,
     })
@@ -926,6 +1005,11 @@ struct Assessed {
     unc: diagnostics::Uncertainty,
     rmse: f64,
     rel_rmse: f64,
+    /// Fraction of the data explained, 1 − ‖r‖²/‖w·y‖², against zero stress.
+    explained: f64,
+    /// Lag-1 autocorrelation of the scaled residuals in time order: ≈ 0 (±1/√n) for
+    /// noise, near 1 for a misfit the model leaves systematically.
+    lag1: f64,
     r2: f64,
     aicc: Option<f64>,
     bic: f64,
@@ -964,12 +1048,18 @@ fn assess(prep: &Prepared, tf: TermFit) -> Assessed {
     let mean = y.iter().sum::<f64>() / nf;
     let ss_res: f64 = pred.iter().zip(y).map(|(p, y)| (p - y).powi(2)).sum();
     let ss_tot: f64 = y.iter().map(|v| (v - mean).powi(2)).sum();
-    let ymax = y.iter().map(|v| v.abs()).fold(0.0, f64::max);
-    let rel: f64 = pred
-        .iter()
-        .zip(y)
-        .map(|(p, y)| ((p - y) / y.abs().max(REL_FLOOR * ymax)).powi(2))
-        .sum();
+    // Against zero stress (all moduli 0, which every series contains), in the fit's
+    // own weighting.
+    let null: f64 = y.iter().zip(&prob.w).map(|(y, w)| (y * w).powi(2)).sum();
+    let lag1 = if rss > 0.0 {
+        r.iter()
+            .zip(r.iter().skip(1))
+            .map(|(a, b)| a * b)
+            .sum::<f64>()
+            / rss
+    } else {
+        0.0
+    };
     let (aicc, bic) = diagnostics::information_criteria(rss, m, k);
 
     let mut problems = Vec::new();
@@ -1097,7 +1187,9 @@ fn assess(prep: &Prepared, tf: TermFit) -> Assessed {
         si,
         unc,
         rmse: (ss_res / nf).sqrt(),
-        rel_rmse: (rel / nf).sqrt(),
+        rel_rmse: (rss / nf).sqrt(),
+        explained: 1.0 - rss / null,
+        lag1,
         r2: if ss_tot > 0.0 {
             1.0 - ss_res / ss_tot
         } else {
@@ -1258,18 +1350,24 @@ pub fn fit(
                 b.tf.n_terms, b.problems[0].1
             ));
         }
-        if c.tf.n_terms == 0 {
-            if score(c) <= score(&assessed[best_any]) + 2.0 {
+        if c.tf.n_terms == 0 && c.explained > EXPLAINS_NOTHING {
+            if score(c) > score(&assessed[best_any]) + 2.0 {
+                unresolved = Some(format!(
+                    "no identifiable Prony series: the data relax (a constant modulus leaves a relative RMSE of {:.3} %), but every fit with terms puts them where these data cannot determine them; check the loading (--ramp-time, a strain column) and the time window",
+                    100.0 * c.rel_rmse
+                ));
+            } else if c.lag1 >= SYSTEMATIC {
+                notes.push(format!(
+                    "no Prony series explains how the stress varies: a constant modulus leaves a relative RMSE of {:.3} % whose residuals are systematic (lag-1 autocorrelation {:.2}), not noise; the stress does not relax as decaying exponentials of this loading: check the loading (--ramp-time, a strain column) and the stress column",
+                    100.0 * c.rel_rmse,
+                    c.lag1
+                ));
+            } else {
                 notes.push(format!(
                     "no relaxation resolved: a constant modulus fits as well as any Prony series (relative RMSE {:.3} %) — purely elastic within the noise over {}–{}",
                     100.0 * c.rel_rmse,
                     fmt_s(prep.window.0),
                     fmt_s(prep.window.1)
-                ));
-            } else {
-                unresolved = Some(format!(
-                    "no identifiable Prony series: the data relax (a constant modulus leaves a relative RMSE of {:.3} %), but every fit with terms puts them where these data cannot determine them; check the loading (--ramp-time, a strain column) and the time window",
-                    100.0 * c.rel_rmse
                 ));
             }
         }
@@ -1318,6 +1416,15 @@ pub fn fit(
     for (s, w) in a.problems.iter().chain(&a.warnings) {
         escalate(*s);
         warnings.push(w.clone());
+    }
+    if a.explained <= EXPLAINS_NOTHING {
+        escalate(Status::IllPosed);
+        warnings.push(format!(
+            "the fit explains nothing: it leaves {:.0} % of the data's weighted sum of squares (relative RMSE {:.3} %, R² {:.3}), where zero stress leaves 100 %; check the stress column (its sign and unit), the loading and --residual",
+            100.0 * (1.0 - a.explained),
+            100.0 * a.rel_rmse,
+            a.r2
+        ));
     }
     // A step assumed while the stress builds up: the loading was not a step.
     if data.strain.is_none() && loading.ramp_time.is_none() {
@@ -1420,7 +1527,7 @@ pub fn fit(
         r2: a.r2,
         aicc: a.aicc,
         bic: a.bic,
-        residual: settings.residual,
+        residual: prep.residual,
         points: m,
         time_window_s: [prep.window.0, prep.window.1],
         spectrum,

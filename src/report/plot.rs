@@ -25,6 +25,16 @@ pub enum Style {
     Line,
     /// Dashed line (model outside its data).
     Dashed,
+    /// Filled band: the points trace its outline, lower edge forward and upper edge
+    /// back ([`band`]).
+    Band,
+}
+
+/// The outline of a band between `lo` and `hi` at `x` (a [`Style::Band`] series).
+pub fn band(x: &[f64], lo: &[f64], hi: &[f64]) -> Vec<(f64, f64)> {
+    let lower = x.iter().zip(lo).map(|(&x, &y)| (x, y));
+    let upper = x.iter().zip(hi).rev().map(|(&x, &y)| (x, y));
+    lower.chain(upper).collect()
 }
 
 /// A chart: title, axis labels, series, and whether x is logarithmic.
@@ -162,6 +172,27 @@ impl Chart {
                             .legend(move |(x, y)| {
                                 PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
                             }),
+                        Style::Band => {
+                            // The outline keeps a band visible where it is thinner
+                            // than a pixel.
+                            let outline: Vec<(f64, f64)> = pts.collect();
+                            chart.draw_series(std::iter::once(PathElement::new(
+                                outline.clone(),
+                                c.stroke_width(1),
+                            )))?;
+                            chart
+                                .draw_series(std::iter::once(Polygon::new(
+                                    outline,
+                                    c.mix(0.45).filled(),
+                                )))?
+                                .label(s.label.as_str())
+                                .legend(move |(x, y)| {
+                                    Rectangle::new(
+                                        [(x, y - 4), (x + 20, y + 4)],
+                                        c.mix(0.45).filled(),
+                                    )
+                                })
+                        }
                         Style::Dashed => chart
                             .draw_series(DashedLineSeries::new(pts, 6, 4, c.stroke_width(2)))?
                             .label(s.label.as_str())

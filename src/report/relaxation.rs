@@ -1,11 +1,13 @@
-//! Report of a relaxation fit: data and model on log time, relative residuals, the
+//! Report of a relaxation fit: data and model on log time (linear time for a history
+//! that unloads), the residuals the fit minimised, the
 //! relaxation spectrum (grid NNLS and the fitted terms), storage and loss moduli
 //! against frequency, and a Markdown page.
 
 use super::format::{si, table};
 use super::plot::{Chart, Series, Style};
 use crate::error::Result;
-use crate::fit::relaxation::{predict, QlvInput, RelaxationFit};
+use crate::fit::problem::{Residual, REL_FLOOR};
+use crate::fit::relaxation::{predict, unloads, QlvInput, RelaxationFit};
 use crate::io::relaxation::RelaxationData;
 use crate::io::write::atomic_write;
 use std::fmt::Write as _;
@@ -20,8 +22,11 @@ pub fn write(
     dir: &Path,
 ) -> Result<PathBuf> {
     let pred = predict(fit, data, qlv)?;
-    let pos = |i: &usize| data.time[*i] > 0.0;
-    let idx: Vec<usize> = (0..data.time.len()).filter(pos).collect();
+    // A relaxation spans decades of time; a load-unload cycle is read on linear time.
+    let log_x = !data.strain.as_deref().is_some_and(unloads);
+    let idx: Vec<usize> = (0..data.time.len())
+        .filter(|&i| !log_x || data.time[i] > 0.0)
+        .collect();
     let n = fit.prony.len();
     Chart {
         title: format!("relaxation: data and {n}-term Prony fit"),
@@ -44,12 +49,19 @@ pub fn write(
                 style: Style::Line,
             },
         ],
-        log_x: true,
+        log_x,
     }
     .write_svg(&dir.join("fit.svg"))?;
     let ymax = data.stress.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    let scale = |y: f64| match fit.residual {
+        Residual::Rel => y.abs().max(REL_FLOOR * ymax),
+        Residual::Abs => ymax,
+    };
     Chart {
-        title: "relative residuals (model − data) / |data|".into(),
+        title: match fit.residual {
+            Residual::Rel => "relative residuals (model − data) / |data|".into(),
+            Residual::Abs => "residuals (model − data) / peak |data|".into(),
+        },
         x_label: "time [s]".into(),
         y_label: "residual [%]".into(),
         series: vec![Series {
@@ -58,16 +70,13 @@ pub fn write(
                 .iter()
                 .map(|&i| {
                     let y = data.stress[i];
-                    (
-                        data.time[i],
-                        100.0 * (pred[i] - y) / y.abs().max(crate::fit::problem::REL_FLOOR * ymax),
-                    )
+                    (data.time[i], 100.0 * (pred[i] - y) / scale(y))
                 })
                 .collect(),
             color: 0,
             style: Style::Points,
         }],
-        log_x: true,
+        log_x,
     }
     .write_svg(&dir.join("residuals.svg"))?;
     Chart {
@@ -154,11 +163,10 @@ pub fn markdown(fit: &RelaxationFit) -> String {
     for f in &fit.provenance.files {
         let _ = writeln!(
             s,
-            "Data: `{}` ({} points, sha256 {}…); loading: strain {} ({}).\n",
+            "Data: `{}` ({} points, sha256 {}…); loading: {}.\n",
             f.path,
             f.points,
             &f.sha256[..12.min(f.sha256.len())],
-            fit.held_strain,
             fit.loading
         );
     }

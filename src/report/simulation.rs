@@ -2,9 +2,10 @@
 //! and a Markdown summary; and the trajectory CSV.
 
 use super::format::si;
-use super::plot::{Chart, Series, Style};
+use super::plot::{band, Chart, Series, Style};
 use crate::error::Result;
 use crate::io::write::atomic_write;
+use crate::sim::sampling::Band;
 use crate::sim::{Outcome, Sensitivities};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -100,7 +101,46 @@ pub fn trajectory_csv(o: &Outcome) -> String {
     s
 }
 
-/// Write `stroke.svg`, `electrical.svg` and `index.md` into `dir`.
+/// A sampled quantity as a chart series: the line through the samples, or, when the
+/// samples do not resolve the motion ([`Outcome::envelope`]), the band of its min/max
+/// per output interval. `f` maps a value to the chart's unit; `band_of` picks the
+/// quantity's band.
+fn trace(
+    o: &Outcome,
+    label: &str,
+    color: usize,
+    value: &dyn Fn(&crate::sim::Sample) -> f64,
+    band_of: &dyn Fn(&crate::sim::sampling::Interval) -> Band,
+    f: &dyn Fn(f64) -> f64,
+) -> Series {
+    match &o.envelope {
+        Some(env) => {
+            let x: Vec<f64> = o.samples.iter().map(|s| s.time_s).collect();
+            let (lo, hi): (Vec<f64>, Vec<f64>) = env
+                .iter()
+                .map(|i| {
+                    let b = band_of(i);
+                    let (a, b) = (f(b.lo), f(b.hi));
+                    (a.min(b), a.max(b))
+                })
+                .unzip();
+            Series {
+                label: format!("{label}: min/max per output interval (samples alias the ringing)"),
+                points: band(&x, &lo, &hi),
+                color,
+                style: Style::Band,
+            }
+        }
+        None => Series {
+            label: label.into(),
+            points: o.samples.iter().map(|s| (s.time_s, f(value(s)))).collect(),
+            color,
+            style: Style::Line,
+        },
+    }
+}
+
+/// Write `stroke.svg`, `voltage.svg`, `power.svg` and `index.md` into `dir`.
 pub fn write(o: &Outcome, dir: &Path) -> Result<PathBuf> {
     let pts = |f: &dyn Fn(&crate::sim::Sample) -> f64| -> Vec<(f64, f64)> {
         o.samples.iter().map(|s| (s.time_s, f(s))).collect()
@@ -109,12 +149,14 @@ pub fn write(o: &Outcome, dir: &Path) -> Result<PathBuf> {
         title: format!("{}: stroke", o.scene),
         x_label: "time (s)".into(),
         y_label: "contraction (mm)".into(),
-        series: vec![Series {
-            label: "stroke".into(),
-            points: pts(&|s| (o.rest_length_m - s.length_m) * 1e3),
-            color: 0,
-            style: Style::Line,
-        }],
+        series: vec![trace(
+            o,
+            "stroke",
+            0,
+            &|s| s.length_m,
+            &|i| i.length_m,
+            &|l| (o.rest_length_m - l) * 1e3,
+        )],
         log_x: false,
     }
     .write_svg(&dir.join("stroke.svg"))?;
@@ -144,12 +186,7 @@ pub fn write(o: &Outcome, dir: &Path) -> Result<PathBuf> {
         x_label: "time (s)".into(),
         y_label: "power (W)".into(),
         series: vec![
-            Series {
-                label: "total V·I".into(),
-                points: pts(&|s| s.power_w),
-                color: 3,
-                style: Style::Line,
-            },
+            trace(o, "total V·I", 3, &|s| s.power_w, &|i| i.power_w, &|p| p),
             Series {
                 label: "leakage".into(),
                 points: pts(&|s| s.leakage_w),

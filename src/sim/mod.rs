@@ -17,6 +17,7 @@ pub mod input;
 pub mod integrate;
 pub mod plant;
 pub mod presets;
+pub mod sampling;
 pub mod scene;
 pub mod stack;
 pub mod static_curve;
@@ -163,6 +164,10 @@ pub struct Outcome {
     /// Samples (not in the JSON summary).
     #[serde(skip)]
     pub samples: Vec<Sample>,
+    /// Extremes per output interval, aligned with `samples`, when they do not resolve
+    /// the motion ([`sampling`]).
+    #[serde(skip)]
+    pub envelope: Option<Vec<sampling::Interval>>,
     /// Forward sensitivities at the samples, if asked for ([`RunOptions::sensitivities`]).
     #[serde(skip)]
     pub sensitivities: Option<Sensitivities>,
@@ -359,6 +364,7 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
         let cols: Vec<f64> = (0..np * n).map(|k| s0[(k % n) * np + k / n]).collect();
         record(&mut sens, y[0], &cols);
     }
+    let mut env = sampling::Envelope::new(fid.inertia, &mode, &scene.time.samples);
     let mut out = |t: f64, y: &[f64], s: &[f64]| {
         samples.push(sample(&p, t, y));
         record(&mut sens, y[0], s);
@@ -376,6 +382,7 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
             false => Extra::None,
         },
         &mut out,
+        &mut |t, y| env.add(&sample(&p, t, y)),
         Some(&event),
         &mut at_kink,
         &mut stats,
@@ -458,7 +465,8 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
         - energy.viscous_j
         - energy.leakage_j
         - energy.source_j;
-    let mut warnings = Vec::new();
+    let (envelope, undersampled) = env.finish(&samples);
+    let mut warnings: Vec<String> = undersampled.into_iter().collect();
     if let Some(fit) = &scene.material.fit {
         let (lo, hi) = samples
             .iter()
@@ -511,6 +519,7 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
         rest_length_m: p.length(p.lam0),
         warnings,
         samples,
+        envelope,
         sensitivities: sens,
     })
 }

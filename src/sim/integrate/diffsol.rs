@@ -10,7 +10,7 @@
 
 use super::{
     budget_exhausted, left_limit, non_finite, End, EventFn, Extra, Method, Options, SampleFn,
-    Stats, System,
+    Stats, StepFn, System,
 };
 use ::diffsol::{
     NalgebraLU, NalgebraMat, NalgebraVec, OdeBuilder, OdeEquations, OdeSolverMethod,
@@ -101,6 +101,7 @@ pub(super) fn run<S: System>(
     samples: &[f64],
     extra: Extra,
     out: &mut SampleFn,
+    step: &mut StepFn,
     event: Option<EventFn>,
     restart: &mut dyn FnMut(f64, &mut [f64]),
     stats: &mut Stats,
@@ -169,6 +170,7 @@ pub(super) fn run<S: System>(
         bounds,
         samples,
         out,
+        step,
         restart,
         stats,
     };
@@ -198,6 +200,7 @@ struct Driver<'d, 's, S> {
     bounds: &'d [f64],
     samples: &'d [f64],
     out: &'d mut SampleFn<'d>,
+    step: &'d mut StepFn<'d>,
     restart: &'d mut dyn FnMut(f64, &mut [f64]),
     stats: &'d mut Stats,
 }
@@ -331,6 +334,7 @@ impl<S: System> Driver<'_, '_, S> {
                     y.copy_from_slice(slice(&buf));
                     return End::Event(te);
                 }
+                (self.step)(t_now, slice(s.state().y));
                 t_prev = t_now;
                 if reason == OdeSolverStopReason::TstopReached {
                     break;

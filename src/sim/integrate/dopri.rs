@@ -8,7 +8,9 @@
 //! non-positive by bisection on the dense output, and allocates nothing per step:
 //! all buffers live in a [`Workspace`] created once per run.
 
-use super::{budget_exhausted, left_limit, non_finite, End, EventFn, Options, Stats, System};
+use super::{
+    budget_exhausted, left_limit, non_finite, End, EventFn, Options, Stats, StepFn, System,
+};
 
 /// Buffers reused by every step.
 struct Workspace {
@@ -130,6 +132,7 @@ pub(super) fn run<S: System>(
     y: &mut [f64],
     samples: &[f64],
     out: &mut dyn FnMut(f64, &[f64]),
+    step: &mut StepFn,
     event: Option<EventFn>,
     restart: &mut dyn FnMut(f64, &mut [f64]),
     stats: &mut Stats,
@@ -154,6 +157,7 @@ pub(super) fn run<S: System>(
             y,
             &samples[si..s_end],
             out,
+            step,
             event,
         );
         si = s_end;
@@ -177,6 +181,7 @@ fn segment<S: System>(
     y: &mut [f64],
     samples: &[f64],
     out: &mut dyn FnMut(f64, &[f64]),
+    step: &mut StepFn,
     event: Option<EventFn>,
 ) -> End {
     let sys = Left {
@@ -286,6 +291,7 @@ fn segment<S: System>(
         }
         y.copy_from_slice(&w.y1);
         t = t_new;
+        step(t, y);
         // FSAL: k[0] ← f(t_new, y)
         let (a, b) = w.k.split_at_mut(6);
         a[0].copy_from_slice(&b[0]);

@@ -177,6 +177,10 @@ fn left_limit(a: f64, b: f64) -> f64 {
 /// The sample callback: (t, y, ∂y/∂θ column by column, empty without them).
 pub type SampleFn<'a> = dyn FnMut(f64, &[f64], &[f64]) + 'a;
 
+/// The step callback: (t, y) at the end of every accepted step, after the samples
+/// within it (not past an event): the integrator's own points between samples.
+pub type StepFn<'a> = dyn FnMut(f64, &[f64]) + 'a;
+
 /// An event function g(t, y); the event is its first change from > 0 to ≤ 0.
 pub type EventFn<'a> = &'a dyn Fn(f64, &[f64]) -> f64;
 
@@ -193,7 +197,7 @@ pub enum Extra<'a> {
 /// Integrate `y` over `bounds` = [t0, kink1, …, t_end] with method `m`.
 ///
 /// `samples` are output times in (t0, t_end] (sorted); `out(t, y, s)` is called for
-/// each one reached, `s` the sensitivities ∂y/∂θ column by column (`s[j·n + i]` =
+/// each one reached, `step(t, y)` at the end of every accepted step, `s` the sensitivities ∂y/∂θ column by column (`s[j·n + i]` =
 /// ∂yi/∂θj; empty without them). At a restart the sensitivities carry on unchanged
 /// (the caller's `restart` may only change states that do not feed back, such as
 /// quadratures, whose sensitivities are then not meaningful). At each interior bound `restart(t, y)` may change the state before the
@@ -210,6 +214,7 @@ pub fn run<S: System>(
     samples: &[f64],
     extra: Extra,
     out: &mut SampleFn,
+    step: &mut StepFn,
     event: Option<EventFn>,
     restart: &mut dyn FnMut(f64, &mut [f64]),
     stats: &mut Stats,
@@ -235,12 +240,13 @@ pub fn run<S: System>(
             y,
             samples,
             &mut |t, y| out(t, y, &[]),
+            step,
             event,
             restart,
             stats,
         ),
         _ => diffsol::run(
-            sys, m, o, scale, bounds, y, samples, extra, out, event, restart, stats,
+            sys, m, o, scale, bounds, y, samples, extra, out, step, event, restart, stats,
         ),
     }
 }

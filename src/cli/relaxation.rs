@@ -2,7 +2,6 @@
 
 use super::Output;
 use clap::ValueEnum;
-use dea_fit::fit::hyperelastic::HyperelasticFit;
 use dea_fit::fit::problem::Residual;
 use dea_fit::fit::relaxation::{
     self, Criterion, FileRef, Loading, Method, QlvInput, RelaxationFit, Settings,
@@ -142,25 +141,11 @@ fn quantity(flag: &str, text: Option<&str>, dim: Dimension) -> Result<Option<f64
     Ok(v)
 }
 
+/// The hyperelastic fit of a QLV run, read by parameter name and checked against
+/// its model (`io::fitfile`), with its checksum for the provenance.
 fn load_qlv(path: &Path) -> Result<QlvInput> {
+    let fit = dea_fit::io::fitfile::read_hyperelastic(path)?;
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let fit: HyperelasticFit = serde_json::from_slice(&bytes).map_err(|e| {
-        Error::input(
-            dea_fit::error::Location::line(path, e.line()),
-            format!("not a hyperelastic fit file: {e}"),
-        )
-        .with_hint("pass a file written by `dea-fit hyperelastic` (fits/<name>.json)")
-    })?;
-    if fit.schema != dea_fit::fit::hyperelastic::SCHEMA {
-        return Err(Error::input(
-            dea_fit::error::Location::file(path),
-            format!(
-                "expected a {} file, found schema '{}'",
-                dea_fit::fit::hyperelastic::SCHEMA,
-                fit.schema
-            ),
-        ));
-    }
     Ok(QlvInput {
         fit,
         file: FileRef {

@@ -9,6 +9,7 @@ use crate::io::lcr::{self, Format, LcrOptions, Sweep};
 use crate::material::dielectric::{
     ac_conductivity, complex_permittivity, kirchhoff_edge_capacitance, Pair, EPS0,
 };
+use crate::sim::budget::PERMITTIVITY;
 use crate::units::Quantity;
 use nalgebra::Complex;
 use rayon::prelude::*;
@@ -371,6 +372,7 @@ pub fn analyse(
     let mut leaky = Vec::new();
     let mut below_stray = Vec::new();
     let mut below_one = Vec::new();
+    let mut beyond = Vec::new();
     let mut negative_d = Vec::new();
     for p in sweep.points.iter().filter(|p| p.y.im > 0.0) {
         let omega = 2.0 * PI * p.freq;
@@ -387,6 +389,13 @@ pub fn analyse(
         }
         let f = |g: &Geometry, s: f64| eps_at(p.y, omega, g, s, settings.edge);
         let (eps, loss) = f(geom, stray);
+        if !(eps.is_finite() && loss.is_finite()) {
+            return Err(Error::input(
+                Location::line(&sweep.path, p.line),
+                format!("εr at {} Hz is not finite (ε′ = {eps}, ε″ = {loss}): the measured values overflow against the empty capacitance {c0:.4e} F", p.freq),
+            )
+            .with_hint("check the unit prefixes of the capacitance or impedance columns and the geometry"));
+        }
         // Linear propagation of the independent tolerances (central differences).
         let mut var = 0.0;
         for (k, sd) in [(0, geom.area_std), (1, geom.thickness_std), (2, stray_std)] {
@@ -419,6 +428,9 @@ pub fn analyse(
         }
         if eps < 1.0 {
             below_one.push((p.freq, eps));
+        }
+        if eps > PERMITTIVITY.max {
+            beyond.push((p.freq, eps));
         }
         points.push(PermittivityPoint {
             freq_hz: p.freq,
@@ -472,6 +484,15 @@ pub fn analyse(
         warnings.push(format!(
             "εr below 1 at {} frequencies (smallest {e:.4} at {f} Hz): impossible for a material; check the thickness and area (units: a bare number is m or m²) and the stray subtraction",
             below_one.len()
+        ));
+    }
+    if let Some(&(f, e)) = beyond.iter().max_by(|a, b| a.1.total_cmp(&b.1)) {
+        status = worst(status, Status::IllPosed);
+        warnings.push(format!(
+            "εr above {:e} at {} frequencies (largest {e:.4e} at {f} Hz): {}; check the capacitance unit, the thickness and the area",
+            PERMITTIVITY.max,
+            beyond.len(),
+            PERMITTIVITY.reason
         ));
     }
     let gap_pct = 100.0 * rel_edge;

@@ -60,6 +60,16 @@ pub const D_NOISE: f64 = 1e-3;
 /// Refuse a point with clearly negative loss (G < 0: D < −[`D_NOISE`], θ beyond
 /// −90°): a passive sample dissipates power, it cannot deliver it.
 fn passive(path: &Path, line: usize, f: f64, y: Complex<f64>) -> Result<()> {
+    if !(y.re.is_finite() && y.im.is_finite()) {
+        return Err(Error::input(
+            Location::line(path, line),
+            format!(
+                "the admittance at {f} Hz is not finite ({} + {}j S)",
+                y.re, y.im
+            ),
+        )
+        .with_hint("a value on this line overflows or is infinite; check its unit prefix"));
+    }
     let d = y.re / y.im.abs();
     if y.re < 0.0 && d < -D_NOISE {
         let theta = y.im.atan2(y.re).to_degrees();
@@ -545,13 +555,35 @@ fn names(pairs: &[Pair]) -> Option<String> {
 }
 
 fn check_frequency(table: &Table, row: &Row, col: usize, f: f64) -> Result<()> {
-    if f > 0.0 {
-        return Ok(());
+    frequency_problem(f).map_or(Ok(()), |(msg, hint)| {
+        Err(Error::input(table.loc(row, col), msg).with_hint(hint))
+    })
+}
+
+/// Lowest and highest frequency (Hz) any dielectric measurement reaches: broadband
+/// dielectric spectrometers start at a few µHz, network analysers end near 100 GHz.
+/// LCR meters and impedance analysers (E4980A 20 Hz–2 MHz, E4990A 20 Hz–120 MHz)
+/// lie well inside.
+pub const FREQUENCY_RANGE_HZ: [f64; 2] = [1e-6, 1e12];
+
+/// Why a frequency cannot be a measured one (message, hint), or None.
+fn frequency_problem(f: f64) -> Option<(String, &'static str)> {
+    let [lo, hi] = FREQUENCY_RANGE_HZ;
+    if !(f > 0.0 && f.is_finite()) {
+        Some((
+            format!("frequency must be > 0 Hz, found {f}"),
+            "the first column is the frequency of each point",
+        ))
+    } else if !(lo..=hi).contains(&f) {
+        Some((
+            format!(
+                "frequency {f:e} Hz is outside any dielectric measurement ({lo:e} … {hi:e} Hz)"
+            ),
+            "is the frequency column's unit right (Hz, kHz, MHz)?",
+        ))
+    } else {
+        None
     }
-    Err(Error::input(
-        table.loc(row, col),
-        format!("frequency must be > 0 Hz, found {f}"),
-    ))
 }
 
 /// A located number in SI: engineering notation, SI prefixes, decimal comma.
@@ -691,10 +723,8 @@ fn read_e4980a(path: &Path, lines: &[&str], opts: &LcrOptions) -> Result<Sweep> 
             }
             continue;
         }
-        if f <= 0.0 || !f.is_finite() {
-            return Err(Error::settings(format!(
-                "frequency must be > 0 Hz, found {f}"
-            )));
+        if let Some((msg, hint)) = frequency_problem(f) {
+            return Err(Error::settings(msg).with_hint(hint));
         }
         let y = pair.to_admittance(a, b * angle, 2.0 * PI * f);
         passive(path, *line, f, y)?;

@@ -2,6 +2,7 @@
 //! and their Jacobian, plus the variable-projection form that solves the linear
 //! coefficients exactly inside the search over the nonlinear ones.
 
+use super::linear;
 use super::lm::LeastSquares;
 use crate::data::Dataset;
 use crate::material::hyperelastic::{Mode, StrainEnergy};
@@ -34,7 +35,7 @@ pub struct HyperProblem<'a> {
     pub stretch: Vec<f64>,
     /// Measured nominal stress (Pa).
     pub stress: Vec<f64>,
-    /// Residual multiplier s_i (√weight / scale).
+    /// Residual multiplier s_i (√(weight / largest weight) / scale).
     pub scale: Vec<f64>,
     /// Evaluation count.
     pub evaluations: usize,
@@ -51,13 +52,19 @@ impl<'a> HyperProblem<'a> {
                 .map(|x| x.stress.abs())
                 .fold(0.0, f64::max)
         };
+        // Weights are relative: divided by the largest, every multiplier is ≤ 1 and
+        // no weight (1e300, say) can overflow the cost.
+        let w_max = s.iter().map(|x| x.weight).fold(0.0, f64::max);
         let scale = s
             .iter()
-            .map(|x| match residual {
-                Residual::Abs => x.weight.sqrt(),
-                Residual::Rel => {
-                    let floor = (REL_FLOOR * max_abs(x.mode)).max(f64::MIN_POSITIVE);
-                    x.weight.sqrt() / x.stress.abs().max(floor)
+            .map(|x| {
+                let w = (x.weight / w_max).sqrt();
+                match residual {
+                    Residual::Abs => w,
+                    Residual::Rel => {
+                        let floor = (REL_FLOOR * max_abs(x.mode)).max(f64::MIN_POSITIVE);
+                        w / x.stress.abs().max(floor)
+                    }
                 }
             })
             .collect();
@@ -142,11 +149,14 @@ impl LeastSquares for HyperProblem<'_> {
 
 /// Solve min ‖A·c − b‖ by SVD with a relative rank tolerance; returns (c, U_r) where
 /// U_r spans the range of A (for the orthogonal projector), or `None` if A is empty
-/// of rank.
+/// of rank or A or b hold a value that is not finite (see [`linear::svd`]).
 pub fn svd_solve(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<(DVector<f64>, DMatrix<f64>)> {
-    let svd = a.clone().svd(true, true);
+    if !b.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let svd = linear::svd(a.clone(), true, true)?;
     let smax = svd.singular_values.max();
-    if smax.is_nan() || smax <= 0.0 || smax.is_infinite() {
+    if smax <= 0.0 {
         return None;
     }
     let tol = smax * 1e-13 * (a.nrows().max(a.ncols()) as f64);

@@ -121,7 +121,14 @@ impl Sample {
             );
         }
         let p = self.stress;
-        if !p.is_finite() || p.abs() > STRESS_MAX {
+        if !p.is_finite() {
+            return fault(
+                Field::Stress,
+                format!("nominal stress must be a finite number, found {p}"),
+                "is the unit right? check the stress column and its conversion",
+            );
+        }
+        if p.abs() > STRESS_MAX {
             return fault(
                 Field::Stress,
                 format!("nominal stress {} Pa: no elastomer test reaches 1 GPa", short(p)),

@@ -339,17 +339,16 @@ fn full_search(
     )
 }
 
-/// "n points", and how many of them lie away from λ = 1 when not all do.
-fn points_phrase(data: &Dataset) -> String {
+/// ("n points", " (m of them away from λ = 1, ...)" when not all are, else "").
+fn points_phrase(data: &Dataset) -> (String, String) {
     let (n, m) = (data.samples.len(), data.informative_points());
-    format!(
-        "{n} point{}{}",
-        if n == 1 { "" } else { "s" },
+    (
+        format!("{n} point{}", if n == 1 { "" } else { "s" }),
         if m < n {
-            format!(" ({m} away from λ = 1, where every model gives zero stress)")
+            format!(" ({m} of them away from λ = 1, where every model gives zero stress)")
         } else {
             String::new()
-        }
+        },
     )
 }
 
@@ -358,9 +357,9 @@ fn points_phrase(data: &Dataset) -> String {
 fn too_few(data: &Dataset, model: &dyn StrainEnergy) -> Option<Error> {
     let k = model.params().len();
     (data.informative_points() < k).then(|| {
+        let (n, why) = points_phrase(data);
         Error::settings(format!(
-            "{} cannot determine {k} parameters of {}",
-            points_phrase(data),
+            "{n} cannot determine {k} parameters of {}{why}",
             model.name()
         ))
         .with_hint("add data or choose a model with fewer parameters (neo-hookean has 1)")
@@ -701,9 +700,9 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
     }
     if data.informative_points() <= k {
         escalate(Status::IllPosed);
+        let (n, why) = points_phrase(data);
         warnings.push(format!(
-            "{} for {k} parameters: no degrees of freedom left for uncertainty, and the model may pass through every point",
-            points_phrase(data)
+            "{n} for {k} parameters{why}: no degrees of freedom left for uncertainty, and the model may pass through every point"
         ));
     }
     // Residuals below what any real test resolves: the data are model-generated
@@ -995,9 +994,9 @@ pub fn fit_auto(
         )));
     }
     if counted.is_empty() {
+        let (n, why) = points_phrase(data);
         return Err(Error::settings(format!(
-            "{} are too few to choose a model: the simplest (neo-hookean, 1 parameter) needs 3 away from λ = 1",
-            points_phrase(data)
+            "{n}{why} are too few to choose a model: the simplest (neo-hookean, 1 parameter) needs 3 away from λ = 1"
         ))
         .with_hint("add data, or name a model with --model (its fit is then marked ill-posed)"));
     }

@@ -311,10 +311,15 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
             } else {
                 f.message
             };
-            let hint = if f.field == Field::Stretch && lam <= 0.0 && !matches!(kin, Kin::Stretch) {
-                "a strain of -1 or less means the coupon has zero length".to_string()
-            } else {
-                f.hint
+            let hint = match (f.field, kin, stress) {
+                (Field::Stretch, Kin::Strain(_) | Kin::Displacement(_), _) if lam <= 0.0 => {
+                    "a strain of -1 or less means the coupon has zero length".to_string()
+                }
+                (Field::Stress, _, Stress::Force(_)) => {
+                    "is the unit right? check the force unit and --area (e.g. --area 22mm2)"
+                        .to_string()
+                }
+                _ => f.hint,
             };
             return Err(Error::input(table.loc(row, col), message).with_hint(hint));
         }

@@ -131,7 +131,10 @@ impl Sample {
         if p.abs() > STRESS_MAX {
             return fault(
                 Field::Stress,
-                format!("nominal stress {} Pa: no elastomer test reaches 1 GPa", short(p)),
+                format!(
+                    "nominal stress {} Pa: no elastomer test reaches 1 GPa",
+                    short(p)
+                ),
                 "is the unit right? a column in Pa labelled MPa reads 10⁶ times too large",
             );
         }

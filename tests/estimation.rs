@@ -439,7 +439,12 @@ fn by_hand(points: &[(f64, f64, f64)]) -> Dataset {
 /// made the Gent bounds panic) are refused with the sample's line, at once.
 #[test]
 fn the_estimator_refuses_data_outside_the_domain_without_the_reader() {
-    let good = [(1.0, 0.0, 1.0), (1.5, 4e4, 1.0), (2.0, 7e4, 1.0), (3.0, 1.2e5, 1.0)];
+    let good = [
+        (1.0, 0.0, 1.0),
+        (1.5, 4e4, 1.0),
+        (2.0, 7e4, 1.0),
+        (3.0, 1.2e5, 1.0),
+    ];
     for (bad, want) in [
         ((1e200, 2e5, 1.0), "a stretch above 100"),
         ((1001.0, 2e5, 1.0), "a stretch above 100"),
@@ -451,10 +456,17 @@ fn the_estimator_refuses_data_outside_the_domain_without_the_reader() {
     ] {
         let d = by_hand(&[&good[..], &[bad]].concat());
         for model in ["yeoh", "gent", "ogden2"] {
-            let e = fit(&d, &ModelSpec::new(model, OgdenForm::Seed), &Settings::default())
-                .expect_err("outside the domain");
+            let e = fit(
+                &d,
+                &ModelSpec::new(model, OgdenForm::Seed),
+                &Settings::default(),
+            )
+            .expect_err("outside the domain");
             let text = e.to_string();
-            assert!(text.starts_with("by-hand.csv:6:") && text.contains(want), "{model}: {text}");
+            assert!(
+                text.starts_with("by-hand.csv:6:") && text.contains(want),
+                "{model}: {text}"
+            );
         }
         assert!(fit_auto(&d, &Settings::default()).is_err());
     }
@@ -464,8 +476,12 @@ fn the_estimator_refuses_data_outside_the_domain_without_the_reader() {
     let still = by_hand(&[(1.0, 0.0, 1.0), (1.0, 100.0, 1.0), (1.0, -100.0, 1.0)]);
     for (d, want) in [(zero, "every stress is 0"), (still, "every stretch is 1")] {
         for model in ["yeoh", "gent", "ogden2"] {
-            let e = fit(&d, &ModelSpec::new(model, OgdenForm::Seed), &Settings::default())
-                .expect_err("nothing to fit");
+            let e = fit(
+                &d,
+                &ModelSpec::new(model, OgdenForm::Seed),
+                &Settings::default(),
+            )
+            .expect_err("nothing to fit");
             assert!(e.to_string().contains(want), "{model}: {e}");
         }
     }
@@ -483,7 +499,12 @@ fn extreme_weights_give_a_finite_fit() {
         (4.0, 2e5, 1e300),
     ]);
     for model in ["neo-hookean", "yeoh", "gent", "ogden1"] {
-        let f = fit(&d, &ModelSpec::new(model, OgdenForm::Seed), &Settings::default()).unwrap();
+        let f = fit(
+            &d,
+            &ModelSpec::new(model, OgdenForm::Seed),
+            &Settings::default(),
+        )
+        .unwrap();
         assert!(
             f.values().iter().all(|v| v.is_finite()) && f.rmse_pa.is_finite(),
             "{model}: {:?}",
@@ -499,7 +520,10 @@ fn extreme_weights_give_a_finite_fit() {
 /// names the rule that applied.
 #[test]
 fn auto_does_not_choose_a_model_that_interpolates_few_points() {
-    let d = dataset("tests/data/bad_cli/files/tensile_neo_hookean_5_noisy.csv", None);
+    let d = dataset(
+        "tests/data/bad_cli/files/tensile_neo_hookean_5_noisy.csv",
+        None,
+    );
     let (f, all) = fit_auto(&d, &Settings::default()).unwrap();
     assert!(f.parameters.len() + 2 <= 4, "{} chosen", f.model);
     let sel = f.selection.unwrap();
@@ -507,12 +531,28 @@ fn auto_does_not_choose_a_model_that_interpolates_few_points() {
         assert_eq!(c.eligible, c.k + 2 <= 4 && !c.status.is_blocking(), "{c:?}");
         assert!(c.r2.is_some_and(f64::is_finite), "{c:?}");
     }
-    assert!(sel.reason.contains("ogden2 (4 points away from λ = 1 for 4 parameters"), "{}", sel.reason);
+    assert!(
+        sel.reason
+            .contains("ogden2 (4 points away from λ = 1 for 4 parameters"),
+        "{}",
+        sel.reason
+    );
     assert!(all.iter().any(|f| f.model == "ogden2"));
     // Fitted on its own, Ogden-2 is ill-posed and says that it interpolates.
-    let o2 = fit(&d, &ModelSpec::new("ogden2", OgdenForm::Seed), &Settings::default()).unwrap();
+    let o2 = fit(
+        &d,
+        &ModelSpec::new("ogden2", OgdenForm::Seed),
+        &Settings::default(),
+    )
+    .unwrap();
     assert_eq!(o2.status, Status::IllPosed, "{:?}", o2.warnings);
-    assert!(o2.warnings.iter().any(|w| w.contains("far below the noise")), "{:?}", o2.warnings);
+    assert!(
+        o2.warnings
+            .iter()
+            .any(|w| w.contains("far below the noise")),
+        "{:?}",
+        o2.warnings
+    );
     // Two points away from λ = 1 are too few for any choice.
     let mut few = d.clone();
     few.samples.truncate(3);
@@ -529,11 +569,19 @@ fn a_fit_below_any_real_noise_is_flagged() {
     let d = synthetic(model.as_ref(), &[4e5], &ALL3[..1], 0.0, 0.0, 1);
     let f = fit(&d, &spec, &Settings::default()).unwrap();
     assert_ne!(f.status, Status::Ok);
-    assert!(f.warnings.iter().any(|w| w.contains("far below the noise")), "{:?}", f.warnings);
+    assert!(
+        f.warnings.iter().any(|w| w.contains("far below the noise")),
+        "{:?}",
+        f.warnings
+    );
     // With 1 % noise the same fit is not flagged.
     let d = synthetic(model.as_ref(), &[4e5], &ALL3[..1], 0.01, 0.0, 1);
     let f = fit(&d, &spec, &Settings::default()).unwrap();
-    assert!(!f.warnings.iter().any(|w| w.contains("far below the noise")), "{:?}", f.warnings);
+    assert!(
+        !f.warnings.iter().any(|w| w.contains("far below the noise")),
+        "{:?}",
+        f.warnings
+    );
 }
 
 /// A fit whose parameter list is not its model's (one value short, relabelled) gives
@@ -541,12 +589,20 @@ fn a_fit_below_any_real_noise_is_flagged() {
 #[test]
 fn a_fit_with_the_wrong_parameters_has_no_evaluator() {
     let d = dataset("datasets/vhb4910/uniaxial.csv", None);
-    let f = fit(&d, &ModelSpec::new("yeoh", OgdenForm::Seed), &Settings::default()).unwrap();
+    let f = fit(
+        &d,
+        &ModelSpec::new("yeoh", OgdenForm::Seed),
+        &Settings::default(),
+    )
+    .unwrap();
     assert!(f.evaluator().is_ok());
     let mut short = f.clone();
     short.parameters.pop();
     let e = short.evaluator().err().expect("one parameter short");
-    assert!(e.to_string().contains("needs the parameters C10, C20, C30"), "{e}");
+    assert!(
+        e.to_string().contains("needs the parameters C10, C20, C30"),
+        "{e}"
+    );
     let mut relabelled = f.clone();
     relabelled.model = "mooney-rivlin".into();
     assert!(relabelled.evaluator().is_err());

@@ -315,12 +315,20 @@ fn wrong_length_parameters_give_nan_and_an_error_never_a_panic() {
     for (m, p) in cases() {
         let k = p.len();
         assert!(m.check_params(&p).is_ok(), "{}", m.name());
-        for bad in [&p[..k - 1], &p[..1], &[][..], &[p.clone(), vec![1.0]].concat()[..]] {
+        for bad in [
+            &p[..k - 1],
+            &p[..1],
+            &[][..],
+            &[p.clone(), vec![1.0]].concat()[..],
+        ] {
             if bad.len() == k {
                 continue;
             }
             let e = m.check_params(bad).expect_err("wrong length");
-            assert!(e.to_string().contains(&format!("takes {k} parameters")), "{e}");
+            assert!(
+                e.to_string().contains(&format!("takes {k} parameters")),
+                "{e}"
+            );
             for mode in Mode::ALL {
                 assert!(m.nominal_stress(bad, mode, 1.7).is_nan(), "{}", m.name());
                 assert!(m.tangent(bad, mode, 1.7).is_nan(), "{}", m.name());

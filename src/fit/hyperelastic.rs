@@ -951,7 +951,9 @@ fn ineligible(f: &HyperelasticFit, informative: usize) -> Option<String> {
             k + 2
         ))
     } else {
-        f.status.is_blocking().then(|| format!("status {}", f.status))
+        f.status
+            .is_blocking()
+            .then(|| format!("status {}", f.status))
     }
 }
 

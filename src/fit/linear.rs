@@ -20,8 +20,7 @@ pub fn svd(m: DMatrix<f64>, compute_u: bool, compute_v: bool) -> Option<SVD<f64,
     }
     let d = m.nrows().min(m.ncols());
     let max_iterations = (6 * d * d).max(60);
-    let mut svd =
-        m.try_svd_unordered(compute_u, compute_v, 5.0 * f64::EPSILON, max_iterations)?;
+    let mut svd = m.try_svd_unordered(compute_u, compute_v, 5.0 * f64::EPSILON, max_iterations)?;
     if !svd.singular_values.iter().all(|v| v.is_finite()) {
         return None;
     }

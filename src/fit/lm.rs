@@ -87,7 +87,8 @@ fn invalid_start(n: usize, x0: &[f64], bounds: &[(f64, f64)]) -> Option<String> 
     }
     if let Some(&(lo, hi)) = bounds
         .iter()
-        .find(|(lo, hi)| lo.is_nan() || hi.is_nan() || lo > hi) {
+        .find(|(lo, hi)| lo.is_nan() || hi.is_nan() || lo > hi)
+    {
         return Some(format!("empty bounds [{lo}, {hi}]"));
     }
     None
@@ -111,7 +112,11 @@ pub fn minimize<P: LeastSquares + ?Sized>(
             termination: Termination::Failed(why),
         };
     }
-    let mut x: Vec<f64> = x0.iter().zip(bounds).map(|(&v, &b)| project(v, b)).collect();
+    let mut x: Vec<f64> = x0
+        .iter()
+        .zip(bounds)
+        .map(|(&v, &b)| project(v, b))
+        .collect();
     let mut r = DVector::zeros(m);
     let mut jac = DMatrix::zeros(m, n);
     let mut r_new = DVector::zeros(m);

@@ -370,7 +370,7 @@ fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Es
     if let Some(e) = too_few(data, model) {
         return Err(e);
     }
-    let mut prob = HyperProblem::new(model, data, s.residual);
+    let mut prob = HyperProblem::new(model, data, s.residual).merge_repeats();
     let (n, k) = (prob.len(), model.params().len());
     if model.linear_in_params() {
         let mut a = DMatrix::zeros(n, k);

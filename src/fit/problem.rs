@@ -8,6 +8,7 @@ use crate::data::Dataset;
 use crate::material::hyperelastic::{Mode, StrainEnergy};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
 
 /// How residuals are measured.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -76,6 +77,44 @@ impl<'a> HyperProblem<'a> {
             scale,
             evaluations: 0,
             row: vec![0.0; model.params().len()],
+        }
+    }
+
+    /// The same problem with repeated (mode, stretch) points merged into one row:
+    /// Σ s_i²(P − y_i)² = S²(P − ȳ)² + Σ s_i²(y_i − ȳ)² with S² = Σ s_i² and ȳ the
+    /// s²-weighted mean, so the minimiser is unchanged and an evaluation costs one row
+    /// per distinct point (10⁶ repeats of three stretches: three rows). The constant
+    /// is left out: merged problems are for the search, not for residual statistics.
+    pub fn merge_repeats(self) -> Self {
+        let mut index: HashMap<(Mode, u64), usize> = HashMap::new();
+        let (mut modes, mut stretch, mut s2, mut s2y) = (vec![], vec![], vec![], vec![]);
+        for i in 0..self.len() {
+            let j = *index
+                .entry((self.modes[i], self.stretch[i].to_bits()))
+                .or_insert_with(|| {
+                    modes.push(self.modes[i]);
+                    stretch.push(self.stretch[i]);
+                    s2.push(0.0);
+                    s2y.push(0.0);
+                    modes.len() - 1
+                });
+            let w = self.scale[i] * self.scale[i];
+            s2[j] += w;
+            s2y[j] += w * self.stress[i];
+        }
+        if modes.len() == self.len() {
+            return self;
+        }
+        HyperProblem {
+            stress: s2
+                .iter()
+                .zip(&s2y)
+                .map(|(w, wy)| if *w > 0.0 { wy / w } else { 0.0 })
+                .collect(),
+            scale: s2.iter().map(|w| w.sqrt()).collect(),
+            modes,
+            stretch,
+            ..self
         }
     }
 

@@ -306,3 +306,56 @@ proptest! {
         }
     }
 }
+
+/// A parameter vector of the wrong length (an Ogden-3 fit file holding one value
+/// panicked in ogden.rs) gives NaN from every evaluator, and `check_params` says
+/// what is wrong, for every model.
+#[test]
+fn wrong_length_parameters_give_nan_and_an_error_never_a_panic() {
+    for (m, p) in cases() {
+        let k = p.len();
+        assert!(m.check_params(&p).is_ok(), "{}", m.name());
+        for bad in [
+            &p[..k - 1],
+            &p[..1],
+            &[][..],
+            &[p.clone(), vec![1.0]].concat()[..],
+        ] {
+            if bad.len() == k {
+                continue;
+            }
+            let e = m.check_params(bad).expect_err("wrong length");
+            assert!(
+                e.to_string().contains(&format!("takes {k} parameters")),
+                "{e}"
+            );
+            for mode in Mode::ALL {
+                assert!(m.nominal_stress(bad, mode, 1.7).is_nan(), "{}", m.name());
+                assert!(m.tangent(bad, mode, 1.7).is_nan(), "{}", m.name());
+                let mut out = vec![0.0; k];
+                m.stress_jacobian(bad, mode, 1.7, &mut out);
+                assert!(out.iter().all(|v| v.is_nan()), "{} {out:?}", m.name());
+            }
+            assert!(m.initial_shear_modulus(bad).is_nan(), "{}", m.name());
+        }
+        // A Jacobian buffer of the wrong length is filled with NaN, not indexed past.
+        let mut short = vec![0.0; k - 1];
+        m.stress_jacobian(&p, Mode::Uniaxial, 1.7, &mut short);
+        assert!(short.iter().all(|v| v.is_nan()), "{}", m.name());
+        let mut nan = p.clone();
+        nan[0] = f64::NAN;
+        assert!(m.check_params(&nan).is_err(), "{}", m.name());
+    }
+}
+
+/// The Gent limit's bounds are never inverted, whatever the data's largest I1 − 3
+/// (data beyond the upper bound, or NaN): `f64::clamp` panicked on them.
+#[test]
+fn gent_bounds_are_never_inverted() {
+    let g = ModelSpec::new("gent", OgdenForm::Seed).build().unwrap();
+    for x in [0.0, 1e4, 1e6, 1e7, 1e300, f64::INFINITY, f64::NAN] {
+        for (lo, hi) in g.bounds(x) {
+            assert!(lo <= hi, "max I1 − 3 = {x}: [{lo}, {hi}]");
+        }
+    }
+}

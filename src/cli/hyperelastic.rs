@@ -199,19 +199,22 @@ pub fn summary(fit: &HyperelasticFit) -> String {
                     c.model.clone(),
                     c.k.to_string(),
                     si(c.rmse_pa, "Pa"),
-                    format!("{:.5}", c.r2),
+                    c.r2.map(|v| format!("{v:.5}")).unwrap_or("n/a".into()),
                     c.aicc.map(|v| format!("{v:.2}")).unwrap_or("n/a".into()),
                     c.delta_aicc
                         .map(|v| format!("{v:.2}"))
                         .unwrap_or("n/a".into()),
                     format!("{:.2}", c.bic),
                     c.status.to_string(),
+                    if c.eligible { "yes" } else { "no" }.to_string(),
                 ]
             })
             .collect();
         s.push_str("\nmodel comparison\n");
         s.push_str(&table(
-            &["model", "k", "RMSE", "R²", "AICc", "ΔAICc", "BIC", "status"],
+            &[
+                "model", "k", "RMSE", "R²", "AICc", "ΔAICc", "BIC", "status", "eligible",
+            ],
             &rows,
         ));
         s.push_str(&format!("chosen: {}\n", sel.reason));
@@ -244,10 +247,10 @@ pub fn summary(fit: &HyperelasticFit) -> String {
         &rows,
     ));
     s.push_str(&format!(
-        "μ0 {}  RMSE {}  R² {:.5}  %RMSE {}  AICc {}  BIC {:.2}\n",
+        "μ0 {}  RMSE {}  R² {}  %RMSE {}  AICc {}  BIC {:.2}\n",
         si(fit.initial_shear_modulus_pa, "Pa"),
         si(fit.rmse_pa, "Pa"),
-        fit.r2,
+        fit.r2.map(|v| format!("{v:.5}")).unwrap_or("n/a".into()),
         fit.rmse_pct
             .map(|v| format!("{v:.3} %"))
             .unwrap_or("n/a".into()),

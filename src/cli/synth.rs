@@ -11,6 +11,9 @@ use rand_distr::{Distribution, Normal};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
+/// Most points `synth` writes (a 10⁶-row file is about 20 MB).
+const MAX_POINTS: usize = 1_000_000;
+
 /// Generate synthetic data.
 #[derive(Debug, clap::Args)]
 pub struct Args {
@@ -109,14 +112,18 @@ pub fn run(a: Args) -> Result<i32> {
         parts[1].parse().map_err(|_| bad())?,
     );
     let count: usize = parts[2].parse().map_err(|_| bad())?;
-    if count < 2 || l0 <= 0.0 || l1 <= 0.0 {
-        return Err(bad());
+    // The same tensile domain the reader enforces, and a count a file can hold.
+    let (lo, hi) = dea_fit::data::STRETCH_RANGE;
+    if !(2..=MAX_POINTS).contains(&count) || ![l0, l1].iter().all(|l| (lo..=hi).contains(l)) {
+        return Err(bad().with_hint(format!(
+            "stretches within {lo}–{hi}, a count from 2 to {MAX_POINTS}"
+        )));
     }
     let noise_abs = parse_quantity(&a.noise_abs, Dimension::Stress)
         .map_err(|e| Error::settings(format!("--noise-abs: {e}")))?
         .value;
-    if a.noise.is_nan() || a.noise < 0.0 || noise_abs < 0.0 {
-        return Err(Error::settings("noise must be ≥ 0"));
+    if !(a.noise.is_finite() && a.noise >= 0.0 && noise_abs.is_finite() && noise_abs >= 0.0) {
+        return Err(Error::settings("noise must be finite and ≥ 0"));
     }
     let mut rng = ChaCha8Rng::seed_from_u64(a.seed);
     let unit = Normal::new(0.0, 1.0).expect("valid");

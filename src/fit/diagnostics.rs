@@ -23,7 +23,9 @@ pub struct Uncertainty {
 }
 
 /// Covariance of least-squares estimates: cov = s²·(JᵀJ)⁻¹, s² = RSS/(n − k), with
-/// J the Jacobian of the scaled residuals at the optimum (pseudo-inverse by SVD).
+/// J the Jacobian of the scaled residuals at the optimum (pseudo-inverse by SVD). A
+/// Jacobian that cannot be decomposed (a value not finite) leaves every parameter
+/// unidentified, with condition number ∞.
 pub fn uncertainty(jac: &DMatrix<f64>, rss: f64) -> Uncertainty {
     let (n, k) = jac.shape();
     let dof = n.saturating_sub(k);
@@ -36,7 +38,21 @@ pub fn uncertainty(jac: &DMatrix<f64>, rss: f64) -> Uncertainty {
             norm.column_mut(j).scale_mut(1.0 / s);
         }
     }
-    let svd = norm.svd(false, true);
+    let t95 = (dof > 0).then(|| {
+        StudentsT::new(0.0, 1.0, dof as f64)
+            .map(|t| t.inverse_cdf(0.975))
+            .unwrap_or(1.96)
+    });
+    let Some(svd) = super::linear::svd(norm, false, true) else {
+        // A Jacobian holding ∞ or NaN (or an empty one) determines nothing.
+        return Uncertainty {
+            covariance: DMatrix::from_element(k, k, f64::NAN),
+            std_error: vec![None; k],
+            correlation: vec![vec![None; k]; k],
+            condition: f64::INFINITY,
+            t95,
+        };
+    };
     let sv = &svd.singular_values;
     let smax = sv.max();
     let smin = sv.min();
@@ -73,11 +89,6 @@ pub fn uncertainty(jac: &DMatrix<f64>, rss: f64) -> Uncertainty {
                 .collect()
         })
         .collect();
-    let t95 = (dof > 0).then(|| {
-        StudentsT::new(0.0, 1.0, dof as f64)
-            .map(|t| t.inverse_cdf(0.975))
-            .unwrap_or(1.96)
-    });
     Uncertainty {
         covariance: cov,
         std_error,

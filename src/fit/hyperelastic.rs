@@ -117,8 +117,9 @@ pub struct ModeStats {
     /// Root-mean-square absolute error (Pa).
     #[serde(rename = "rmse_Pa")]
     pub rmse_pa: f64,
-    /// Coefficient of determination of this mode.
-    pub r2: f64,
+    /// Coefficient of determination of this mode (None when its stresses do not
+    /// vary, e.g. one point: R² is undefined).
+    pub r2: Option<f64>,
 }
 
 /// A model prediction in a mode the data does not cover.
@@ -150,16 +151,21 @@ pub struct Candidate {
     /// RMSE (Pa).
     #[serde(rename = "rmse_Pa")]
     pub rmse_pa: f64,
-    /// R².
-    pub r2: f64,
+    /// R² (None where undefined).
+    pub r2: Option<f64>,
     /// AICc (None when n ≤ k + 1).
     pub aicc: Option<f64>,
     /// BIC.
     pub bic: f64,
-    /// AICc minus the smallest AICc.
+    /// AICc minus the smallest AICc of the models `auto` could choose from (negative
+    /// for a model that fits better but is not eligible).
     pub delta_aicc: Option<f64>,
     /// Fit status.
     pub status: Status,
+    /// Whether the rule ([`AUTO_RULE`]) let `auto` choose it: enough points away
+    /// from λ = 1 for its parameters, and a status that does not block.
+    #[serde(default)]
+    pub eligible: bool,
 }
 
 /// How `--model auto` chose.
@@ -202,8 +208,8 @@ pub struct HyperelasticFit {
     /// RMSE over all points (Pa, unweighted).
     #[serde(rename = "rmse_Pa")]
     pub rmse_pa: f64,
-    /// R² over all points.
-    pub r2: f64,
+    /// R² over all points (None when the stresses do not vary: undefined).
+    pub r2: Option<f64>,
     /// Seed Eq. 3.28 %RMSE (RMSE over the data's stress range).
     pub rmse_pct: Option<f64>,
     /// AICc of the fitted objective (None when n ≤ k + 1).
@@ -243,13 +249,30 @@ impl HyperelasticFit {
         self.parameters.iter().map(|p| p.value).collect()
     }
 
-    /// The model evaluator.
+    /// The model evaluator, after checking that the parameters are the model's own:
+    /// the same names in the same order, each a finite number (see [`Self::values`]).
     pub fn evaluator(&self) -> Result<Box<dyn StrainEnergy>> {
-        ModelSpec {
+        let model = ModelSpec {
             name: self.model.clone(),
             form: self.form,
         }
-        .build()
+        .build()?;
+        let want: Vec<&str> = model.params().iter().map(|p| p.name.as_str()).collect();
+        let got: Vec<&str> = self.parameters.iter().map(|p| p.name.as_str()).collect();
+        if want != got {
+            return Err(Error::settings(format!(
+                "a {} fit needs the parameters {}, found {}",
+                self.model,
+                want.join(", "),
+                if got.is_empty() {
+                    "none".to_string()
+                } else {
+                    got.join(", ")
+                }
+            )));
+        }
+        model.check_params(&self.values())?;
+        Ok(model)
     }
 
     /// A warning if `stretch` in `mode` lies outside what the data covered. Uniaxial
@@ -316,12 +339,27 @@ fn full_search(
     )
 }
 
+/// ("n points", " (m of them away from λ = 1, ...)" when not all are, else "").
+fn points_phrase(data: &Dataset) -> (String, String) {
+    let (n, m) = (data.samples.len(), data.informative_points());
+    (
+        format!("{n} point{}", if n == 1 { "" } else { "s" }),
+        if m < n {
+            format!(" ({m} of them away from λ = 1, where every model gives zero stress)")
+        } else {
+            String::new()
+        },
+    )
+}
+
+/// Fewer informative points (away from λ = 1) than parameters: the design is
+/// rank-deficient whatever the data say.
 fn too_few(data: &Dataset, model: &dyn StrainEnergy) -> Option<Error> {
-    let (n, k) = (data.samples.len(), model.params().len());
-    (n < k).then(|| {
+    let k = model.params().len();
+    (data.informative_points() < k).then(|| {
+        let (n, why) = points_phrase(data);
         Error::settings(format!(
-            "{n} point{} cannot determine {k} parameters of {}",
-            if n == 1 { "" } else { "s" },
+            "{n} cannot determine {k} parameters of {}{why}",
             model.name()
         ))
         .with_hint("add data or choose a model with fewer parameters (neo-hookean has 1)")
@@ -332,7 +370,7 @@ fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Es
     if let Some(e) = too_few(data, model) {
         return Err(e);
     }
-    let mut prob = HyperProblem::new(model, data, s.residual);
+    let mut prob = HyperProblem::new(model, data, s.residual).merge_repeats();
     let (n, k) = (prob.len(), model.params().len());
     if model.linear_in_params() {
         let mut a = DMatrix::zeros(n, k);
@@ -518,6 +556,13 @@ fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Es
     })
 }
 
+/// RMSE relative to the largest |stress| below which a fit is too good to be a fit of
+/// measured data: a 24-bit load-cell reading resolves 6e-8 of full scale and the
+/// scatter of a tensile test is ≥ 1e-5 of its largest force, while the rounding of an
+/// exact synthetic set is ≈ 1e-15. 1e-9 lies orders below the first two and above
+/// the last, so it flags both interpolation and noise-free data.
+pub const TOO_GOOD: f64 = 1e-9;
+
 /// Restarts allowed per start to escape a degenerate (coinciding-exponent) point.
 const MAX_ESCAPES: usize = 2;
 
@@ -532,7 +577,7 @@ fn split_coincident(x: &[f64], bounds: &[(f64, f64)]) -> Option<Vec<f64>> {
             if (y[i] - y[j]).abs() <= 1e-3 * (1.0 + y[i].abs()) {
                 let best = CANDIDATES
                     .iter()
-                    .map(|&c| c.clamp(bounds[j].0, bounds[j].1))
+                    .map(|&c| lm::project(c, bounds[j]))
                     .max_by(|a, b| {
                         let d = |c: f64| {
                             y.iter()
@@ -551,25 +596,22 @@ fn split_coincident(x: &[f64], bounds: &[(f64, f64)]) -> Option<Vec<f64>> {
     changed.then_some(y)
 }
 
-/// Unweighted absolute-residual statistics: (rmse, r²).
-fn stats(pred: &[f64], y: &[f64]) -> (f64, f64) {
+/// Unweighted absolute-residual statistics: (rmse, r², None when y does not vary).
+fn stats(pred: &[f64], y: &[f64]) -> (f64, Option<f64>) {
     let n = y.len() as f64;
     let mean = y.iter().sum::<f64>() / n;
     let ss_res: f64 = pred.iter().zip(y).map(|(p, y)| (p - y).powi(2)).sum();
     let ss_tot: f64 = y.iter().map(|y| (y - mean).powi(2)).sum();
     (
         (ss_res / n).sqrt(),
-        if ss_tot > 0.0 {
-            1.0 - ss_res / ss_tot
-        } else {
-            f64::NAN
-        },
+        (ss_tot > 0.0).then(|| 1.0 - ss_res / ss_tot),
     )
 }
 
 /// Fit one model to the data.
 pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<HyperelasticFit> {
     settings.check()?;
+    data.check()?;
     let model = spec.build()?;
     let model = model.as_ref();
     let t0 = Instant::now();
@@ -656,10 +698,21 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
             unc.condition
         ));
     }
-    if n <= k {
+    if data.informative_points() <= k {
         escalate(Status::IllPosed);
+        let (n, why) = points_phrase(data);
         warnings.push(format!(
-            "{n} points for {k} parameters: no degrees of freedom left for uncertainty"
+            "{n} for {k} parameters{why}: no degrees of freedom left for uncertainty, and the model may pass through every point"
+        ));
+    }
+    // Residuals below what any real test resolves: the data are model-generated
+    // (synthetic, smoothed) or the model interpolates them.
+    let y_max = y.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    if rmse < TOO_GOOD * y_max {
+        escalate(Status::Warning);
+        warnings.push(format!(
+            "the model reproduces the data to {:.1e} of the largest stress, far below the noise of any real test: the data are model-generated (synthetic or smoothed) or the model interpolates them, and the standard errors do not measure a test's scatter",
+            rmse / y_max
         ));
     }
     for (info, (v, se)) in params_info.iter().zip(p.iter().zip(&unc.std_error)) {
@@ -778,10 +831,20 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         };
         for i in 1..=4 {
             let l = 1.0 + (top - 1.0) * i as f64 / 4.0;
+            let stress_pa = model.nominal_stress(&p, m, l);
+            if !stress_pa.is_finite() {
+                // Beyond the model's extensibility limit (Gent): no stress to list.
+                escalate(Status::Warning);
+                warnings.push(format!(
+                    "{} gives no finite {m} stress from λ = {l:.2} on (beyond its extensibility limit): the fitted limit lies inside the {m} range of interest",
+                    model.name()
+                ));
+                break;
+            }
             extrapolation.push(Extrapolation {
                 mode: m,
                 stretch: l,
-                stress_pa: model.nominal_stress(&p, m, l),
+                stress_pa,
                 other_models_pa: None,
             });
         }
@@ -808,6 +871,24 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
             ci95: se.zip(unc.t95).map(|(s, t)| [v - t * s, v + t * s]),
         })
         .collect();
+    if let Some(what) = [
+        ("a parameter", p.iter().all(|v| v.is_finite())),
+        ("the RMSE", rmse.is_finite()),
+        ("μ0", model.initial_shear_modulus(&p).is_finite()),
+    ]
+    .iter()
+    .find_map(|(what, ok)| (!ok).then_some(*what))
+    {
+        let why = match &est.termination {
+            Termination::Failed(w) => format!(" ({w})"),
+            _ => String::new(),
+        };
+        return Err(Error::settings(format!(
+            "the {} fit gave no finite result: {what} is not finite{why}",
+            model.name()
+        ))
+        .with_hint("check the data for outliers or choose another model"));
+    }
     let termination = match &est.termination {
         Termination::Converged(w) => format!("converged ({w})"),
         Termination::MaxIterations => "iteration limit".into(),
@@ -852,11 +933,29 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
 }
 
 /// The rule `auto` applies.
-pub const AUTO_RULE: &str = "among models that converged, are identifiable and are Drucker-stable over the data, take the fewest parameters within ΔAICc ≤ 2 of the smallest AICc (BIC where AICc is undefined)";
+pub const AUTO_RULE: &str = "among models with at least k + 2 points away from λ = 1 (AICc defined, and at least two degrees of freedom beyond an interpolation of the data) that converged, are identifiable and are Drucker-stable over the data, take the fewest parameters within ΔAICc ≤ 2 of the smallest AICc";
 
 /// ΔAICc below which models count as fitting the data about equally well when their
 /// extrapolations are compared (Burnham & Anderson: ΔAIC > 10 means essentially no support).
 pub const EQUALLY_GOOD: f64 = 10.0;
+
+/// Why `auto` may not choose a fitted model, if it may not: too few informative
+/// points for its k (AICc needs n > k + 1; with n ≤ k + 1 points away from λ = 1 a
+/// model comes within one degree of freedom of passing through every point, and
+/// its residuals say nothing about the noise), or a blocking status.
+fn ineligible(f: &HyperelasticFit, informative: usize) -> Option<String> {
+    let k = f.parameters.len();
+    if informative < k + 2 {
+        Some(format!(
+            "{informative} points away from λ = 1 for {k} parameters; it needs at least {}",
+            k + 2
+        ))
+    } else {
+        f.status
+            .is_blocking()
+            .then(|| format!("status {}", f.status))
+    }
+}
 
 /// Fit every model (in parallel) and choose the simplest the data support.
 /// Returns the chosen fit (with its `selection`) and all fits.
@@ -865,60 +964,101 @@ pub fn fit_auto(
     settings: &Settings,
 ) -> Result<(HyperelasticFit, Vec<HyperelasticFit>)> {
     settings.check()?;
-    let n = data.samples.len();
+    data.check()?;
+    let m = data.informative_points();
     let specs: Vec<ModelSpec> = MODEL_NAMES
         .iter()
-        .map(|m| ModelSpec::new(m, settings.ogden_form))
+        .map(|name| ModelSpec::new(name, settings.ogden_form))
         .collect();
-    let fits: Vec<HyperelasticFit> = specs
+    // Models with k ≤ m are fitted (and shown); only those with k + 2 ≤ m may be chosen.
+    let results: Vec<(String, Result<HyperelasticFit>)> = specs
         .par_iter()
-        .filter(|s| s.build().map(|m| m.params().len() < n).unwrap_or(false))
-        .map(|s| fit(data, s, settings))
-        .collect::<Result<Vec<_>>>()?;
-    if fits.is_empty() {
+        .filter(|s| s.build().map(|x| x.params().len() <= m).unwrap_or(false))
+        .map(|s| (s.name.clone(), fit(data, s, settings)))
+        .collect();
+    // A model that gives no usable fit drops out of the comparison and says why.
+    let mut fits = Vec::new();
+    let mut failed = Vec::new();
+    for (name, r) in results {
+        match r {
+            Ok(f) => fits.push(f),
+            Err(e) => failed.push(format!("{name} ({e})")),
+        }
+    }
+    let counted: Vec<&HyperelasticFit> = fits
+        .iter()
+        .filter(|f| f.parameters.len() + 2 <= m)
+        .collect();
+    if counted.is_empty() && m >= 3 {
         return Err(Error::settings(format!(
-            "{n} point(s) are too few for any model"
+            "no model gave a usable fit: {}",
+            failed.join("; ")
         )));
     }
-    let score = |f: &HyperelasticFit| f.aicc.unwrap_or(f.bic);
-    let best = fits.iter().map(score).fold(f64::INFINITY, f64::min);
-    let eligible: Vec<&HyperelasticFit> = fits.iter().filter(|f| !f.status.is_blocking()).collect();
-    let pool: Vec<&HyperelasticFit> = if eligible.is_empty() {
-        fits.iter().collect()
-    } else {
-        eligible
-    };
-    let best_eligible = pool.iter().map(|f| score(f)).fold(f64::INFINITY, f64::min);
+    if counted.is_empty() {
+        let (n, why) = points_phrase(data);
+        return Err(Error::settings(format!(
+            "{n}{why} are too few to choose a model: the simplest (neo-hookean, 1 parameter) needs 3 away from λ = 1"
+        ))
+        .with_hint("add data, or name a model with --model (its fit is then marked ill-posed)"));
+    }
+    // Every model in `counted` has n ≥ m ≥ k + 2 points, so its AICc is defined.
+    let aicc = |f: &HyperelasticFit| f.aicc.unwrap_or(f64::INFINITY);
+    let eligible: Vec<&HyperelasticFit> = counted
+        .iter()
+        .copied()
+        .filter(|f| !f.status.is_blocking())
+        .collect();
+    let all_blocked = eligible.is_empty();
+    let pool = if all_blocked { &counted } else { &eligible };
+    let best = pool
+        .iter()
+        .copied()
+        .min_by(|a, b| aicc(a).total_cmp(&aicc(b)))
+        .expect("the pool is not empty");
     let chosen = pool
         .iter()
-        .filter(|f| score(f) <= best_eligible + 2.0)
+        .copied()
+        .filter(|f| aicc(f) <= aicc(best) + 2.0)
         .min_by(|a, b| {
             a.parameters
                 .len()
                 .cmp(&b.parameters.len())
-                .then(score(a).total_cmp(&score(b)))
+                .then(aicc(a).total_cmp(&aicc(b)))
         })
-        .expect("pool is non-empty");
-    let best_fit = fits
-        .iter()
-        .min_by(|a, b| score(a).total_cmp(&score(b)))
-        .expect("non-empty");
-    let reason = if chosen.model == best_fit.model {
+        .expect("best is within 2 of itself");
+    let mut reason = if std::ptr::eq(chosen, best) {
         format!(
-            "{} has the smallest AICc and no simpler model is within 2 of it",
-            chosen.model
+            "{} has the smallest AICc ({:.2}) of the {} models, and none with fewer parameters is within ΔAICc ≤ 2 of it",
+            chosen.model,
+            aicc(chosen),
+            if all_blocked { "sufficiently sampled" } else { "eligible" }
         )
     } else {
         format!(
-            "{} ({} parameters) is within ΔAICc = {:.2} of the best ({}, {} parameters{}); the extra parameters are not supported by the data",
+            "{} ({} parameter{}) is within ΔAICc = {:.2} of the smallest AICc ({}, {} parameters); the extra parameters are not supported by the data",
             chosen.model,
             chosen.parameters.len(),
-            score(chosen) - best,
-            best_fit.model,
-            best_fit.parameters.len(),
-            if best_fit.status.is_blocking() { ", but not eligible: see its status" } else { "" }
+            if chosen.parameters.len() == 1 { "" } else { "s" },
+            aicc(chosen) - aicc(best),
+            best.model,
+            best.parameters.len()
         )
     };
+    if all_blocked {
+        reason.push_str(&format!(
+            "; no model passed every check, so the choice carries its status ({})",
+            chosen.status
+        ));
+    }
+    let excluded: Vec<String> = fits
+        .iter()
+        .filter_map(|f| ineligible(f, m).map(|why| format!("{} ({why})", f.model)))
+        .chain(failed)
+        .collect();
+    if !excluded.is_empty() {
+        reason.push_str(&format!("; not eligible: {}", excluded.join(", ")));
+    }
     let candidates = fits
         .iter()
         .map(|f| Candidate {
@@ -928,16 +1068,17 @@ pub fn fit_auto(
             r2: f.r2,
             aicc: f.aicc,
             bic: f.bic,
-            delta_aicc: f.aicc.map(|a| a - best),
+            delta_aicc: f.aicc.map(|a| a - aicc(best)),
             status: f.status,
+            eligible: ineligible(f, m).is_none(),
         })
         .collect();
     let mut out = (*chosen).clone();
     // Spread of the other models' predictions where the data say nothing.
     for e in &mut out.extrapolation {
-        let preds: Vec<f64> = fits
+        let preds: Vec<f64> = eligible
             .iter()
-            .filter(|f| !f.status.is_blocking() && score(f) <= best + EQUALLY_GOOD)
+            .filter(|f| aicc(f) <= aicc(best) + EQUALLY_GOOD)
             .filter_map(|f| {
                 f.evaluator()
                     .ok()

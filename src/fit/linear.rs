@@ -1,12 +1,33 @@
 //! Exact solvers for models linear in their parameters: weighted linear least squares
 //! (SVD), and the same problem under linear inequality constraints as a convex QP
-//! solved by Clarabel (used to keep a fit Drucker-stable).
+//! solved by Clarabel (used to keep a fit Drucker-stable). [`svd`] is the one SVD of
+//! the estimators: guarded against input on which nalgebra's iteration never ends.
 
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
 };
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Dyn, SVD};
+
+/// The SVD of `m` (singular values in descending order), or None when `m` is empty,
+/// holds a value that is not finite, or the iteration does not converge within
+/// LAPACK's limit (`dbdsqr`: 6 sweeps per singular value and dimension, 6·d²; at
+/// least 60). nalgebra's plain `svd` iterates without a limit and never returns on
+/// a matrix holding NaN or ∞ (seen with stretches of 1e200 and stresses of 1e150).
+pub fn svd(m: DMatrix<f64>, compute_u: bool, compute_v: bool) -> Option<SVD<f64, Dyn, Dyn>> {
+    if m.is_empty() || !m.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let d = m.nrows().min(m.ncols());
+    let max_iterations = (6 * d * d).max(60);
+    let mut svd = m.try_svd_unordered(compute_u, compute_v, 5.0 * f64::EPSILON, max_iterations)?;
+    if !svd.singular_values.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    // Safe now: the sort panics only on a NaN singular value.
+    svd.sort_by_singular_values();
+    Some(svd)
+}
 
 /// Dense → CSC; with `upper` only the upper triangle is kept (Clarabel's P).
 fn csc(m: &DMatrix<f64>, upper: bool) -> CscMatrix<f64> {
@@ -44,6 +65,10 @@ pub fn constrained_least_squares(
     b: &DVector<f64>,
     g: &DMatrix<f64>,
 ) -> Result<QpSolution, String> {
+    let finite = |m: &DMatrix<f64>| m.iter().all(|v| v.is_finite());
+    if !(finite(a) && finite(g) && b.iter().all(|v| v.is_finite())) {
+        return Err("the problem holds a value that is not finite".into());
+    }
     let n = a.ncols();
     let d: Vec<f64> = (0..n)
         .map(|j| {
@@ -128,5 +153,22 @@ mod tests {
         let b = DVector::from_vec(vec![1.0, 2.0]);
         let s = constrained_least_squares(&a, &b, &g).unwrap();
         assert!((s.x[1] - 2.0).abs() < 1e-7);
+    }
+
+    /// A matrix holding ∞ or NaN (nalgebra's `svd` never returns on it) or too
+    /// large to square gives None or a finite decomposition, at once.
+    #[test]
+    fn svd_refuses_what_it_cannot_decompose() {
+        let mut m = DMatrix::from_element(5, 3, 1.0);
+        m[(2, 1)] = f64::INFINITY;
+        assert!(svd(m.clone(), true, true).is_none());
+        m[(2, 1)] = f64::NAN;
+        assert!(svd(m, true, true).is_none());
+        assert!(svd(DMatrix::zeros(0, 3), true, true).is_none());
+        let big = DMatrix::from_fn(6, 3, |i, j| 1e300 * ((i + 1) as f64).powi(j as i32));
+        let s = svd(big, true, true).expect("finite entries decompose");
+        assert!(s.singular_values.iter().all(|v| v.is_finite()));
+        // Descending order, as the callers' rank tests assume.
+        assert!(s.singular_values[0] >= s.singular_values[2]);
     }
 }

@@ -66,7 +66,36 @@ pub struct LmResult {
     pub termination: Termination,
 }
 
-/// Minimise ½‖r(p)‖² from `x0` within `bounds`.
+/// `v` moved into `[lo, hi]`. Unlike `f64::clamp` it never panics (NaN or inverted
+/// bounds); [`minimize`] refuses such bounds before it projects anything.
+pub fn project(v: f64, (lo, hi): (f64, f64)) -> f64 {
+    v.max(lo).min(hi)
+}
+
+/// Why `x0` and `bounds` cannot start a search, if they cannot: one start value and
+/// one (lo, hi) pair per parameter, a finite start, bounds not NaN with lo ≤ hi.
+fn invalid_start(n: usize, x0: &[f64], bounds: &[(f64, f64)]) -> Option<String> {
+    if x0.len() != n || bounds.len() != n {
+        return Some(format!(
+            "{} start values and {} bounds for {n} parameters",
+            x0.len(),
+            bounds.len()
+        ));
+    }
+    if let Some(i) = (0..n).find(|&i| !x0[i].is_finite()) {
+        return Some(format!("start value {i} is {}", x0[i]));
+    }
+    if let Some(&(lo, hi)) = bounds
+        .iter()
+        .find(|(lo, hi)| lo.is_nan() || hi.is_nan() || lo > hi)
+    {
+        return Some(format!("empty bounds [{lo}, {hi}]"));
+    }
+    None
+}
+
+/// Minimise ½‖r(p)‖² from `x0` within `bounds`. A start or bounds that cannot be
+/// used (see [`invalid_start`]) end the search at once as [`Termination::Failed`].
 pub fn minimize<P: LeastSquares + ?Sized>(
     problem: &mut P,
     x0: &[f64],
@@ -74,10 +103,19 @@ pub fn minimize<P: LeastSquares + ?Sized>(
     settings: &LmSettings,
 ) -> LmResult {
     let (m, n) = problem.dims();
+    if let Some(why) = invalid_start(n, x0, bounds) {
+        return LmResult {
+            x: x0.to_vec(),
+            cost: f64::INFINITY,
+            iterations: 0,
+            evaluations: 0,
+            termination: Termination::Failed(why),
+        };
+    }
     let mut x: Vec<f64> = x0
         .iter()
         .zip(bounds)
-        .map(|(&v, &(lo, hi))| v.clamp(lo, hi))
+        .map(|(&v, &b)| project(v, b))
         .collect();
     let mut r = DVector::zeros(m);
     let mut jac = DMatrix::zeros(m, n);
@@ -102,6 +140,15 @@ pub fn minimize<P: LeastSquares + ?Sized>(
     for it in 0..settings.max_iterations {
         jac.tr_mul_to(&jac, &mut a);
         jac.tr_mul_to(&r, &mut g);
+        if !(a.iter().all(|v| v.is_finite()) && g.iter().all(|v| v.is_finite())) {
+            return done(
+                x,
+                cost,
+                it,
+                evaluations,
+                Termination::Failed("the normal equations overflowed".into()),
+            );
+        }
         // Active set: variables at a bound whose gradient pushes outward stay put.
         let mut free = vec![true; n];
         for i in 0..n {
@@ -147,7 +194,7 @@ pub fn minimize<P: LeastSquares + ?Sized>(
                 continue;
             };
             for i in 0..n {
-                x_new[i] = (x[i] + step[i]).clamp(bounds[i].0, bounds[i].1);
+                x_new[i] = project(x[i] + step[i], bounds[i]);
             }
             let dx: Vec<f64> = (0..n).map(|i| x_new[i] - x[i]).collect();
             let dx_norm = dx.iter().map(|d| d * d).sum::<f64>().sqrt();
@@ -273,5 +320,35 @@ mod tests {
             (res.x[0] - 0.5).abs() < 1e-12 && (res.x[1] - 0.25).abs() < 1e-6,
             "{res:?}"
         );
+    }
+
+    /// Bounds that `f64::clamp` panics on (the Gent limit's lower end above its upper
+    /// end, NaN) and a non-finite start end the search as failed, never in a panic.
+    #[test]
+    fn unusable_bounds_or_start_fail_without_panic() {
+        let inf = f64::INFINITY;
+        for (x0, bounds) in [
+            ([-1.2, 1.0], [(2.0, 1.0), (-inf, inf)]),
+            ([-1.2, 1.0], [(f64::NAN, 1.0), (-inf, inf)]),
+            ([f64::NAN, 1.0], [(-inf, inf), (-inf, inf)]),
+            ([inf, 1.0], [(-inf, inf), (-inf, inf)]),
+        ] {
+            let res = minimize(&mut Rosen, &x0, &bounds, &LmSettings::default());
+            assert!(
+                matches!(res.termination, Termination::Failed(_)),
+                "{x0:?} {bounds:?}: {res:?}"
+            );
+        }
+        let res = minimize(&mut Rosen, &[0.0], &[(-inf, inf)], &LmSettings::default());
+        assert!(matches!(res.termination, Termination::Failed(_)), "{res:?}");
+    }
+
+    #[test]
+    fn project_never_panics() {
+        assert_eq!(project(5.0, (0.0, 1.0)), 1.0);
+        assert_eq!(project(-5.0, (0.0, 1.0)), 0.0);
+        // Inverted or NaN bounds give some value instead of a panic.
+        assert!(!project(0.5, (2.0, 1.0)).is_nan());
+        assert_eq!(project(0.5, (f64::NAN, 1.0)), 0.5);
     }
 }

@@ -2,11 +2,13 @@
 //! and their Jacobian, plus the variable-projection form that solves the linear
 //! coefficients exactly inside the search over the nonlinear ones.
 
+use super::linear;
 use super::lm::LeastSquares;
 use crate::data::Dataset;
 use crate::material::hyperelastic::{Mode, StrainEnergy};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
 
 /// How residuals are measured.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -34,7 +36,7 @@ pub struct HyperProblem<'a> {
     pub stretch: Vec<f64>,
     /// Measured nominal stress (Pa).
     pub stress: Vec<f64>,
-    /// Residual multiplier s_i (√weight / scale).
+    /// Residual multiplier s_i (√(weight / largest weight) / scale).
     pub scale: Vec<f64>,
     /// Evaluation count.
     pub evaluations: usize,
@@ -51,13 +53,19 @@ impl<'a> HyperProblem<'a> {
                 .map(|x| x.stress.abs())
                 .fold(0.0, f64::max)
         };
+        // Weights are relative: divided by the largest, every multiplier is ≤ 1 and
+        // no weight (1e300, say) can overflow the cost.
+        let w_max = s.iter().map(|x| x.weight).fold(0.0, f64::max);
         let scale = s
             .iter()
-            .map(|x| match residual {
-                Residual::Abs => x.weight.sqrt(),
-                Residual::Rel => {
-                    let floor = (REL_FLOOR * max_abs(x.mode)).max(f64::MIN_POSITIVE);
-                    x.weight.sqrt() / x.stress.abs().max(floor)
+            .map(|x| {
+                let w = (x.weight / w_max).sqrt();
+                match residual {
+                    Residual::Abs => w,
+                    Residual::Rel => {
+                        let floor = (REL_FLOOR * max_abs(x.mode)).max(f64::MIN_POSITIVE);
+                        w / x.stress.abs().max(floor)
+                    }
                 }
             })
             .collect();
@@ -69,6 +77,44 @@ impl<'a> HyperProblem<'a> {
             scale,
             evaluations: 0,
             row: vec![0.0; model.params().len()],
+        }
+    }
+
+    /// The same problem with repeated (mode, stretch) points merged into one row:
+    /// Σ s_i²(P − y_i)² = S²(P − ȳ)² + Σ s_i²(y_i − ȳ)² with S² = Σ s_i² and ȳ the
+    /// s²-weighted mean, so the minimiser is unchanged and an evaluation costs one row
+    /// per distinct point (10⁶ repeats of three stretches: three rows). The constant
+    /// is left out: merged problems are for the search, not for residual statistics.
+    pub fn merge_repeats(self) -> Self {
+        let mut index: HashMap<(Mode, u64), usize> = HashMap::new();
+        let (mut modes, mut stretch, mut s2, mut s2y) = (vec![], vec![], vec![], vec![]);
+        for i in 0..self.len() {
+            let j = *index
+                .entry((self.modes[i], self.stretch[i].to_bits()))
+                .or_insert_with(|| {
+                    modes.push(self.modes[i]);
+                    stretch.push(self.stretch[i]);
+                    s2.push(0.0);
+                    s2y.push(0.0);
+                    modes.len() - 1
+                });
+            let w = self.scale[i] * self.scale[i];
+            s2[j] += w;
+            s2y[j] += w * self.stress[i];
+        }
+        if modes.len() == self.len() {
+            return self;
+        }
+        HyperProblem {
+            stress: s2
+                .iter()
+                .zip(&s2y)
+                .map(|(w, wy)| if *w > 0.0 { wy / w } else { 0.0 })
+                .collect(),
+            scale: s2.iter().map(|w| w.sqrt()).collect(),
+            modes,
+            stretch,
+            ..self
         }
     }
 
@@ -142,11 +188,14 @@ impl LeastSquares for HyperProblem<'_> {
 
 /// Solve min ‖A·c − b‖ by SVD with a relative rank tolerance; returns (c, U_r) where
 /// U_r spans the range of A (for the orthogonal projector), or `None` if A is empty
-/// of rank.
+/// of rank or A or b hold a value that is not finite (see [`linear::svd`]).
 pub fn svd_solve(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<(DVector<f64>, DMatrix<f64>)> {
-    let svd = a.clone().svd(true, true);
+    if !b.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let svd = linear::svd(a.clone(), true, true)?;
     let smax = svd.singular_values.max();
-    if smax.is_nan() || smax <= 0.0 || smax.is_infinite() {
+    if smax <= 0.0 {
         return None;
     }
     let tol = smax * 1e-13 * (a.nrows().max(a.ncols()) as f64);

@@ -6,9 +6,12 @@
 //! `true_stress_<stress>` converted with incompressibility σ = P·λ, or `force_<force>`
 //! with a reference area), and optionally `weight`, `mode` and `time_<time>` (ignored).
 //! The mode comes from a `mode` column, a `# mode: …` comment, or the caller.
+//! Every point is checked against the tensile domain ([`Sample::check`]: stretch in
+//! [`crate::data::STRETCH_RANGE`], |stress| ≤ [`crate::data::STRESS_MAX`], weight > 0)
+//! and refused with its line, column and a hint.
 
 use super::table::{split_header, Table};
-use crate::data::{Dataset, Sample, Source};
+use crate::data::{Dataset, Field, Sample, Source};
 use crate::error::{Error, Location, Result};
 use crate::material::hyperelastic::Mode;
 use crate::units::Dimension;
@@ -258,19 +261,6 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
             Kin::Strain(f) => 1.0 + x * f,
             Kin::Displacement(f) => 1.0 + x * f,
         };
-        if lam <= 0.0 {
-            return Err(Error::input(
-                table.loc(row, kc),
-                format!(
-                    "stretch must be > 0, found {lam} (from '{}')",
-                    row.fields[kc]
-                ),
-            )
-            .with_hint(match kin {
-                Kin::Stretch => "is this column a strain? name it 'strain' or 'strain_pct'",
-                _ => "a strain of -1 or less means the coupon has zero length",
-            }));
-        }
         let y = table.number(row, sc, &format!("'{}'", table.header[sc]))?;
         let p = match stress {
             Stress::Nominal(f) => y * f,
@@ -278,17 +268,7 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
             Stress::Force(f) => y * f,
         };
         let weight = match weight_col {
-            Some(c) => {
-                let w = table.number(row, c, "'weight'")?;
-                if w <= 0.0 {
-                    return Err(Error::input(
-                        table.loc(row, c),
-                        format!("weight must be > 0, found {w}"),
-                    )
-                    .with_hint("drop the point instead of giving it weight 0"));
-                }
-                w
-            }
+            Some(c) => table.number(row, c, "'weight'")?,
             None => 1.0,
         };
         let mode = match mode_col {
@@ -310,23 +290,40 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
             }
             None => default_mode,
         };
-        if matches!(mode, Mode::Equibiaxial | Mode::Planar) && lam < 1.0 {
-            return Err(Error::input(
-                table.loc(row, kc),
-                format!("{mode} tests stretch the coupon: stretch must be ≥ 1, found {lam}"),
-            )
-            .with_hint(
-                "compression of a layer is uniaxial compression (stretch < 1 in a uniaxial file)",
-            ));
-        }
-        samples.push(Sample {
+        let sample = Sample {
             mode,
             stretch: lam,
             stress: p,
             weight,
             source: 0,
             line: row.line,
-        });
+        };
+        if let Err(f) = sample.check() {
+            let col = match f.field {
+                Field::Stretch => kc,
+                Field::Stress => sc,
+                Field::Weight => weight_col.unwrap_or(kc),
+            };
+            let converted = f.field == Field::Stretch && !matches!(kin, Kin::Stretch)
+                || f.field == Field::Stress && !matches!(stress, Stress::Nominal(_));
+            let message = if converted {
+                format!("{} (from '{}')", f.message, row.fields[col])
+            } else {
+                f.message
+            };
+            let hint = match (f.field, kin, stress) {
+                (Field::Stretch, Kin::Strain(_) | Kin::Displacement(_), _) if lam <= 0.0 => {
+                    "a strain of -1 or less means the coupon has zero length".to_string()
+                }
+                (Field::Stress, _, Stress::Force(_)) => {
+                    "is the unit right? check the force unit and --area (e.g. --area 22mm2)"
+                        .to_string()
+                }
+                _ => f.hint,
+            };
+            return Err(Error::input(table.loc(row, col), message).with_hint(hint));
+        }
+        samples.push(sample);
     }
     let mut modes: Vec<Mode> = samples.iter().map(|s| s.mode).collect();
     modes.sort();

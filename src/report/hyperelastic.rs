@@ -152,10 +152,10 @@ pub fn markdown(fit: &HyperelasticFit) -> String {
     );
     let _ = writeln!(
         s,
-        "μ0 = {}, RMSE = {}, R² = {:.5}, %RMSE (seed Eq. 3.28) = {}, AICc = {}, BIC = {:.2}\n",
+        "μ0 = {}, RMSE = {}, R² = {}, %RMSE (seed Eq. 3.28) = {}, AICc = {}, BIC = {:.2}\n",
         si(fit.initial_shear_modulus_pa, "Pa"),
         si(fit.rmse_pa, "Pa"),
-        fit.r2,
+        fit.r2.map(|v| format!("{v:.5}")).unwrap_or("n/a".into()),
         fit.rmse_pct
             .map(|v| format!("{v:.3} %"))
             .unwrap_or("n/a".into()),
@@ -187,18 +187,22 @@ pub fn markdown(fit: &HyperelasticFit) -> String {
                     c.model.clone(),
                     c.k.to_string(),
                     si(c.rmse_pa, "Pa"),
-                    format!("{:.5}", c.r2),
+                    c.r2.map(|v| format!("{v:.5}")).unwrap_or("n/a".into()),
                     c.delta_aicc
                         .map(|v| format!("{v:.2}"))
                         .unwrap_or("n/a".into()),
                     c.status.to_string(),
+                    if c.eligible { "yes" } else { "no" }.to_string(),
                 ]
             })
             .collect();
         let _ = writeln!(
             s,
             "```\n{}```",
-            table(&["model", "k", "RMSE", "R²", "ΔAICc", "status"], &rows)
+            table(
+                &["model", "k", "RMSE", "R²", "ΔAICc", "status", "eligible"],
+                &rows
+            )
         );
     }
     s.push_str(&super::warnings_and_solver(&fit.warnings, &fit.solver));

@@ -34,12 +34,15 @@ impl Gent {
         }
     }
 
-    /// Derivatives at I1; NaN beyond the extensibility limit (no finite stress there).
+    /// Derivatives at I1; NaN beyond the extensibility limit (no finite stress there)
+    /// and for a parameter vector that is not (μ, Jm).
     #[inline]
     fn derivs(p: &[f64], i1: f64) -> InvariantDerivs {
-        let (mu, jm) = (p[0], p[1]);
+        let &[mu, jm] = p else {
+            return Self::derivs(&[f64::NAN, f64::NAN], i1);
+        };
         let gap = jm - (i1 - 3.0);
-        if gap <= 0.0 {
+        if gap.is_nan() || gap <= 0.0 {
             let nan = f64::NAN;
             return InvariantDerivs {
                 w1: nan,
@@ -74,9 +77,13 @@ impl StrainEnergy for Gent {
         k.invariant_tangent(&Self::derivs(p, k.invariants().0))
     }
     fn stress_jacobian(&self, p: &[f64], mode: Mode, lam: f64, out: &mut [f64]) {
+        if p.len() != 2 || out.len() != 2 {
+            out.fill(f64::NAN);
+            return;
+        }
+        let (mu, jm) = (p[0], p[1]);
         let k = mode.kinematics(lam);
         let x = k.invariants().0 - 3.0;
-        let (mu, jm) = (p[0], p[1]);
         let gap = jm - x;
         let f = k.invariant_factor();
         // ∂W1/∂μ = Jm/(2·gap); ∂W1/∂Jm = −μ·x/(2·gap²).
@@ -84,7 +91,10 @@ impl StrainEnergy for Gent {
         out[1] = -f * 0.5 * mu * x / (gap * gap);
     }
     fn initial_shear_modulus(&self, p: &[f64]) -> f64 {
-        p[0]
+        match p {
+            &[mu, _] => mu,
+            _ => f64::NAN,
+        }
     }
     fn nonlinear_starts(&self, max_x: f64) -> Vec<Vec<f64>> {
         let lo = self.bounds(max_x)[1].0;
@@ -94,11 +104,14 @@ impl StrainEnergy for Gent {
             .collect()
     }
     fn bounds(&self, max_x: f64) -> Vec<(f64, f64)> {
-        // The limit must lie beyond every data point: Jm > max(I1 − 3).
+        // The limit must lie beyond every data point: Jm > max(I1 − 3). Data beyond
+        // the upper bound (I1 − 3 > 1e6, a stretch above 1000, which the tensile
+        // domain refuses) leave the box a point rather than an inverted interval; a
+        // NaN max_x is ignored by f64::max.
         let lo = (max_x * (1.0 + 1e-6)).max(self.params[1].lower);
         vec![
             (f64::NEG_INFINITY, f64::INFINITY),
-            (lo, self.params[1].upper),
+            (lo, self.params[1].upper.max(lo)),
         ]
     }
 }

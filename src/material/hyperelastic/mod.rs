@@ -48,6 +48,9 @@ impl ParamInfo {
 /// An incompressible strain-energy function evaluated for homogeneous test modes.
 ///
 /// All stresses are nominal (first Piola-Kirchhoff, force per reference area) in Pa.
+/// A parameter vector (or Jacobian buffer) of the wrong length gives NaN, never a
+/// panic; where parameters enter from outside, [`StrainEnergy::check_params`] says
+/// what is wrong with them.
 pub trait StrainEnergy: Send + Sync {
     /// Registry name (`neo-hookean`, `yeoh`, `ogden3`, ...).
     fn name(&self) -> String;
@@ -74,6 +77,27 @@ pub trait StrainEnergy: Send + Sync {
     /// True if the stress is linear in every parameter (exact linear least squares).
     fn linear_in_params(&self) -> bool {
         self.params().iter().all(|p| p.linear)
+    }
+    /// Check a parameter vector before it is used: one finite value per parameter,
+    /// in the order of [`StrainEnergy::params`].
+    fn check_params(&self, p: &[f64]) -> Result<()> {
+        let names: Vec<&str> = self.params().iter().map(|i| i.name.as_str()).collect();
+        if p.len() != names.len() {
+            return Err(Error::settings(format!(
+                "{} takes {} parameters ({}), found {}",
+                self.name(),
+                names.len(),
+                names.join(", "),
+                p.len()
+            )));
+        }
+        match names.iter().zip(p).find(|(_, v)| !v.is_finite()) {
+            Some((name, v)) => Err(Error::settings(format!(
+                "{} parameter {name} must be a finite number, found {v}",
+                self.name()
+            ))),
+            None => Ok(()),
+        }
     }
 }
 

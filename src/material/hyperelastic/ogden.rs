@@ -45,10 +45,17 @@ impl Ogden {
         self.form
     }
 
+    /// The (μi, αi) pairs of `p`, or None when `p` is not 2n values: the evaluators
+    /// then give NaN rather than index past the end of a short vector.
+    #[inline]
+    fn terms<'p>(&self, p: &'p [f64]) -> Option<std::slice::ChunksExact<'p, f64>> {
+        (p.len() == 2 * self.n).then(|| p.chunks_exact(2))
+    }
+
     /// Convert parameters from this model's form to the other form (same function).
     pub fn convert(p: &[f64], from: OgdenForm, to: OgdenForm) -> Vec<f64> {
         let mut q = p.to_vec();
-        for t in q.chunks_mut(2) {
+        for t in q.chunks_exact_mut(2) {
             let (mu, alpha) = (t[0], t[1]);
             t[0] = match (from, to) {
                 (OgdenForm::Seed, OgdenForm::Original) => 2.0 * mu / alpha,
@@ -101,34 +108,43 @@ impl StrainEnergy for Ogden {
         &self.params
     }
     fn nominal_stress(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
+        let Some(terms) = self.terms(p) else {
+            return f64::NAN;
+        };
         let k = mode.kinematics(lam);
         let (a, b) = (k.l[0].ln(), k.l[2].ln());
-        p.chunks(2)
-            .map(|t| t[0] * self.basis(t[1], a, b).0)
-            .sum::<f64>()
-            / k.l[0]
+        terms.map(|t| t[0] * self.basis(t[1], a, b).0).sum::<f64>() / k.l[0]
     }
     fn tangent(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
         // P = (g(λ1) − g(λ3))/λ1 ⇒ dP/dλ = (g'(λ1)λ1' − g'(λ3)λ3')/λ1 − P·λ1'/λ1.
+        let Some(terms) = self.terms(p) else {
+            return f64::NAN;
+        };
         let k = mode.kinematics(lam);
         let stress = self.nominal_stress(p, mode, lam);
-        let dg: f64 = p
-            .chunks(2)
+        let dg: f64 = terms
             .map(|t| self.dg(t[0], t[1], k.l[0]) * k.dl[0] - self.dg(t[0], t[1], k.l[2]) * k.dl[2])
             .sum();
         dg / k.l[0] - stress * k.dl[0] / k.l[0]
     }
     fn stress_jacobian(&self, p: &[f64], mode: Mode, lam: f64, out: &mut [f64]) {
+        let (Some(terms), true) = (self.terms(p), out.len() == p.len()) else {
+            out.fill(f64::NAN);
+            return;
+        };
         let k = mode.kinematics(lam);
         let (a, b) = (k.l[0].ln(), k.l[2].ln());
-        for (t, o) in p.chunks(2).zip(out.chunks_mut(2)) {
+        for (t, o) in terms.zip(out.chunks_exact_mut(2)) {
             let (v, dv) = self.basis(t[1], a, b);
             o[0] = v / k.l[0];
             o[1] = t[0] * dv / k.l[0];
         }
     }
     fn initial_shear_modulus(&self, p: &[f64]) -> f64 {
-        p.chunks(2)
+        let Some(terms) = self.terms(p) else {
+            return f64::NAN;
+        };
+        terms
             .map(|t| match self.form {
                 OgdenForm::Seed => t[0],
                 OgdenForm::Original => 0.5 * t[0] * t[1],

@@ -65,9 +65,19 @@ impl Polynomial {
         )
     }
 
-    /// Energy derivatives at (I1, I2).
+    /// Energy derivatives at (I1, I2); NaN for a parameter vector of the wrong length.
     #[inline]
     fn derivs(&self, p: &[f64], i1: f64, i2: f64) -> InvariantDerivs {
+        if p.len() != self.terms.len() {
+            let nan = f64::NAN;
+            return InvariantDerivs {
+                w1: nan,
+                w2: nan,
+                w11: nan,
+                w12: nan,
+                w22: nan,
+            };
+        }
         let (x, y) = (i1 - 3.0, i2 - 3.0);
         let mut d = InvariantDerivs::default();
         for (t, &c) in self.terms.iter().zip(p) {
@@ -101,7 +111,11 @@ impl StrainEnergy for Polynomial {
         let (i1, i2) = k.invariants();
         k.invariant_tangent(&self.derivs(p, i1, i2))
     }
-    fn stress_jacobian(&self, _p: &[f64], mode: Mode, lam: f64, out: &mut [f64]) {
+    fn stress_jacobian(&self, p: &[f64], mode: Mode, lam: f64, out: &mut [f64]) {
+        if p.len() != self.terms.len() || out.len() != self.terms.len() {
+            out.fill(f64::NAN);
+            return;
+        }
         let k = mode.kinematics(lam);
         let (i1, i2) = k.invariants();
         let (x, y) = (i1 - 3.0, i2 - 3.0);

@@ -419,6 +419,55 @@ fn out_never_replaces_a_foreign_file() {
     }
 }
 
+/// `--out` onto a device or a pipe (`--out /dev/null` to discard) once renamed the
+/// device aside and put a regular file in its place. A FIFO stands in for the device
+/// here (a regression must not break the test machine's /dev/null): it stays a FIFO,
+/// nothing is kept aside, and its reader receives the fit.
+#[test]
+fn out_onto_a_pipe_writes_into_it() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let fifo = dir.path().join("fit.json");
+    let made = Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .expect("mkfifo runs");
+    assert!(made.success(), "mkfifo failed");
+    let reader = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || std::fs::read(&fifo).expect("reads the FIFO"))
+    };
+    let uniaxial = shipped("datasets/vhb4910/uniaxial.csv");
+    let o = run(
+        dir.path(),
+        &[
+            "hyperelastic",
+            &uniaxial,
+            "--model",
+            "yeoh",
+            "--no-report",
+            "--out",
+            "fit.json",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let got = reader.join().expect("the reader thread");
+    assert!(
+        String::from_utf8_lossy(&got).contains("\"model\": \"yeoh\""),
+        "the FIFO's reader got {} bytes",
+        got.len()
+    );
+    let kind = std::fs::symlink_metadata(&fifo)
+        .expect("the FIFO is there")
+        .file_type();
+    assert!(kind.is_fifo(), "the FIFO was replaced: {kind:?}");
+    assert_eq!(
+        names_in(dir.path()),
+        ["fit.json"],
+        "something was kept aside"
+    );
+}
+
 /// A report directory holding files dea-fit did not write is refused before anything
 /// is written; one dea-fit wrote (it carries the marker) is refreshed.
 #[test]

@@ -5,8 +5,24 @@ use crate::error::{Error, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-/// Write `bytes` to `path` atomically, creating parent directories.
+/// Whether `path` exists and is not a regular file or a directory: a device or a
+/// pipe (`/dev/null`, `/dev/stdout`, a FIFO). Such a target is written into, never
+/// renamed over (renaming onto `/dev/null` would replace the device with a file)
+/// and never kept aside.
+fn is_stream(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir())
+}
+
+/// Write `bytes` to `path` atomically, creating parent directories. A device or a
+/// pipe is written into directly (it has no content to protect).
 pub fn atomic_write(path: &Path, bytes: &[u8]) -> Result<()> {
+    if is_stream(path) {
+        return std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .and_then(|mut f| f.write_all(bytes))
+            .map_err(|e| Error::io(path, e));
+    }
     let dir = path
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
@@ -38,6 +54,8 @@ pub enum Replaced {
     Same,
     /// The file held something else; it was kept under this name.
     KeptAs(PathBuf),
+    /// The path is a device or a pipe (`/dev/null`); it was written into.
+    Stream,
 }
 
 /// Write a single output file (fit, result, trajectory, synthetic data, generated
@@ -46,6 +64,10 @@ pub enum Replaced {
 /// old file is first renamed to `<stem>.previous-<n>.<ext>` (first free n). An
 /// existing path that cannot be read is an error, never taken for "no file".
 pub fn write_keeping(path: &Path, bytes: &[u8], same: impl Fn(&[u8]) -> bool) -> Result<Replaced> {
+    if is_stream(path) {
+        atomic_write(path, bytes)?;
+        return Ok(Replaced::Stream);
+    }
     let replaced = match std::fs::read(path) {
         Ok(old) if same(&old) => Replaced::Same,
         Ok(_) => {

@@ -254,8 +254,14 @@ fn finite(what: &str, values: impl IntoIterator<Item = f64>) -> Result<(), Strin
 }
 
 /// A usable status (not blocking) with non-finite outputs is a lie, and so is one on
-/// a fit that explains less than the data's mean (R² < 0).
-fn check_fit(reader: &str, status: Status, r2: f64, outputs: Result<(), String>) -> Verdict {
+/// a fit that explains less than the data's mean (R² < 0) or whose R² is undefined
+/// (`None` where the estimator has one).
+fn check_fit(
+    reader: &str,
+    status: Status,
+    r2: Option<f64>,
+    outputs: Result<(), String>,
+) -> Verdict {
     if status.is_blocking() {
         return Verdict::Accepted;
     }
@@ -264,9 +270,9 @@ fn check_fit(reader: &str, status: Status, r2: f64, outputs: Result<(), String>)
             format!("{reader}: status {status} with a non-finite output"),
             e,
         )),
-        Ok(()) if r2 < 0.0 => Some((
-            format!("{reader}: status {status} with R² < 0"),
-            format!("R² = {r2}"),
+        Ok(()) if r2.is_none_or(|r2| r2 < 0.0) => Some((
+            format!("{reader}: status {status} with R² < 0 or undefined"),
+            format!("R² = {r2:?}"),
         )),
         Ok(()) => None,
     };
@@ -338,7 +344,7 @@ pub fn run(r: Reader, case: &Case, dir: &Path) -> Verdict {
             let out = finite("parameter", f.parameters.iter().map(|p| p.value))
                 .and(finite("rmse_Pa", [f.rmse_pa, f.rel_rmse]))
                 .and(finite("E_inf", [f.long_term_modulus_pa]));
-            check_fit("fit", f.status, f.r2, out)
+            check_fit("fit", f.status, Some(f.r2), out)
         }
         Reader::Lcr => {
             let Ok(sweep) = lcr::read(&path, &LcrOptions::default()) else {
@@ -350,7 +356,7 @@ pub fn run(r: Reader, case: &Case, dir: &Path) -> Verdict {
                 return Verdict::Refused;
             };
             let out = points_finite(&s);
-            check_fit("permittivity", s.status, 0.0, out)
+            check_fit("permittivity", s.status, Some(0.0), out)
         }
         Reader::Manifest => {
             let Ok(m) = manifest::read(&path) else {
@@ -380,7 +386,7 @@ pub fn run(r: Reader, case: &Case, dir: &Path) -> Verdict {
                     detail: format!("{} frequencies", f.fits.len()),
                 };
             }
-            check_fit("composite", f.status, 0.0, out)
+            check_fit("composite", f.status, Some(0.0), out)
         }
         Reader::Scene | Reader::Fit => simulate(&path, &case.oracle),
     }

@@ -27,9 +27,6 @@ fn seed_geometry() -> Geometry {
     .unwrap()
 }
 
-/// Seed coupon (Ch. 5): A = 1.439e-3 m², d = 2.2 mm, Sylgard 184 εr = 2.72 gives
-/// C ≈ 15.75 pF; tolerance 0.005 pF is the rounding of the quoted value.
-
 /// A file of the shared reference copy beside the repository (`../shared/datasets/`;
 /// tests that need it are `#[ignore]`d where it is absent, see build.rs).
 fn shared(rel: &str) -> std::path::PathBuf {
@@ -37,6 +34,9 @@ fn shared(rel: &str) -> std::path::PathBuf {
         .join("../shared/datasets")
         .join(rel)
 }
+
+/// Seed coupon (Ch. 5): A = 1.439e-3 m², d = 2.2 mm, Sylgard 184 εr = 2.72 gives
+/// C ≈ 15.75 pF; tolerance 0.005 pF is the rounding of the quoted value.
 
 #[test]
 fn seed_coupon_capacitance_and_back() {

@@ -37,7 +37,6 @@ fn shared(rel: &str) -> std::path::PathBuf {
 
 /// Seed coupon (Ch. 5): A = 1.439e-3 m², d = 2.2 mm, Sylgard 184 εr = 2.72 gives
 /// C ≈ 15.75 pF; tolerance 0.005 pF is the rounding of the quoted value.
-
 #[test]
 fn seed_coupon_capacitance_and_back() {
     let c = parallel_plate_capacitance(2.72, SEED_AREA, SEED_D);

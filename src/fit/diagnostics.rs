@@ -198,3 +198,14 @@ pub fn drucker_grid() -> Vec<(Mode, f64)> {
         .flat_map(|&m| (0..N).map(move |i| (m, (a + (b - a) * i as f64 / (N - 1) as f64).exp())))
         .collect()
 }
+
+/// The warning for a fit that explains less of the data's variation than their mean
+/// (R² < 0, R² = 1 − RSS/Σ(y − ȳ)²): a constant would do better, so no constant of
+/// the model can be trusted. Both estimators make it `ill_posed`; `None` when R² ≥ 0.
+pub fn worse_than_mean(r2: f64) -> Option<String> {
+    (r2 < 0.0).then(|| {
+        format!(
+            "R² = {r2:.3} < 0: the fit explains less of the stress than its mean value would; the model cannot describe these data (check the columns, their units and signs, and outliers)"
+        )
+    })
+}

@@ -698,6 +698,10 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
             unc.condition
         ));
     }
+    if let Some(w) = r2.and_then(diagnostics::worse_than_mean) {
+        escalate(Status::IllPosed);
+        warnings.push(w);
+    }
     if data.informative_points() <= k {
         escalate(Status::IllPosed);
         let (n, why) = points_phrase(data);

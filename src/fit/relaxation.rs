@@ -1417,6 +1417,10 @@ pub fn fit(
         escalate(*s);
         warnings.push(w.clone());
     }
+    if let Some(w) = diagnostics::worse_than_mean(a.r2) {
+        escalate(Status::IllPosed);
+        warnings.push(w);
+    }
     if a.explained <= EXPLAINS_NOTHING {
         escalate(Status::IllPosed);
         warnings.push(format!(

@@ -265,7 +265,7 @@ fn elastic_energy(p: &Plant, a: f64, b: f64) -> f64 {
 
 /// Simulate a scene.
 pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
-    budget::check(scene)?;
+    let cost = budget::check(scene)?;
     let fid = fidelity::choose(scene)?;
     let p = Plant::new(scene, fid.inertia, &fid.keep);
     let full = full_plant(scene);
@@ -295,7 +295,7 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
                     t if t > 0.0 => t,
                     _ => f64::INFINITY,
                 }),
-        max_steps: budget::MAX_STEPS,
+        max_steps: cost.step_budget(),
         fixed_step: opts.fixed_step,
     };
     let scale = p.scales(v_max);
@@ -415,6 +415,14 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
         }
         End::Failed(why) => {
             let t = samples.last().map(|s| s.time_s).unwrap_or(0.0);
+            let why = if why.starts_with("step budget exhausted") {
+                format!(
+                    "{why}: the run was estimated at {} steps before it started (sim::budget); dynamics that much stiffer than the axial mode (high control gains, a fast source) want the implicit integrator = \"bdf\"",
+                    budget::fmt_g(cost.steps.round())
+                )
+            } else {
+                why
+            };
             (RunStatus::Failed, why, t, Vec::new())
         }
     };

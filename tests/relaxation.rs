@@ -870,3 +870,34 @@ fn which_histories_unload() {
     assert!(relaxation::unloads(&[0.0, -1.0, 0.0]));
     assert!(!relaxation::unloads(&[]));
 }
+
+/// The estimator checks the domain itself (data built without the reader): a time of
+/// 1e300 s once hung the fit (found by the fuzz harness), a NaN stress or a strain of
+/// −2 reached the numerics. Each is refused at its line.
+#[test]
+fn the_estimator_refuses_data_outside_the_domain() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/vhb4910/relaxation.csv");
+    let good = read(&path, &RelaxationOptions::default()).unwrap();
+    let loading = Loading {
+        strain: Some(0.5),
+        ramp_time: None,
+    };
+    let last = good.time.len() - 1;
+    let mut cases = Vec::new();
+    let mut d = good.clone();
+    d.time[last] = 1e300;
+    cases.push(("time", d));
+    let mut d = good.clone();
+    d.stress[3] = f64::NAN;
+    cases.push(("stress", d));
+    let mut d = good.clone();
+    d.strain = Some(vec![-2.0; d.time.len()]);
+    cases.push(("strain", d));
+    for (what, d) in cases {
+        let e = relaxation::fit(&d, &loading, None, &Settings::default())
+            .err()
+            .unwrap_or_else(|| panic!("{what} outside the domain was fitted"));
+        let msg = e.to_string();
+        assert!(msg.contains(what) && msg.contains("relaxation.csv:"), "{msg}");
+    }
+}

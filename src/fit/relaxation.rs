@@ -622,6 +622,7 @@ fn prepare(
     qlv: Option<&QlvInput>,
     settings: &Settings,
 ) -> Result<Prepared> {
+    data.check()?;
     let n = data.time.len();
     if n < 3 {
         return Err(Error::settings(format!(

@@ -8,6 +8,7 @@
 //! loading) and increase strictly.
 
 use super::table::{split_header, Table};
+use crate::data::{STRESS_MAX, STRETCH_RANGE};
 use crate::error::{Error, Location, Result};
 use crate::material::viscoelastic::{History, Prony, Schedule};
 use crate::units::Dimension;
@@ -50,12 +51,72 @@ pub struct RelaxationData {
     pub source: RelaxationSource,
 }
 
+impl RelaxationData {
+    /// The domain of a relaxation curve, for data built without the reader (the
+    /// estimator calls it): equal lengths, at least one point, times finite, ≥ 0,
+    /// increasing and at most [`TIME_MAX_S`], stresses finite with |σ| ≤
+    /// [`STRESS_MAX`], strains finite with 1 + ε in (0, [`STRETCH_RANGE`].1].
+    pub fn check(&self) -> Result<()> {
+        let n = self.time.len();
+        let at = |i: usize| {
+            let line = self.line.get(i).copied().unwrap_or(0);
+            Location::line(&self.source.path, line)
+        };
+        if n == 0
+            || self.stress.len() != n
+            || self.line.len() != n
+            || self.strain.as_ref().is_some_and(|e| e.len() != n)
+        {
+            return Err(Error::input(
+                Location::file(&self.source.path),
+                format!(
+                    "a relaxation curve needs as many stresses, strains and lines as times ({n} times, {} stresses)",
+                    self.stress.len()
+                ),
+            ));
+        }
+        for i in 0..n {
+            let t = self.time[i];
+            let prev = if i > 0 { self.time[i - 1] } else { -1.0 };
+            if !(t.is_finite() && (0.0..=TIME_MAX_S).contains(&t) && t > prev) {
+                return Err(Error::input(
+                    at(i),
+                    format!("time {t} s: times must be finite, increasing and within 0 … {TIME_MAX_S:e} s"),
+                ));
+            }
+            let y = self.stress[i];
+            if !(y.is_finite() && y.abs() <= STRESS_MAX) {
+                return Err(Error::input(
+                    at(i),
+                    format!("stress {y} Pa: must be finite with |σ| ≤ {STRESS_MAX:e} Pa"),
+                ));
+            }
+            if let Some(e) = self.strain.as_ref().map(|e| e[i]) {
+                if !(e.is_finite() && e > -1.0 && 1.0 + e <= STRETCH_RANGE.1) {
+                    return Err(Error::input(
+                        at(i),
+                        format!(
+                            "strain {e}: must be finite with 1 + ε in (0, {}]",
+                            STRETCH_RANGE.1
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
 /// How to read a relaxation file.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct RelaxationOptions {
     /// Reference cross-section (m²) for force columns.
     pub area: Option<f64>,
 }
+
+/// Longest plausible relaxation record (s): 30 years. A longer time is a unit error,
+/// and times like 1e300 s leave the hereditary integrals no resolvable τ grid.
+pub const TIME_MAX_S: f64 = 1e9;
 
 const ACCEPTED: &str = "time_s|ms|min|h, stress_Pa|kPa|MPa (or nominal_stress_…), force_N with --area, and optionally strain, strain_pct or stretch";
 
@@ -197,6 +258,13 @@ pub fn from_table(table: &Table, opts: &RelaxationOptions) -> Result<RelaxationD
             )
             .with_hint("measure time from the start of loading (t = 0)"));
         }
+        if tv > TIME_MAX_S {
+            return Err(Error::input(
+                table.loc(row, tc),
+                format!("time {tv:e} s: a relaxation test does not last beyond {TIME_MAX_S:e} s (30 years)"),
+            )
+            .with_hint("is the time column's unit right (s, ms, min, h)?"));
+        }
         if let Some(&prev) = t.last() {
             if tv <= prev {
                 return Err(Error::input(
@@ -210,6 +278,15 @@ pub fn from_table(table: &Table, opts: &RelaxationOptions) -> Result<RelaxationD
             }
         }
         let sv = table.number(row, sc, &format!("'{}'", table.header[sc]))? * sf;
+        if sv.abs() > STRESS_MAX {
+            return Err(Error::input(
+                table.loc(row, sc),
+                format!("stress {sv:e} Pa: no elastomer test reaches {STRESS_MAX:e} Pa"),
+            )
+            .with_hint(
+                "is the unit right? a column in Pa labelled MPa reads 10⁶ times too large",
+            ));
+        }
         if let Some((lc, kind)) = load {
             let v = table.number(row, lc, &format!("'{}'", table.header[lc]))?;
             let e = match kind {
@@ -225,6 +302,19 @@ pub fn from_table(table: &Table, opts: &RelaxationOptions) -> Result<RelaxationD
                     v - 1.0
                 }
             };
+            let stretch = 1.0 + e;
+            if stretch > STRETCH_RANGE.1 {
+                return Err(Error::input(
+                    table.loc(row, lc),
+                    format!(
+                        "stretch {stretch}: a stretch above {} is not a relaxation test",
+                        STRETCH_RANGE.1
+                    ),
+                )
+                .with_hint(
+                    "is this column a displacement, or a strain in %? name it 'strain_pct'",
+                ));
+            }
             if e <= -1.0 {
                 return Err(Error::input(
                     table.loc(row, lc),

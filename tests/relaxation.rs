@@ -898,6 +898,9 @@ fn the_estimator_refuses_data_outside_the_domain() {
             .err()
             .unwrap_or_else(|| panic!("{what} outside the domain was fitted"));
         let msg = e.to_string();
-        assert!(msg.contains(what) && msg.contains("relaxation.csv:"), "{msg}");
+        assert!(
+            msg.contains(what) && msg.contains("relaxation.csv:"),
+            "{msg}"
+        );
     }
 }

@@ -222,9 +222,7 @@ pub fn summary(fit: &HyperelasticFit) -> String {
     s.push_str(&format!(
         "\nmodel: {}{}\n",
         fit.model,
-        fit.form
-            .map(|f| format!(" ({f:?} form)").to_lowercase())
-            .unwrap_or_default()
+        fit.form.map(|f| format!(" ({f} form)")).unwrap_or_default()
     ));
     let rows: Vec<Vec<String>> = fit
         .parameters

@@ -112,6 +112,16 @@ pub enum OgdenForm {
     Original,
 }
 
+impl std::fmt::Display for OgdenForm {
+    /// The name the flag (`--ogden-form`) and the fit file use.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            OgdenForm::Seed => "seed",
+            OgdenForm::Original => "original",
+        })
+    }
+}
+
 /// A model as the user names it: plain data, turned into an evaluator by [`ModelSpec::build`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ModelSpec {

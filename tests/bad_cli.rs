@@ -3,12 +3,9 @@
 //! input that once panicked, hung or lied, with the exit status it must give and what
 //! its output must say. The format is documented in `tests/data/bad_cli/README.md`.
 
-use std::path::{Path, PathBuf};
+use crate::support::{names_in, repo};
+use std::path::PathBuf;
 use std::process::Command;
-
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
 
 /// One corpus line.
 struct Case {
@@ -65,18 +62,6 @@ fn cases() -> Vec<Case> {
         }
     }
     out
-}
-
-fn names_in(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .map(|r| {
-            r.filter_map(|e| e.ok())
-                .map(|e| e.file_name().to_string_lossy().into_owned())
-                .collect()
-        })
-        .unwrap_or_default();
-    v.sort();
-    v
 }
 
 /// Every corpus run gives its exit status, says what it must, never panics, and when

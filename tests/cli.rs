@@ -6,28 +6,16 @@
 //! `--report` pointing into it, so the tests never write into the worktree (except
 //! when regenerating goldens, see [`golden`]).
 
+use crate::support::{names_in, repo, run};
 use dea_fit::data::Dataset;
 use dea_fit::io::tensile::{self, TensileOptions};
 use dea_fit::material::hyperelastic::Mode;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
+use std::process::Output;
 
 fn data(dir: &str, file: &str) -> PathBuf {
     repo().join("tests/data").join(dir).join(file)
-}
-
-/// Run `dea-fit` with `args` in `cwd`.
-fn run(cwd: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dea-fit"))
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .expect("the dea-fit binary runs")
 }
 
 fn stderr(o: &Output) -> String {
@@ -76,20 +64,6 @@ fn tempdir() -> tempfile::TempDir {
 fn read_json(path: &Path) -> Value {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-}
-
-fn names_in(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .expect("readable dir")
-        .map(|e| {
-            e.expect("dir entry")
-                .file_name()
-                .to_string_lossy()
-                .into_owned()
-        })
-        .collect();
-    v.sort();
-    v
 }
 
 // ---------------------------------------------------------------------------------

@@ -3,13 +3,9 @@
 //! the exit code; runs that go non-finite or run out of steps; the file policy
 //! (nothing the tool did not write is ever replaced); a reader that goes away.
 
+use crate::support::{names_in, repo, run};
 use dea_fit::sim::integrate::{self, End, Extra, Method, Options, Stats, System};
-use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
-
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
 
 fn file(name: &str) -> String {
     repo()
@@ -21,14 +17,6 @@ fn file(name: &str) -> String {
 
 fn shipped(rel: &str) -> String {
     repo().join(rel).display().to_string()
-}
-
-fn run(cwd: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dea-fit"))
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .expect("the dea-fit binary runs")
 }
 
 fn text(o: &Output) -> String {
@@ -345,18 +333,6 @@ fn closed_pipe_ends_quietly() {
     let o = child.wait_with_output().expect("dea-fit ends");
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!err.contains("panicked") && err.is_empty(), "{err}");
-}
-
-fn names_in(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .map(|r| {
-            r.filter_map(|e| e.ok())
-                .map(|e| e.file_name().to_string_lossy().into_owned())
-                .collect()
-        })
-        .unwrap_or_default();
-    v.sort();
-    v
 }
 
 /// `--out` onto a file that is not UTF-8 once replaced it; it is kept aside, byte for

@@ -14,3 +14,4 @@ mod sampling;
 mod scene_input;
 mod sim;
 mod sim_derivatives;
+mod support;

@@ -49,6 +49,11 @@ use std::time::Instant;
 /// half unless it is as large as the stress.
 const EXPLAINS_NOTHING: f64 = 0.5;
 
+/// Most decades of time the τ search spans, counted back from the last sample: a
+/// relaxation record covers 3–8 decades (a 1 ms rig to a day); a first time of
+/// 1e-300 s would put 300 decades of columns in the NNLS grid and stall the fit.
+const MAX_DECADES: i32 = 12;
+
 /// Lag-1 autocorrelation of residuals above which they are systematic rather than
 /// noise: white noise gives 0 ± 1/√n (±0.1 for 100 points), a misfit left by the
 /// model gives values near 1; 0.5 is halfway.
@@ -795,7 +800,15 @@ fn prepare(
         .copied()
         .find(|&t| t > 0.0)
         .expect("times increase from ≥ 0 and n ≥ 3");
-    let window = (t_pos, data.time[n - 1]);
+    let t_end = data.time[n - 1];
+    let window = (t_pos.max(t_end * 10f64.powi(-MAX_DECADES)), t_end);
+    if window.0 > t_pos {
+        notes.push(format!(
+            "the data span more than {MAX_DECADES} decades of time (first positive time {} after a last of {}): relaxation times are searched over the last {MAX_DECADES} decades only",
+            fmt_s(t_pos),
+            fmt_s(t_end)
+        ));
+    }
     let bounds = ((window.0 / 10.0).ln(), (window.1 * 10.0).ln());
     Ok(Prepared {
         prob: Problem {

@@ -39,18 +39,11 @@ impl Gent {
     #[inline]
     fn derivs(p: &[f64], i1: f64) -> InvariantDerivs {
         let &[mu, jm] = p else {
-            return Self::derivs(&[f64::NAN, f64::NAN], i1);
+            return InvariantDerivs::NAN;
         };
         let gap = jm - (i1 - 3.0);
         if gap.is_nan() || gap <= 0.0 {
-            let nan = f64::NAN;
-            return InvariantDerivs {
-                w1: nan,
-                w2: nan,
-                w11: nan,
-                w12: nan,
-                w22: nan,
-            };
+            return InvariantDerivs::NAN;
         }
         InvariantDerivs {
             w1: 0.5 * mu * jm / gap,

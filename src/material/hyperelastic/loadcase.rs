@@ -116,6 +116,19 @@ pub struct InvariantDerivs {
     pub w22: f64,
 }
 
+impl InvariantDerivs {
+    /// Every derivative NaN: what a model returns outside its domain (a parameter
+    /// vector of the wrong length, Gent beyond its limit), so stress and tangent are
+    /// NaN and the callers' finiteness checks see it.
+    pub const NAN: InvariantDerivs = InvariantDerivs {
+        w1: f64::NAN,
+        w2: f64::NAN,
+        w11: f64::NAN,
+        w12: f64::NAN,
+        w22: f64::NAN,
+    };
+}
+
 impl Kinematics {
     /// (I1, I2) = (Σλi², Σλi⁻²) for an incompressible state.
     #[inline]

@@ -69,14 +69,7 @@ impl Polynomial {
     #[inline]
     fn derivs(&self, p: &[f64], i1: f64, i2: f64) -> InvariantDerivs {
         if p.len() != self.terms.len() {
-            let nan = f64::NAN;
-            return InvariantDerivs {
-                w1: nan,
-                w2: nan,
-                w11: nan,
-                w12: nan,
-                w22: nan,
-            };
+            return InvariantDerivs::NAN;
         }
         let (x, y) = (i1 - 3.0, i2 - 3.0);
         let mut d = InvariantDerivs::default();

@@ -789,10 +789,11 @@ pub fn estimate(s: &Scene) -> Result<Cost> {
     // an explicit method (the scene's, or auto's choice for a lightly damped mode
     // with inertia, as in `sim::simulate`) cannot step past its stability limit
     // h·ω ≈ 3.3 even after the ringing has died away
-    let explicit = match s.time.method {
-        Some(m) => matches!(m, Method::Tsit45 | Method::Dp54),
-        None => fid.inertia && mode.damping_ratio < 0.3,
-    };
+    let method = s
+        .time
+        .method
+        .unwrap_or_else(|| super::auto_method(fid.inertia, mode.damping_ratio).0);
+    let explicit = matches!(method, Method::Tsit45 | Method::Dp54);
     let stability = match explicit && fid.inertia && omega.is_finite() {
         true => span * omega / EXPLICIT_STABILITY,
         false => 0.0,

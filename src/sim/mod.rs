@@ -263,6 +263,20 @@ fn elastic_energy(p: &Plant, a: f64, b: f64) -> f64 {
     p.vol * s * 0.5 * h
 }
 
+/// The integrator `auto` chooses, with the reason: explicit Tsitouras 5(4) for a
+/// lightly damped oscillation (ζ < 0.3 with inertia), variable-order BDF otherwise.
+/// `sim::budget` estimates a run's cost with the same choice.
+pub fn auto_method(inertia: bool, damping_ratio: f64) -> (Method, &'static str) {
+    if inertia && damping_ratio < 0.3 {
+        (
+            Method::Tsit45,
+            "auto: lightly damped oscillation, explicit Tsitouras 5(4)",
+        )
+    } else {
+        (Method::Bdf, "auto: damped/stiff, variable-order BDF")
+    }
+}
+
 /// Simulate a scene.
 pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
     let cost = budget::check(scene)?;
@@ -273,11 +287,10 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
     let rtol = opts.rtol.unwrap_or(scene.time.rtol);
     let (method, mreason) = match opts.method.or(scene.time.method) {
         Some(m) => (m, "requested".to_string()),
-        None if p.inertia && mode.damping_ratio < 0.3 => (
-            Method::Tsit45,
-            "auto: lightly damped oscillation, explicit Tsitouras 5(4)".into(),
-        ),
-        None => (Method::Bdf, "auto: damped/stiff, variable-order BDF".into()),
+        None => {
+            let (m, why) = auto_method(p.inertia, mode.damping_ratio);
+            (m, why.to_string())
+        }
     };
     let span = scene.time.span;
     let v_max = match &scene.control {

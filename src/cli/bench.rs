@@ -12,6 +12,11 @@ use std::path::PathBuf;
 pub struct Args {
     #[command(subcommand)]
     what: What,
+    /// Exit with status 1 when a measured case ended in a blocking status (a fit
+    /// `ill_posed`, `unstable` or `not_converged`, a run at `pull_in`); a run that
+    /// failed exits 1 with or without it.
+    #[arg(long, global = true)]
+    strict: bool,
 }
 
 #[derive(Debug, clap::Subcommand)]
@@ -72,10 +77,51 @@ struct HyperArgs {
 
 /// Run the subcommand.
 pub fn run(a: Args) -> Result<i32> {
-    match a.what {
-        What::Hyperelastic(h) => hyperelastic(h),
-        What::Relaxation => super::bench_relaxation::run(),
-        What::Simulate(a) => super::bench_simulate::run(&a.scenes),
+    let verdict = match a.what {
+        What::Hyperelastic(h) => hyperelastic(h)?,
+        What::Relaxation => super::bench_relaxation::run()?,
+        What::Simulate(s) => super::bench_simulate::run(&s.scenes)?,
+    };
+    Ok(verdict.report(a.strict))
+}
+
+/// What a bench found besides its measurements: the cases that ended in a blocking
+/// status and those that failed (no result), each described for the summary.
+#[derive(Debug, Default)]
+pub struct Verdict {
+    /// Cases with a blocking status (`case: status`).
+    pub blocking: Vec<String>,
+    /// Cases that failed.
+    pub failed: Vec<String>,
+}
+
+impl Verdict {
+    /// Count a case by its status.
+    pub fn add(&mut self, case: String, status: dea_fit::fit::Status) {
+        match status {
+            dea_fit::fit::Status::Failed => self.failed.push(format!("{case}: {status}")),
+            s if s.is_blocking() => self.blocking.push(format!("{case}: {s}")),
+            _ => {}
+        }
+    }
+
+    /// Print the `status:` line (and each blocking or failed case) and return the exit
+    /// status: 1 when a case failed, or under `--strict` when one is blocking.
+    fn report(&self, strict: bool) -> i32 {
+        let (status, code) = match (self.failed.is_empty(), self.blocking.is_empty()) {
+            (false, _) => ("failed", 1),
+            (true, false) => ("blocking", i32::from(strict)),
+            (true, true) => ("ok", 0),
+        };
+        let cases = self.failed.len() + self.blocking.len();
+        match cases {
+            0 => println!("status: {status}"),
+            n => println!("status: {status} ({n} case(s) without a usable result; the measurements are written)"),
+        }
+        for c in self.failed.iter().chain(&self.blocking) {
+            println!("  {c}");
+        }
+        code
     }
 }
 
@@ -87,7 +133,7 @@ fn progress_bar(len: usize) -> ProgressBar {
     bar
 }
 
-fn hyperelastic(a: HyperArgs) -> Result<i32> {
+fn hyperelastic(a: HyperArgs) -> Result<Verdict> {
     let budget = a.common.budget()?;
     if !a.data_dir.join("vhb4910").is_dir() || !a.data_dir.join("treloar").is_dir() {
         return Err(Error::settings(format!(
@@ -122,5 +168,34 @@ fn hyperelastic(a: HyperArgs) -> Result<i32> {
         println!("{h}");
     }
     println!("report: {}", page.display());
-    Ok(0)
+    let mut verdict = Verdict::default();
+    for r in &rows {
+        verdict.add(
+            format!("{} {} {}={}", r.dataset, r.model, r.setting, r.value),
+            r.status,
+        );
+    }
+    Ok(verdict)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Verdict;
+    use dea_fit::fit::Status;
+
+    /// The exit status follows the README: a failed case exits 1 always, a blocking
+    /// one only under --strict, `warning` never.
+    #[test]
+    fn verdict_exit_codes() {
+        let mut v = Verdict::default();
+        v.add("a".into(), Status::Ok);
+        v.add("b".into(), Status::Warning);
+        assert_eq!((v.report(false), v.report(true)), (0, 0));
+        v.add("c".into(), Status::IllPosed);
+        assert_eq!((v.report(false), v.report(true)), (0, 1));
+        v.add("d".into(), Status::Failed);
+        assert_eq!((v.report(false), v.report(true)), (1, 1));
+        assert_eq!(v.blocking, ["c: ill_posed"]);
+        assert_eq!(v.failed, ["d: failed"]);
+    }
 }

@@ -21,7 +21,8 @@ use std::time::Instant;
 const REPS: usize = 15;
 
 /// Run the benchmark.
-pub fn run() -> Result<i32> {
+pub fn run() -> Result<super::bench::Verdict> {
+    let mut verdict = super::bench::Verdict::default();
     let truth = preset("seed-table-3.3")?.prony;
     let syn = Synthetic {
         prony: truth.clone(),
@@ -72,6 +73,7 @@ pub fn run() -> Result<i32> {
                 })
                 .fold(0.0, f64::max);
             let name = ["grid", "refined"][mi].to_string();
+            verdict.add(format!("{name} {terms} terms"), fit.status);
             let _ = writeln!(
                 csv_out,
                 "{name},{terms},{best:.6e},{:.6e},{err:.6e}",
@@ -137,5 +139,5 @@ pub fn run() -> Result<i32> {
     atomic_write(&dir.join("relaxation.md"), md.as_bytes())?;
     print!("{tab}");
     println!("wrote {}", dir.join("relaxation.md").display());
-    Ok(0)
+    Ok(verdict)
 }

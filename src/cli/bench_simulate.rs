@@ -31,13 +31,13 @@ fn timed(s: &Scene, o: &RunOptions) -> Result<(Outcome, f64)> {
 }
 
 /// Run the benchmark.
-pub fn run(dir: &Path) -> Result<i32> {
+pub fn run(dir: &Path) -> Result<super::bench::Verdict> {
     let out_dir: PathBuf = PathBuf::from("reports/bench-simulate");
     super::claim_dir(&out_dir)?;
     let mut csv =
         String::from("scene,method,fidelity,rtol,run_time_s,steps,status,max_error_rel_stroke\n");
     // A failed run has no trajectory to compare: it is counted, and the bench exits 1.
-    let mut failed = 0;
+    let mut verdict = super::bench::Verdict::default();
     for name in SCENES {
         let mut scene = Scene::read(&dir.join(format!("{name}.toml")))?;
         scene.time.samples = (1..=200)
@@ -94,9 +94,16 @@ pub fn run(dir: &Path) -> Result<i32> {
                     "{name},{method},{},{rtol:e},{t:e},{},{},{err:e}",
                     o.fidelity.model, o.integrator.stats.steps, o.integrator.status
                 );
-                if o.integrator.status == RunStatus::Failed {
-                    failed += 1;
-                    continue;
+                let case = format!("{name} {method} rtol {rtol:e}");
+                match o.integrator.status {
+                    RunStatus::Failed => {
+                        verdict
+                            .failed
+                            .push(format!("{case}: {}", o.integrator.message));
+                        continue;
+                    }
+                    RunStatus::PullIn => verdict.blocking.push(format!("{case}: pull_in")),
+                    RunStatus::Completed => {}
                 }
                 pts.push((t, err.max(1e-16).log10()));
             }
@@ -123,10 +130,5 @@ pub fn run(dir: &Path) -> Result<i32> {
     atomic_write(&path, csv.as_bytes())?;
     print!("{csv}");
     println!("wrote {}", path.display());
-    if failed > 0 {
-        println!("status: failed ({failed} run(s) did not complete; see the status column)");
-        return Ok(1);
-    }
-    println!("status: ok");
-    Ok(0)
+    Ok(verdict)
 }

@@ -18,6 +18,7 @@ pub mod bench;
 pub mod data;
 pub mod error;
 pub mod fit;
+pub mod identify;
 pub mod io;
 pub mod material;
 pub mod report;

@@ -188,6 +188,10 @@ pub struct Sensitivities {
     pub stretch: Vec<Vec<f64>>,
     /// ∂C/∂θj (F per unit of θj), one row per sample.
     pub capacitance: Vec<Vec<f64>>,
+    /// ∂L/∂θj (m per unit of θj), one row per sample.
+    pub length: Vec<Vec<f64>>,
+    /// ∂I/∂θj (A per unit of θj), one row per sample.
+    pub current: Vec<Vec<f64>>,
 }
 
 /// Run settings that are not part of the scene.
@@ -359,6 +363,8 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
         theta: theta.clone(),
         stretch: Vec::new(),
         capacitance: Vec::new(),
+        length: Vec::new(),
+        current: Vec::new(),
     });
     let dlnc = p.capacitance_log_sensitivity();
     let record = |sens: &mut Option<Sensitivities>, lam: f64, s: &[f64]| {
@@ -367,6 +373,10 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
             let dl: Vec<f64> = (0..np).map(|j| s[j * n]).collect();
             se.capacitance
                 .push((0..np).map(|j| dc * dl[j] + c * dlnc[j]).collect());
+            let h = 1e-6 * lam;
+            let dlen = (p.length(lam + h) - p.length(lam - h)) / (2.0 * h);
+            se.length.push(dl.iter().map(|d| dlen * d).collect());
+            se.current.push(vec![f64::NAN; np]);
             se.stretch.push(dl);
         }
     };
@@ -413,6 +423,8 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
             if let Some(se) = &mut sens {
                 se.stretch.push(vec![f64::NAN; np]);
                 se.capacitance.push(vec![f64::NAN; np]);
+                se.length.push(vec![f64::NAN; np]);
+                se.current.push(vec![f64::NAN; np]);
             }
             (
                 RunStatus::PullIn,

@@ -1,0 +1,498 @@
+//! Inverse identification: the material constants that make the simulator reproduce
+//! measured actuator traces, how sure we are of each, and which of them the traces
+//! do not pin down.
+//!
+//! ```text
+//! traces (io::trace) + scene ──Experiment per trace──► Problem (params, problem)
+//! Problem ──multi-start bounded LM (search)──► best x
+//! best x ──σ from residuals (noise), polish──► optimum
+//! optimum ──Jacobian from forward sensitivities──► Assessment (σ, CI, identifiable, why)
+//! ```
+//! Modules: [`params`] (names, θ in a scene, search coordinates), [`problem`]
+//! (residuals and exact Jacobian with the simulator inside), [`noise`] (σ per
+//! channel), [`search`] (multi-start), [`assessment`] (what the traces pin down).
+
+pub mod assessment;
+pub mod noise;
+pub mod params;
+pub mod problem;
+pub mod search;
+
+use crate::error::{Error, Result};
+use crate::fit::diagnostics::{information_criteria, rmse_percent};
+use crate::fit::lm::{LeastSquares, LmSettings, Termination};
+use crate::fit::Status;
+use crate::sim::scene::FidelityChoice;
+use crate::sim::RunOptions;
+use assessment::{assess, Assessment, Context, Estimate, WARN_CORRELATION};
+use nalgebra::{DMatrix, DVector};
+use noise::{Sigma, SigmaSource};
+use problem::{Experiment, Problem, Quantity};
+use serde::Serialize;
+use std::time::Instant;
+
+/// Checked identification settings.
+#[derive(Debug, Clone)]
+pub struct Settings {
+    /// Constants to fit (None: every material constant of the scene).
+    pub free: Option<Vec<String>>,
+    /// Constants held (`NAME` or `NAME=VALUE`).
+    pub fix: Vec<String>,
+    /// Noise per channel; a channel not named has σ estimated from its residuals.
+    pub sigma: Vec<(Quantity, Sigma)>,
+    /// Number of starts (the scene's values are the first).
+    pub starts: usize,
+    /// Seed of the start design.
+    pub seed: u64,
+    /// Stopping rules of each search.
+    pub lm: LmSettings,
+    /// Relative tolerance of the simulator (None: the scene's).
+    pub rtol: Option<f64>,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            free: None,
+            fix: Vec::new(),
+            sigma: Vec::new(),
+            starts: 8,
+            seed: 1,
+            lm: LmSettings {
+                max_iterations: 100,
+                ftol: 1e-10,
+                xtol: 1e-10,
+                gtol: 1e-10,
+            },
+            rtol: None,
+        }
+    }
+}
+
+impl Settings {
+    /// Refuse settings that cannot run.
+    pub fn check(&self) -> Result<()> {
+        if self.starts == 0 || self.starts > 10_000 {
+            return Err(Error::settings(format!(
+                "--starts {}: give 1 to 10000 starts",
+                self.starts
+            )));
+        }
+        for (q, s) in &self.sigma {
+            let v = match s {
+                Sigma::Absolute(v) | Sigma::Relative(v) => *v,
+            };
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::settings(format!(
+                    "--sigma {q}: the noise must be finite and positive, not {v}"
+                )));
+            }
+        }
+        if let Some(r) = self.rtol {
+            if !(1e-12..=1e-2).contains(&r) {
+                return Err(Error::settings(format!(
+                    "--rtol {r}: give 1e-12 to 1e-2"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Fit of one channel of one experiment.
+#[derive(Debug, Clone, Serialize)]
+pub struct ChannelFit {
+    /// Channel name.
+    pub channel: Quantity,
+    /// SI unit of the values below.
+    pub unit: &'static str,
+    /// Measured values used.
+    pub points: usize,
+    /// Noise σ used (SI).
+    pub sigma: f64,
+    /// Where σ came from.
+    pub sigma_source: SigmaSource,
+    /// Root-mean-square residual (SI).
+    pub rmse: f64,
+    /// Seed Eq. 3.28: RMSE over the measured range, %.
+    pub rmse_pct: Option<f64>,
+}
+
+/// Fit of one experiment.
+#[derive(Debug, Clone, Serialize)]
+pub struct ExperimentFit {
+    /// Trace file.
+    pub file: String,
+    /// Trace rows.
+    pub rows: usize,
+    /// Channels.
+    pub channels: Vec<ChannelFit>,
+}
+
+/// What the search did.
+#[derive(Debug, Clone, Serialize)]
+pub struct SolverSummary {
+    /// Method.
+    pub method: String,
+    /// Starts run.
+    pub starts: usize,
+    /// Starts that reached the best cost ([`search::AT_BEST_ABS`]).
+    pub starts_at_best: usize,
+    /// Iterations over all starts and the polish.
+    pub iterations: usize,
+    /// Simulator runs (plain and with sensitivities).
+    pub simulator_runs: usize,
+    /// Of which with sensitivities.
+    pub sensitivity_runs: usize,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+    /// Why the best search stopped.
+    pub termination: String,
+    /// Final ½χ² of every start, sorted (the waterfall); ∞ for a start that failed.
+    pub final_costs: Vec<f64>,
+}
+
+/// The result of [`identify`].
+#[derive(Debug, Clone, Serialize)]
+pub struct Identification {
+    /// Status (blocking under `--strict`: `ill_posed`, `not_converged`).
+    pub status: Status,
+    /// The free constants.
+    pub parameters: Vec<Estimate>,
+    /// The constants held fixed, with their values (SI).
+    pub fixed: Vec<(String, f64)>,
+    /// Warnings.
+    pub warnings: Vec<String>,
+    /// Per experiment and channel.
+    pub experiments: Vec<ExperimentFit>,
+    /// Search report.
+    pub solver: SolverSummary,
+    /// ½χ² at the optimum.
+    pub cost: f64,
+    /// χ²/(N − p).
+    pub chi2_per_dof: f64,
+    /// Corrected Akaike criterion on χ² (None when N ≤ p + 1).
+    pub aicc: Option<f64>,
+    /// Bayesian criterion on χ².
+    pub bic: f64,
+    /// Uncertainty and identifiability.
+    pub assessment: Assessment,
+    /// θ at the optimum (the whole vector, SI), for the material file and reports.
+    #[serde(skip)]
+    pub theta: Vec<f64>,
+}
+
+/// Identify the material constants of `experiments` (one scene per trace, sharing
+/// the material) under `settings`.
+pub fn identify(mut experiments: Vec<Experiment>, settings: &Settings) -> Result<Identification> {
+    settings.check()?;
+    let t0 = Instant::now();
+    let first = experiments
+        .first()
+        .ok_or_else(|| Error::settings("no trace to identify from"))?;
+    let all = params::constants(&first.scene);
+    let (free, fixed) = params::choose(&all, settings.free.as_deref(), &settings.fix)?;
+    let mut theta0 = params::theta(&first.scene);
+    for &(k, v) in &fixed {
+        theta0[k] = v;
+    }
+    for e in &mut experiments {
+        keep_every_arm(&mut e.scene)?;
+        let times: Vec<f64> = std::iter::once(0.0)
+            .chain(e.scene.time.samples.iter().copied())
+            .collect();
+        for ch in &mut e.channels {
+            ch.sigma = match settings.sigma.iter().find(|(q, _)| *q == ch.quantity) {
+                Some((_, s)) => s.resolve(&ch.values),
+                None => noise::from_data(&times, &ch.values),
+            };
+        }
+    }
+    let given: Vec<Vec<bool>> = experiments
+        .iter()
+        .map(|e| {
+            e.channels
+                .iter()
+                .map(|c| settings.sigma.iter().any(|(q, _)| *q == c.quantity))
+                .collect()
+        })
+        .collect();
+    let mut problem = Problem {
+        experiments,
+        free: free.clone(),
+        theta: theta0.clone(),
+        run: RunOptions {
+            rtol: settings.rtol,
+            ..RunOptions::default()
+        },
+        counts: Default::default(),
+        last_failure: None,
+    };
+    let (n, k) = problem.dims();
+    if n <= k {
+        return Err(Error::settings(format!(
+            "{n} measured values for {k} free constants: nothing to estimate"
+        ))
+        .with_hint("fix some constants (--fix) or give longer traces"));
+    }
+    let x_start: Vec<f64> = problem.x_of(&theta0);
+    let design = search::starts(&problem, x_start, settings.starts, settings.seed);
+    let mut results = search::run_all(&problem, &design, &settings.lm);
+    let mut counts = sum_counts(&results);
+    let best = results[0].clone();
+    if !best.cost.is_finite() {
+        let why = best
+            .failure
+            .clone()
+            .unwrap_or_else(|| format!("{:?}", best.termination));
+        return Err(Error::settings(format!(
+            "no start could simulate the traces: {why}"
+        ))
+        .with_hint("check that the scene reproduces the trace's drive without pull-in, and that the starting constants are of the right magnitude"));
+    }
+    // σ from the residuals for the channels not given, then a polish from the best.
+    let mut x = best.x.clone();
+    let mut termination = best.termination.clone();
+    let mut iterations: usize = results.iter().map(|r| r.iterations).sum();
+    if given.iter().flatten().any(|g| !g) {
+        let r = residuals(&mut problem, &x)?;
+        reestimate_sigma(&mut problem, &given, &r, k);
+        let polish = search::run_one(&problem, &x, &settings.lm);
+        counts.runs += polish.counts.runs;
+        counts.sensitivity_runs += polish.counts.sensitivity_runs;
+        iterations += polish.iterations;
+        if polish.cost.is_finite() {
+            x = polish.x;
+            termination = polish.termination;
+        }
+    }
+    // The optimum: residuals, Jacobian, assessment.
+    let mut r = DVector::zeros(n);
+    let mut jac = DMatrix::zeros(n, k);
+    if !problem.eval(&x, &mut r, Some(&mut jac)) {
+        return Err(Error::settings(format!(
+            "the optimum could not be re-simulated: {}",
+            problem.last_failure.clone().unwrap_or_default()
+        )));
+    }
+    counts.sensitivity_runs += 1;
+    let theta = problem.theta_at(&x);
+    let runs = problem
+        .simulate_at(&theta, false)
+        .map_err(Error::settings)?;
+    counts.runs += 1;
+    let rss = r.norm_squared();
+    let ctx = context(&problem, &runs);
+    let assessment = assess(&free, &x, &jac, rss, &ctx);
+    let experiments = channel_fits(&problem, &given, &r);
+    let mut warnings = Vec::new();
+    for (a, row) in assessment.correlation.iter().enumerate() {
+        for (b, rho) in row.iter().enumerate().skip(a + 1) {
+            if let Some(rho) = rho.filter(|r| r.abs() > WARN_CORRELATION) {
+                warnings.push(format!(
+                    "{} and {} are correlated (ρ = {rho:.4})",
+                    free[a].name, free[b].name
+                ));
+            }
+        }
+    }
+    for e in assessment.estimates.iter().filter(|e| e.at_bound) {
+        warnings.push(format!(
+            "{} ended at a bound of its search ({:.4e} {}): the traces push it beyond",
+            e.name, e.value, e.unit
+        ));
+    }
+    for e in assessment.estimates.iter().filter(|e| !e.identifiable) {
+        warnings.push(format!(
+            "{} is not identifiable: {}",
+            e.name,
+            e.reason.as_deref().unwrap_or("")
+        ));
+    }
+    for o in &runs {
+        warnings.extend(o.warnings.iter().cloned());
+    }
+    warnings.dedup();
+    let at_best = results.iter().filter(|s| s.at_best(best.cost)).count();
+    if settings.starts > 1 && at_best == 1 {
+        warnings.push(format!(
+            "only 1 of {} starts reached the best cost: the cost has other minima, and more starts (--starts) may find a better one",
+            settings.starts
+        ));
+    }
+    let status = if !matches!(termination, Termination::Converged(_)) {
+        Status::NotConverged
+    } else if assessment.estimates.iter().any(|e| !e.identifiable) {
+        Status::IllPosed
+    } else if warnings.is_empty() {
+        Status::Ok
+    } else {
+        Status::Warning
+    };
+    let (aicc, bic) = information_criteria(rss, n, k);
+    let final_costs: Vec<f64> = results.drain(..).map(|s| s.cost).collect();
+    Ok(Identification {
+        status,
+        fixed: all
+            .iter()
+            .filter(|c| !free.iter().any(|f| f.name == c.name))
+            .map(|c| (c.name.clone(), theta[c.index]))
+            .collect(),
+        parameters: assessment.estimates.clone(),
+        warnings,
+        experiments,
+        solver: SolverSummary {
+            method: "multi-start bounded Levenberg-Marquardt, forward-sensitivity Jacobian".into(),
+            starts: settings.starts,
+            starts_at_best: at_best,
+            iterations,
+            simulator_runs: counts.runs + counts.sensitivity_runs,
+            sensitivity_runs: counts.sensitivity_runs,
+            seconds: t0.elapsed().as_secs_f64(),
+            termination: match &termination {
+                Termination::Converged(why) => format!("converged ({why})"),
+                Termination::MaxIterations => "iteration limit".into(),
+                Termination::Failed(why) => format!("failed: {why}"),
+            },
+            final_costs,
+        },
+        cost: 0.5 * rss,
+        chi2_per_dof: rss / (n - k) as f64,
+        aicc,
+        bic,
+        assessment,
+        theta,
+    })
+}
+
+/// Identification moves every arm: an `auto` fidelity could lump one away, so it is
+/// resolved here to the dynamic or quasi-static model with all arms integrated.
+fn keep_every_arm(scene: &mut crate::sim::scene::Scene) -> Result<()> {
+    if scene.time.fidelity == FidelityChoice::Auto {
+        let f = crate::sim::fidelity::choose(scene)?;
+        scene.time.fidelity = match f.inertia {
+            true => FidelityChoice::Dynamic,
+            false => FidelityChoice::QuasiStatic,
+        };
+    }
+    Ok(())
+}
+
+fn sum_counts(r: &[search::StartResult]) -> problem::Counts {
+    r.iter().fold(Default::default(), |a, s| problem::Counts {
+        runs: a.runs + s.counts.runs,
+        sensitivity_runs: a.sensitivity_runs + s.counts.sensitivity_runs,
+    })
+}
+
+/// Scaled residuals at x.
+fn residuals(problem: &mut Problem, x: &[f64]) -> Result<DVector<f64>> {
+    let mut r = DVector::zeros(problem.dims().0);
+    if !problem.eval(x, &mut r, None) {
+        return Err(Error::settings(format!(
+            "the best start could not be re-simulated: {}",
+            problem.last_failure.clone().unwrap_or_default()
+        )));
+    }
+    Ok(r)
+}
+
+/// Rows of the residual vector per (experiment, channel), in problem order.
+fn channel_rows(problem: &Problem) -> Vec<(usize, usize, std::ops::Range<usize>)> {
+    let mut at = 0;
+    let mut out = Vec::new();
+    for (ei, e) in problem.experiments.iter().enumerate() {
+        for (ci, c) in e.channels.iter().enumerate() {
+            let n = c.points();
+            out.push((ei, ci, at..at + n));
+            at += n;
+        }
+    }
+    out
+}
+
+/// σ of every channel not given, from its residuals r (scaled by the old σ):
+/// σ² = Σ(σ_old·r)² / (n_c − p·n_c/N) (module [`noise`]).
+fn reestimate_sigma(problem: &mut Problem, given: &[Vec<bool>], r: &DVector<f64>, p: usize) {
+    let total = r.len() as f64;
+    for (ei, ci, rows) in channel_rows(problem) {
+        if given[ei][ci] {
+            continue;
+        }
+        let ch = &mut problem.experiments[ei].channels[ci];
+        let nc = rows.len() as f64;
+        let ss: f64 = rows.map(|i| (ch.sigma * r[i]).powi(2)).sum();
+        let dof = (nc - p as f64 * nc / total).max(1.0);
+        let s = (ss / dof).sqrt();
+        if s.is_finite() && s > 0.0 {
+            ch.sigma = s;
+        }
+    }
+}
+
+/// RMSE and %RMSE per channel from the scaled residuals at the optimum.
+fn channel_fits(problem: &Problem, given: &[Vec<bool>], r: &DVector<f64>) -> Vec<ExperimentFit> {
+    let rows = channel_rows(problem);
+    problem
+        .experiments
+        .iter()
+        .enumerate()
+        .map(|(ei, e)| ExperimentFit {
+            file: e.name.clone(),
+            rows: e.rows(),
+            channels: e
+                .channels
+                .iter()
+                .enumerate()
+                .map(|(ci, c)| {
+                    let range = rows
+                        .iter()
+                        .find(|(a, b, _)| *a == ei && *b == ci)
+                        .map(|x| x.2.clone())
+                        .unwrap_or(0..0);
+                    let n = range.len().max(1) as f64;
+                    let rmse = c.sigma * (range.map(|i| r[i] * r[i]).sum::<f64>() / n).sqrt();
+                    let measured: Vec<f64> =
+                        c.values.iter().copied().filter(|v| v.is_finite()).collect();
+                    ChannelFit {
+                        channel: c.quantity,
+                        unit: c.quantity.unit(),
+                        points: c.points(),
+                        sigma: c.sigma,
+                        sigma_source: match given[ei][ci] {
+                            true => SigmaSource::Given,
+                            false => SigmaSource::Residuals,
+                        },
+                        rmse,
+                        rmse_pct: rmse_percent(rmse, &measured),
+                    }
+                })
+                .collect(),
+        })
+        .collect()
+}
+
+/// What the traces show (for the identifiability explanations).
+fn context(problem: &Problem, runs: &[crate::sim::Outcome]) -> Context {
+    let mut ctx = Context {
+        capacitance: false,
+        max_strain: 0.0,
+        span: 0.0,
+        min_dt: f64::INFINITY,
+    };
+    for (e, o) in problem.experiments.iter().zip(runs) {
+        ctx.capacitance |= e
+            .channels
+            .iter()
+            .any(|c| c.quantity == Quantity::Capacitance);
+        ctx.span = ctx.span.max(e.scene.time.span);
+        let rest = o.rest_stretch;
+        for s in &o.samples {
+            ctx.max_strain = ctx.max_strain.max(((s.stretch - rest) / rest).abs());
+        }
+        for w in o.samples.windows(2) {
+            ctx.min_dt = ctx.min_dt.min(w[1].time_s - w[0].time_s);
+        }
+    }
+    ctx
+}

@@ -1,0 +1,305 @@
+//! The material constants identification can move: their names, where they live in
+//! a scene, and how the search sees them.
+//!
+//! **θ** is the simulator's parameter vector ([`crate::sim::Sensitivities`]): the
+//! hyperelastic parameters in model order (`C10`, `C20`, `mu`, `Jm`, Ogden `mu1`,
+//! `alpha1`, …), then per Maxwell arm `armJ.k` (Pa) and `armJ.tau` (s), then `nv`
+//! (Pa·s), then `eps_r`. Identification keeps every arm integrated (no lumping), so
+//! θ's layout follows the scene's arms one to one.
+//!
+//! **Search coordinates x.** A constant that is positive by physics (arm k and τ, εr,
+//! Gent's Jm, a positive leading modulus C10 or μ, a positive nv) is searched as
+//! x = ln θ, so that a step is a ratio and the bound θ > 0 can never be crossed.
+//! A constant that may take either sign or be zero (higher polynomial terms such as
+//! C20, C30 or C01, Ogden pairs, nv = 0) is searched as x = θ/s with a scale s
+//! (its magnitude, or a fraction of μ0 when it is zero).
+
+use crate::error::{Error, Result};
+use crate::sim::scene::{Arm, Scene};
+
+/// How a constant is seen by the search.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Space {
+    /// x = ln θ.
+    Log,
+    /// x = θ / scale.
+    Linear {
+        /// θ per unit of x.
+        scale: f64,
+    },
+}
+
+impl Space {
+    /// θ from x.
+    pub fn theta(self, x: f64) -> f64 {
+        match self {
+            Space::Log => x.exp(),
+            Space::Linear { scale } => x * scale,
+        }
+    }
+
+    /// x from θ.
+    pub fn x(self, theta: f64) -> f64 {
+        match self {
+            Space::Log => theta.ln(),
+            Space::Linear { scale } => theta / scale,
+        }
+    }
+
+    /// dθ/dx at x.
+    pub fn dtheta_dx(self, x: f64) -> f64 {
+        match self {
+            Space::Log => x.exp(),
+            Space::Linear { scale } => scale,
+        }
+    }
+}
+
+/// One named constant of θ.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Constant {
+    /// Name as the user writes it (`C10`, `arm2.tau`, `nv`, `eps_r`).
+    pub name: String,
+    /// SI unit (`Pa`, `s`, `Pa s`, `1`).
+    pub unit: &'static str,
+    /// Index in θ.
+    pub index: usize,
+    /// The scene's value (the start of the search).
+    pub start: f64,
+    /// Search coordinates.
+    pub space: Space,
+    /// Bounds in θ (SI).
+    pub bounds: (f64, f64),
+    /// Box the multi-start spreads its starts over, in θ (inside `bounds`).
+    pub start_box: (f64, f64),
+    /// What this constant is, for the identifiability reasons.
+    pub role: Role,
+}
+
+/// What a constant is in the model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Role {
+    /// The leading (small-strain) modulus: `C10`, `mu`, `mu1`.
+    LeadingModulus,
+    /// A hyperelastic term that only shows at larger strain (`C20`, `C30`, `C01`,
+    /// Ogden pairs beyond the first, `Jm`).
+    HigherOrder,
+    /// Spring of Maxwell arm j (0-based).
+    ArmK(usize),
+    /// Relaxation time of Maxwell arm j (0-based).
+    ArmTau(usize),
+    /// Kelvin-Voigt dashpot.
+    Nv,
+    /// Relative permittivity.
+    EpsR,
+}
+
+/// Every constant of a scene's material, in θ order.
+pub fn constants(scene: &Scene) -> Vec<Constant> {
+    let m = &scene.material;
+    let mu0 = m.model.initial_shear_modulus(&m.params).abs().max(1.0);
+    let mut out = Vec::new();
+    for (i, info) in m.model.params().iter().enumerate() {
+        let v = m.params[i];
+        let role = if i == 0 {
+            Role::LeadingModulus
+        } else {
+            Role::HigherOrder
+        };
+        let positive = v > 0.0 && (info.lower >= 0.0 || i == 0);
+        let (space, bounds, start_box) = if positive {
+            let lo = (v / 100.0).max(info.lower);
+            let hi = (v * 100.0).min(info.upper);
+            (Space::Log, (lo, hi), ((v / 10.0).max(lo), (v * 10.0).min(hi)))
+        } else {
+            let scale = match info.unit {
+                "Pa" => v.abs().max(1e-3 * mu0),
+                _ => v.abs().max(0.1),
+            };
+            let lo = (v - 100.0 * scale).max(info.lower);
+            let hi = (v + 100.0 * scale).min(info.upper);
+            (
+                Space::Linear { scale },
+                (lo, hi),
+                ((v - 3.0 * scale).max(lo), (v + 3.0 * scale).min(hi)),
+            )
+        };
+        out.push(Constant {
+            name: info.name.clone(),
+            unit: info.unit,
+            index: i,
+            start: v,
+            space,
+            bounds,
+            start_box,
+            role,
+        });
+    }
+    let np = m.params.len();
+    for (j, a) in m.viscous.arms.iter().enumerate() {
+        let tau = a.eta_pa_s / a.k_pa;
+        out.push(positive(
+            format!("arm{}.k", j + 1),
+            "Pa",
+            np + 2 * j,
+            a.k_pa,
+            100.0,
+            Role::ArmK(j),
+        ));
+        out.push(positive(
+            format!("arm{}.tau", j + 1),
+            "s",
+            np + 2 * j + 1,
+            tau,
+            1000.0,
+            Role::ArmTau(j),
+        ));
+    }
+    let k = np + 2 * m.viscous.arms.len();
+    let nv = m.viscous.nv_pa_s;
+    out.push(if nv > 0.0 {
+        positive("nv".into(), "Pa s", k, nv, 100.0, Role::Nv)
+    } else {
+        // No dashpot in the scene: searched from 0 on the scale μ0·10 ms (the shipped
+        // damped stack has nv/μ0 ≈ 13 ms).
+        let scale = 0.01 * mu0;
+        Constant {
+            name: "nv".into(),
+            unit: "Pa s",
+            index: k,
+            start: 0.0,
+            space: Space::Linear { scale },
+            bounds: (0.0, 1e4 * scale),
+            start_box: (0.0, 3.0 * scale),
+            role: Role::Nv,
+        }
+    });
+    let mut eps = positive("eps_r".into(), "1", k + 1, m.eps_r, 100.0, Role::EpsR);
+    eps.bounds.0 = eps.bounds.0.max(1.0);
+    eps.start_box.0 = eps.start_box.0.max(1.0);
+    out.push(eps);
+    out
+}
+
+/// A positive constant searched in log space within a factor `range` of its value
+/// (starts within a factor 10, or `range`'s square root when that is smaller).
+fn positive(name: String, unit: &'static str, index: usize, v: f64, range: f64, role: Role) -> Constant {
+    let spread = range.sqrt().min(10.0);
+    Constant {
+        name,
+        unit,
+        index,
+        start: v,
+        space: Space::Log,
+        bounds: (v / range, v * range),
+        start_box: (v / spread, v * spread),
+        role,
+    }
+}
+
+/// θ of a scene (see the module documentation).
+pub fn theta(scene: &Scene) -> Vec<f64> {
+    let m = &scene.material;
+    let mut th = m.params.clone();
+    for a in &m.viscous.arms {
+        th.push(a.k_pa);
+        th.push(a.eta_pa_s / a.k_pa);
+    }
+    th.push(m.viscous.nv_pa_s);
+    th.push(m.eps_r);
+    th
+}
+
+/// Put θ into a scene's material (no allocation).
+pub fn set_theta(scene: &mut Scene, th: &[f64]) {
+    let m = &mut scene.material;
+    let np = m.params.len();
+    m.params.copy_from_slice(&th[..np]);
+    for (j, a) in m.viscous.arms.iter_mut().enumerate() {
+        let (k, tau) = (th[np + 2 * j], th[np + 2 * j + 1]);
+        *a = Arm {
+            k_pa: k,
+            eta_pa_s: k * tau,
+        };
+    }
+    let n = th.len();
+    m.viscous.nv_pa_s = th[n - 2];
+    m.eps_r = th[n - 1];
+}
+
+/// Which constants are free: all of them unless `free` names some; then `fix`
+/// removes names (each `NAME` or `NAME=VALUE`, the value in SI or with a unit, which
+/// also sets the constant in every scene). Unknown names are refused with the list
+/// of known ones.
+pub fn choose(
+    all: &[Constant],
+    free: Option<&[String]>,
+    fix: &[String],
+) -> Result<(Vec<Constant>, Vec<(usize, f64)>)> {
+    let known: Vec<&str> = all.iter().map(|c| c.name.as_str()).collect();
+    let find = |name: &str, flag: &str| -> Result<&Constant> {
+        all.iter().find(|c| c.name == name).ok_or_else(|| {
+            let near = crate::sim::scene::did_you_mean(name, &known)
+                .map(|k| format!("did you mean {k}? "))
+                .unwrap_or_default();
+            Error::settings(format!("{flag} {name}: this scene has no constant '{name}'"))
+                .with_hint(format!("{near}its constants: {}", known.join(", ")))
+        })
+    };
+    let mut chosen: Vec<Constant> = match free {
+        None => all.to_vec(),
+        Some(list) => {
+            let mut v = Vec::new();
+            for n in list {
+                let c = find(n.trim(), "--free")?;
+                if v.iter().any(|x: &Constant| x.name == c.name) {
+                    return Err(Error::settings(format!("--free names {} twice", c.name)));
+                }
+                v.push(c.clone());
+            }
+            v
+        }
+    };
+    let mut set = Vec::new();
+    for f in fix {
+        let (name, value) = match f.split_once('=') {
+            Some((n, v)) => (n.trim(), Some(v.trim())),
+            None => (f.trim(), None),
+        };
+        let c = find(name, "--fix")?;
+        if let Some(v) = value {
+            let x = parse_value(v, c.unit).map_err(|e| {
+                Error::settings(format!("--fix {name}={v}: {e}"))
+                    .with_hint(format!("give {name} in {} (e.g. {name}=1.5e5) or with a unit", c.unit))
+            })?;
+            if !x.is_finite() || (matches!(c.space, Space::Log) && x <= 0.0) || x < c.bounds.0.min(0.0) {
+                return Err(Error::settings(format!(
+                    "--fix {name}={v}: {name} must be finite{}",
+                    if matches!(c.space, Space::Log) { " and positive" } else { "" }
+                )));
+            }
+            set.push((c.index, x));
+        }
+        chosen.retain(|x| x.name != c.name);
+    }
+    if chosen.is_empty() {
+        return Err(Error::settings("no constant is left free to identify")
+            .with_hint("drop a --fix, or name the constants to fit with --free"));
+    }
+    Ok((chosen, set))
+}
+
+/// A value in SI: a bare number, or a number with a unit of the constant's dimension.
+fn parse_value(v: &str, unit: &str) -> std::result::Result<f64, String> {
+    use crate::units::{parse_quantity, Dimension};
+    if let Ok(x) = v.parse::<f64>() {
+        return Ok(x);
+    }
+    let dim = match unit {
+        "Pa" => Dimension::Stress,
+        "s" => Dimension::Time,
+        "Pa s" => Dimension::Viscosity,
+        _ => return Err(format!("expected a number (SI unit {unit})")),
+    };
+    parse_quantity(v, dim).map(|q| q.value)
+}

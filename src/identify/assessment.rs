@@ -16,6 +16,7 @@
 
 use super::params::{Constant, Role, Space};
 use crate::fit::diagnostics::uncertainty;
+use crate::sim::budget::fmt_g;
 use nalgebra::DMatrix;
 use serde::Serialize;
 
@@ -55,7 +56,7 @@ pub struct Estimate {
 }
 
 /// What the traces show, for the explanations.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Context {
     /// A capacitance channel is measured in some experiment.
     pub capacitance: bool,
@@ -65,6 +66,8 @@ pub struct Context {
     pub span: f64,
     /// Shortest sample interval (s).
     pub min_dt: f64,
+    /// τ of each arm at the optimum (s).
+    pub arm_tau: Vec<f64>,
 }
 
 /// The assessment at the optimum.
@@ -122,8 +125,7 @@ pub fn assess(
                 identifiable: true,
                 reason: None,
                 start: c.start,
-                at_bound: (value - c.bounds.0).abs() <= tol
-                    || (value - c.bounds.1).abs() <= tol,
+                at_bound: (value - c.bounds.0).abs() <= tol || (value - c.bounds.1).abs() <= tol,
             }
         })
         .collect();
@@ -141,8 +143,7 @@ pub fn assess(
             _ => None,
         };
         if let Some(w) = why {
-            let values: Vec<f64> = estimates.iter().map(|e| e.value).collect();
-            let reason = explain(free, &values, j, w, &weakest.0, ctx);
+            let reason = explain(free, j, w, &weakest.0, ctx);
             estimates[j].identifiable = false;
             estimates[j].reason = Some(reason);
         }
@@ -191,18 +192,15 @@ fn weakest_direction(free: &[Constant], jac: &DMatrix<f64>) -> (Vec<usize>, f64)
 }
 
 /// The reason in words for constant j.
-fn explain(
-    free: &[Constant],
-    values: &[f64],
-    j: usize,
-    w: Weakness,
-    weakest: &[usize],
-    ctx: &Context,
-) -> String {
+fn explain(free: &[Constant], j: usize, w: Weakness, weakest: &[usize], ctx: &Context) -> String {
     let c = &free[j];
     let partners: Vec<&Constant> = match w {
         Weakness::Traded(k, _) => vec![&free[k]],
-        _ if weakest.contains(&j) => weakest.iter().filter(|&&k| k != j).map(|&k| &free[k]).collect(),
+        _ if weakest.contains(&j) => weakest
+            .iter()
+            .filter(|&&k| k != j)
+            .map(|&k| &free[k])
+            .collect(),
         _ => Vec::new(),
     };
     let how = match w {
@@ -220,10 +218,11 @@ fn explain(
             100.0 * ctx.max_strain,
             c.name
         )
-    } else if let Some(tau) = slow_arm(j, &partners, free, values, ctx.span) {
+    } else if let Some(tau) = slow_arm(c, &partners, ctx) {
         format!(
-            "an arm with τ = {tau:.3e} s is slower than the {:.3e} s trace: within it the arm acts as extra stiffness, traded against the leading modulus; use a longer trace or fix the arm",
-            ctx.span
+            "an arm with τ = {} s is slower than the {} s trace: within it the arm acts as extra stiffness, traded against the leading modulus; use a longer trace or fix the arm",
+            fmt_g(tau),
+            fmt_g(ctx.span)
         )
     } else if c.role == Role::Nv {
         "the damping is unresolved: the traces have no motion fast enough for the dashpot nv to show above the noise (fix nv, e.g. --fix nv=0, or add a fast step)".to_string()
@@ -231,25 +230,23 @@ fn explain(
         "the trace does not pin it down".to_string()
     } else {
         let names: Vec<&str> = partners.iter().map(|p| p.name.as_str()).collect();
-        format!("the trace fixes only a combination of it with {}", names.join(", "))
+        format!(
+            "the trace fixes only a combination of it with {}",
+            names.join(", ")
+        )
     };
     format!("{how}: {why}")
 }
 
-/// τ of an arm (constant j's or a partner's) that is slower than half the longest
-/// trace (its estimate when free, else its start value).
-fn slow_arm(
-    j: usize,
-    partners: &[&Constant],
-    free: &[Constant],
-    values: &[f64],
-    span: f64,
-) -> Option<f64> {
+/// τ of an arm (this constant's or a partner's) slower than half the longest trace.
+fn slow_arm(c: &Constant, partners: &[&Constant], ctx: &Context) -> Option<f64> {
     let arm = |k: &Constant| match k.role {
         Role::ArmK(a) | Role::ArmTau(a) => Some(a),
         _ => None,
     };
-    let a = arm(&free[j]).or_else(|| partners.iter().find_map(|p| arm(p)))?;
-    let k = free.iter().position(|k| k.role == Role::ArmTau(a))?;
-    Some(values[k]).filter(|&tau| tau > 0.5 * span)
+    let a = arm(c).or_else(|| partners.iter().find_map(|p| arm(p)))?;
+    ctx.arm_tau
+        .get(a)
+        .copied()
+        .filter(|&tau| tau > 0.5 * ctx.span)
 }

@@ -22,7 +22,6 @@ use crate::error::{Error, Result};
 use crate::fit::diagnostics::{information_criteria, rmse_percent};
 use crate::fit::lm::{LeastSquares, LmSettings, Termination};
 use crate::fit::Status;
-use crate::sim::scene::FidelityChoice;
 use crate::sim::RunOptions;
 use assessment::{assess, Assessment, Context, Estimate, WARN_CORRELATION};
 use nalgebra::{DMatrix, DVector};
@@ -90,9 +89,7 @@ impl Settings {
         }
         if let Some(r) = self.rtol {
             if !(1e-12..=1e-2).contains(&r) {
-                return Err(Error::settings(format!(
-                    "--rtol {r}: give 1e-12 to 1e-2"
-                )));
+                return Err(Error::settings(format!("--rtol {r}: give 1e-12 to 1e-2")));
             }
         }
         Ok(())
@@ -197,7 +194,6 @@ pub fn identify(mut experiments: Vec<Experiment>, settings: &Settings) -> Result
         theta0[k] = v;
     }
     for e in &mut experiments {
-        keep_every_arm(&mut e.scene)?;
         let times: Vec<f64> = std::iter::once(0.0)
             .chain(e.scene.time.samples.iter().copied())
             .collect();
@@ -217,17 +213,15 @@ pub fn identify(mut experiments: Vec<Experiment>, settings: &Settings) -> Result
                 .collect()
         })
         .collect();
-    let mut problem = Problem {
+    let mut problem = Problem::new(
         experiments,
-        free: free.clone(),
-        theta: theta0.clone(),
-        run: RunOptions {
+        free.clone(),
+        theta0.clone(),
+        RunOptions {
             rtol: settings.rtol,
             ..RunOptions::default()
         },
-        counts: Default::default(),
-        last_failure: None,
-    };
+    )?;
     let (n, k) = problem.dims();
     if n <= k {
         return Err(Error::settings(format!(
@@ -365,19 +359,6 @@ pub fn identify(mut experiments: Vec<Experiment>, settings: &Settings) -> Result
     })
 }
 
-/// Identification moves every arm: an `auto` fidelity could lump one away, so it is
-/// resolved here to the dynamic or quasi-static model with all arms integrated.
-fn keep_every_arm(scene: &mut crate::sim::scene::Scene) -> Result<()> {
-    if scene.time.fidelity == FidelityChoice::Auto {
-        let f = crate::sim::fidelity::choose(scene)?;
-        scene.time.fidelity = match f.inertia {
-            true => FidelityChoice::Dynamic,
-            false => FidelityChoice::QuasiStatic,
-        };
-    }
-    Ok(())
-}
-
 fn sum_counts(r: &[search::StartResult]) -> problem::Counts {
     r.iter().fold(Default::default(), |a, s| problem::Counts {
         runs: a.runs + s.counts.runs,
@@ -479,6 +460,11 @@ fn context(problem: &Problem, runs: &[crate::sim::Outcome]) -> Context {
         max_strain: 0.0,
         span: 0.0,
         min_dt: f64::INFINITY,
+        arm_tau: params::constants(&problem.experiments[0].scene)
+            .iter()
+            .filter(|c| matches!(c.role, params::Role::ArmTau(_)))
+            .map(|c| c.start)
+            .collect(),
     };
     for (e, o) in problem.experiments.iter().zip(runs) {
         ctx.capacitance |= e

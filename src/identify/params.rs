@@ -110,7 +110,11 @@ pub fn constants(scene: &Scene) -> Vec<Constant> {
         let (space, bounds, start_box) = if positive {
             let lo = (v / 100.0).max(info.lower);
             let hi = (v * 100.0).min(info.upper);
-            (Space::Log, (lo, hi), ((v / 10.0).max(lo), (v * 10.0).min(hi)))
+            (
+                Space::Log,
+                (lo, hi),
+                ((v / 10.0).max(lo), (v * 10.0).min(hi)),
+            )
         } else {
             let scale = match info.unit {
                 "Pa" => v.abs().max(1e-3 * mu0),
@@ -183,7 +187,14 @@ pub fn constants(scene: &Scene) -> Vec<Constant> {
 
 /// A positive constant searched in log space within a factor `range` of its value
 /// (starts within a factor 10, or `range`'s square root when that is smaller).
-fn positive(name: String, unit: &'static str, index: usize, v: f64, range: f64, role: Role) -> Constant {
+fn positive(
+    name: String,
+    unit: &'static str,
+    index: usize,
+    v: f64,
+    range: f64,
+    role: Role,
+) -> Constant {
     let spread = range.sqrt().min(10.0);
     Constant {
         name,
@@ -242,8 +253,10 @@ pub fn choose(
             let near = crate::sim::scene::did_you_mean(name, &known)
                 .map(|k| format!("did you mean {k}? "))
                 .unwrap_or_default();
-            Error::settings(format!("{flag} {name}: this scene has no constant '{name}'"))
-                .with_hint(format!("{near}its constants: {}", known.join(", ")))
+            Error::settings(format!(
+                "{flag} {name}: this scene has no constant '{name}'"
+            ))
+            .with_hint(format!("{near}its constants: {}", known.join(", ")))
         })
     };
     let mut chosen: Vec<Constant> = match free {
@@ -269,13 +282,22 @@ pub fn choose(
         let c = find(name, "--fix")?;
         if let Some(v) = value {
             let x = parse_value(v, c.unit).map_err(|e| {
-                Error::settings(format!("--fix {name}={v}: {e}"))
-                    .with_hint(format!("give {name} in {} (e.g. {name}=1.5e5) or with a unit", c.unit))
+                Error::settings(format!("--fix {name}={v}: {e}")).with_hint(format!(
+                    "give {name} in {} (e.g. {name}=1.5e5) or with a unit",
+                    c.unit
+                ))
             })?;
-            if !x.is_finite() || (matches!(c.space, Space::Log) && x <= 0.0) || x < c.bounds.0.min(0.0) {
+            if !x.is_finite()
+                || (matches!(c.space, Space::Log) && x <= 0.0)
+                || x < c.bounds.0.min(0.0)
+            {
                 return Err(Error::settings(format!(
                     "--fix {name}={v}: {name} must be finite{}",
-                    if matches!(c.space, Space::Log) { " and positive" } else { "" }
+                    if matches!(c.space, Space::Log) {
+                        " and positive"
+                    } else {
+                        ""
+                    }
                 )));
             }
             set.push((c.index, x));

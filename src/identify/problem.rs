@@ -10,8 +10,8 @@
 
 use super::params::{set_theta, Constant};
 use crate::fit::lm::LeastSquares;
+use crate::sim::scene::{FidelityChoice, Scene};
 use crate::sim::{simulate, Outcome, RunOptions, RunStatus, Sample, Sensitivities};
-use crate::sim::scene::Scene;
 use nalgebra::{DMatrix, DVector};
 
 /// What a channel measures, and how the simulator's sample gives it.
@@ -142,6 +142,35 @@ pub struct Problem {
 }
 
 impl Problem {
+    /// The problem of fitting `free` (θ elsewhere at `theta`) to `experiments`. An
+    /// `auto` fidelity could lump an arm away, which would drop it from θ, so each
+    /// scene's is resolved here to the dynamic or quasi-static model with every arm
+    /// integrated.
+    pub fn new(
+        mut experiments: Vec<Experiment>,
+        free: Vec<Constant>,
+        theta: Vec<f64>,
+        run: RunOptions,
+    ) -> crate::Result<Problem> {
+        for e in &mut experiments {
+            if e.scene.time.fidelity == FidelityChoice::Auto {
+                let f = crate::sim::fidelity::choose(&e.scene)?;
+                e.scene.time.fidelity = match f.inertia {
+                    true => FidelityChoice::Dynamic,
+                    false => FidelityChoice::QuasiStatic,
+                };
+            }
+        }
+        Ok(Problem {
+            experiments,
+            free,
+            theta,
+            run,
+            counts: Counts::default(),
+            last_failure: None,
+        })
+    }
+
     /// θ for search coordinates x.
     pub fn theta_at(&self, x: &[f64]) -> Vec<f64> {
         let mut th = self.theta.clone();
@@ -208,6 +237,14 @@ impl Problem {
                     ))
                 }
             }
+            let np = o.sensitivities.as_ref().map(|s| s.theta.len());
+            if np.is_some_and(|np| np != theta.len()) {
+                return Err(format!(
+                    "{}: sensitivities to {np:?} constants, not the {} of θ (an arm lumped away?)",
+                    e.name,
+                    theta.len()
+                ));
+            }
             if o.samples.len() != e.rows() {
                 return Err(format!(
                     "{}: {} samples for {} trace rows",
@@ -249,8 +286,7 @@ impl Problem {
                 }
             }
         }
-        r.iter().all(|v| v.is_finite())
-            && jac.is_none_or(|j| j.iter().all(|v| v.is_finite()))
+        r.iter().all(|v| v.is_finite()) && jac.is_none_or(|j| j.iter().all(|v| v.is_finite()))
     }
 }
 

@@ -7,6 +7,7 @@ mod datasets;
 mod estimation;
 mod exit_status;
 mod fuzz;
+mod material_file;
 mod models;
 mod permittivity;
 mod relaxation;

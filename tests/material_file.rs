@@ -246,8 +246,7 @@ fn an_identified_file_edited_inconsistently_is_refused_with_file_key_and_expecta
         edit(&mut v);
         let p = write(dir.path(), "edited.json", &v.to_string());
         let got = IdentifiedMaterial::read(&p)
-            .err()
-            .expect("refused")
+            .expect_err("refused")
             .to_string();
         assert!(
             got.contains(&format!("edited.json: {msg}")) && got.contains(hint),
@@ -279,7 +278,7 @@ fn writing_refuses_an_uncertainty_that_is_not_a_parameter_of_the_material() {
     ] {
         let mut m = material();
         edit(&mut m);
-        let got = m.to_json().err().expect("refused").to_string();
+        let got = m.to_json().expect_err("refused").to_string();
         assert!(got.contains(want), "{got}");
     }
 }
@@ -289,7 +288,7 @@ fn a_hyperelastic_fit_file_reads_as_the_material_part_the_fit_holds() {
     let mut n = 0;
     for e in std::fs::read_dir(repo().join("tests/golden")).unwrap() {
         let p = e.unwrap().path();
-        if !p.extension().is_some_and(|x| x == "json") {
+        if p.extension().is_none_or(|x| x != "json") {
             continue;
         }
         let fit: HyperelasticFit =

@@ -275,6 +275,14 @@ fn writing_refuses_an_uncertainty_that_is_not_a_parameter_of_the_material() {
         (|m| m.uncertainty[5].value = 4.8, "'eps_r' [1] = 4.8"),
         (|m| m.viscous = None, "'nv' [Pa s]"),
         (|m| m.provenance = json!(null), "provenance"),
+        // what the reader would refuse is never written
+        (
+            |m| {
+                m.eps_r = Some(0.5);
+                m.uncertainty[5].value = 0.5;
+            },
+            "eps_r = 0.5 is not a plausible relative permittivity",
+        ),
     ] {
         let mut m = material();
         edit(&mut m);

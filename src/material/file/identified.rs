@@ -68,8 +68,10 @@ struct IdentifiedJson {
 
 impl IdentifiedMaterial {
     /// The file text (pretty JSON). Refuses (a settings error) an uncertainty entry
-    /// that is not a parameter of the parts with the same unit and value, a
-    /// provenance that is not a JSON object, and parameters the model refuses.
+    /// that is not a parameter of the parts with the same unit and value and a
+    /// provenance that is not a JSON object; the text is read back before it is
+    /// returned, so what the reader would refuse (an implausible constant) is never
+    /// written.
     pub fn to_json(&self) -> Result<String> {
         let u = &self.uncertainty;
         let j = IdentifiedJson {
@@ -105,7 +107,10 @@ impl IdentifiedMaterial {
                 )));
             }
         }
-        Ok(serde_json::to_string_pretty(&j).expect("an identified material serialises") + "\n")
+        let text =
+            serde_json::to_string_pretty(&j).expect("an identified material serialises") + "\n";
+        Self::parse(Path::new("(identified material being written)"), &text)?;
+        Ok(text)
     }
 
     /// Read an identified material file; every part is checked by name and unit

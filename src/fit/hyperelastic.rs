@@ -280,10 +280,7 @@ impl HyperelasticFit {
     /// parameters in model order, fitted stretch range per mode).
     pub fn material(&self) -> HyperelasticPart {
         HyperelasticPart {
-            spec: ModelSpec {
-                name: self.model.clone(),
-                form: self.form,
-            },
+            spec: ModelSpec::new(&self.model, self.form.unwrap_or_default()),
             params: self.values(),
             ranges: Some(FittedRanges {
                 per_mode: self

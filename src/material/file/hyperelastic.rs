@@ -152,12 +152,8 @@ impl HyperelasticPart {
             return Err(err(path, &key("model"), format!("unknown model '{name}'"))
                 .with_hint(format!("{near}known: {}", MODEL_NAMES.join(", "))));
         }
-        let spec = ModelSpec {
-            name: name.to_string(),
-            form: j
-                .form
-                .or(name.starts_with("ogden").then_some(OgdenForm::Seed)),
-        };
+        // an Ogden file without a form is in the seed's (the default form)
+        let spec = ModelSpec::new(name, j.form.unwrap_or_default());
         let model = spec.build()?;
         let expected: Vec<(String, &str)> = model
             .params()

@@ -282,9 +282,15 @@ fn uniaxial_only_mooney_rivlin_extrapolates_badly_to_equibiaxial_and_says_so() {
         d.extend(eq);
         fit(&d, &spec, &Settings::default()).unwrap()
     };
-    assert!(f.range_warning(Mode::Uniaxial, 0.5).is_some());
-    assert!(with_eq.range_warning(Mode::Uniaxial, 0.5).is_none());
-    assert!(with_eq.range_warning(Mode::Uniaxial, 9.0).is_some());
+    assert!(f.material().range_warning(Mode::Uniaxial, 0.5).is_some());
+    assert!(with_eq
+        .material()
+        .range_warning(Mode::Uniaxial, 0.5)
+        .is_none());
+    assert!(with_eq
+        .material()
+        .range_warning(Mode::Uniaxial, 9.0)
+        .is_some());
 }
 
 #[test]

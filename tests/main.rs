@@ -8,6 +8,7 @@ mod estimation;
 mod exit_status;
 mod fuzz;
 mod identify;
+mod material_file;
 mod models;
 mod permittivity;
 mod relaxation;

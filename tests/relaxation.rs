@@ -477,7 +477,7 @@ fn qlv_recovers_the_normalised_relaxation_function() {
     let d = data(&syn);
     assert!(d.strain.is_some());
     let q = QlvInput {
-        fit: hf.clone(),
+        fit: hf.material(),
         file: FileRef {
             path: "mem".into(),
             sha256: "0".into(),
@@ -787,7 +787,7 @@ fn measured_vhb_cycle_is_fitted_by_qlv() {
     )
     .unwrap();
     let q = QlvInput {
-        fit: hf,
+        fit: hf.material(),
         file: FileRef {
             path: "mem".into(),
             sha256: "0".into(),

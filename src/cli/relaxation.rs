@@ -141,10 +141,11 @@ fn quantity(flag: &str, text: Option<&str>, dim: Dimension) -> Result<Option<f64
     Ok(v)
 }
 
-/// The hyperelastic fit of a QLV run, read by parameter name and checked against
-/// its model (`io::fitfile`), with its checksum for the provenance.
+/// The hyperelastic material of a QLV run (a hyperelastic fit or an identified
+/// material), read by parameter name and checked against its model
+/// (`material::file`), with its checksum for the provenance.
 fn load_qlv(path: &Path) -> Result<QlvInput> {
-    let fit = dea_fit::io::fitfile::read_hyperelastic(path)?;
+    let fit = dea_fit::material::file::read_hyperelastic(path)?;
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     Ok(QlvInput {
         fit,

@@ -16,14 +16,15 @@ use super::problem::{svd_solve, HyperProblem, Residual, VarPro};
 use super::{Parameter, SolverReport, Status};
 use crate::data::{Dataset, Source};
 use crate::error::{Error, Result};
+use crate::material::file::{FittedRanges, HyperelasticPart, StretchRange};
 use crate::material::hyperelastic::{Mode, ModelSpec, OgdenForm, StrainEnergy, MODEL_NAMES};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
-/// Schema tag of hyperelastic fit files.
-pub const SCHEMA: &str = "dea-fit/hyperelastic-fit/1";
+/// Schema tag of hyperelastic fit files (the material files' reader knows it).
+pub const SCHEMA: &str = crate::material::file::HYPERELASTIC_SCHEMA;
 
 /// Estimator settings (checked by [`Settings::check`] before use).
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -275,26 +276,23 @@ impl HyperelasticFit {
         Ok(model)
     }
 
-    /// A warning if `stretch` in `mode` lies outside what the data covered. Uniaxial
-    /// compression at λ is equibiaxial tension at λ^-1/2 and is checked as such.
-    pub fn range_warning(&self, mode: Mode, stretch: f64) -> Option<String> {
-        let (m, l) = if mode == Mode::Uniaxial && stretch < 1.0 {
-            match self.per_mode.iter().find(|s| s.mode == Mode::Uniaxial) {
-                Some(s) if s.stretch_min <= stretch => return None,
-                _ => (Mode::Equibiaxial, stretch.powf(-0.5)),
-            }
-        } else {
-            (mode, stretch)
-        };
-        match self.per_mode.iter().find(|s| s.mode == m) {
-            Some(s) if l >= s.stretch_min - 1e-12 && l <= s.stretch_max + 1e-12 => None,
-            Some(s) => Some(format!(
-                "{mode} stretch {stretch:.3} lies outside the fitted {m} range {:.3}–{:.3}: the model is extrapolated",
-                s.stretch_min, s.stretch_max
-            )),
-            None => Some(format!(
-                "{mode} stretch {stretch:.3} needs {m} behaviour, for which the fit had no data: the model is extrapolated"
-            )),
+    /// The material part of the fit: what a scene reads from its file (model,
+    /// parameters in model order, fitted stretch range per mode).
+    pub fn material(&self) -> HyperelasticPart {
+        HyperelasticPart {
+            spec: ModelSpec::new(&self.model, self.form.unwrap_or_default()),
+            params: self.values(),
+            ranges: Some(FittedRanges {
+                per_mode: self
+                    .per_mode
+                    .iter()
+                    .map(|s| StretchRange {
+                        mode: s.mode,
+                        stretch_min: s.stretch_min,
+                        stretch_max: s.stretch_max,
+                    })
+                    .collect(),
+            }),
         }
     }
 }

@@ -6,10 +6,10 @@
 use super::Status;
 use crate::error::{Error, Location, Result};
 use crate::io::lcr::{self, Format, LcrOptions, Sweep};
+use crate::material::check::PERMITTIVITY;
 use crate::material::dielectric::{
     ac_conductivity, complex_permittivity, kirchhoff_edge_capacitance, Pair, EPS0,
 };
-use crate::sim::budget::PERMITTIVITY;
 use crate::units::Quantity;
 use nalgebra::Complex;
 use rayon::prelude::*;

@@ -26,13 +26,13 @@
 //! identifiable and inside the sampled window.
 
 use super::diagnostics;
-use super::hyperelastic::HyperelasticFit;
 use super::linear::constrained_least_squares;
 use super::lm::{self, LeastSquares, LmSettings, Termination};
 use super::problem::{Residual, REL_FLOOR};
 use super::{Parameter, SolverReport, Status};
 use crate::error::{Error, Result};
 use crate::io::relaxation::{RelaxationData, RelaxationSource};
+use crate::material::file::HyperelasticPart;
 use crate::material::hyperelastic::Mode;
 use crate::material::viscoelastic::{
     Formulation, History, KelvinMaxwell, MaxwellArm, Prony, Schedule,
@@ -59,8 +59,8 @@ const MAX_DECADES: i32 = 12;
 /// model gives values near 1; 0.5 is halfway.
 const SYSTEMATIC: f64 = 0.5;
 
-/// Schema tag of relaxation fit files.
-pub const SCHEMA: &str = "dea-fit/relaxation-fit/1";
+/// Schema tag of relaxation fit files (the material files' reader knows it).
+pub const SCHEMA: &str = crate::material::file::RELAXATION_SCHEMA;
 
 /// How `auto` scores term counts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -193,8 +193,8 @@ pub struct FileRef {
 /// The hyperelastic fit that gives the instantaneous response of a QLV fit.
 #[derive(Debug, Clone)]
 pub struct QlvInput {
-    /// The hyperelastic fit (its uniaxial stress is σₑ).
-    pub fit: HyperelasticFit,
+    /// The hyperelastic material of a fit file (its uniaxial stress is σₑ).
+    pub fit: HyperelasticPart,
     /// Its file.
     pub file: FileRef,
 }
@@ -749,8 +749,8 @@ fn prepare(
         None => (strain_hist, Formulation::Parallel, 1.0, None),
         Some(q) => {
             let model = q.fit.evaluator()?;
-            let p = q.fit.values();
-            let se = |e: f64| model.nominal_stress(&p, Mode::Uniaxial, 1.0 + e);
+            let p = &q.fit.params;
+            let se = |e: f64| model.nominal_stress(p, Mode::Uniaxial, 1.0 + e);
             if let Some(w) = q.fit.range_warning(Mode::Uniaxial, 1.0 + peak) {
                 notes.push(format!("hyperelastic fit: {w}"));
             }
@@ -763,7 +763,7 @@ fn prepare(
                 )?,
                 None => strain_hist.map(se),
             };
-            let e_ref = 3.0 * q.fit.initial_shear_modulus_pa;
+            let e_ref = 3.0 * model.initial_shear_modulus(p);
             let held_stress = se(peak);
             if !(held_stress.is_finite() && held_stress != 0.0 && e_ref > 0.0) {
                 return Err(Error::settings(format!(
@@ -776,7 +776,7 @@ fn prepare(
                 Formulation::Qlv,
                 e_ref,
                 Some(QlvInfo {
-                    hyperelastic_model: q.fit.model.clone(),
+                    hyperelastic_model: q.fit.spec.name.clone(),
                     reference_modulus_pa: e_ref,
                     instantaneous_scale: f64::NAN,
                     held_stress_pa: held_stress,

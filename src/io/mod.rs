@@ -1,7 +1,6 @@
 //! Reading and writing files: a located delimited-table reader, the tensile-test
 //! reader, and atomic writes.
 
-pub mod fitfile;
 pub mod lcr;
 pub mod manifest;
 pub mod relaxation;

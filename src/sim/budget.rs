@@ -25,42 +25,13 @@ use super::integrate::Method;
 use super::scene::{Actuator, Scene, Source};
 use super::{fidelity, Sample};
 use crate::error::{Error, Result};
-use crate::material::hyperelastic::StrainEnergy;
-
-/// A plausible range of a physical quantity (SI).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Domain {
-    /// What the quantity is (for messages).
-    pub what: &'static str,
-    /// SI unit.
-    pub unit: &'static str,
-    /// Smallest plausible value.
-    pub min: f64,
-    /// Largest plausible value.
-    pub max: f64,
-    /// Whether exactly 0 is allowed too (an absent part: no electrode, no load).
-    pub zero: bool,
-    /// Why these bounds.
-    pub reason: &'static str,
-}
-
-const fn d(
-    what: &'static str,
-    unit: &'static str,
-    min: f64,
-    max: f64,
-    zero: bool,
-    reason: &'static str,
-) -> Domain {
-    Domain {
-        what,
-        unit,
-        min,
-        max,
-        zero,
-        reason,
-    }
-}
+use crate::material::check::{
+    check_hyperelastic, d, ARM_MODULUS, ARM_TIME, DASHPOT, MODULUS, OGDEN_EXPONENT, PERMITTIVITY,
+    SHEAR_MODULUS,
+};
+// the range type is the material's (`material::check`); the simulator's table holds
+// the material's ranges too (TABLE, docs/scenes.md)
+pub use crate::material::check::{fmt_g, Domain, Violation};
 
 /// Geometric lengths (radii, layer and element thickness).
 pub const LENGTH: Domain = d("length", "m", 1e-7, 10.0, false, "the thinnest elastomer films are ≈ 1 µm and actuators are smaller than metres; outside, a unit is wrong (um for mm?)");
@@ -83,15 +54,6 @@ pub const ELECTRODE_COUNT: Domain = d(
     1e6,
     true,
     "one more than the layers at most, 0 to leave the electrodes out of the length",
-);
-/// Relative permittivity εr.
-pub const PERMITTIVITY: Domain = d(
-    "relative permittivity",
-    "",
-    1.0,
-    1e5,
-    false,
-    "vacuum has εr = 1, elastomers 2–10, ceramic-filled composites up to ≈ 1e4",
 );
 /// Mass density.
 pub const DENSITY: Domain = d(
@@ -269,61 +231,6 @@ pub const TIME_CONSTANT: Domain = d("time constant", "s", 1e-9, 1e4, false, "1 n
 /// Source output resistance.
 pub const SOURCE_RESISTANCE: Domain =
     d("source resistance", "Ω", 1e-3, 1e15, false, "1 mΩ to 1 PΩ");
-/// Hyperelastic stress coefficients (C10, μi, …; may be negative).
-pub const MODULUS: Domain = d(
-    "stress coefficient",
-    "Pa",
-    -1e10,
-    1e10,
-    true,
-    "elastomers have moduli of 1 kPa–100 MPa; 10 GPa is a metal",
-);
-/// Small-strain shear modulus μ0 of the hyperelastic model.
-pub const SHEAR_MODULUS: Domain = d(
-    "initial shear modulus",
-    "Pa",
-    1.0,
-    1e10,
-    false,
-    "a solid resists shear (μ0 > 0); gels have ≈ 100 Pa, elastomers 10 kPa–10 MPa",
-);
-/// |αi| of an Ogden term.
-pub const OGDEN_EXPONENT: Domain = d(
-    "Ogden exponent magnitude",
-    "",
-    1e-2,
-    20.0,
-    false,
-    "a term with α ≈ 0 stores no energy; the fitter bounds the magnitude of α by 20",
-);
-/// Kelvin-Voigt dashpot Nv.
-pub const DASHPOT: Domain = d(
-    "dashpot viscosity",
-    "Pa·s",
-    1e-9,
-    1e12,
-    true,
-    "0 for none; Table 4.2: 1875 Pa·s",
-);
-/// Maxwell arm modulus kj.
-pub const ARM_MODULUS: Domain = d(
-    "arm modulus",
-    "Pa",
-    1e-3,
-    1e10,
-    false,
-    "relaxation moduli of elastomers are 1 kPa–100 MPa",
-);
-/// Maxwell arm relaxation time τj = ηj/kj.
-pub const ARM_TIME: Domain = d(
-    "relaxation time",
-    "s",
-    1e-9,
-    1e12,
-    false,
-    "1 ns to 30 000 years",
-);
-
 /// The loaded rest stretch λ0 (a result, checked before a run).
 pub const REST_STRETCH: Domain = d("rest stretch under the load", "", 0.05, 10.0, false, "beyond 10 (or below 0.05) the load is far past what the material can carry and the model is extrapolated without limit");
 
@@ -388,132 +295,6 @@ pub const STEPS_PER_RESTART: f64 = 10.0;
 pub const STEP_MARGIN: f64 = 100.0;
 /// The smallest step budget a run gets (about a second of integration).
 pub const MIN_STEP_BUDGET: usize = 1_000_000;
-
-/// A value outside its domain: the scene key, what is wrong, what to do.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Violation {
-    /// Key path in the scene format (`material.relative_permittivity`, `input[0].cycles`).
-    pub key: String,
-    /// What was found and why it is refused.
-    pub msg: String,
-    /// What to do.
-    pub hint: String,
-}
-
-impl Domain {
-    /// Accept `v` if finite and inside the range (or 0 where allowed).
-    pub fn check(&self, key: &str, v: f64) -> std::result::Result<f64, Violation> {
-        let ok = v.is_finite() && ((self.zero && v == 0.0) || (v >= self.min && v <= self.max));
-        if ok {
-            return Ok(v);
-        }
-        let u = if self.unit.is_empty() {
-            String::new()
-        } else {
-            format!(" {}", self.unit)
-        };
-        let range = format!(
-            "{}{}{u} … {}{u}",
-            if self.zero && self.min > 0.0 {
-                "0 or "
-            } else {
-                ""
-            },
-            fmt_g(self.min),
-            fmt_g(self.max)
-        );
-        Err(Violation {
-            key: key.to_string(),
-            msg: match v.is_finite() {
-                true => format!(
-                    "{} = {}{u} is not a plausible {}: expected {range}",
-                    key_leaf(key),
-                    fmt_g(v),
-                    self.what
-                ),
-                false => format!("{} must be a finite number, found {v}", key_leaf(key)),
-            },
-            hint: match self.unit.is_empty() {
-                true => self.reason.to_string(),
-                false => format!("{}; is the unit right?", self.reason),
-            },
-        })
-    }
-}
-
-fn key_leaf(key: &str) -> &str {
-    key.rsplit('.').next().unwrap_or(key)
-}
-
-/// A number in short form, 4 significant digits at most (1e-7, 0.5, 2.25e6, 8.44e8).
-pub fn fmt_g(v: f64) -> String {
-    if v != 0.0 && v.is_finite() && (v.abs() >= 1e5 || v.abs() < 1e-3) {
-        let s = format!("{v:.3e}");
-        let (m, e) = s.split_once('e').unwrap_or((&s, "0"));
-        let m = match m.contains('.') {
-            true => m.trim_end_matches('0').trim_end_matches('.'),
-            false => m,
-        };
-        format!("{m}e{e}")
-    } else {
-        format!("{v}")
-    }
-}
-
-/// Check the parameters of a hyperelastic model: the count, each value finite and
-/// plausible (Pa coefficients by [`MODULUS`], dimensionless ones within the model's
-/// own bounds (Gent Jm ∈ [1e-3, 1e6]), Ogden exponents by [`OGDEN_EXPONENT`]), and
-/// a positive initial shear modulus. `key` prefixes the parameter names.
-pub fn check_hyperelastic(
-    model: &dyn StrainEnergy,
-    params: &[f64],
-    key: &str,
-) -> std::result::Result<(), Violation> {
-    let info = model.params();
-    if params.len() != info.len() {
-        return Err(Violation {
-            key: key.to_string(),
-            msg: format!(
-                "{} needs {} parameters ({}), found {}",
-                model.name(),
-                info.len(),
-                info.iter()
-                    .map(|p| p.name.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                params.len()
-            ),
-            hint: "give every parameter of the model by name".into(),
-        });
-    }
-    for (p, &v) in info.iter().zip(params) {
-        let k = format!("{key}.{}", p.name);
-        if p.unit == "Pa" {
-            MODULUS.check(&k, v)?;
-        } else if p.name.starts_with("alpha") {
-            OGDEN_EXPONENT.check(&k, v.abs()).map_err(|mut e| {
-                e.msg = format!("{}: {} = {v}: |α| {}", model.name(), p.name, e.msg);
-                e
-            })?;
-        } else {
-            let dom = Domain {
-                what: "dimensionless parameter",
-                unit: "",
-                min: p.lower,
-                max: p.upper,
-                zero: false,
-                reason: "the model's own bounds (the fitter's search range)",
-            };
-            dom.check(&k, v)?;
-        }
-    }
-    SHEAR_MODULUS
-        .check(
-            &format!("{key}.initial_shear_modulus"),
-            model.initial_shear_modulus(params),
-        )
-        .map(|_| ())
-}
 
 /// Check every quantity of a scene against its domain (no location: the reader
 /// maps the key to its line and column).

@@ -2,7 +2,7 @@
 //! one place, [`crate::material::viscoelastic::preset`]; this module only turns them
 //! into the simulator's plain [`Viscous`] data and adds the hyperelastic spring.
 
-use super::scene::{Arm, Viscous};
+use crate::material::file::{Arm, Viscous};
 use crate::material::viscoelastic::{self, PRESET_NAMES};
 
 /// Yeoh constants of VHB4910 (seed Table 3.2 = Table 4.2): C10, C20, C30 in Pa.

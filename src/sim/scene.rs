@@ -2,37 +2,20 @@
 //! `docs/scenes.md`. Quantities are strings with a unit (`"2.25 mm"`, `"5 kV"`) or
 //! bare SI numbers; keys that carry no unit table name the unit (`resistivity_ohm_m`).
 
-use super::budget::{self, Domain, Violation};
+use super::budget;
 use super::input::{Term, Waveform};
 use super::integrate::Method;
 use super::presets;
 use crate::error::{Error, Location, Result};
-use crate::fit::hyperelastic::HyperelasticFit;
-use crate::io::fitfile;
+use crate::material::check::{did_you_mean, Domain, Violation};
+use crate::material::file::{
+    self, expected_params, FittedRanges, HyperelasticPart, IdentifiedMaterial, Viscous,
+};
 use crate::material::hyperelastic::{ModelSpec, OgdenForm, StrainEnergy, MODEL_NAMES};
 use crate::units::{parse_quantity, Dimension};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-
-/// One Maxwell arm: spring k in series with dashpot η (τ = η/k), seed Eq. 3.16.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct Arm {
-    /// Spring modulus (Pa).
-    pub k_pa: f64,
-    /// Dashpot viscosity (Pa·s).
-    pub eta_pa_s: f64,
-}
-
-/// Viscous part of the seed's generalised Kelvin-Maxwell model: Kelvin-Voigt dashpot
-/// Nv (σ = Nv·dλ/dt, Eq. 3.14 read as strain rate) and Maxwell arms.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct Viscous {
-    /// Kelvin-Voigt dashpot (Pa·s).
-    pub nv_pa_s: f64,
-    /// Maxwell arms.
-    pub arms: Vec<Arm>,
-}
 
 /// Lateral kinematics of a helix element.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -95,8 +78,9 @@ pub struct Material {
     pub model: Arc<dyn StrainEnergy>,
     /// Parameters (SI, model order).
     pub params: Vec<f64>,
-    /// The fit the constants came from, if any (for range warnings).
-    pub fit: Option<Arc<HyperelasticFit>>,
+    /// The fitted stretch ranges of the file the constants came from, if any (for
+    /// range warnings; None for presets and inline constants).
+    pub fit: Option<Arc<FittedRanges>>,
     /// Viscous constants.
     pub viscous: Viscous,
     /// Relative permittivity εr.
@@ -255,34 +239,6 @@ fn line_col(text: &str, offset: usize) -> (usize, usize) {
     let line = before.matches('\n').count() + 1;
     let start = before.rfind('\n').map(|i| i + 1).unwrap_or(0);
     (line, before[start..].chars().count() + 1)
-}
-
-/// The known name closest to `word` if it is a near miss (edit distance ≤ 2, and
-/// less than half the word): `presett` → `preset`.
-pub(crate) fn did_you_mean<'k>(word: &str, known: &[&'k str]) -> Option<&'k str> {
-    let lev = |a: &str, b: &str| {
-        let b: Vec<char> = b.chars().collect();
-        let mut row: Vec<usize> = (0..=b.len()).collect();
-        for (i, ca) in a.chars().enumerate() {
-            let mut prev = row[0];
-            row[0] = i + 1;
-            for j in 0..b.len() {
-                let cur = row[j + 1];
-                row[j + 1] = (prev + usize::from(ca != b[j]))
-                    .min(row[j] + 1)
-                    .min(cur + 1);
-                prev = cur;
-            }
-        }
-        row[b.len()]
-    };
-    let w = word.to_lowercase();
-    known
-        .iter()
-        .map(|k| (lev(&w, &k.to_lowercase()), *k))
-        .filter(|&(d, _)| d <= 2 && 2 * d < w.chars().count().max(1))
-        .min_by_key(|&(d, _)| d)
-        .map(|(_, k)| k)
 }
 
 impl Ctx<'_> {
@@ -611,25 +567,26 @@ fn read_actuator(c: &Ctx, t: &toml::Table) -> Result<Actuator> {
     }
 }
 
-fn read_hyperelastic(
-    c: &Ctx,
-    h: &toml::Table,
-    dir: &Path,
-) -> Result<(String, Vec<f64>, Option<Arc<HyperelasticFit>>)> {
+/// The hyperelastic part: a preset, a material file (a hyperelastic fit or an
+/// identified material, `material::file`) or a model with inline parameters.
+fn read_hyperelastic(c: &Ctx, h: &toml::Table, dir: &Path) -> Result<HyperelasticPart> {
     let hs = "material.hyperelastic";
     c.known(h, hs, &["preset", "fit", "model", "parameters"])?;
     c.one_of(h, hs, &["preset", "fit", "model"])?;
     if let Some(p) = c.string(h, hs, "preset")? {
         c.one_of(h, hs, &["preset", "parameters"])?;
         return match p {
-            "vhb4910-yeoh" => Ok(("yeoh".to_string(), presets::VHB4910_YEOH_PA.to_vec(), None)),
+            "vhb4910-yeoh" => Ok(HyperelasticPart {
+                spec: ModelSpec::new("yeoh", OgdenForm::Seed),
+                params: presets::VHB4910_YEOH_PA.to_vec(),
+                ranges: None,
+            }),
             o => Err(c.unknown_name(&format!("{hs}.preset"), o, &["vhb4910-yeoh"])),
         };
     }
     if let Some(f) = c.string(h, hs, "fit")? {
         c.one_of(h, hs, &["fit", "parameters"])?;
-        let fit = fitfile::read_hyperelastic(&c.file_ref(dir, &format!("{hs}.fit"), f)?)?;
-        return Ok((fit.model.clone(), fit.values(), Some(Arc::new(fit))));
+        return file::read_hyperelastic(&c.file_ref(dir, &format!("{hs}.fit"), f)?);
     }
     let Some(m) = c.string(h, hs, "model")? else {
         return Err(c
@@ -647,7 +604,7 @@ fn read_hyperelastic(
         None => {
             return Err(c
                 .err(&ps, "is missing")
-                .with_hint(fitfile::expected_params(model.as_ref())))
+                .with_hint(expected_params(model.as_ref())))
         }
     };
     let names: Vec<&str> = model.params().iter().map(|p| p.name.as_str()).collect();
@@ -660,10 +617,14 @@ fn read_hyperelastic(
         };
         vals.push(v.ok_or_else(|| {
             c.err(&format!("{ps}.{}", info.name), "is missing")
-                .with_hint(fitfile::expected_params(model.as_ref()))
+                .with_hint(expected_params(model.as_ref()))
         })?);
     }
-    Ok((m.to_string(), vals, None))
+    Ok(HyperelasticPart {
+        spec: ModelSpec::new(m, OgdenForm::Seed),
+        params: vals,
+        ranges: None,
+    })
 }
 
 fn read_viscous(c: &Ctx, v: Option<&toml::Table>, dir: &Path) -> Result<Viscous> {
@@ -679,20 +640,20 @@ fn read_viscous(c: &Ctx, v: Option<&toml::Table>, dir: &Path) -> Result<Viscous>
         return presets::viscous(p)
             .ok_or_else(|| c.unknown_name(&format!("{vs}.preset"), p, &names));
     }
-    let nv = c
-        .quantity(v, vs, "nv", Dimension::Viscosity)?
-        .unwrap_or(0.0);
+    let nv = c.quantity(v, vs, "nv", Dimension::Viscosity)?;
     if let Some(f) = c.string(v, vs, "fit")? {
-        let (_, arms) = fitfile::read_relaxation(&c.file_ref(dir, &format!("{vs}.fit"), f)?)?;
+        let (arms, stated) = file::read_viscous(&c.file_ref(dir, &format!("{vs}.fit"), f)?)?;
+        if stated.is_some() && nv.is_some() {
+            return Err(c
+                .err(
+                    &format!("{vs}.nv"),
+                    format!("conflicts with the nv of {vs}.fit"),
+                )
+                .with_hint("an identified material states its dashpot: drop nv here"));
+        }
         return Ok(Viscous {
-            nv_pa_s: nv,
-            arms: arms
-                .iter()
-                .map(|a| Arm {
-                    k_pa: a.k,
-                    eta_pa_s: a.n,
-                })
-                .collect(),
+            nv_pa_s: stated.or(nv).unwrap_or(0.0),
+            arms,
         });
     }
     let mut arms = Vec::new();
@@ -710,13 +671,42 @@ fn read_viscous(c: &Ctx, v: Option<&toml::Table>, dir: &Path) -> Result<Viscous>
                 Some(e) => e,
                 None => k * c.need(at, &sec, "tau", Dimension::Time)?,
             };
-            arms.push(Arm {
+            arms.push(file::Arm {
                 k_pa: k,
                 eta_pa_s: eta,
             });
         }
     }
-    Ok(Viscous { nv_pa_s: nv, arms })
+    Ok(Viscous {
+        nv_pa_s: nv.unwrap_or(0.0),
+        arms,
+    })
+}
+
+/// The material file of `material.identified`, after refusing the scene keys it
+/// fills (hyperelastic always, viscous and relative_permittivity when it holds them).
+fn read_identified(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<Option<IdentifiedMaterial>> {
+    let Some(f) = c.string(t, "material", "identified")? else {
+        return Ok(None);
+    };
+    let m = IdentifiedMaterial::read(&c.file_ref(dir, "material.identified", f)?)?;
+    for (key, filled) in [
+        ("hyperelastic", true),
+        ("viscous", m.viscous.is_some()),
+        ("relative_permittivity", m.eps_r.is_some()),
+    ] {
+        if filled && t.contains_key(key) {
+            return Err(c
+                .err(
+                    &format!("material.{key}"),
+                    "conflicts with material.identified, whose file gives it",
+                )
+                .with_hint(format!(
+                    "drop material.{key}, or take only some parts of the file: hyperelastic = {{ fit = \"{f}\" }}"
+                )));
+        }
+    }
+    Ok(Some(m))
 }
 
 fn read_material(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<(Material, Option<f64>)> {
@@ -725,6 +715,7 @@ fn read_material(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<(Material, Opti
         t,
         s,
         &[
+            "identified",
             "hyperelastic",
             "viscous",
             "relative_permittivity",
@@ -733,39 +724,42 @@ fn read_material(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<(Material, Opti
             "actuator_mass",
         ],
     )?;
-    let h = match t.get("hyperelastic") {
-        Some(toml::Value::Table(h)) => h,
-        _ => {
-            return Err(c
-                .err("material.hyperelastic", "is missing or not a table")
-                .with_hint("give { preset = \"vhb4910-yeoh\" }, { fit = \"fits/x.json\" } or { model = \"yeoh\", parameters = { C10 = \"69.3 kPa\", ... } }"))
+    let identified = read_identified(c, t, dir)?;
+    let (hyper, viscous, eps_r) = match identified {
+        Some(m) => (m.hyperelastic, m.viscous, m.eps_r),
+        None => {
+            let h = match t.get("hyperelastic") {
+                Some(toml::Value::Table(h)) => h,
+                _ => {
+                    return Err(c
+                        .err("material.hyperelastic", "is missing or not a table")
+                        .with_hint("give { preset = \"vhb4910-yeoh\" }, { fit = \"fits/x.json\" } or { model = \"yeoh\", parameters = { C10 = \"69.3 kPa\", ... } }, or material.identified = \"fits/x.json\""))
+                }
+            };
+            (read_hyperelastic(c, h, dir)?, None, None)
         }
     };
-    let (model_name, params, fit) = read_hyperelastic(c, h, dir)?;
-    let model: Arc<dyn StrainEnergy> = Arc::from(
-        ModelSpec {
-            name: model_name.clone(),
-            form: fit
-                .as_ref()
-                .and_then(|f: &Arc<HyperelasticFit>| f.form)
-                .or(model_name.starts_with("ogden").then_some(OgdenForm::Seed)),
-        }
-        .build()?,
-    );
-    let viscous = read_viscous(c, c.opt_table(t, "viscous")?, dir)?;
-    let eps_r = c.number(t, s, "relative_permittivity")?.ok_or_else(|| {
-        c.err("material.relative_permittivity", "is missing")
-            .with_hint("e.g. relative_permittivity = 4.7")
-    })?;
+    let viscous = match viscous {
+        Some(v) => v,
+        None => read_viscous(c, c.opt_table(t, "viscous")?, dir)?,
+    };
+    let eps_r = match eps_r {
+        Some(e) => e,
+        None => c.number(t, s, "relative_permittivity")?.ok_or_else(|| {
+            c.err("material.relative_permittivity", "is missing")
+                .with_hint("e.g. relative_permittivity = 4.7")
+        })?,
+    };
+    let model: Arc<dyn StrainEnergy> = Arc::from(hyper.spec.build()?);
     let density = c.need(t, s, "density", Dimension::Density)?;
     let resistivity = c.number(t, s, "resistivity_ohm_m")?;
     let mass = c.quantity(t, s, "actuator_mass", Dimension::Mass)?;
     Ok((
         Material {
-            model_name,
+            model_name: hyper.spec.name,
             model,
-            params,
-            fit,
+            params: hyper.params,
+            fit: hyper.ranges.map(Arc::new),
             viscous,
             eps_r,
             density,

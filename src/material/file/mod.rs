@@ -1,0 +1,236 @@
+//! Material files: what a scene can reference as its material, read by parameter
+//! NAME (never by position) with each unit checked, and refused with the file, the
+//! key and what was expected when edited inconsistently.
+//!
+//! - a hyperelastic fit (`dea-fit hyperelastic --out`, schema [`HYPERELASTIC_SCHEMA`])
+//!   holds a [`HyperelasticPart`];
+//! - a relaxation fit (`dea-fit relaxation --out`, [`RELAXATION_SCHEMA`]) holds the
+//!   Maxwell arms of a [`Viscous`] part (its own model has no Kelvin–Voigt dashpot);
+//! - an identified material (`dea-fit identify`, [`IDENTIFIED_SCHEMA`]) holds all
+//!   of them and εr, each parameter with its uncertainty ([`IdentifiedMaterial`]).
+//!
+//! The estimators (`fit::`) write the first two; this module, below both `fit` and
+//! `sim`, defines the material part of each and reads it.
+
+mod hyperelastic;
+mod identified;
+mod viscous;
+
+pub use hyperelastic::{expected_params, FittedRanges, HyperelasticPart, StretchRange};
+pub use identified::{IdentifiedMaterial, ParamUncertainty};
+pub use viscous::{Arm, Viscous};
+
+use crate::error::{Error, Location, Result};
+use crate::material::check::{did_you_mean, Violation};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Schema tag of hyperelastic fit files.
+pub const HYPERELASTIC_SCHEMA: &str = "dea-fit/hyperelastic-fit/1";
+/// Schema tag of relaxation fit files.
+pub const RELAXATION_SCHEMA: &str = "dea-fit/relaxation-fit/1";
+/// Schema tag of identified material files.
+pub const IDENTIFIED_SCHEMA: &str = "dea-fit/identified/1";
+
+/// Read the hyperelastic part of a hyperelastic fit or an identified material file.
+/// Its parameters are in the model's order.
+pub fn read_hyperelastic(path: &Path) -> Result<HyperelasticPart> {
+    let (text, schema) = read_text(
+        path,
+        &[HYPERELASTIC_SCHEMA, IDENTIFIED_SCHEMA],
+        "hyperelastic",
+    )?;
+    match schema {
+        HYPERELASTIC_SCHEMA => HyperelasticPart::from_json(path, "", &typed(path, &text)?),
+        _ => Ok(IdentifiedMaterial::parse(path, &text)?.hyperelastic),
+    }
+}
+
+/// Read the viscous part of a relaxation fit or an identified material file: the
+/// Maxwell arms, and the Kelvin–Voigt dashpot Nv (Pa·s) when the file states it
+/// (an identified file does, a relaxation fit does not). A file without a viscous
+/// part is refused.
+pub fn read_viscous(path: &Path) -> Result<(Vec<Arm>, Option<f64>)> {
+    let (text, schema) = read_text(path, &[RELAXATION_SCHEMA, IDENTIFIED_SCHEMA], "viscous")?;
+    match schema {
+        RELAXATION_SCHEMA => Ok((viscous::relaxation_arms(path, &typed(path, &text)?)?, None)),
+        _ => match IdentifiedMaterial::parse(path, &text)?.viscous {
+            Some(v) => Ok((v.arms, Some(v.nv_pa_s))),
+            None => Err(err(path, "viscous", "missing: this identified material has no viscous part")
+                .with_hint("give the scene's material.viscous another way (preset, arms) or identify with arms")),
+        },
+    }
+}
+
+/// One parameter as a material file holds it: name, SI unit and value, and, in an
+/// identified file, its standard error and whether the data pinned it down
+/// (both `null` for a parameter that was held fixed).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+struct FileParam {
+    name: String,
+    #[serde(default)]
+    unit: String,
+    value: f64,
+    #[serde(default)]
+    std_error: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    identifiable: Option<bool>,
+}
+
+impl FileParam {
+    /// A parameter with the uncertainty `uncertainty` gives it by name (none: fixed).
+    pub(super) fn with(
+        name: &str,
+        unit: &str,
+        value: f64,
+        uncertainty: &[ParamUncertainty],
+    ) -> Self {
+        let u = uncertainty.iter().find(|u| u.name == name);
+        FileParam {
+            name: name.to_string(),
+            unit: unit.to_string(),
+            value,
+            std_error: u.and_then(|u| u.std_error),
+            identifiable: u.map(|u| u.identifiable),
+        }
+    }
+}
+
+/// An error at `key` of a material file (no line: JSON keys are named by path).
+fn err(path: &Path, key: &str, msg: impl std::fmt::Display) -> Error {
+    Error::input(Location::file(path), format!("{key}: {msg}"))
+}
+
+fn violation(path: &Path, v: Violation) -> Error {
+    err(path, &v.key, v.msg).with_hint(v.hint)
+}
+
+/// `prefix.key`, or `key` at the top level.
+fn join(prefix: &str, key: &str) -> String {
+    match prefix {
+        "" => key.to_string(),
+        p => format!("{p}.{key}"),
+    }
+}
+
+/// The file's text once it is JSON with one of the `accepted` schema tags (the
+/// tag returned); `what` names the material part the caller wants.
+fn read_text(path: &Path, accepted: &[&'static str], what: &str) -> Result<(String, &'static str)> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
+        Error::input(
+            Location::at(path, e.line(), e.column()),
+            format!("not a {what} material file: {e}"),
+        )
+    })?;
+    let want = accepted
+        .iter()
+        .map(|s| format!("\"{s}\""))
+        .collect::<Vec<_>>()
+        .join(" or ");
+    match v.get("schema").and_then(serde_json::Value::as_str) {
+        Some(s) => match accepted.iter().find(|a| **a == s) {
+            Some(a) => Ok((text, *a)),
+            None => {
+                let hint = match s {
+                    RELAXATION_SCHEMA => {
+                        "this is a relaxation fit: use it as material.viscous = { fit = ... }"
+                    }
+                    HYPERELASTIC_SCHEMA => {
+                        "this is a hyperelastic fit: use it as material.hyperelastic = { fit = ... }"
+                    }
+                    _ => "write it with dea-fit hyperelastic --out, dea-fit relaxation --out or dea-fit identify",
+                };
+                Err(err(path, "schema", format!("expected {want}, found \"{s}\"")).with_hint(hint))
+            }
+        },
+        None => Err(err(path, "schema", format!("missing; expected {want}"))
+            .with_hint("a material file from dea-fit has a schema tag")),
+    }
+}
+
+/// The file's text as the typed shape `T`; a wrong type is located at its line
+/// and column.
+fn typed<T: serde::de::DeserializeOwned>(path: &Path, text: &str) -> Result<T> {
+    serde_json::from_str(text).map_err(|e| {
+        Error::input(
+            Location::at(path, e.line(), e.column()),
+            format!("not a material file of its schema: {e}"),
+        )
+    })
+}
+
+/// The values of `list` by name: for each expected (name, unit) its value, in the
+/// expected order. Refuses a missing, unknown, repeated or mis-unitised name and a
+/// non-finite value; `key` names the list in messages, `what` the model.
+fn by_name(
+    path: &Path,
+    list: &[FileParam],
+    key: &str,
+    expected: &[(String, &str)],
+    what: &str,
+) -> Result<Vec<f64>> {
+    let names: Vec<&str> = expected.iter().map(|e| e.0.as_str()).collect();
+    let want = || {
+        let list: Vec<String> = expected.iter().map(|(n, u)| format!("{n} [{u}]")).collect();
+        format!("{what} takes {}", list.join(", "))
+    };
+    let mut vals: Vec<Option<f64>> = vec![None; expected.len()];
+    for (i, p) in list.iter().enumerate() {
+        let at = format!("{key}[{i}]");
+        let name = p.name.as_str();
+        let Some(j) = names.iter().position(|n| *n == name) else {
+            let near = did_you_mean(name, &names)
+                .map(|m| format!("did you mean '{m}'? "))
+                .unwrap_or_default();
+            return Err(err(
+                path,
+                &format!("{at}.name"),
+                format!("'{name}' is not a parameter of {what}"),
+            )
+            .with_hint(format!("{near}{}", want())));
+        };
+        if vals[j].is_some() {
+            return Err(err(
+                path,
+                &format!("{at}.name"),
+                format!("'{name}' is given twice"),
+            )
+            .with_hint(want()));
+        }
+        if p.unit != expected[j].1 {
+            return Err(err(
+                path,
+                &format!("{at}.unit"),
+                format!("{name} is in '{}', found '{}'", expected[j].1, p.unit),
+            )
+            .with_hint("material files hold SI values: write them with dea-fit"));
+        }
+        if !p.value.is_finite() {
+            return Err(err(
+                path,
+                &format!("{at}.value"),
+                format!("{name} needs a finite number"),
+            ));
+        }
+        vals[j] = Some(p.value);
+    }
+    expected
+        .iter()
+        .zip(vals)
+        .map(|((n, _), x)| {
+            x.ok_or_else(|| {
+                err(
+                    path,
+                    key,
+                    format!(
+                        "{n} is missing ({} of {} given)",
+                        list.len(),
+                        expected.len()
+                    ),
+                )
+                .with_hint(want())
+            })
+        })
+        .collect()
+}

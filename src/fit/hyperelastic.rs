@@ -673,6 +673,10 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
                 settings.max_iterations
             ));
         }
+        Termination::WallTime => {
+            escalate(Status::NotConverged);
+            warnings.push("the search stopped at its wall-time limit".into());
+        }
         Termination::Failed(why) => {
             escalate(Status::NotConverged);
             warnings.push(format!("the search failed: {why}"));
@@ -893,11 +897,7 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         ))
         .with_hint("check the data for outliers or choose another model"));
     }
-    let termination = match &est.termination {
-        Termination::Converged(w) => format!("converged ({w})"),
-        Termination::MaxIterations => "iteration limit".into(),
-        Termination::Failed(w) => format!("failed: {w}"),
-    };
+    let termination = est.termination.to_string();
     Ok(HyperelasticFit {
         schema: SCHEMA.into(),
         tool_version: env!("CARGO_PKG_VERSION").into(),

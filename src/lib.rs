@@ -20,6 +20,7 @@ pub mod error;
 pub mod fit;
 pub mod io;
 pub mod material;
+pub mod observe;
 pub mod report;
 pub mod sim;
 pub mod units;

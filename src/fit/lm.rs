@@ -12,9 +12,7 @@
 
 use argmin::core::checkpointing::{Checkpoint as Save, CheckpointingFrequency};
 use argmin::core::observers::{Observe, ObserverMode};
-use argmin::core::{
-    Executor, IterState, Problem, Solver, State, TerminationReason, KV,
-};
+use argmin::core::{Executor, IterState, Problem, Solver, State, TerminationReason, KV};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -164,7 +162,11 @@ impl Lm {
         let mut lm = Lm {
             settings: *settings,
             bounds: bounds.to_vec(),
-            x: x0.iter().zip(bounds).map(|(&v, &b)| project(v, b)).collect(),
+            x: x0
+                .iter()
+                .zip(bounds)
+                .map(|(&v, &b)| project(v, b))
+                .collect(),
             r: DVector::zeros(m),
             jac: DMatrix::zeros(m, n),
             cost: f64::INFINITY,
@@ -195,7 +197,9 @@ impl Lm {
         let a = self.jac.tr_mul(&self.jac);
         let g = self.jac.tr_mul(&self.r);
         if !(a.iter().all(|v| v.is_finite()) && g.iter().all(|v| v.is_finite())) {
-            return Some(Termination::Failed("the normal equations overflowed".into()));
+            return Some(Termination::Failed(
+                "the normal equations overflowed".into(),
+            ));
         }
         let mut free = vec![true; n];
         for i in 0..n {
@@ -318,6 +322,8 @@ pub type LmState = IterState<Vec<f64>, (), (), (), (), f64>;
 struct LmSolver<'s> {
     lm: &'s mut Lm,
     stopped: Option<Termination>,
+    /// Whether anyone reads the key-value pairs (they cost a few allocations).
+    observed: bool,
 }
 
 /// The problem as argmin holds it.
@@ -333,7 +339,7 @@ impl<P: LeastSquares + ?Sized> Solver<Held<'_, P>, LmState> for LmSolver<'_> {
         _problem: &mut Problem<Held<'_, P>>,
         state: LmState,
     ) -> Result<(LmState, Option<KV>), argmin::core::Error> {
-        Ok((state, Some(self.lm.kv())))
+        Ok((state, self.observed.then(|| self.lm.kv())))
     }
 
     fn next_iter(
@@ -354,7 +360,7 @@ impl<P: LeastSquares + ?Sized> Solver<Held<'_, P>, LmState> for LmSolver<'_> {
             Some(t) => state.terminate_with(TerminationReason::SolverExit(t.to_string())),
         };
         self.stopped = stop;
-        Ok((state, Some(self.lm.kv())))
+        Ok((state, self.observed.then(|| self.lm.kv())))
     }
 }
 
@@ -405,8 +411,23 @@ pub fn minimize<P: LeastSquares + ?Sized>(
     bounds: &[(f64, f64)],
     settings: &LmSettings,
 ) -> LmResult {
+    if DIRECT.load(std::sync::atomic::Ordering::Relaxed) {
+        let mut lm = match Lm::start(problem, x0, bounds, settings) {
+            Ok(lm) => lm,
+            Err(failed) => return failed,
+        };
+        loop {
+            if let Some(t) = lm.step(problem) {
+                return lm.finish(t);
+            }
+        }
+    }
     search(problem, x0, bounds, settings, &mut Control::default())
 }
+
+/// TEMPORARY A/B switch for the overhead measurement (hand loop when true).
+#[doc(hidden)]
+pub static DIRECT: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
 /// Minimise ½‖r(p)‖² from `x0` within `bounds` (or from the checkpoint when
 /// `control.resume` and its file exists), through argmin's `Executor` with the
@@ -450,6 +471,7 @@ pub fn search<P: LeastSquares + ?Sized>(
         LmSolver {
             lm: &mut lm,
             stopped: None,
+            observed: !control.observers.is_empty(),
         },
     )
     .configure(|_| state)
@@ -489,7 +511,12 @@ pub fn search<P: LeastSquares + ?Sized>(
 struct Forward(Observer);
 
 impl Observe<LmState> for Forward {
-    fn observe_init(&mut self, name: &str, state: &LmState, kv: &KV) -> Result<(), argmin::core::Error> {
+    fn observe_init(
+        &mut self,
+        name: &str,
+        state: &LmState,
+        kv: &KV,
+    ) -> Result<(), argmin::core::Error> {
         self.0.observe_init(name, state, kv)
     }
     fn observe_iter(&mut self, state: &LmState, kv: &KV) -> Result<(), argmin::core::Error> {
@@ -589,8 +616,7 @@ fn load(file: &Path, (m, n): (usize, usize), bounds: &[(f64, f64)]) -> Result<Lm
         return Err(what(format!("format {:?}, expected {FORMAT:?}", s.format)));
     }
     let same_bounds = s.bounds.len() == bounds.len()
-        && s
-            .bounds
+        && s.bounds
             .iter()
             .zip(bounds)
             .all(|(&(a, b), &(lo, hi))| a == lo.to_bits() && b == hi.to_bits());

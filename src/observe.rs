@@ -65,6 +65,9 @@ impl Observe<LmState> for Progress {
     }
 }
 
+/// Where a [`Trace`] writes, shared by the observers of all starts.
+type Sink = BufWriter<Box<dyn Write + Send>>;
+
 /// A JSON-lines trace: one object per line, at the start of each search and after
 /// each of its iterations,
 /// `{"start":0,"iteration":3,"cost":1.2e-4,"damping":1e-5,"evaluations":7,"x":[...]}`
@@ -73,7 +76,7 @@ impl Observe<LmState> for Progress {
 /// interleave, each whole.
 #[derive(Clone)]
 pub struct Trace {
-    out: Arc<Mutex<BufWriter<Box<dyn Write + Send>>>>,
+    out: Arc<Mutex<Sink>>,
     path: PathBuf,
 }
 

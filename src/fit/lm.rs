@@ -411,23 +411,8 @@ pub fn minimize<P: LeastSquares + ?Sized>(
     bounds: &[(f64, f64)],
     settings: &LmSettings,
 ) -> LmResult {
-    if DIRECT.load(std::sync::atomic::Ordering::Relaxed) {
-        let mut lm = match Lm::start(problem, x0, bounds, settings) {
-            Ok(lm) => lm,
-            Err(failed) => return failed,
-        };
-        loop {
-            if let Some(t) = lm.step(problem) {
-                return lm.finish(t);
-            }
-        }
-    }
     search(problem, x0, bounds, settings, &mut Control::default())
 }
-
-/// TEMPORARY A/B switch for the overhead measurement (hand loop when true).
-#[doc(hidden)]
-pub static DIRECT: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
 /// Minimise ½‖r(p)‖² from `x0` within `bounds` (or from the checkpoint when
 /// `control.resume` and its file exists), through argmin's `Executor` with the
@@ -532,16 +517,16 @@ impl Observe<LmState> for Forward {
 /// search and check the file belongs to the problem).
 struct FileCheckpoint(Checkpoint);
 
-impl Save<LmSolver<'_>, LmState> for FileCheckpoint {
+impl<'s> Save<LmSolver<'s>, LmState> for FileCheckpoint {
     /// A search the solver has stopped is not saved: resuming repeats its last
     /// iteration, which stops it the same way.
-    fn save(&self, solver: &LmSolver<'_>, _state: &LmState) -> Result<(), argmin::core::Error> {
+    fn save(&self, solver: &LmSolver<'s>, _state: &LmState) -> Result<(), argmin::core::Error> {
         if solver.stopped.is_some() {
             return Ok(());
         }
         save(&self.0.file, solver.lm).map_err(argmin::core::Error::msg)
     }
-    fn load(&self) -> Result<Option<(LmSolver<'static>, LmState)>, argmin::core::Error> {
+    fn load(&self) -> Result<Option<(LmSolver<'s>, LmState)>, argmin::core::Error> {
         Ok(None)
     }
     fn frequency(&self) -> CheckpointingFrequency {

@@ -7,6 +7,10 @@
 //!   LM baseline from the same starts.
 //! * `search/vhb4910-uniaxial/yeoh-{svd,lm}`: the search alone for Yeoh, the exact
 //!   linear least-squares solve against the naive baseline of an iterative LM.
+//! * `search/rosenbrock-2/lm`: the LM on a 2-parameter problem (some twenty
+//!   iterations of microseconds), where the fixed cost of argmin's `Executor`
+//!   around `Lm::step` shows (docs/architecture.md, "argmin: what it bought, what
+//!   it cost").
 //!
 //! Sample settings are modest (10 flat samples, 1 s) so the whole run takes a
 //! couple of minutes on a shared 2-core machine.
@@ -17,7 +21,7 @@ use dea_fit::fit::hyperelastic::{fit, Search, Settings};
 use dea_fit::fit::lm::{self, LeastSquares, LmSettings};
 use dea_fit::fit::problem::{svd_solve, HyperProblem};
 use dea_fit::material::hyperelastic::{ModelSpec, MODEL_NAMES};
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 use std::hint::black_box;
 use std::path::Path;
 use std::time::Duration;
@@ -108,12 +112,39 @@ fn yeoh_search(c: &mut Criterion) {
     g.finish();
 }
 
+/// Rosenbrock as least squares: r = (10(y − x²), 1 − x), from (−1.2, 1).
+struct Rosenbrock;
+
+impl LeastSquares for Rosenbrock {
+    fn dims(&self) -> (usize, usize) {
+        (2, 2)
+    }
+    fn eval(&mut self, p: &[f64], r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>) -> bool {
+        r[0] = 10.0 * (p[1] - p[0] * p[0]);
+        r[1] = 1.0 - p[0];
+        if let Some(j) = jac {
+            j.copy_from_slice(&[-20.0 * p[0], -1.0, 10.0, 0.0]);
+        }
+        true
+    }
+}
+
+fn tiny_search(c: &mut Criterion) {
+    let free = [(f64::NEG_INFINITY, f64::INFINITY); 2];
+    let settings = LmSettings::default();
+    let res = lm::minimize(&mut Rosenbrock, &[-1.2, 1.0], &free, &settings);
+    assert!(res.cost < 1e-20, "{res:?}");
+    c.bench_function("search/rosenbrock-2/lm", |b| {
+        b.iter(|| lm::minimize(&mut Rosenbrock, black_box(&[-1.2, 1.0]), &free, &settings))
+    });
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default()
         .sample_size(10)
         .warm_up_time(Duration::from_millis(300))
         .measurement_time(Duration::from_secs(1));
-    targets = fits, yeoh_search
+    targets = fits, yeoh_search, tiny_search
 }
 criterion_main!(benches);

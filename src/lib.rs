@@ -21,6 +21,7 @@ pub mod fit;
 pub mod identify;
 pub mod io;
 pub mod material;
+pub mod observe;
 pub mod report;
 pub mod sim;
 pub mod units;

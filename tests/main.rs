@@ -14,6 +14,7 @@ mod permittivity;
 mod relaxation;
 mod sampling;
 mod scene_input;
+mod search;
 mod sim;
 mod sim_derivatives;
 mod support;

@@ -364,6 +364,10 @@ pub fn fit_rule(rule: MixingRule, phi: &[f64], eps: &[f64]) -> Option<RuleFit> {
             status = Status::NotConverged;
             warnings.push("the search stopped at the iteration limit".into());
         }
+        Termination::WallTime => {
+            status = Status::NotConverged;
+            warnings.push("the search stopped at its wall-time limit".into());
+        }
         Termination::Failed(w) => {
             status = Status::NotConverged;
             warnings.push(format!("the search failed: {w}"));
@@ -407,11 +411,7 @@ pub fn fit_rule(rule: MixingRule, phi: &[f64], eps: &[f64]) -> Option<RuleFit> {
         status,
         warnings,
         iterations,
-        termination: match &best.termination {
-            Termination::Converged(w) => format!("converged ({w})"),
-            Termination::MaxIterations => "iteration limit".into(),
-            Termination::Failed(w) => format!("failed: {w}"),
-        },
+        termination: best.termination.to_string(),
     })
 }
 

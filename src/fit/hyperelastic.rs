@@ -12,6 +12,7 @@
 use super::diagnostics::{self, DruckerCheck, DRUCKER_RANGE};
 use super::linear::constrained_least_squares;
 use super::lm::{self, LeastSquares, LmSettings, Termination};
+use super::multistart;
 use super::problem::{svd_solve, HyperProblem, Residual, VarPro};
 use super::{Parameter, SolverReport, Status};
 use crate::data::{Dataset, Source};
@@ -488,17 +489,14 @@ fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Es
     let mut notes = Vec::new();
     let stable_ok = |p: &[f64]| diagnostics::drucker(model, p).iter().all(|d| d.stable);
     let best_cost = results.iter().map(|r| r.0).fold(f64::INFINITY, f64::min);
-    let at_best = results
-        .iter()
-        .filter(|r| r.0 <= best_cost * (1.0 + 1e-6) + 1e-300)
-        .count();
+    let at_best = multistart::starts_at_best(&results.iter().map(|r| r.0).collect::<Vec<_>>());
     let chosen = if s.stable {
         let mut stable: Vec<&(f64, Vec<f64>)> =
             results.iter().filter(|r| stable_ok(&r.1)).collect();
         stable.sort_by(|a, b| a.0.total_cmp(&b.0));
         match stable.first() {
             Some(r) => {
-                if r.0 > best_cost * (1.0 + 1e-6) {
+                if r.0 > best_cost * (1.0 + multistart::AT_BEST_REL) {
                     notes.push(format!(
                         "--stable: the best Drucker-stable start has cost {:.4e}, above the unconstrained best {:.4e}",
                         r.0, best_cost
@@ -670,6 +668,10 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
                 "the search stopped at the iteration limit ({}) without converging",
                 settings.max_iterations
             ));
+        }
+        Termination::WallTime => {
+            escalate(Status::NotConverged);
+            warnings.push("the search stopped at its wall-time limit".into());
         }
         Termination::Failed(why) => {
             escalate(Status::NotConverged);
@@ -891,11 +893,7 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         ))
         .with_hint("check the data for outliers or choose another model"));
     }
-    let termination = match &est.termination {
-        Termination::Converged(w) => format!("converged ({w})"),
-        Termination::MaxIterations => "iteration limit".into(),
-        Termination::Failed(w) => format!("failed: {w}"),
-    };
+    let termination = est.termination.to_string();
     Ok(HyperelasticFit {
         schema: SCHEMA.into(),
         tool_version: env!("CARGO_PKG_VERSION").into(),

@@ -1,11 +1,22 @@
 //! Bounded Levenberg-Marquardt (Marquardt scaling, Nielsen's damping update,
-//! active-set handling of box bounds).
+//! active-set handling of box bounds), run by argmin's `Executor`.
 //!
-//! Written here rather than taken from a crate because the estimators need box
-//! bounds, analytic Jacobians supplied in place, variable projection on top, and
-//! exact counts for the solver report; none of the Rust LM crates offers all four.
+//! The algorithm is written here rather than taken from a crate because the
+//! estimators need box bounds, analytic Jacobians supplied in place, variable
+//! projection on top, and exact counts for the solver report; none of the Rust LM
+//! crates offers all four. One iteration is [`Lm::step`]; argmin's `Executor` drives
+//! it ([`search`]) and adds what a long search needs: observers (progress bar,
+//! iteration trace: [`crate::observe`]), checkpoints to resume from, and a wall-time
+//! limit. [`minimize`] is the same search without those (docs/architecture.md,
+//! "argmin: what it bought, what it cost").
 
+use argmin::core::checkpointing::{Checkpoint as Save, CheckpointingFrequency};
+use argmin::core::observers::{Observe, ObserverMode};
+use argmin::core::{Executor, IterState, Problem, Solver, State, TerminationReason, KV};
 use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 /// A nonlinear least-squares problem: minimise ½‖r(p)‖².
 pub trait LeastSquares {
@@ -47,8 +58,23 @@ pub enum Termination {
     Converged(&'static str),
     /// The iteration limit was reached.
     MaxIterations,
-    /// The start was outside the domain or the problem produced non-finite values.
+    /// The wall-time limit of [`Control::max_wall`] was reached; with a checkpoint
+    /// the search can be resumed from where it stopped.
+    WallTime,
+    /// The start was outside the domain, the problem produced non-finite values, or
+    /// the machinery around the search (trace, checkpoint) failed: why.
     Failed(String),
+}
+
+impl std::fmt::Display for Termination {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        match self {
+            Termination::Converged(w) => write!(f, "converged ({w})"),
+            Termination::MaxIterations => f.write_str("iteration limit"),
+            Termination::WallTime => f.write_str("wall-time limit"),
+            Termination::Failed(w) => write!(f, "failed: {w}"),
+        }
+    }
 }
 
 /// Result of one search.
@@ -58,9 +84,9 @@ pub struct LmResult {
     pub x: Vec<f64>,
     /// ½‖r‖² at `x`.
     pub cost: f64,
-    /// Iterations taken.
+    /// Iterations taken (accepted steps; across a resume, the total).
     pub iterations: usize,
-    /// Residual evaluations (each with or without Jacobian).
+    /// Residual evaluations (each with or without Jacobian; across a resume, the total).
     pub evaluations: usize,
     /// Why it stopped.
     pub termination: Termination,
@@ -94,62 +120,87 @@ fn invalid_start(n: usize, x0: &[f64], bounds: &[(f64, f64)]) -> Option<String> 
     None
 }
 
-/// Minimise ½‖r(p)‖² from `x0` within `bounds`. A start or bounds that cannot be
-/// used (see [`invalid_start`]) end the search at once as [`Termination::Failed`].
-pub fn minimize<P: LeastSquares + ?Sized>(
-    problem: &mut P,
-    x0: &[f64],
-    bounds: &[(f64, f64)],
-    settings: &LmSettings,
-) -> LmResult {
-    let (m, n) = problem.dims();
-    if let Some(why) = invalid_start(n, x0, bounds) {
-        return LmResult {
-            x: x0.to_vec(),
-            cost: f64::INFINITY,
-            iterations: 0,
-            evaluations: 0,
-            termination: Termination::Failed(why),
-        };
-    }
-    let mut x: Vec<f64> = x0
-        .iter()
-        .zip(bounds)
-        .map(|(&v, &b)| project(v, b))
-        .collect();
-    let mut r = DVector::zeros(m);
-    let mut jac = DMatrix::zeros(m, n);
-    let mut r_new = DVector::zeros(m);
-    let mut x_new = vec![0.0; n];
-    let mut evaluations = 1;
-    if !problem.eval(&x, &mut r, Some(&mut jac)) {
-        return LmResult {
-            cost: f64::INFINITY,
-            x,
-            iterations: 0,
-            evaluations,
-            termination: Termination::Failed("not finite at the start".into()),
-        };
-    }
-    let mut cost = 0.5 * r.norm_squared();
-    // Damping is relative to diag(JᵀJ) (Marquardt scaling), so it is dimensionless.
-    let mut mu = 1e-3;
-    let mut nu = 2.0;
-    let mut a = DMatrix::zeros(n, n);
-    let mut g = DVector::zeros(n);
-    for it in 0..settings.max_iterations {
-        jac.tr_mul_to(&jac, &mut a);
-        jac.tr_mul_to(&r, &mut g);
-        if !(a.iter().all(|v| v.is_finite()) && g.iter().all(|v| v.is_finite())) {
-            return done(
-                x,
-                cost,
-                it,
-                evaluations,
-                Termination::Failed("the normal equations overflowed".into()),
-            );
+/// The search between two iterations: everything a checkpoint holds. Settings are
+/// not state: a resumed search takes the caller's (so it may be given more
+/// iterations or time than the first run).
+#[derive(Debug, Clone)]
+pub struct Lm {
+    settings: LmSettings,
+    bounds: Vec<(f64, f64)>,
+    x: Vec<f64>,
+    r: DVector<f64>,
+    jac: DMatrix<f64>,
+    cost: f64,
+    /// Damping relative to diag(JᵀJ) (Marquardt scaling), so dimensionless.
+    mu: f64,
+    /// Nielsen's growth factor for `mu` after a rejected step.
+    nu: f64,
+    iterations: usize,
+    evaluations: usize,
+}
+
+impl Lm {
+    /// Project `x0` into `bounds` and evaluate there (one evaluation, with Jacobian).
+    /// A start or bounds that cannot be used (see [`invalid_start`]) or a start
+    /// where the problem is not finite give the failed result instead.
+    fn start<P: LeastSquares + ?Sized>(
+        problem: &mut P,
+        x0: &[f64],
+        bounds: &[(f64, f64)],
+        settings: &LmSettings,
+    ) -> Result<Lm, LmResult> {
+        let (m, n) = problem.dims();
+        if let Some(why) = invalid_start(n, x0, bounds) {
+            return Err(LmResult {
+                x: x0.to_vec(),
+                cost: f64::INFINITY,
+                iterations: 0,
+                evaluations: 0,
+                termination: Termination::Failed(why),
+            });
         }
-        // Active set: variables at a bound whose gradient pushes outward stay put.
+        let mut lm = Lm {
+            settings: *settings,
+            bounds: bounds.to_vec(),
+            x: x0
+                .iter()
+                .zip(bounds)
+                .map(|(&v, &b)| project(v, b))
+                .collect(),
+            r: DVector::zeros(m),
+            jac: DMatrix::zeros(m, n),
+            cost: f64::INFINITY,
+            mu: 1e-3,
+            nu: 2.0,
+            iterations: 0,
+            evaluations: 1,
+        };
+        if !problem.eval(&lm.x, &mut lm.r, Some(&mut lm.jac)) {
+            return Err(lm.finish(Termination::Failed("not finite at the start".into())));
+        }
+        lm.cost = 0.5 * lm.r.norm_squared();
+        Ok(lm)
+    }
+
+    /// One iteration: the damped Gauss-Newton step
+    /// (JᵀJ + μ·diag(JᵀJ)) δ = −Jᵀr over the free variables (Marquardt 1963),
+    /// projected onto the bounds, tried until the cost decreases (then μ shrinks by
+    /// max(1/3, 1 − (2ρ − 1)³) with ρ the actual over the predicted decrease, Nielsen
+    /// 1999) or a stopping rule holds. Variables at a bound whose gradient pushes
+    /// outward are held (active set). None while the search goes on.
+    pub fn step<P: LeastSquares + ?Sized>(&mut self, problem: &mut P) -> Option<Termination> {
+        if self.iterations >= self.settings.max_iterations {
+            return Some(Termination::MaxIterations);
+        }
+        let n = self.x.len();
+        let (x, bounds, settings) = (&mut self.x, &self.bounds, &self.settings);
+        let a = self.jac.tr_mul(&self.jac);
+        let g = self.jac.tr_mul(&self.r);
+        if !(a.iter().all(|v| v.is_finite()) && g.iter().all(|v| v.is_finite())) {
+            return Some(Termination::Failed(
+                "the normal equations overflowed".into(),
+            ));
+        }
         let mut free = vec![true; n];
         for i in 0..n {
             let (lo, hi) = bounds[i];
@@ -161,15 +212,17 @@ pub fn minimize<P: LeastSquares + ?Sized>(
             .filter(|&i| free[i])
             .map(|i| g[i].abs())
             .fold(0.0, f64::max);
-        if gnorm <= settings.gtol * (1.0 + cost) {
-            return done(x, cost, it, evaluations, Termination::Converged("gradient"));
+        if gnorm <= settings.gtol * (1.0 + self.cost) {
+            return Some(Termination::Converged("gradient"));
         }
+        let mut x_new = vec![0.0; n];
+        let mut r_new = DVector::zeros(self.r.len());
         loop {
             let mut sys = a.clone();
             let mut rhs = -&g;
             for i in 0..n {
                 if free[i] {
-                    sys[(i, i)] += mu * a[(i, i)].max(1e-12 * (1.0 + a[(i, i)]));
+                    sys[(i, i)] += self.mu * a[(i, i)].max(1e-12 * (1.0 + a[(i, i)]));
                 } else {
                     for j in 0..n {
                         sys[(i, j)] = 0.0;
@@ -180,29 +233,23 @@ pub fn minimize<P: LeastSquares + ?Sized>(
                 }
             }
             let Some(step) = sys.cholesky().map(|c| c.solve(&rhs)) else {
-                mu *= nu;
-                nu *= 2.0;
-                if !mu.is_finite() || mu > 1e300 {
-                    return done(
-                        x,
-                        cost,
-                        it,
-                        evaluations,
-                        Termination::Failed("singular system".into()),
-                    );
+                self.mu *= self.nu;
+                self.nu *= 2.0;
+                if !self.mu.is_finite() || self.mu > 1e300 {
+                    return Some(Termination::Failed("singular system".into()));
                 }
                 continue;
             };
             for i in 0..n {
                 x_new[i] = project(x[i] + step[i], bounds[i]);
             }
-            let dx: Vec<f64> = (0..n).map(|i| x_new[i] - x[i]).collect();
+            let dx = DVector::from_fn(n, |i, _| x_new[i] - x[i]);
             let dx_norm = dx.iter().map(|d| d * d).sum::<f64>().sqrt();
             let x_norm = x.iter().map(|d| d * d).sum::<f64>().sqrt();
             if dx_norm <= settings.xtol * (x_norm + settings.xtol) {
-                return done(x, cost, it, evaluations, Termination::Converged("step"));
+                return Some(Termination::Converged("step"));
             }
-            evaluations += 1;
+            self.evaluations += 1;
             let ok = problem.eval(&x_new, &mut r_new, None);
             let cost_new = if ok {
                 0.5 * r_new.norm_squared()
@@ -210,62 +257,377 @@ pub fn minimize<P: LeastSquares + ?Sized>(
                 f64::INFINITY
             };
             // Predicted decrease of the linear model for the (projected) step.
-            let dxv = DVector::from_column_slice(&dx);
-            let pred = -(g.dot(&dxv)) - 0.5 * (&a * &dxv).dot(&dxv);
+            let pred = -(g.dot(&dx)) - 0.5 * (&a * &dx).dot(&dx);
             let rho = if pred > 0.0 {
-                (cost - cost_new) / pred
+                (self.cost - cost_new) / pred
             } else {
                 -1.0
             };
-            if ok && cost_new < cost && rho > 0.0 {
-                let rel = (cost - cost_new) / cost.max(f64::MIN_POSITIVE);
+            if ok && cost_new < self.cost && rho > 0.0 {
+                let rel = (self.cost - cost_new) / self.cost.max(f64::MIN_POSITIVE);
                 x.copy_from_slice(&x_new);
-                evaluations += 1;
-                problem.eval(&x, &mut r, Some(&mut jac));
-                cost = cost_new;
-                mu *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
-                nu = 2.0;
-                if rel <= settings.ftol {
-                    return done(x, cost, it + 1, evaluations, Termination::Converged("cost"));
-                }
-                break;
+                self.evaluations += 1;
+                problem.eval(x, &mut self.r, Some(&mut self.jac));
+                self.cost = cost_new;
+                self.mu *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
+                self.nu = 2.0;
+                self.iterations += 1;
+                return (rel <= settings.ftol).then_some(Termination::Converged("cost"));
             }
-            mu *= nu;
-            nu *= 2.0;
-            if !mu.is_finite() || mu > 1e300 {
-                return done(
-                    x,
-                    cost,
-                    it,
-                    evaluations,
-                    Termination::Converged("no further decrease"),
-                );
+            self.mu *= self.nu;
+            self.nu *= 2.0;
+            if !self.mu.is_finite() || self.mu > 1e300 {
+                return Some(Termination::Converged("no further decrease"));
             }
         }
     }
-    done(
-        x,
-        cost,
-        settings.max_iterations,
-        evaluations,
-        Termination::MaxIterations,
-    )
+
+    /// The result as it stands, stopped for `termination`.
+    fn finish(&self, termination: Termination) -> LmResult {
+        LmResult {
+            x: self.x.clone(),
+            cost: self.cost,
+            iterations: self.iterations,
+            evaluations: self.evaluations,
+            termination,
+        }
+    }
+
+    /// What observers see after each iteration besides the parameters and the cost.
+    fn kv(&self) -> KV {
+        let mut kv = KV::new();
+        kv.insert("iteration", (self.iterations as u64).into());
+        kv.insert("evaluations", (self.evaluations as u64).into());
+        kv.insert("damping", self.mu.into());
+        kv
+    }
+
+    /// The argmin state matching this search: parameters, cost and the iteration
+    /// count (which tells the `Executor` whether the search is starting or resuming).
+    fn state(&self) -> LmState {
+        let mut state = LmState::new().param(self.x.clone()).cost(self.cost);
+        for _ in 0..self.iterations {
+            state.increment_iter();
+        }
+        state
+    }
 }
 
-fn done(
-    x: Vec<f64>,
-    cost: f64,
+/// The argmin state the LM reports to observers (`get_param`, `get_cost`,
+/// `get_iter`); the key-value pairs beside it hold `iteration` (accepted steps so
+/// far), `evaluations` and `damping` (μ).
+pub type LmState = IterState<Vec<f64>, (), (), (), (), f64>;
+
+/// The LM as an argmin [`Solver`]: each `next_iter` is one [`Lm::step`].
+struct LmSolver<'s> {
+    lm: &'s mut Lm,
+    stopped: Option<Termination>,
+    /// Whether anyone reads the key-value pairs (they cost a few allocations).
+    observed: bool,
+}
+
+/// The problem as argmin holds it.
+struct Held<'p, P: ?Sized>(&'p mut P);
+
+impl<P: LeastSquares + ?Sized> Solver<Held<'_, P>, LmState> for LmSolver<'_> {
+    fn name(&self) -> &str {
+        "bounded Levenberg-Marquardt"
+    }
+
+    fn init(
+        &mut self,
+        _problem: &mut Problem<Held<'_, P>>,
+        state: LmState,
+    ) -> Result<(LmState, Option<KV>), argmin::core::Error> {
+        Ok((state, self.observed.then(|| self.lm.kv())))
+    }
+
+    fn next_iter(
+        &mut self,
+        problem: &mut Problem<Held<'_, P>>,
+        state: LmState,
+    ) -> Result<(LmState, Option<KV>), argmin::core::Error> {
+        let Some(Held(p)) = problem.problem.as_mut() else {
+            return Err(argmin::core::Error::msg("the executor lost the problem"));
+        };
+        let stop = self.lm.step(*p);
+        let state = state.param(self.lm.x.clone()).cost(self.lm.cost);
+        let state = match &stop {
+            None => state,
+            Some(Termination::Converged(_)) => {
+                state.terminate_with(TerminationReason::SolverConverged)
+            }
+            Some(t) => state.terminate_with(TerminationReason::SolverExit(t.to_string())),
+        };
+        self.stopped = stop;
+        Ok((state, self.observed.then(|| self.lm.kv())))
+    }
+}
+
+/// Where and how often a search saves itself.
+#[derive(Debug, Clone)]
+pub struct Checkpoint {
+    /// The checkpoint file (JSON, written atomically: a temporary file renamed).
+    pub file: PathBuf,
+    /// Save after every this many iterations (≥ 1); a search stopped by the wall
+    /// time saves at once whatever the cadence.
+    pub every: u64,
+}
+
+impl Checkpoint {
+    /// The checkpoint of start `i` of a multi-start: `FILE.i`.
+    pub fn for_start(&self, i: usize) -> Checkpoint {
+        let mut name = self.file.clone().into_os_string();
+        name.push(format!(".{i}"));
+        Checkpoint {
+            file: name.into(),
+            every: self.every,
+        }
+    }
+}
+
+/// An argmin observer of the LM, boxed ([`crate::observe`] has the house's).
+pub type Observer = Box<dyn Observe<LmState>>;
+
+/// What runs around a [`search`]: observers, checkpointing, resume, wall time.
+#[derive(Default)]
+pub struct Control {
+    /// Told of the start, every iteration and the end.
+    pub observers: Vec<Observer>,
+    /// Save the search to resume it later.
+    pub checkpoint: Option<Checkpoint>,
+    /// Continue from the checkpoint file if it exists (else start afresh). Without
+    /// this an existing checkpoint file is overwritten, never read.
+    pub resume: bool,
+    /// Stop with [`Termination::WallTime`] once an iteration ends past this time.
+    pub max_wall: Option<Duration>,
+}
+
+/// Minimise ½‖r(p)‖² from `x0` within `bounds`: [`search`] without observers,
+/// checkpoints or time limit.
+pub fn minimize<P: LeastSquares + ?Sized>(
+    problem: &mut P,
+    x0: &[f64],
+    bounds: &[(f64, f64)],
+    settings: &LmSettings,
+) -> LmResult {
+    search(problem, x0, bounds, settings, &mut Control::default())
+}
+
+/// Minimise ½‖r(p)‖² from `x0` within `bounds` (or from the checkpoint when
+/// `control.resume` and its file exists), through argmin's `Executor` with the
+/// observers, checkpointing and wall-time limit of `control`. A resumed search gives
+/// the same result, iterations and evaluations (totals) as one never interrupted.
+/// A start or bounds that cannot be used end the search at once as
+/// [`Termination::Failed`], and so does a checkpoint written for another problem.
+pub fn search<P: LeastSquares + ?Sized>(
+    problem: &mut P,
+    x0: &[f64],
+    bounds: &[(f64, f64)],
+    settings: &LmSettings,
+    control: &mut Control,
+) -> LmResult {
+    let resumed = match (&control.checkpoint, control.resume) {
+        (Some(c), true) if c.file.exists() => Some(load(&c.file, problem.dims(), bounds)),
+        _ => None,
+    };
+    let mut lm = match resumed {
+        Some(Ok(mut lm)) => {
+            lm.settings = *settings;
+            lm
+        }
+        Some(Err(why)) => {
+            return LmResult {
+                x: x0.to_vec(),
+                cost: f64::INFINITY,
+                iterations: 0,
+                evaluations: 0,
+                termination: Termination::Failed(why),
+            }
+        }
+        None => match Lm::start(problem, x0, bounds, settings) {
+            Ok(lm) => lm,
+            Err(failed) => return failed,
+        },
+    };
+    let state = lm.state();
+    let mut executor = Executor::new(
+        Held(problem),
+        LmSolver {
+            lm: &mut lm,
+            stopped: None,
+            observed: !control.observers.is_empty(),
+        },
+    )
+    .configure(|_| state)
+    .ctrlc(false);
+    for observer in control.observers.drain(..) {
+        executor = executor.add_observer(Forward(observer), ObserverMode::Always);
+    }
+    if let Some(c) = &control.checkpoint {
+        executor = executor.checkpointing(FileCheckpoint(c.clone()));
+    }
+    if let Some(limit) = control.max_wall {
+        executor = executor.timeout(limit);
+    }
+    let run = executor.run();
+    let termination = match run {
+        Err(e) => Termination::Failed(format!("{e:#}")),
+        Ok(done) => match done.solver.stopped {
+            Some(t) => t,
+            None if done.state.get_termination_reason() == Some(&TerminationReason::Timeout) => {
+                Termination::WallTime
+            }
+            None => Termination::Failed(format!(
+                "the executor stopped the search: {}",
+                done.state.get_termination_status()
+            )),
+        },
+    };
+    if let (Termination::WallTime, Some(c)) = (&termination, &control.checkpoint) {
+        if let Err(e) = save(&c.file, &lm) {
+            return lm.finish(Termination::Failed(e));
+        }
+    }
+    lm.finish(termination)
+}
+
+/// Forwards argmin's calls to a boxed observer (argmin takes observers by value).
+struct Forward(Observer);
+
+impl Observe<LmState> for Forward {
+    fn observe_init(
+        &mut self,
+        name: &str,
+        state: &LmState,
+        kv: &KV,
+    ) -> Result<(), argmin::core::Error> {
+        self.0.observe_init(name, state, kv)
+    }
+    fn observe_iter(&mut self, state: &LmState, kv: &KV) -> Result<(), argmin::core::Error> {
+        self.0.observe_iter(state, kv)
+    }
+    fn observe_final(&mut self, state: &LmState) -> Result<(), argmin::core::Error> {
+        self.0.observe_final(state)
+    }
+}
+
+/// argmin's checkpointing hook for the LM: saves [`Lm`] as [`Saved`]. Loading is
+/// done by [`search`] itself (it must give the caller's settings to the loaded
+/// search and check the file belongs to the problem).
+struct FileCheckpoint(Checkpoint);
+
+impl<'s> Save<LmSolver<'s>, LmState> for FileCheckpoint {
+    /// A search the solver has stopped is not saved: resuming repeats its last
+    /// iteration, which stops it the same way.
+    fn save(&self, solver: &LmSolver<'s>, _state: &LmState) -> Result<(), argmin::core::Error> {
+        if solver.stopped.is_some() {
+            return Ok(());
+        }
+        save(&self.0.file, solver.lm).map_err(argmin::core::Error::msg)
+    }
+    fn load(&self) -> Result<Option<(LmSolver<'s>, LmState)>, argmin::core::Error> {
+        Ok(None)
+    }
+    fn frequency(&self) -> CheckpointingFrequency {
+        CheckpointingFrequency::Every(self.0.every.max(1))
+    }
+}
+
+/// The checkpoint file's content. Every f64 is kept as its bit pattern: JSON has no
+/// infinity (unbounded parameters) and a decimal round trip is not guaranteed exact,
+/// while a resumed search must continue bit for bit.
+#[derive(Serialize, Deserialize)]
+struct Saved {
+    format: String,
+    residuals: usize,
+    bounds: Vec<(u64, u64)>,
+    x: Vec<u64>,
+    r: Vec<u64>,
+    jac: Vec<u64>,
+    cost: u64,
+    mu: u64,
+    nu: u64,
     iterations: usize,
     evaluations: usize,
-    termination: Termination,
-) -> LmResult {
-    LmResult {
-        x,
-        cost,
-        iterations,
-        evaluations,
-        termination,
+}
+
+/// The `format` of a checkpoint file this version reads.
+const FORMAT: &str = "dea-fit lm checkpoint 1";
+
+fn bits(v: &[f64]) -> Vec<u64> {
+    v.iter().map(|x| x.to_bits()).collect()
+}
+
+fn unbits(v: &[u64]) -> Vec<f64> {
+    v.iter().map(|&b| f64::from_bits(b)).collect()
+}
+
+/// Write `lm` to `file` (a temporary file beside it renamed over it, so a search
+/// killed while saving leaves the previous checkpoint whole).
+fn save(file: &Path, lm: &Lm) -> Result<(), String> {
+    let saved = Saved {
+        format: FORMAT.into(),
+        residuals: lm.r.len(),
+        bounds: lm
+            .bounds
+            .iter()
+            .map(|(lo, hi)| (lo.to_bits(), hi.to_bits()))
+            .collect(),
+        x: bits(&lm.x),
+        r: bits(lm.r.as_slice()),
+        jac: bits(lm.jac.as_slice()),
+        cost: lm.cost.to_bits(),
+        mu: lm.mu.to_bits(),
+        nu: lm.nu.to_bits(),
+        iterations: lm.iterations,
+        evaluations: lm.evaluations,
+    };
+    let text = serde_json::to_string(&saved).map_err(|e| e.to_string())?;
+    let mut tmp = file.as_os_str().to_owned();
+    tmp.push(".tmp");
+    std::fs::write(&tmp, text)
+        .and_then(|()| std::fs::rename(&tmp, file))
+        .map_err(|e| format!("cannot write the checkpoint {}: {e}", file.display()))
+}
+
+/// Read a checkpoint of a problem with `dims` (residuals, parameters) and `bounds`;
+/// a file of another format or another problem is refused with the reason.
+fn load(file: &Path, (m, n): (usize, usize), bounds: &[(f64, f64)]) -> Result<Lm, String> {
+    let what = |e: String| format!("checkpoint {}: {e}", file.display());
+    let text = std::fs::read_to_string(file).map_err(|e| what(e.to_string()))?;
+    let s: Saved = serde_json::from_str(&text).map_err(|e| what(e.to_string()))?;
+    if s.format != FORMAT {
+        return Err(what(format!("format {:?}, expected {FORMAT:?}", s.format)));
     }
+    let same_bounds = s.bounds.len() == bounds.len()
+        && s.bounds
+            .iter()
+            .zip(bounds)
+            .all(|(&(a, b), &(lo, hi))| a == lo.to_bits() && b == hi.to_bits());
+    if s.residuals != m || s.x.len() != n || !same_bounds {
+        return Err(what(format!(
+            "written for a problem with {} residuals, {} parameters and other bounds or \
+             these; this one has {m} residuals and {n} parameters (delete the file to start afresh)",
+            s.residuals,
+            s.x.len()
+        )));
+    }
+    if s.r.len() != m || s.jac.len() != m * n {
+        return Err(what("residuals or Jacobian of the wrong size".into()));
+    }
+    Ok(Lm {
+        settings: LmSettings::default(),
+        bounds: bounds.to_vec(),
+        x: unbits(&s.x),
+        r: DVector::from_vec(unbits(&s.r)),
+        jac: DMatrix::from_vec(m, n, unbits(&s.jac)),
+        cost: f64::from_bits(s.cost),
+        mu: f64::from_bits(s.mu),
+        nu: f64::from_bits(s.nu),
+        iterations: s.iterations,
+        evaluations: s.evaluations,
+    })
 }
 
 #[cfg(test)]

@@ -6,6 +6,7 @@ pub mod diagnostics;
 pub mod hyperelastic;
 pub mod linear;
 pub mod lm;
+pub mod multistart;
 pub mod permittivity;
 pub mod problem;
 pub mod relaxation;

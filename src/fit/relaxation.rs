@@ -1084,6 +1084,10 @@ fn assess(prep: &Prepared, tf: TermFit) -> Assessed {
             Status::NotConverged,
             "the search stopped at the iteration limit without converging".to_string(),
         )),
+        Termination::WallTime => problems.push((
+            Status::NotConverged,
+            "the search stopped at its wall-time limit".to_string(),
+        )),
         Termination::Failed(w) => {
             problems.push((Status::NotConverged, format!("the search failed: {w}")))
         }
@@ -1510,11 +1514,7 @@ pub fn fit(
             modulus_pa: e * prep.prob.scale * prep.unit,
         })
         .collect();
-    let termination = match &a.tf.termination {
-        Termination::Converged(w) => format!("converged ({w})"),
-        Termination::MaxIterations => "iteration limit".into(),
-        Termination::Failed(w) => format!("failed: {w}"),
-    };
+    let termination = a.tf.termination.to_string();
     let method = match settings.method {
         Method::Refined => format!(
             "grid NNLS ({} τ, {}/decade, Clarabel) + merge/prune + bounded Levenberg-Marquardt over (E∞, Eᵢ, ln τᵢ), multi-start",

@@ -31,6 +31,8 @@ pub enum Dimension {
     Density,
     /// Voltage (SI: V).
     Voltage,
+    /// Electric current (SI: A).
+    Current,
     /// Mass (SI: kg).
     Mass,
     /// Dynamic viscosity (SI: Pa·s).
@@ -133,6 +135,13 @@ impl Dimension {
                 ("°", std::f64::consts::PI / 180.0),
             ],
             Dimension::Voltage => &[("V", 1.0), ("kV", 1e3), ("mV", 1e-3)],
+            Dimension::Current => &[
+                ("A", 1.0),
+                ("mA", 1e-3),
+                ("uA", 1e-6),
+                ("µA", 1e-6),
+                ("nA", 1e-9),
+            ],
             Dimension::Mass => &[("kg", 1.0), ("g", 1e-3)],
             Dimension::Viscosity => &[
                 ("Pa s", 1.0),
@@ -173,6 +182,7 @@ impl Dimension {
             Dimension::Angle => "rad",
             Dimension::Density => "kg/m³",
             Dimension::Voltage => "V",
+            Dimension::Current => "A",
             Dimension::Mass => "kg",
             Dimension::Viscosity => "Pa·s",
             Dimension::Fraction => "1",

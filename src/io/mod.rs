@@ -6,6 +6,7 @@ pub mod manifest;
 pub mod relaxation;
 pub mod table;
 pub mod tensile;
+pub mod trace;
 pub mod write;
 
 use sha2::{Digest, Sha256};

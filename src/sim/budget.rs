@@ -478,6 +478,14 @@ fn validate_input(
                     level.check(&k("file"), v).map_err(point)?;
                 }
             }
+            Term::Measured(ref m) => {
+                let (t0, t1) = m.span();
+                INSTANT.check(&k("file"), t0)?;
+                INSTANT.check(&k("file"), t1)?;
+                for v in m.knot_values() {
+                    level.check(&k("file"), v)?;
+                }
+            }
         }
     }
     Ok(())

@@ -1,11 +1,16 @@
-//! Input waveforms: step, ramp, triangle, sine, piecewise-linear (from CSV) and sums.
+//! Input waveforms: step, ramp, triangle, sine, piecewise-linear (from CSV), a
+//! measured signal (smooth between its real corners, [`measured`]) and sums.
 //!
 //! A waveform is plain data; [`Waveform::eval`] returns the value and its time
 //! derivative, [`Waveform::kinks`] the times where either is discontinuous (the
 //! integrator restarts there).
 
+pub mod measured;
+
 use super::budget::MAX_KINKS;
+pub use measured::Measured;
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 /// One term of an input signal (SI units: V for voltages, 1 for a PID reference).
 #[derive(Debug, Clone, PartialEq)]
@@ -63,6 +68,9 @@ pub enum Term {
         /// Points (s, value).
         points: Vec<(f64, f64)>,
     },
+    /// A measured signal: one smooth piece between each two of its corners (shared:
+    /// a scene clone does not copy the samples).
+    Measured(Arc<Measured>),
 }
 
 /// A sum of terms.
@@ -142,6 +150,7 @@ impl Term {
                     (a.1 + r * (t - a.0), r)
                 }
             }
+            Term::Measured(ref m) => m.eval(t),
         }
     }
 
@@ -189,6 +198,13 @@ impl Term {
                 .filter(inside)
                 .take(MAX_KINKS + 1)
                 .collect(),
+            Term::Measured(ref m) => m
+                .corners()
+                .iter()
+                .copied()
+                .filter(inside)
+                .take(MAX_KINKS + 1)
+                .collect(),
         }
     }
 
@@ -219,12 +235,13 @@ impl Term {
                 (hi - lo + 1.0).max(0.0) + 1.0
             }
             Term::Pwl { points } => points.iter().filter(|p| p.0 >= t0 && p.0 <= t1).count() as f64,
+            Term::Measured(m) => m.corners().iter().filter(|&&c| c >= t0 && c <= t1).count() as f64,
             _ => self.kinks(t0, t1).len() as f64,
         }
     }
 
     /// The shortest time scale of the term (s): ramp duration, quarter period,
-    /// shortest PWL segment; zero for a step (a jump).
+    /// shortest PWL segment, shortest measured piece; zero for a step (a jump).
     pub fn time_scale(&self) -> f64 {
         match *self {
             Term::Step { .. } => 0.0,
@@ -235,6 +252,7 @@ impl Term {
                 .windows(2)
                 .map(|w| w[1].0 - w[0].0)
                 .fold(f64::INFINITY, f64::min),
+            Term::Measured(ref m) => m.shortest_piece(),
         }
     }
 }

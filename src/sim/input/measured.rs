@@ -1,0 +1,547 @@
+//! A measured voltage as one smooth input with real corners.
+//!
+//! A logged drive voltage is noisy and has thousands of samples; a piecewise-linear
+//! input through every sample would restart the integrator at each of them (every
+//! sample is a kink, and scenes cap the kinks, `sim::budget::MAX_KINKS`). Instead,
+//! [`Measured::fit`] finds the real corners (steps, ramp ends, triangle peaks) with a
+//! noise-aware test and represents the signal between two corners by one C¹ cubic
+//! Hermite spline fitted by least squares, so that [`Measured::corners`] lists only
+//! the corners and [`Measured::eval`] gives the value and its time derivative by a
+//! binary search (O(log n), no allocation).
+//!
+//! 1. **Noise.** σ̂ = 1.4826·median|rᵢ|/√(1 + wᵢ² + (1 − wᵢ)²), with rᵢ the distance
+//!    of sample i from the chord of its neighbours and wᵢ = (tᵢ − tᵢ₋₁)/(tᵢ₊₁ − tᵢ₋₁)
+//!    (the normalised second difference of white noise has standard deviation σ;
+//!    1.4826·MAD is its robust estimate, unaffected by the few samples at corners).
+//!    The test uses σ = max(σ̂, [`NOISE_FLOOR`] × range), so a noiseless record is
+//!    not split at the rounding of its digits.
+//! 2. **Steps.** Interval i is part of a rise when its increment differs from the
+//!    local slope (median of the [`STEP_NEIGHBOURS`] neighbouring intervals on each
+//!    side) by more than [`STEP_SIGMAS`]·√2·σ; consecutive rises of one sign form a
+//!    step, a pair of corners at its first and last sample joined by a straight line.
+//! 3. **Corners.** At each remaining sample c, a cubic plus a hinge (t − t_c)₊ is
+//!    fitted over up to [`WINDOW`] samples on each side (never across a corner found
+//!    already); the hinge coefficient's t-ratio against σ measures a slope jump that
+//!    no smooth signal explains. The largest ratio above [`CORNER_SIGMAS`] becomes a
+//!    corner, its time refined to the hinge position of least squares within a
+//!    sample interval either side, and the test is repeated on the split segments
+//!    until no ratio exceeds the threshold (greedy, so two close corners are found
+//!    as two).
+//! 4. **Pieces.** Between two corners, a cubic Hermite spline (C¹) with knots at
+//!    sample quantiles is fitted by least squares; its number of intervals K
+//!    minimises BIC with the known σ, RSS/σ² + 2(K + 1)·ln m (m samples). At a
+//!    corner the two sides' values are averaged (the input is continuous; only its
+//!    slope jumps).
+//!
+//! Before the first sample and after the last the value is held.
+
+/// Noise floor as a fraction of the record's range (0.1 %): below any real drive's
+/// noise; it keeps a noiseless synthetic record from being split at its rounding.
+pub const NOISE_FLOOR: f64 = 1e-3;
+/// Threshold of the hinge t-ratio for a corner (a 6σ slope jump: the chance that
+/// noise alone reaches it anywhere in a 10⁴-sample record is below 10⁻⁵).
+pub const CORNER_SIGMAS: f64 = 6.0;
+/// Threshold of a one-interval jump for a step, in standard deviations of a
+/// difference of two noisy samples.
+pub const STEP_SIGMAS: f64 = 8.0;
+/// Samples on each side of a candidate corner in its test window.
+pub const WINDOW: usize = 40;
+/// Intervals on each side whose median slope is the local slope of the step test.
+pub const STEP_NEIGHBOURS: usize = 6;
+/// Fewest samples on each side of a candidate corner (the hinge needs both sides).
+const MIN_SIDE: usize = 4;
+
+/// A measured signal: smooth Hermite pieces between corners.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Measured {
+    /// Knot times (s), increasing; piece i spans `knots[i]..knots[i + 1]`.
+    knots: Vec<f64>,
+    /// Per piece: value and slope at its start, value and slope at its end.
+    pieces: Vec<[f64; 4]>,
+    /// Corner times (s), increasing, including the first and last sample.
+    corners: Vec<f64>,
+    /// The noise σ used by the tests (V).
+    noise: f64,
+}
+
+/// A segment between two corners, in sample indices (inclusive) and times.
+#[derive(Debug, Clone, Copy)]
+struct Segment {
+    t0: f64,
+    t1: f64,
+    /// A step: a straight line between its neighbours' end values.
+    step: bool,
+}
+
+impl Measured {
+    /// Fit samples `(times, values)`: times finite and strictly increasing, values
+    /// finite, at least two. The error says what is wrong (the caller locates it).
+    pub fn fit(times: &[f64], values: &[f64]) -> Result<Measured, String> {
+        let n = times.len();
+        if n < 2 || values.len() != n {
+            return Err(format!(
+                "a measured signal needs at least 2 samples and one value per time ({n} times, {} values)",
+                values.len()
+            ));
+        }
+        if let Some(i) = (0..n).find(|&i| !times[i].is_finite() || !values[i].is_finite()) {
+            return Err(format!("sample {}: time and value must be finite", i + 1));
+        }
+        if let Some(i) = (1..n).find(|&i| times[i] <= times[i - 1]) {
+            return Err(format!(
+                "sample {}: time {} s is not after the previous {} s",
+                i + 1,
+                times[i],
+                times[i - 1]
+            ));
+        }
+        let (lo, hi) = values
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
+        let noise = noise_sigma(times, values).max(NOISE_FLOOR * (hi - lo));
+        let mut segs = if noise > 0.0 {
+            find_corners(times, values, noise)
+        } else {
+            // a constant record: one piece
+            vec![(0, n - 1, times[0], false)]
+        };
+        segs.sort_by(|a, b| a.2.total_cmp(&b.2));
+        Ok(build(times, values, noise, &segs))
+    }
+
+    /// Value and time derivative at `t` (right-continuous at corners; held outside
+    /// the samples).
+    #[inline]
+    pub fn eval(&self, t: f64) -> (f64, f64) {
+        let k = &self.knots;
+        if t < k[0] {
+            return (self.pieces[0][0], 0.0);
+        }
+        let i = k.partition_point(|&x| x <= t);
+        if i >= k.len() {
+            return (self.pieces[self.pieces.len() - 1][2], 0.0);
+        }
+        let (a, b) = (k[i - 1], k[i]);
+        let [y0, s0, y1, s1] = self.pieces[i - 1];
+        let h = b - a;
+        let u = (t - a) / h;
+        let (u2, u3) = (u * u, u * u * u);
+        let v = (2.0 * u3 - 3.0 * u2 + 1.0) * y0
+            + (u3 - 2.0 * u2 + u) * h * s0
+            + (3.0 * u2 - 2.0 * u3) * y1
+            + (u3 - u2) * h * s1;
+        let d = (6.0 * u2 - 6.0 * u) / h * (y0 - y1)
+            + (3.0 * u2 - 4.0 * u + 1.0) * s0
+            + (3.0 * u2 - 2.0 * u) * s1;
+        (v, d)
+    }
+
+    /// Corner times (s): where the slope jumps, the first and last sample included
+    /// (the held value outside has zero slope).
+    pub fn corners(&self) -> &[f64] {
+        &self.corners
+    }
+
+    /// The noise standard deviation the corner test used (units of the values).
+    pub fn noise(&self) -> f64 {
+        self.noise
+    }
+
+    /// First and last sample time (s).
+    pub fn span(&self) -> (f64, f64) {
+        (self.knots[0], self.knots[self.knots.len() - 1])
+    }
+
+    /// Shortest interval between two corners (s).
+    pub fn shortest_piece(&self) -> f64 {
+        self.corners
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Values at the knots (for range checks).
+    pub fn knot_values(&self) -> impl Iterator<Item = f64> + '_ {
+        self.pieces.iter().flat_map(|p| [p[0], p[2]])
+    }
+}
+
+/// Robust noise σ from normalised second differences (module doc, step 1).
+fn noise_sigma(t: &[f64], v: &[f64]) -> f64 {
+    if t.len() < 3 {
+        return 0.0;
+    }
+    let mut r: Vec<f64> = (1..t.len() - 1)
+        .map(|i| {
+            let w = (t[i] - t[i - 1]) / (t[i + 1] - t[i - 1]);
+            let chord = (1.0 - w) * v[i - 1] + w * v[i + 1];
+            (v[i] - chord).abs() / (1.0 + w * w + (1.0 - w) * (1.0 - w)).sqrt()
+        })
+        .collect();
+    1.4826 * median(&mut r)
+}
+
+fn median(x: &mut [f64]) -> f64 {
+    x.sort_by(f64::total_cmp);
+    let n = x.len();
+    match n {
+        0 => 0.0,
+        _ if n % 2 == 1 => x[n / 2],
+        _ => 0.5 * (x[n / 2 - 1] + x[n / 2]),
+    }
+}
+
+/// Rises: runs of intervals [a, b] (sample a to sample b + 1) that jump (step 2).
+fn find_steps(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize)> {
+    let n = t.len();
+    let slope = |j: usize| (v[j + 1] - v[j]) / (t[j + 1] - t[j]);
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    let mut sign_of_run = 0.0;
+    let mut buf = Vec::with_capacity(2 * STEP_NEIGHBOURS);
+    for i in 0..n - 1 {
+        buf.clear();
+        let lo = i.saturating_sub(STEP_NEIGHBOURS);
+        let hi = (i + STEP_NEIGHBOURS).min(n - 2);
+        buf.extend((lo..=hi).filter(|&j| j != i).map(slope));
+        let local = if buf.is_empty() { 0.0 } else { median(&mut buf) };
+        let e = (v[i + 1] - v[i]) - local * (t[i + 1] - t[i]);
+        if e.abs() <= STEP_SIGMAS * std::f64::consts::SQRT_2 * sigma {
+            continue;
+        }
+        match runs.last_mut() {
+            Some(r) if r.1 + 1 == i && e.signum() == sign_of_run => r.1 = i,
+            _ => {
+                runs.push((i, i));
+                sign_of_run = e.signum();
+            }
+        }
+    }
+    runs
+}
+
+/// Least squares on a cubic plus a hinge at x_h over samples `lo..=hi` (x scaled
+/// about t_c): the hinge coefficient's t-ratio against `sigma` and the RSS.
+fn hinge_fit(t: &[f64], v: &[f64], lo: usize, hi: usize, tc: f64, th: f64, sigma: f64) -> (f64, f64) {
+    let h = (t[hi] - tc).abs().max((tc - t[lo]).abs());
+    let xh = (th - tc) / h;
+    let mut a = [[0.0; 5]; 5];
+    let mut b = [0.0; 5];
+    let mut yy = 0.0;
+    for i in lo..=hi {
+        let x = (t[i] - tc) / h;
+        let f = [1.0, x, x * x, x * x * x, (x - xh).max(0.0)];
+        for r in 0..5 {
+            for c in 0..5 {
+                a[r][c] += f[r] * f[c];
+            }
+            b[r] += f[r] * v[i];
+        }
+        yy += v[i] * v[i];
+    }
+    let Some(l) = cholesky5(&a) else {
+        return (0.0, f64::INFINITY);
+    };
+    let beta = solve5(&l, &b);
+    let rss = (yy - (0..5).map(|r| beta[r] * b[r]).sum::<f64>()).max(0.0);
+    // (AᵀA)⁻¹₄₄ = ‖L⁻¹e₄‖² … with A = L·Lᵀ it is 1/L₄₄²
+    let var44 = 1.0 / (l[4][4] * l[4][4]);
+    (beta[4] / (sigma * var44.sqrt()), rss)
+}
+
+fn cholesky5(a: &[[f64; 5]; 5]) -> Option<[[f64; 5]; 5]> {
+    let mut l = [[0.0; 5]; 5];
+    let scale = (0..5).map(|i| a[i][i]).fold(0.0, f64::max);
+    for i in 0..5 {
+        for j in 0..=i {
+            let s: f64 = a[i][j] - (0..j).map(|k| l[i][k] * l[j][k]).sum::<f64>();
+            if i == j {
+                if s <= 1e-13 * scale {
+                    return None;
+                }
+                l[i][i] = s.sqrt();
+            } else {
+                l[i][j] = s / l[j][j];
+            }
+        }
+    }
+    Some(l)
+}
+
+fn solve5(l: &[[f64; 5]; 5], b: &[f64; 5]) -> [f64; 5] {
+    let mut y = [0.0; 5];
+    for i in 0..5 {
+        y[i] = (b[i] - (0..i).map(|k| l[i][k] * y[k]).sum::<f64>()) / l[i][i];
+    }
+    let mut x = [0.0; 5];
+    for i in (0..5).rev() {
+        x[i] = (y[i] - (i + 1..5).map(|k| l[k][i] * x[k]).sum::<f64>()) / l[i][i];
+    }
+    x
+}
+
+/// The segments between corners (steps 2 and 3): (first sample, last sample, start
+/// time, is a step), unsorted.
+fn find_corners(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize, f64, bool)> {
+    let n = t.len();
+    // boundaries: sample index and corner time; a step's two corners are samples
+    let mut bounds: Vec<(usize, f64)> = vec![(0, t[0]), (n - 1, t[n - 1])];
+    let mut steps = Vec::new();
+    for (a, b) in find_steps(t, v, sigma) {
+        bounds.push((a, t[a]));
+        bounds.push((b + 1, t[b + 1]));
+        steps.push(a);
+    }
+    bounds.sort_by_key(|b| b.0);
+    bounds.dedup_by_key(|b| b.0);
+    let ratio = |bounds: &[(usize, f64)], c: usize| -> f64 {
+        let k = bounds.partition_point(|b| b.0 <= c);
+        if k == 0 || k >= bounds.len() || bounds[k - 1].0 == c {
+            return 0.0;
+        }
+        let (lo, hi) = (bounds[k - 1].0, bounds[k].0);
+        if steps.contains(&lo) {
+            return 0.0;
+        }
+        let lo = lo.max(c.saturating_sub(WINDOW));
+        let hi = hi.min(c + WINDOW);
+        if c - lo < MIN_SIDE || hi - c < MIN_SIDE {
+            return 0.0;
+        }
+        hinge_fit(t, v, lo, hi, t[c], t[c], sigma).0.abs()
+    };
+    let mut r: Vec<f64> = (0..n).map(|c| ratio(&bounds, c)).collect();
+    loop {
+        let (c, &best) = match r.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)) {
+            Some(x) => x,
+            None => break,
+        };
+        if best <= CORNER_SIGMAS {
+            break;
+        }
+        let k = bounds.partition_point(|b| b.0 <= c);
+        let lo = bounds[k - 1].0.max(c.saturating_sub(WINDOW));
+        let hi = bounds[k].0.min(c + WINDOW);
+        let tc = refine(t, v, lo, hi, c, sigma);
+        bounds.insert(k, (c, tc));
+        for j in c.saturating_sub(WINDOW)..=(c + WINDOW).min(n - 1) {
+            r[j] = ratio(&bounds, j);
+        }
+    }
+    bounds
+        .windows(2)
+        .map(|w| (w[0].0, w[1].0, w[0].1, steps.contains(&w[0].0)))
+        .collect()
+}
+
+/// The hinge time of least squares within one sample interval either side of c.
+fn refine(t: &[f64], v: &[f64], lo: usize, hi: usize, c: usize, sigma: f64) -> f64 {
+    let (a, b) = (t[c - 1], t[c + 1]);
+    let steps = 40;
+    (0..=steps)
+        .map(|j| a + (b - a) * j as f64 / steps as f64)
+        .map(|th| (th, hinge_fit(t, v, lo, hi, t[c], th, sigma).1))
+        .min_by(|x, y| x.1.total_cmp(&y.1))
+        .map(|x| x.0)
+        .unwrap_or(t[c])
+}
+
+/// Hermite pieces on each segment, joined at the corners (step 4).
+fn build(t: &[f64], v: &[f64], noise: f64, segs: &[(usize, usize, f64, bool)]) -> Measured {
+    let n = t.len();
+    let mut knots: Vec<f64> = Vec::new();
+    let mut pieces: Vec<[f64; 4]> = Vec::new();
+    // first piece index of each segment
+    let mut first = Vec::with_capacity(segs.len() + 1);
+    for (k, &(_, _, t0, step)) in segs.iter().enumerate() {
+        let t1 = segs.get(k + 1).map_or(t[n - 1], |s| s.2);
+        let seg = Segment { t0, t1, step };
+        first.push(pieces.len());
+        let (ks, ps) = fit_segment(t, v, &seg, noise);
+        if knots.is_empty() {
+            knots.push(ks[0]);
+        }
+        knots.extend_from_slice(&ks[1..]);
+        pieces.extend(ps);
+    }
+    first.push(pieces.len());
+    // join the values at the corners: a step takes its neighbours' values, two
+    // smooth sides meet halfway
+    for k in 0..segs.len() {
+        let (a, b) = (first[k], first[k + 1] - 1);
+        if segs[k].3 {
+            let y0 = if k > 0 { pieces[a - 1][2] } else { pieces[a][0] };
+            let y1 = if k + 1 < segs.len() && !segs[k + 1].3 {
+                pieces[b + 1][0]
+            } else {
+                pieces[b][2]
+            };
+            let s = (y1 - y0) / (knots[b + 1] - knots[a]);
+            pieces[a] = [y0, s, y1, s];
+        } else if k + 1 < segs.len() && !segs[k + 1].3 {
+            let m = 0.5 * (pieces[b][2] + pieces[b + 1][0]);
+            pieces[b][2] = m;
+            pieces[b + 1][0] = m;
+        }
+    }
+    let mut corners: Vec<f64> = segs.iter().map(|s| s.2).collect();
+    corners.push(t[n - 1]);
+    Measured {
+        knots,
+        pieces,
+        corners,
+        noise,
+    }
+}
+
+/// Knots and Hermite pieces of one segment. A step is one straight piece (its
+/// values are set from its neighbours afterwards).
+fn fit_segment(t: &[f64], v: &[f64], s: &Segment, sigma: f64) -> (Vec<f64>, Vec<[f64; 4]>) {
+    let lo = t.partition_point(|&x| x < s.t0);
+    let hi = t.partition_point(|&x| x <= s.t1);
+    let (ts, vs) = (&t[lo..hi], &v[lo..hi]);
+    let m = ts.len();
+    if s.step || m < 4 {
+        // too few samples for a curve: the straight line of least squares
+        let (y0, y1) = line_fit(ts, vs, s.t0, s.t1);
+        let sl = (y1 - y0) / (s.t1 - s.t0);
+        return (vec![s.t0, s.t1], vec![[y0, sl, y1, sl]]);
+    }
+    let mut best: Option<(f64, Vec<f64>, Vec<f64>)> = None;
+    let mut k = 1usize;
+    while k == 1 || 4 * k <= m {
+        let knots = quantile_knots(ts, s.t0, s.t1, k);
+        if let Some((u, rss)) = hermite_lsq(ts, vs, &knots) {
+            let score = rss / (sigma * sigma) + 2.0 * knots.len() as f64 * (m as f64).ln();
+            if best.as_ref().is_none_or(|b| score < b.0) {
+                best = Some((score, knots, u));
+            }
+        }
+        k = if k < 4 { k + 1 } else { k + k / 2 };
+    }
+    let Some((_, knots, u)) = best else {
+        let (y0, y1) = line_fit(ts, vs, s.t0, s.t1);
+        let sl = (y1 - y0) / (s.t1 - s.t0);
+        return (vec![s.t0, s.t1], vec![[y0, sl, y1, sl]]);
+    };
+    let pieces = (0..knots.len() - 1)
+        .map(|j| [u[2 * j], u[2 * j + 1], u[2 * j + 2], u[2 * j + 3]])
+        .collect();
+    (knots, pieces)
+}
+
+/// Values at t0 and t1 of the least-squares line through the samples (the mean
+/// when fewer than two, the chord of the ends when none).
+fn line_fit(ts: &[f64], vs: &[f64], t0: f64, t1: f64) -> (f64, f64) {
+    let m = ts.len() as f64;
+    match ts.len() {
+        0 => (0.0, 0.0),
+        1 => (vs[0], vs[0]),
+        _ => {
+            let tm = ts.iter().sum::<f64>() / m;
+            let vm = vs.iter().sum::<f64>() / m;
+            let sxx: f64 = ts.iter().map(|t| (t - tm) * (t - tm)).sum();
+            let sxy: f64 = ts.iter().zip(vs).map(|(t, v)| (t - tm) * (v - vm)).sum();
+            let b = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+            (vm + b * (t0 - tm), vm + b * (t1 - tm))
+        }
+    }
+}
+
+/// k intervals over [t0, t1] with interior knots at sample quantiles.
+fn quantile_knots(ts: &[f64], t0: f64, t1: f64, k: usize) -> Vec<f64> {
+    let m = ts.len();
+    let mut knots = vec![t0];
+    for j in 1..k {
+        let x = ts[j * m / k];
+        if x > *knots.last().expect("non-empty") && x < t1 {
+            knots.push(x);
+        }
+    }
+    knots.push(t1);
+    knots
+}
+
+/// Least-squares C¹ cubic Hermite spline on `knots`: unknowns (y_j, s_j) per knot,
+/// banded normal equations (half-bandwidth 3) solved by banded Cholesky. Returns
+/// the unknowns and the RSS.
+fn hermite_lsq(ts: &[f64], vs: &[f64], knots: &[f64]) -> Option<(Vec<f64>, f64)> {
+    const W: usize = 4;
+    let nu = 2 * knots.len();
+    let mut a = vec![[0.0; W]; nu]; // a[i][d] = A[i][i + d]
+    let mut b = vec![0.0; nu];
+    let basis = |x: f64, j: usize| -> [f64; 4] {
+        let h = knots[j + 1] - knots[j];
+        let u = (x - knots[j]) / h;
+        let (u2, u3) = (u * u, u * u * u);
+        [
+            2.0 * u3 - 3.0 * u2 + 1.0,
+            (u3 - 2.0 * u2 + u) * h,
+            3.0 * u2 - 2.0 * u3,
+            (u3 - u2) * h,
+        ]
+    };
+    let mut j = 0;
+    for (&x, &y) in ts.iter().zip(vs) {
+        while j + 2 < knots.len() && x >= knots[j + 1] {
+            j += 1;
+        }
+        let f = basis(x, j);
+        for r in 0..4 {
+            for c in r..4 {
+                a[2 * j + r][c - r] += f[r] * f[c];
+            }
+            b[2 * j + r] += f[r] * y;
+        }
+    }
+    let scale = a.iter().map(|r| r[0]).fold(0.0, f64::max);
+    for r in a.iter_mut() {
+        r[0] += 1e-12 * scale;
+    }
+    // banded Cholesky: A = L·Lᵀ, L stored as l[i][d] = L[i + d][i]
+    let mut l = vec![[0.0; W]; nu];
+    for i in 0..nu {
+        let mut d0 = a[i][0];
+        for k in i.saturating_sub(W - 1)..i {
+            d0 -= l[k][i - k] * l[k][i - k];
+        }
+        if d0 <= 0.0 {
+            return None;
+        }
+        let lii = d0.sqrt();
+        l[i][0] = lii;
+        for d in 1..W.min(nu - i) {
+            let r = i + d;
+            let mut s = a[i][d];
+            for k in r.saturating_sub(W - 1)..i {
+                s -= l[k][r - k] * l[k][i - k];
+            }
+            l[i][d] = s / lii;
+        }
+    }
+    let mut y = b.clone();
+    for i in 0..nu {
+        for k in i.saturating_sub(W - 1)..i {
+            y[i] -= l[k][i - k] * y[k];
+        }
+        y[i] /= l[i][0];
+    }
+    for i in (0..nu).rev() {
+        for d in 1..W.min(nu - i) {
+            y[i] -= l[i][d] * y[i + d];
+        }
+        y[i] /= l[i][0];
+    }
+    let mut rss = 0.0;
+    let mut j = 0;
+    for (&x, &v) in ts.iter().zip(vs) {
+        while j + 2 < knots.len() && x >= knots[j + 1] {
+            j += 1;
+        }
+        let f = basis(x, j);
+        let fit: f64 = (0..4).map(|r| f[r] * y[2 * j + r]).sum();
+        rss += (v - fit) * (v - fit);
+    }
+    Some((y, rss))
+}

@@ -14,4 +14,5 @@ mod sampling;
 mod scene_input;
 mod sim;
 mod sim_derivatives;
+mod sim_sensitivities;
 mod support;

@@ -17,4 +17,5 @@ mod scene_input;
 mod search;
 mod sim;
 mod sim_derivatives;
+mod sim_sensitivities;
 mod support;

@@ -66,7 +66,7 @@ fn neo_hookean_static_pull_in_matches_closed_form() {
         "[[input]]\nkind = \"step\"\namplitude = \"1 kV\"",
         "span = \"1 s\"",
     ));
-    let p = full_plant(&s);
+    let p = full_plant(&s).unwrap();
     let c = static_curve::static_curve(&p, 400, 0.3);
     let pi = c.pull_in.expect("a peak exists");
     let lc = 4f64.powf(-1.0 / 3.0);
@@ -116,7 +116,7 @@ fn slow_ramp_follows_the_static_curve_and_stops_at_pull_in() {
         e.voltage_v
     );
     assert!((e.stretch - lc).abs() < 0.02, "{}", e.stretch);
-    let p = full_plant(&s);
+    let p = full_plant(&s).unwrap();
     let mut checked = 0;
     for smp in o
         .samples
@@ -181,7 +181,7 @@ span = "1 s"
 "#,
         (ro * ro - ri * ri).sqrt()
     ));
-    let (ph, ps) = (full_plant(&helix), full_plant(&stack));
+    let (ph, ps) = (full_plant(&helix).unwrap(), full_plant(&stack).unwrap());
     let vh = static_curve::static_curve(&ph, 200, 0.3).pull_in.unwrap();
     let vs = static_curve::static_curve(&ps, 200, 0.3).pull_in.unwrap();
     // and the capacitance at rest
@@ -434,7 +434,7 @@ fn seed_hdea_settles_within_250_ms_and_alpha_stays_near_half_pi() {
     // ≥ 99 % of the electrostatic force along z (seed Fig. 4.14)
     assert!(o.samples.iter().all(|x| x.alpha_rad.sin() > 0.99));
     // the seed's α approximation differs from the exact helix
-    let p = full_plant(&s);
+    let p = full_plant(&s).unwrap();
     if let dea_fit::sim::scene::Actuator::Helix(h) = p.actuator {
         assert!((h.alpha(1.0) - h.seed_alpha(1.0)).abs() > 1e-4);
     }
@@ -458,7 +458,7 @@ fn seed_scenes_run_and_are_deterministic_in_parallel() {
     assert!(runs.windows(2).all(|w| w[0] == w[1]));
     fn send_sync<T: Send + Sync>(_: &T) {}
     send_sync(&s);
-    send_sync(&full_plant(&s));
+    send_sync(&full_plant(&s).unwrap());
 }
 
 #[test]
@@ -688,7 +688,7 @@ fn adaptive_work_precision_slope_is_the_methods_order() {
 
 /// The scene with parameter j of the full plant's θ (hyperelastic constants, each
 /// arm's k and τ, Nv, εr) multiplied by (1 + rel).
-fn perturbed(s: &Scene, j: usize, rel: f64) -> Scene {
+pub(crate) fn perturbed(s: &Scene, j: usize, rel: f64) -> Scene {
     let mut s = s.clone();
     let m = &mut s.material;
     let np = m.params.len();

@@ -116,12 +116,12 @@ fn nh_pull_in() -> (f64, f64) {
 }
 
 fn plant(s: &Scene, inertia: bool) -> Plant {
-    Plant::new(s, inertia, &vec![true; s.material.viscous.arms.len()])
+    Plant::new(s, inertia, &vec![true; s.material.viscous.arms.len()]).unwrap()
 }
 
 /// Arms 3 and 4 of Table 3.3 (τ = 32 s, 216 s ≥ the 1 s span) frozen.
 fn frozen(s: &Scene, inertia: bool) -> Plant {
-    let p = Plant::new(s, inertia, &[true, true, false, false]);
+    let p = Plant::new(s, inertia, &[true, true, false, false]).unwrap();
     assert!(p.frozen_k > 0.0 && p.arms.len() == 2);
     p
 }
@@ -287,7 +287,7 @@ fn fd_theta(p: &Plant, f: impl Fn(&Plant) -> Vec<f64>) -> Vec<f64> {
         let col = fd5(1e-3 * s[k], |d| {
             let mut td = th.clone();
             td[k] += d;
-            f(&p.with_theta(&td))
+            f(&p.with_theta(&td).unwrap())
         });
         set_col(&mut j, m, k, &col);
     }
@@ -623,7 +623,7 @@ fn initial_state_sensitivity_matches_finite_differences() {
 fn with_theta_of_theta_is_the_same_plant() {
     for c in cases() {
         let p = &c.plant;
-        let q = p.with_theta(&p.theta());
+        let q = p.with_theta(&p.theta()).unwrap();
         assert_eq!(q.theta(), p.theta(), "{}", c.name);
         assert_eq!(
             (q.lam0, q.lam_f, q.c_rest, q.eps, q.g_per_c, q.tau_c),

@@ -42,7 +42,7 @@ pub fn run(a: Args) -> Result<i32> {
         ))
         .with_hint(format!("use --points {MIN_POINTS} or more (default 200)")));
     }
-    let p = full_plant(&scene);
+    let p = full_plant(&scene)?;
     let c = static_curve::static_curve(&p, a.points, a.stretch_min);
     let v_in = match &scene.control {
         Some(pid) => pid.v_max,

@@ -21,9 +21,11 @@
 //! plus 10 steps per restart.
 //! Memory: one [`super::Sample`] per output time and one f64 per kink.
 
+use super::fidelity::{self, AxialMode, Fidelity};
 use super::integrate::Method;
+use super::plant::{NoEquilibrium, Plant};
 use super::scene::{Actuator, Scene, Source};
-use super::{fidelity, Sample};
+use super::Sample;
 use crate::error::{Error, Result};
 use crate::material::check::{
     check_hyperelastic, d, ARM_MODULUS, ARM_TIME, DASHPOT, MODULUS, OGDEN_EXPONENT, PERMITTIVITY,
@@ -494,29 +496,47 @@ fn validate_input(
 /// The loaded rest state (stable static equilibrium at 0 V from λ = 1), or why
 /// there is none (a load beyond the material, constants outside the model).
 pub fn rest_state(s: &Scene) -> std::result::Result<f64, Violation> {
-    let hint =
-        "lower the load (load.mass, load.weight, load.force) or check the hyperelastic constants";
-    let lam0 = super::full_plant(s)
-        .static_stretch(0.0, 1.0)
-        .map_err(|why| Violation {
-            key: "load".into(),
-            msg: format!("no stable rest state under the load at 0 V: {why}"),
-            hint: hint.into(),
-        })?;
+    let arms = vec![true; s.material.viscous.arms.len()];
+    let lam0 = Plant::new(s, true, &arms).map_err(rest_violation)?.lam0;
     REST_STRETCH.check("load", lam0).map_err(|mut v| {
         v.msg = format!(
             "the rest stretch under the load is {}: {}",
             fmt_g(lam0),
             REST_STRETCH.reason
         );
-        v.hint = hint.into();
+        v.hint = REST_HINT.into();
         v
     })
 }
 
-/// The estimated cost of a run.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// What to do about a scene without rest state.
+const REST_HINT: &str =
+    "lower the load (load.mass, load.weight, load.force) or check the hyperelastic constants";
+
+/// No stable rest state, located at the load.
+fn rest_violation(why: NoEquilibrium) -> Violation {
+    Violation {
+        key: "load".into(),
+        msg: format!("no stable rest state under the load at 0 V: {why}"),
+        hint: REST_HINT.into(),
+    }
+}
+
+/// The error of a scene whose parameters have no stable rest state (a library
+/// caller that changed them after reading, e.g. identification moving θ).
+pub fn no_rest_state(s: &Scene, why: NoEquilibrium) -> Error {
+    let v = rest_violation(why);
+    Error::settings(format!("scene '{}': {}", s.name, v.msg)).with_hint(v.hint)
+}
+
+/// The estimated cost of a run, with the fidelity and axial mode it rests on
+/// (computed once: `sim::simulate` runs with them).
+#[derive(Debug, Clone, PartialEq)]
 pub struct Cost {
+    /// The fidelity choice ([`fidelity::choose`]).
+    pub fidelity: Fidelity,
+    /// The axial mode of the full plant.
+    pub mode: AxialMode,
     /// Estimated integration steps.
     pub steps: f64,
     /// Estimated memory of the outputs (bytes).
@@ -564,7 +584,7 @@ pub fn estimate(s: &Scene) -> Result<Cost> {
         })
         .sum();
     let fid = fidelity::choose(s)?;
-    let mode = fidelity::axial_mode(&super::full_plant(s));
+    let mode = fid.mode;
     let rtol = s.time.rtol;
     let omega = 2.0 * std::f64::consts::PI * mode.frequency_hz;
     let ring_time = if !fid.inertia || mode.damping_ratio >= 1.0 || !omega.is_finite() {
@@ -591,6 +611,8 @@ pub fn estimate(s: &Scene) -> Result<Cost> {
     let memory =
         (s.time.samples.len() as f64 + 2.0) * std::mem::size_of::<Sample>() as f64 + 8.0 * kinks;
     Ok(Cost {
+        fidelity: fid,
+        mode,
         steps,
         memory,
         kinks,
@@ -632,7 +654,7 @@ pub fn check(s: &Scene) -> Result<Cost> {
         );
     }
     if c.steps > MAX_STEPS as f64 {
-        let mode = fidelity::axial_mode(&super::full_plant(s));
+        let mode = c.mode;
         let why = if c.stability_steps >= c.steps / 2.0 {
             format!(
                 "span {} s is {} periods of the {:.0} Hz axial mode, which an explicit method must resolve for stability",

@@ -35,7 +35,7 @@
 //! different, singular perturbation of it), so its Nv column holds only the
 //! dissipation quadrature's Vol·λ̇².
 
-use super::plant::{Eval, Num, Plant};
+use super::plant::{Eval, NoEquilibrium, Num, Plant};
 use super::scene::Source;
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
@@ -138,11 +138,10 @@ impl Num for Dual {
     }
 }
 
-/// One entry of θ.
+/// One entry of θ besides the hyperelastic parameters (which come first, in the
+/// model's order).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Theta {
-    /// Hyperelastic parameter (index in the model's order).
-    Model(usize),
     /// kj of integrated arm j.
     ArmK(usize),
     /// τj of integrated arm j.
@@ -151,6 +150,20 @@ enum Theta {
     Nv,
     /// Relative permittivity.
     EpsR,
+}
+
+/// Total derivatives of the measured outputs along one parameter θk
+/// ([`Plant::output_sensitivity`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OutputSensitivity {
+    /// dλ/dθk.
+    pub stretch: f64,
+    /// dL/dθk (m per unit of θk).
+    pub length: f64,
+    /// dC/dθk (F per unit of θk).
+    pub capacitance: f64,
+    /// dI/dθk (A per unit of θk).
+    pub current: f64,
 }
 
 /// Relative step of the central differences of P' and ∂P/∂p in λ (see module doc).
@@ -169,14 +182,30 @@ enum StateSeed<'a> {
     Along(&'a [f64]),
 }
 
-/// The plant read with one derivative direction: in state space (∂/∂y_k or along a
-/// vector) or a parameter (∂/∂θ_k, with the chain through λ0 into λf and C_rest).
+/// Direction in parameter space of a seed.
+#[derive(Clone, Copy)]
+enum ThetaSeed<'a> {
+    /// No parameter direction.
+    None,
+    /// ∂/∂θ_k.
+    Unit(usize),
+    /// The directional derivative along w: every θk seeded with wk in one
+    /// evaluation, (∂f/∂θ)·w (as J·v is for the state).
+    Along(&'a [f64]),
+}
+
+/// The plant read with one derivative direction in state space (∂/∂y_k or along a
+/// vector) and one in parameter space (∂/∂θ_k or along a vector, with the chain
+/// through λ0 into λf and C_rest): the dual part is the sum of both.
 struct Seeded<'a> {
     p: &'a Plant,
     /// Seeded state direction.
     state: StateSeed<'a>,
-    /// Seeded parameter.
-    theta: Option<Theta>,
+    /// Seeded parameter direction.
+    theta: ThetaSeed<'a>,
+    /// Whether the parameter direction moves a hyperelastic parameter (else P does
+    /// not depend on it and `stress_jacobian` is not needed).
+    model: bool,
     /// dλ0/dθ along the seed (= dλf/dθ).
     dlam0: f64,
     /// dC_rest/dθ along the seed.
@@ -184,43 +213,54 @@ struct Seeded<'a> {
 }
 
 impl<'a> Seeded<'a> {
-    fn state(p: &'a Plant, k: usize) -> Seeded<'a> {
-        Seeded {
+    /// Seeded along `state` in state space and `theta` in parameter space.
+    fn new(p: &'a Plant, state: StateSeed<'a>, theta: ThetaSeed<'a>) -> Seeded<'a> {
+        let np = p.params.len();
+        let model = match theta {
+            ThetaSeed::None => false,
+            ThetaSeed::Unit(k) => k < np,
+            ThetaSeed::Along(w) => w[..np].iter().any(|&x| x != 0.0),
+        };
+        let mut s = Seeded {
             p,
-            state: StateSeed::Unit(k),
-            theta: None,
+            state,
+            theta,
+            model,
             dlam0: 0.0,
             dc_rest: 0.0,
+        };
+        // dλ0/dθ·w = −(∂P/∂p·w)/P'(λ0) (module documentation)
+        if model {
+            s.dlam0 = -s.stress_param(p.lam0) / p.tangent(p.lam0);
         }
+        s.dc_rest = p.capacitance(p.lam0).1 * s.dlam0 + s.is(Theta::EpsR) * p.c_rest / p.eps_r;
+        s
     }
 
-    fn along(p: &'a Plant, v: &'a [f64]) -> Seeded<'a> {
-        Seeded {
-            state: StateSeed::Along(v),
-            ..Seeded::state(p, 0)
-        }
-    }
-
-    fn theta(p: &'a Plant, k: usize) -> Seeded<'a> {
-        let th = p.theta_kind(k);
-        let dlam0 = p.rest_stretch_derivative(th);
-        let dc_rest = p.capacitance(p.lam0).1 * dlam0
-            + match th {
-                Theta::EpsR => p.c_rest / p.eps_r,
-                _ => 0.0,
-            };
-        Seeded {
-            p,
-            state: StateSeed::None,
-            theta: Some(th),
-            dlam0,
-            dc_rest,
-        }
-    }
-
+    /// The weight of θ entry `th` in the parameter direction.
     #[inline]
     fn is(&self, th: Theta) -> f64 {
-        (self.theta == Some(th)) as u8 as f64
+        match self.theta {
+            ThetaSeed::None => 0.0,
+            ThetaSeed::Unit(k) => (self.p.theta_index(th) == k) as u8 as f64,
+            ThetaSeed::Along(w) => w[self.p.theta_index(th)],
+        }
+    }
+
+    /// ∂P/∂p·w at λ (Pa): P's derivative along the parameter direction.
+    #[inline]
+    fn stress_param(&self, lam: f64) -> f64 {
+        if !self.model {
+            return 0.0;
+        }
+        let np = self.p.params.len();
+        let mut buf = [0.0; MAX_MODEL_PARAMS];
+        self.p.stress_jacobian(lam, &mut buf[..np]);
+        match self.theta {
+            ThetaSeed::Unit(k) => buf[k],
+            ThetaSeed::Along(w) => buf[..np].iter().zip(w).map(|(a, b)| a * b).sum(),
+            ThetaSeed::None => 0.0,
+        }
     }
 }
 
@@ -262,10 +302,7 @@ impl Eval for Seeded<'_> {
     }
     #[inline]
     fn stress(&self, lam: Dual) -> Dual {
-        let mut d = self.p.tangent(lam.v) * lam.d;
-        if let Some(Theta::Model(k)) = self.theta {
-            d += self.p.stress_param_derivative(lam.v, k);
-        }
+        let d = self.p.tangent(lam.v) * lam.d + self.stress_param(lam.v);
         Dual::new(self.p.stress(lam.v), d)
     }
     #[inline]
@@ -275,10 +312,8 @@ impl Eval for Seeded<'_> {
         if lam.d != 0.0 {
             d += (self.p.tangent(lam.v + h) - self.p.tangent(lam.v - h)) / (2.0 * h) * lam.d;
         }
-        if let Some(Theta::Model(k)) = self.theta {
-            d += (self.p.stress_param_derivative(lam.v + h, k)
-                - self.p.stress_param_derivative(lam.v - h, k))
-                / (2.0 * h);
+        if self.model {
+            d += (self.stress_param(lam.v + h) - self.stress_param(lam.v - h)) / (2.0 * h);
         }
         Dual::new(self.p.tangent(lam.v), d)
     }
@@ -312,41 +347,27 @@ impl Plant {
         }
     }
 
-    /// ∂P/∂p_k at λ (Pa per unit of p_k), allocation-free.
-    fn stress_param_derivative(&self, lam: f64, k: usize) -> f64 {
-        let np = self.params.len();
+    /// ∂P/∂p at λ (Pa per unit of each p_k) into `out` (the model's parameter count,
+    /// at most [`MAX_MODEL_PARAMS`]), allocation-free.
+    fn stress_jacobian(&self, lam: f64, out: &mut [f64]) {
         assert!(
-            np <= MAX_MODEL_PARAMS,
-            "{np} hyperelastic parameters: more than MAX_MODEL_PARAMS"
+            out.len() <= MAX_MODEL_PARAMS,
+            "{} hyperelastic parameters: more than MAX_MODEL_PARAMS",
+            out.len()
         );
-        let mut buf = [0.0; MAX_MODEL_PARAMS];
         self.model()
-            .stress_jacobian(&self.params, self.mode, lam, &mut buf[..np]);
-        buf[k]
+            .stress_jacobian(&self.params, self.mode, lam, out);
     }
 
-    /// dλ0/dθ: λ0 solves −Vol·P(λ0) + F_load·L0 = 0, so dλ0/dp = −(∂P/∂p)/P'(λ0);
-    /// zero for the other parameters.
-    fn rest_stretch_derivative(&self, th: Theta) -> f64 {
-        match th {
-            Theta::Model(k) => {
-                -self.stress_param_derivative(self.lam0, k) / self.tangent(self.lam0)
-            }
-            _ => 0.0,
-        }
-    }
-
-    fn theta_kind(&self, k: usize) -> Theta {
+    /// Index in θ of an entry.
+    #[inline]
+    fn theta_index(&self, th: Theta) -> usize {
         let (np, na) = (self.params.len(), self.arms.len());
-        match k {
-            k if k < np => Theta::Model(k),
-            k if k < np + 2 * na => match (k - np) % 2 {
-                0 => Theta::ArmK((k - np) / 2),
-                _ => Theta::ArmTau((k - np) / 2),
-            },
-            k if k == np + 2 * na => Theta::Nv,
-            k if k == np + 2 * na + 1 => Theta::EpsR,
-            _ => panic!("θ has {} entries, not {}", np + 2 * na + 2, k + 1),
+        match th {
+            Theta::ArmK(j) => np + 2 * j,
+            Theta::ArmTau(j) => np + 2 * j + 1,
+            Theta::Nv => np + 2 * na,
+            Theta::EpsR => np + 2 * na + 1,
         }
     }
 
@@ -389,20 +410,10 @@ impl Plant {
         th
     }
 
-    /// ∂ln C/∂θ at fixed λ: C ∝ ε (Eq. 3.22, 4.47), so 1/εr for εr and zero for the
-    /// mechanical parameters.
-    pub fn capacitance_log_sensitivity(&self) -> Vec<f64> {
-        (0..self.n_theta())
-            .map(|k| match self.theta_kind(k) {
-                Theta::EpsR => 1.0 / self.eps_r,
-                _ => 0.0,
-            })
-            .collect()
-    }
-
     /// The plant with parameters θ, every derived quantity (ε, G/C, λ0, λf, C_rest)
-    /// recomputed as [`Plant::new`] does; τc is kept.
-    pub fn with_theta(&self, theta: &[f64]) -> Plant {
+    /// recomputed as [`Plant::new`] does; τc is kept. Err when θ has no stable rest
+    /// state (no run starts from it).
+    pub fn with_theta(&self, theta: &[f64]) -> Result<Plant, NoEquilibrium> {
         assert_eq!(theta.len(), self.n_theta(), "θ length");
         let mut p = self.clone();
         let np = p.params.len();
@@ -412,8 +423,8 @@ impl Plant {
         }
         p.nv = theta[theta.len() - 2];
         p.eps_r = theta[theta.len() - 1];
-        p.derive();
-        p
+        p.derive()?;
+        Ok(p)
     }
 
     /// The Jacobian ∂f/∂y of the right-hand side at (t, y), row-major n×n into `jac`
@@ -425,7 +436,8 @@ impl Plant {
         assert_eq!(jac.len(), n * n, "jacobian: n×n buffer");
         for k in 0..n {
             if k < l.quad {
-                self.rhs_with(&Seeded::state(self, k), t, y, |i, v| jac[i * n + k] = v.d);
+                let e = Seeded::new(self, StateSeed::Unit(k), ThetaSeed::None);
+                self.rhs_with(&e, t, y, |i, v| jac[i * n + k] = v.d);
             } else {
                 (0..n).for_each(|i| jac[i * n + k] = 0.0);
             }
@@ -435,7 +447,42 @@ impl Plant {
     /// J·v, the Jacobian applied to `v`, in one forward evaluation (what implicit
     /// integrators need); `out` has n entries. No allocation.
     pub fn jacobian_times(&self, t: f64, y: &[f64], v: &[f64], out: &mut [f64]) {
-        self.rhs_with(&Seeded::along(self, v), t, y, |i, d| out[i] = d.d);
+        let e = Seeded::new(self, StateSeed::Along(v), ThetaSeed::None);
+        self.rhs_with(&e, t, y, |i, d| out[i] = d.d);
+    }
+
+    /// (∂f/∂θ)·w at fixed (t, y), including the chain through λ0 into λf and C_rest,
+    /// in one forward evaluation with every θk seeded with wk (what forward
+    /// sensitivities need per parameter direction); `out` has n entries. No
+    /// allocation.
+    pub fn param_jacobian_times(&self, t: f64, y: &[f64], w: &[f64], out: &mut [f64]) {
+        let e = Seeded::new(self, StateSeed::None, ThetaSeed::Along(w));
+        self.rhs_with(&e, t, y, |i, d| out[i] = d.d);
+    }
+
+    /// J·s + ∂f/∂θk, the rate of the sensitivity column s = ∂y/∂θk, in one forward
+    /// evaluation seeded along s in state space and θk in parameter space. No
+    /// allocation.
+    pub fn sensitivity_rate(&self, t: f64, y: &[f64], s: &[f64], k: usize, out: &mut [f64]) {
+        let e = Seeded::new(self, StateSeed::Along(s), ThetaSeed::Unit(k));
+        self.rhs_with(&e, t, y, |i, d| out[i] = d.d);
+    }
+
+    /// The total derivatives d/dθk of the measured outputs at (t, y) given the state
+    /// sensitivity s = ∂y/∂θk: dλ/dθk = s0, dL/dθk = L0·s0, and the capacitance and
+    /// the current (which depends on λ̇, V and the source state) as
+    /// ∂out/∂y·s + ∂out/∂θk, by one forward evaluation of the same output code that
+    /// writes the samples (`Plant::electrical` at `Plant::lam_dot`), seeded along s
+    /// and θk. No allocation.
+    pub fn output_sensitivity(&self, t: f64, y: &[f64], s: &[f64], k: usize) -> OutputSensitivity {
+        let e = Seeded::new(self, StateSeed::Along(s), ThetaSeed::Unit(k));
+        let el = self.kinematics(&e, t, y, &self.layout()).elec;
+        OutputSensitivity {
+            stretch: s[0],
+            length: self.l0 * s[0],
+            capacitance: el.capacitance.d,
+            current: el.current.d,
+        }
     }
 
     /// ∂f/∂θ at fixed (t, y), row-major n×nθ into `dfdp` (∂f_i/∂θ_k at
@@ -445,7 +492,8 @@ impl Plant {
         let (n, m) = (self.layout().n, self.n_theta());
         assert_eq!(dfdp.len(), n * m, "param_jacobian: n×nθ buffer");
         for k in 0..m {
-            self.rhs_with(&Seeded::theta(self, k), t, y, |i, v| dfdp[i * m + k] = v.d);
+            let e = Seeded::new(self, StateSeed::None, ThetaSeed::Unit(k));
+            self.rhs_with(&e, t, y, |i, v| dfdp[i * m + k] = v.d);
         }
     }
 
@@ -465,16 +513,11 @@ impl Plant {
         let y0 = self.initial_state();
         let (c, dc, _) = self.capacitance(self.lam0);
         for k in 0..m {
-            let th = self.theta_kind(k);
-            let dlam0 = self.rest_stretch_derivative(th);
-            out[k] = dlam0;
+            let e = Seeded::new(self, StateSeed::None, ThetaSeed::Unit(k));
+            out[k] = e.dlam0;
             if let (Some(i), Source::Resistance { .. }) = (l.src, self.source) {
                 let u0 = y0[i] / c;
-                let dc_dth = match th {
-                    Theta::EpsR => c / self.eps_r,
-                    _ => 0.0,
-                };
-                out[i * m + k] = u0 * (dc * dlam0 + dc_dth);
+                out[i * m + k] = u0 * (dc * e.dlam0 + e.is(Theta::EpsR) * c / self.eps_r);
             }
         }
     }

@@ -98,6 +98,9 @@ pub struct Fidelity {
     /// With inertia.
     #[serde(skip)]
     pub inertia: bool,
+    /// The axial mode of the full plant the choice rests on.
+    #[serde(skip)]
+    pub mode: AxialMode,
 }
 
 /// The input's shortest time scale (s), including the source's rise time; 0 for a jump.
@@ -116,7 +119,7 @@ pub fn input_time_scale(scene: &Scene, c0: f64) -> f64 {
 /// Choose the fidelity of a scene.
 pub fn choose(scene: &Scene) -> Result<Fidelity> {
     let n = scene.material.viscous.arms.len();
-    let full = super::full_plant(scene);
+    let full = super::full_plant(scene)?;
     let mode = axial_mode(&full);
     let t_in = input_time_scale(scene, full.capacitance(full.lam0).0);
     let e_inst = full.tangent(full.lam0) + full.arms.iter().map(|a| a.0).sum::<f64>();
@@ -144,7 +147,8 @@ pub fn choose(scene: &Scene) -> Result<Fidelity> {
             notes.push(format!("arm {} (τ = {tau:.4} s) integrated", i + 1));
         }
     }
-    let lumped = Plant::new(scene, false, &keep);
+    let lumped =
+        Plant::new(scene, false, &keep).map_err(|why| super::budget::no_rest_state(scene, why))?;
     let f_in = if t_in > 0.0 {
         1.0 / (2.0 * PI * t_in)
     } else {
@@ -187,5 +191,6 @@ pub fn choose(scene: &Scene) -> Result<Fidelity> {
         estimated_error: err,
         keep,
         inertia,
+        mode,
     })
 }

@@ -176,22 +176,80 @@ pub struct Outcome {
 /// Forward sensitivities of the sampled trajectory to the parameters θ of the plant
 /// that ran (`Plant::sensitivity_params`): the hyperelastic constants, each
 /// integrated arm's k and τ, the dashpot Nv and εr. Arms lumped away by the
-/// fidelity choice are not parameters of that plant.
+/// fidelity choice are not parameters of that plant. One row per sample, one
+/// column per θj, for every channel a trace can measure; a pull-in sample's row is
+/// NaN (the event time itself moves with θ).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Sensitivities {
     /// Parameter names with units.
     pub params: Vec<String>,
     /// Parameter values θ (SI).
     pub theta: Vec<f64>,
-    /// ∂λ/∂θj, one row per sample (NaN at a pull-in sample: the event time itself
-    /// moves with θ).
+    /// ∂λ/∂θj (`Sample::stretch`).
     pub stretch: Vec<Vec<f64>>,
-    /// ∂C/∂θj (F per unit of θj), one row per sample.
-    pub capacitance: Vec<Vec<f64>>,
-    /// ∂L/∂θj (m per unit of θj), one row per sample.
+    /// ∂L/∂θj (m per unit of θj; `Sample::length_m`).
     pub length: Vec<Vec<f64>>,
-    /// ∂I/∂θj (A per unit of θj), one row per sample.
+    /// ∂C/∂θj (F per unit of θj; `Sample::capacitance_f`).
+    pub capacitance: Vec<Vec<f64>>,
+    /// ∂I/∂θj (A per unit of θj; `Sample::current_a`, which depends on λ̇, V and
+    /// the source state: [`Plant::output_sensitivity`]).
     pub current: Vec<Vec<f64>>,
+}
+
+impl Sensitivities {
+    /// The sensitivities at the rest state (∂y0/∂θ, `Plant::initial_state_sensitivity`),
+    /// recorded as the row of sample 0.
+    fn at_start(p: &Plant, y0: &[f64]) -> Sensitivities {
+        let (n, np) = (y0.len(), p.n_theta());
+        let mut s0 = vec![0.0; n * np];
+        p.initial_state_sensitivity(&mut s0);
+        // row-major n × nθ → column per parameter
+        let cols: Vec<f64> = (0..np * n).map(|k| s0[(k % n) * np + k / n]).collect();
+        let mut se = Sensitivities {
+            params: p.sensitivity_params(),
+            theta: p.theta(),
+            stretch: Vec::new(),
+            length: Vec::new(),
+            capacitance: Vec::new(),
+            current: Vec::new(),
+        };
+        se.record(p, 0.0, y0, &cols);
+        se
+    }
+
+    /// The row of a sample at (t, y) from the state sensitivities `s` (column by
+    /// column, `s[j·n + i]` = ∂yi/∂θj).
+    fn record(&mut self, p: &Plant, t: f64, y: &[f64], s: &[f64]) {
+        let (n, np) = (y.len(), self.theta.len());
+        let mut rows = [(); 4].map(|_| Vec::with_capacity(np));
+        for j in 0..np {
+            let d = p.output_sensitivity(t, y, &s[j * n..(j + 1) * n], j);
+            for (row, v) in rows
+                .iter_mut()
+                .zip([d.stretch, d.length, d.capacitance, d.current])
+            {
+                row.push(v);
+            }
+        }
+        let [stretch, length, capacitance, current] = rows;
+        self.stretch.push(stretch);
+        self.length.push(length);
+        self.capacitance.push(capacitance);
+        self.current.push(current);
+    }
+
+    /// The NaN row of a pull-in sample.
+    fn record_unknown(&mut self) {
+        let nan = vec![f64::NAN; self.theta.len()];
+        for ch in [
+            &mut self.stretch,
+            &mut self.length,
+            &mut self.capacitance,
+            &mut self.current,
+        ] {
+            ch.push(nan.clone());
+        }
+    }
 }
 
 /// Run settings that are not part of the scene.
@@ -281,18 +339,84 @@ pub fn auto_method(inertia: bool, damping_ratio: f64) -> (Method, &'static str) 
     }
 }
 
-/// Simulate a scene.
+/// Simulate a scene: [`prepare`] the run, [`integrate`] it, [`summarise`] it
+/// (energy balance, sampling, range and damping warnings, tracking error).
 pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
+    let run = prepare(scene, opts)?;
+    let mut env = sampling::Envelope::new(
+        run.cost.fidelity.inertia,
+        &run.cost.mode,
+        &scene.time.samples,
+    );
+    let ran = integrate(scene, &run, opts.sensitivities, &mut |t, y| {
+        env.add(&sample(&run.plant, t, y))
+    });
+    Ok(summarise(scene, run, ran, env))
+}
+
+/// The trajectory of a scene without the report-only work of [`simulate`]: the
+/// same guard, plant, integrator and samples (bit for bit), the same check that a
+/// `Completed` run has finite outputs, no energy balance or warnings. What
+/// identification runs in its inner loop (issue 10).
+pub fn trajectory(scene: &Scene, opts: &RunOptions) -> crate::Result<Trajectory> {
+    let run = prepare(scene, opts)?;
+    Ok(integrate(scene, &run, opts.sensitivities, &mut |_, _| {}).trajectory)
+}
+
+/// The trajectory of a run (see [`trajectory`]).
+#[derive(Debug, Clone)]
+pub struct Trajectory {
+    /// `samples[0]` is t = 0, then one per `scene.time.samples` reached (plus the
+    /// pull-in sample of a run stopped there).
+    pub samples: Vec<Sample>,
+    /// Forward sensitivities at the samples, if asked for.
+    pub sensitivities: Option<Sensitivities>,
+    /// Status.
+    pub status: RunStatus,
+    /// Reason of the status.
+    pub message: String,
+    /// Integrator that ran.
+    pub method: Method,
+    /// Its counts.
+    pub stats: Stats,
+    /// Rest stretch under the load.
+    pub rest_stretch: f64,
+    /// Rest length (m).
+    pub rest_length_m: f64,
+}
+
+/// A run made ready by [`prepare`].
+struct Prepared {
+    /// The guard's estimate, with the fidelity and axial mode it chose.
+    cost: budget::Cost,
+    /// The plant of that fidelity.
+    plant: Plant,
+    /// Integrator and why.
+    method: Method,
+    reason: String,
+    /// Relative tolerance.
+    rtol: f64,
+    /// Tolerances and limits.
+    options: Options,
+    /// Restart times [0, input kinks…, span].
+    bounds: Vec<f64>,
+    /// Typical state magnitudes (absolute tolerances).
+    scale: Vec<f64>,
+}
+
+/// The guard ([`budget::check`]: domain, rest state, cost; it chooses the fidelity
+/// and the axial mode once), the plant, the integrator (requested, or
+/// [`auto_method`]), its options and the restart times.
+fn prepare(scene: &Scene, opts: &RunOptions) -> crate::Result<Prepared> {
     let cost = budget::check(scene)?;
-    let fid = fidelity::choose(scene)?;
-    let p = Plant::new(scene, fid.inertia, &fid.keep);
-    let full = full_plant(scene);
-    let mode = fidelity::axial_mode(&full);
+    let plant = Plant::new(scene, cost.fidelity.inertia, &cost.fidelity.keep)
+        .map_err(|why| budget::no_rest_state(scene, why))?;
+    let mode = &cost.mode;
     let rtol = opts.rtol.unwrap_or(scene.time.rtol);
-    let (method, mreason) = match opts.method.or(scene.time.method) {
+    let (method, reason) = match opts.method.or(scene.time.method) {
         Some(m) => (m, "requested".to_string()),
         None => {
-            let (m, why) = auto_method(p.inertia, mode.damping_ratio);
+            let (m, why) = auto_method(plant.inertia, mode.damping_ratio);
             (m, why.to_string())
         }
     };
@@ -301,7 +425,7 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
         Some(pid) => pid.v_max,
         None => scene.input.max_abs(0.0, span),
     };
-    let o = Options {
+    let options = Options {
         rtol,
         atol: scene.time.atol * rtol / scene.time.rtol,
         h_max: span / 10.0,
@@ -315,27 +439,57 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
         max_steps: cost.step_budget(),
         fixed_step: opts.fixed_step,
     };
-    let scale = p.scales(v_max);
-    let mut y = p.initial_state();
-    let l = p.layout();
-    let mut stats = Stats::default();
-    let mut samples = Vec::with_capacity(scene.time.samples.len() + 1);
-    samples.push(sample(&p, 0.0, &y));
     let mut kinks = match &scene.control {
         Some(pid) => pid.reference.kinks(0.0, span),
         None => scene.input.kinks(0.0, span),
     };
     kinks.dedup();
     let mut bounds = vec![0.0];
-    bounds.extend(kinks.iter().copied());
+    bounds.extend(kinks);
     bounds.push(span);
+    Ok(Prepared {
+        scale: plant.scales(v_max),
+        cost,
+        plant,
+        method,
+        reason,
+        rtol,
+        options,
+        bounds,
+    })
+}
+
+/// What [`integrate`] leaves: the trajectory, the events and where the run ended.
+struct Integrated {
+    trajectory: Trajectory,
+    events: Vec<Event>,
+    /// Time and state at the end of the run (pull-in, failure or the span).
+    t_end: f64,
+    y_end: Vec<f64>,
+}
+
+/// Integrate a prepared run from the rest state: the samples (and their
+/// sensitivities), the pull-in event (the instantaneous stiffness reaching zero),
+/// an ideal source's charging losses at its jumps, the status. `step` sees the
+/// state at every accepted step.
+fn integrate(
+    scene: &Scene,
+    run: &Prepared,
+    sensitivities: bool,
+    step: &mut integrate::StepFn,
+) -> Integrated {
+    let p = &run.plant;
+    let l = p.layout();
+    let span = scene.time.span;
+    let mut y = p.initial_state();
+    let mut stats = Stats::default();
+    let mut samples = Vec::with_capacity(scene.time.samples.len() + 2);
+    samples.push(sample(p, 0.0, &y));
     let e_scale = p.vol * p.tangent(p.lam0).abs().max(1.0);
     let event = |t: f64, y: &[f64]| {
         let v = p.electrical(t, y, 0.0).voltage;
         p.instant_stiffness(y[0], v) / e_scale
     };
-    let (c0, _, _) = p.capacitance(y[0]);
-    let v_start = p.electrical(0.0, &y, 0.0).voltage;
     // An ideal source jumping by ΔV charges C through zero resistance: it delivers
     // V⁺·C·ΔV, of which ½C·ΔV² is lost in the wiring (also at t = 0 from 0 V).
     let ideal = matches!(scene.source, Source::Ideal);
@@ -344,9 +498,9 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
         y[l.quad] += vp * c * (vp - vm);
         y[l.quad + 3] += 0.5 * c * (vp - vm).powi(2);
     };
+    let mut sens = sensitivities.then(|| Sensitivities::at_start(p, &y));
     if ideal {
-        let v0 = scene.input.eval(0.0).0;
-        jump(&mut y, 0.0, v0);
+        jump(&mut y, 0.0, scene.input.eval(0.0).0);
     }
     let mut at_kink = |t: f64, y: &mut [f64]| {
         if ideal {
@@ -356,56 +510,26 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
         }
     };
     let theta = p.theta();
-    let np = theta.len();
-    let n = l.n;
-    let mut sens = opts.sensitivities.then(|| Sensitivities {
-        params: p.sensitivity_params(),
-        theta: theta.clone(),
-        stretch: Vec::new(),
-        capacitance: Vec::new(),
-        length: Vec::new(),
-        current: Vec::new(),
-    });
-    let dlnc = p.capacitance_log_sensitivity();
-    let record = |sens: &mut Option<Sensitivities>, lam: f64, s: &[f64]| {
-        if let Some(se) = sens {
-            let (c, dc, _) = p.capacitance(lam);
-            let dl: Vec<f64> = (0..np).map(|j| s[j * n]).collect();
-            se.capacitance
-                .push((0..np).map(|j| dc * dl[j] + c * dlnc[j]).collect());
-            let h = 1e-6 * lam;
-            let dlen = (p.length(lam + h) - p.length(lam - h)) / (2.0 * h);
-            se.length.push(dl.iter().map(|d| dlen * d).collect());
-            se.current.push(vec![f64::NAN; np]);
-            se.stretch.push(dl);
+    let mut out = |t: f64, y: &[f64], s: &[f64]| {
+        samples.push(sample(p, t, y));
+        if let Some(se) = &mut sens {
+            se.record(p, t, y, s);
         }
     };
-    {
-        let mut s0 = vec![0.0; n * np];
-        p.initial_state_sensitivity(&mut s0);
-        // row-major n × np → column per parameter
-        let cols: Vec<f64> = (0..np * n).map(|k| s0[(k % n) * np + k / n]).collect();
-        record(&mut sens, y[0], &cols);
-    }
-    let mut env = sampling::Envelope::new(fid.inertia, &mode, &scene.time.samples);
-    let mut out = |t: f64, y: &[f64], s: &[f64]| {
-        samples.push(sample(&p, t, y));
-        record(&mut sens, y[0], s);
-    };
     let end = integrate::run(
-        &p,
-        method,
-        &o,
-        &scale,
-        &bounds,
+        p,
+        run.method,
+        &run.options,
+        &run.scale,
+        &run.bounds,
         &mut y,
         &scene.time.samples,
-        match opts.sensitivities {
+        match sensitivities {
             true => Extra::Sensitivities(&theta),
             false => Extra::None,
         },
         &mut out,
-        &mut |t, y| env.add(&sample(&p, t, y)),
+        step,
         Some(&event),
         &mut at_kink,
         &mut stats,
@@ -418,13 +542,9 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
             Vec::new(),
         ),
         End::Event(te) => {
-            let v = p.electrical(te, &y, 0.0).voltage;
-            samples.push(sample(&p, te, &y));
+            samples.push(sample(p, te, &y));
             if let Some(se) = &mut sens {
-                se.stretch.push(vec![f64::NAN; np]);
-                se.capacitance.push(vec![f64::NAN; np]);
-                se.length.push(vec![f64::NAN; np]);
-                se.current.push(vec![f64::NAN; np]);
+                se.record_unknown();
             }
             (
                 RunStatus::PullIn,
@@ -433,7 +553,7 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
                 vec![Event {
                     kind: "pull_in".into(),
                     time_s: te,
-                    voltage_v: v,
+                    voltage_v: p.electrical(te, &y, 0.0).voltage,
                     stretch: y[0],
                 }],
             )
@@ -443,7 +563,7 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
             let why = if why.starts_with("step budget exhausted") {
                 format!(
                     "{why}: the run was estimated at {} steps before it started (sim::budget); dynamics that much stiffer than the axial mode (high control gains, a fast source) want the implicit integrator = \"bdf\"",
-                    budget::fmt_g(cost.steps.round())
+                    budget::fmt_g(run.cost.steps.round())
                 )
             } else {
                 why
@@ -463,8 +583,70 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
         ),
         _ => (status, message),
     };
-    // energy balance
-    let e = p.electrical(t_end, &y, p.lam_dot(t_end, &y));
+    Integrated {
+        trajectory: Trajectory {
+            samples,
+            sensitivities: sens,
+            status,
+            message,
+            method: run.method,
+            stats,
+            rest_stretch: p.lam0,
+            rest_length_m: p.length(p.lam0),
+        },
+        events,
+        t_end,
+        y_end: y,
+    }
+}
+
+/// The report of an integrated run: energy balance, the sampling envelope and
+/// warnings, the tracking error.
+fn summarise(scene: &Scene, run: Prepared, ran: Integrated, env: sampling::Envelope) -> Outcome {
+    let p = &run.plant;
+    let tr = ran.trajectory;
+    let energy = energy_balance(p, ran.t_end, &ran.y_end);
+    let (envelope, undersampled) = env.finish(&tr.samples);
+    let mut warnings: Vec<String> = undersampled.into_iter().collect();
+    warnings.extend(model_warnings(scene, p, &run.cost.mode, &tr.samples));
+    let tracking_rmse_pct = scene
+        .control
+        .as_ref()
+        .map(|_| tracking_rmse_pct(p, &tr.samples));
+    Outcome {
+        tracking_rmse_pct,
+        scene: scene.name.clone(),
+        fidelity: run.cost.fidelity,
+        mode: run.cost.mode,
+        events: ran.events,
+        integrator: IntegratorReport {
+            method: tr.method,
+            reason: run.reason,
+            rtol: run.rtol,
+            stats: tr.stats,
+            status: tr.status,
+            message: tr.message,
+        },
+        energy,
+        rest_stretch: tr.rest_stretch,
+        rest_length_m: tr.rest_length_m,
+        warnings,
+        samples: tr.samples,
+        envelope,
+        sensitivities: tr.sensitivities,
+    }
+}
+
+/// Energy bookkeeping from the rest state to (t_end, y): the quadratures (work in,
+/// dashpot and arm dissipation, leakage, source losses) against the stored energies
+/// (field ½CV², hyperelastic Vol·∫P dλ, arm springs Vol·σj²/(2kj) and frozen
+/// springs, kinetic ½M·λ̇², the load's work); the residual closes the balance.
+fn energy_balance(p: &Plant, t_end: f64, y: &[f64]) -> Energy {
+    let l = p.layout();
+    let y0 = p.initial_state();
+    let (c0, _, _) = p.capacitance(y0[0]);
+    let v_start = p.electrical(0.0, &y0, 0.0).voltage;
+    let e = p.electrical(t_end, y, p.lam_dot(t_end, y));
     let kinetic = l.v.map(|i| 0.5 * p.mass * y[i] * y[i]).unwrap_or(0.0);
     let arms_j: f64 = p
         .arms
@@ -474,16 +656,14 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
         .sum::<f64>()
         + p.vol * 0.5 * p.frozen_k * (y[0] - p.lam_f).powi(2);
     let field = 0.5 * e.capacitance * e.voltage.powi(2) - 0.5 * c0 * v_start * v_start;
-    let elastic = elastic_energy(&p, p.lam0, y[0]);
-    let load = -p.f_load * p.l0 * (y[0] - p.lam0);
     let q = l.quad;
     let mut energy = Energy {
         input_j: y[q],
         field_j: field + 0.5 * c0 * v_start * v_start,
-        elastic_j: elastic,
+        elastic_j: elastic_energy(p, p.lam0, y[0]),
         arms_j,
         kinetic_j: kinetic,
-        load_j: load,
+        load_j: -p.f_load * p.l0 * (y[0] - p.lam0),
         viscous_j: y[q + 1],
         leakage_j: y[q + 2],
         source_j: y[q + 3],
@@ -498,8 +678,13 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
         - energy.viscous_j
         - energy.leakage_j
         - energy.source_j;
-    let (envelope, undersampled) = env.finish(&samples);
-    let mut warnings: Vec<String> = undersampled.into_iter().collect();
+    energy
+}
+
+/// Warnings about the model rather than the run: a fit used outside its data's
+/// stretch range, damping that relaxation tests do not determine, an ideal step.
+fn model_warnings(scene: &Scene, p: &Plant, mode: &AxialMode, samples: &[Sample]) -> Vec<String> {
+    let mut warnings = Vec::new();
     if let Some(fit) = &scene.material.fit {
         let (lo, hi) = samples
             .iter()
@@ -522,44 +707,28 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
     if matches!(scene.source, Source::Ideal) && scene.input.time_scale() == 0.0 {
         warnings.push("ideal voltage step: a real supply has a finite rise time (give source.rise_time or source.resistance_ohm)".into());
     }
-    let tracking_rmse_pct = scene.control.as_ref().map(|_| {
-        let rest = p.length(p.lam0);
-        let (mut ss, mut lo, mut hi) = (0.0, f64::INFINITY, f64::NEG_INFINITY);
-        for s in &samples {
-            let y = 1.0 - s.length_m / rest;
-            ss += (y - s.reference).powi(2);
-            lo = lo.min(s.reference);
-            hi = hi.max(s.reference);
-        }
-        100.0 * (ss / samples.len() as f64).sqrt() / (hi - lo)
-    });
-    Ok(Outcome {
-        tracking_rmse_pct,
-        scene: scene.name.clone(),
-        fidelity: fid,
-        mode,
-        events,
-        integrator: IntegratorReport {
-            method,
-            reason: mreason,
-            rtol,
-            stats,
-            status,
-            message,
-        },
-        energy,
-        rest_stretch: p.lam0,
-        rest_length_m: p.length(p.lam0),
-        warnings,
-        samples,
-        envelope,
-        sensitivities: sens,
-    })
+    warnings
 }
 
-/// The plant a scene runs with (full model, all arms, with inertia).
-pub fn full_plant(scene: &Scene) -> Plant {
+/// Closed loop: %RMSE of the true contraction 1 − Z/Z_rest against the reference,
+/// normalised by the reference's range (seed Eq. 3.28).
+fn tracking_rmse_pct(p: &Plant, samples: &[Sample]) -> f64 {
+    let rest = p.length(p.lam0);
+    let (mut ss, mut lo, mut hi) = (0.0, f64::INFINITY, f64::NEG_INFINITY);
+    for s in samples {
+        let y = 1.0 - s.length_m / rest;
+        ss += (y - s.reference).powi(2);
+        lo = lo.min(s.reference);
+        hi = hi.max(s.reference);
+    }
+    100.0 * (ss / samples.len() as f64).sqrt() / (hi - lo)
+}
+
+/// The plant a scene runs with (full model, all arms, with inertia), or the error
+/// of a scene without a stable rest state.
+pub fn full_plant(scene: &Scene) -> crate::Result<Plant> {
     Plant::new(scene, true, &vec![true; scene.material.viscous.arms.len()])
+        .map_err(|why| budget::no_rest_state(scene, why))
 }
 
 impl Outcome {

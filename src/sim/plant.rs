@@ -322,8 +322,10 @@ impl std::fmt::Display for NoEquilibrium {
 }
 
 impl Plant {
-    /// Build the plant of a scene with given lumping (arms kept, Nv add, frozen k).
-    pub fn new(scene: &Scene, inertia: bool, keep: &[bool]) -> Plant {
+    /// Build the plant of a scene with given lumping (arms kept, Nv add, frozen k),
+    /// or why its parameters have no stable rest state (then there is no run: the
+    /// state starts there).
+    pub fn new(scene: &Scene, inertia: bool, keep: &[bool]) -> Result<Plant, NoEquilibrium> {
         let m = &scene.material;
         let (mode, vol, l0, m_act) = match scene.actuator {
             Actuator::Stack(s) => (
@@ -387,14 +389,14 @@ impl Plant {
             lam_f: 1.0,
             c_rest: 0.0,
         };
-        p.derive();
+        p.derive()?;
         let t_in = super::fidelity::input_time_scale(scene, p.c_rest);
         p.tau_c = BAUMGARTE_FRACTION
             * [1.0 / p.fastest_arm_rate(), t_in]
                 .into_iter()
                 .filter(|&t| t > 0.0)
                 .fold(scene.time.span, f64::min);
-        p
+        Ok(p)
     }
 
     /// Fastest relaxation rate s (1/s) of the integrated arms in the quasi-static
@@ -443,17 +445,17 @@ impl Plant {
 
     /// The quantities derived from the parameters θ (the one place computing them):
     /// ε = ε0·εr, G/C = 1/(ρε), λ0 = static equilibrium at V = 0 (from λ = 1),
-    /// λf = λ0, C_rest = C(λ0).
-    pub(super) fn derive(&mut self) {
+    /// λf = λ0, C_rest = C(λ0); or why there is no rest state.
+    pub(super) fn derive(&mut self) -> Result<(), NoEquilibrium> {
         self.eps = EPS0 * self.eps_r;
         self.g_per_c = self
             .resistivity
             .map(|r| 1.0 / (r * self.eps))
             .unwrap_or(0.0);
-        // a plant without rest state keeps λ0 = 1; `sim::budget::check` refuses it
-        self.lam0 = self.static_stretch(0.0, 1.0).unwrap_or(1.0);
+        self.lam0 = self.static_stretch(0.0, 1.0)?;
         self.lam_f = self.lam0;
         self.c_rest = self.capacitance(self.lam0).0;
+        Ok(())
     }
 
     /// The hyperelastic model.
@@ -923,8 +925,11 @@ impl super::integrate::System for Plant {
     fn n_params(&self) -> usize {
         self.n_theta()
     }
-    fn param_jacobian(&self, t: f64, y: &[f64], dfdp: &mut [f64]) {
-        Plant::param_jacobian(self, t, y, dfdp)
+    fn param_jacobian_times(&self, t: f64, y: &[f64], w: &[f64], out: &mut [f64]) {
+        Plant::param_jacobian_times(self, t, y, w, out)
+    }
+    fn sensitivity_rate(&self, t: f64, y: &[f64], s: &[f64], k: usize, out: &mut [f64]) {
+        Plant::sensitivity_rate(self, t, y, s, k, out)
     }
     fn initial_sensitivity(&self, out: &mut [f64]) {
         self.initial_state_sensitivity(out)
@@ -957,7 +962,7 @@ span = "1 s"
 "#
         );
         let s = Scene::parse(&text, Path::new("t.toml")).unwrap();
-        Plant::new(&s, false, &vec![true; s.material.viscous.arms.len()])
+        Plant::new(&s, false, &vec![true; s.material.viscous.arms.len()]).unwrap()
     }
 
     #[test]

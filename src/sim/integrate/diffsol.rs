@@ -16,7 +16,7 @@ use ::diffsol::{
     NalgebraLU, NalgebraMat, NalgebraVec, OdeBuilder, OdeEquations, OdeSolverMethod,
     OdeSolverStopReason, Vector, VectorCommon,
 };
-use std::cell::{Cell, RefCell};
+use std::cell::Cell;
 
 type M = NalgebraMat<f64>;
 type LS = NalgebraLU<f64>;
@@ -38,12 +38,11 @@ struct Counts {
     jac: Cell<usize>,
 }
 
-/// The closures' shared view of the system: right-hand side with the left limit
-/// at `t_end`, Jacobian-vector product through a scratch matrix.
+/// The closures' shared view of the system: right-hand side, Jacobian-vector and
+/// parameter-Jacobian-vector products with the left limit at `t_end`.
 struct Adapter<'s, S> {
     sys: &'s S,
     t_end: Cell<f64>,
-    dfdp: RefCell<Vec<f64>>,
     counts: Counts,
 }
 
@@ -61,30 +60,21 @@ impl<S: System> Adapter<'_, S> {
         self.sys.jacobian_times(t.min(self.t_end.get()), x, v, out);
     }
 
-    /// (∂f/∂θ)·v, one parameter direction per call, like [`Self::jac_vec`].
+    /// (∂f/∂θ)·v, one parameter direction per call (one dual evaluation, like
+    /// [`Self::jac_vec`]; diffsol assembles ∂f/∂θ column by column from it).
     #[inline]
     fn sens_vec(&self, t: f64, x: &[f64], v: &[f64], out: &mut [f64]) {
-        let mut d = self.dfdp.borrow_mut();
-        self.sys.param_jacobian(t.min(self.t_end.get()), x, &mut d);
-        let np = v.len();
-        for i in 0..x.len() {
-            let row = &d[i * np..(i + 1) * np];
-            out[i] = row.iter().zip(v).map(|(a, b)| a * b).sum();
-        }
+        self.sys
+            .param_jacobian_times(t.min(self.t_end.get()), x, v, out);
     }
 
     /// ds = J·s + ∂f/∂θ for every parameter column of `s` (after a restart).
     fn sens_rate(&self, t: f64, x: &[f64], s: &[f64], ds: &mut [f64]) {
         let n = x.len();
-        let np = self.sys.n_params();
-        let mut d = self.dfdp.borrow_mut();
-        self.sys.param_jacobian(t, x, &mut d);
-        for p in 0..np {
-            let col = &mut ds[p * n..(p + 1) * n];
-            self.sys.jacobian_times(t, x, &s[p * n..(p + 1) * n], col);
-            for i in 0..n {
-                col[i] += d[i * np + p];
-            }
+        for p in 0..self.sys.n_params() {
+            let col = p * n..(p + 1) * n;
+            self.sys
+                .sensitivity_rate(t, x, &s[col.clone()], p, &mut ds[col]);
         }
     }
 }
@@ -111,7 +101,6 @@ pub(super) fn run<S: System>(
     let ad = Adapter {
         sys,
         t_end: Cell::new(left_limit(bounds[0], bounds[1])),
-        dfdp: RefCell::new(vec![0.0; n * np]),
         counts: Counts::default(),
     };
     if let Some(g) = event {

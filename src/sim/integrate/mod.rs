@@ -30,8 +30,11 @@ pub trait System {
     fn jacobian_times(&self, t: f64, y: &[f64], v: &[f64], out: &mut [f64]);
     /// Number of parameters θ for forward sensitivities.
     fn n_params(&self) -> usize;
-    /// ∂f/∂θ at fixed y, row-major `dim × n_params`; must not allocate.
-    fn param_jacobian(&self, t: f64, y: &[f64], dfdp: &mut [f64]);
+    /// (∂f/∂θ)·w at fixed y, one parameter direction; must not allocate.
+    fn param_jacobian_times(&self, t: f64, y: &[f64], w: &[f64], out: &mut [f64]);
+    /// (∂f/∂y)·s + ∂f/∂θk, the rate of the sensitivity column s = ∂y/∂θk; must not
+    /// allocate.
+    fn sensitivity_rate(&self, t: f64, y: &[f64], s: &[f64], k: usize, out: &mut [f64]);
     /// ∂y0/∂θ, row-major `dim × n_params`.
     fn initial_sensitivity(&self, out: &mut [f64]);
 }

@@ -1,0 +1,234 @@
+//! Forward sensitivities of every channel a trace can measure (stretch, length,
+//! capacitance, current) against central differences of whole `simulate` runs, for
+//! a stack behind a resistance (RC charging: the current depends on the source
+//! state), a stack behind a rise-time supply with a triangle (restarts), and the
+//! seed's helix; `trajectory` against `simulate`; parameters without a rest state.
+//!
+//! Tolerance: the runs use BDF at rtol 1e-10 and the differences a relative step
+//! h = 1e-5 of each θj, so the difference quotient is good to ≈ 1e-5 of a
+//! channel's largest effect (integration error 1e-10 / h, truncation h²); each
+//! channel is compared on one absolute scale, the largest effect θj·∂y/∂θj of any
+//! parameter on it (a parameter with a tiny effect, e.g. Yeoh's C30 at small
+//! strain, is compared on that scale too), at 1e-4 (room for the adaptive step
+//! pattern, which differs between the perturbed runs).
+
+use crate::sim::perturbed;
+use dea_fit::sim::integrate::Method;
+use dea_fit::sim::scene::{FidelityChoice, Scene};
+use dea_fit::sim::{simulate, trajectory, Outcome, RunOptions, RunStatus, Sample};
+use std::path::Path;
+
+fn shipped(name: &str) -> String {
+    std::fs::read_to_string(format!("datasets/scenes/{name}.toml")).unwrap()
+}
+
+fn scene(text: &str) -> Scene {
+    Scene::parse(text, Path::new("test.toml")).expect("valid scene")
+}
+
+fn tight(sens: bool) -> RunOptions {
+    RunOptions {
+        method: Some(Method::Bdf),
+        rtol: Some(1e-10),
+        sensitivities: sens,
+        ..Default::default()
+    }
+}
+
+/// The channels: name, the sample's value, the sensitivity rows.
+type Channel = (
+    &'static str,
+    fn(&Sample) -> f64,
+    fn(&dea_fit::sim::Sensitivities) -> &Vec<Vec<f64>>,
+);
+
+const CHANNELS: [Channel; 4] = [
+    ("stretch", |s| s.stretch, |se| &se.stretch),
+    ("length", |s| s.length_m, |se| &se.length),
+    ("capacitance", |s| s.capacitance_f, |se| &se.capacitance),
+    ("current", |s| s.current_a, |se| &se.current),
+];
+
+/// Every channel's forward sensitivity at every sample within 1e-4 of the channel's
+/// largest effect of the central difference (module documentation); returns the
+/// worst per channel.
+fn check_all_channels(s: &Scene) -> [f64; 4] {
+    // `perturbed` moves the scene's own arms: none may be lumped away
+    let mut s = s.clone();
+    s.time.fidelity = FidelityChoice::Dynamic;
+    let s = &s;
+    let o = simulate(s, &tight(true)).unwrap();
+    assert_eq!(o.integrator.status, RunStatus::Completed, "{}", o.scene);
+    let se = o.sensitivities.as_ref().unwrap();
+    let n = o.samples.len();
+    for (name, _, rows) in CHANNELS {
+        assert_eq!(rows(se).len(), n, "{name}: one row per sample");
+        assert!(rows(se).iter().all(|r| r.len() == se.theta.len()));
+    }
+    let h = 1e-5;
+    let runs: Vec<(Outcome, Outcome)> = (0..se.theta.len())
+        .map(|j| {
+            let up = simulate(&perturbed(s, j, h), &tight(false)).unwrap();
+            let dn = simulate(&perturbed(s, j, -h), &tight(false)).unwrap();
+            assert_eq!((up.samples.len(), dn.samples.len()), (n, n));
+            (up, dn)
+        })
+        .collect();
+    let mut worst = [0.0; 4];
+    for (c, (name, value, rows)) in CHANNELS.into_iter().enumerate() {
+        let fd = |j: usize, k: usize| {
+            (value(&runs[j].0.samples[k]) - value(&runs[j].1.samples[k])) / (2.0 * h)
+        };
+        let scale = (0..se.theta.len())
+            .flat_map(|j| (0..n).map(move |k| (j, k)))
+            .fold(0.0_f64, |m, (j, k)| m.max(fd(j, k).abs()));
+        assert!(scale > 0.0, "{name}: no effect at all");
+        for j in 0..se.theta.len() {
+            for k in 0..n {
+                let an = se.theta[j] * rows(se)[k][j];
+                let d = (an - fd(j, k)).abs() / scale;
+                worst[c] = f64::max(worst[c], d);
+                assert!(
+                    d <= 1e-4,
+                    "{}: {name} to {} at t = {}: forward {an:e}, differences {:e} (scale {scale:e})",
+                    o.scene,
+                    se.params[j],
+                    o.samples[k].time_s,
+                    fd(j, k)
+                );
+            }
+        }
+    }
+    eprintln!(
+        "{}: worst of the largest effect: stretch {:.1e}, length {:.1e}, capacitance {:.1e}, current {:.1e}",
+        o.scene, worst[0], worst[1], worst[2], worst[3]
+    );
+    worst
+}
+
+/// A 5 kV step through 100 MΩ on the damped seed stack (RC ≈ 1.2 ms with the
+/// leakage in parallel), sampled every 0.25 ms through the charging, then every
+/// 50 ms to 1.5 s.
+fn rc_stack() -> Scene {
+    let text =
+        shipped("stack_step_5kV_damped").replace("rise_time = \"1 ms\"", "resistance_ohm = 1e8");
+    assert!(text.contains("resistance_ohm"));
+    let mut s = scene(&text);
+    s.time.span = 1.5;
+    s.time.samples = (1..=20)
+        .map(|i| 2.5e-4 * i as f64)
+        .chain((1..=30).map(|i| 0.05 * i as f64))
+        .collect();
+    s
+}
+
+#[test]
+fn every_channel_of_a_stack_behind_a_resistance_matches_differences() {
+    check_all_channels(&rc_stack());
+}
+
+#[test]
+fn every_channel_of_a_stack_through_triangle_restarts_matches_differences() {
+    let text = shipped("stack_step_5kV_damped").replace(
+        "kind = \"step\"\nat = \"0 s\"\namplitude = \"5 kV\"",
+        "kind = \"triangle\"\namplitude = \"5 kV\"\nfrequency = \"2 Hz\"\ncycles = 3",
+    );
+    let mut s = scene(&text);
+    s.time.span = 2.0;
+    s.time.samples = (1..=40).map(|i| 0.05 * i as f64).collect();
+    check_all_channels(&s);
+}
+
+#[test]
+fn every_channel_of_the_helix_matches_differences() {
+    let mut s = scene(&shipped("hdea_step_10N"));
+    s.time.span = 0.3;
+    s.time.samples = (1..=30).map(|i| 0.01 * i as f64).collect();
+    check_all_channels(&s);
+}
+
+/// `trajectory` runs what `simulate` runs: the same samples and sensitivities, bit
+/// for bit, the same status, method and counts.
+#[test]
+fn trajectory_is_the_run_of_simulate() {
+    for s in [
+        rc_stack(),
+        scene(&shipped("hdea_step_10N")),
+        scene(&shipped("stack_pid_triangle")),
+    ] {
+        for sens in [false, true] {
+            let o = RunOptions {
+                sensitivities: sens,
+                ..Default::default()
+            };
+            let full = simulate(&s, &o).unwrap();
+            let t = trajectory(&s, &o).unwrap();
+            // Debug prints every f64 exactly, NaN (α of a stack) included
+            let bits = |x: &dyn std::fmt::Debug| format!("{x:?}");
+            assert_eq!(bits(&t.samples), bits(&full.samples), "{}", s.name);
+            assert_eq!(bits(&t.sensitivities), bits(&full.sensitivities));
+            assert_eq!(t.status, full.integrator.status);
+            assert_eq!(t.message, full.integrator.message);
+            assert_eq!(
+                (t.method, t.stats),
+                (full.integrator.method, full.integrator.stats)
+            );
+            assert_eq!(t.rest_stretch, full.rest_stretch);
+            assert_eq!(t.rest_length_m, full.rest_length_m);
+            assert_eq!(t.samples.len(), s.time.samples.len() + 1);
+        }
+    }
+}
+
+/// A pull-in sample has NaN sensitivities in every channel (its time moves with θ).
+#[test]
+fn a_pull_in_sample_has_no_sensitivities() {
+    // the Neo-Hookean layer of tests/sim.rs (pull-in near 37 kV) ramped to 60 kV
+    let s = scene(&crate::sim::nh_layer(
+        "{ nv = \"20 Pa s\" }",
+        "[[input]]\nkind = \"ramp\"\nstart = \"0 s\"\nend = \"1 s\"\nto = \"60 kV\"",
+        "span = \"1 s\"\nsamples = 20",
+    ));
+    let t = trajectory(&s, &tight(true)).unwrap();
+    assert_eq!(t.status, RunStatus::PullIn, "{}", t.message);
+    let se = t.sensitivities.unwrap();
+    for (name, _, rows) in CHANNELS {
+        let rows = rows(&se);
+        assert_eq!(rows.len(), t.samples.len());
+        assert!(rows.last().unwrap().iter().all(|v| v.is_nan()), "{name}");
+        assert!(
+            rows[..rows.len() - 1]
+                .iter()
+                .flatten()
+                .all(|v| v.is_finite()),
+            "{name}"
+        );
+    }
+}
+
+/// Identification sets θ on the scene and calls `trajectory`: a θ without a stable
+/// rest state (a modulus too soft for the load, a Gent limit below the rest
+/// stretch) is an error saying so, never a run from a made-up rest state.
+#[test]
+fn parameters_without_a_rest_state_are_an_error() {
+    let mut s = scene(&shipped("hdea_step_10N"));
+    // C10 a thousand times softer: the 10 N weight pulls the layer apart
+    s.material.params[0] *= 1e-3;
+    let e = trajectory(&s, &RunOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no stable rest state"), "{e}");
+    assert!(simulate(&s, &RunOptions::default()).is_err());
+    assert!(dea_fit::sim::full_plant(&s).is_err());
+    // the plant's own constructor and `with_theta` say so too
+    let ok = scene(&shipped("hdea_step_10N"));
+    let p = dea_fit::sim::full_plant(&ok).unwrap();
+    let mut th = p.theta();
+    th[0] *= 1e-3;
+    assert!(p.with_theta(&th).is_err());
+    assert!(p.with_theta(&p.theta()).is_ok());
+    // a non-finite constant is refused before any plant is built
+    let mut s = ok.clone();
+    s.material.params[1] = f64::NAN;
+    assert!(trajectory(&s, &RunOptions::default()).is_err());
+}

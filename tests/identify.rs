@@ -3,7 +3,7 @@
 //! trace cannot pin down.
 
 use dea_fit::identify::params::{set_theta, theta};
-use dea_fit::identify::problem::{Channel, Experiment, Quantity};
+use dea_fit::identify::problem::{simulated, Channel, ChannelKind, Experiment};
 use dea_fit::identify::{identify, Settings};
 use dea_fit::sim::scene::Scene;
 use dea_fit::sim::{simulate, RunOptions};
@@ -26,7 +26,7 @@ fn stack(span: &str, samples: usize) -> Scene {
 }
 
 /// A trace of `scene` with Gaussian noise: (quantity, σ) per channel, seeded.
-fn trace(scene: &Scene, channels: &[(Quantity, f64)], seed: u64) -> Experiment {
+fn trace(scene: &Scene, channels: &[(ChannelKind, f64)], seed: u64) -> Experiment {
     let o = simulate(scene, &RunOptions::default()).expect("runs");
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let s0 = o.samples[0];
@@ -35,11 +35,11 @@ fn trace(scene: &Scene, channels: &[(Quantity, f64)], seed: u64) -> Experiment {
         .map(|&(q, sigma)| {
             let n = Normal::new(0.0, sigma).expect("σ > 0");
             Channel {
-                quantity: q,
+                kind: q,
                 values: o
                     .samples
                     .iter()
-                    .map(|s| q.value(&s0, s) + n.sample(&mut rng))
+                    .map(|s| simulated(q, &s0, s) + n.sample(&mut rng))
                     .collect(),
                 sigma: f64::NAN,
             }
@@ -58,7 +58,7 @@ fn peak_contraction(scene: &Scene) -> f64 {
     let s0 = o.samples[0];
     o.samples
         .iter()
-        .map(|s| Quantity::Contraction.value(&s0, s).abs())
+        .map(|s| simulated(ChannelKind::Contraction, &s0, s).abs())
         .fold(0.0, f64::max)
 }
 
@@ -74,8 +74,8 @@ fn recovers_known_constants_from_a_noisy_step() {
     let exp = trace(
         &truth,
         &[
-            (Quantity::Contraction, sig_l),
-            (Quantity::Capacitance, 1e-3 * c_rest),
+            (ChannelKind::Contraction, sig_l),
+            (ChannelKind::Capacitance, 1e-3 * c_rest),
         ],
         7,
     );
@@ -118,18 +118,18 @@ fn recovers_known_constants_from_a_noisy_step() {
 /// the trace pins down, not about the search).
 fn identify_from(
     truth: &Scene,
-    channels: &[(Quantity, f64)],
+    channels: &[(ChannelKind, f64)],
     free: &[&str],
 ) -> dea_fit::identify::Identification {
     let o = simulate(truth, &RunOptions::default()).expect("runs");
     let s0 = o.samples[0];
-    let abs: Vec<(Quantity, f64)> = channels
+    let abs: Vec<(ChannelKind, f64)> = channels
         .iter()
         .map(|&(q, rel)| {
             let peak = o
                 .samples
                 .iter()
-                .map(|s| (q.value(&s0, s)).abs())
+                .map(|s| (simulated(q, &s0, s)).abs())
                 .fold(0.0, f64::max);
             (q, rel * peak)
         })
@@ -160,8 +160,8 @@ fn small_strain_does_not_pin_down_higher_yeoh_terms() {
     let id = identify_from(
         &stack("1 s", 300),
         &[
-            (Quantity::Contraction, 0.01),
-            (Quantity::Capacitance, 0.001),
+            (ChannelKind::Contraction, 0.01),
+            (ChannelKind::Capacitance, 0.001),
         ],
         &["C10", "C20", "C30"],
     );
@@ -199,7 +199,7 @@ fn contraction_alone_cannot_separate_permittivity_from_modulus() {
         "rise_time = \"1 ms\"",
     );
     let free = ["C10", "arm1.k", "nv", "eps_r"];
-    let id = identify_from(&truth, &[(Quantity::Contraction, 0.01)], &free);
+    let id = identify_from(&truth, &[(ChannelKind::Contraction, 0.01)], &free);
     let e = estimate(&id, "eps_r");
     assert!(!e.identifiable, "{e:?}");
     assert!(
@@ -213,8 +213,8 @@ fn contraction_alone_cannot_separate_permittivity_from_modulus() {
     let id = identify_from(
         &truth,
         &[
-            (Quantity::Contraction, 0.01),
-            (Quantity::Capacitance, 0.001),
+            (ChannelKind::Contraction, 0.01),
+            (ChannelKind::Capacitance, 0.001),
         ],
         &free,
     );
@@ -232,8 +232,8 @@ fn an_arm_slower_than_the_trace_trades_against_the_modulus() {
     let id = identify_from(
         &stack("1 s", 300),
         &[
-            (Quantity::Contraction, 0.01),
-            (Quantity::Capacitance, 0.001),
+            (ChannelKind::Contraction, 0.01),
+            (ChannelKind::Capacitance, 0.001),
         ],
         &["C10", "arm4.k"],
     );
@@ -261,8 +261,8 @@ fn damping_of_a_scene_without_dashpot_is_reported_unresolved() {
     let id = identify_from(
         &truth,
         &[
-            (Quantity::Contraction, 0.01),
-            (Quantity::Capacitance, 0.001),
+            (ChannelKind::Contraction, 0.01),
+            (ChannelKind::Capacitance, 0.001),
         ],
         &["C10", "nv"],
     );
@@ -297,8 +297,8 @@ fn residual_jacobian_and_cost_match_finite_differences() {
     let mut exp = trace(
         &truth,
         &[
-            (Quantity::Contraction, 0.005 * peak_contraction(&truth)),
-            (Quantity::Capacitance, 1e-3 * c_rest),
+            (ChannelKind::Contraction, 0.005 * peak_contraction(&truth)),
+            (ChannelKind::Capacitance, 1e-3 * c_rest),
         ],
         5,
     );
@@ -340,7 +340,7 @@ fn residual_jacobian_and_cost_match_finite_differences() {
             xs[j] += d;
             let mut rs = DVector::zeros(n);
             let mut q = p.clone();
-            assert!(q.eval(&xs, &mut rs, None), "{:?}", q.last_failure);
+            assert!(q.eval(&xs, &mut rs, None), "{:?}", q.counts.last_failure());
             rs
         };
         let fd = (at(-2.0 * h) - at(2.0 * h) + (at(h) - at(-h)) * 8.0) / (12.0 * h);
@@ -366,11 +366,11 @@ fn residual_jacobian_and_cost_match_finite_differences() {
         rtol: Some(1e-10),
         sigma: vec![
             (
-                Quantity::Contraction,
+                ChannelKind::Contraction,
                 dea_fit::identify::noise::Sigma::Absolute(exp.channels[0].sigma),
             ),
             (
-                Quantity::Capacitance,
+                ChannelKind::Capacitance,
                 dea_fit::identify::noise::Sigma::Absolute(exp.channels[1].sigma),
             ),
         ],
@@ -395,7 +395,7 @@ fn residual_jacobian_and_cost_match_finite_differences() {
             c.values
                 .iter()
                 .zip(&o.samples)
-                .map(|(y, s)| ((c.quantity.value(&s0, s) - y) / c.sigma).powi(2))
+                .map(|(y, s)| ((simulated(c.kind, &s0, s) - y) / c.sigma).powi(2))
                 .sum::<f64>()
         })
         .sum::<f64>()

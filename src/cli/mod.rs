@@ -5,6 +5,7 @@ mod bench_relaxation;
 mod bench_simulate;
 mod composite;
 mod hyperelastic;
+mod identify;
 mod permittivity;
 mod relaxation;
 mod simulate;
@@ -30,6 +31,8 @@ enum Command {
     Permittivity(permittivity::Args),
     /// Fit mixing rules to a composite series described by a TOML manifest.
     Composite(composite::Args),
+    /// Identify material constants from measured actuator traces (simulator in the loop).
+    Identify(identify::Args),
     /// Fit Prony / Kelvin-Maxwell constants to a stress-relaxation curve.
     Relaxation(relaxation::Args),
     /// Generate synthetic test data from known constants (with noise and seed).
@@ -47,6 +50,7 @@ pub fn run(cli: Cli) -> Result<i32> {
     match cli.command {
         Command::Hyperelastic(a) => hyperelastic::run(a),
         Command::Relaxation(a) => relaxation::run(a),
+        Command::Identify(a) => identify::run(a),
         Command::Synth(a) => synth::run(a),
         Command::Permittivity(a) => permittivity::run(a),
         Command::Composite(a) => composite::run(a),

@@ -13,6 +13,7 @@
 //! channel), [`search`] (multi-start), [`assessment`] (what the traces pin down).
 
 pub mod assessment;
+pub mod material;
 pub mod noise;
 pub mod params;
 pub mod problem;
@@ -20,13 +21,13 @@ pub mod search;
 
 use crate::error::{Error, Result};
 use crate::fit::diagnostics::{information_criteria, rmse_percent};
-use crate::fit::lm::{LeastSquares, LmSettings, Termination};
+use crate::fit::lm::{Control, LeastSquares, LmSettings, Termination};
 use crate::fit::Status;
 use crate::sim::RunOptions;
 use assessment::{assess, Assessment, Context, Estimate, WARN_CORRELATION};
 use nalgebra::{DMatrix, DVector};
 use noise::{Sigma, SigmaSource};
-use problem::{Experiment, Problem, Quantity};
+use problem::{ChannelKind, Experiment, Problem};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -38,7 +39,7 @@ pub struct Settings {
     /// Constants held (`NAME` or `NAME=VALUE`).
     pub fix: Vec<String>,
     /// Noise per channel; a channel not named has σ estimated from its residuals.
-    pub sigma: Vec<(Quantity, Sigma)>,
+    pub sigma: Vec<(ChannelKind, Sigma)>,
     /// Number of starts (the scene's values are the first).
     pub starts: usize,
     /// Seed of the start design.
@@ -100,7 +101,7 @@ impl Settings {
 #[derive(Debug, Clone, Serialize)]
 pub struct ChannelFit {
     /// Channel name.
-    pub channel: Quantity,
+    pub channel: ChannelKind,
     /// SI unit of the values below.
     pub unit: &'static str,
     /// Measured values used.
@@ -177,83 +178,60 @@ pub struct Identification {
     /// θ at the optimum (the whole vector, SI), for the material file and reports.
     #[serde(skip)]
     pub theta: Vec<f64>,
+    /// Smallest and largest stretch the traces' simulations reached at the optimum
+    /// (the range the constants were identified over).
+    #[serde(skip)]
+    pub stretch_range: (f64, f64),
+    /// The simulations at the optimum, one per experiment (for reports).
+    #[serde(skip)]
+    pub runs: Vec<crate::sim::Outcome>,
 }
 
 /// Identify the material constants of `experiments` (one scene per trace, sharing
-/// the material) under `settings`.
-pub fn identify(mut experiments: Vec<Experiment>, settings: &Settings) -> Result<Identification> {
+/// the material) under `settings`, without observers.
+pub fn identify(experiments: Vec<Experiment>, settings: &Settings) -> Result<Identification> {
+    identify_with(experiments, settings, &|_| Control::default())
+}
+
+/// [`identify`] with the [`Control`] (progress, trace, checkpoint, wall time) that
+/// `control` makes for each start (index `settings.starts` is the polish).
+pub fn identify_with(
+    experiments: Vec<Experiment>,
+    settings: &Settings,
+    control: &(dyn Fn(usize) -> Control + Sync),
+) -> Result<Identification> {
     settings.check()?;
     let t0 = Instant::now();
-    let first = experiments
-        .first()
-        .ok_or_else(|| Error::settings("no trace to identify from"))?;
-    let all = params::constants(&first.scene);
-    let (free, fixed) = params::choose(&all, settings.free.as_deref(), &settings.fix)?;
-    let mut theta0 = params::theta(&first.scene);
-    for &(k, v) in &fixed {
-        theta0[k] = v;
-    }
-    for e in &mut experiments {
-        let times: Vec<f64> = std::iter::once(0.0)
-            .chain(e.scene.time.samples.iter().copied())
-            .collect();
-        for ch in &mut e.channels {
-            ch.sigma = match settings.sigma.iter().find(|(q, _)| *q == ch.quantity) {
-                Some((_, s)) => s.resolve(&ch.values),
-                None => noise::from_data(&times, &ch.values),
-            };
-        }
-    }
-    let given: Vec<Vec<bool>> = experiments
-        .iter()
-        .map(|e| {
-            e.channels
-                .iter()
-                .map(|c| settings.sigma.iter().any(|(q, _)| *q == c.quantity))
-                .collect()
-        })
-        .collect();
-    let mut problem = Problem::new(
-        experiments,
-        free.clone(),
-        theta0.clone(),
-        RunOptions {
-            rtol: settings.rtol,
-            ..RunOptions::default()
-        },
-    )?;
+    let (mut problem, all, given) = prepare(experiments, settings)?;
     let (n, k) = problem.dims();
-    if n <= k {
-        return Err(Error::settings(format!(
-            "{n} measured values for {k} free constants: nothing to estimate"
-        ))
-        .with_hint("fix some constants (--fix) or give longer traces"));
-    }
-    let x_start: Vec<f64> = problem.x_of(&theta0);
-    let design = search::starts(&problem, x_start, settings.starts, settings.seed);
-    let mut results = search::run_all(&problem, &design, &settings.lm);
-    let mut counts = sum_counts(&results);
-    let best = results[0].clone();
-    if !best.cost.is_finite() {
-        let why = best
-            .failure
-            .clone()
-            .unwrap_or_else(|| format!("{:?}", best.termination));
+    let x_start = problem.x_of(&problem.theta);
+    let design = search::starts(&problem, x_start, settings.starts, settings.seed)?;
+    let ms = search::run_all(&problem, &design, &settings.lm, control);
+    let Some(best) = ms.best().cloned() else {
+        let why = problem
+            .counts
+            .last_failure()
+            .unwrap_or_else(|| ms.runs[0].1.termination.to_string());
         return Err(Error::settings(format!(
             "no start could simulate the traces: {why}"
         ))
         .with_hint("check that the scene reproduces the trace's drive without pull-in, and that the starting constants are of the right magnitude"));
-    }
+    };
     // σ from the residuals for the channels not given, then a polish from the best.
     let mut x = best.x.clone();
     let mut termination = best.termination.clone();
-    let mut iterations: usize = results.iter().map(|r| r.iterations).sum();
+    let mut iterations: usize = ms.runs.iter().map(|r| r.1.iterations).sum();
     if given.iter().flatten().any(|g| !g) {
         let r = residuals(&mut problem, &x)?;
         reestimate_sigma(&mut problem, &given, &r, k);
-        let polish = search::run_one(&problem, &x, &settings.lm);
-        counts.runs += polish.counts.runs;
-        counts.sensitivity_runs += polish.counts.sensitivity_runs;
+        let mut p = problem.clone();
+        let polish = crate::fit::lm::search(
+            &mut p,
+            &x,
+            &problem.x_bounds(),
+            &settings.lm,
+            &mut control(settings.starts),
+        );
         iterations += polish.iterations;
         if polish.cost.is_finite() {
             x = polish.x;
@@ -266,54 +244,16 @@ pub fn identify(mut experiments: Vec<Experiment>, settings: &Settings) -> Result
     if !problem.eval(&x, &mut r, Some(&mut jac)) {
         return Err(Error::settings(format!(
             "the optimum could not be re-simulated: {}",
-            problem.last_failure.clone().unwrap_or_default()
+            problem.counts.last_failure().unwrap_or_default()
         )));
     }
-    counts.sensitivity_runs += 1;
     let theta = problem.theta_at(&x);
-    let runs = problem
-        .simulate_at(&theta, false)
-        .map_err(Error::settings)?;
-    counts.runs += 1;
+    let runs = problem.outcomes_at(&theta)?;
     let rss = r.norm_squared();
     let ctx = context(&problem, &runs);
-    let assessment = assess(&free, &x, &jac, rss, &ctx);
+    let assessment = assess(&problem.free, &x, &jac, rss, &ctx);
     let experiments = channel_fits(&problem, &given, &r);
-    let mut warnings = Vec::new();
-    for (a, row) in assessment.correlation.iter().enumerate() {
-        for (b, rho) in row.iter().enumerate().skip(a + 1) {
-            if let Some(rho) = rho.filter(|r| r.abs() > WARN_CORRELATION) {
-                warnings.push(format!(
-                    "{} and {} are correlated (ρ = {rho:.4})",
-                    free[a].name, free[b].name
-                ));
-            }
-        }
-    }
-    for e in assessment.estimates.iter().filter(|e| e.at_bound) {
-        warnings.push(format!(
-            "{} ended at a bound of its search ({:.4e} {}): the traces push it beyond",
-            e.name, e.value, e.unit
-        ));
-    }
-    for e in assessment.estimates.iter().filter(|e| !e.identifiable) {
-        warnings.push(format!(
-            "{} is not identifiable: {}",
-            e.name,
-            e.reason.as_deref().unwrap_or("")
-        ));
-    }
-    for o in &runs {
-        warnings.extend(o.warnings.iter().cloned());
-    }
-    warnings.dedup();
-    let at_best = results.iter().filter(|s| s.at_best(best.cost)).count();
-    if settings.starts > 1 && at_best == 1 {
-        warnings.push(format!(
-            "only 1 of {} starts reached the best cost: the cost has other minima, and more starts (--starts) may find a better one",
-            settings.starts
-        ));
-    }
+    let warnings = warnings(&problem, &assessment, &runs, ms.at_best, settings.starts);
     let status = if !matches!(termination, Termination::Converged(_)) {
         Status::NotConverged
     } else if assessment.estimates.iter().any(|e| !e.identifiable) {
@@ -324,31 +264,27 @@ pub fn identify(mut experiments: Vec<Experiment>, settings: &Settings) -> Result
         Status::Warning
     };
     let (aicc, bic) = information_criteria(rss, n, k);
-    let final_costs: Vec<f64> = results.drain(..).map(|s| s.cost).collect();
+    let (plain, sens) = problem.counts.get();
     Ok(Identification {
         status,
         fixed: all
             .iter()
-            .filter(|c| !free.iter().any(|f| f.name == c.name))
+            .filter(|c| !problem.free.iter().any(|f| f.name == c.name))
             .map(|c| (c.name.clone(), theta[c.index]))
             .collect(),
         parameters: assessment.estimates.clone(),
         warnings,
         experiments,
         solver: SolverSummary {
-            method: "multi-start bounded Levenberg-Marquardt, forward-sensitivity Jacobian".into(),
+            method: "multi-start bounded Levenberg-Marquardt (argmin), forward-sensitivity Jacobian".into(),
             starts: settings.starts,
-            starts_at_best: at_best,
+            starts_at_best: ms.at_best,
             iterations,
-            simulator_runs: counts.runs + counts.sensitivity_runs,
-            sensitivity_runs: counts.sensitivity_runs,
+            simulator_runs: plain + sens,
+            sensitivity_runs: sens,
             seconds: t0.elapsed().as_secs_f64(),
-            termination: match &termination {
-                Termination::Converged(why) => format!("converged ({why})"),
-                Termination::MaxIterations => "iteration limit".into(),
-                Termination::Failed(why) => format!("failed: {why}"),
-            },
-            final_costs,
+            termination: termination.to_string(),
+            final_costs: ms.waterfall(),
         },
         cost: 0.5 * rss,
         chi2_per_dof: rss / (n - k) as f64,
@@ -356,14 +292,119 @@ pub fn identify(mut experiments: Vec<Experiment>, settings: &Settings) -> Result
         bic,
         assessment,
         theta,
+        stretch_range: runs
+            .iter()
+            .flat_map(|o| &o.samples)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| {
+                (a.min(s.stretch), b.max(s.stretch))
+            }),
+        runs,
     })
 }
 
-fn sum_counts(r: &[search::StartResult]) -> problem::Counts {
-    r.iter().fold(Default::default(), |a, s| problem::Counts {
-        runs: a.runs + s.counts.runs,
-        sensitivity_runs: a.sensitivity_runs + s.counts.sensitivity_runs,
-    })
+/// The problem: constants chosen, fixed values set, σ of every channel (given, or
+/// from the data to start with); also every constant, and which σ were given.
+#[allow(clippy::type_complexity)]
+fn prepare(
+    mut experiments: Vec<Experiment>,
+    settings: &Settings,
+) -> Result<(Problem, Vec<params::Constant>, Vec<Vec<bool>>)> {
+    let first = experiments
+        .first()
+        .ok_or_else(|| Error::settings("no trace to identify from"))?;
+    let all = params::constants(&first.scene);
+    let (free, fixed) = params::choose(&all, settings.free.as_deref(), &settings.fix)?;
+    let mut theta0 = params::theta(&first.scene);
+    for &(k, v) in &fixed {
+        theta0[k] = v;
+    }
+    let mut given = Vec::new();
+    for e in &mut experiments {
+        let times: Vec<f64> = std::iter::once(0.0)
+            .chain(e.scene.time.samples.iter().copied())
+            .collect();
+        let mut g = Vec::new();
+        for ch in &mut e.channels {
+            if ch.kind == ChannelKind::Force {
+                return Err(Error::settings(format!(
+                    "{}: a force channel cannot be identified from: the simulator drives a given load and computes no force",
+                    e.name
+                ))
+                .with_hint("remove the force column, or use the contraction, capacitance or current"));
+            }
+            let s = settings.sigma.iter().find(|(q, _)| *q == ch.kind);
+            ch.sigma = match s {
+                Some((_, s)) => s.resolve(&ch.values),
+                None => noise::from_data(&times, &ch.values),
+            };
+            g.push(s.is_some());
+        }
+        given.push(g);
+    }
+    let problem = Problem::new(
+        experiments,
+        free,
+        theta0,
+        RunOptions {
+            rtol: settings.rtol,
+            ..RunOptions::default()
+        },
+    )?;
+    let (n, k) = problem.dims();
+    if n <= k {
+        return Err(Error::settings(format!(
+            "{n} measured values for {k} free constants: nothing to estimate"
+        ))
+        .with_hint("fix some constants (--fix) or give longer traces"));
+    }
+    Ok((problem, all, given))
+}
+
+/// The warnings of an identification: correlated pairs, constants at a bound, the
+/// constants not identified and why, the simulator's own (extrapolation), and a
+/// multi-start whose best was reached only once.
+fn warnings(
+    problem: &Problem,
+    assessment: &Assessment,
+    runs: &[crate::sim::Outcome],
+    at_best: usize,
+    starts: usize,
+) -> Vec<String> {
+    let free = &problem.free;
+    let mut w = Vec::new();
+    for (a, row) in assessment.correlation.iter().enumerate() {
+        for (b, rho) in row.iter().enumerate().skip(a + 1) {
+            if let Some(rho) = rho.filter(|r| r.abs() > WARN_CORRELATION) {
+                w.push(format!(
+                    "{} and {} are correlated (ρ = {rho:.4})",
+                    free[a].name, free[b].name
+                ));
+            }
+        }
+    }
+    for e in assessment.estimates.iter().filter(|e| e.at_bound) {
+        w.push(format!(
+            "{} ended at a bound of its search ({:.4e} {}): the traces push it beyond",
+            e.name, e.value, e.unit
+        ));
+    }
+    for e in assessment.estimates.iter().filter(|e| !e.identifiable) {
+        w.push(format!(
+            "{} is not identifiable: {}",
+            e.name,
+            e.reason.as_deref().unwrap_or("")
+        ));
+    }
+    for o in runs {
+        w.extend(o.warnings.iter().cloned());
+    }
+    w.dedup();
+    if starts > 1 && at_best == 1 {
+        w.push(format!(
+            "only 1 of {starts} starts reached the best cost: the cost has other minima, and more starts (--starts) may find a better one"
+        ));
+    }
+    w
 }
 
 /// Scaled residuals at x.
@@ -372,7 +413,7 @@ fn residuals(problem: &mut Problem, x: &[f64]) -> Result<DVector<f64>> {
     if !problem.eval(x, &mut r, None) {
         return Err(Error::settings(format!(
             "the best start could not be re-simulated: {}",
-            problem.last_failure.clone().unwrap_or_default()
+            problem.counts.last_failure().unwrap_or_default()
         )));
     }
     Ok(r)
@@ -436,8 +477,8 @@ fn channel_fits(problem: &Problem, given: &[Vec<bool>], r: &DVector<f64>) -> Vec
                     let measured: Vec<f64> =
                         c.values.iter().copied().filter(|v| v.is_finite()).collect();
                     ChannelFit {
-                        channel: c.quantity,
-                        unit: c.quantity.unit(),
+                        channel: c.kind,
+                        unit: c.kind.unit(),
                         points: c.points(),
                         sigma: c.sigma,
                         sigma_source: match given[ei][ci] {
@@ -470,7 +511,7 @@ fn context(problem: &Problem, runs: &[crate::sim::Outcome]) -> Context {
         ctx.capacitance |= e
             .channels
             .iter()
-            .any(|c| c.quantity == Quantity::Capacitance);
+            .any(|c| c.kind == ChannelKind::Capacitance);
         ctx.span = ctx.span.max(e.scene.time.span);
         let rest = o.rest_stretch;
         for s in &o.samples {

@@ -15,7 +15,8 @@
 //! (its magnitude, or a fraction of μ0 when it is zero).
 
 use crate::error::{Error, Result};
-use crate::sim::scene::{Arm, Scene};
+use crate::material::file::Arm;
+use crate::sim::scene::Scene;
 
 /// How a constant is seen by the search.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -250,7 +251,7 @@ pub fn choose(
     let known: Vec<&str> = all.iter().map(|c| c.name.as_str()).collect();
     let find = |name: &str, flag: &str| -> Result<&Constant> {
         all.iter().find(|c| c.name == name).ok_or_else(|| {
-            let near = crate::sim::scene::did_you_mean(name, &known)
+            let near = crate::material::check::did_you_mean(name, &known)
                 .map(|k| format!("did you mean {k}? "))
                 .unwrap_or_default();
             Error::settings(format!(

@@ -11,69 +11,31 @@
 use super::params::{set_theta, Constant};
 use crate::fit::lm::LeastSquares;
 use crate::sim::scene::{FidelityChoice, Scene};
-use crate::sim::{simulate, Outcome, RunOptions, RunStatus, Sample, Sensitivities};
+use crate::sim::{
+    simulate, trajectory, Outcome, RunOptions, RunStatus, Sample, Sensitivities, Trajectory,
+};
 use nalgebra::{DMatrix, DVector};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 
-/// What a channel measures, and how the simulator's sample gives it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Quantity {
-    /// Shortening from the trace's first row, L(t0) − L(t) (m).
-    Contraction,
-    /// Actuator length (m).
-    Length,
-    /// Thickness stretch λ.
-    Stretch,
-    /// Capacitance (F).
-    Capacitance,
-    /// Current into the actuator (A).
-    Current,
+pub use crate::io::trace::ChannelKind;
+
+/// The simulated value of a channel at sample `s`, given the first sample `s0` (the
+/// rest state at t = 0); NaN for a force, which the simulator does not compute
+/// (identification refuses force channels before it starts).
+pub fn simulated(kind: ChannelKind, s0: &Sample, s: &Sample) -> f64 {
+    kind.simulated(s, s0.length_m).unwrap_or(f64::NAN)
 }
 
-impl Quantity {
-    /// SI unit.
-    pub fn unit(self) -> &'static str {
-        match self {
-            Quantity::Contraction | Quantity::Length => "m",
-            Quantity::Stretch => "1",
-            Quantity::Capacitance => "F",
-            Quantity::Current => "A",
-        }
-    }
-
-    /// The simulated value at sample `s`, given the first sample `s0`.
-    pub fn value(self, s0: &Sample, s: &Sample) -> f64 {
-        match self {
-            Quantity::Contraction => s0.length_m - s.length_m,
-            Quantity::Length => s.length_m,
-            Quantity::Stretch => s.stretch,
-            Quantity::Capacitance => s.capacitance_f,
-            Quantity::Current => s.current_a,
-        }
-    }
-
-    /// ∂value/∂θk at row `i` (row 0 is the first sample).
-    pub fn sensitivity(self, se: &Sensitivities, i: usize, k: usize) -> f64 {
-        match self {
-            Quantity::Contraction => se.length[0][k] - se.length[i][k],
-            Quantity::Length => se.length[i][k],
-            Quantity::Stretch => se.stretch[i][k],
-            Quantity::Capacitance => se.capacitance[i][k],
-            Quantity::Current => se.current[i][k],
-        }
-    }
-}
-
-impl std::fmt::Display for Quantity {
-    /// The name used by `--sigma` and in every output.
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Quantity::Contraction => "contraction",
-            Quantity::Length => "length",
-            Quantity::Stretch => "stretch",
-            Quantity::Capacitance => "capacitance",
-            Quantity::Current => "current",
-        })
+/// ∂(simulated value)/∂θk at row `i` (row 0 is the first sample).
+pub fn sensitivity(kind: ChannelKind, se: &Sensitivities, i: usize, k: usize) -> f64 {
+    match kind {
+        ChannelKind::Contraction => se.length[0][k] - se.length[i][k],
+        ChannelKind::Length => se.length[i][k],
+        ChannelKind::Stretch => se.stretch[i][k],
+        ChannelKind::Capacitance => se.capacitance[i][k],
+        ChannelKind::Current => se.current[i][k],
+        ChannelKind::Force => f64::NAN,
     }
 }
 
@@ -81,7 +43,7 @@ impl std::fmt::Display for Quantity {
 #[derive(Debug, Clone)]
 pub struct Channel {
     /// What it measures.
-    pub quantity: Quantity,
+    pub kind: ChannelKind,
     /// Values per trace row (SI; NaN where not logged).
     pub values: Vec<f64>,
     /// Noise standard deviation (SI); set by [`super::identify`] from `--sigma` or
@@ -115,13 +77,37 @@ impl Experiment {
     }
 }
 
-/// Counts of the work done.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+/// Counts of the work done, shared by every copy of a problem (the starts of a
+/// multi-start run on clones, in parallel).
+#[derive(Debug, Default)]
 pub struct Counts {
     /// Simulator runs without sensitivities.
-    pub runs: usize,
+    pub runs: AtomicUsize,
     /// Simulator runs with sensitivities.
-    pub sensitivity_runs: usize,
+    pub sensitivity_runs: AtomicUsize,
+    /// Why the last evaluation that failed did (any copy).
+    pub last_failure: Mutex<Option<String>>,
+}
+
+impl Counts {
+    /// (plain runs, sensitivity runs) so far.
+    pub fn get(&self) -> (usize, usize) {
+        (
+            self.runs.load(Ordering::Relaxed),
+            self.sensitivity_runs.load(Ordering::Relaxed),
+        )
+    }
+
+    /// Why the last failed evaluation failed.
+    pub fn last_failure(&self) -> Option<String> {
+        self.last_failure.lock().ok().and_then(|g| g.clone())
+    }
+
+    fn fail(&self, why: String) {
+        if let Ok(mut g) = self.last_failure.lock() {
+            *g = Some(why);
+        }
+    }
 }
 
 /// The problem the search minimises. Cheap to clone (one per multi-start).
@@ -135,10 +121,8 @@ pub struct Problem {
     pub theta: Vec<f64>,
     /// Simulator settings.
     pub run: RunOptions,
-    /// Work done so far.
-    pub counts: Counts,
-    /// Why the last evaluation failed, if it did.
-    pub last_failure: Option<String>,
+    /// Work done so far (shared by clones).
+    pub counts: Arc<Counts>,
 }
 
 impl Problem {
@@ -166,8 +150,7 @@ impl Problem {
             free,
             theta,
             run,
-            counts: Counts::default(),
-            last_failure: None,
+            counts: Arc::default(),
         })
     }
 
@@ -208,14 +191,15 @@ impl Problem {
             .sum()
     }
 
-    /// Run every experiment at θ (with sensitivities if asked): the outcomes, or why
-    /// θ gives no usable trajectory (an error, a failure, a pull-in the trace does not
-    /// show, or too few samples).
+    /// Run every experiment at θ (with sensitivities if asked), the lean run without
+    /// the report's work ([`crate::sim::trajectory`]): the trajectories, or why θ
+    /// gives no usable one (an error, a failure, a pull-in the trace does not show,
+    /// or too few samples).
     pub fn simulate_at(
         &mut self,
         theta: &[f64],
         sensitivities: bool,
-    ) -> std::result::Result<Vec<Outcome>, String> {
+    ) -> std::result::Result<Vec<Trajectory>, String> {
         let opts = RunOptions {
             sensitivities,
             ..self.run
@@ -224,18 +208,13 @@ impl Problem {
         for e in &mut self.experiments {
             set_theta(&mut e.scene, theta);
             match sensitivities {
-                true => self.counts.sensitivity_runs += 1,
-                false => self.counts.runs += 1,
+                true => &self.counts.sensitivity_runs,
+                false => &self.counts.runs,
             }
-            let o = simulate(&e.scene, &opts).map_err(|err| format!("{}: {err}", e.name))?;
-            match o.integrator.status {
-                RunStatus::Completed => {}
-                _ => {
-                    return Err(format!(
-                        "{}: {} ({})",
-                        e.name, o.integrator.status, o.integrator.message
-                    ))
-                }
+            .fetch_add(1, Ordering::Relaxed);
+            let o = trajectory(&e.scene, &opts).map_err(|err| format!("{}: {err}", e.name))?;
+            if o.status != RunStatus::Completed {
+                return Err(format!("{}: {} ({})", e.name, o.status, o.message));
             }
             let np = o.sensitivities.as_ref().map(|s| s.theta.len());
             if np.is_some_and(|np| np != theta.len()) {
@@ -258,11 +237,23 @@ impl Problem {
         Ok(out)
     }
 
+    /// The full simulations (with the report's warnings) of every experiment at θ.
+    pub fn outcomes_at(&mut self, theta: &[f64]) -> crate::Result<Vec<Outcome>> {
+        let opts = self.run;
+        self.experiments
+            .iter_mut()
+            .map(|e| {
+                set_theta(&mut e.scene, theta);
+                simulate(&e.scene, &opts)
+            })
+            .collect()
+    }
+
     /// Residuals (and Jacobian) from the outcomes at x.
     fn fill(
         &self,
         x: &[f64],
-        runs: &[Outcome],
+        runs: &[Trajectory],
         r: &mut DVector<f64>,
         mut jac: Option<&mut DMatrix<f64>>,
     ) -> bool {
@@ -274,11 +265,11 @@ impl Problem {
                     if !y.is_finite() {
                         continue;
                     }
-                    let m = ch.quantity.value(s0, &o.samples[i]);
+                    let m = simulated(ch.kind, s0, &o.samples[i]);
                     r[row] = (m - y) / ch.sigma;
                     if let (Some(j), Some(se)) = (jac.as_deref_mut(), &o.sensitivities) {
                         for (col, c) in self.free.iter().enumerate() {
-                            let d = ch.quantity.sensitivity(se, i, c.index);
+                            let d = sensitivity(ch.kind, se, i, c.index);
                             j[(row, col)] = d * c.space.dtheta_dx(x[col]) / ch.sigma;
                         }
                     }
@@ -303,21 +294,42 @@ impl LeastSquares for Problem {
             .map(|c| (c, theta[c.index]))
             .find(|(_, v)| !v.is_finite())
         {
-            self.last_failure = Some(format!("{} = {v}", c.name));
+            self.counts.fail(format!("{} = {v}", c.name));
             return false;
         }
         match self.simulate_at(&theta, jac.is_some()) {
             Ok(runs) => {
                 let ok = self.fill(x, &runs, r, jac);
                 if !ok {
-                    self.last_failure = Some("a non-finite residual or sensitivity".into());
+                    self.counts
+                        .fail("a non-finite residual or sensitivity".into());
                 }
                 ok
             }
             Err(why) => {
-                self.last_failure = Some(why);
+                self.counts.fail(why);
                 false
             }
         }
+    }
+}
+
+impl Experiment {
+    /// The experiment of a measured trace on `base` (its input and sample times from
+    /// the trace, [`crate::io::trace::Trace::scene`]), every measured channel kept.
+    pub fn from_trace(trace: &crate::io::trace::Trace, base: &Scene) -> crate::Result<Experiment> {
+        Ok(Experiment {
+            name: trace.provenance.path.clone(),
+            scene: trace.scene(base)?,
+            channels: trace
+                .channels
+                .iter()
+                .map(|c| Channel {
+                    kind: c.kind,
+                    values: c.values.clone(),
+                    sigma: f64::NAN,
+                })
+                .collect(),
+        })
     }
 }

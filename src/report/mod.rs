@@ -4,6 +4,7 @@
 pub mod bench;
 pub mod format;
 pub mod hyperelastic;
+pub mod identify;
 pub mod permittivity;
 pub mod plot;
 pub mod relaxation;

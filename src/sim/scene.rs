@@ -72,8 +72,8 @@ pub enum Actuator {
 /// Material constants.
 #[derive(Clone)]
 pub struct Material {
-    /// Hyperelastic model (registry name).
-    pub model_name: String,
+    /// Hyperelastic model (registry name and Ogden form).
+    pub spec: ModelSpec,
     /// Evaluator.
     pub model: Arc<dyn StrainEnergy>,
     /// Parameters (SI, model order).
@@ -756,7 +756,7 @@ fn read_material(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<(Material, Opti
     let mass = c.quantity(t, s, "actuator_mass", Dimension::Mass)?;
     Ok((
         Material {
-            model_name: hyper.spec.name,
+            spec: hyper.spec,
             model,
             params: hyper.params,
             fit: hyper.ranges.map(Arc::new),

@@ -1,0 +1,309 @@
+//! `dea-fit identify`: material constants from measured actuator traces, with the
+//! simulator in the loop (`dea_fit::identify`).
+
+use dea_fit::fit::lm::{Checkpoint, Control};
+use dea_fit::identify::material::{material_file, validate, Validation};
+use dea_fit::identify::noise::{Sigma, SigmaSource};
+use dea_fit::identify::problem::{ChannelKind, Experiment};
+use dea_fit::identify::{identify_with, Identification, Settings};
+use dea_fit::io::trace;
+use dea_fit::observe::{Progress, Trace as TraceFile};
+use dea_fit::report::format::table;
+use dea_fit::sim::scene::Scene;
+use dea_fit::units::parse_quantity;
+use dea_fit::{Error, Result};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// Identify material constants from actuator traces (one experiment per file,
+/// fitted jointly).
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Trace CSV files (time, voltage and measured channels; docs/traces.md).
+    #[arg(required = true)]
+    traces: Vec<PathBuf>,
+    /// Scene of the actuator: geometry, load, source and the starting material; the
+    /// traces replace its input and time.
+    #[arg(long)]
+    scene: PathBuf,
+    /// Constants to fit, comma-separated (default: every material constant).
+    #[arg(long, value_delimiter = ',', value_name = "LIST")]
+    free: Option<Vec<String>>,
+    /// Constants held, comma-separated, each NAME or NAME=VALUE.
+    #[arg(long, value_delimiter = ',', value_name = "LIST")]
+    fix: Vec<String>,
+    /// Noise of a channel: NAME=VALUE with a unit (contraction=0.5um) or a percentage
+    /// of the channel's RMS (capacitance=0.2%); channels not given are estimated from
+    /// their residuals.
+    #[arg(long, value_name = "NAME=VALUE")]
+    sigma: Vec<String>,
+    /// Number of starts (the scene's values are the first).
+    #[arg(long, default_value_t = 8)]
+    starts: usize,
+    /// Seed of the start design.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Iteration limit per start.
+    #[arg(long, default_value_t = 100)]
+    max_iterations: usize,
+    /// Relative tolerance of the simulator (default: the scene's).
+    #[arg(long)]
+    rtol: Option<f64>,
+    /// Held-out traces to predict with the identified constants.
+    #[arg(long, value_name = "FILE")]
+    validate: Vec<PathBuf>,
+    /// JSON-lines iteration trace of every start.
+    #[arg(long, value_name = "FILE")]
+    trace: Option<PathBuf>,
+    /// Checkpoint file of the search (one per start: FILE.0, FILE.1, …).
+    #[arg(long, value_name = "FILE")]
+    checkpoint: Option<PathBuf>,
+    /// Resume the search from --checkpoint.
+    #[arg(long, requires = "checkpoint")]
+    resume: bool,
+    /// Wall-time limit per start in seconds (a start stopped by it is not converged;
+    /// with --checkpoint it can be resumed).
+    #[arg(long, value_name = "SECONDS")]
+    max_time: Option<f64>,
+    #[command(flatten)]
+    output: super::Output,
+}
+
+/// What `--json` prints: the identification, the held-out predictions and the fit
+/// file written.
+#[derive(Serialize)]
+struct Printed<'a> {
+    #[serde(flatten)]
+    id: &'a Identification,
+    validation: &'a [Validation],
+    fit_file: String,
+}
+
+/// A `--sigma NAME=VALUE`.
+fn parse_sigma(text: &str) -> Result<(ChannelKind, Sigma)> {
+    let bad = |msg: String| {
+        Error::settings(format!("--sigma {text}: {msg}"))
+            .with_hint("e.g. --sigma contraction=0.5um or --sigma capacitance=0.2%")
+    };
+    let (name, value) = text
+        .split_once('=')
+        .ok_or_else(|| bad("expected NAME=VALUE".into()))?;
+    let kind = ChannelKind::parse(name.trim()).ok_or_else(|| {
+        let names: Vec<&str> = ChannelKind::ALL.iter().map(|k| k.name()).collect();
+        bad(format!("no channel '{name}' (channels: {})", names.join(", ")))
+    })?;
+    let value = value.trim();
+    if let Some(p) = value.strip_suffix('%') {
+        let f: f64 = p
+            .trim()
+            .parse()
+            .map_err(|_| bad(format!("'{value}' is not a percentage")))?;
+        return Ok((kind, Sigma::Relative(f / 100.0)));
+    }
+    let v = match kind.dimension() {
+        Some(d) => parse_quantity(value, d).map_err(bad)?.value,
+        None => value
+            .parse()
+            .map_err(|_| bad(format!("'{value}' is not a number")))?,
+    };
+    Ok((kind, Sigma::Absolute(v)))
+}
+
+fn experiments(files: &[PathBuf], base: &Scene) -> Result<Vec<Experiment>> {
+    files
+        .iter()
+        .map(|f| Experiment::from_trace(&trace::read(f)?, base))
+        .collect()
+}
+
+/// The stem of the first trace (for the default names).
+fn stem(p: &Path) -> String {
+    p.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "trace".into())
+}
+
+/// Run the subcommand.
+pub fn run(a: Args) -> Result<i32> {
+    let base = Scene::read(&a.scene)?;
+    let exps = experiments(&a.traces, &base)?;
+    let held = experiments(&a.validate, &base)?;
+    let settings = Settings {
+        free: a.free.clone(),
+        fix: a.fix.clone(),
+        sigma: a
+            .sigma
+            .iter()
+            .map(|s| parse_sigma(s))
+            .collect::<Result<_>>()?,
+        starts: a.starts,
+        seed: a.seed,
+        lm: dea_fit::fit::lm::LmSettings {
+            max_iterations: a.max_iterations,
+            ..Settings::default().lm
+        },
+        rtol: a.rtol,
+    };
+    settings.check()?;
+    if let Some(t) = a.max_time {
+        if !(t.is_finite() && t > 0.0) {
+            return Err(Error::settings(format!(
+                "--max-time {t}: give a positive number of seconds"
+            )));
+        }
+    }
+    let trace_file = a.trace.as_deref().map(TraceFile::create).transpose()?;
+    let bar = (!a.output.json).then(|| Progress::bar(a.starts + 1));
+    let control = |i: usize| {
+        let mut c = Control::default();
+        if let Some(b) = &bar {
+            c.observers.push(Box::new(Progress::new(b, i)));
+        }
+        if let Some(t) = &trace_file {
+            c.observers.push(Box::new(t.observer(i)));
+        }
+        c.checkpoint = a.checkpoint.as_ref().map(|f| {
+            Checkpoint {
+                file: f.clone(),
+                every: 1,
+            }
+            .for_start(i)
+        });
+        c.resume = a.resume;
+        c.max_wall = a.max_time.map(std::time::Duration::from_secs_f64);
+        c
+    };
+    let kept = exps.clone();
+    let id = identify_with(exps, &settings, &control)?;
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    let validation: Vec<Validation> = held
+        .iter()
+        .map(|e| validate(&id, e))
+        .collect::<Result<_>>()?;
+    let provenance = serde_json::json!({
+        "tool": format!("dea-fit {}", env!("CARGO_PKG_VERSION")),
+        "traces": a.traces.iter().map(|t| {
+            let sha = trace::read(t).map(|tr| tr.provenance.sha256).unwrap_or_default();
+            serde_json::json!({"file": t.display().to_string(), "sha256": sha})
+        }).collect::<Vec<_>>(),
+        "scene": {"file": a.scene.display().to_string(), "sha256": sha256_file(&a.scene)?},
+        "settings": {
+            "free": id.parameters.iter().map(|p| p.name.clone()).collect::<Vec<_>>(),
+            "fixed": id.fixed.iter().map(|(n, v)| serde_json::json!({"name": n, "value": v})).collect::<Vec<_>>(),
+            "starts": a.starts, "seed": a.seed, "rtol": a.rtol, "sigma": a.sigma,
+        },
+    });
+    let file = material_file(&id, &kept[0].scene, provenance)?;
+    let json = file.to_json()?;
+    let name = format!("{}-identified", stem(&a.traces[0]));
+    let out = a
+        .output
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("fits").join(format!("{name}.json")));
+    let dir = (!a.output.no_report).then(|| {
+        a.output
+            .report
+            .clone()
+            .unwrap_or_else(|| Path::new("reports").join(&name))
+    });
+    if let Some(d) = &dir {
+        super::claim_dir(d)?;
+    }
+    super::write_fit_noted(&out, json.as_bytes(), |old| old == json)?;
+    let page = dir
+        .map(|d| dea_fit::report::identify::write(&id, &kept, &validation, &d))
+        .transpose()?;
+    if a.output.json {
+        let p = Printed {
+            id: &id,
+            validation: &validation,
+            fit_file: out.display().to_string(),
+        };
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&p).expect("an identification serialises")
+        );
+    } else {
+        print!("{}", summary(&id, &validation));
+        println!("fit: {}", out.display());
+        if let Some(r) = &page {
+            println!("report: {}", r.display());
+        }
+    }
+    Ok(id.status.exit_code(a.output.strict))
+}
+
+fn sha256_file(p: &Path) -> Result<String> {
+    use sha2::{Digest, Sha256};
+    let bytes = std::fs::read(p).map_err(|e| Error::io(p, e))?;
+    Ok(format!("{:x}", Sha256::digest(bytes)))
+}
+
+/// The printed summary: parameters, channels, solver, status and warnings.
+fn summary(id: &Identification, validation: &[Validation]) -> String {
+    use dea_fit::report::format::si;
+    let mut rows = Vec::new();
+    for p in &id.parameters {
+        rows.push(vec![
+            p.name.clone(),
+            si(p.value, &p.unit),
+            p.std_error.map(|s| si(s, &p.unit)).unwrap_or_else(|| "—".into()),
+            p.ci95
+                .map(|c| format!("[{}, {}]", si(c[0], &p.unit), si(c[1], &p.unit)))
+                .unwrap_or_else(|| "—".into()),
+            if p.identifiable { "yes" } else { "no" }.into(),
+        ]);
+    }
+    let mut s = table(&["parameter", "value", "σ", "95 % interval", "identifiable"], &rows);
+    let mut ch = Vec::new();
+    for e in &id.experiments {
+        for c in &e.channels {
+            ch.push(vec![
+                e.file.clone(),
+                c.channel.to_string(),
+                c.points.to_string(),
+                si(c.sigma, c.unit),
+                match c.sigma_source {
+                    SigmaSource::Given => "given",
+                    SigmaSource::Residuals => "residuals",
+                }
+                .into(),
+                si(c.rmse, c.unit),
+                c.rmse_pct.map(|p| format!("{p:.3}")).unwrap_or_else(|| "—".into()),
+            ]);
+        }
+    }
+    for v in validation {
+        for c in &v.channels {
+            ch.push(vec![
+                format!("{} (held out)", v.file),
+                c.channel.to_string(),
+                "".into(),
+                "".into(),
+                "".into(),
+                si(c.rmse, c.unit),
+                c.rmse_pct.map(|p| format!("{p:.3}")).unwrap_or_else(|| "—".into()),
+            ]);
+        }
+    }
+    s.push_str(&table(
+        &["trace", "channel", "points", "σ", "σ from", "RMSE", "%RMSE"],
+        &ch,
+    ));
+    let v = &id.solver;
+    s.push_str(&format!(
+        "solver: {}; {} start(s), {} at best, {} iterations, {} simulator runs ({} with sensitivities), {:.3} s, {}\n",
+        v.method, v.starts, v.starts_at_best, v.iterations, v.simulator_runs, v.sensitivity_runs, v.seconds, v.termination
+    ));
+    s.push_str(&format!(
+        "χ²/dof {:.4}, condition {:.3e}\nstatus: {}\n",
+        id.chi2_per_dof, id.assessment.condition, id.status
+    ));
+    for w in &id.warnings {
+        s.push_str(&format!("warning: {w}\n"));
+    }
+    s
+}

@@ -1,0 +1,120 @@
+//! The identified constants as a material file a scene can reference
+//! ([`crate::material::file::IdentifiedMaterial`]), and a held-out trace predicted
+//! with them (`--validate`).
+
+use super::problem::{simulated, Experiment};
+use super::{params, Identification};
+use crate::error::{Error, Result};
+use crate::fit::diagnostics::rmse_percent;
+use crate::material::file::{
+    FittedRanges, HyperelasticPart, IdentifiedMaterial, ParamUncertainty, StretchRange, Viscous,
+};
+use crate::sim::scene::Scene;
+use crate::sim::{simulate, RunOptions, RunStatus};
+use serde::Serialize;
+
+/// The material file of an identification on `scene` (the scene the traces ran on),
+/// with the stretch range the traces covered (so that a scene using the file warns
+/// when it extrapolates) and `provenance`.
+pub fn material_file(
+    id: &Identification,
+    scene: &Scene,
+    provenance: serde_json::Value,
+) -> Result<IdentifiedMaterial> {
+    let mut s = scene.clone();
+    params::set_theta(&mut s, &id.theta);
+    let m = &s.material;
+    let plant = crate::sim::full_plant(&s)?;
+    let uncertainty = id
+        .parameters
+        .iter()
+        .map(|p| ParamUncertainty {
+            name: p.name.clone(),
+            unit: p.unit.clone(),
+            value: p.value,
+            std_error: p.std_error,
+            identifiable: p.identifiable,
+        })
+        .collect();
+    Ok(IdentifiedMaterial {
+        hyperelastic: HyperelasticPart {
+            spec: m.spec.clone(),
+            params: m.params.clone(),
+            ranges: Some(FittedRanges {
+                per_mode: vec![StretchRange {
+                    mode: plant.mode,
+                    stretch_min: id.stretch_range.0,
+                    stretch_max: id.stretch_range.1,
+                }],
+            }),
+        },
+        viscous: Some(Viscous {
+            nv_pa_s: m.viscous.nv_pa_s,
+            arms: m.viscous.arms.clone(),
+        }),
+        eps_r: Some(m.eps_r),
+        uncertainty,
+        provenance,
+    })
+}
+
+/// A channel of a held-out trace predicted with the identified constants.
+#[derive(Debug, Clone, Serialize)]
+pub struct Prediction {
+    /// Channel.
+    pub channel: crate::io::trace::ChannelKind,
+    /// SI unit.
+    pub unit: &'static str,
+    /// Root-mean-square error of the prediction (SI).
+    pub rmse: f64,
+    /// Seed Eq. 3.28 (%).
+    pub rmse_pct: Option<f64>,
+}
+
+/// A held-out trace predicted (`--validate`).
+#[derive(Debug, Clone, Serialize)]
+pub struct Validation {
+    /// Trace file.
+    pub file: String,
+    /// Per channel.
+    pub channels: Vec<Prediction>,
+}
+
+/// Predict `exp` (a trace not used in the fit) with the identified θ.
+pub fn validate(id: &Identification, exp: &Experiment) -> Result<Validation> {
+    let mut scene = exp.scene.clone();
+    params::set_theta(&mut scene, &id.theta);
+    let o = simulate(&scene, &RunOptions::default())?;
+    if o.integrator.status != RunStatus::Completed || o.samples.len() != exp.rows() {
+        return Err(Error::settings(format!(
+            "{}: the identified constants do not reproduce this trace's run: {} ({})",
+            exp.name, o.integrator.status, o.integrator.message
+        )));
+    }
+    let s0 = o.samples[0];
+    let channels = exp
+        .channels
+        .iter()
+        .map(|c| {
+            let (mut ss, mut n) = (0.0, 0usize);
+            for (y, s) in c.values.iter().zip(&o.samples) {
+                if y.is_finite() {
+                    ss += (simulated(c.kind, &s0, s) - y).powi(2);
+                    n += 1;
+                }
+            }
+            let rmse = (ss / n.max(1) as f64).sqrt();
+            let measured: Vec<f64> = c.values.iter().copied().filter(|v| v.is_finite()).collect();
+            Prediction {
+                channel: c.kind,
+                unit: c.kind.unit(),
+                rmse,
+                rmse_pct: rmse_percent(rmse, &measured),
+            }
+        })
+        .collect();
+    Ok(Validation {
+        file: exp.name.clone(),
+        channels,
+    })
+}

@@ -1,0 +1,176 @@
+//! Report of an identification: every trace against the model per channel, the
+//! residuals over their noise, the correlation matrix as a picture, the multi-start
+//! waterfall, and a Markdown page linking them.
+
+use super::format::{si, table};
+use super::plot::{Chart, Series, Style};
+use crate::error::{Error, Result};
+use crate::identify::material::Validation;
+use crate::identify::problem::{simulated, ChannelKind, Experiment};
+use crate::identify::Identification;
+use crate::io::write::atomic_write;
+use plotters::prelude::*;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Display unit and factor of a channel's SI values.
+fn display(kind: ChannelKind) -> (&'static str, f64) {
+    match kind {
+        ChannelKind::Contraction | ChannelKind::Length => ("µm", 1e6),
+        ChannelKind::Capacitance => ("pF", 1e12),
+        ChannelKind::Current => ("µA", 1e6),
+        ChannelKind::Force => ("N", 1.0),
+        ChannelKind::Stretch => ("1", 1.0),
+    }
+}
+
+/// Write the report into `dir` (claimed by the caller); returns the page.
+pub fn write(
+    id: &Identification,
+    experiments: &[Experiment],
+    validation: &[Validation],
+    dir: &Path,
+) -> Result<PathBuf> {
+    let mut md = String::from("# Identification from actuator traces\n\n");
+    let _ = writeln!(md, "status: **{}**\n", id.status);
+    let rows: Vec<Vec<String>> = id
+        .parameters
+        .iter()
+        .map(|p| {
+            vec![
+                p.name.clone(),
+                si(p.value, &p.unit),
+                p.std_error.map(|s| si(s, &p.unit)).unwrap_or_else(|| "—".into()),
+                if p.identifiable { "yes".into() } else { format!("no: {}", p.reason.as_deref().unwrap_or("")) },
+            ]
+        })
+        .collect();
+    let _ = writeln!(md, "```\n{}```\n", table(&["parameter", "value", "σ", "identifiable"], &rows));
+    for (ei, (e, o)) in experiments.iter().zip(&id.runs).enumerate() {
+        let s0 = o.samples[0];
+        for (ci, c) in e.channels.iter().enumerate() {
+            let (unit, f) = display(c.kind);
+            let data: Vec<(f64, f64)> = o
+                .samples
+                .iter()
+                .zip(&c.values)
+                .filter(|(_, y)| y.is_finite())
+                .map(|(s, y)| (s.time_s, y * f))
+                .collect();
+            let model: Vec<(f64, f64)> = o
+                .samples
+                .iter()
+                .map(|s| (s.time_s, simulated(c.kind, &s0, s) * f))
+                .collect();
+            let name = format!("trace{}-{}.svg", ei + 1, c.kind);
+            Chart {
+                title: format!("{}: {}", e.name, c.kind),
+                x_label: "time (s)".into(),
+                y_label: format!("{} ({unit})", c.kind),
+                series: vec![
+                    Series { label: "measured".into(), points: data, color: 0, style: Style::Points },
+                    Series { label: "identified model".into(), points: model, color: 1, style: Style::Line },
+                ],
+                log_x: false,
+            }
+            .write_svg(&dir.join(&name))?;
+            let sigma = id.experiments[ei].channels[ci].sigma;
+            let res: Vec<(f64, f64)> = o
+                .samples
+                .iter()
+                .zip(&c.values)
+                .filter(|(_, y)| y.is_finite())
+                .map(|(s, y)| (s.time_s, (simulated(c.kind, &s0, s) - y) / sigma))
+                .collect();
+            let rname = format!("trace{}-{}-residuals.svg", ei + 1, c.kind);
+            Chart {
+                title: format!("{}: {} residual / σ", e.name, c.kind),
+                x_label: "time (s)".into(),
+                y_label: "(model − measured) / σ".into(),
+                series: vec![Series { label: "residual".into(), points: res, color: 2, style: Style::Points }],
+                log_x: false,
+            }
+            .write_svg(&dir.join(&rname))?;
+            let _ = writeln!(md, "![{name}]({name})\n![{rname}]({rname})\n");
+        }
+    }
+    let costs: Vec<(f64, f64)> = id
+        .solver
+        .final_costs
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.is_finite())
+        .map(|(i, c)| ((i + 1) as f64, (c - id.solver.final_costs[0] + 1e-3).log10()))
+        .collect();
+    Chart {
+        title: format!(
+            "multi-start: {} of {} starts at the best cost",
+            id.solver.starts_at_best, id.solver.starts
+        ),
+        x_label: "start (sorted by final cost)".into(),
+        y_label: "log10(cost − best + 0.001)".into(),
+        series: vec![Series { label: "final ½χ²".into(), points: costs, color: 3, style: Style::Points }],
+        log_x: false,
+    }
+    .write_svg(&dir.join("waterfall.svg"))?;
+    let _ = writeln!(md, "![waterfall](waterfall.svg)\n");
+    correlation(id, &dir.join("correlation.svg"))?;
+    let _ = writeln!(md, "![correlation](correlation.svg)\n");
+    for v in validation {
+        let rows: Vec<Vec<String>> = v
+            .channels
+            .iter()
+            .map(|c| {
+                vec![
+                    c.channel.to_string(),
+                    si(c.rmse, c.unit),
+                    c.rmse_pct.map(|p| format!("{p:.3}")).unwrap_or_else(|| "—".into()),
+                ]
+            })
+            .collect();
+        let _ = writeln!(md, "Held-out trace {}:\n```\n{}```\n", v.file, table(&["channel", "RMSE", "%RMSE"], &rows));
+    }
+    for w in &id.warnings {
+        let _ = writeln!(md, "- warning: {w}");
+    }
+    let page = dir.join("index.md");
+    atomic_write(&page, md.as_bytes())?;
+    Ok(page)
+}
+
+/// The correlation matrix of the free constants as coloured cells (blue −1 … white
+/// 0 … red +1; grey where undefined), with the names on both axes.
+fn correlation(id: &Identification, path: &Path) -> Result<()> {
+    let names: Vec<&str> = id.parameters.iter().map(|p| p.name.as_str()).collect();
+    let k = names.len();
+    let cell = 48i32;
+    let margin = 90i32;
+    let size = (margin + cell * k as i32 + 20) as u32;
+    let fail = |e: String| Error::settings(format!("{}: {e}", path.display()));
+    let root = SVGBackend::new(path, (size, size)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| fail(e.to_string()))?;
+    for (a, row) in id.assessment.correlation.iter().enumerate() {
+        for (b, rho) in row.iter().enumerate() {
+            let (x, y) = (margin + cell * b as i32, margin + cell * a as i32);
+            let fill = match rho {
+                Some(r) if r.is_finite() => {
+                    let t = r.clamp(-1.0, 1.0);
+                    let w = |c: f64| (255.0 * (1.0 - t.abs()) + c * t.abs()) as u8;
+                    if t >= 0.0 { RGBColor(w(214.0), w(39.0), w(40.0)) } else { RGBColor(w(31.0), w(119.0), w(180.0)) }
+                }
+                _ => RGBColor(200, 200, 200),
+            };
+            root.draw(&Rectangle::new([(x, y), (x + cell, y + cell)], fill.filled()))
+                .map_err(|e| fail(e.to_string()))?;
+            let label = rho.map(|r| format!("{r:.2}")).unwrap_or_else(|| "—".into());
+            root.draw(&Text::new(label, (x + 8, y + cell / 2 - 6), ("sans-serif", 13)))
+                .map_err(|e| fail(e.to_string()))?;
+        }
+        root.draw(&Text::new(names[a].to_string(), (4, margin + cell * a as i32 + cell / 2 - 6), ("sans-serif", 13)))
+            .map_err(|e| fail(e.to_string()))?;
+        root.draw(&Text::new(names[a].to_string(), (margin + cell * a as i32 + 4, margin - 20), ("sans-serif", 13)))
+            .map_err(|e| fail(e.to_string()))?;
+    }
+    root.present().map_err(|e| fail(e.to_string()))?;
+    Ok(())
+}

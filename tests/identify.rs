@@ -412,3 +412,112 @@ fn residual_jacobian_and_cost_match_finite_differences() {
     println!("gradient at the optimum: {rel:.2e} of |J||r|");
     assert!(rel < 1e-3, "{rel:e}");
 }
+
+/// Over `replicates` noisy traces of `truth` (seeds 100, 101, …), identify `free`
+/// from a start 10 % off and count how many 95 % intervals cover the truth.
+fn coverage(
+    truth: &Scene,
+    channels: &[(ChannelKind, f64)],
+    free: &[&str],
+    replicates: u64,
+) -> (usize, usize) {
+    let all = dea_fit::identify::params::constants(truth);
+    let th = theta(truth);
+    let (mut covered, mut total) = (0, 0);
+    for seed in 100..100 + replicates {
+        let mut exp = trace(truth, channels, seed);
+        let mut off = th.clone();
+        for c in all.iter().filter(|c| free.contains(&c.name.as_str())) {
+            off[c.index] *= 1.1;
+        }
+        set_theta(&mut exp.scene, &off);
+        let settings = Settings {
+            free: Some(free.iter().map(|s| s.to_string()).collect()),
+            starts: 1,
+            ..Settings::default()
+        };
+        let id = identify(vec![exp], &settings).expect("identifies");
+        for p in &id.parameters {
+            let c = all.iter().find(|c| c.name == p.name).unwrap();
+            let ci = p.ci95.expect("an interval");
+            total += 1;
+            if ci[0] <= th[c.index] && th[c.index] <= ci[1] {
+                covered += 1;
+            }
+        }
+    }
+    (covered, total)
+}
+
+/// Noise σ of each channel as a fraction of its peak |value| in `truth`.
+fn relative_noise(truth: &Scene, rel: &[(ChannelKind, f64)]) -> Vec<(ChannelKind, f64)> {
+    let o = simulate(truth, &RunOptions::default()).expect("runs");
+    let s0 = o.samples[0];
+    rel.iter()
+        .map(|&(q, r)| {
+            let peak = o
+                .samples
+                .iter()
+                .map(|s| simulated(q, &s0, s).abs())
+                .fold(0.0, f64::max);
+            (q, r * peak)
+        })
+        .collect()
+}
+
+/// The 95 % intervals cover the truth at about their rate. Stack with one arm and a
+/// dashpot, a 50 ms rise, 5 constants, 20 replicates (100 intervals): the count of
+/// covering intervals is binomial(100, 0.95) if the intervals are right, mean 95,
+/// σ 2.2; at least 85 (4.5 σ below) and at most 100. The seeds are fixed, so the
+/// count is too (it is printed).
+#[test]
+fn intervals_cover_the_truth_at_their_rate_for_a_stack() {
+    let truth = one_arm_stack(
+        "viscous = { nv = \"1875 Pa s\", arms = [ { k = \"50 kPa\", tau = \"0.2 s\" } ] }",
+        "rise_time = \"50 ms\"",
+    );
+    let ch = relative_noise(
+        &truth,
+        &[
+            (ChannelKind::Contraction, 0.01),
+            (ChannelKind::Capacitance, 0.001),
+        ],
+    );
+    let (covered, total) = coverage(
+        &truth,
+        &ch,
+        &["C10", "arm1.k", "arm1.tau", "nv", "eps_r"],
+        20,
+    );
+    println!("stack: {covered} of {total} intervals cover the truth");
+    assert_eq!(total, 100);
+    assert!(covered >= 85, "{covered} of {total}");
+}
+
+/// The same for the shipped helix (Chapter 4, 10 N load, inertia of its 0.24 kg)
+/// with one arm and a 25 kV step with a 50 ms rise: 4 constants, 15 replicates (60
+/// intervals; binomial mean 57, σ 1.7): at least 50.
+#[test]
+fn intervals_cover_the_truth_at_their_rate_for_a_helix() {
+    let text =
+        std::fs::read_to_string(super::support::repo().join("datasets/scenes/hdea_step_10N.toml"))
+            .unwrap()
+            .replace(
+                "viscous = { preset = \"seed-table-4.2\" }",
+                "viscous = { nv = \"1875 Pa s\", arms = [ { k = \"50 kPa\", tau = \"0.2 s\" } ] }",
+            )
+            .replace("rise_time = \"1 ms\"", "rise_time = \"50 ms\"")
+            .replace("samples = 1000", "samples = 300");
+    let truth = Scene::parse(&text, Path::new("helix.toml")).unwrap();
+    let ch = relative_noise(
+        &truth,
+        &[
+            (ChannelKind::Contraction, 0.01),
+            (ChannelKind::Capacitance, 0.001),
+        ],
+    );
+    let (covered, total) = coverage(&truth, &ch, &["C10", "arm1.k", "arm1.tau", "eps_r"], 15);
+    println!("helix: {covered} of {total} intervals cover the truth");
+    assert_eq!(total, 60);
+    assert!(covered >= 50, "{covered} of {total}");
+}

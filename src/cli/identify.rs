@@ -90,7 +90,10 @@ fn parse_sigma(text: &str) -> Result<(ChannelKind, Sigma)> {
         .ok_or_else(|| bad("expected NAME=VALUE".into()))?;
     let kind = ChannelKind::parse(name.trim()).ok_or_else(|| {
         let names: Vec<&str> = ChannelKind::ALL.iter().map(|k| k.name()).collect();
-        bad(format!("no channel '{name}' (channels: {})", names.join(", ")))
+        bad(format!(
+            "no channel '{name}' (channels: {})",
+            names.join(", ")
+        ))
     })?;
     let value = value.trim();
     if let Some(p) = value.strip_suffix('%') {
@@ -250,14 +253,19 @@ fn summary(id: &Identification, validation: &[Validation]) -> String {
         rows.push(vec![
             p.name.clone(),
             si(p.value, &p.unit),
-            p.std_error.map(|s| si(s, &p.unit)).unwrap_or_else(|| "—".into()),
+            p.std_error
+                .map(|s| si(s, &p.unit))
+                .unwrap_or_else(|| "—".into()),
             p.ci95
                 .map(|c| format!("[{}, {}]", si(c[0], &p.unit), si(c[1], &p.unit)))
                 .unwrap_or_else(|| "—".into()),
             if p.identifiable { "yes" } else { "no" }.into(),
         ]);
     }
-    let mut s = table(&["parameter", "value", "σ", "95 % interval", "identifiable"], &rows);
+    let mut s = table(
+        &["parameter", "value", "σ", "95 % interval", "identifiable"],
+        &rows,
+    );
     let mut ch = Vec::new();
     for e in &id.experiments {
         for c in &e.channels {
@@ -272,7 +280,9 @@ fn summary(id: &Identification, validation: &[Validation]) -> String {
                 }
                 .into(),
                 si(c.rmse, c.unit),
-                c.rmse_pct.map(|p| format!("{p:.3}")).unwrap_or_else(|| "—".into()),
+                c.rmse_pct
+                    .map(|p| format!("{p:.3}"))
+                    .unwrap_or_else(|| "—".into()),
             ]);
         }
     }
@@ -285,7 +295,9 @@ fn summary(id: &Identification, validation: &[Validation]) -> String {
                 "".into(),
                 "".into(),
                 si(c.rmse, c.unit),
-                c.rmse_pct.map(|p| format!("{p:.3}")).unwrap_or_else(|| "—".into()),
+                c.rmse_pct
+                    .map(|p| format!("{p:.3}"))
+                    .unwrap_or_else(|| "—".into()),
             ]);
         }
     }

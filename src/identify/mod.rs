@@ -276,7 +276,9 @@ pub fn identify_with(
         warnings,
         experiments,
         solver: SolverSummary {
-            method: "multi-start bounded Levenberg-Marquardt (argmin), forward-sensitivity Jacobian".into(),
+            method:
+                "multi-start bounded Levenberg-Marquardt (argmin), forward-sensitivity Jacobian"
+                    .into(),
             starts: settings.starts,
             starts_at_best: ms.at_best,
             iterations,

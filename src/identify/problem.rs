@@ -317,10 +317,15 @@ impl LeastSquares for Problem {
 impl Experiment {
     /// The experiment of a measured trace on `base` (its input and sample times from
     /// the trace, [`crate::io::trace::Trace::scene`]), every measured channel kept.
+    /// The measured voltage is the actuator's terminal voltage, so the scene's source
+    /// model (rise time, resistance) is replaced by an ideal source: the supply's
+    /// dynamics are already in the measurement.
     pub fn from_trace(trace: &crate::io::trace::Trace, base: &Scene) -> crate::Result<Experiment> {
+        let mut scene = trace.scene(base)?;
+        scene.source = crate::sim::scene::Source::Ideal;
         Ok(Experiment {
             name: trace.provenance.path.clone(),
-            scene: trace.scene(base)?,
+            scene,
             channels: trace
                 .channels
                 .iter()

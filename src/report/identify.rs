@@ -40,12 +40,22 @@ pub fn write(
             vec![
                 p.name.clone(),
                 si(p.value, &p.unit),
-                p.std_error.map(|s| si(s, &p.unit)).unwrap_or_else(|| "—".into()),
-                if p.identifiable { "yes".into() } else { format!("no: {}", p.reason.as_deref().unwrap_or("")) },
+                p.std_error
+                    .map(|s| si(s, &p.unit))
+                    .unwrap_or_else(|| "—".into()),
+                if p.identifiable {
+                    "yes".into()
+                } else {
+                    format!("no: {}", p.reason.as_deref().unwrap_or(""))
+                },
             ]
         })
         .collect();
-    let _ = writeln!(md, "```\n{}```\n", table(&["parameter", "value", "σ", "identifiable"], &rows));
+    let _ = writeln!(
+        md,
+        "```\n{}```\n",
+        table(&["parameter", "value", "σ", "identifiable"], &rows)
+    );
     for (ei, (e, o)) in experiments.iter().zip(&id.runs).enumerate() {
         let s0 = o.samples[0];
         for (ci, c) in e.channels.iter().enumerate() {
@@ -68,8 +78,18 @@ pub fn write(
                 x_label: "time (s)".into(),
                 y_label: format!("{} ({unit})", c.kind),
                 series: vec![
-                    Series { label: "measured".into(), points: data, color: 0, style: Style::Points },
-                    Series { label: "identified model".into(), points: model, color: 1, style: Style::Line },
+                    Series {
+                        label: "measured".into(),
+                        points: data,
+                        color: 0,
+                        style: Style::Points,
+                    },
+                    Series {
+                        label: "identified model".into(),
+                        points: model,
+                        color: 1,
+                        style: Style::Line,
+                    },
                 ],
                 log_x: false,
             }
@@ -87,7 +107,12 @@ pub fn write(
                 title: format!("{}: {} residual / σ", e.name, c.kind),
                 x_label: "time (s)".into(),
                 y_label: "(model − measured) / σ".into(),
-                series: vec![Series { label: "residual".into(), points: res, color: 2, style: Style::Points }],
+                series: vec![Series {
+                    label: "residual".into(),
+                    points: res,
+                    color: 2,
+                    style: Style::Points,
+                }],
                 log_x: false,
             }
             .write_svg(&dir.join(&rname))?;
@@ -100,7 +125,12 @@ pub fn write(
         .iter()
         .enumerate()
         .filter(|(_, c)| c.is_finite())
-        .map(|(i, c)| ((i + 1) as f64, (c - id.solver.final_costs[0] + 1e-3).log10()))
+        .map(|(i, c)| {
+            (
+                (i + 1) as f64,
+                (c - id.solver.final_costs[0] + 1e-3).log10(),
+            )
+        })
         .collect();
     Chart {
         title: format!(
@@ -109,7 +139,12 @@ pub fn write(
         ),
         x_label: "start (sorted by final cost)".into(),
         y_label: "log10(cost − best + 0.001)".into(),
-        series: vec![Series { label: "final ½χ²".into(), points: costs, color: 3, style: Style::Points }],
+        series: vec![Series {
+            label: "final ½χ²".into(),
+            points: costs,
+            color: 3,
+            style: Style::Points,
+        }],
         log_x: false,
     }
     .write_svg(&dir.join("waterfall.svg"))?;
@@ -124,11 +159,18 @@ pub fn write(
                 vec![
                     c.channel.to_string(),
                     si(c.rmse, c.unit),
-                    c.rmse_pct.map(|p| format!("{p:.3}")).unwrap_or_else(|| "—".into()),
+                    c.rmse_pct
+                        .map(|p| format!("{p:.3}"))
+                        .unwrap_or_else(|| "—".into()),
                 ]
             })
             .collect();
-        let _ = writeln!(md, "Held-out trace {}:\n```\n{}```\n", v.file, table(&["channel", "RMSE", "%RMSE"], &rows));
+        let _ = writeln!(
+            md,
+            "Held-out trace {}:\n```\n{}```\n",
+            v.file,
+            table(&["channel", "RMSE", "%RMSE"], &rows)
+        );
     }
     for w in &id.warnings {
         let _ = writeln!(md, "- warning: {w}");
@@ -156,20 +198,39 @@ fn correlation(id: &Identification, path: &Path) -> Result<()> {
                 Some(r) if r.is_finite() => {
                     let t = r.clamp(-1.0, 1.0);
                     let w = |c: f64| (255.0 * (1.0 - t.abs()) + c * t.abs()) as u8;
-                    if t >= 0.0 { RGBColor(w(214.0), w(39.0), w(40.0)) } else { RGBColor(w(31.0), w(119.0), w(180.0)) }
+                    if t >= 0.0 {
+                        RGBColor(w(214.0), w(39.0), w(40.0))
+                    } else {
+                        RGBColor(w(31.0), w(119.0), w(180.0))
+                    }
                 }
                 _ => RGBColor(200, 200, 200),
             };
-            root.draw(&Rectangle::new([(x, y), (x + cell, y + cell)], fill.filled()))
-                .map_err(|e| fail(e.to_string()))?;
+            root.draw(&Rectangle::new(
+                [(x, y), (x + cell, y + cell)],
+                fill.filled(),
+            ))
+            .map_err(|e| fail(e.to_string()))?;
             let label = rho.map(|r| format!("{r:.2}")).unwrap_or_else(|| "—".into());
-            root.draw(&Text::new(label, (x + 8, y + cell / 2 - 6), ("sans-serif", 13)))
-                .map_err(|e| fail(e.to_string()))?;
+            root.draw(&Text::new(
+                label,
+                (x + 8, y + cell / 2 - 6),
+                ("sans-serif", 13),
+            ))
+            .map_err(|e| fail(e.to_string()))?;
         }
-        root.draw(&Text::new(names[a].to_string(), (4, margin + cell * a as i32 + cell / 2 - 6), ("sans-serif", 13)))
-            .map_err(|e| fail(e.to_string()))?;
-        root.draw(&Text::new(names[a].to_string(), (margin + cell * a as i32 + 4, margin - 20), ("sans-serif", 13)))
-            .map_err(|e| fail(e.to_string()))?;
+        root.draw(&Text::new(
+            names[a].to_string(),
+            (4, margin + cell * a as i32 + cell / 2 - 6),
+            ("sans-serif", 13),
+        ))
+        .map_err(|e| fail(e.to_string()))?;
+        root.draw(&Text::new(
+            names[a].to_string(),
+            (margin + cell * a as i32 + 4, margin - 20),
+            ("sans-serif", 13),
+        ))
+        .map_err(|e| fail(e.to_string()))?;
     }
     root.present().map_err(|e| fail(e.to_string()))?;
     Ok(())

@@ -205,7 +205,11 @@ fn find_steps(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize)> {
         let lo = i.saturating_sub(STEP_NEIGHBOURS);
         let hi = (i + STEP_NEIGHBOURS).min(n - 2);
         buf.extend((lo..=hi).filter(|&j| j != i).map(slope));
-        let local = if buf.is_empty() { 0.0 } else { median(&mut buf) };
+        let local = if buf.is_empty() {
+            0.0
+        } else {
+            median(&mut buf)
+        };
         let e = (v[i + 1] - v[i]) - local * (t[i + 1] - t[i]);
         if e.abs() <= STEP_SIGMAS * std::f64::consts::SQRT_2 * sigma {
             continue;
@@ -223,7 +227,15 @@ fn find_steps(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize)> {
 
 /// Least squares on a cubic plus a hinge at x_h over samples `lo..=hi` (x scaled
 /// about t_c): the hinge coefficient's t-ratio against `sigma` and the RSS.
-fn hinge_fit(t: &[f64], v: &[f64], lo: usize, hi: usize, tc: f64, th: f64, sigma: f64) -> (f64, f64) {
+fn hinge_fit(
+    t: &[f64],
+    v: &[f64],
+    lo: usize,
+    hi: usize,
+    tc: f64,
+    th: f64,
+    sigma: f64,
+) -> (f64, f64) {
     let h = (t[hi] - tc).abs().max((tc - t[lo]).abs());
     let xh = (th - tc) / h;
     let mut a = [[0.0; 5]; 5];
@@ -371,7 +383,11 @@ fn build(t: &[f64], v: &[f64], noise: f64, segs: &[(usize, usize, f64, bool)]) -
     for k in 0..segs.len() {
         let (a, b) = (first[k], first[k + 1] - 1);
         if segs[k].3 {
-            let y0 = if k > 0 { pieces[a - 1][2] } else { pieces[a][0] };
+            let y0 = if k > 0 {
+                pieces[a - 1][2]
+            } else {
+                pieces[a][0]
+            };
             let y1 = if k + 1 < segs.len() && !segs[k + 1].3 {
                 pieces[b + 1][0]
             } else {

@@ -472,11 +472,11 @@ impl Plant {
     /// sensitivity s = ∂y/∂θk: dλ/dθk = s0, dL/dθk = L0·s0, and the capacitance and
     /// the current (which depends on λ̇, V and the source state) as
     /// ∂out/∂y·s + ∂out/∂θk, by one forward evaluation of the same output code that
-    /// writes the samples (`Plant::electrical` at `Plant::lam_dot`), seeded along s
+    /// writes the samples ([`Plant::output`]), seeded along s
     /// and θk. No allocation.
     pub fn output_sensitivity(&self, t: f64, y: &[f64], s: &[f64], k: usize) -> OutputSensitivity {
         let e = Seeded::new(self, StateSeed::Along(s), ThetaSeed::Unit(k));
-        let el = self.kinematics(&e, t, y, &self.layout()).elec;
+        let el = self.output_with(&e, t, y, &self.layout());
         OutputSensitivity {
             stretch: s[0],
             length: self.l0 * s[0],

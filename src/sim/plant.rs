@@ -881,9 +881,27 @@ impl Plant {
         self.drive_with(&e, y, &l, &self.terminal(&e, t, y, &l))
     }
 
-    /// λ̇ at a state (both fidelities).
-    pub fn lam_dot(&self, t: f64, y: &[f64]) -> f64 {
-        self.kinematics(&Plain(self), t, y, &self.layout()).lam_dot
+    /// The electrical state at a state with the current at the state's own λ̇: what
+    /// a sample reports.
+    pub fn output(&self, t: f64, y: &[f64]) -> Electrical {
+        self.output_with(&Plain(self), t, y, &self.layout())
+    }
+
+    /// [`Plant::output`] for every number type: the terminal, λ̇ as the right-hand
+    /// side computes it (with inertia the velocity state, so without the force),
+    /// the rates at λ̇.
+    #[inline]
+    pub(crate) fn output_with<E: Eval>(
+        &self,
+        e: &E,
+        t: f64,
+        y: &[f64],
+        l: &Layout,
+    ) -> Electrical<E::T> {
+        match l.v {
+            Some(i) => self.rates(&self.terminal(e, t, y, l), e.y(y, i)),
+            None => self.kinematics(e, t, y, l).elec,
+        }
     }
 }
 

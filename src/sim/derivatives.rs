@@ -221,20 +221,23 @@ impl<'a> Seeded<'a> {
             ThetaSeed::Unit(k) => k < np,
             ThetaSeed::Along(w) => w[..np].iter().any(|&x| x != 0.0),
         };
-        let mut s = Seeded {
+        let (dlam0, dc_rest) = match theta {
+            ThetaSeed::None => (0.0, 0.0),
+            ThetaSeed::Unit(k) => p.rest_derivatives[k],
+            ThetaSeed::Along(w) => p
+                .rest_derivatives
+                .iter()
+                .zip(w)
+                .fold((0.0, 0.0), |(a, b), (d, w)| (a + w * d.0, b + w * d.1)),
+        };
+        Seeded {
             p,
             state,
             theta,
             model,
-            dlam0: 0.0,
-            dc_rest: 0.0,
-        };
-        // dλ0/dθ·w = −(∂P/∂p·w)/P'(λ0) (module documentation)
-        if model {
-            s.dlam0 = -s.stress_param(p.lam0) / p.tangent(p.lam0);
+            dlam0,
+            dc_rest,
         }
-        s.dc_rest = p.capacitance(p.lam0).1 * s.dlam0 + s.is(Theta::EpsR) * p.c_rest / p.eps_r;
-        s
     }
 
     /// The weight of θ entry `th` in the parameter direction.
@@ -359,6 +362,23 @@ impl Plant {
             .stress_jacobian(&self.params, self.mode, lam, out);
     }
 
+    /// (dλ0/dθk, dC_rest/dθk) for every entry of θ: λ0 solves
+    /// −Vol·P(λ0) + F_load·L0 = 0, so dλ0/dp = −(∂P/∂p)/P'(λ0) (zero for the other
+    /// parameters); dC_rest/dθ = C'(λ0)·dλ0/dθ + ∂C/∂θ, ∂C/∂εr = C/εr.
+    pub(super) fn rest_state_derivatives(&self) -> Vec<(f64, f64)> {
+        let np = self.params.len();
+        let mut dp = [0.0; MAX_MODEL_PARAMS];
+        self.stress_jacobian(self.lam0, &mut dp[..np]);
+        let (tangent, dc) = (self.tangent(self.lam0), self.capacitance(self.lam0).1);
+        (0..self.n_theta())
+            .map(|k| {
+                let dlam0 = if k < np { -dp[k] / tangent } else { 0.0 };
+                let eps = (k == self.n_theta() - 1) as u8 as f64 * self.c_rest / self.eps_r;
+                (dlam0, dc * dlam0 + eps)
+            })
+            .collect()
+    }
+
     /// Index in θ of an entry.
     #[inline]
     fn theta_index(&self, th: Theta) -> usize {
@@ -472,11 +492,11 @@ impl Plant {
     /// sensitivity s = ∂y/∂θk: dλ/dθk = s0, dL/dθk = L0·s0, and the capacitance and
     /// the current (which depends on λ̇, V and the source state) as
     /// ∂out/∂y·s + ∂out/∂θk, by one forward evaluation of the same output code that
-    /// writes the samples (`Plant::electrical` at `Plant::lam_dot`), seeded along s
+    /// writes the samples ([`Plant::output`]), seeded along s
     /// and θk. No allocation.
     pub fn output_sensitivity(&self, t: f64, y: &[f64], s: &[f64], k: usize) -> OutputSensitivity {
         let e = Seeded::new(self, StateSeed::Along(s), ThetaSeed::Unit(k));
-        let el = self.kinematics(&e, t, y, &self.layout()).elec;
+        let el = self.output_with(&e, t, y, &self.layout());
         OutputSensitivity {
             stretch: s[0],
             length: self.l0 * s[0],

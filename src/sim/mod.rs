@@ -266,8 +266,7 @@ pub struct RunOptions {
 }
 
 fn sample(p: &Plant, t: f64, y: &[f64]) -> Sample {
-    let ld = p.lam_dot(t, y);
-    let e = p.electrical(t, y, ld);
+    let e = p.output(t, y);
     Sample {
         time_s: t,
         input_v: e.u,
@@ -646,7 +645,7 @@ fn energy_balance(p: &Plant, t_end: f64, y: &[f64]) -> Energy {
     let y0 = p.initial_state();
     let (c0, _, _) = p.capacitance(y0[0]);
     let v_start = p.electrical(0.0, &y0, 0.0).voltage;
-    let e = p.electrical(t_end, y, p.lam_dot(t_end, y));
+    let e = p.output(t_end, y);
     let kinetic = l.v.map(|i| 0.5 * p.mass * y[i] * y[i]).unwrap_or(0.0);
     let arms_j: f64 = p
         .arms

@@ -109,6 +109,8 @@ pub struct Plant {
     pub lam_f: f64,
     /// Capacitance at the rest state (the self-sensing calibration).
     pub c_rest: f64,
+    /// (dλ0/dθk, dC_rest/dθk) per entry of θ (`derivatives`), derived with λ0.
+    pub(crate) rest_derivatives: Vec<(f64, f64)>,
 }
 
 /// Indices into the state vector.
@@ -388,6 +390,7 @@ impl Plant {
             lam0: 1.0,
             lam_f: 1.0,
             c_rest: 0.0,
+            rest_derivatives: Vec::new(),
         };
         p.derive()?;
         let t_in = super::fidelity::input_time_scale(scene, p.c_rest);
@@ -455,6 +458,7 @@ impl Plant {
         self.lam0 = self.static_stretch(0.0, 1.0)?;
         self.lam_f = self.lam0;
         self.c_rest = self.capacitance(self.lam0).0;
+        self.rest_derivatives = self.rest_state_derivatives();
         Ok(())
     }
 
@@ -881,9 +885,27 @@ impl Plant {
         self.drive_with(&e, y, &l, &self.terminal(&e, t, y, &l))
     }
 
-    /// λ̇ at a state (both fidelities).
-    pub fn lam_dot(&self, t: f64, y: &[f64]) -> f64 {
-        self.kinematics(&Plain(self), t, y, &self.layout()).lam_dot
+    /// The electrical state at a state with the current at the state's own λ̇: what
+    /// a sample reports.
+    pub fn output(&self, t: f64, y: &[f64]) -> Electrical {
+        self.output_with(&Plain(self), t, y, &self.layout())
+    }
+
+    /// [`Plant::output`] for every number type: the terminal, λ̇ as the right-hand
+    /// side computes it (with inertia the velocity state, so without the force),
+    /// the rates at λ̇.
+    #[inline]
+    pub(crate) fn output_with<E: Eval>(
+        &self,
+        e: &E,
+        t: f64,
+        y: &[f64],
+        l: &Layout,
+    ) -> Electrical<E::T> {
+        match l.v {
+            Some(i) => self.rates(&self.terminal(e, t, y, l), e.y(y, i)),
+            None => self.kinematics(e, t, y, l).elec,
+        }
     }
 }
 

@@ -16,7 +16,7 @@ use ::diffsol::{
     NalgebraLU, NalgebraMat, NalgebraVec, OdeBuilder, OdeEquations, OdeSolverMethod,
     OdeSolverStopReason, Vector, VectorCommon,
 };
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 
 type M = NalgebraMat<f64>;
 type LS = NalgebraLU<f64>;
@@ -44,6 +44,26 @@ struct Adapter<'s, S> {
     sys: &'s S,
     t_end: Cell<f64>,
     counts: Counts,
+    /// With sensitivities: the Jacobian at the state it was last asked at.
+    jac: Option<RefCell<JacCache>>,
+}
+
+/// The dense Jacobian at one (t, x), built once that state is asked for a second
+/// J·v. A sensitivity run asks for J·s at one state once per parameter lane and
+/// Newton iteration (the sensitivity solve after each step): nθ × iterations dual
+/// evaluations of the right-hand side become n evaluations (the Jacobian's
+/// columns) and cheap products. Built from the same J·e_k, so it holds the same
+/// numbers; a state asked once costs nothing extra.
+struct JacCache {
+    t: f64,
+    x: Vec<f64>,
+    /// Whether `jac` is the Jacobian at (t, x).
+    built: bool,
+    /// Row-major n × n.
+    jac: Vec<f64>,
+    /// Unit vector and column scratch.
+    unit: Vec<f64>,
+    col: Vec<f64>,
 }
 
 impl<S: System> Adapter<'_, S> {
@@ -56,8 +76,39 @@ impl<S: System> Adapter<'_, S> {
     /// J(x)·v (diffsol builds its dense Jacobian column by column from this).
     #[inline]
     fn jac_vec(&self, t: f64, x: &[f64], v: &[f64], out: &mut [f64]) {
-        self.counts.jac.set(self.counts.jac.get() + 1);
-        self.sys.jacobian_times(t.min(self.t_end.get()), x, v, out);
+        let t = t.min(self.t_end.get());
+        let Some(cache) = &self.jac else {
+            self.counts.jac.set(self.counts.jac.get() + 1);
+            return self.sys.jacobian_times(t, x, v, out);
+        };
+        let c = &mut *cache.borrow_mut();
+        if c.t != t || c.x != x {
+            c.t = t;
+            c.x.copy_from_slice(x);
+            c.built = false;
+            self.counts.jac.set(self.counts.jac.get() + 1);
+            return self.sys.jacobian_times(t, x, v, out);
+        }
+        let n = x.len();
+        if !c.built {
+            for k in 0..n {
+                c.unit[k] = 1.0;
+                self.sys.jacobian_times(t, x, &c.unit, &mut c.col);
+                c.unit[k] = 0.0;
+                for i in 0..n {
+                    c.jac[i * n + k] = c.col[i];
+                }
+            }
+            self.counts.jac.set(self.counts.jac.get() + n);
+            c.built = true;
+        }
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = c.jac[i * n..(i + 1) * n]
+                .iter()
+                .zip(v)
+                .map(|(a, b)| a * b)
+                .sum();
+        }
     }
 
     /// (∂f/∂θ)·v, one parameter direction per call (one dual evaluation, like
@@ -102,6 +153,16 @@ pub(super) fn run<S: System>(
         sys,
         t_end: Cell::new(left_limit(bounds[0], bounds[1])),
         counts: Counts::default(),
+        jac: matches!(extra, Extra::Sensitivities(_)).then(|| {
+            RefCell::new(JacCache {
+                t: f64::NAN,
+                x: vec![0.0; n],
+                built: false,
+                jac: vec![0.0; n * n],
+                unit: vec![0.0; n],
+                col: vec![0.0; n],
+            })
+        }),
     };
     if let Some(g) = event {
         if g(bounds[0], y) <= 0.0 {
@@ -122,9 +183,7 @@ pub(super) fn run<S: System>(
     let problem = OdeBuilder::<M>::new()
         .t0(bounds[0])
         .rtol(o.rtol)
-        .atol(atol.clone())
-        .sens_rtol(o.rtol)
-        .sens_atol(atol)
+        .atol(atol)
         .p(magnitudes.clone())
         .param_scales(magnitudes)
         .rhs_sens_implicit(

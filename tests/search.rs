@@ -3,7 +3,7 @@
 
 use dea_fit::fit::lm::{self, Checkpoint, Control, LeastSquares, LmSettings, Termination};
 use dea_fit::fit::multistart::{self, latin_hypercube, starts_at_best};
-use dea_fit::observe::Trace;
+use dea_fit::observe::{Progress, Trace};
 use nalgebra::{DMatrix, DVector};
 use std::time::Duration;
 
@@ -354,4 +354,20 @@ fn a_multi_start_counts_the_starts_that_reach_the_best_minimum() {
     );
     let fall = ms.waterfall();
     assert!(fall.windows(2).all(|w| w[0] <= w[1]) && fall.len() == starts.len());
+}
+
+#[test]
+fn the_progress_bar_counts_the_finished_starts() {
+    let bar = indicatif::ProgressBar::hidden();
+    bar.set_length(3);
+    let starts = vec![vec![-1.2, 1.0]; 3];
+    let ms = multistart::run(&Rosen, &starts, &[FREE; 2], &LmSettings::default(), |i| {
+        Control {
+            observers: vec![Box::new(Progress::new(&bar, i))],
+            ..Control::default()
+        }
+    });
+    assert_eq!(bar.position(), 3);
+    assert_eq!(ms.at_best, 3);
+    assert!(bar.message().contains("cost"), "{}", bar.message());
 }

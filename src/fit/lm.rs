@@ -392,7 +392,8 @@ pub type Observer = Box<dyn Observe<LmState>>;
 /// What runs around a [`search`]: observers, checkpointing, resume, wall time.
 #[derive(Default)]
 pub struct Control {
-    /// Told of the start, every iteration and the end.
+    /// Told of the start, every iteration and the end; a search takes them (argmin
+    /// owns its observers), so a [`Control`] serves one search.
     pub observers: Vec<Observer>,
     /// Save the search to resume it later.
     pub checkpoint: Option<Checkpoint>,

@@ -15,3 +15,4 @@ mod scene_input;
 mod sim;
 mod sim_derivatives;
 mod support;
+mod trace;

@@ -19,3 +19,4 @@ mod sim;
 mod sim_derivatives;
 mod sim_sensitivities;
 mod support;
+mod trace;

@@ -826,14 +826,29 @@ fn read_time(c: &Ctx, t: &toml::Table) -> Result<TimeSpec> {
     c.known(
         t,
         s,
-        &["span", "samples", "rtol", "atol", "integrator", "fidelity"],
+        &[
+            "span",
+            "samples",
+            "sample_times",
+            "rtol",
+            "atol",
+            "integrator",
+            "fidelity",
+        ],
     )?;
+    c.one_of(t, s, &["samples", "sample_times"])?;
     let span = c.need(t, s, "span", Dimension::Time)?;
     budget::SPAN
         .check("time.span", span)
         .map_err(|v| c.violation(v))?;
-    // checked before the sample times are allocated
-    let n = c.count(t, s, "samples", &budget::SAMPLES)?.unwrap_or(1000);
+    let samples = match t.get("sample_times") {
+        Some(list) => read_sample_times(c, list, span)?,
+        None => {
+            // checked before the sample times are allocated
+            let n = c.count(t, s, "samples", &budget::SAMPLES)?.unwrap_or(1000);
+            (1..=n).map(|i| span * i as f64 / n as f64).collect()
+        }
+    };
     let rtol = c.number(t, s, "rtol")?.unwrap_or(1e-6);
     let atol = c.number(t, s, "atol")?.unwrap_or(rtol * 1e-3);
     let method = match c.string(t, s, "integrator")? {
@@ -859,12 +874,51 @@ fn read_time(c: &Ctx, t: &toml::Table) -> Result<TimeSpec> {
     };
     Ok(TimeSpec {
         span,
-        samples: (1..=n).map(|i| span * i as f64 / n as f64).collect(),
+        samples,
         rtol,
         atol,
         method,
         fidelity,
     })
+}
+
+/// `time.sample_times`: explicit output times, numbers in s or strings with a unit,
+/// strictly increasing, in (0, span], at most the sample-count limit.
+fn read_sample_times(c: &Ctx, list: &toml::Value, span: f64) -> Result<Vec<f64>> {
+    let key = "time.sample_times";
+    let items = list.as_array().ok_or_else(|| {
+        c.err(key, "must be a list of times")
+            .with_hint("e.g. sample_times = [0.1, 0.25, \"0.5 s\", \"800 ms\"]")
+    })?;
+    budget::SAMPLES
+        .check(key, items.len() as f64)
+        .map_err(|v| c.violation(v))?;
+    let mut out: Vec<f64> = Vec::with_capacity(items.len());
+    for (i, x) in items.iter().enumerate() {
+        let k = format!("{key}[{i}]");
+        let v = match x {
+            toml::Value::Float(f) => *f,
+            toml::Value::Integer(n) => *n as f64,
+            toml::Value::String(q) => parse_quantity(q, Dimension::Time)
+                .map(|q| q.value)
+                .map_err(|e| c.err(&k, e))?,
+            o => return Err(c.err(&k, format!("expected a time such as \"0.5 s\", found {o}"))),
+        };
+        let prev = out.last().copied().unwrap_or(0.0);
+        if !(v.is_finite() && v > prev && v <= span) {
+            let why = match (v.is_finite(), v <= span) {
+                (false, _) => "must be a finite time".to_string(),
+                (true, false) => format!("{v} s is after the end of the span ({span} s)"),
+                (true, true) if i == 0 => format!("{v} s must be after 0 (the run's start is always sampled)"),
+                _ => format!("{v} s is not after the previous time {prev} s"),
+            };
+            return Err(c
+                .err(&k, why)
+                .with_hint("sample times increase strictly within (0, time.span]"));
+        }
+        out.push(v);
+    }
+    Ok(out)
 }
 
 fn read_pid(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<Pid> {

@@ -20,16 +20,23 @@
 //!    side) by more than [`STEP_SIGMAS`]·√2·σ; consecutive rises of one sign form a
 //!    step, a pair of corners at its first and last sample joined by a straight line.
 //! 3. **Corners.** At each remaining sample c, a cubic plus a hinge (t − t_c)₊ is
-//!    fitted over up to [`WINDOW`] samples on each side (never across a corner found
-//!    already); the hinge coefficient's t-ratio against σ measures a slope jump that
-//!    no smooth signal explains. The largest ratio above [`CORNER_SIGMAS`] becomes a
-//!    corner, its time refined to the hinge position of least squares within a
-//!    sample interval either side, and the test is repeated on the split segments
+//!    fitted over up to w samples on each side, w in [`WINDOWS`] (never across a
+//!    corner found already); the hinge coefficient's t-ratio against σ measures a
+//!    slope jump that no smooth signal explains. A window whose residual sum of
+//!    squares exceeds its noise expectation (dof + 4·√(2·dof))·σ² holds more than a
+//!    cubic and a corner and is not used. The largest ratio above [`CORNER_SIGMAS`] becomes a
+//!    corner, its time refined to the hinge position of least squares within
+//!    [`REFINE_SAMPLES`] sample intervals, and the test is repeated on the split segments
 //!    until no ratio exceeds the threshold (greedy, so two close corners are found
 //!    as two).
+//!    A corner stays only where splitting its segment there lowers the BIC of
+//!    the pieces (step 4) on the two sides, by more than [`CORNER_SIGMAS`]² σ²
+//!    in RSS, against one piece over both (also with the two sides' knots): a smooth
+//!    peak that a hinge imitates over a long window is one spline with a few more
+//!    knots. The least useful corner is removed until every one pays.
 //! 4. **Pieces.** Between two corners, a cubic Hermite spline (C¹) with knots at
-//!    sample quantiles is fitted by least squares; its number of intervals K
-//!    minimises BIC with the known σ, RSS/σ² + 2(K + 1)·ln m (m samples). At a
+//!    sample quantiles is fitted by least squares; its number of intervals K (1, 2,
+//!    …, growing by an eighth) minimises BIC with the known σ, RSS/σ² + 2(K + 1)·ln m (m samples). At a
 //!    corner the two sides' values are averaged (the input is continuous; only its
 //!    slope jumps).
 //!
@@ -44,8 +51,10 @@ pub const CORNER_SIGMAS: f64 = 6.0;
 /// Threshold of a one-interval jump for a step, in standard deviations of a
 /// difference of two noisy samples.
 pub const STEP_SIGMAS: f64 = 8.0;
-/// Samples on each side of a candidate corner in its test window.
-pub const WINDOW: usize = 40;
+/// Samples on each side of a candidate corner in its test windows: a slope jump
+/// shows best over a long window, a smooth signal fits a cubic only over a short
+/// one; a window whose residual exceeds the noise is not used.
+pub const WINDOWS: [usize; 4] = [20, 40, 80, 160];
 /// Intervals on each side whose median slope is the local slope of the step test.
 pub const STEP_NEIGHBOURS: usize = 6;
 /// Fewest samples on each side of a candidate corner (the hinge needs both sides).
@@ -300,57 +309,98 @@ fn find_corners(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize, f64, boo
     // boundaries: sample index and corner time; a step's two corners are samples
     let mut bounds: Vec<(usize, f64)> = vec![(0, t[0]), (n - 1, t[n - 1])];
     let mut steps = Vec::new();
+    let mut step_ends = Vec::new();
     for (a, b) in find_steps(t, v, sigma) {
         bounds.push((a, t[a]));
         bounds.push((b + 1, t[b + 1]));
         steps.push(a);
+        step_ends.push(b + 1);
     }
     bounds.sort_by_key(|b| b.0);
     bounds.dedup_by_key(|b| b.0);
-    let ratio = |bounds: &[(usize, f64)], c: usize| -> f64 {
+    // the largest hinge t-ratio at c over the window scales, and its window
+    let ratio = |bounds: &[(usize, f64)], c: usize| -> (f64, usize, usize) {
+        let none = (0.0, 0, 0);
         let k = bounds.partition_point(|b| b.0 <= c);
-        if k == 0 || k >= bounds.len() || bounds[k - 1].0 == c {
-            return 0.0;
+        if k == 0 || k >= bounds.len() || bounds[k - 1].0 == c || steps.contains(&bounds[k - 1].0)
+        {
+            return none;
         }
         let (lo, hi) = (bounds[k - 1].0, bounds[k].0);
-        if steps.contains(&lo) {
-            return 0.0;
+        let mut best = none;
+        for w in WINDOWS {
+            let (a, b) = (lo.max(c.saturating_sub(w)), hi.min(c + w));
+            if c - a < MIN_SIDE || b - c < MIN_SIDE {
+                continue;
+            }
+            let (r, rss) = hinge_fit(t, v, a, b, t[c], t[c], sigma);
+            // a window whose residual exceeds the noise holds more than a cubic and
+            // a corner: its ratio means nothing
+            let dof = (b - a + 1 - 5) as f64;
+            if rss > sigma * sigma * (dof + 4.0 * (2.0 * dof).sqrt()) {
+                continue;
+            }
+            if r.abs() > best.0 {
+                best = (r.abs(), a, b);
+            }
         }
-        let lo = lo.max(c.saturating_sub(WINDOW));
-        let hi = hi.min(c + WINDOW);
-        if c - lo < MIN_SIDE || hi - c < MIN_SIDE {
-            return 0.0;
-        }
-        hinge_fit(t, v, lo, hi, t[c], t[c], sigma).0.abs()
+        best
     };
-    let mut r: Vec<f64> = (0..n).map(|c| ratio(&bounds, c)).collect();
+    let mut r: Vec<(f64, usize, usize)> = (0..n).map(|c| ratio(&bounds, c)).collect();
+    let reach = WINDOWS[WINDOWS.len() - 1];
     loop {
-        let (c, &best) = match r.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)) {
-            Some(x) => x,
-            None => break,
+        let Some((c, &(best, a, b))) = r.iter().enumerate().max_by(|x, y| x.1 .0.total_cmp(&y.1 .0))
+        else {
+            break;
         };
         if best <= CORNER_SIGMAS {
             break;
         }
-        let k = bounds.partition_point(|b| b.0 <= c);
-        let lo = bounds[k - 1].0.max(c.saturating_sub(WINDOW));
-        let hi = bounds[k].0.min(c + WINDOW);
-        let tc = refine(t, v, lo, hi, c, sigma);
+        let tc = refine(t, v, a, b, c, sigma);
+        let k = bounds.partition_point(|x| x.0 <= c);
         bounds.insert(k, (c, tc));
-        for j in c.saturating_sub(WINDOW)..=(c + WINDOW).min(n - 1) {
+        for j in c.saturating_sub(reach)..=(c + reach).min(n - 1) {
             r[j] = ratio(&bounds, j);
+        }
+    }
+    // a hinge corner stays only where splitting its segment lowers the BIC of the
+    // smooth fits: a smooth peak that a hinge imitates over a long window is one
+    // spline with a few more knots
+    let is_step = |b: usize| steps.contains(&b);
+    loop {
+        let mut worst: Option<(usize, f64)> = None;
+        for i in 1..bounds.len().saturating_sub(1) {
+            let (p, c, q) = (bounds[i - 1], bounds[i], bounds[i + 1]);
+            if is_step(c.0) || is_step(p.0) || step_ends.contains(&c.0) {
+                continue;
+            }
+            let m = (q.0 - p.0 + 1) as f64;
+            let gain = corner_gain(t, v, (p.1, c.1, q.1), sigma, m);
+            if worst.is_none_or(|w| gain < w.1) {
+                worst = Some((i, gain));
+            }
+        }
+        match worst {
+            Some((i, g)) if g < 0.0 => {
+                bounds.remove(i);
+            }
+            _ => break,
         }
     }
     bounds
         .windows(2)
-        .map(|w| (w[0].0, w[1].0, w[0].1, steps.contains(&w[0].0)))
+        .map(|w| (w[0].0, w[1].0, w[0].1, is_step(w[0].0)))
         .collect()
 }
 
-/// The hinge time of least squares within one sample interval either side of c.
+/// The hinge time of least squares within [`REFINE_SAMPLES`] sample intervals
+/// either side of c (inside the window `lo..=hi`).
 fn refine(t: &[f64], v: &[f64], lo: usize, hi: usize, c: usize, sigma: f64) -> f64 {
-    let (a, b) = (t[c - 1], t[c + 1]);
-    let steps = 40;
+    let (a, b) = (
+        t[c.saturating_sub(REFINE_SAMPLES).max(lo + 1)],
+        t[(c + REFINE_SAMPLES).min(hi - 1)],
+    );
+    let steps = 20 * REFINE_SAMPLES;
     (0..=steps)
         .map(|j| a + (b - a) * j as f64 / steps as f64)
         .map(|th| (th, hinge_fit(t, v, lo, hi, t[c], th, sigma).1))
@@ -358,6 +408,10 @@ fn refine(t: &[f64], v: &[f64], lo: usize, hi: usize, c: usize, sigma: f64) -> f
         .map(|x| x.0)
         .unwrap_or(t[c])
 }
+
+/// How far (in sample intervals) a corner's time is refined from the sample of the
+/// largest t-ratio.
+const REFINE_SAMPLES: usize = 4;
 
 /// Hermite pieces on each segment, joined at the corners (step 4).
 fn build(t: &[f64], v: &[f64], noise: f64, segs: &[(usize, usize, f64, bool)]) -> Measured {
@@ -424,19 +478,7 @@ fn fit_segment(t: &[f64], v: &[f64], s: &Segment, sigma: f64) -> (Vec<f64>, Vec<
         let sl = (y1 - y0) / (s.t1 - s.t0);
         return (vec![s.t0, s.t1], vec![[y0, sl, y1, sl]]);
     }
-    let mut best: Option<(f64, Vec<f64>, Vec<f64>)> = None;
-    let mut k = 1usize;
-    while k == 1 || 4 * k <= m {
-        let knots = quantile_knots(ts, s.t0, s.t1, k);
-        if let Some((u, rss)) = hermite_lsq(ts, vs, &knots) {
-            let score = rss / (sigma * sigma) + 2.0 * knots.len() as f64 * (m as f64).ln();
-            if best.as_ref().is_none_or(|b| score < b.0) {
-                best = Some((score, knots, u));
-            }
-        }
-        k = if k < 4 { k + 1 } else { k + k / 2 };
-    }
-    let Some((_, knots, u)) = best else {
+    let Some((_, knots, u)) = segment_fit(t, v, s.t0, s.t1, sigma, m as f64) else {
         let (y0, y1) = line_fit(ts, vs, s.t0, s.t1);
         let sl = (y1 - y0) / (s.t1 - s.t0);
         return (vec![s.t0, s.t1], vec![[y0, sl, y1, sl]]);
@@ -445,6 +487,65 @@ fn fit_segment(t: &[f64], v: &[f64], s: &Segment, sigma: f64) -> (Vec<f64>, Vec<
         .map(|j| [u[2 * j], u[2 * j + 1], u[2 * j + 2], u[2 * j + 3]])
         .collect();
     (knots, pieces)
+}
+
+/// What a corner at c saves in BIC on [a, b] (`m` samples): the best spline over
+/// both sides, or the two sides' knots as one C¹ spline (the split without its
+/// slope jump, so the comparison is nested), against the two sides' splines: the
+/// RSS the split saves must exceed [`CORNER_SIGMAS`]² σ² (as a hinge's t-ratio).
+fn corner_gain(t: &[f64], v: &[f64], (a, c, b): (f64, f64, f64), sigma: f64, m: f64) -> f64 {
+    let (Some(l), Some(r)) = (
+        segment_fit(t, v, a, c, sigma, m),
+        segment_fit(t, v, c, b, sigma, m),
+    ) else {
+        return f64::INFINITY;
+    };
+    let lo = t.partition_point(|&x| x < a);
+    let hi = t.partition_point(|&x| x <= b);
+    let mut knots = l.1.clone();
+    knots.extend_from_slice(&r.1[1..]);
+    let joined = hermite_lsq(&t[lo..hi], &v[lo..hi], &knots)
+        .map_or(f64::INFINITY, |(_, rss)| {
+            rss / (sigma * sigma) + 2.0 * knots.len() as f64 * m.ln()
+        });
+    let merged = segment_fit(t, v, a, b, sigma, m).map_or(f64::INFINITY, |f| f.0);
+    // the split has two unknowns more than the joined spline (a second value and
+    // slope at c): refund their BIC and ask, as of a hinge, a 6σ saving instead
+    merged.min(joined) - l.0 - r.0 + 2.0 * m.ln() - CORNER_SIGMAS * CORNER_SIGMAS
+}
+
+/// The spline of least BIC on the samples in [t0, t1]: (score, knots, unknowns),
+/// score = RSS/σ² + p·ln `m` with p = 2(K + 1) unknowns for K intervals (BIC with
+/// a known σ; `m` is the sample count the penalty is counted on). `None` with
+/// fewer than 4 samples.
+fn segment_fit(
+    t: &[f64],
+    v: &[f64],
+    t0: f64,
+    t1: f64,
+    sigma: f64,
+    m: f64,
+) -> Option<(f64, Vec<f64>, Vec<f64>)> {
+    let lo = t.partition_point(|&x| x < t0);
+    let hi = t.partition_point(|&x| x <= t1);
+    let (ts, vs) = (&t[lo..hi], &v[lo..hi]);
+    let n = ts.len();
+    if n < 4 {
+        return None;
+    }
+    let mut best: Option<(f64, Vec<f64>, Vec<f64>)> = None;
+    let mut k = 1usize;
+    while k == 1 || 4 * k <= n {
+        let knots = quantile_knots(ts, t0, t1, k);
+        if let Some((u, rss)) = hermite_lsq(ts, vs, &knots) {
+            let score = rss / (sigma * sigma) + 2.0 * knots.len() as f64 * m.ln();
+            if best.as_ref().is_none_or(|b| score < b.0) {
+                best = Some((score, knots, u));
+            }
+        }
+        k += 1 + k / 8;
+    }
+    best
 }
 
 /// Values at t0 and t1 of the least-squares line through the samples (the mean

@@ -437,3 +437,127 @@ mod tests {
         assert!(measure(&bad, || Ok(())).is_err());
     }
 }
+
+/// One measured case of `dea-fit bench identify`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct IdentifyRow {
+    /// Simulator relative tolerance.
+    pub rtol: f64,
+    /// Multi-start points.
+    pub starts: usize,
+    /// Wall time of the whole identification (s), fastest of the repeats.
+    pub seconds: f64,
+    /// Of which per start (s): `seconds / starts`.
+    pub per_start_s: f64,
+    /// Largest |θ − truth|/|truth| over the identifiable constants.
+    pub max_rel_error: f64,
+    /// Largest |θ − truth|/σ over the identifiable constants.
+    pub max_z: f64,
+    /// Constants identified / free.
+    pub identified: usize,
+    /// Free constants.
+    pub free: usize,
+    /// Starts at the best cost.
+    pub starts_at_best: usize,
+    /// LM iterations (all starts and polish).
+    pub iterations: usize,
+    /// Simulator runs (all).
+    pub simulator_runs: usize,
+    /// Status.
+    pub status: Status,
+}
+
+/// The identification benchmark's problem: `scene` simulated at its constants with
+/// 1 % (of the peak) contraction and 0.1 % capacitance noise (seed 10), and the
+/// scene the search starts from, every free constant 20 % above its truth.
+pub fn identify_case(
+    scene: &crate::sim::scene::Scene,
+) -> Result<(crate::identify::problem::Experiment, Vec<f64>)> {
+    use crate::identify::params;
+    use crate::identify::problem::{simulated, ChannelKind, Experiment};
+    let o = crate::sim::simulate(scene, &crate::sim::RunOptions::default())?;
+    let s0 = o.samples[0];
+    let peak = |k: ChannelKind| {
+        o.samples
+            .iter()
+            .map(|s| simulated(k, &s0, s).abs())
+            .fold(0.0, f64::max)
+    };
+    let mut exp = Experiment::synthetic(
+        scene,
+        &[
+            (
+                ChannelKind::Contraction,
+                0.01 * peak(ChannelKind::Contraction),
+            ),
+            (
+                ChannelKind::Capacitance,
+                0.001 * peak(ChannelKind::Capacitance),
+            ),
+        ],
+        10,
+    )?;
+    let truth = params::theta(scene);
+    let start: Vec<f64> = truth.iter().map(|v| 1.2 * v).collect();
+    params::set_theta(&mut exp.scene, &start);
+    Ok((exp, truth))
+}
+
+/// Identify every constant of `scene` (from [`identify_case`]) at each rtol and
+/// start count, fastest of `repeats` runs each.
+pub fn identify_rows(
+    scene: &crate::sim::scene::Scene,
+    rtols: &[f64],
+    starts: &[usize],
+    repeats: usize,
+    progress: &mut dyn FnMut(&IdentifyRow),
+) -> Result<Vec<IdentifyRow>> {
+    use crate::identify::{identify, params, Settings};
+    let (exp, truth) = identify_case(scene)?;
+    let all = params::constants(scene);
+    let mut rows = Vec::new();
+    for &rtol in rtols {
+        for &n in starts {
+            let settings = Settings {
+                starts: n,
+                rtol: Some(rtol),
+                ..Settings::default()
+            };
+            let mut best = f64::INFINITY;
+            let mut last = None;
+            for _ in 0..repeats.max(1) {
+                let t = Instant::now();
+                let id = identify(vec![exp.clone()], &settings)?;
+                best = best.min(t.elapsed().as_secs_f64());
+                last = Some(id);
+            }
+            let id = last.expect("repeats ≥ 1");
+            let (mut err, mut z) = (0.0f64, 0.0f64);
+            for p in id.parameters.iter().filter(|p| p.identifiable) {
+                let c = all.iter().find(|c| c.name == p.name).expect("a constant");
+                let t = truth[c.index];
+                err = err.max(((p.value - t) / t).abs());
+                if let Some(s) = p.std_error {
+                    z = z.max(((p.value - t) / s).abs());
+                }
+            }
+            let row = IdentifyRow {
+                rtol,
+                starts: n,
+                seconds: best,
+                per_start_s: best / n as f64,
+                max_rel_error: err,
+                max_z: z,
+                identified: id.parameters.iter().filter(|p| p.identifiable).count(),
+                free: id.parameters.len(),
+                starts_at_best: id.solver.starts_at_best,
+                iterations: id.solver.iterations,
+                simulator_runs: id.solver.simulator_runs,
+                status: id.status,
+            };
+            progress(&row);
+            rows.push(row);
+        }
+    }
+    Ok(rows)
+}

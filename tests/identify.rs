@@ -3,13 +3,10 @@
 //! trace cannot pin down.
 
 use dea_fit::identify::params::{set_theta, theta};
-use dea_fit::identify::problem::{simulated, Channel, ChannelKind, Experiment};
+use dea_fit::identify::problem::{simulated, ChannelKind, Experiment};
 use dea_fit::identify::{identify, Settings};
 use dea_fit::sim::scene::Scene;
 use dea_fit::sim::{simulate, RunOptions};
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
 use std::path::Path;
 
 /// The damped shipped stack (Yeoh, seed Table 4.2 arms, nv) driven by a 5 kV step
@@ -27,29 +24,7 @@ fn stack(span: &str, samples: usize) -> Scene {
 
 /// A trace of `scene` with Gaussian noise: (quantity, σ) per channel, seeded.
 fn trace(scene: &Scene, channels: &[(ChannelKind, f64)], seed: u64) -> Experiment {
-    let o = simulate(scene, &RunOptions::default()).expect("runs");
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let s0 = o.samples[0];
-    let channels = channels
-        .iter()
-        .map(|&(q, sigma)| {
-            let n = Normal::new(0.0, sigma).expect("σ > 0");
-            Channel {
-                kind: q,
-                values: o
-                    .samples
-                    .iter()
-                    .map(|s| simulated(q, &s0, s) + n.sample(&mut rng))
-                    .collect(),
-                sigma: f64::NAN,
-            }
-        })
-        .collect();
-    Experiment {
-        name: format!("synthetic-{seed}"),
-        scene: scene.clone(),
-        channels,
-    }
+    Experiment::synthetic(scene, channels, seed).expect("the scene runs")
 }
 
 /// Peak contraction of a scene (m), for noise levels relative to the signal.

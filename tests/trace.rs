@@ -12,11 +12,16 @@ use std::f64::consts::PI;
 fn record(times: &[f64], truth: &dyn Fn(f64) -> f64, sigma: f64, seed: u64) -> Vec<f64> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let n = Normal::new(0.0, sigma).expect("valid σ");
-    times.iter().map(|&t| truth(t) + n.sample(&mut rng)).collect()
+    times
+        .iter()
+        .map(|&t| truth(t) + n.sample(&mut rng))
+        .collect()
 }
 
 fn regular(span: f64, dt: f64) -> Vec<f64> {
-    (0..=(span / dt).round() as usize).map(|i| i as f64 * dt).collect()
+    (0..=(span / dt).round() as usize)
+        .map(|i| i as f64 * dt)
+        .collect()
 }
 
 /// Bursts: 100 samples at dt/2, then 50 at 2·dt, with ±20 % jitter (seeded).
@@ -71,9 +76,21 @@ const KINK_INTERVALS: f64 = 5.0;
 /// The cases: name, truth, true interior corners (a step's pair: its time twice).
 fn cases() -> Vec<(&'static str, Box<dyn Fn(f64) -> f64>, Vec<Corner>)> {
     vec![
-        ("step", Box::new(|t| if t >= 0.5004 { A } else { 0.0 }), vec![S(0.5004), S(0.5004)]),
-        ("ramp-hold", Box::new(|t| ramp(t, 0.5, 1.0, A)), vec![K(0.5), K(1.0)]),
-        ("triangle", Box::new(triangle), [0.5, 1.0, 1.5, 2.0, 2.5].map(K).to_vec()),
+        (
+            "step",
+            Box::new(|t| if t >= 0.5004 { A } else { 0.0 }),
+            vec![S(0.5004), S(0.5004)],
+        ),
+        (
+            "ramp-hold",
+            Box::new(|t| ramp(t, 0.5, 1.0, A)),
+            vec![K(0.5), K(1.0)],
+        ),
+        (
+            "triangle",
+            Box::new(triangle),
+            [0.5, 1.0, 1.5, 2.0, 2.5].map(K).to_vec(),
+        ),
         (
             "sine",
             Box::new(|t| 0.5 * A * (1.0 - (2.0 * PI * t).cos())),
@@ -107,7 +124,11 @@ fn check_case(
         let i = times.partition_point(|&t| t < tc).clamp(1, times.len() - 1);
         (times[i] - times[i - 1]).max(times[(i + 1).min(times.len() - 1)] - times[i])
     };
-    assert_eq!(inner.len(), corners.len(), "{name} (seed {seed}): corners {inner:?}, expected {corners:?}");
+    assert_eq!(
+        inner.len(),
+        corners.len(),
+        "{name} (seed {seed}): corners {inner:?}, expected {corners:?}"
+    );
     for (f, c) in inner.iter().zip(corners) {
         let (c, tol) = match *c {
             S(c) => (c, 1.0),
@@ -128,7 +149,10 @@ fn check_case(
         }
         worst = worst.max((m.eval(t).0 - truth(t)).abs());
     }
-    assert!(worst <= 2.0 * SIGMA, "{name} (seed {seed}): reconstruction off by {worst} V");
+    assert!(
+        worst <= 2.0 * SIGMA,
+        "{name} (seed {seed}): reconstruction off by {worst} V"
+    );
 }
 
 #[test]
@@ -158,8 +182,14 @@ fn measured_invents_no_corners_in_noise() {
     for seed in 10..40 {
         for (name, f) in [
             ("hold", Box::new(|_| 0.5 * A) as Box<dyn Fn(f64) -> f64>),
-            ("sine 0.5 Hz", Box::new(|t| 0.5 * A * (1.0 - (PI * t).cos()))),
-            ("sine 2 Hz", Box::new(|t| 0.5 * A + 0.4 * A * (4.0 * PI * t).sin())),
+            (
+                "sine 0.5 Hz",
+                Box::new(|t| 0.5 * A * (1.0 - (PI * t).cos())),
+            ),
+            (
+                "sine 2 Hz",
+                Box::new(|t| 0.5 * A + 0.4 * A * (4.0 * PI * t).sin()),
+            ),
         ] {
             let v = record(&times, f.as_ref(), SIGMA, seed);
             let m = Measured::fit(&times, &v).expect("valid");

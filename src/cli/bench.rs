@@ -31,6 +31,16 @@ enum What {
     /// The simulator: error against run time over tolerances, integrators and
     /// fidelity levels for the seed's scenes.
     Simulate(SimArgs),
+    /// Identification from a rig-log-sized trace: parameter error against time over
+    /// simulator tolerances and start counts.
+    Identify(IdentifyArgs),
+}
+
+#[derive(Debug, clap::Args)]
+struct IdentifyArgs {
+    /// The scene whose simulated trace is identified.
+    #[arg(long, default_value = "datasets/scenes/stack_rig_7s.toml")]
+    scene: PathBuf,
 }
 
 #[derive(Debug, clap::Args)]
@@ -81,6 +91,7 @@ pub fn run(a: Args) -> Result<i32> {
         What::Hyperelastic(h) => hyperelastic(h)?,
         What::Relaxation => super::bench_relaxation::run()?,
         What::Simulate(s) => super::bench_simulate::run(&s.scenes)?,
+        What::Identify(i) => super::bench_identify::run(&i.scene)?,
     };
     Ok(verdict.report(a.strict))
 }
@@ -125,7 +136,7 @@ impl Verdict {
     }
 }
 
-fn progress_bar(len: usize) -> ProgressBar {
+pub fn progress_bar(len: usize) -> ProgressBar {
     let bar = ProgressBar::new(len as u64);
     if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} {elapsed} {msg}") {
         bar.set_style(style);

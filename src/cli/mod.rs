@@ -1,6 +1,7 @@
 //! Subcommands, one file each.
 
 mod bench;
+mod bench_identify;
 mod bench_relaxation;
 mod bench_simulate;
 mod composite;

@@ -322,8 +322,7 @@ fn find_corners(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize, f64, boo
     let ratio = |bounds: &[(usize, f64)], c: usize| -> (f64, usize, usize) {
         let none = (0.0, 0, 0);
         let k = bounds.partition_point(|b| b.0 <= c);
-        if k == 0 || k >= bounds.len() || bounds[k - 1].0 == c || steps.contains(&bounds[k - 1].0)
-        {
+        if k == 0 || k >= bounds.len() || bounds[k - 1].0 == c || steps.contains(&bounds[k - 1].0) {
             return none;
         }
         let (lo, hi) = (bounds[k - 1].0, bounds[k].0);
@@ -349,7 +348,10 @@ fn find_corners(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize, f64, boo
     let mut r: Vec<(f64, usize, usize)> = (0..n).map(|c| ratio(&bounds, c)).collect();
     let reach = WINDOWS[WINDOWS.len() - 1];
     loop {
-        let Some((c, &(best, a, b))) = r.iter().enumerate().max_by(|x, y| x.1 .0.total_cmp(&y.1 .0))
+        let Some((c, &(best, a, b))) = r
+            .iter()
+            .enumerate()
+            .max_by(|x, y| x.1 .0.total_cmp(&y.1 .0))
         else {
             break;
         };
@@ -504,10 +506,9 @@ fn corner_gain(t: &[f64], v: &[f64], (a, c, b): (f64, f64, f64), sigma: f64, m: 
     let hi = t.partition_point(|&x| x <= b);
     let mut knots = l.1.clone();
     knots.extend_from_slice(&r.1[1..]);
-    let joined = hermite_lsq(&t[lo..hi], &v[lo..hi], &knots)
-        .map_or(f64::INFINITY, |(_, rss)| {
-            rss / (sigma * sigma) + 2.0 * knots.len() as f64 * m.ln()
-        });
+    let joined = hermite_lsq(&t[lo..hi], &v[lo..hi], &knots).map_or(f64::INFINITY, |(_, rss)| {
+        rss / (sigma * sigma) + 2.0 * knots.len() as f64 * m.ln()
+    });
     let merged = segment_fit(t, v, a, b, sigma, m).map_or(f64::INFINITY, |f| f.0);
     // the split has two unknowns more than the joined spline (a second value and
     // slope at c): refund their BIC and ask, as of a hinge, a 6σ saving instead

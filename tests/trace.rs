@@ -12,11 +12,16 @@ use std::f64::consts::PI;
 fn record(times: &[f64], truth: &dyn Fn(f64) -> f64, sigma: f64, seed: u64) -> Vec<f64> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let n = Normal::new(0.0, sigma).expect("valid σ");
-    times.iter().map(|&t| truth(t) + n.sample(&mut rng)).collect()
+    times
+        .iter()
+        .map(|&t| truth(t) + n.sample(&mut rng))
+        .collect()
 }
 
 fn regular(span: f64, dt: f64) -> Vec<f64> {
-    (0..=(span / dt).round() as usize).map(|i| i as f64 * dt).collect()
+    (0..=(span / dt).round() as usize)
+        .map(|i| i as f64 * dt)
+        .collect()
 }
 
 /// Bursts: 100 samples at dt/2, then 50 at 2·dt, with ±20 % jitter (seeded).
@@ -71,9 +76,21 @@ const KINK_INTERVALS: f64 = 5.0;
 /// The cases: name, truth, true interior corners (a step's pair: its time twice).
 fn cases() -> Vec<(&'static str, Box<dyn Fn(f64) -> f64>, Vec<Corner>)> {
     vec![
-        ("step", Box::new(|t| if t >= 0.5004 { A } else { 0.0 }), vec![S(0.5004), S(0.5004)]),
-        ("ramp-hold", Box::new(|t| ramp(t, 0.5, 1.0, A)), vec![K(0.5), K(1.0)]),
-        ("triangle", Box::new(triangle), [0.5, 1.0, 1.5, 2.0, 2.5].map(K).to_vec()),
+        (
+            "step",
+            Box::new(|t| if t >= 0.5004 { A } else { 0.0 }),
+            vec![S(0.5004), S(0.5004)],
+        ),
+        (
+            "ramp-hold",
+            Box::new(|t| ramp(t, 0.5, 1.0, A)),
+            vec![K(0.5), K(1.0)],
+        ),
+        (
+            "triangle",
+            Box::new(triangle),
+            [0.5, 1.0, 1.5, 2.0, 2.5].map(K).to_vec(),
+        ),
         (
             "sine",
             Box::new(|t| 0.5 * A * (1.0 - (2.0 * PI * t).cos())),
@@ -107,7 +124,11 @@ fn check_case(
         let i = times.partition_point(|&t| t < tc).clamp(1, times.len() - 1);
         (times[i] - times[i - 1]).max(times[(i + 1).min(times.len() - 1)] - times[i])
     };
-    assert_eq!(inner.len(), corners.len(), "{name} (seed {seed}): corners {inner:?}, expected {corners:?}");
+    assert_eq!(
+        inner.len(),
+        corners.len(),
+        "{name} (seed {seed}): corners {inner:?}, expected {corners:?}"
+    );
     for (f, c) in inner.iter().zip(corners) {
         let (c, tol) = match *c {
             S(c) => (c, 1.0),
@@ -128,7 +149,10 @@ fn check_case(
         }
         worst = worst.max((m.eval(t).0 - truth(t)).abs());
     }
-    assert!(worst <= 2.0 * SIGMA, "{name} (seed {seed}): reconstruction off by {worst} V");
+    assert!(
+        worst <= 2.0 * SIGMA,
+        "{name} (seed {seed}): reconstruction off by {worst} V"
+    );
 }
 
 #[test]
@@ -158,13 +182,123 @@ fn measured_invents_no_corners_in_noise() {
     for seed in 10..40 {
         for (name, f) in [
             ("hold", Box::new(|_| 0.5 * A) as Box<dyn Fn(f64) -> f64>),
-            ("sine 0.5 Hz", Box::new(|t| 0.5 * A * (1.0 - (PI * t).cos()))),
-            ("sine 2 Hz", Box::new(|t| 0.5 * A + 0.4 * A * (4.0 * PI * t).sin())),
+            (
+                "sine 0.5 Hz",
+                Box::new(|t| 0.5 * A * (1.0 - (PI * t).cos())),
+            ),
+            (
+                "sine 2 Hz",
+                Box::new(|t| 0.5 * A + 0.4 * A * (4.0 * PI * t).sin()),
+            ),
         ] {
             let v = record(&times, f.as_ref(), SIGMA, seed);
             let m = Measured::fit(&times, &v).expect("valid");
             let c = m.corners();
             assert_eq!(c.len(), 2, "{name} (seed {seed}): invented corners {c:?}");
+        }
+    }
+}
+
+/// Every shipped trace is what its README command writes, bit for bit.
+#[test]
+fn identify_datasets_regenerate() {
+    let readme =
+        std::fs::read_to_string(crate::support::repo().join("datasets/identify/README.md"))
+            .expect("README");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut n = 0;
+    for line in readme
+        .lines()
+        .filter(|l| l.starts_with("dea-fit synth trace "))
+    {
+        let args: Vec<&str> = line.split_whitespace().skip(1).collect();
+        let k = args.iter().position(|a| *a == "--out").expect("--out");
+        let shipped = crate::support::repo().join(args[k + 1]);
+        let out = dir.path().join(format!("{n}.csv"));
+        let mut run: Vec<&str> = args.clone();
+        let o = out.display().to_string();
+        run[k + 1] = &o;
+        let r = crate::support::run(&crate::support::repo(), &run);
+        assert!(
+            r.status.success(),
+            "{line}: {}",
+            String::from_utf8_lossy(&r.stderr)
+        );
+        let (a, b) = (
+            std::fs::read(&out).unwrap(),
+            std::fs::read(&shipped).unwrap(),
+        );
+        assert!(
+            a == b,
+            "{} differs from what `{line}` writes",
+            shipped.display()
+        );
+        assert!(b.len() < 200_000, "{} is over 200 kB", shipped.display());
+        n += 1;
+    }
+    assert_eq!(n, 4, "four traces in the README");
+}
+
+/// synth trace → io::trace::read → Trace::scene → simulate reproduces the noiseless
+/// channels. The reconstruction ramps a step over the sample interval (2 ms) in
+/// which the scene jumps: during the fast transient right after it the two runs are
+/// up to a millisecond apart (the largest difference, ~10 % of the range, is there),
+/// elsewhere they agree; the RMS over the trace within 0.5 % of the range bounds it.
+#[test]
+fn synth_trace_round_trip() {
+    use dea_fit::io::trace::{self, ChannelKind};
+    use dea_fit::sim::{self, scene::Scene};
+    let dir = tempfile::tempdir().expect("temp dir");
+    for scene_file in [
+        "datasets/identify/stack.toml",
+        "datasets/identify/validate.toml",
+    ] {
+        let out = dir.path().join("t.csv");
+        let o = out.display().to_string();
+        let r = crate::support::run(
+            &crate::support::repo(),
+            &[
+                "synth",
+                "trace",
+                scene_file,
+                "--channels",
+                "contraction,capacitance,current",
+                "--out",
+                &o,
+            ],
+        );
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        let t = trace::read(&out).expect("a synth trace reads");
+        let base = Scene::read(&crate::support::repo().join(scene_file)).expect("scene");
+        let scene = t.scene(&base).expect("trace scene");
+        let run = sim::simulate(&scene, &sim::RunOptions::default()).expect("runs");
+        assert_eq!(run.samples.len(), t.time_s.len());
+        for kind in [ChannelKind::Contraction, ChannelKind::Capacitance] {
+            let ch = t.channel(kind).expect("written");
+            let (lo, hi) = ch
+                .values
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                    (a.min(v), b.max(v))
+                });
+            let d: Vec<f64> = run
+                .samples
+                .iter()
+                .zip(&ch.values)
+                .map(|(s, &v)| kind.simulated(s, run.rest_length_m).unwrap() - v)
+                .collect();
+            let rms = (d.iter().map(|x| x * x).sum::<f64>() / d.len() as f64).sqrt();
+            let worst = d.iter().fold(0.0, |a: f64, x| a.max(x.abs()));
+            eprintln!(
+                "{scene_file} {kind}: rms {:.2e} worst {:.2e} of range",
+                rms / (hi - lo),
+                worst / (hi - lo)
+            );
+            assert!(
+                rms <= 5e-3 * (hi - lo),
+                "{scene_file} {kind}: rms {rms:e} of range {:e}",
+                hi - lo
+            );
         }
     }
 }

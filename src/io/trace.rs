@@ -230,7 +230,10 @@ fn header_unit(table: &Table, c: usize, unit: Option<&str>, dim: Dimension) -> R
     };
     dim.factor(u).ok_or_else(|| {
         let hint = match dim.suggest(u) {
-            Some(s) => format!("units are case-sensitive: did you mean '{s}'? expected one of {}", dim.accepted()),
+            Some(s) => format!(
+                "units are case-sensitive: did you mean '{s}'? expected one of {}",
+                dim.accepted()
+            ),
             None => format!("expected one of {}", dim.accepted()),
         };
         Error::input(loc, format!("unknown unit '{u}' in column '{h}'")).with_hint(hint)
@@ -294,8 +297,9 @@ pub fn from_table(table: &Table) -> Result<Trace> {
             .with_hint(format!("name one column time_s or time_ms, e.g. {EXAMPLE}")));
     };
     let Some((vc, vf)) = voltage else {
-        return Err(Error::input(hline, "no voltage column")
-            .with_hint("name the measured drive voltage_V or voltage_kV: it becomes the scene's input"));
+        return Err(Error::input(hline, "no voltage column").with_hint(
+            "name the measured drive voltage_V or voltage_kV: it becomes the scene's input",
+        ));
     };
     if chans.is_empty() {
         return Err(Error::input(hline, "no measured channel besides the voltage")
@@ -359,7 +363,9 @@ pub fn from_table(table: &Table) -> Result<Trace> {
     }
     budget::SPAN
         .check("time span", t[t.len() - 1] - t[0])
-        .map_err(|e| Error::input(Location::at(path, line[line.len() - 1], tc + 1), e.msg).with_hint(e.hint))?;
+        .map_err(|e| {
+            Error::input(Location::at(path, line[line.len() - 1], tc + 1), e.msg).with_hint(e.hint)
+        })?;
     for (k, &(c, _, _)) in chans.iter().enumerate() {
         if values[k].iter().all(|x| x.is_nan()) {
             return Err(Error::input(
@@ -416,7 +422,10 @@ impl Trace {
         let t0 = self.time_s[0];
         let t: Vec<f64> = self.time_s.iter().map(|t| t - t0).collect();
         Measured::fit(&t, &self.voltage_v).map_err(|e| {
-            Error::input(Location::file(&self.provenance.path), format!("the voltage: {e}"))
+            Error::input(
+                Location::file(&self.provenance.path),
+                format!("the voltage: {e}"),
+            )
         })
     }
 

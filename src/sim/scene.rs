@@ -915,7 +915,9 @@ fn read_sample_times(c: &Ctx, list: &toml::Value, span: f64) -> Result<Vec<f64>>
             let why = match (v.is_finite(), v <= span) {
                 (false, _) => "must be a finite time".to_string(),
                 (true, false) => format!("{v} s is after the end of the span ({span} s)"),
-                (true, true) if i == 0 => format!("{v} s must be after 0 (the run's start is always sampled)"),
+                (true, true) if i == 0 => {
+                    format!("{v} s must be after 0 (the run's start is always sampled)")
+                }
                 _ => format!("{v} s is not after the previous time {prev} s"),
             };
             return Err(c

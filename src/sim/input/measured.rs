@@ -214,7 +214,11 @@ fn find_steps(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize)> {
         let lo = i.saturating_sub(STEP_NEIGHBOURS);
         let hi = (i + STEP_NEIGHBOURS).min(n - 2);
         buf.extend((lo..=hi).filter(|&j| j != i).map(slope));
-        let local = if buf.is_empty() { 0.0 } else { median(&mut buf) };
+        let local = if buf.is_empty() {
+            0.0
+        } else {
+            median(&mut buf)
+        };
         let e = (v[i + 1] - v[i]) - local * (t[i + 1] - t[i]);
         if e.abs() <= STEP_SIGMAS * std::f64::consts::SQRT_2 * sigma {
             continue;
@@ -232,7 +236,15 @@ fn find_steps(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize)> {
 
 /// Least squares on a cubic plus a hinge at x_h over samples `lo..=hi` (x scaled
 /// about t_c): the hinge coefficient's t-ratio against `sigma` and the RSS.
-fn hinge_fit(t: &[f64], v: &[f64], lo: usize, hi: usize, tc: f64, th: f64, sigma: f64) -> (f64, f64) {
+fn hinge_fit(
+    t: &[f64],
+    v: &[f64],
+    lo: usize,
+    hi: usize,
+    tc: f64,
+    th: f64,
+    sigma: f64,
+) -> (f64, f64) {
     let h = (t[hi] - tc).abs().max((tc - t[lo]).abs());
     let xh = (th - tc) / h;
     let mut a = [[0.0; 5]; 5];
@@ -310,8 +322,7 @@ fn find_corners(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize, f64, boo
     let ratio = |bounds: &[(usize, f64)], c: usize| -> (f64, usize, usize) {
         let none = (0.0, 0, 0);
         let k = bounds.partition_point(|b| b.0 <= c);
-        if k == 0 || k >= bounds.len() || bounds[k - 1].0 == c || steps.contains(&bounds[k - 1].0)
-        {
+        if k == 0 || k >= bounds.len() || bounds[k - 1].0 == c || steps.contains(&bounds[k - 1].0) {
             return none;
         }
         let (lo, hi) = (bounds[k - 1].0, bounds[k].0);
@@ -337,7 +348,10 @@ fn find_corners(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize, f64, boo
     let mut r: Vec<(f64, usize, usize)> = (0..n).map(|c| ratio(&bounds, c)).collect();
     let reach = WINDOWS[WINDOWS.len() - 1];
     loop {
-        let Some((c, &(best, a, b))) = r.iter().enumerate().max_by(|x, y| x.1 .0.total_cmp(&y.1 .0))
+        let Some((c, &(best, a, b))) = r
+            .iter()
+            .enumerate()
+            .max_by(|x, y| x.1 .0.total_cmp(&y.1 .0))
         else {
             break;
         };
@@ -425,7 +439,11 @@ fn build(t: &[f64], v: &[f64], noise: f64, segs: &[(usize, usize, f64, bool)]) -
     for k in 0..segs.len() {
         let (a, b) = (first[k], first[k + 1] - 1);
         if segs[k].3 {
-            let y0 = if k > 0 { pieces[a - 1][2] } else { pieces[a][0] };
+            let y0 = if k > 0 {
+                pieces[a - 1][2]
+            } else {
+                pieces[a][0]
+            };
             let y1 = if k + 1 < segs.len() && !segs[k + 1].3 {
                 pieces[b + 1][0]
             } else {
@@ -488,10 +506,9 @@ fn corner_gain(t: &[f64], v: &[f64], (a, c, b): (f64, f64, f64), sigma: f64, m: 
     let hi = t.partition_point(|&x| x <= b);
     let mut knots = l.1.clone();
     knots.extend_from_slice(&r.1[1..]);
-    let joined = hermite_lsq(&t[lo..hi], &v[lo..hi], &knots)
-        .map_or(f64::INFINITY, |(_, rss)| {
-            rss / (sigma * sigma) + 2.0 * knots.len() as f64 * m.ln()
-        });
+    let joined = hermite_lsq(&t[lo..hi], &v[lo..hi], &knots).map_or(f64::INFINITY, |(_, rss)| {
+        rss / (sigma * sigma) + 2.0 * knots.len() as f64 * m.ln()
+    });
     let merged = segment_fit(t, v, a, b, sigma, m).map_or(f64::INFINITY, |f| f.0);
     // the split has two unknowns more than the joined spline (a second value and
     // slope at c): refund their BIC and ask, as of a hinge, a 6σ saving instead

@@ -73,8 +73,11 @@ use Corner::{K, S};
 /// (the largest error seen over these seeds is 4.5).
 const KINK_INTERVALS: f64 = 5.0;
 
+/// A true signal.
+type Signal = Box<dyn Fn(f64) -> f64>;
+
 /// The cases: name, truth, true interior corners (a step's pair: its time twice).
-fn cases() -> Vec<(&'static str, Box<dyn Fn(f64) -> f64>, Vec<Corner>)> {
+fn cases() -> Vec<(&'static str, Signal, Vec<Corner>)> {
     vec![
         (
             "step",

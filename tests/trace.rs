@@ -73,8 +73,11 @@ use Corner::{K, S};
 /// (the largest error seen over these seeds is 4.5).
 const KINK_INTERVALS: f64 = 5.0;
 
+/// A true signal.
+type Signal = Box<dyn Fn(f64) -> f64>;
+
 /// The cases: name, truth, true interior corners (a step's pair: its time twice).
-fn cases() -> Vec<(&'static str, Box<dyn Fn(f64) -> f64>, Vec<Corner>)> {
+fn cases() -> Vec<(&'static str, Signal, Vec<Corner>)> {
     vec![
         (
             "step",
@@ -197,4 +200,263 @@ fn measured_invents_no_corners_in_noise() {
             assert_eq!(c.len(), 2, "{name} (seed {seed}): invented corners {c:?}");
         }
     }
+}
+
+/// Every shipped trace is what its README command writes, bit for bit.
+#[test]
+fn identify_datasets_regenerate() {
+    let readme =
+        std::fs::read_to_string(crate::support::repo().join("datasets/identify/README.md"))
+            .expect("README");
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut n = 0;
+    for line in readme
+        .lines()
+        .filter(|l| l.starts_with("dea-fit synth trace "))
+    {
+        let args: Vec<&str> = line.split_whitespace().skip(1).collect();
+        let k = args.iter().position(|a| *a == "--out").expect("--out");
+        let shipped = crate::support::repo().join(args[k + 1]);
+        let out = dir.path().join(format!("{n}.csv"));
+        let mut run: Vec<&str> = args.clone();
+        let o = out.display().to_string();
+        run[k + 1] = &o;
+        let r = crate::support::run(&crate::support::repo(), &run);
+        assert!(
+            r.status.success(),
+            "{line}: {}",
+            String::from_utf8_lossy(&r.stderr)
+        );
+        let (a, b) = (
+            std::fs::read(&out).unwrap(),
+            std::fs::read(&shipped).unwrap(),
+        );
+        assert!(
+            a == b,
+            "{} differs from what `{line}` writes",
+            shipped.display()
+        );
+        assert!(b.len() < 200_000, "{} is over 200 kB", shipped.display());
+        n += 1;
+    }
+    assert_eq!(n, 4, "four traces in the README");
+}
+
+/// synth trace → io::trace::read → Trace::scene → simulate reproduces the noiseless
+/// channels. The reconstruction ramps a step over the sample interval (2 ms) in
+/// which the scene jumps: during the fast transient right after it the two runs are
+/// up to a millisecond apart (the largest difference, ~10 % of the range, is there),
+/// elsewhere they agree; the RMS over the trace within 0.5 % of the range bounds it.
+#[test]
+fn synth_trace_round_trip() {
+    use dea_fit::io::trace::{self, ChannelKind};
+    use dea_fit::sim::{self, scene::Scene};
+    let dir = tempfile::tempdir().expect("temp dir");
+    for scene_file in [
+        "datasets/identify/stack.toml",
+        "datasets/identify/validate.toml",
+    ] {
+        let out = dir.path().join("t.csv");
+        let o = out.display().to_string();
+        let r = crate::support::run(
+            &crate::support::repo(),
+            &[
+                "synth",
+                "trace",
+                scene_file,
+                "--channels",
+                "contraction,capacitance,current",
+                "--out",
+                &o,
+            ],
+        );
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        let t = trace::read(&out).expect("a synth trace reads");
+        let base = Scene::read(&crate::support::repo().join(scene_file)).expect("scene");
+        let scene = t.scene(&base).expect("trace scene");
+        let run = sim::simulate(&scene, &sim::RunOptions::default()).expect("runs");
+        assert_eq!(run.samples.len(), t.time_s.len());
+        for kind in [ChannelKind::Contraction, ChannelKind::Capacitance] {
+            let ch = t.channel(kind).expect("written");
+            let (lo, hi) = ch
+                .values
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                    (a.min(v), b.max(v))
+                });
+            let d: Vec<f64> = run
+                .samples
+                .iter()
+                .zip(&ch.values)
+                .map(|(s, &v)| kind.simulated(s, run.rest_length_m).unwrap() - v)
+                .collect();
+            let rms = (d.iter().map(|x| x * x).sum::<f64>() / d.len() as f64).sqrt();
+            let worst = d.iter().fold(0.0, |a: f64, x| a.max(x.abs()));
+            eprintln!(
+                "{scene_file} {kind}: rms {:.2e} worst {:.2e} of range",
+                rms / (hi - lo),
+                worst / (hi - lo)
+            );
+            assert!(
+                rms <= 5e-3 * (hi - lo),
+                "{scene_file} {kind}: rms {rms:e} of range {:e}",
+                hi - lo
+            );
+        }
+    }
+}
+
+fn read_text(name: &str, text: &str) -> dea_fit::Result<dea_fit::io::trace::Trace> {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let p = dir.path().join(name);
+    std::fs::write(&p, text).expect("write");
+    dea_fit::io::trace::read(&p)
+}
+
+/// The reader: units to SI, missing cells kept as NaN, and located refusals.
+#[test]
+fn trace_reader_units_missing_and_errors() {
+    use dea_fit::io::trace::ChannelKind;
+    let t = read_text(
+        "ok.csv",
+        "time_ms,voltage_kV,contraction_um,capacitance_pF\n0,0,0,13.2\n2,1.5,,\n4,3,12.5,13.9\n",
+    )
+    .expect("reads");
+    assert_eq!(t.time_s, vec![0.0, 0.002, 0.004]);
+    assert_eq!(t.voltage_v, vec![0.0, 1500.0, 3000.0]);
+    let c = t.channel(ChannelKind::Contraction).expect("contraction");
+    assert!(c.values[1].is_nan());
+    // 12.5 µm in m, exact to rounding (1e-18 m)
+    assert!((c.values[2] - 12.5e-6).abs() < 1e-18);
+    assert_eq!(ChannelKind::Capacitance.to_string(), "capacitance");
+    assert_eq!(ChannelKind::Capacitance.unit(), "F");
+    for (text, want) in [
+        (
+            "time_s,voltage_V,contraction_um\n0,0,0\n0,1,1\n",
+            "x.csv:3:1: time 0 s repeats line 2",
+        ),
+        (
+            "time_s,voltage_V,contraction_um\n0,0,0\n,1,1\n",
+            "x.csv:3:1",
+        ),
+        (
+            "time_s,voltage_V,contraction_um\n0,,0\n1,1,1\n",
+            "x.csv:2:2",
+        ),
+        ("time_s,voltage_V\n0,0\n1,1\n", "no measured channel"),
+        (
+            "time_s,voltage_V,capacitance_F\n0,0,13.2\n1,1,13.3\n",
+            "x.csv:2:3: capacitance_F = 13.2 F is not a plausible capacitance",
+        ),
+        (
+            "time_s,voltage_V,contraction\n0,0,0\n1,1,1\n",
+            "x.csv:1:3: column 'contraction' has no unit",
+        ),
+        (
+            "time_s,voltage_V,contraction_um,capacitance_pF\n0,0,0,\n1,1,1,\n",
+            "column 'capacitance_pF' holds no value",
+        ),
+        (
+            "time_s,voltage_V,contraction_um\n0,0,0\n1,1e7,1\n",
+            "x.csv:3:2",
+        ),
+    ] {
+        let e = read_text("x.csv", text).expect_err(text).to_string();
+        assert!(e.contains(want), "{text:?}: {e}");
+    }
+}
+
+/// Trace::scene: times line up, a trace that does not start at rest is refused.
+#[test]
+fn trace_scene_times_and_start() {
+    use dea_fit::sim::scene::Scene;
+    let base =
+        Scene::read(&crate::support::repo().join("datasets/identify/stack.toml")).expect("scene");
+    let t = read_text(
+        "a.csv",
+        "time_s,voltage_V,contraction_um\n10,0,0\n10.5,100,1\n11.25,100,2\n",
+    )
+    .expect("reads");
+    let s = t.scene(&base).expect("scene");
+    assert_eq!(s.time.samples, vec![0.5, 1.25]);
+    assert_eq!(s.time.span, 1.25);
+    let t = read_text(
+        "b.csv",
+        "time_s,voltage_V,contraction_um\n0,4000,0\n1,5000,1\n2,5000,2\n",
+    )
+    .expect("reads");
+    let e = t.scene(&base).err().expect("not at rest").to_string();
+    assert!(e.contains("b.csv:2:2") && e.contains("at rest"), "{e}");
+}
+
+/// [time] sample_times: explicit times, validated at their key.
+#[test]
+fn scene_sample_times() {
+    use dea_fit::sim::scene::Scene;
+    let text = std::fs::read_to_string(crate::support::repo().join("datasets/identify/stack.toml"))
+        .unwrap();
+    let p = crate::support::repo().join("datasets/identify/x.toml");
+    let with = |times: &str| text.replace("samples = 1500", &format!("sample_times = {times}"));
+    let s = Scene::parse(&with("[0.1, \"250 ms\", 3]"), &p).expect("reads");
+    assert_eq!(s.time.samples, vec![0.1, 0.25, 3.0]);
+    for (bad, want) in [
+        ("[0.2, 0.1]", "time.sample_times[1]: 0.1 s is not after"),
+        ("[0, 0.1]", "time.sample_times[0]: 0 s must be after 0"),
+        ("[4]", "after the end of the span"),
+        ("[\"1 parsec\"]", "time.sample_times[0]"),
+    ] {
+        let e = Scene::parse(&with(bad), &p).err().expect(bad).to_string();
+        assert!(e.contains(want), "{bad}: {e}");
+    }
+    let both = text.replace("samples = 1500", "samples = 10\nsample_times = [1]");
+    let e = Scene::parse(&both, &p).err().expect("both").to_string();
+    assert!(e.contains("conflicts with time.samples"), "{e}");
+}
+
+/// synth prints its status; --strict makes `unstable` exit 1.
+#[test]
+fn synth_status_and_strict() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let args = |strict: bool| {
+        let mut a = vec![
+            "synth",
+            "hyperelastic",
+            "--model",
+            "yeoh",
+            "--param",
+            "C10=69.3kPa",
+            "--param",
+            "C20=-20kPa",
+            "--param",
+            "C30=0.1kPa",
+            "--stretch",
+            "1:4:10",
+            "--out",
+            "u.csv",
+        ];
+        if strict {
+            a.push("--strict");
+        }
+        a
+    };
+    let r = crate::support::run(dir.path(), &args(false));
+    let out = String::from_utf8_lossy(&r.stdout);
+    assert_eq!(r.status.code(), Some(0), "{out}");
+    assert!(out.contains("status: unstable"), "{out}");
+    let r = crate::support::run(dir.path(), &args(true));
+    assert_eq!(r.status.code(), Some(1));
+    let s = crate::support::repo().join("datasets/identify/stack.toml");
+    let r = crate::support::run(
+        dir.path(),
+        &[
+            "synth",
+            "trace",
+            &s.display().to_string(),
+            "--strict",
+            "--out",
+            "t.csv",
+        ],
+    );
+    assert_eq!(r.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&r.stdout).contains("status: completed"));
 }

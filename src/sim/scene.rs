@@ -992,7 +992,7 @@ const INPUT_KEYS: [(&str, &[&str]); 5] = [
             "cycles",
         ],
     ),
-    ("csv", &["kind", "file"]),
+    ("csv", &["kind", "file", "smooth"]),
 ];
 
 fn read_input(
@@ -1070,8 +1070,21 @@ fn read_input(
                 let f = c
                     .string(t, s, "file")?
                     .ok_or_else(|| c.err(&key, "is missing").with_hint("file = \"v.csv\""))?;
-                Term::Pwl {
-                    points: read_pwl(&c.file_ref(dir, &key, f)?)?,
+                let points = read_pwl(&c.file_ref(dir, &key, f)?)?;
+                match t.get("smooth") {
+                    None | Some(toml::Value::Boolean(false)) => Term::Pwl { points },
+                    // a measured signal: smooth between its real corners
+                    Some(toml::Value::Boolean(true)) => {
+                        let (ts, vs): (Vec<f64>, Vec<f64>) = points.into_iter().unzip();
+                        Term::Measured(std::sync::Arc::new(
+                            super::input::Measured::fit(&ts, &vs).map_err(|e| c.err(&key, e))?,
+                        ))
+                    }
+                    Some(o) => {
+                        return Err(c
+                            .err(&format!("{s}.smooth"), format!("expected true or false, found {o}"))
+                            .with_hint("smooth = true reads a measured voltage as one smooth input with its real corners"))
+                    }
                 }
             }
         };

@@ -347,14 +347,11 @@ fn find_corners(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize, f64, boo
     };
     let mut r: Vec<(f64, usize, usize)> = (0..n).map(|c| ratio(&bounds, c)).collect();
     let reach = WINDOWS[WINDOWS.len() - 1];
-    loop {
-        let Some((c, &(best, a, b))) = r
-            .iter()
-            .enumerate()
-            .max_by(|x, y| x.1 .0.total_cmp(&y.1 .0))
-        else {
-            break;
-        };
+    while let Some((c, &(best, a, b))) = r
+        .iter()
+        .enumerate()
+        .max_by(|x, y| x.1 .0.total_cmp(&y.1 .0))
+    {
         if best <= CORNER_SIGMAS {
             break;
         }

@@ -396,7 +396,7 @@ fn trace(a: Args) -> Result<i32> {
         .iter()
         .map(|p| p.unit.to_string())
         .collect();
-    let _ = writeln!(s, "# hyperelastic: {}", m.model_name);
+    let _ = writeln!(s, "# hyperelastic: {}", m.spec.name);
     for ((n, u), v) in names.iter().zip(&units).zip(&m.params) {
         let _ = writeln!(s, "# param {n} = {v:e} {u}");
     }

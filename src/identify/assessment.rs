@@ -16,7 +16,7 @@
 
 use super::params::{Constant, Role, Space};
 use crate::fit::diagnostics::uncertainty;
-use crate::sim::budget::fmt_g;
+use crate::report::format::si;
 use nalgebra::DMatrix;
 use serde::Serialize;
 
@@ -220,9 +220,9 @@ fn explain(free: &[Constant], j: usize, w: Weakness, weakest: &[usize], ctx: &Co
         )
     } else if let Some(tau) = slow_arm(c, &partners, ctx) {
         format!(
-            "an arm with τ = {} s is slower than the {} s trace: within it the arm acts as extra stiffness, traded against the leading modulus; use a longer trace or fix the arm",
-            fmt_g(tau),
-            fmt_g(ctx.span)
+            "an arm with τ = {} is slower than the {} trace: within it the arm acts as extra stiffness, traded against the leading modulus; use a longer trace or fix the arm",
+            si(tau, "s"),
+            si(ctx.span, "s")
         )
     } else if c.role == Role::Nv {
         "the damping is unresolved: the traces have no motion fast enough for the dashpot nv to show above the noise (fix nv, e.g. --fix nv=0, or add a fast step)".to_string()

@@ -25,13 +25,20 @@ pub fn material_file(
     params::set_theta(&mut s, &id.theta);
     let m = &s.material;
     let plant = crate::sim::full_plant(&s)?;
+    // The values as the file states them (an arm's τ is written as η/k: take it
+    // back the same way, so that each entry names the file's own number).
+    let written = params::theta(&s);
+    let constants = params::constants(&s);
     let uncertainty = id
         .parameters
         .iter()
         .map(|p| ParamUncertainty {
             name: p.name.clone(),
             unit: p.unit.clone(),
-            value: p.value,
+            value: constants
+                .iter()
+                .find(|c| c.name == p.name)
+                .map_or(p.value, |c| written[c.index]),
             std_error: p.std_error,
             identifiable: p.identifiable,
         })

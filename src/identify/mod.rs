@@ -400,6 +400,9 @@ fn warnings(
     for o in runs {
         w.extend(o.warnings.iter().cloned());
     }
+    for e in &problem.experiments {
+        w.extend(unresolved_drive(e));
+    }
     w.dedup();
     if starts > 1 && at_best == 1 {
         w.push(format!(
@@ -407,6 +410,33 @@ fn warnings(
         ));
     }
     w
+}
+
+/// A measured drive that changes faster than the trace samples it: two of its
+/// corners (a step's start and end) within two sample intervals. The rise between
+/// them was not recorded, so the constants that act at that rate (the dashpot nv,
+/// fast arms) are fitted to a guessed shape of it.
+fn unresolved_drive(e: &Experiment) -> Option<String> {
+    let measured = e.scene.input.terms.iter().find_map(|t| match t {
+        crate::sim::input::Term::Measured(m) => Some(m),
+        _ => None,
+    })?;
+    let dt = e
+        .scene
+        .time
+        .samples
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .fold(f64::INFINITY, f64::min);
+    let piece = measured.shortest_piece();
+    (piece <= 2.0 * dt).then(|| {
+        format!(
+            "{}: the drive changes between corners {} apart, within two sample intervals ({} each): the shape of that rise was not recorded, so nv and the fast arms are fitted to a guess of it; sample faster or drive with a slower ramp",
+            e.name,
+            crate::report::format::si(piece, "s"),
+            crate::report::format::si(dt, "s")
+        )
+    })
 }
 
 /// Scaled residuals at x.

@@ -285,7 +285,7 @@ fn residual_jacobian_and_cost_match_finite_differences() {
         .iter()
         .map(|s| s.to_string())
         .collect();
-    let (free, _) = choose(&all, Some(&names), &[]).unwrap();
+    let free = choose(&all, Some(&names), &[]).unwrap().free;
     let mut p = Problem::new(
         vec![exp.clone()],
         free,

@@ -138,7 +138,7 @@ pub fn assess(
         let rel = e.std_error.map(|s| s / e.value.abs());
         let why = match (rel, partner) {
             (None, _) => Some(Weakness::Singular),
-            (Some(r), _) if !(r <= MAX_REL_SIGMA) => Some(Weakness::Loose(r)),
+            (Some(r), _) if r.is_nan() || r > MAX_REL_SIGMA => Some(Weakness::Loose(r)),
             (_, Some((k, rho))) if rho.abs() > MAX_CORRELATION => Some(Weakness::Traded(k, rho)),
             _ => None,
         };

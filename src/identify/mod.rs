@@ -315,7 +315,8 @@ fn prepare(
         .first()
         .ok_or_else(|| Error::settings("no trace to identify from"))?;
     let all = params::constants(&first.scene);
-    let (free, fixed) = params::choose(&all, settings.free.as_deref(), &settings.fix)?;
+    let params::Chosen { free, fixed } =
+        params::choose(&all, settings.free.as_deref(), &settings.fix)?;
     let mut theta0 = params::theta(&first.scene);
     for &(k, v) in &fixed {
         theta0[k] = v;

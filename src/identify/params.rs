@@ -239,15 +239,20 @@ pub fn set_theta(scene: &mut Scene, th: &[f64]) {
     m.eps_r = th[n - 1];
 }
 
+/// The constants a run moves, and the values `--fix` sets (index in θ, value).
+#[derive(Debug, Clone)]
+pub struct Chosen {
+    /// Free constants, in search order.
+    pub free: Vec<Constant>,
+    /// Fixed values given with `NAME=VALUE`.
+    pub fixed: Vec<(usize, f64)>,
+}
+
 /// Which constants are free: all of them unless `free` names some; then `fix`
 /// removes names (each `NAME` or `NAME=VALUE`, the value in SI or with a unit, which
 /// also sets the constant in every scene). Unknown names are refused with the list
 /// of known ones.
-pub fn choose(
-    all: &[Constant],
-    free: Option<&[String]>,
-    fix: &[String],
-) -> Result<(Vec<Constant>, Vec<(usize, f64)>)> {
+pub fn choose(all: &[Constant], free: Option<&[String]>, fix: &[String]) -> Result<Chosen> {
     let known: Vec<&str> = all.iter().map(|c| c.name.as_str()).collect();
     let find = |name: &str, flag: &str| -> Result<&Constant> {
         all.iter().find(|c| c.name == name).ok_or_else(|| {
@@ -309,7 +314,10 @@ pub fn choose(
         return Err(Error::settings("no constant is left free to identify")
             .with_hint("drop a --fix, or name the constants to fit with --free"));
     }
-    Ok((chosen, set))
+    Ok(Chosen {
+        free: chosen,
+        fixed: set,
+    })
 }
 
 /// A value in SI: a bare number, or a number with a unit of the constant's dimension.

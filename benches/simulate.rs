@@ -7,39 +7,6 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use dea_fit::sim::{scene::Scene, simulate, trajectory, RunOptions};
 use std::path::Path;
 
-/// A rig log's size (issue 10): the seed stack with Yeoh VHB4910, two Maxwell arms
-/// and a dashpot (9 θ: C10, C20, C30, k1, τ1, k2, τ2, Nv, εr), a 3 kV step behind a
-/// 1 ms supply, then a 1 kV, 1 Hz sine from 2 s; 7 s, 3500 samples.
-const RIG: &str = r#"
-name = "rig_7s"
-[actuator]
-kind = "stack"
-radius = "2.25 mm"
-layer_thickness = "500 um"
-electrode_thickness = "50 um"
-layers = 10
-electrodes = 11
-[material]
-hyperelastic = { preset = "vhb4910-yeoh" }
-viscous = { nv = "1875 Pa s", arms = [ { k = "106 kPa", tau = "0.32 s" }, { k = "45 kPa", tau = "2.26 s" } ] }
-relative_permittivity = 4.7
-density = "960 kg/m3"
-[source]
-rise_time = "1 ms"
-[[input]]
-kind = "step"
-amplitude = "3 kV"
-[[input]]
-kind = "sine"
-amplitude = "1 kV"
-frequency = "1 Hz"
-start = "2 s"
-cycles = 5
-[time]
-span = "7 s"
-samples = 3500
-"#;
-
 fn bench(c: &mut Criterion) {
     for name in [
         "stack_step_5kV_damped",
@@ -58,7 +25,8 @@ fn bench(c: &mut Criterion) {
     }
     let damped =
         Scene::read(Path::new("datasets/scenes/stack_step_5kV_damped.toml")).expect("scene");
-    let rig = Scene::parse(RIG, Path::new("rig_7s.toml")).expect("scene");
+    // A rig log's size (issue 10): 7 s, 3500 samples, 9 θ (the scene file says how).
+    let rig = Scene::read(Path::new("datasets/scenes/stack_rig_7s.toml")).expect("scene");
     let sens = RunOptions {
         sensitivities: true,
         ..Default::default()

@@ -597,3 +597,41 @@ fn worked_example_runs_end_to_end() {
         String::from_utf8_lossy(&o.stderr)
     );
 }
+
+/// `--arms auto` on a trace made with one arm (τ = 0.2 s, a 1 s trace): 0 arms
+/// explain it worse, a second arm is not identifiable (its candidate is ill-posed and
+/// not eligible), so one arm is chosen.
+#[test]
+fn arms_auto_chooses_the_number_of_arms_the_trace_was_made_with() {
+    use dea_fit::identify::selection::select_arms;
+    let truth = one_arm_stack(
+        "viscous = { nv = \"1875 Pa s\", arms = [ { k = \"50 kPa\", tau = \"0.2 s\" } ] }",
+        "rise_time = \"50 ms\"",
+    );
+    let ch = relative_noise(
+        &truth,
+        &[
+            (ChannelKind::Contraction, 0.01),
+            (ChannelKind::Capacitance, 0.001),
+        ],
+    );
+    let exp = trace(&truth, &ch, 21);
+    let settings = Settings {
+        free: Some(vec!["C10".into(), "nv".into(), "eps_r".into()]),
+        starts: 2,
+        ..Settings::default()
+    };
+    let (id, table) = select_arms(vec![exp], &settings, &|_| {
+        dea_fit::fit::lm::Control::default()
+    })
+    .expect("selects");
+    for c in &table {
+        println!("{c:?}");
+    }
+    assert_eq!(table.len(), 5);
+    let names: Vec<&str> = id.parameters.iter().map(|p| p.name.as_str()).collect();
+    assert!(
+        names.contains(&"arm1.k") && !names.contains(&"arm2.k"),
+        "{names:?}"
+    );
+}

@@ -5,6 +5,7 @@ use dea_fit::fit::lm::{Checkpoint, Control};
 use dea_fit::identify::material::{material_file, validate, Validation};
 use dea_fit::identify::noise::{Sigma, SigmaSource};
 use dea_fit::identify::problem::{ChannelKind, Experiment};
+use dea_fit::identify::selection::{select_arms, Candidate};
 use dea_fit::identify::{identify_with, Identification, Settings};
 use dea_fit::io::trace;
 use dea_fit::observe::{Progress, Trace as TraceFile};
@@ -49,6 +50,10 @@ pub struct Args {
     /// Relative tolerance of the simulator (default: the scene's).
     #[arg(long)]
     rtol: Option<f64>,
+    /// `auto`: fit 0 to 4 Maxwell arms (in place of the scene's) and keep the fewest
+    /// within ΔAICc ≤ 2 of the best identifiable candidate; the comparison is printed.
+    #[arg(long, value_name = "auto")]
+    arms: Option<String>,
     /// Held-out traces to predict with the identified constants.
     #[arg(long, value_name = "FILE")]
     validate: Vec<PathBuf>,
@@ -75,6 +80,8 @@ pub struct Args {
 struct Printed<'a> {
     #[serde(flatten)]
     id: &'a Identification,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    arms_selection: Option<&'a [Candidate]>,
     validation: &'a [Validation],
     fit_file: String,
 }
@@ -176,8 +183,33 @@ pub fn run(a: Args) -> Result<i32> {
         c.max_wall = a.max_time.map(std::time::Duration::from_secs_f64);
         c
     };
-    let kept = exps.clone();
-    let id = identify_with(exps, &settings, &control)?;
+    let (id, selection) = match a.arms.as_deref() {
+        None => (identify_with(exps, &settings, &control)?, None),
+        Some("auto") => {
+            let (id, table) = select_arms(exps, &settings, &control)?;
+            (id, Some(table))
+        }
+        Some(other) => {
+            return Err(
+                Error::settings(format!("--arms {other}: only auto is understood"))
+                    .with_hint("give the arms in the scene, or --arms auto to choose 0 to 4"),
+            )
+        }
+    };
+    // The experiments as identified, with as many arms as θ has (θ = model
+    // parameters, k and τ per arm, nv, εr), for the material file and the report.
+    let n_arms = (id.theta.len() - base.material.params.len() - 2) / 2;
+    let kept: Vec<Experiment> = experiments(&a.traces, &base)?
+        .into_iter()
+        .map(|mut e| {
+            let placeholder = dea_fit::material::file::Arm {
+                k_pa: 1.0,
+                eta_pa_s: 1.0,
+            };
+            e.scene.material.viscous.arms.resize(n_arms, placeholder);
+            e
+        })
+        .collect();
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
@@ -222,6 +254,7 @@ pub fn run(a: Args) -> Result<i32> {
     if a.output.json {
         let p = Printed {
             id: &id,
+            arms_selection: selection.as_deref(),
             validation: &validation,
             fit_file: out.display().to_string(),
         };
@@ -230,6 +263,9 @@ pub fn run(a: Args) -> Result<i32> {
             serde_json::to_string_pretty(&p).expect("an identification serialises")
         );
     } else {
+        if let Some(t) = &selection {
+            print!("{}", arms_table(t, n_arms));
+        }
         print!("{}", summary(&id, &validation));
         println!("fit: {}", out.display());
         if let Some(r) = &page {
@@ -317,5 +353,35 @@ fn summary(id: &Identification, validation: &[Validation]) -> String {
     for w in &id.warnings {
         s.push_str(&format!("warning: {w}\n"));
     }
+    s
+}
+
+/// The `--arms auto` comparison, with the chosen row marked.
+fn arms_table(t: &[Candidate], chosen: usize) -> String {
+    let rows: Vec<Vec<String>> = t
+        .iter()
+        .map(|c| {
+            vec![
+                format!("{}{}", c.arms, if c.arms == chosen { " ←" } else { "" }),
+                c.free.to_string(),
+                format!("{:.4}", c.chi2_per_dof),
+                c.aicc
+                    .map(|a| format!("{a:.2}"))
+                    .unwrap_or_else(|| "—".into()),
+                format!("{:.2}", c.bic),
+                c.status.to_string(),
+                if c.eligible { "yes" } else { "no" }.into(),
+            ]
+        })
+        .collect();
+    let mut s = table(
+        &[
+            "arms", "free", "χ²/dof", "AICc", "BIC", "status", "eligible",
+        ],
+        &rows,
+    );
+    s.push_str(&format!(
+        "--arms auto: {chosen} arm(s), the fewest within ΔAICc ≤ 2 of the best eligible candidate (a common σ from the 4-arm fit)\n"
+    ));
     s
 }

@@ -18,6 +18,7 @@ pub mod noise;
 pub mod params;
 pub mod problem;
 pub mod search;
+pub mod selection;
 
 use crate::error::{Error, Result};
 use crate::fit::diagnostics::{information_criteria, rmse_percent};

@@ -635,3 +635,57 @@ fn arms_auto_chooses_the_number_of_arms_the_trace_was_made_with() {
         "{names:?}"
     );
 }
+
+/// Profile likelihoods (`--profiles`): for C10 and nv, identified from a step, the
+/// profile is 0 at the estimate and its 95 % interval agrees with the linearised one
+/// to 15 % of the latter's half-width (the problem is nearly linear over ±3σ; the
+/// difference is the curvature the linearisation leaves out).
+#[test]
+fn profiles_agree_with_the_linearised_interval_where_the_problem_is_nearly_linear() {
+    let truth = one_arm_stack(
+        "viscous = { nv = \"1875 Pa s\", arms = [ { k = \"50 kPa\", tau = \"0.2 s\" } ] }",
+        "rise_time = \"50 ms\"",
+    );
+    let ch = relative_noise(
+        &truth,
+        &[
+            (ChannelKind::Contraction, 0.01),
+            (ChannelKind::Capacitance, 0.001),
+        ],
+    );
+    let settings = Settings {
+        free: Some(vec![
+            "C10".into(),
+            "arm1.k".into(),
+            "nv".into(),
+            "eps_r".into(),
+        ]),
+        starts: 1,
+        profiles: vec!["C10".into(), "nv".into()],
+        ..Settings::default()
+    };
+    let id = identify(vec![trace(&truth, &ch, 31)], &settings).expect("identifies");
+    assert_eq!(id.profiles.len(), 2);
+    for p in &id.profiles {
+        let e = estimate(&id, &p.name);
+        let ci = e.ci95.unwrap();
+        let mid = p.delta_chi2.len() / 2;
+        assert!(
+            p.delta_chi2[mid] < 1e-3,
+            "{}: Δχ² {} at the estimate",
+            p.name,
+            p.delta_chi2[mid]
+        );
+        let (lo, hi) = (
+            p.interval[0].expect("lower crossing"),
+            p.interval[1].expect("upper crossing"),
+        );
+        let half = 0.5 * (ci[1] - ci[0]);
+        println!("{}: profile [{lo}, {hi}], linearised {ci:?}", p.name);
+        assert!(
+            (lo - ci[0]).abs() < 0.15 * half && (hi - ci[1]).abs() < 0.15 * half,
+            "{}: profile [{lo}, {hi}] vs {ci:?}",
+            p.name
+        );
+    }
+}

@@ -54,6 +54,10 @@ pub struct Args {
     /// within ΔAICc ≤ 2 of the best identifiable candidate; the comparison is printed.
     #[arg(long, value_name = "auto")]
     arms: Option<String>,
+    /// Profile likelihoods of these free constants, comma-separated (plotted in the
+    /// report, the profile 95 % interval printed).
+    #[arg(long, value_delimiter = ',', value_name = "LIST")]
+    profiles: Vec<String>,
     /// Held-out traces to predict with the identified constants.
     #[arg(long, value_name = "FILE")]
     validate: Vec<PathBuf>,
@@ -153,6 +157,7 @@ pub fn run(a: Args) -> Result<i32> {
             ..Settings::default().lm
         },
         rtol: a.rtol,
+        profiles: a.profiles.clone(),
     };
     settings.check()?;
     if let Some(t) = a.max_time {
@@ -346,6 +351,18 @@ fn summary(id: &Identification, validation: &[Validation]) -> String {
         "solver: {}; {} start(s), {} at best, {} iterations, {} simulator runs ({} with sensitivities), {:.3} s, {}\n",
         v.method, v.starts, v.starts_at_best, v.iterations, v.simulator_runs, v.sensitivity_runs, v.seconds, v.termination
     ));
+    for p in &id.profiles {
+        let side = |v: Option<f64>| {
+            v.map(|v| si(v, &p.unit))
+                .unwrap_or_else(|| "beyond the grid".into())
+        };
+        s.push_str(&format!(
+            "profile {}: Δχ² ≤ 3.84 from {} to {}\n",
+            p.name,
+            side(p.interval[0]),
+            side(p.interval[1])
+        ));
+    }
     s.push_str(&format!(
         "χ²/dof {:.4}, condition {:.3e}\nstatus: {}\n",
         id.chi2_per_dof, id.assessment.condition, id.status

@@ -17,6 +17,7 @@ pub mod material;
 pub mod noise;
 pub mod params;
 pub mod problem;
+pub mod profile;
 pub mod search;
 pub mod selection;
 
@@ -49,6 +50,8 @@ pub struct Settings {
     pub lm: LmSettings,
     /// Relative tolerance of the simulator (None: the scene's).
     pub rtol: Option<f64>,
+    /// Free constants to profile ([`profile`]).
+    pub profiles: Vec<String>,
 }
 
 impl Default for Settings {
@@ -66,6 +69,7 @@ impl Default for Settings {
                 gtol: 1e-10,
             },
             rtol: None,
+            profiles: Vec::new(),
         }
     }
 }
@@ -176,6 +180,9 @@ pub struct Identification {
     pub bic: f64,
     /// Uncertainty and identifiability.
     pub assessment: Assessment,
+    /// Profile likelihoods asked for (`--profiles`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub profiles: Vec<profile::Profile>,
     /// θ at the optimum (the whole vector, SI), for the material file and reports.
     #[serde(skip)]
     pub theta: Vec<f64>,
@@ -253,6 +260,7 @@ pub fn identify_with(
     let rss = r.norm_squared();
     let ctx = context(&problem, &runs);
     let assessment = assess(&problem.free, &x, &jac, rss, &ctx);
+    let profiles = profiles(&problem, &x, rss, &jac, settings)?;
     let experiments = channel_fits(&problem, &given, &r);
     let warnings = warnings(&problem, &assessment, &runs, ms.at_best, settings.starts);
     let status = if !matches!(termination, Termination::Converged(_)) {
@@ -294,6 +302,7 @@ pub fn identify_with(
         aicc,
         bic,
         assessment,
+        profiles,
         theta,
         stretch_range: runs
             .iter()
@@ -439,6 +448,38 @@ fn unresolved_drive(e: &Experiment) -> Option<String> {
             crate::report::format::si(dt, "s")
         )
     })
+}
+
+/// The profiles `settings.profiles` asks for, in parallel; a name that is not a
+/// free constant is refused.
+fn profiles(
+    problem: &Problem,
+    x: &[f64],
+    rss: f64,
+    jac: &DMatrix<f64>,
+    settings: &Settings,
+) -> Result<Vec<profile::Profile>> {
+    use rayon::prelude::*;
+    let u = crate::fit::diagnostics::uncertainty(jac, rss);
+    let idx: Vec<usize> = settings
+        .profiles
+        .iter()
+        .map(|n| {
+            problem
+                .free
+                .iter()
+                .position(|c| c.name == *n)
+                .ok_or_else(|| {
+                    let free: Vec<&str> = problem.free.iter().map(|c| c.name.as_str()).collect();
+                    Error::settings(format!("--profiles {n}: not a free constant"))
+                        .with_hint(format!("the free constants: {}", free.join(", ")))
+                })
+        })
+        .collect::<Result<_>>()?;
+    Ok(idx
+        .par_iter()
+        .map(|&j| profile::profile(problem, x, 0.5 * rss, j, u.std_error[j], &settings.lm))
+        .collect())
 }
 
 /// Scaled residuals at x.

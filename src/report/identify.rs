@@ -149,6 +149,50 @@ pub fn write(
     }
     .write_svg(&dir.join("waterfall.svg"))?;
     let _ = writeln!(md, "![waterfall](waterfall.svg)\n");
+    for p in &id.profiles {
+        let (unit, f) = match p.unit.as_str() {
+            "Pa" => ("kPa", 1e-3),
+            u => (u, 1.0),
+        };
+        let pts: Vec<(f64, f64)> = p
+            .values
+            .iter()
+            .zip(&p.delta_chi2)
+            .filter(|(_, d)| d.is_finite())
+            .map(|(v, d)| (v * f, *d))
+            .collect();
+        let (lo, hi) = pts
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                (a.min(p.0), b.max(p.0))
+            });
+        let name = format!("profile-{}.svg", p.name);
+        Chart {
+            title: format!("profile likelihood of {}", p.name),
+            x_label: format!("{} ({unit})", p.name),
+            y_label: "Δχ² (others re-fitted)".into(),
+            series: vec![
+                Series {
+                    label: "profile".into(),
+                    points: pts,
+                    color: 0,
+                    style: Style::Line,
+                },
+                Series {
+                    label: "95 % (3.84)".into(),
+                    points: vec![
+                        (lo, crate::identify::profile::DELTA_CHI2_95),
+                        (hi, crate::identify::profile::DELTA_CHI2_95),
+                    ],
+                    color: 1,
+                    style: Style::Dashed,
+                },
+            ],
+            log_x: false,
+        }
+        .write_svg(&dir.join(&name))?;
+        let _ = writeln!(md, "![{name}]({name})\n");
+    }
     correlation(id, &dir.join("correlation.svg"))?;
     let _ = writeln!(md, "![correlation](correlation.svg)\n");
     for v in validation {

@@ -26,16 +26,20 @@ pub enum Reader {
     Scene,
     /// A hyperelastic fit file as a scene's material.
     Fit,
+    /// An actuator trace, as identification reads it: the trace on the worked
+    /// example's stack (its measured voltage rebuilt as the input), simulated.
+    Trace,
 }
 
 impl Reader {
-    pub const ALL: [Reader; 6] = [
+    pub const ALL: [Reader; 7] = [
         Reader::Tensile,
         Reader::Relaxation,
         Reader::Lcr,
         Reader::Manifest,
         Reader::Scene,
         Reader::Fit,
+        Reader::Trace,
     ];
 
     pub fn name(self) -> &'static str {
@@ -46,6 +50,7 @@ impl Reader {
             Reader::Manifest => "manifest",
             Reader::Scene => "scene",
             Reader::Fit => "fit",
+            Reader::Trace => "trace",
         }
     }
 
@@ -109,6 +114,9 @@ fn dir(rel: &str) -> Vec<String> {
 /// The scene a fit file is the material of (a fast one: 10 ms).
 const FIT_HOST: &str = "datasets/scenes/stack_step_5kV_damped.toml";
 
+/// The worked example whose stack scene hosts the trace cases.
+const TRACE_HOST_DIR: &str = "datasets/identify";
+
 /// The shipped files a reader's cases start from; each seed is the file set of a
 /// case before mutation.
 pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
@@ -119,6 +127,10 @@ pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
             .filter(|p| !p.ends_with("relaxation.csv") && !p.ends_with(".md"))
             .collect(),
         Reader::Relaxation => vec!["datasets/vhb4910/relaxation.csv".into()],
+        Reader::Trace => ["step.csv", "sine.csv", "validate.csv"]
+            .iter()
+            .map(|f| format!("{TRACE_HOST_DIR}/{f}"))
+            .collect(),
         Reader::Lcr => dir("datasets/composites/sylgard_batio3"),
         Reader::Manifest => vec![
             "datasets/composites/sylgard_batio3.toml".into(),
@@ -242,6 +254,10 @@ pub fn replay(r: Reader, case: &Case, dir: &Path) -> String {
         Reader::Scene | Reader::Fit => format!(
             "dea-fit simulate {f} --no-report --out {}",
             dir.join("trajectory.csv").display()
+        ),
+        Reader::Trace => format!(
+            "dea-fit identify {f} --scene {} --free eps_r --starts 1 {out}",
+            repo(&format!("{TRACE_HOST_DIR}/stack.toml")).display()
         ),
     }
 }
@@ -389,6 +405,16 @@ pub fn run(r: Reader, case: &Case, dir: &Path) -> Verdict {
             check_fit("composite", f.status, Some(0.0), out)
         }
         Reader::Scene | Reader::Fit => simulate(&path, &case.oracle),
+        Reader::Trace => {
+            let base = Scene::read(&repo(&format!("{TRACE_HOST_DIR}/stack.toml"))).unwrap();
+            let Ok(t) = dea_fit::io::trace::read(&path) else {
+                return Verdict::Refused;
+            };
+            match dea_fit::identify::problem::Experiment::from_trace(&t, &base) {
+                Ok(e) => check_run(&e.scene),
+                Err(_) => Verdict::Refused,
+            }
+        }
     }
 }
 
@@ -422,7 +448,13 @@ fn simulate(path: &Path, oracle: &Oracle) -> Verdict {
         }
         _ => {}
     }
-    let Ok(o) = sim::simulate(&scene, &RunOptions::default()) else {
+    check_run(&scene)
+}
+
+/// Simulate an accepted scene with its own settings: a completed run has a finite
+/// trajectory.
+fn check_run(scene: &Scene) -> Verdict {
+    let Ok(o) = sim::simulate(scene, &RunOptions::default()) else {
         return Verdict::Refused;
     };
     if o.integrator.status != RunStatus::Completed {

@@ -123,11 +123,22 @@ fn parse_sigma(text: &str) -> Result<(ChannelKind, Sigma)> {
     Ok((kind, Sigma::Absolute(v)))
 }
 
-fn experiments(files: &[PathBuf], base: &Scene) -> Result<Vec<Experiment>> {
-    files
-        .iter()
-        .map(|f| Experiment::from_trace(&trace::read(f)?, base))
-        .collect()
+/// The experiments of trace files on `base`, each file read once, with their
+/// provenance entries (file and sha256).
+fn experiments(
+    files: &[PathBuf],
+    base: &Scene,
+) -> Result<(Vec<Experiment>, Vec<serde_json::Value>)> {
+    let mut exps = Vec::with_capacity(files.len());
+    let mut prov = Vec::with_capacity(files.len());
+    for f in files {
+        let t = trace::read(f)?;
+        prov.push(
+            serde_json::json!({"file": f.display().to_string(), "sha256": t.provenance.sha256}),
+        );
+        exps.push(Experiment::from_trace(&t, base)?);
+    }
+    Ok((exps, prov))
 }
 
 /// The stem of the first trace (for the default names).
@@ -140,8 +151,10 @@ fn stem(p: &Path) -> String {
 /// Run the subcommand.
 pub fn run(a: Args) -> Result<i32> {
     let base = Scene::read(&a.scene)?;
-    let exps = experiments(&a.traces, &base)?;
-    let held = experiments(&a.validate, &base)?;
+    let (exps, traces) = experiments(&a.traces, &base)?;
+    let (held, _) = experiments(&a.validate, &base)?;
+    // The experiments as given, for the material file and the report.
+    let mut kept = exps.clone();
     let settings = Settings {
         free: a.free.clone(),
         fix: a.fix.clone(),
@@ -201,20 +214,16 @@ pub fn run(a: Args) -> Result<i32> {
             )
         }
     };
-    // The experiments as identified, with as many arms as θ has (θ = model
-    // parameters, k and τ per arm, nv, εr), for the material file and the report.
+    // With as many arms as θ has (θ = model parameters, k and τ per arm, nv, εr):
+    // `--arms auto` may have chosen another number than the scene's.
     let n_arms = (id.theta.len() - base.material.params.len() - 2) / 2;
-    let kept: Vec<Experiment> = experiments(&a.traces, &base)?
-        .into_iter()
-        .map(|mut e| {
-            let placeholder = dea_fit::material::file::Arm {
-                k_pa: 1.0,
-                eta_pa_s: 1.0,
-            };
-            e.scene.material.viscous.arms.resize(n_arms, placeholder);
-            e
-        })
-        .collect();
+    let placeholder = dea_fit::material::file::Arm {
+        k_pa: 1.0,
+        eta_pa_s: 1.0,
+    };
+    for e in &mut kept {
+        e.scene.material.viscous.arms.resize(n_arms, placeholder);
+    }
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
@@ -224,11 +233,11 @@ pub fn run(a: Args) -> Result<i32> {
         .collect::<Result<_>>()?;
     let provenance = serde_json::json!({
         "tool": format!("dea-fit {}", env!("CARGO_PKG_VERSION")),
-        "traces": a.traces.iter().map(|t| {
-            let sha = trace::read(t).map(|tr| tr.provenance.sha256).unwrap_or_default();
-            serde_json::json!({"file": t.display().to_string(), "sha256": sha})
-        }).collect::<Vec<_>>(),
-        "scene": {"file": a.scene.display().to_string(), "sha256": sha256_file(&a.scene)?},
+        "traces": traces,
+        "scene": {
+            "file": a.scene.display().to_string(),
+            "sha256": dea_fit::io::sha256_hex(&std::fs::read(&a.scene).map_err(|e| Error::io(&a.scene, e))?),
+        },
         "settings": {
             "free": id.parameters.iter().map(|p| p.name.clone()).collect::<Vec<_>>(),
             "fixed": id.fixed.iter().map(|(n, v)| serde_json::json!({"name": n, "value": v})).collect::<Vec<_>>(),
@@ -278,12 +287,6 @@ pub fn run(a: Args) -> Result<i32> {
         }
     }
     Ok(id.status.exit_code(a.output.strict))
-}
-
-fn sha256_file(p: &Path) -> Result<String> {
-    use sha2::{Digest, Sha256};
-    let bytes = std::fs::read(p).map_err(|e| Error::io(p, e))?;
-    Ok(format!("{:x}", Sha256::digest(bytes)))
 }
 
 /// The printed summary: parameters, channels, solver, status and warnings.

@@ -7,7 +7,7 @@
 //! (`strain`, `strain_pct` or `stretch`). Times must start at ≥ 0 (the start of
 //! loading) and increase strictly.
 
-use super::table::{split_header, Table};
+use super::table::{column_unit, split_header, Table};
 use crate::data::{STRESS_MAX, STRETCH_RANGE};
 use crate::error::{Error, Location, Result};
 use crate::material::viscoelastic::{History, Prony, Schedule};
@@ -139,24 +139,6 @@ enum Col {
     Stretch,
 }
 
-fn unit(table: &Table, c: usize, unit: Option<String>, dim: Dimension) -> Result<f64> {
-    let h = &table.header[c];
-    let loc = Location::at(&table.path, table.header_line, c + 1);
-    let Some(u) = unit else {
-        return Err(
-            Error::input(loc, format!("column '{h}' has no unit")).with_hint(format!(
-                "write it as e.g. '{}_{}'",
-                h.trim(),
-                dim.units()[0].0
-            )),
-        );
-    };
-    dim.factor(&u).ok_or_else(|| {
-        Error::input(loc, format!("unknown unit '{u}' in column '{h}'"))
-            .with_hint(format!("expected one of {}", dim.accepted()))
-    })
-}
-
 /// Read one relaxation file.
 pub fn read(path: &Path, opts: &RelaxationOptions) -> Result<RelaxationData> {
     from_table(&Table::read(path)?, opts)
@@ -173,12 +155,12 @@ pub fn from_table(table: &Table, opts: &RelaxationOptions) -> Result<RelaxationD
     for (c, h) in table.header.iter().enumerate() {
         let (name, u) = split_header(h, COLUMNS);
         let col = match name.as_str() {
-            "time" => Col::Time(unit(table, c, u, Dimension::Time)?),
+            "time" => Col::Time(column_unit(table, c, u.as_deref(), Dimension::Time)?),
             "stress" | "nominal_stress" | "engineering_stress" => {
-                Col::Stress(unit(table, c, u, Dimension::Stress)?)
+                Col::Stress(column_unit(table, c, u.as_deref(), Dimension::Stress)?)
             }
             "force" => {
-                let f = unit(table, c, u, Dimension::Force)?;
+                let f = column_unit(table, c, u.as_deref(), Dimension::Force)?;
                 let a = opts.area.ok_or_else(|| {
                     Error::input(
                         hloc(c),

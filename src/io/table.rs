@@ -7,6 +7,7 @@
 //! spreadsheet, UTF-16 or Latin-1 file is recognised and named as such.
 
 use crate::error::{Error, Location, Result};
+use crate::units::Dimension;
 use std::path::{Path, PathBuf};
 
 /// One data row.
@@ -293,4 +294,31 @@ pub fn split_header(h: &str, names: &[&str]) -> (String, Option<String>) {
         }
     }
     (lower.replace(' ', "_"), None)
+}
+
+/// The SI factor of column `c`'s header unit (`unit`, as split from the header) of
+/// dimension `dim`: a located error when it is missing or unknown, with the closest
+/// accepted spelling as a hint.
+pub fn column_unit(table: &Table, c: usize, unit: Option<&str>, dim: Dimension) -> Result<f64> {
+    let h = &table.header[c];
+    let loc = Location::at(&table.path, table.header_line, c + 1);
+    let Some(u) = unit else {
+        return Err(
+            Error::input(loc, format!("column '{h}' has no unit")).with_hint(format!(
+                "write it as e.g. '{}_{}'",
+                h.trim(),
+                dim.units()[0].0
+            )),
+        );
+    };
+    dim.factor(u).ok_or_else(|| {
+        let hint = match dim.suggest(u) {
+            Some(s) => format!(
+                "units are case-sensitive: did you mean '{s}'? expected one of {}",
+                dim.accepted()
+            ),
+            None => format!("expected one of {}", dim.accepted()),
+        };
+        Error::input(loc, format!("unknown unit '{u}' in column '{h}'")).with_hint(hint)
+    })
 }

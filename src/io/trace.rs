@@ -12,7 +12,7 @@
 //! against the plausible range of its quantity ([`ChannelKind::domain`]), located at
 //! its line and column.
 
-use super::table::{split_header, Table};
+use super::table::{column_unit, split_header, Table};
 use crate::error::{Error, Location, Result};
 use crate::sim::budget::{self, Domain};
 use crate::sim::input::{Measured, Term, Waveform};
@@ -216,30 +216,6 @@ const COLUMNS: &[&str] = &[
 /// trace does not start at rest (the run starts at rest under the load at 0 V).
 pub const START_SHARE: f64 = 0.05;
 
-fn header_unit(table: &Table, c: usize, unit: Option<&str>, dim: Dimension) -> Result<f64> {
-    let h = &table.header[c];
-    let loc = Location::at(&table.path, table.header_line, c + 1);
-    let Some(u) = unit else {
-        return Err(
-            Error::input(loc, format!("column '{h}' has no unit")).with_hint(format!(
-                "write it as e.g. '{}_{}'",
-                h.trim(),
-                dim.units()[0].0
-            )),
-        );
-    };
-    dim.factor(u).ok_or_else(|| {
-        let hint = match dim.suggest(u) {
-            Some(s) => format!(
-                "units are case-sensitive: did you mean '{s}'? expected one of {}",
-                dim.accepted()
-            ),
-            None => format!("expected one of {}", dim.accepted()),
-        };
-        Error::input(loc, format!("unknown unit '{u}' in column '{h}'")).with_hint(hint)
-    })
-}
-
 /// Read one trace file.
 pub fn read(path: &Path) -> Result<Trace> {
     from_table(&Table::read(path)?)
@@ -265,14 +241,14 @@ pub fn from_table(table: &Table) -> Result<Trace> {
                 if let Some((c0, _)) = *slot {
                     return Err(second(table, c, c0));
                 }
-                *slot = Some((c, header_unit(table, c, u, dim)?));
+                *slot = Some((c, column_unit(table, c, u, dim)?));
             }
             other => {
                 let Some(kind) = ChannelKind::parse(other) else {
                     return Err(table.unknown_column(c, ACCEPTED, EXAMPLE));
                 };
                 let f = match kind.dimension() {
-                    Some(d) => header_unit(table, c, u, d)?,
+                    Some(d) => column_unit(table, c, u, d)?,
                     None => match u {
                         None | Some("1") | Some("-") => 1.0,
                         Some(o) => {

@@ -219,7 +219,10 @@ impl System for GoesNan {
     fn n_params(&self) -> usize {
         0
     }
-    fn param_jacobian_times(&self, _t: f64, _y: &[f64], _w: &[f64], _out: &mut [f64]) {}
+    fn jacobian(&self, _t: f64, _y: &[f64], jac: &mut [f64]) {
+        jac[0] = -1.0;
+    }
+    fn param_jacobian(&self, _t: f64, _y: &[f64], _dfdp: &mut [f64]) {}
     fn sensitivity_rate(&self, _t: f64, _y: &[f64], _s: &[f64], _k: usize, _out: &mut [f64]) {}
     fn initial_sensitivity(&self, _out: &mut [f64]) {}
 }

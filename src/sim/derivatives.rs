@@ -3,12 +3,17 @@
 //! initial-state sensitivity ∂y0/∂θ.
 //!
 //! **How.** The right-hand side is one generic code (`Plant::rhs_with`). Evaluated
-//! in dual numbers x + ẋ·ε (ε² = 0) with one state or parameter seeded (ẋ = 1), it
-//! returns f and the directional derivative of every row along that seed: one
-//! column of the Jacobian, exact to rounding, through every branch the `f64` code
-//! takes (the PID clamp and anti-windup, the source models, the pull-in floor of
-//! the quasi-static rate: the derivative is that of the active branch). No
-//! allocation: a column is written straight into the caller's matrix.
+//! in dual numbers x + Σ ẋ_l·ε_l (ε_l·ε_m = 0) with one state or parameter direction
+//! seeded per lane, it returns f and the directional derivative of every row along
+//! each lane's seed: one column of the Jacobian per lane, exact to rounding, through
+//! every branch the `f64` code takes (the PID clamp and anti-windup, the source
+//! models, the pull-in floor of the quasi-static rate: the derivative is that of the
+//! active branch). A dense Jacobian ∂f/∂y or ∂f/∂θ, or the outputs' derivatives to
+//! every θk, take one evaluation of up to 16 lanes ([`width`]): the material
+//! functions, the input and the capacitance are evaluated once, only the lanes'
+//! arithmetic repeats (∂f/∂θ with 9 constants: 3 single-direction evaluations' worth
+//! of instructions instead of 9). No allocation: a column is written straight into
+//! the caller's matrix.
 //!
 //! **Primitives** (what the dual evaluation needs besides arithmetic):
 //! * P(λ): ∂P/∂λ = `StrainEnergy::tangent`, ∂P/∂p = `StrainEnergy::stress_jacobian`;
@@ -43,98 +48,111 @@ use std::ops::{Add, Div, Mul, Neg, Sub};
 /// (Ogden-4 has 8).
 pub const MAX_MODEL_PARAMS: usize = 16;
 
-/// A dual number v + d·ε with ε² = 0: a value and one directional derivative.
+/// A dual number with `L` lanes, v + Σ d_l·ε_l with ε_l·ε_m = 0: a value and `L`
+/// directional derivatives carried through one evaluation. One lane is the classic
+/// dual number (J·v, (∂f/∂θ)·w); several lanes give several columns of a Jacobian
+/// for the price of one value evaluation (the material functions, the input and the
+/// capacitance are evaluated once; only the lanes' arithmetic repeats).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Dual {
+pub(crate) struct Dual<const L: usize> {
     v: f64,
-    d: f64,
+    d: [f64; L],
 }
 
-impl Dual {
+impl<const L: usize> Dual<L> {
     #[inline]
-    fn new(v: f64, d: f64) -> Dual {
+    fn new(v: f64, d: [f64; L]) -> Dual<L> {
         Dual { v, d }
     }
+    /// Every lane of `self.d` mapped with `f(lane, d)`.
+    #[inline]
+    fn map(self, v: f64, f: impl Fn(usize, f64) -> f64) -> Dual<L> {
+        Dual::new(v, std::array::from_fn(|l| f(l, self.d[l])))
+    }
 }
 
-impl Add for Dual {
-    type Output = Dual;
+impl<const L: usize> Add for Dual<L> {
+    type Output = Dual<L>;
     #[inline]
-    fn add(self, o: Dual) -> Dual {
-        Dual::new(self.v + o.v, self.d + o.d)
+    fn add(self, o: Dual<L>) -> Dual<L> {
+        self.map(self.v + o.v, |l, d| d + o.d[l])
     }
 }
-impl Sub for Dual {
-    type Output = Dual;
+impl<const L: usize> Sub for Dual<L> {
+    type Output = Dual<L>;
     #[inline]
-    fn sub(self, o: Dual) -> Dual {
-        Dual::new(self.v - o.v, self.d - o.d)
+    fn sub(self, o: Dual<L>) -> Dual<L> {
+        self.map(self.v - o.v, |l, d| d - o.d[l])
     }
 }
-impl Mul for Dual {
-    type Output = Dual;
+impl<const L: usize> Mul for Dual<L> {
+    type Output = Dual<L>;
+    /// The product rule.
+    #[allow(clippy::suspicious_arithmetic_impl)]
     #[inline]
-    fn mul(self, o: Dual) -> Dual {
-        Dual::new(self.v * o.v, self.d * o.v + self.v * o.d)
+    fn mul(self, o: Dual<L>) -> Dual<L> {
+        self.map(self.v * o.v, |l, d| d * o.v + self.v * o.d[l])
     }
 }
-impl Div for Dual {
-    type Output = Dual;
+impl<const L: usize> Div for Dual<L> {
+    type Output = Dual<L>;
+    /// The quotient rule.
+    #[allow(clippy::suspicious_arithmetic_impl)]
     #[inline]
-    fn div(self, o: Dual) -> Dual {
+    fn div(self, o: Dual<L>) -> Dual<L> {
         let q = self.v / o.v;
-        Dual::new(q, (self.d - q * o.d) / o.v)
+        self.map(q, |l, d| (d - q * o.d[l]) / o.v)
     }
 }
-impl Neg for Dual {
-    type Output = Dual;
+impl<const L: usize> Neg for Dual<L> {
+    type Output = Dual<L>;
     #[inline]
-    fn neg(self) -> Dual {
-        Dual::new(-self.v, -self.d)
+    fn neg(self) -> Dual<L> {
+        self.map(-self.v, |_, d| -d)
     }
 }
-impl Add<f64> for Dual {
-    type Output = Dual;
+impl<const L: usize> Add<f64> for Dual<L> {
+    type Output = Dual<L>;
     #[inline]
-    fn add(self, o: f64) -> Dual {
+    fn add(self, o: f64) -> Dual<L> {
         Dual::new(self.v + o, self.d)
     }
 }
-impl Sub<f64> for Dual {
-    type Output = Dual;
+impl<const L: usize> Sub<f64> for Dual<L> {
+    type Output = Dual<L>;
     #[inline]
-    fn sub(self, o: f64) -> Dual {
+    fn sub(self, o: f64) -> Dual<L> {
         Dual::new(self.v - o, self.d)
     }
 }
-impl Mul<f64> for Dual {
-    type Output = Dual;
+impl<const L: usize> Mul<f64> for Dual<L> {
+    type Output = Dual<L>;
     #[inline]
-    fn mul(self, o: f64) -> Dual {
-        Dual::new(self.v * o, self.d * o)
+    fn mul(self, o: f64) -> Dual<L> {
+        self.map(self.v * o, |_, d| d * o)
     }
 }
-impl Div<f64> for Dual {
-    type Output = Dual;
+impl<const L: usize> Div<f64> for Dual<L> {
+    type Output = Dual<L>;
     #[inline]
-    fn div(self, o: f64) -> Dual {
-        Dual::new(self.v / o, self.d / o)
+    fn div(self, o: f64) -> Dual<L> {
+        self.map(self.v / o, |_, d| d / o)
     }
 }
 
-impl Num for Dual {
+impl<const L: usize> Num for Dual<L> {
     #[inline]
-    fn cst(v: f64) -> Dual {
-        Dual::new(v, 0.0)
+    fn cst(v: f64) -> Dual<L> {
+        Dual::new(v, [0.0; L])
     }
     #[inline]
     fn val(self) -> f64 {
         self.v
     }
     #[inline]
-    fn sqrt(self) -> Dual {
+    fn sqrt(self) -> Dual<L> {
         let s = self.v.sqrt();
-        Dual::new(s, 0.5 * self.d / s)
+        self.map(s, |_, d| 0.5 * d / s)
     }
 }
 
@@ -184,102 +202,106 @@ enum StateSeed<'a> {
 
 /// Direction in parameter space of a seed.
 #[derive(Clone, Copy)]
-enum ThetaSeed<'a> {
+enum ThetaSeed {
     /// No parameter direction.
     None,
     /// ∂/∂θ_k.
     Unit(usize),
-    /// The directional derivative along w: every θk seeded with wk in one
-    /// evaluation, (∂f/∂θ)·w (as J·v is for the state).
-    Along(&'a [f64]),
 }
 
-/// The plant read with one derivative direction in state space (∂/∂y_k or along a
-/// vector) and one in parameter space (∂/∂θ_k or along a vector, with the chain
-/// through λ0 into λf and C_rest): the dual part is the sum of both.
-struct Seeded<'a> {
-    p: &'a Plant,
-    /// Seeded state direction.
+/// The seed of one lane: a direction in state space and one in parameter space
+/// (the lane's derivative is the sum of both).
+#[derive(Clone, Copy)]
+struct Seed<'a> {
     state: StateSeed<'a>,
-    /// Seeded parameter direction.
-    theta: ThetaSeed<'a>,
-    /// Whether the parameter direction moves a hyperelastic parameter (else P does
-    /// not depend on it and `stress_jacobian` is not needed).
-    model: bool,
-    /// dλ0/dθ along the seed (= dλf/dθ).
-    dlam0: f64,
-    /// dC_rest/dθ along the seed.
-    dc_rest: f64,
+    theta: ThetaSeed,
 }
 
-impl<'a> Seeded<'a> {
-    /// Seeded along `state` in state space and `theta` in parameter space.
-    fn new(p: &'a Plant, state: StateSeed<'a>, theta: ThetaSeed<'a>) -> Seeded<'a> {
+/// No direction (an unused lane).
+const UNSEEDED: Seed<'static> = Seed {
+    state: StateSeed::None,
+    theta: ThetaSeed::None,
+};
+
+/// The plant read with `L` derivative lanes, each seeded with a direction in state
+/// space (∂/∂y_k or along a vector) and one in parameter space (∂/∂θ_k or along a
+/// vector, with the chain through λ0 into λf and C_rest).
+struct Seeded<'a, const L: usize> {
+    p: &'a Plant,
+    /// The lanes' seeds.
+    seeds: [Seed<'a>; L],
+    /// Whether some lane's parameter direction moves a hyperelastic parameter (else
+    /// P does not depend on the seeds and `stress_jacobian` is not needed).
+    model: bool,
+    /// dλ0/dθ along each lane (= dλf/dθ).
+    dlam0: [f64; L],
+    /// dC_rest/dθ along each lane.
+    dc_rest: [f64; L],
+}
+
+impl<'a, const L: usize> Seeded<'a, L> {
+    /// Lane l seeded with `seed(l)` for l < `lanes` (at most L), the others unused.
+    fn new(p: &'a Plant, lanes: usize, seed: impl Fn(usize) -> Seed<'a>) -> Seeded<'a, L> {
+        let seeds: [Seed; L] = std::array::from_fn(|l| if l < lanes { seed(l) } else { UNSEEDED });
         let np = p.params.len();
-        let model = match theta {
+        let model = seeds.iter().any(|s| match s.theta {
             ThetaSeed::None => false,
             ThetaSeed::Unit(k) => k < np,
-            ThetaSeed::Along(w) => w[..np].iter().any(|&x| x != 0.0),
-        };
-        let (dlam0, dc_rest) = match theta {
+        });
+        let rest = |l: usize| match seeds[l].theta {
             ThetaSeed::None => (0.0, 0.0),
             ThetaSeed::Unit(k) => p.rest_derivatives[k],
-            ThetaSeed::Along(w) => p
-                .rest_derivatives
-                .iter()
-                .zip(w)
-                .fold((0.0, 0.0), |(a, b), (d, w)| (a + w * d.0, b + w * d.1)),
         };
         Seeded {
             p,
-            state,
-            theta,
+            seeds,
             model,
-            dlam0,
-            dc_rest,
+            dlam0: std::array::from_fn(|l| rest(l).0),
+            dc_rest: std::array::from_fn(|l| rest(l).1),
         }
     }
 
-    /// The weight of θ entry `th` in the parameter direction.
+    /// The weight of θ entry `th` in each lane's parameter direction.
     #[inline]
-    fn is(&self, th: Theta) -> f64 {
-        match self.theta {
-            ThetaSeed::None => 0.0,
-            ThetaSeed::Unit(k) => (self.p.theta_index(th) == k) as u8 as f64,
-            ThetaSeed::Along(w) => w[self.p.theta_index(th)],
-        }
+    fn is(&self, th: Theta) -> [f64; L] {
+        let i = self.p.theta_index(th);
+        std::array::from_fn(|l| match self.seeds[l].theta {
+            ThetaSeed::Unit(k) if k == i => 1.0,
+            _ => 0.0,
+        })
     }
 
-    /// ∂P/∂p·w at λ (Pa): P's derivative along the parameter direction.
+    /// ∂P/∂p·w at λ (Pa) for each lane: P's derivative along its parameter direction.
     #[inline]
-    fn stress_param(&self, lam: f64) -> f64 {
+    fn stress_param(&self, lam: f64) -> [f64; L] {
         if !self.model {
-            return 0.0;
+            return [0.0; L];
         }
         let np = self.p.params.len();
         let mut buf = [0.0; MAX_MODEL_PARAMS];
         self.p.stress_jacobian(lam, &mut buf[..np]);
-        match self.theta {
-            ThetaSeed::Unit(k) => buf[k],
-            ThetaSeed::Along(w) => buf[..np].iter().zip(w).map(|(a, b)| a * b).sum(),
-            ThetaSeed::None => 0.0,
-        }
+        std::array::from_fn(|l| match self.seeds[l].theta {
+            ThetaSeed::Unit(k) if k < np => buf[k],
+            _ => 0.0,
+        })
     }
 }
 
-impl Eval for Seeded<'_> {
-    type T = Dual;
+impl<const L: usize> Eval for Seeded<'_, L> {
+    type T = Dual<L>;
     #[inline]
-    fn y(&self, y: &[f64], i: usize) -> Dual {
-        let d = match self.state {
-            StateSeed::None => 0.0,
-            StateSeed::Unit(k) => (k == i) as u8 as f64,
-            StateSeed::Along(v) => v[i],
-        };
-        Dual::new(y[i], d)
+    fn y(&self, y: &[f64], i: usize) -> Dual<L> {
+        Dual::new(
+            y[i],
+            std::array::from_fn(|l| match self.seeds[l].state {
+                StateSeed::None => 0.0,
+                StateSeed::Unit(k) => (k == i) as u8 as f64,
+                StateSeed::Along(v) => v[i],
+            }),
+        )
     }
     #[inline]
-    fn arm(&self, j: usize) -> (Dual, Dual) {
+    fn arm(&self, j: usize) -> (Dual<L>, Dual<L>) {
         let (k, tau) = self.p.arms[j];
         (
             Dual::new(k, self.is(Theta::ArmK(j))),
@@ -287,53 +309,70 @@ impl Eval for Seeded<'_> {
         )
     }
     #[inline]
-    fn nv(&self) -> Dual {
+    fn nv(&self) -> Dual<L> {
         Dual::new(self.p.nv, self.is(Theta::Nv))
     }
     #[inline]
-    fn g_per_c(&self) -> Dual {
+    fn g_per_c(&self) -> Dual<L> {
         let g = self.p.g_per_c;
-        Dual::new(g, -g / self.p.eps_r * self.is(Theta::EpsR))
+        let k = -g / self.p.eps_r;
+        Dual::new(g, self.is(Theta::EpsR).map(|w| k * w))
     }
     #[inline]
-    fn lam_f(&self) -> Dual {
+    fn lam_f(&self) -> Dual<L> {
         Dual::new(self.p.lam_f, self.dlam0)
     }
     #[inline]
-    fn c_rest(&self) -> Dual {
+    fn c_rest(&self) -> Dual<L> {
         Dual::new(self.p.c_rest, self.dc_rest)
     }
     #[inline]
-    fn stress(&self, lam: Dual) -> Dual {
-        let d = self.p.tangent(lam.v) * lam.d + self.stress_param(lam.v);
-        Dual::new(self.p.stress(lam.v), d)
+    fn stress(&self, lam: Dual<L>) -> Dual<L> {
+        let t = self.p.tangent(lam.v);
+        let sp = self.stress_param(lam.v);
+        lam.map(self.p.stress(lam.v), |l, d| t * d + sp[l])
     }
     #[inline]
-    fn tangent(&self, lam: Dual) -> Dual {
+    fn tangent(&self, lam: Dual<L>) -> Dual<L> {
         let h = H_STRESS * lam.v;
-        let mut d = 0.0;
-        if lam.d != 0.0 {
-            d += (self.p.tangent(lam.v + h) - self.p.tangent(lam.v - h)) / (2.0 * h) * lam.d;
+        let mut d = [0.0; L];
+        if lam.d.iter().any(|&x| x != 0.0) {
+            let dt = (self.p.tangent(lam.v + h) - self.p.tangent(lam.v - h)) / (2.0 * h);
+            d = lam.d.map(|x| dt * x);
         }
         if self.model {
-            d += (self.stress_param(lam.v + h) - self.stress_param(lam.v - h)) / (2.0 * h);
+            let (up, down) = (self.stress_param(lam.v + h), self.stress_param(lam.v - h));
+            for l in 0..L {
+                d[l] += (up[l] - down[l]) / (2.0 * h);
+            }
         }
         Dual::new(self.p.tangent(lam.v), d)
     }
     #[inline]
-    fn capacitance(&self, lam: Dual) -> [Dual; 3] {
+    fn capacitance(&self, lam: Dual<L>) -> [Dual<L>; 3] {
         let (c, c1, c2) = self.p.capacitance(lam.v);
-        let c3 = if lam.d != 0.0 {
+        let c3 = if lam.d.iter().any(|&x| x != 0.0) {
             self.p.capacitance_d3(lam.v, c2)
         } else {
             0.0
         };
-        let de = self.is(Theta::EpsR) / self.p.eps_r;
+        let de = self.is(Theta::EpsR).map(|w| w / self.p.eps_r);
         [
-            Dual::new(c, c1 * lam.d + c * de),
-            Dual::new(c1, c2 * lam.d + c1 * de),
-            Dual::new(c2, c3 * lam.d + c2 * de),
+            lam.map(c, |l, d| c1 * d + c * de[l]),
+            lam.map(c1, |l, d| c2 * d + c1 * de[l]),
+            lam.map(c2, |l, d| c3 * d + c2 * de[l]),
         ]
+    }
+}
+
+/// Lanes per evaluation for `count` directions: the smallest of 4, 8 and 16 that
+/// holds them (more are done 16 at a time).
+fn width(count: usize) -> usize {
+    match count {
+        0..=4 => 4,
+        5..=8 => 8,
+        9..=12 => 12,
+        _ => 16,
     }
 }
 
@@ -447,74 +486,122 @@ impl Plant {
         Ok(p)
     }
 
+    /// `pass` over `count` lanes seeded with `seed(lane)`, in evaluations of
+    /// [`width`]`(count)` lanes each. No allocation.
+    fn in_lanes<'a, P: LanePass>(
+        &'a self,
+        count: usize,
+        seed: impl Fn(usize) -> Seed<'a> + Copy,
+        pass: &mut P,
+    ) {
+        match width(count) {
+            4 => self.chunks::<4, P>(count, seed, pass),
+            8 => self.chunks::<8, P>(count, seed, pass),
+            12 => self.chunks::<12, P>(count, seed, pass),
+            _ => self.chunks::<16, P>(count, seed, pass),
+        }
+    }
+
+    fn chunks<'a, const L: usize, P: LanePass>(
+        &'a self,
+        count: usize,
+        seed: impl Fn(usize) -> Seed<'a> + Copy,
+        pass: &mut P,
+    ) {
+        for first in (0..count).step_by(L) {
+            let lanes = (count - first).min(L);
+            let e = Seeded::<L>::new(self, lanes, |l| seed(first + l));
+            pass.run(self, &e, first, lanes);
+        }
+    }
+
     /// The Jacobian ∂f/∂y of the right-hand side at (t, y), row-major n×n into `jac`
     /// (∂f_i/∂y_j at `jac[i·n + j]`); the quadrature columns are zero. Exact forward
-    /// differentiation of the right-hand side (module documentation). No allocation.
+    /// differentiation of the right-hand side (module documentation), every column
+    /// a lane of one evaluation. No allocation.
     pub fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) {
         let l = self.layout();
         let n = l.n;
         assert_eq!(jac.len(), n * n, "jacobian: n×n buffer");
-        for k in 0..n {
-            if k < l.quad {
-                let e = Seeded::new(self, StateSeed::Unit(k), ThetaSeed::None);
-                self.rhs_with(&e, t, y, |i, v| jac[i * n + k] = v.d);
-            } else {
-                (0..n).for_each(|i| jac[i * n + k] = 0.0);
-            }
-        }
+        jac.fill(0.0);
+        let seed = |k| Seed {
+            state: StateSeed::Unit(k),
+            theta: ThetaSeed::None,
+        };
+        self.in_lanes(
+            l.quad,
+            seed,
+            &mut Columns {
+                t,
+                y,
+                out: jac,
+                cols: n,
+            },
+        );
     }
 
     /// J·v, the Jacobian applied to `v`, in one forward evaluation (what implicit
     /// integrators need); `out` has n entries. No allocation.
     pub fn jacobian_times(&self, t: f64, y: &[f64], v: &[f64], out: &mut [f64]) {
-        let e = Seeded::new(self, StateSeed::Along(v), ThetaSeed::None);
-        self.rhs_with(&e, t, y, |i, d| out[i] = d.d);
-    }
-
-    /// (∂f/∂θ)·w at fixed (t, y), including the chain through λ0 into λf and C_rest,
-    /// in one forward evaluation with every θk seeded with wk (what forward
-    /// sensitivities need per parameter direction); `out` has n entries. No
-    /// allocation.
-    pub fn param_jacobian_times(&self, t: f64, y: &[f64], w: &[f64], out: &mut [f64]) {
-        let e = Seeded::new(self, StateSeed::None, ThetaSeed::Along(w));
-        self.rhs_with(&e, t, y, |i, d| out[i] = d.d);
+        self.one_lane(t, y, StateSeed::Along(v), ThetaSeed::None, out);
     }
 
     /// J·s + ∂f/∂θk, the rate of the sensitivity column s = ∂y/∂θk, in one forward
     /// evaluation seeded along s in state space and θk in parameter space. No
     /// allocation.
     pub fn sensitivity_rate(&self, t: f64, y: &[f64], s: &[f64], k: usize, out: &mut [f64]) {
-        let e = Seeded::new(self, StateSeed::Along(s), ThetaSeed::Unit(k));
-        self.rhs_with(&e, t, y, |i, d| out[i] = d.d);
+        self.one_lane(t, y, StateSeed::Along(s), ThetaSeed::Unit(k), out);
     }
 
-    /// The total derivatives d/dθk of the measured outputs at (t, y) given the state
-    /// sensitivity s = ∂y/∂θk: dλ/dθk = s0, dL/dθk = L0·s0, and the capacitance and
-    /// the current (which depends on λ̇, V and the source state) as
-    /// ∂out/∂y·s + ∂out/∂θk, by one forward evaluation of the same output code that
-    /// writes the samples ([`Plant::output`]), seeded along s
-    /// and θk. No allocation.
-    pub fn output_sensitivity(&self, t: f64, y: &[f64], s: &[f64], k: usize) -> OutputSensitivity {
-        let e = Seeded::new(self, StateSeed::Along(s), ThetaSeed::Unit(k));
-        let el = self.output_with(&e, t, y, &self.layout());
-        OutputSensitivity {
-            stretch: s[0],
-            length: self.l0 * s[0],
-            capacitance: el.capacitance.d,
-            current: el.current.d,
-        }
+    /// The right-hand side's derivative along one seed into `out`.
+    fn one_lane(&self, t: f64, y: &[f64], state: StateSeed, theta: ThetaSeed, out: &mut [f64]) {
+        let e = Seeded::<1>::new(self, 1, |_| Seed { state, theta });
+        self.rhs_with(&e, t, y, |i, d| out[i] = d.d[0]);
+    }
+
+    /// The total derivatives d/dθk of the measured outputs at (t, y), for every θk,
+    /// given the state sensitivities `s` (column by column, `s[k·n + i]` =
+    /// ∂yi/∂θk) into `out` (nθ entries): dλ/dθk = s0, dL/dθk = L0·s0, and the
+    /// capacitance and the current (which depends on λ̇, V and the source state) as
+    /// ∂out/∂y·s + ∂out/∂θk, by forward evaluation of the same output code that
+    /// writes the samples ([`Plant::output`]), lane k seeded along s_k and θk. No
+    /// allocation.
+    pub fn output_sensitivities(
+        &self,
+        t: f64,
+        y: &[f64],
+        s: &[f64],
+        out: &mut [OutputSensitivity],
+    ) {
+        let n = y.len();
+        assert_eq!(s.len(), n * out.len(), "output_sensitivities: n×nθ columns");
+        let seed = |k: usize| Seed {
+            state: StateSeed::Along(&s[k * n..(k + 1) * n]),
+            theta: ThetaSeed::Unit(k),
+        };
+        self.in_lanes(out.len(), seed, &mut Outputs { t, y, s, out });
     }
 
     /// ∂f/∂θ at fixed (t, y), row-major n×nθ into `dfdp` (∂f_i/∂θ_k at
-    /// `dfdp[i·nθ + k]`), including the chain through λ0 into λf and C_rest. No
-    /// allocation.
+    /// `dfdp[i·nθ + k]`), including the chain through λ0 into λf and C_rest, every
+    /// column a lane of one evaluation. No allocation.
     pub fn param_jacobian(&self, t: f64, y: &[f64], dfdp: &mut [f64]) {
         let (n, m) = (self.layout().n, self.n_theta());
         assert_eq!(dfdp.len(), n * m, "param_jacobian: n×nθ buffer");
-        for k in 0..m {
-            let e = Seeded::new(self, StateSeed::None, ThetaSeed::Unit(k));
-            self.rhs_with(&e, t, y, |i, v| dfdp[i * m + k] = v.d);
-        }
+        let seed = |k| Seed {
+            state: StateSeed::None,
+            theta: ThetaSeed::Unit(k),
+        };
+        self.in_lanes(
+            m,
+            seed,
+            &mut Columns {
+                t,
+                y,
+                out: dfdp,
+                cols: m,
+            },
+        );
     }
 
     /// ∂y0/∂θ of [`Plant::initial_state`], row-major n×nθ into `out`:
@@ -532,13 +619,62 @@ impl Plant {
         out.fill(0.0);
         let y0 = self.initial_state();
         let (c, dc, _) = self.capacitance(self.lam0);
-        for k in 0..m {
-            let e = Seeded::new(self, StateSeed::None, ThetaSeed::Unit(k));
-            out[k] = e.dlam0;
+        let eps = self.theta_index(Theta::EpsR);
+        for (k, &(dlam0, _)) in self.rest_derivatives.iter().enumerate() {
+            out[k] = dlam0;
             if let (Some(i), Source::Resistance { .. }) = (l.src, self.source) {
                 let u0 = y0[i] / c;
-                out[i * m + k] = u0 * (dc * e.dlam0 + e.is(Theta::EpsR) * c / self.eps_r);
+                let de = (k == eps) as u8 as f64 / self.eps_r;
+                out[i * m + k] = u0 * (dc * dlam0 + de * c);
             }
+        }
+    }
+}
+
+/// What an evaluation of several lanes writes ([`Plant::in_lanes`]).
+trait LanePass {
+    /// Lanes `first..first + lanes` evaluated as `e`.
+    fn run<const L: usize>(&mut self, p: &Plant, e: &Seeded<'_, L>, first: usize, lanes: usize);
+}
+
+/// Columns of a row-major matrix with `cols` columns: the right-hand side's
+/// derivative along lane l is column first + l.
+struct Columns<'a> {
+    t: f64,
+    y: &'a [f64],
+    out: &'a mut [f64],
+    cols: usize,
+}
+
+impl LanePass for Columns<'_> {
+    fn run<const L: usize>(&mut self, p: &Plant, e: &Seeded<'_, L>, first: usize, lanes: usize) {
+        let (out, cols) = (&mut *self.out, self.cols);
+        p.rhs_with(e, self.t, self.y, |i, v| {
+            out[i * cols + first..i * cols + first + lanes].copy_from_slice(&v.d[..lanes])
+        });
+    }
+}
+
+/// The outputs' total derivatives, lane k for θk ([`Plant::output_sensitivities`]).
+struct Outputs<'a> {
+    t: f64,
+    y: &'a [f64],
+    s: &'a [f64],
+    out: &'a mut [OutputSensitivity],
+}
+
+impl LanePass for Outputs<'_> {
+    fn run<const L: usize>(&mut self, p: &Plant, e: &Seeded<'_, L>, first: usize, lanes: usize) {
+        let el = p.output_with(e, self.t, self.y, &p.layout());
+        let n = self.y.len();
+        for l in 0..lanes {
+            let s0 = self.s[(first + l) * n];
+            self.out[first + l] = OutputSensitivity {
+                stretch: s0,
+                length: p.l0 * s0,
+                capacitance: el.capacitance.d[l],
+                current: el.current.d[l],
+            };
         }
     }
 }

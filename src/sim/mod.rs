@@ -192,7 +192,7 @@ pub struct Sensitivities {
     /// ∂C/∂θj (F per unit of θj; `Sample::capacitance_f`).
     pub capacitance: Vec<Vec<f64>>,
     /// ∂I/∂θj (A per unit of θj; `Sample::current_a`, which depends on λ̇, V and
-    /// the source state: [`Plant::output_sensitivity`]).
+    /// the source state: [`Plant::output_sensitivities`]).
     pub current: Vec<Vec<f64>>,
 }
 
@@ -220,22 +220,20 @@ impl Sensitivities {
     /// The row of a sample at (t, y) from the state sensitivities `s` (column by
     /// column, `s[j·n + i]` = ∂yi/∂θj).
     fn record(&mut self, p: &Plant, t: f64, y: &[f64], s: &[f64]) {
-        let (n, np) = (y.len(), self.theta.len());
-        let mut rows = [(); 4].map(|_| Vec::with_capacity(np));
-        for j in 0..np {
-            let d = p.output_sensitivity(t, y, &s[j * n..(j + 1) * n], j);
-            for (row, v) in rows
-                .iter_mut()
-                .zip([d.stretch, d.length, d.capacitance, d.current])
-            {
-                row.push(v);
-            }
-        }
-        let [stretch, length, capacitance, current] = rows;
-        self.stretch.push(stretch);
-        self.length.push(length);
-        self.capacitance.push(capacitance);
-        self.current.push(current);
+        let np = self.theta.len();
+        let zero = derivatives::OutputSensitivity {
+            stretch: 0.0,
+            length: 0.0,
+            capacitance: 0.0,
+            current: 0.0,
+        };
+        let mut d = vec![zero; np];
+        p.output_sensitivities(t, y, s, &mut d);
+        self.stretch.push(d.iter().map(|d| d.stretch).collect());
+        self.length.push(d.iter().map(|d| d.length).collect());
+        self.capacitance
+            .push(d.iter().map(|d| d.capacitance).collect());
+        self.current.push(d.iter().map(|d| d.current).collect());
     }
 
     /// The NaN row of a pull-in sample.

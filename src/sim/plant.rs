@@ -947,8 +947,11 @@ impl super::integrate::System for Plant {
     fn n_params(&self) -> usize {
         self.n_theta()
     }
-    fn param_jacobian_times(&self, t: f64, y: &[f64], w: &[f64], out: &mut [f64]) {
-        Plant::param_jacobian_times(self, t, y, w, out)
+    fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) {
+        Plant::jacobian(self, t, y, jac)
+    }
+    fn param_jacobian(&self, t: f64, y: &[f64], dfdp: &mut [f64]) {
+        Plant::param_jacobian(self, t, y, dfdp)
     }
     fn sensitivity_rate(&self, t: f64, y: &[f64], s: &[f64], k: usize, out: &mut [f64]) {
         Plant::sensitivity_rate(self, t, y, s, k, out)

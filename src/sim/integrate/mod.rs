@@ -28,10 +28,13 @@ pub trait System {
     fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]);
     /// The Jacobian applied to a vector, (∂f/∂y)·v; must not allocate.
     fn jacobian_times(&self, t: f64, y: &[f64], v: &[f64], out: &mut [f64]);
+    /// The dense Jacobian ∂f/∂y, row-major `dim × dim`; must not allocate.
+    fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]);
     /// Number of parameters θ for forward sensitivities.
     fn n_params(&self) -> usize;
-    /// (∂f/∂θ)·w at fixed y, one parameter direction; must not allocate.
-    fn param_jacobian_times(&self, t: f64, y: &[f64], w: &[f64], out: &mut [f64]);
+    /// The dense parameter Jacobian ∂f/∂θ at fixed y, row-major `dim × n_params`;
+    /// must not allocate.
+    fn param_jacobian(&self, t: f64, y: &[f64], dfdp: &mut [f64]);
     /// (∂f/∂y)·s + ∂f/∂θk, the rate of the sensitivity column s = ∂y/∂θk; must not
     /// allocate.
     fn sensitivity_rate(&self, t: f64, y: &[f64], s: &[f64], k: usize, out: &mut [f64]);

@@ -689,3 +689,39 @@ fn profiles_agree_with_the_linearised_interval_where_the_problem_is_nearly_linea
         );
     }
 }
+
+/// A run of the search is bounded by `WORK_FACTOR` × the steps at the starting
+/// constants: on the rig scene (820 BDF steps at its constants), a dashpot 50×
+/// weaker with a 100× stiffer slow arm (where a far start of the multi-start once
+/// spent 6.3 s in one sensitivity run, 105 000 Tsitouras steps) fails at the budget
+/// and says so, while the starting constants run within it.
+#[test]
+fn a_run_far_from_the_start_stops_at_its_work_budget() {
+    use dea_fit::identify::params::{choose, constants};
+    use dea_fit::identify::problem::{Problem, WORK_FACTOR};
+    let scene = Scene::read(&super::support::repo().join("datasets/scenes/stack_rig_7s.toml"))
+        .expect("shipped scene");
+    let (exp, _) = dea_fit::bench::identify_case(&scene).expect("case");
+    let all = constants(&exp.scene);
+    let chosen = choose(&all, None, &[]).expect("every constant free");
+    let th0 = theta(&exp.scene);
+    let mut problem = Problem::new(
+        vec![exp.clone()],
+        chosen.free,
+        th0.clone(),
+        RunOptions::default(),
+    )
+    .expect("problem");
+    let steps = dea_fit::sim::trajectory(&exp.scene, &RunOptions::default())
+        .expect("runs")
+        .stats
+        .steps;
+    assert_eq!(problem.budgets, vec![Some((WORK_FACTOR * steps).max(2000))]);
+    assert!(problem.simulate_at(&th0, true).is_ok(), "the start runs");
+    let at = |name: &str| all.iter().find(|c| c.name == name).expect(name).index;
+    let mut far = th0.clone();
+    far[at("nv")] /= 50.0;
+    far[at("arm2.k")] *= 100.0;
+    let why = problem.simulate_at(&far, false).expect_err("over budget");
+    assert!(why.contains("step budget exhausted"), "{why}");
+}

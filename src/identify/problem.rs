@@ -110,6 +110,20 @@ impl Counts {
     }
 }
 
+/// A run of the search may take this many times the steps of the run at the
+/// starting constants. Far starts and long LM steps reach corners of the box where
+/// the scene becomes a different problem for its integrator: a dashpot 50× weaker
+/// turns the rig scene (datasets/scenes/stack_rig_7s.toml, 820 BDF steps at its
+/// constants) into a lightly damped oscillation that took Tsitouras 5(4) 105 000
+/// steps, 6.3 s with sensitivities, and BDF 366 000. Such a run fails at its budget
+/// (the LM then shortens its step, or the start is reported failed with the reason)
+/// instead of costing seconds; the constants it probed were far from the trace.
+pub const WORK_FACTOR: usize = 10;
+
+/// The smallest step budget (a short trace at its constants may take only a few
+/// dozen steps).
+const MIN_BUDGET: usize = 2000;
+
 /// The problem the search minimises. Cheap to clone (one per multi-start).
 #[derive(Clone)]
 pub struct Problem {
@@ -121,6 +135,9 @@ pub struct Problem {
     pub theta: Vec<f64>,
     /// Simulator settings.
     pub run: RunOptions,
+    /// Step budget of each experiment's runs ([`WORK_FACTOR`] × the steps at the
+    /// starting constants; None where that run failed, which the search reports).
+    pub budgets: Vec<Option<usize>>,
     /// Work done so far (shared by clones).
     pub counts: Arc<Counts>,
 }
@@ -145,11 +162,21 @@ impl Problem {
                 };
             }
         }
+        let budgets = experiments
+            .iter_mut()
+            .map(|e| {
+                set_theta(&mut e.scene, &theta);
+                let o = trajectory(&e.scene, &run).ok()?;
+                (o.status == RunStatus::Completed)
+                    .then(|| (WORK_FACTOR * o.stats.steps).max(MIN_BUDGET))
+            })
+            .collect();
         Ok(Problem {
             experiments,
             free,
             theta,
             run,
+            budgets,
             counts: Arc::default(),
         })
     }
@@ -205,7 +232,11 @@ impl Problem {
             ..self.run
         };
         let mut out = Vec::with_capacity(self.experiments.len());
-        for e in &mut self.experiments {
+        for (e, &budget) in self.experiments.iter_mut().zip(&self.budgets) {
+            let opts = RunOptions {
+                max_steps: budget,
+                ..opts
+            };
             set_theta(&mut e.scene, theta);
             match sensitivities {
                 true => &self.counts.sensitivity_runs,

@@ -261,6 +261,9 @@ pub struct RunOptions {
     pub fixed_step: Option<f64>,
     /// Integrate the forward sensitivities to the plant's parameters too.
     pub sensitivities: bool,
+    /// A step budget tighter than the guard's estimate (`budget::Cost::step_budget`);
+    /// a run that reaches it fails and says so.
+    pub max_steps: Option<usize>,
 }
 
 fn sample(p: &Plant, t: f64, y: &[f64]) -> Sample {
@@ -433,7 +436,9 @@ fn prepare(scene: &Scene, opts: &RunOptions) -> crate::Result<Prepared> {
                     t if t > 0.0 => t,
                     _ => f64::INFINITY,
                 }),
-        max_steps: cost.step_budget(),
+        max_steps: opts
+            .max_steps
+            .map_or(cost.step_budget(), |m| m.min(cost.step_budget())),
         fixed_step: opts.fixed_step,
     };
     let mut kinks = match &scene.control {

@@ -67,7 +67,10 @@ fn recovers_known_constants_from_a_noisy_step() {
         starts: 2,
         ..Settings::default()
     };
-    let id = identify(vec![start], &settings).expect("identifies");
+    let id = identify(vec![start], &settings)
+        .expect("runs")
+        .identified()
+        .expect("identifies");
     println!("{}", serde_json::to_string_pretty(&id).unwrap());
     let truth_of = |name: &str| match name {
         "C10" => th[0],
@@ -115,7 +118,10 @@ fn identify_from(
         starts: 1,
         ..Settings::default()
     };
-    identify(vec![exp], &settings).expect("identifies")
+    identify(vec![exp], &settings)
+        .expect("runs")
+        .identified()
+        .expect("identifies")
 }
 
 fn estimate<'a>(
@@ -315,7 +321,7 @@ fn residual_jacobian_and_cost_match_finite_differences() {
             xs[j] += d;
             let mut rs = DVector::zeros(n);
             let mut q = p.clone();
-            assert!(q.eval(&xs, &mut rs, None), "{:?}", q.counts.last_failure());
+            assert!(q.eval(&xs, &mut rs, None), "{:?}", q.failure());
             rs
         };
         let fd = (at(-2.0 * h) - at(2.0 * h) + (at(h) - at(-h)) * 8.0) / (12.0 * h);
@@ -351,7 +357,10 @@ fn residual_jacobian_and_cost_match_finite_differences() {
         ],
         ..Settings::default()
     };
-    let id = identify(vec![exp.clone()], &settings).unwrap();
+    let id = identify(vec![exp.clone()], &settings)
+        .unwrap()
+        .identified()
+        .unwrap();
     let mut scene = exp.scene.clone();
     set_theta(&mut scene, &id.theta);
     let o = simulate(
@@ -411,7 +420,10 @@ fn coverage(
             starts: 1,
             ..Settings::default()
         };
-        let id = identify(vec![exp], &settings).expect("identifies");
+        let id = identify(vec![exp], &settings)
+            .expect("runs")
+            .identified()
+            .expect("identifies");
         for p in &id.parameters {
             let c = all.iter().find(|c| c.name == p.name).unwrap();
             let ci = p.ci95.expect("an interval");
@@ -625,6 +637,7 @@ fn arms_auto_chooses_the_number_of_arms_the_trace_was_made_with() {
         dea_fit::fit::lm::Control::default()
     })
     .expect("selects");
+    let id = id.identified().expect("identifies");
     for c in &table {
         println!("{c:?}");
     }
@@ -664,7 +677,10 @@ fn profiles_agree_with_the_linearised_interval_where_the_problem_is_nearly_linea
         profiles: vec!["C10".into(), "nv".into()],
         ..Settings::default()
     };
-    let id = identify(vec![trace(&truth, &ch, 31)], &settings).expect("identifies");
+    let id = identify(vec![trace(&truth, &ch, 31)], &settings)
+        .expect("runs")
+        .identified()
+        .expect("identifies");
     assert_eq!(id.profiles.len(), 2);
     for p in &id.profiles {
         let e = estimate(&id, &p.name);

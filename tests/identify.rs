@@ -705,3 +705,83 @@ fn profiles_agree_with_the_linearised_interval_where_the_problem_is_nearly_linea
         );
     }
 }
+
+/// The texts of an SVG chart's `<text>` elements whose opening tag contains `attr`.
+fn svg_texts(svg: &str, attr: &str) -> Vec<String> {
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| {
+            let (tag, rest) = t.split_once('>')?;
+            tag.contains(attr).then(|| {
+                rest.split("</text>")
+                    .next()
+                    .unwrap_or("")
+                    .trim()
+                    .to_string()
+            })
+        })
+        .collect()
+}
+
+/// The report charts, for each measured channel, the scaled sensitivities
+/// θ·∂y/∂θ / σ of the channel to every free constant over time, linked from the
+/// page with a caption that says what is plotted; the legend names every free
+/// constant, and the y ticks read as distinct numbers (charts once labelled every
+/// tick "0.0").
+#[test]
+fn the_report_charts_each_channels_sensitivities_to_the_free_constants() {
+    let d = super::support::repo().join("datasets/identify");
+    let dir = tempfile::tempdir().unwrap();
+    let p = |f: &str| d.join(f).display().to_string();
+    let o = super::support::run(
+        dir.path(),
+        &[
+            "identify",
+            &p("step.csv"),
+            "--scene",
+            &p("stack.toml"),
+            "--free",
+            "C10,nv,eps_r",
+            "--starts",
+            "1",
+            "--report",
+            "rep",
+            "--out",
+            "fit.json",
+        ],
+    );
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let rep = dir.path().join("rep");
+    let page = std::fs::read_to_string(rep.join("index.md")).unwrap();
+    assert!(
+        page.contains("θ·∂y/∂θ / σ for each free constant θ"),
+        "{page}"
+    );
+    for channel in ["contraction", "capacitance"] {
+        let name = format!("sensitivities1-{channel}.svg");
+        assert!(
+            page.contains(&format!("![{name}]({name})")),
+            "{name} is not linked:\n{page}"
+        );
+        let svg = std::fs::read_to_string(rep.join(&name)).unwrap();
+        let texts = svg_texts(&svg, "");
+        for c in ["C10", "nv", "eps_r"] {
+            assert!(texts.iter().any(|t| t == c), "{name}: no legend entry {c}");
+        }
+        let y_ticks = svg_texts(&svg, "text-anchor=\"end\"");
+        let mut distinct: Vec<f64> = y_ticks
+            .iter()
+            .map(|t| t.parse().unwrap_or_else(|_| panic!("{name}: y tick '{t}'")))
+            .collect();
+        distinct.dedup();
+        assert!(
+            distinct.len() >= 3 && distinct.len() == y_ticks.len(),
+            "{name}: y ticks {y_ticks:?}"
+        );
+    }
+}

@@ -19,7 +19,12 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("identify");
     g.sample_size(10);
     g.bench_function("rig_7s one start, 9 constants", |b| {
-        b.iter(|| identify(vec![exp.clone()], &settings).expect("identifies"))
+        b.iter(|| {
+            identify(vec![exp.clone()], &settings)
+                .expect("runs")
+                .identified()
+                .expect("identifies")
+        })
     });
     let opts = RunOptions {
         sensitivities: true,

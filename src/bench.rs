@@ -512,7 +512,7 @@ pub fn identify_rows(
     repeats: usize,
     progress: &mut dyn FnMut(&IdentifyRow),
 ) -> Result<Vec<IdentifyRow>> {
-    use crate::identify::{identify, params, Settings};
+    use crate::identify::{identify, params, Run, Settings};
     let (exp, truth) = identify_case(scene)?;
     let all = params::constants(scene);
     let mut rows = Vec::new();
@@ -531,29 +531,47 @@ pub fn identify_rows(
                 best = best.min(t.elapsed().as_secs_f64());
                 last = Some(id);
             }
-            let id = last.expect("repeats ≥ 1");
-            let (mut err, mut z) = (0.0f64, 0.0f64);
-            for p in id.parameters.iter().filter(|p| p.identifiable) {
-                let c = all.iter().find(|c| c.name == p.name).expect("a constant");
-                let t = truth[c.index];
-                err = err.max(((p.value - t) / t).abs());
-                if let Some(s) = p.std_error {
-                    z = z.max(((p.value - t) / s).abs());
+            let row = match last.expect("repeats ≥ 1") {
+                Run::Identified(id) => {
+                    let (mut err, mut z) = (0.0f64, 0.0f64);
+                    for p in id.parameters.iter().filter(|p| p.identifiable) {
+                        let c = all.iter().find(|c| c.name == p.name).expect("a constant");
+                        let t = truth[c.index];
+                        err = err.max(((p.value - t) / t).abs());
+                        if let Some(s) = p.std_error {
+                            z = z.max(((p.value - t) / s).abs());
+                        }
+                    }
+                    IdentifyRow {
+                        rtol,
+                        starts: n,
+                        seconds: best,
+                        per_start_s: best / n as f64,
+                        max_rel_error: err,
+                        max_z: z,
+                        identified: id.parameters.iter().filter(|p| p.identifiable).count(),
+                        free: id.parameters.len(),
+                        starts_at_best: id.solver.starts_at_best,
+                        iterations: id.solver.iterations,
+                        simulator_runs: id.solver.simulator_runs,
+                        status: id.status,
+                    }
                 }
-            }
-            let row = IdentifyRow {
-                rtol,
-                starts: n,
-                seconds: best,
-                per_start_s: best / n as f64,
-                max_rel_error: err,
-                max_z: z,
-                identified: id.parameters.iter().filter(|p| p.identifiable).count(),
-                free: id.parameters.len(),
-                starts_at_best: id.solver.starts_at_best,
-                iterations: id.solver.iterations,
-                simulator_runs: id.solver.simulator_runs,
-                status: id.status,
+                // no result: no error to measure
+                Run::Failed(f) => IdentifyRow {
+                    rtol,
+                    starts: n,
+                    seconds: best,
+                    per_start_s: best / n as f64,
+                    max_rel_error: f64::NAN,
+                    max_z: f64::NAN,
+                    identified: 0,
+                    free: f.free.len(),
+                    starts_at_best: 0,
+                    iterations: f.solver.iterations,
+                    simulator_runs: f.solver.simulator_runs,
+                    status: f.status,
+                },
             };
             progress(&row);
             rows.push(row);

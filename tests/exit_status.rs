@@ -570,3 +570,107 @@ fn one_spelling_of_statuses_and_no_debug_names() {
     assert!(!all.contains("0.0000  "), "{all}");
     assert!(all.contains('—'), "{all}");
 }
+
+/// `identify` when no start can simulate the traces: a trace of a stiffer actuator
+/// (C10 = 200 kPa, pull-in near 35 kV) driven by a 25 kV step, identified with only
+/// the dashpot nv free on the worked example's stack (C10 = 69.3 kPa: pull-in at
+/// 20.8 kV). Every start pulls in, whatever nv: the run is `failed` (exit 1), says
+/// which starts failed and why, in text and in JSON (`fit_file` null), and writes no
+/// fit file and no report. The same scene with a constant fixed where it has no rest
+/// state cannot start at all: that input is refused (exit 2) before any search.
+#[test]
+fn identify_without_any_start_that_simulates_is_failed() {
+    let stack = repo().join("datasets/identify/stack.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let stiff = std::fs::read_to_string(&stack)
+        .unwrap()
+        .replace("C10 = \"69.3 kPa\"", "C10 = \"200 kPa\"")
+        .replace("amplitude = \"5 kV\"", "amplitude = \"25 kV\"")
+        .replace("span = \"3 s\"", "span = \"1 s\"")
+        .replace("samples = 1500", "samples = 200");
+    assert!(stiff.contains("200 kPa") && stiff.contains("25 kV") && stiff.contains("= 200"));
+    std::fs::write(dir.path().join("stiff.toml"), stiff).unwrap();
+    let synth = run(
+        dir.path(),
+        &[
+            "synth",
+            "trace",
+            "stiff.toml",
+            "--noise",
+            "contraction=0.5um",
+            "--seed",
+            "5",
+            "--out",
+            "stiff.csv",
+        ],
+    );
+    assert_eq!(synth.status.code(), Some(0), "{}", text(&synth));
+    let scene = stack.display().to_string();
+    let args = |json: bool| {
+        let mut a = vec![
+            "identify",
+            "stiff.csv",
+            "--scene",
+            &scene,
+            "--free",
+            "nv",
+            "--starts",
+            "3",
+        ];
+        if json {
+            a.push("--json");
+        }
+        a
+    };
+    let o = run(dir.path(), &args(false));
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    check_agrees(&args(false), &o);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("no start could simulate the traces"), "{out}");
+    for i in 0..3 {
+        assert!(
+            out.lines()
+                .any(|l| l.contains(&format!("start {i} (nv = ")) && l.contains("pull_in")),
+            "start {i} and its pull-in are not named:\n{out}"
+        );
+    }
+    let o = run(dir.path(), &args(true));
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    check_agrees(&args(true), &o);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    assert_eq!(v["status"], "failed");
+    assert!(v["fit_file"].is_null(), "{v}");
+    let starts = v["starts"].as_array().unwrap();
+    assert_eq!(starts.len(), 3);
+    for s in starts {
+        assert_eq!(s["constants"][0]["name"], "nv");
+        assert!(
+            s["reason"].as_str().unwrap().contains("pull-in at t ="),
+            "{s}"
+        );
+    }
+    assert_eq!(
+        names_in(dir.path()),
+        ["stiff.csv", "stiff.toml"],
+        "a failed run writes nothing"
+    );
+    // a fixed constant without rest state: the input cannot start (exit 2)
+    let helix = repo().join("datasets/identify");
+    let o = run(
+        dir.path(),
+        &[
+            "identify",
+            &helix.join("helix_step.csv").display().to_string(),
+            "--scene",
+            &helix.join("helix.toml").display().to_string(),
+            "--fix",
+            "C10=1Pa",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("the scene at its starting constants cannot run this trace"),
+        "{}",
+        text(&o)
+    );
+}

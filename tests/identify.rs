@@ -67,7 +67,10 @@ fn recovers_known_constants_from_a_noisy_step() {
         starts: 2,
         ..Settings::default()
     };
-    let id = identify(vec![start], &settings).expect("identifies");
+    let id = identify(vec![start], &settings)
+        .expect("runs")
+        .identified()
+        .expect("identifies");
     println!("{}", serde_json::to_string_pretty(&id).unwrap());
     let truth_of = |name: &str| match name {
         "C10" => th[0],
@@ -115,7 +118,10 @@ fn identify_from(
         starts: 1,
         ..Settings::default()
     };
-    identify(vec![exp], &settings).expect("identifies")
+    identify(vec![exp], &settings)
+        .expect("runs")
+        .identified()
+        .expect("identifies")
 }
 
 fn estimate<'a>(
@@ -315,7 +321,7 @@ fn residual_jacobian_and_cost_match_finite_differences() {
             xs[j] += d;
             let mut rs = DVector::zeros(n);
             let mut q = p.clone();
-            assert!(q.eval(&xs, &mut rs, None), "{:?}", q.counts.last_failure());
+            assert!(q.eval(&xs, &mut rs, None), "{:?}", q.failure());
             rs
         };
         let fd = (at(-2.0 * h) - at(2.0 * h) + (at(h) - at(-h)) * 8.0) / (12.0 * h);
@@ -351,7 +357,10 @@ fn residual_jacobian_and_cost_match_finite_differences() {
         ],
         ..Settings::default()
     };
-    let id = identify(vec![exp.clone()], &settings).unwrap();
+    let id = identify(vec![exp.clone()], &settings)
+        .unwrap()
+        .identified()
+        .unwrap();
     let mut scene = exp.scene.clone();
     set_theta(&mut scene, &id.theta);
     let o = simulate(
@@ -411,7 +420,10 @@ fn coverage(
             starts: 1,
             ..Settings::default()
         };
-        let id = identify(vec![exp], &settings).expect("identifies");
+        let id = identify(vec![exp], &settings)
+            .expect("runs")
+            .identified()
+            .expect("identifies");
         for p in &id.parameters {
             let c = all.iter().find(|c| c.name == p.name).unwrap();
             let ci = p.ci95.expect("an interval");
@@ -625,6 +637,7 @@ fn arms_auto_chooses_the_number_of_arms_the_trace_was_made_with() {
         dea_fit::fit::lm::Control::default()
     })
     .expect("selects");
+    let id = id.identified().expect("identifies");
     for c in &table {
         println!("{c:?}");
     }
@@ -664,7 +677,10 @@ fn profiles_agree_with_the_linearised_interval_where_the_problem_is_nearly_linea
         profiles: vec!["C10".into(), "nv".into()],
         ..Settings::default()
     };
-    let id = identify(vec![trace(&truth, &ch, 31)], &settings).expect("identifies");
+    let id = identify(vec![trace(&truth, &ch, 31)], &settings)
+        .expect("runs")
+        .identified()
+        .expect("identifies");
     assert_eq!(id.profiles.len(), 2);
     for p in &id.profiles {
         let e = estimate(&id, &p.name);
@@ -724,4 +740,84 @@ fn a_run_far_from_the_start_stops_at_its_work_budget() {
     far[at("arm2.k")] *= 100.0;
     let why = problem.simulate_at(&far, false).expect_err("over budget");
     assert!(why.contains("step budget exhausted"), "{why}");
+}
+
+/// The texts of an SVG chart's `<text>` elements whose opening tag contains `attr`.
+fn svg_texts(svg: &str, attr: &str) -> Vec<String> {
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| {
+            let (tag, rest) = t.split_once('>')?;
+            tag.contains(attr).then(|| {
+                rest.split("</text>")
+                    .next()
+                    .unwrap_or("")
+                    .trim()
+                    .to_string()
+            })
+        })
+        .collect()
+}
+
+/// The report charts, for each measured channel, the scaled sensitivities
+/// θ·∂y/∂θ / σ of the channel to every free constant over time, linked from the
+/// page with a caption that says what is plotted; the legend names every free
+/// constant, and the y ticks read as distinct numbers (charts once labelled every
+/// tick "0.0").
+#[test]
+fn the_report_charts_each_channels_sensitivities_to_the_free_constants() {
+    let d = super::support::repo().join("datasets/identify");
+    let dir = tempfile::tempdir().unwrap();
+    let p = |f: &str| d.join(f).display().to_string();
+    let o = super::support::run(
+        dir.path(),
+        &[
+            "identify",
+            &p("step.csv"),
+            "--scene",
+            &p("stack.toml"),
+            "--free",
+            "C10,nv,eps_r",
+            "--starts",
+            "1",
+            "--report",
+            "rep",
+            "--out",
+            "fit.json",
+        ],
+    );
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let rep = dir.path().join("rep");
+    let page = std::fs::read_to_string(rep.join("index.md")).unwrap();
+    assert!(
+        page.contains("θ·∂y/∂θ / σ for each free constant θ"),
+        "{page}"
+    );
+    for channel in ["contraction", "capacitance"] {
+        let name = format!("sensitivities1-{channel}.svg");
+        assert!(
+            page.contains(&format!("![{name}]({name})")),
+            "{name} is not linked:\n{page}"
+        );
+        let svg = std::fs::read_to_string(rep.join(&name)).unwrap();
+        let texts = svg_texts(&svg, "");
+        for c in ["C10", "nv", "eps_r"] {
+            assert!(texts.iter().any(|t| t == c), "{name}: no legend entry {c}");
+        }
+        let y_ticks = svg_texts(&svg, "text-anchor=\"end\"");
+        let mut distinct: Vec<f64> = y_ticks
+            .iter()
+            .map(|t| t.parse().unwrap_or_else(|_| panic!("{name}: y tick '{t}'")))
+            .collect();
+        distinct.dedup();
+        assert!(
+            distinct.len() >= 3 && distinct.len() == y_ticks.len(),
+            "{name}: y ticks {y_ticks:?}"
+        );
+    }
 }

@@ -2,11 +2,12 @@
 //! simulator in the loop (`dea_fit::identify`).
 
 use dea_fit::fit::lm::{Checkpoint, Control};
+use dea_fit::identify::failure::Failure;
 use dea_fit::identify::material::{material_file, validate, Validation};
 use dea_fit::identify::noise::{Sigma, SigmaSource};
 use dea_fit::identify::problem::{ChannelKind, Experiment};
 use dea_fit::identify::selection::{select_arms, Candidate};
-use dea_fit::identify::{identify_with, Identification, Settings};
+use dea_fit::identify::{identify_with, Identification, Run, Settings};
 use dea_fit::io::trace;
 use dea_fit::observe::{Progress, Trace as TraceFile};
 use dea_fit::report::format::table;
@@ -88,6 +89,14 @@ struct Printed<'a> {
     arms_selection: Option<&'a [Candidate]>,
     validation: &'a [Validation],
     fit_file: String,
+}
+
+/// What `--json` prints for a failed run: the failure and no fit file (`null`).
+#[derive(Serialize)]
+struct PrintedFailure<'a> {
+    #[serde(flatten)]
+    failure: &'a Failure,
+    fit_file: Option<String>,
 }
 
 /// A `--sigma NAME=VALUE`.
@@ -201,7 +210,7 @@ pub fn run(a: Args) -> Result<i32> {
         c.max_wall = a.max_time.map(std::time::Duration::from_secs_f64);
         c
     };
-    let (id, selection) = match a.arms.as_deref() {
+    let (run, selection) = match a.arms.as_deref() {
         None => (identify_with(exps, &settings, &control)?, None),
         Some("auto") => {
             let (id, table) = select_arms(exps, &settings, &control)?;
@@ -214,6 +223,13 @@ pub fn run(a: Args) -> Result<i32> {
             )
         }
     };
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    let id = match run {
+        Run::Identified(id) => *id,
+        Run::Failed(f) => return Ok(failed(&f, a.output.json)),
+    };
     // With as many arms as θ has (θ = model parameters, k and τ per arm, nv, εr):
     // `--arms auto` may have chosen another number than the scene's.
     let n_arms = (id.theta.len() - base.material.params.len() - 2) / 2;
@@ -223,9 +239,6 @@ pub fn run(a: Args) -> Result<i32> {
     };
     for e in &mut kept {
         e.scene.material.viscous.arms.resize(n_arms, placeholder);
-    }
-    if let Some(b) = &bar {
-        b.finish_and_clear();
     }
     let validation: Vec<Validation> = held
         .iter()
@@ -287,6 +300,45 @@ pub fn run(a: Args) -> Result<i32> {
         }
     }
     Ok(id.status.exit_code(a.output.strict))
+}
+
+/// Print a failed run (JSON or text) and give its exit status, 1: no fit file or
+/// report is written. (A failed `--arms auto` is the failure of its largest
+/// candidate, before there is a comparison to print.)
+fn failed(f: &Failure, json: bool) -> i32 {
+    use dea_fit::report::format::si;
+    if json {
+        let p = PrintedFailure {
+            failure: f,
+            fit_file: None,
+        };
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&p).expect("a failure serialises")
+        );
+        return 1;
+    }
+    let mut s = format!("{}\n", f.reason);
+    for st in &f.starts {
+        let at: Vec<String> = st
+            .constants
+            .iter()
+            .map(|c| format!("{} = {}", c.name, si(c.value, &c.unit)))
+            .collect();
+        s.push_str(&format!(
+            "  start {} ({}): {}\n",
+            st.start,
+            at.join(", "),
+            st.reason
+        ));
+    }
+    let v = &f.solver;
+    s.push_str(&format!(
+        "solver: {} start(s), {} simulator runs, {:.3} s\nstatus: {}\nhint: {}\nnothing written (no fit file, no report)\n",
+        v.starts, v.simulator_runs, v.seconds, f.status, f.hint
+    ));
+    print!("{s}");
+    1
 }
 
 /// The printed summary: parameters, channels, solver, status and warnings.
@@ -378,17 +430,19 @@ fn summary(id: &Identification, validation: &[Validation]) -> String {
 
 /// The `--arms auto` comparison, with the chosen row marked.
 fn arms_table(t: &[Candidate], chosen: usize) -> String {
+    let or_dash = |v: Option<f64>, digits: usize| {
+        v.map(|v| format!("{v:.digits$}"))
+            .unwrap_or_else(|| "—".into())
+    };
     let rows: Vec<Vec<String>> = t
         .iter()
         .map(|c| {
             vec![
                 format!("{}{}", c.arms, if c.arms == chosen { " ←" } else { "" }),
                 c.free.to_string(),
-                format!("{:.4}", c.chi2_per_dof),
-                c.aicc
-                    .map(|a| format!("{a:.2}"))
-                    .unwrap_or_else(|| "—".into()),
-                format!("{:.2}", c.bic),
+                or_dash(c.chi2_per_dof, 4),
+                or_dash(c.aicc, 2),
+                or_dash(c.bic, 2),
                 c.status.to_string(),
                 if c.eligible { "yes" } else { "no" }.into(),
             ]

@@ -29,8 +29,9 @@ pub struct Args {
     #[arg(long, value_parser = parse_method)]
     method: Option<Method>,
     /// Also integrate the forward sensitivities to the material parameters: adds
-    /// dstretch_d_<param> and dC_d_<param> columns to the trajectory, a chart, and
-    /// the scaled sensitivities to the summary.
+    /// the derivatives of stretch, length, capacitance and current to every
+    /// parameter as trajectory columns (dlength_d_C10_m_per_Pa, …), a chart, and the
+    /// scaled sensitivities to the summary.
     #[arg(long)]
     sensitivities: bool,
     /// Report directory (default reports/sim-<scene>).

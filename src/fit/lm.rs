@@ -25,6 +25,12 @@ pub trait LeastSquares {
     /// Residuals into `r` and, if asked, the Jacobian ∂r/∂p into `jac`.
     /// Returns false when `p` is outside the model's domain or a value is not finite.
     fn eval(&mut self, p: &[f64], r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>) -> bool;
+    /// Why the last [`LeastSquares::eval`] that returned false did, if the problem
+    /// knows (a simulation that pulled in, a constant outside the model's domain);
+    /// a search that cannot start reports it.
+    fn failure(&self) -> Option<String> {
+        None
+    }
 }
 
 /// Stopping rules.
@@ -176,7 +182,8 @@ impl Lm {
             evaluations: 1,
         };
         if !problem.eval(&lm.x, &mut lm.r, Some(&mut lm.jac)) {
-            return Err(lm.finish(Termination::Failed("not finite at the start".into())));
+            let why = problem.failure().unwrap_or_else(|| "not finite".into());
+            return Err(lm.finish(Termination::Failed(format!("at the start: {why}"))));
         }
         lm.cost = 0.5 * lm.r.norm_squared();
         Ok(lm)

@@ -10,9 +10,11 @@
 //! ```
 //! Modules: [`params`] (names, θ in a scene, search coordinates), [`problem`]
 //! (residuals and exact Jacobian with the simulator inside), [`noise`] (σ per
-//! channel), [`search`] (multi-start), [`assessment`] (what the traces pin down).
+//! channel), [`search`] (multi-start), [`assessment`] (what the traces pin down),
+//! [`failure`] (a run without a result).
 
 pub mod assessment;
+pub mod failure;
 pub mod material;
 pub mod noise;
 pub mod params;
@@ -27,6 +29,7 @@ use crate::fit::lm::{Control, LeastSquares, LmSettings, Termination};
 use crate::fit::Status;
 use crate::sim::RunOptions;
 use assessment::{assess, Assessment, Context, Estimate, WARN_CORRELATION};
+use failure::Failure;
 use nalgebra::{DMatrix, DVector};
 use noise::{Sigma, SigmaSource};
 use problem::{ChannelKind, Experiment, Problem};
@@ -190,47 +193,97 @@ pub struct Identification {
     /// (the range the constants were identified over).
     #[serde(skip)]
     pub stretch_range: (f64, f64),
-    /// The simulations at the optimum, one per experiment (for reports).
+    /// The simulations at the optimum, one per experiment, with their sensitivities
+    /// (for reports).
     #[serde(skip)]
     pub runs: Vec<crate::sim::Outcome>,
 }
 
+/// What an identification of usable input gives: the identified constants, or a
+/// run without a result (status `failed`, [`failure`]).
+#[derive(Debug, Clone)]
+pub enum Run {
+    /// Constants with their uncertainty (any status but `failed`).
+    Identified(Box<Identification>),
+    /// Nothing estimated.
+    Failed(Box<Failure>),
+}
+
+impl Run {
+    /// The status of the run.
+    pub fn status(&self) -> Status {
+        match self {
+            Run::Identified(id) => id.status,
+            Run::Failed(f) => f.status,
+        }
+    }
+
+    /// The identification, or the failure.
+    pub fn identified(self) -> std::result::Result<Identification, Box<Failure>> {
+        match self {
+            Run::Identified(id) => Ok(*id),
+            Run::Failed(f) => Err(f),
+        }
+    }
+}
+
 /// Identify the material constants of `experiments` (one scene per trace, sharing
 /// the material) under `settings`, without observers.
-pub fn identify(experiments: Vec<Experiment>, settings: &Settings) -> Result<Identification> {
+pub fn identify(experiments: Vec<Experiment>, settings: &Settings) -> Result<Run> {
     identify_with(experiments, settings, &|_| Control::default())
 }
 
 /// [`identify`] with the [`Control`] (progress, trace, checkpoint, wall time) that
 /// `control` makes for each start (index `settings.starts` is the polish).
+///
+/// `Err` is unusable input: refused settings, traces the problem cannot be posed
+/// on, and a scene that the simulator refuses to start on a trace at the starting
+/// constants (its guard: domain, rest state, step and memory budget), since then
+/// the input as given cannot run. A run that starts and fails numerically (a
+/// pull-in the trace does not show, an integrator failure) at every start of the
+/// search is a [`Run::Failed`] with each start's reason.
 pub fn identify_with(
     experiments: Vec<Experiment>,
     settings: &Settings,
     control: &(dyn Fn(usize) -> Control + Sync),
-) -> Result<Identification> {
+) -> Result<Run> {
     settings.check()?;
     let t0 = Instant::now();
     let (mut problem, all, given) = prepare(experiments, settings)?;
+    let profiled = profile_indices(&problem, settings)?;
     let (n, k) = problem.dims();
     let x_start = problem.x_of(&problem.theta);
     let design = search::starts(&problem, x_start, settings.starts, settings.seed)?;
     let ms = search::run_all(&problem, &design, &settings.lm, control);
+    let mut iterations: usize = ms.runs.iter().map(|r| r.1.iterations).sum();
+    let solver = |problem: &Problem, iterations: usize, termination: String| SolverSummary {
+        method: "multi-start bounded Levenberg-Marquardt (argmin), forward-sensitivity Jacobian"
+            .into(),
+        starts: settings.starts,
+        starts_at_best: ms.at_best,
+        iterations,
+        simulator_runs: problem.counts.get().0 + problem.counts.get().1,
+        sensitivity_runs: problem.counts.get().1,
+        seconds: t0.elapsed().as_secs_f64(),
+        termination,
+        final_costs: ms.waterfall(),
+    };
     let Some(best) = ms.best().cloned() else {
-        let why = problem
-            .counts
-            .last_failure()
-            .unwrap_or_else(|| ms.runs[0].1.termination.to_string());
-        return Err(Error::settings(format!(
-            "no start could simulate the traces: {why}"
-        ))
-        .with_hint("check that the scene reproduces the trace's drive without pull-in, and that the starting constants are of the right magnitude"));
+        let s = solver(&problem, iterations, "every start failed".into());
+        return Ok(Run::Failed(Box::new(Failure::no_start(&problem, &ms, s))));
+    };
+    let failed_at_best = |problem: &Problem, iterations: usize, why: String| {
+        let s = solver(problem, iterations, best.termination.to_string());
+        Ok(Run::Failed(Box::new(Failure::at_best(problem, why, s))))
     };
     // σ from the residuals for the channels not given, then a polish from the best.
     let mut x = best.x.clone();
     let mut termination = best.termination.clone();
-    let mut iterations: usize = ms.runs.iter().map(|r| r.1.iterations).sum();
     if given.iter().flatten().any(|g| !g) {
-        let r = residuals(&mut problem, &x)?;
+        let r = match residuals(&mut problem, &x) {
+            Ok(r) => r,
+            Err(why) => return failed_at_best(&problem, iterations, why),
+        };
         reestimate_sigma(&mut problem, &given, &r, k);
         let mut p = problem.clone();
         let polish = crate::fit::lm::search(
@@ -249,18 +302,15 @@ pub fn identify_with(
     // The optimum: residuals, Jacobian, assessment.
     let mut r = DVector::zeros(n);
     let mut jac = DMatrix::zeros(n, k);
-    if !problem.eval(&x, &mut r, Some(&mut jac)) {
-        return Err(Error::settings(format!(
-            "the optimum could not be re-simulated: {}",
-            problem.counts.last_failure().unwrap_or_default()
-        )));
-    }
+    let runs = match problem.optimum(&x, &mut r, &mut jac) {
+        Ok(runs) => runs,
+        Err(why) => return failed_at_best(&problem, iterations, why),
+    };
     let theta = problem.theta_at(&x);
-    let runs = problem.outcomes_at(&theta)?;
     let rss = r.norm_squared();
     let ctx = context(&problem, &runs);
     let assessment = assess(&problem.free, &x, &jac, rss, &ctx);
-    let profiles = profiles(&problem, &x, rss, &jac, settings)?;
+    let profiles = profiles(&problem, &x, rss, &jac, &profiled, settings);
     let experiments = channel_fits(&problem, &given, &r);
     let warnings = warnings(&problem, &assessment, &runs, ms.at_best, settings.starts);
     let status = if !matches!(termination, Termination::Converged(_)) {
@@ -273,8 +323,7 @@ pub fn identify_with(
         Status::Warning
     };
     let (aicc, bic) = information_criteria(rss, n, k);
-    let (plain, sens) = problem.counts.get();
-    Ok(Identification {
+    Ok(Run::Identified(Box::new(Identification {
         status,
         fixed: all
             .iter()
@@ -284,19 +333,7 @@ pub fn identify_with(
         parameters: assessment.estimates.clone(),
         warnings,
         experiments,
-        solver: SolverSummary {
-            method:
-                "multi-start bounded Levenberg-Marquardt (argmin), forward-sensitivity Jacobian"
-                    .into(),
-            starts: settings.starts,
-            starts_at_best: ms.at_best,
-            iterations,
-            simulator_runs: plain + sens,
-            sensitivity_runs: sens,
-            seconds: t0.elapsed().as_secs_f64(),
-            termination: termination.to_string(),
-            final_costs: ms.waterfall(),
-        },
+        solver: solver(&problem, iterations, termination.to_string()),
         cost: 0.5 * rss,
         chi2_per_dof: rss / (n - k) as f64,
         aicc,
@@ -311,7 +348,7 @@ pub fn identify_with(
                 (a.min(s.stretch), b.max(s.stretch))
             }),
         runs,
-    })
+    })))
 }
 
 /// The problem: constants chosen, fixed values set, σ of every channel (given, or
@@ -369,6 +406,18 @@ fn prepare(
             "{n} measured values for {k} free constants: nothing to estimate"
         ))
         .with_hint("fix some constants (--fix) or give longer traces"));
+    }
+    // The input as given must start: the simulator's guard (domain, rest state,
+    // step and memory budget) on each trace at the starting constants.
+    for e in &problem.experiments {
+        let mut scene = e.scene.clone();
+        params::set_theta(&mut scene, &problem.theta);
+        crate::sim::budget::check(&scene).map_err(|err| {
+            Error::settings(format!(
+                "{}: the scene at its starting constants cannot run this trace: {err}",
+                e.name
+            ))
+        })?;
     }
     Ok((problem, all, given))
 }
@@ -450,18 +499,10 @@ fn unresolved_drive(e: &Experiment) -> Option<String> {
     })
 }
 
-/// The profiles `settings.profiles` asks for, in parallel; a name that is not a
-/// free constant is refused.
-fn profiles(
-    problem: &Problem,
-    x: &[f64],
-    rss: f64,
-    jac: &DMatrix<f64>,
-    settings: &Settings,
-) -> Result<Vec<profile::Profile>> {
-    use rayon::prelude::*;
-    let u = crate::fit::diagnostics::uncertainty(jac, rss);
-    let idx: Vec<usize> = settings
+/// The free constants `settings.profiles` names, as indices into the free list; a
+/// name that is not a free constant is refused (before the search).
+fn profile_indices(problem: &Problem, settings: &Settings) -> Result<Vec<usize>> {
+    settings
         .profiles
         .iter()
         .map(|n| {
@@ -475,23 +516,32 @@ fn profiles(
                         .with_hint(format!("the free constants: {}", free.join(", ")))
                 })
         })
-        .collect::<Result<_>>()?;
-    Ok(idx
-        .par_iter()
-        .map(|&j| profile::profile(problem, x, 0.5 * rss, j, u.std_error[j], &settings.lm))
-        .collect())
+        .collect()
 }
 
-/// Scaled residuals at x.
-fn residuals(problem: &mut Problem, x: &[f64]) -> Result<DVector<f64>> {
+/// The profiles of the free constants `idx`, in parallel.
+fn profiles(
+    problem: &Problem,
+    x: &[f64],
+    rss: f64,
+    jac: &DMatrix<f64>,
+    idx: &[usize],
+    settings: &Settings,
+) -> Vec<profile::Profile> {
+    use rayon::prelude::*;
+    let u = crate::fit::diagnostics::uncertainty(jac, rss);
+    idx.par_iter()
+        .map(|&j| profile::profile(problem, x, 0.5 * rss, j, u.std_error[j], &settings.lm))
+        .collect()
+}
+
+/// Scaled residuals at x, or why there are none.
+fn residuals(problem: &mut Problem, x: &[f64]) -> std::result::Result<DVector<f64>, String> {
     let mut r = DVector::zeros(problem.dims().0);
-    if !problem.eval(x, &mut r, None) {
-        return Err(Error::settings(format!(
-            "the best start could not be re-simulated: {}",
-            problem.counts.last_failure().unwrap_or_default()
-        )));
+    match problem.eval(x, &mut r, None) {
+        true => Ok(r),
+        false => Err(problem.failure().unwrap_or_default()),
     }
-    Ok(r)
 }
 
 /// Rows of the residual vector per (experiment, channel), in problem order.

@@ -16,7 +16,7 @@ use crate::sim::{
 };
 use nalgebra::{DMatrix, DVector};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 pub use crate::io::trace::ChannelKind;
 
@@ -85,8 +85,6 @@ pub struct Counts {
     pub runs: AtomicUsize,
     /// Simulator runs with sensitivities.
     pub sensitivity_runs: AtomicUsize,
-    /// Why the last evaluation that failed did (any copy).
-    pub last_failure: Mutex<Option<String>>,
 }
 
 impl Counts {
@@ -96,17 +94,6 @@ impl Counts {
             self.runs.load(Ordering::Relaxed),
             self.sensitivity_runs.load(Ordering::Relaxed),
         )
-    }
-
-    /// Why the last failed evaluation failed.
-    pub fn last_failure(&self) -> Option<String> {
-        self.last_failure.lock().ok().and_then(|g| g.clone())
-    }
-
-    fn fail(&self, why: String) {
-        if let Ok(mut g) = self.last_failure.lock() {
-            *g = Some(why);
-        }
     }
 }
 
@@ -140,6 +127,9 @@ pub struct Problem {
     pub budgets: Vec<Option<usize>>,
     /// Work done so far (shared by clones).
     pub counts: Arc<Counts>,
+    /// Why this copy's last evaluation failed ([`LeastSquares::failure`]); each
+    /// start's copy keeps its own.
+    failure: Option<String>,
 }
 
 impl Problem {
@@ -178,6 +168,7 @@ impl Problem {
             run,
             budgets,
             counts: Arc::default(),
+            failure: None,
         })
     }
 
@@ -220,8 +211,7 @@ impl Problem {
 
     /// Run every experiment at θ (with sensitivities if asked), the lean run without
     /// the report's work ([`crate::sim::trajectory`]): the trajectories, or why θ
-    /// gives no usable one (an error, a failure, a pull-in the trace does not show,
-    /// or too few samples).
+    /// gives no usable one ([`unusable`]).
     pub fn simulate_at(
         &mut self,
         theta: &[f64],
@@ -244,47 +234,51 @@ impl Problem {
             }
             .fetch_add(1, Ordering::Relaxed);
             let o = trajectory(&e.scene, &opts).map_err(|err| format!("{}: {err}", e.name))?;
-            if o.status != RunStatus::Completed {
-                return Err(format!("{}: {} ({})", e.name, o.status, o.message));
-            }
-            let np = o.sensitivities.as_ref().map(|s| s.theta.len());
-            if np.is_some_and(|np| np != theta.len()) {
-                return Err(format!(
-                    "{}: sensitivities to {np:?} constants, not the {} of θ (an arm lumped away?)",
-                    e.name,
-                    theta.len()
-                ));
-            }
-            if o.samples.len() != e.rows() {
-                return Err(format!(
-                    "{}: {} samples for {} trace rows",
-                    e.name,
-                    o.samples.len(),
-                    e.rows()
-                ));
+            if let Some(why) = unusable(e, &RunView::from(&o), theta.len()) {
+                return Err(why);
             }
             out.push(o);
         }
         Ok(out)
     }
 
-    /// The full simulations (with the report's warnings) of every experiment at θ.
-    pub fn outcomes_at(&mut self, theta: &[f64]) -> crate::Result<Vec<Outcome>> {
-        let opts = self.run;
-        self.experiments
-            .iter_mut()
-            .map(|e| {
-                set_theta(&mut e.scene, theta);
-                simulate(&e.scene, &opts)
-            })
-            .collect()
+    /// At the optimum x: the full simulation of every experiment with its
+    /// sensitivities (the report draws both), and the residuals and the Jacobian
+    /// from them, so one sensitivity run per experiment serves the assessment and
+    /// the report. Err: why x gives no usable run.
+    pub fn optimum(
+        &mut self,
+        x: &[f64],
+        r: &mut DVector<f64>,
+        jac: &mut DMatrix<f64>,
+    ) -> std::result::Result<Vec<Outcome>, String> {
+        let theta = self.theta_at(x);
+        let opts = RunOptions {
+            sensitivities: true,
+            ..self.run
+        };
+        let mut out = Vec::with_capacity(self.experiments.len());
+        for e in &mut self.experiments {
+            set_theta(&mut e.scene, &theta);
+            self.counts.sensitivity_runs.fetch_add(1, Ordering::Relaxed);
+            let o = simulate(&e.scene, &opts).map_err(|err| format!("{}: {err}", e.name))?;
+            if let Some(why) = unusable(e, &RunView::from(&o), theta.len()) {
+                return Err(why);
+            }
+            out.push(o);
+        }
+        let runs: Vec<RunView> = out.iter().map(RunView::from).collect();
+        match self.fill(x, &runs, r, Some(jac)) {
+            true => Ok(out),
+            false => Err("a non-finite residual or sensitivity at the optimum".into()),
+        }
     }
 
-    /// Residuals (and Jacobian) from the outcomes at x.
+    /// Residuals (and Jacobian) from the runs at x.
     fn fill(
         &self,
         x: &[f64],
-        runs: &[Trajectory],
+        runs: &[RunView],
         r: &mut DVector<f64>,
         mut jac: Option<&mut DMatrix<f64>>,
     ) -> bool {
@@ -298,7 +292,7 @@ impl Problem {
                     }
                     let m = simulated(ch.kind, s0, &o.samples[i]);
                     r[row] = (m - y) / ch.sigma;
-                    if let (Some(j), Some(se)) = (jac.as_deref_mut(), &o.sensitivities) {
+                    if let (Some(j), Some(se)) = (jac.as_deref_mut(), o.sensitivities) {
                         for (col, c) in self.free.iter().enumerate() {
                             let d = sensitivity(ch.kind, se, i, c.index);
                             j[(row, col)] = d * c.space.dtheta_dx(x[col]) / ch.sigma;
@@ -310,6 +304,60 @@ impl Problem {
         }
         r.iter().all(|v| v.is_finite()) && jac.is_none_or(|j| j.iter().all(|v| v.is_finite()))
     }
+}
+
+/// What the residuals need of a run, lean ([`Trajectory`]) or full ([`Outcome`]).
+struct RunView<'a> {
+    status: RunStatus,
+    message: &'a str,
+    samples: &'a [Sample],
+    sensitivities: Option<&'a Sensitivities>,
+}
+
+impl<'a> From<&'a Trajectory> for RunView<'a> {
+    fn from(o: &'a Trajectory) -> Self {
+        RunView {
+            status: o.status,
+            message: &o.message,
+            samples: &o.samples,
+            sensitivities: o.sensitivities.as_ref(),
+        }
+    }
+}
+
+impl<'a> From<&'a Outcome> for RunView<'a> {
+    fn from(o: &'a Outcome) -> Self {
+        RunView {
+            status: o.integrator.status,
+            message: &o.integrator.message,
+            samples: &o.samples,
+            sensitivities: o.sensitivities.as_ref(),
+        }
+    }
+}
+
+/// Why a run of `e` at a θ of `n_theta` constants gives no usable trajectory, if it
+/// does not: a failure or a pull-in the trace does not show, sensitivities to
+/// another θ (an arm lumped away), or too few samples.
+fn unusable(e: &Experiment, run: &RunView, n_theta: usize) -> Option<String> {
+    if run.status != RunStatus::Completed {
+        return Some(format!("{}: {} ({})", e.name, run.status, run.message));
+    }
+    let np = run.sensitivities.map(|s| s.theta.len());
+    if np.is_some_and(|np| np != n_theta) {
+        return Some(format!(
+            "{}: sensitivities to {np:?} constants, not the {n_theta} of θ (an arm lumped away?)",
+            e.name
+        ));
+    }
+    (run.samples.len() != e.rows()).then(|| {
+        format!(
+            "{}: {} samples for {} trace rows",
+            e.name,
+            run.samples.len(),
+            e.rows()
+        )
+    })
 }
 
 impl LeastSquares for Problem {
@@ -325,23 +373,27 @@ impl LeastSquares for Problem {
             .map(|c| (c, theta[c.index]))
             .find(|(_, v)| !v.is_finite())
         {
-            self.counts.fail(format!("{} = {v}", c.name));
+            self.failure = Some(format!("{} = {v}", c.name));
             return false;
         }
         match self.simulate_at(&theta, jac.is_some()) {
             Ok(runs) => {
+                let runs: Vec<RunView> = runs.iter().map(RunView::from).collect();
                 let ok = self.fill(x, &runs, r, jac);
                 if !ok {
-                    self.counts
-                        .fail("a non-finite residual or sensitivity".into());
+                    self.failure = Some("a non-finite residual or sensitivity".into());
                 }
                 ok
             }
             Err(why) => {
-                self.counts.fail(why);
+                self.failure = Some(why);
                 false
             }
         }
+    }
+
+    fn failure(&self) -> Option<String> {
+        self.failure.clone()
     }
 }
 

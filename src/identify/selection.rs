@@ -12,7 +12,7 @@
 
 use super::noise::Sigma;
 use super::problem::Experiment;
-use super::{identify_with, Identification, Settings};
+use super::{identify_with, Run, Settings};
 use crate::error::{Error, Result};
 use crate::fit::lm::Control;
 use crate::material::file::Arm;
@@ -31,12 +31,12 @@ pub struct Candidate {
     pub arms: usize,
     /// Free constants.
     pub free: usize,
-    /// χ²/(N − p) at the common σ.
-    pub chi2_per_dof: f64,
-    /// AICc (None when undefined).
+    /// χ²/(N − p) at the common σ (None: the candidate failed).
+    pub chi2_per_dof: Option<f64>,
+    /// AICc (None when undefined or the candidate failed).
     pub aicc: Option<f64>,
-    /// BIC.
-    pub bic: f64,
+    /// BIC (None: the candidate failed).
+    pub bic: Option<f64>,
     /// Its status.
     pub status: crate::fit::Status,
     /// Eligible (a status that does not block, AICc defined).
@@ -78,12 +78,14 @@ fn arms(experiments: &[Experiment], n: usize) -> Vec<Arm> {
 }
 
 /// Fit 0 … [`MAX_ARMS`] arms and choose (module documentation): the chosen
-/// identification and the comparison.
+/// identification and the comparison. A candidate that fails is not eligible; when
+/// the largest fails there is no common σ, and the selection is that failure (with
+/// no comparison).
 pub fn select_arms(
     experiments: Vec<Experiment>,
     settings: &Settings,
     control: &(dyn Fn(usize) -> Control + Sync),
-) -> Result<(Identification, Vec<Candidate>)> {
+) -> Result<(Run, Vec<Candidate>)> {
     if settings
         .fix
         .iter()
@@ -118,11 +120,14 @@ pub fn select_arms(
         }
         s
     };
-    let largest = identify_with(
+    let largest = match identify_with(
         with_arms(MAX_ARMS),
         &settings_for(MAX_ARMS, settings),
         control,
-    )?;
+    )? {
+        Run::Identified(id) => id,
+        failed => return Ok((failed, Vec::new())),
+    };
     // The common σ: the largest candidate's, per channel kind (the first experiment
     // that has the channel).
     let mut common = settings.clone();
@@ -141,18 +146,29 @@ pub fn select_arms(
             control,
         )?);
     }
-    fits.push(largest);
+    fits.push(Run::Identified(largest));
     let table: Vec<Candidate> = fits
         .iter()
         .enumerate()
-        .map(|(n, f)| Candidate {
-            arms: n,
-            free: f.parameters.len(),
-            chi2_per_dof: f.chi2_per_dof,
-            aicc: f.aicc,
-            bic: f.bic,
-            status: f.status,
-            eligible: !f.status.is_blocking() && f.aicc.is_some(),
+        .map(|(n, f)| match f {
+            Run::Identified(f) => Candidate {
+                arms: n,
+                free: f.parameters.len(),
+                chi2_per_dof: Some(f.chi2_per_dof),
+                aicc: f.aicc,
+                bic: Some(f.bic),
+                status: f.status,
+                eligible: !f.status.is_blocking() && f.aicc.is_some(),
+            },
+            Run::Failed(f) => Candidate {
+                arms: n,
+                free: f.free.len(),
+                chi2_per_dof: None,
+                aicc: None,
+                bic: None,
+                status: f.status,
+                eligible: false,
+            },
         })
         .collect();
     let best = table

@@ -1,12 +1,14 @@
 //! Report of an identification: every trace against the model per channel, the
-//! residuals over their noise, the correlation matrix as a picture, the multi-start
-//! waterfall, and a Markdown page linking them.
+//! residuals over their noise, the scaled sensitivities of each channel to the free
+//! constants, the correlation matrix as a picture, the multi-start waterfall, and a
+//! Markdown page linking them.
 
-use super::format::{si, table};
-use super::plot::{Chart, Series, Style};
+use super::format::{si, sig, table};
+use super::plot::{nth_line, Chart, Series, Style};
 use crate::error::{Error, Result};
 use crate::identify::material::Validation;
-use crate::identify::problem::{simulated, ChannelKind, Experiment};
+use crate::identify::params;
+use crate::identify::problem::{sensitivity, simulated, Channel, ChannelKind, Experiment};
 use crate::identify::Identification;
 use crate::io::write::atomic_write;
 use plotters::prelude::*;
@@ -117,6 +119,14 @@ pub fn write(
             }
             .write_svg(&dir.join(&rname))?;
             let _ = writeln!(md, "![{name}]({name})\n![{rname}]({rname})\n");
+            if let Some(sname) = sensitivity_chart(id, e, ei, c, sigma, dir)? {
+                let noise = format!("{} {unit}", sig(sigma * f, 4));
+                let _ = writeln!(
+                    md,
+                    "Scaled sensitivities of the {kind}: θ·∂y/∂θ / σ for each free constant θ, the first-order change of the simulated {kind} y, in units of its noise σ = {noise}, for a 100 % change of θ, at the identified constants. A constant whose curve is small everywhere is weakly pinned down by this channel; two constants with proportional curves cannot be told apart by it.\n\n![{sname}]({sname})\n",
+                    kind = c.kind,
+                );
+            }
         }
     }
     let costs: Vec<(f64, f64)> = id
@@ -222,6 +232,58 @@ pub fn write(
     let page = dir.join("index.md");
     atomic_write(&page, md.as_bytes())?;
     Ok(page)
+}
+
+/// The chart of θk·∂y/∂θk / σ against time for channel `c` of experiment `ei` (`e`)
+/// and every free constant θk, at the identified constants: its file name, or None
+/// when the run has no sensitivities.
+fn sensitivity_chart(
+    id: &Identification,
+    e: &Experiment,
+    ei: usize,
+    c: &Channel,
+    sigma: f64,
+    dir: &Path,
+) -> Result<Option<String>> {
+    let o = &id.runs[ei];
+    let Some(se) = &o.sensitivities else {
+        return Ok(None);
+    };
+    let constants = params::constants(&e.scene);
+    let series = id
+        .parameters
+        .iter()
+        .filter_map(|p| constants.iter().find(|k| k.name == p.name))
+        .enumerate()
+        .map(|(j, k)| {
+            let (color, style) = nth_line(j);
+            Series {
+                label: k.name.clone(),
+                points: o
+                    .samples
+                    .iter()
+                    .enumerate()
+                    .map(|(i, s)| {
+                        let d = id.theta[k.index] * sensitivity(c.kind, se, i, k.index) / sigma;
+                        (s.time_s, d)
+                    })
+                    .filter(|(_, d)| d.is_finite())
+                    .collect(),
+                color,
+                style,
+            }
+        })
+        .collect();
+    let name = format!("sensitivities{}-{}.svg", ei + 1, c.kind);
+    Chart {
+        title: format!("{}: {} sensitivities θ·∂y/∂θ / σ", e.name, c.kind),
+        x_label: "time (s)".into(),
+        y_label: format!("θ·∂({})/∂θ / σ  (noise units)", c.kind),
+        series,
+        log_x: false,
+    }
+    .write_svg(&dir.join(&name))?;
+    Ok(Some(name))
 }
 
 /// The correlation matrix of the free constants as coloured cells (blue −1 … white

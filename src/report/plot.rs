@@ -51,18 +51,32 @@ pub struct Chart {
     pub log_x: bool,
 }
 
+/// The palette (Tableau 10); a colour index beyond it repeats it.
+const PALETTE: [RGBColor; 10] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+    RGBColor(255, 127, 14),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(23, 190, 207),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+];
+
 fn color(i: usize) -> RGBColor {
-    const P: [RGBColor; 8] = [
-        RGBColor(31, 119, 180),
-        RGBColor(214, 39, 40),
-        RGBColor(44, 160, 44),
-        RGBColor(148, 103, 189),
-        RGBColor(255, 127, 14),
-        RGBColor(140, 86, 75),
-        RGBColor(227, 119, 194),
-        RGBColor(23, 190, 207),
-    ];
-    P[i % P.len()]
+    PALETTE[i % PALETTE.len()]
+}
+
+/// The colour and style of the `i`-th of many model curves on one chart (one per
+/// parameter): a colour each, drawn dashed once the palette repeats, so that twice
+/// as many curves as colours stay apart.
+pub fn nth_line(i: usize) -> (usize, Style) {
+    match i < PALETTE.len() {
+        true => (i, Style::Line),
+        false => (i, Style::Dashed),
+    }
 }
 
 fn range(vals: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
@@ -83,6 +97,30 @@ fn range(vals: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
         0.5 * lo.abs().max(1.0)
     };
     (lo - pad, hi + pad)
+}
+
+/// The label of a tick at `v` on a linear axis from `lo` to `hi`: as many decimals
+/// as a tenth of the span needs (plotters' own labels stop at 5 decimals, so an axis
+/// of 10⁻⁷ read "0.0" at every tick), in scientific notation when the axis' largest
+/// magnitude is below 10⁻³ or at least 10⁵; "0" at zero.
+fn tick_label(v: f64, lo: f64, hi: f64) -> String {
+    let step = (hi - lo).abs() / 10.0;
+    if !(v.is_finite() && step.is_finite() && step > 0.0) {
+        return format!("{v}");
+    }
+    if v.abs() < 1e-9 * step {
+        return "0".into();
+    }
+    let step_exp = step.log10().floor();
+    let magnitude = lo.abs().max(hi.abs());
+    if !(1e-3..1e5).contains(&magnitude) {
+        // one mantissa precision for the whole axis
+        let digits = (magnitude.log10().floor() - step_exp).max(0.0) as usize;
+        format!("{v:.digits$e}")
+    } else {
+        let digits = (-step_exp).max(0.0) as usize;
+        format!("{v:.digits$}")
+    }
 }
 
 impl Chart {
@@ -152,6 +190,7 @@ impl Chart {
                     .configure_mesh()
                     .x_desc(self.x_label.as_str())
                     .y_desc(self.y_label.as_str())
+                    .y_label_formatter(&|v| tick_label(*v, y0, y1))
                     .light_line_style(RGBColor(235, 235, 235))
                     .draw()?;
                 for s in &self.series {
@@ -197,7 +236,9 @@ impl Chart {
                             .draw_series(DashedLineSeries::new(pts, 6, 4, c.stroke_width(2)))?
                             .label(s.label.as_str())
                             .legend(move |(x, y)| {
-                                PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(1))
+                                EmptyElement::at((x, y))
+                                    + PathElement::new(vec![(0, 0), (7, 0)], c.stroke_width(2))
+                                    + PathElement::new(vec![(12, 0), (20, 0)], c.stroke_width(2))
                             }),
                     };
                 }
@@ -216,5 +257,30 @@ impl Chart {
         }
         root.present()?;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::tick_label;
+
+    /// Neighbouring ticks read differently at every scale (an axis of 10⁻⁷ once
+    /// read "0.0" at every tick).
+    #[test]
+    fn tick_labels_tell_neighbours_apart() {
+        let labels = |lo: f64, hi: f64, ticks: &[f64]| -> Vec<String> {
+            ticks.iter().map(|&v| tick_label(v, lo, hi)).collect()
+        };
+        assert_eq!(
+            labels(0.0, 1e-7, &[0.0, 2e-8, 4e-8]),
+            ["0", "2.0e-8", "4.0e-8"]
+        );
+        assert_eq!(labels(-0.5, 0.5, &[-0.4, 0.0, 0.1]), ["-0.4", "0", "0.1"]);
+        assert_eq!(labels(0.0, 30.0, &[5.0, 10.0]), ["5", "10"]);
+        assert_eq!(
+            labels(0.0, 2e5, &[5e4, 1e5, 1.5e5]),
+            ["5.0e4", "1.0e5", "1.5e5"]
+        );
+        assert_eq!(labels(1.0, 1.002, &[1.0005]), ["1.0005"]);
     }
 }

@@ -2,7 +2,7 @@
 //! and a Markdown summary; and the trajectory CSV.
 
 use super::format::si;
-use super::plot::{band, Chart, Series, Style};
+use super::plot::{band, nth_line, Chart, Series, Style};
 use crate::error::Result;
 use crate::io::write::atomic_write;
 use crate::sim::sampling::Band;
@@ -18,9 +18,37 @@ fn opt(v: f64) -> String {
     }
 }
 
-/// Column key of a sensitivity parameter: its name without the unit.
-fn param_key(name: &str) -> &str {
-    name.split(' ').next().unwrap_or(name)
+/// The rows (sample × parameter) of one output in [`Sensitivities`].
+type Rows = fn(&Sensitivities) -> &Vec<Vec<f64>>;
+
+/// The sensitivity outputs of a trajectory: the column of the quantity, its SI unit
+/// (empty: dimensionless) and its rows.
+const SENSITIVITY_COLUMNS: [(&str, &str, Rows); 4] = [
+    ("stretch", "", |se| &se.stretch),
+    ("length", "m", |se| &se.length),
+    ("capacitance", "F", |se| &se.capacitance),
+    ("current", "A", |se| &se.current),
+];
+
+/// The CSV header of ∂`quantity`/∂`param`: `d<quantity>_d_<name>` with the unit
+/// `<quantity unit>_per_<parameter unit>`, from a parameter named as
+/// [`Sensitivities::params`] does (`C10 (Pa)`, `nv (Pa s)`, `eps_r`):
+/// `dlength_d_C10_m_per_Pa`, `dstretch_d_eps_r`.
+fn sensitivity_header(quantity: &str, unit: &str, param: &str) -> String {
+    let (name, p_unit) = match param.split_once(" (") {
+        Some((n, u)) => (n, u.trim_end_matches(')').replace(' ', "_")),
+        None => (param, String::new()),
+    };
+    let mut h = format!("d{quantity}_d_{name}");
+    if !unit.is_empty() {
+        h.push('_');
+        h.push_str(unit);
+    }
+    if !p_unit.is_empty() {
+        h.push_str("_per_");
+        h.push_str(&p_unit);
+    }
+    h
 }
 
 /// Scaled sensitivity of a parameter: over the run, the largest |θj·∂λ/∂θj| (the
@@ -58,18 +86,19 @@ pub fn scaled_sensitivities(se: &Sensitivities) -> Vec<ScaledSensitivity> {
     v
 }
 
-/// The trajectory as CSV text (SI units in the header); with sensitivities, the
-/// columns `dstretch_d_<param>` and `dC_d_<param>` (per SI unit of the parameter).
+/// The trajectory as CSV text (SI units in the header); with sensitivities, for each
+/// of stretch, length, capacitance and current the derivative of that output to
+/// every parameter (per SI unit of the parameter; headers by [`sensitivity_header`],
+/// e.g. `dcurrent_d_eps_r_A`, `dlength_d_C10_m_per_Pa`), empty at a pull-in sample.
 pub fn trajectory_csv(o: &Outcome) -> String {
     let mut s = String::from(
         "time_s,input_V,voltage_V,stretch,length_m,stroke_m,capacitance_F,current_A,power_W,leakage_power_W,alpha_rad,reference,sensed_contraction",
     );
     if let Some(se) = &o.sensitivities {
-        for p in &se.params {
-            let _ = write!(s, ",dstretch_d_{}", param_key(p));
-        }
-        for p in &se.params {
-            let _ = write!(s, ",dC_d_{}", param_key(p));
+        for (quantity, unit, _) in SENSITIVITY_COLUMNS {
+            for p in &se.params {
+                let _ = write!(s, ",{}", sensitivity_header(quantity, unit, p));
+            }
         }
     }
     s.push('\n');
@@ -92,8 +121,10 @@ pub fn trajectory_csv(o: &Outcome) -> String {
             x.sensed_contraction
         );
         if let Some(se) = &o.sensitivities {
-            for v in se.stretch[k].iter().chain(&se.capacitance[k]) {
-                let _ = write!(s, ",{}", opt(*v));
+            for (_, _, rows) in SENSITIVITY_COLUMNS {
+                for v in &rows(se)[k] {
+                    let _ = write!(s, ",{}", opt(*v));
+                }
             }
         }
         s.push('\n');
@@ -286,17 +317,20 @@ pub fn write(o: &Outcome, dir: &Path) -> Result<PathBuf> {
             x_label: "time (s)".into(),
             y_label: "θ·∂λ/∂θ".into(),
             series: (0..se.params.len())
-                .map(|j| Series {
-                    label: se.params[j].clone(),
-                    points: o
-                        .samples
-                        .iter()
-                        .zip(&se.stretch)
-                        .filter(|(_, r)| r[j].is_finite())
-                        .map(|(s, r)| (s.time_s, se.theta[j] * r[j]))
-                        .collect(),
-                    color: j,
-                    style: Style::Line,
+                .map(|j| {
+                    let (color, style) = nth_line(j);
+                    Series {
+                        label: se.params[j].clone(),
+                        points: o
+                            .samples
+                            .iter()
+                            .zip(&se.stretch)
+                            .filter(|(_, r)| r[j].is_finite())
+                            .map(|(s, r)| (s.time_s, se.theta[j] * r[j]))
+                            .collect(),
+                        color,
+                        style,
+                    }
                 })
                 .collect(),
             log_x: false,

@@ -52,7 +52,11 @@ impl Config {
                 .split(',')
                 .map(|r| {
                     Reader::parse(r).unwrap_or_else(|| {
-                        panic!("DEA_FIT_FUZZ_READERS: unknown reader '{r}' (tensile, relaxation, lcr, manifest, scene, fit)")
+                        let all: Vec<&str> = Reader::ALL.iter().map(|r| r.name()).collect();
+                        panic!(
+                            "DEA_FIT_FUZZ_READERS: unknown reader '{r}' ({})",
+                            all.join(", ")
+                        )
                     })
                 })
                 .collect(),

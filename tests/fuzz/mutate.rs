@@ -1,5 +1,5 @@
-//! Mutations: of any text (numbers, bytes, lines), of a scene's TOML structure and of
-//! a fit file's JSON structure. Each returns a description for the reproducer and a
+//! Mutations: of any text (numbers, bytes, lines), of a scene's TOML structure, and
+//! of the JSON structure of a fit file and an identified material file. Each returns a description for the reproducer and a
 //! short kind (what it did, without the values) that names hangs and aborts.
 
 use rand::seq::SliceRandom;
@@ -392,16 +392,20 @@ pub fn scene(text: &str, rng: &mut ChaCha8Rng) -> (Mutated, Option<String>) {
 /// Parameter names of other models, and misspellings, for renamed parameters.
 const PARAM_NAMES: [&str; 7] = ["mu", "C01", "C11", "alpha1", "Jm", "c10", "mu1"];
 
-/// A structure-aware mutation of a hyperelastic fit file: parameters reordered,
-/// removed, renamed, duplicated or given another unit or an extreme value; the model
-/// renamed; a count changed.
-pub fn fit(text: &str, rng: &mut ChaCha8Rng) -> Mutated {
+/// Mutation `op` (0–5) of parameter `i` of a material file's parameter list
+/// (`[{name, unit, value, …}]`): the list reversed, the parameter removed, renamed
+/// (to one of `names`), duplicated, given another unit (of `units`) or an extreme
+/// value. Returns what was done and its kind.
+fn parameter_list(
+    params: &mut Vec<serde_json::Value>,
+    op: usize,
+    i: usize,
+    names: &[&str],
+    units: &[&str],
+    rng: &mut ChaCha8Rng,
+) -> (String, &'static str) {
     use serde_json::{json, Value};
-    let mut v: Value = serde_json::from_str(text).expect("a shipped fit file");
-    let params = v["parameters"].as_array_mut().expect("parameters");
-    let n = params.len();
-    let i = rng.gen_range(0..n);
-    let (what, kind) = match rng.gen_range(0..8) {
+    match op {
         0 => {
             params.reverse();
             ("parameters reversed".to_string(), "parameters reordered")
@@ -414,7 +418,7 @@ pub fn fit(text: &str, rng: &mut ChaCha8Rng) -> Mutated {
             )
         }
         2 => {
-            let new = *PARAM_NAMES.choose(rng).unwrap();
+            let new = *names.choose(rng).unwrap();
             let what = format!("parameter {} renamed {new}", params[i]["name"]);
             params[i]["name"] = json!(new);
             (what, "parameter renamed")
@@ -428,12 +432,12 @@ pub fn fit(text: &str, rng: &mut ChaCha8Rng) -> Mutated {
             )
         }
         4 => {
-            let unit = *["kPa", "1", "m", "MPa", ""].choose(rng).unwrap();
+            let unit = *units.choose(rng).unwrap();
             let what = format!("parameter {} unit → {unit}", params[i]["name"]);
             params[i]["unit"] = json!(unit);
             (what, "unit changed")
         }
-        5 => {
+        _ => {
             let x = params[i]["value"].as_f64().unwrap_or(1.0);
             let new = [
                 json!(0.0),
@@ -450,6 +454,27 @@ pub fn fit(text: &str, rng: &mut ChaCha8Rng) -> Mutated {
             params[i]["value"] = new;
             (what, "value changed")
         }
+    }
+}
+
+/// A structure-aware mutation of a hyperelastic fit file: parameters reordered,
+/// removed, renamed, duplicated or given another unit or an extreme value; the model
+/// renamed; a count changed.
+pub fn fit(text: &str, rng: &mut ChaCha8Rng) -> Mutated {
+    use serde_json::{json, Value};
+    let mut v: Value = serde_json::from_str(text).expect("a shipped fit file");
+    let params = v["parameters"].as_array_mut().expect("parameters");
+    let n = params.len();
+    let i = rng.gen_range(0..n);
+    let (what, kind) = match rng.gen_range(0..8) {
+        op @ 0..=5 => parameter_list(
+            params,
+            op,
+            i,
+            &PARAM_NAMES,
+            &["kPa", "1", "m", "MPa", ""],
+            rng,
+        ),
         6 => {
             let m = *dea_fit::material::hyperelastic::MODEL_NAMES
                 .choose(rng)
@@ -470,6 +495,123 @@ pub fn fit(text: &str, rng: &mut ChaCha8Rng) -> Mutated {
             v[key] = new;
             (what, "field changed")
         }
+    };
+    let bytes = serde_json::to_vec_pretty(&v).expect("JSON prints");
+    Mutated {
+        bytes,
+        what,
+        kind: kind.into(),
+    }
+}
+
+/// Names a parameter of an identified file is renamed to: of every part, of other
+/// models, of arms that do not follow on, and misspelt.
+const IDENTIFIED_NAMES: [&str; 14] = [
+    "C10", "C30", "C01", "mu", "alpha1", "nv", "eps_r", "arm1.k", "arm1.tau", "arm2.k", "arm5.k",
+    "arm0.tau", "arm1.K", "Nv",
+];
+
+/// A structure-aware mutation of an identified material file (schema
+/// `dea-fit/identified/1`): a parameter list of one part (hyperelastic, viscous,
+/// dielectric) mutated as a fit file's; a parameter's uncertainty made inconsistent
+/// (a negative or absurd σ, `identifiable` dropped, null or not a boolean); a part
+/// removed; the fitted stretch range inverted, extreme or of an unknown mode; the
+/// model renamed; the schema or the provenance replaced.
+pub fn identified(text: &str, rng: &mut ChaCha8Rng) -> Mutated {
+    use serde_json::{json, Value};
+    let mut v: Value = serde_json::from_str(text).expect("a shipped identified file");
+    let parts: Vec<&str> = ["hyperelastic", "viscous", "dielectric"]
+        .into_iter()
+        .filter(|p| v[*p].is_object())
+        .collect();
+    let part = *parts.choose(rng).unwrap();
+    let (what, kind) = match rng.gen_range(0..10) {
+        op @ 0..=5 => {
+            let params = v[part]["parameters"].as_array_mut().expect("parameters");
+            let i = rng.gen_range(0..params.len());
+            let units = ["Pa", "kPa", "s", "ms", "Pa s", "1", ""];
+            let (what, kind) = parameter_list(params, op, i, &IDENTIFIED_NAMES, &units, rng);
+            (format!("{part}: {what}"), kind)
+        }
+        6 => {
+            let params = v[part]["parameters"].as_array_mut().expect("parameters");
+            let i = rng.gen_range(0..params.len());
+            let p = &mut params[i];
+            let name = p["name"].clone();
+            let (key, new) = match rng.gen_range(0..5) {
+                0 => ("std_error", json!(-1.0)),
+                1 => ("std_error", json!(1e300)),
+                2 => ("identifiable", Value::Null),
+                3 => ("identifiable", json!("yes")),
+                _ => ("identifiable", json!(p["identifiable"] != json!(true))),
+            };
+            let what = format!("{part}: parameter {name} {key} → {new}");
+            p[key] = new;
+            (what, "uncertainty changed")
+        }
+        7 => {
+            v.as_object_mut().unwrap().remove(part);
+            (format!("part {part} removed"), "part removed")
+        }
+        8 => {
+            let ranges = v["hyperelastic"]["per_mode"]
+                .as_array_mut()
+                .expect("per_mode");
+            let k = rng.gen_range(0..ranges.len());
+            let r = &mut ranges[k];
+            let what = match rng.gen_range(0..3) {
+                0 => {
+                    let (lo, hi) = (r["stretch_min"].clone(), r["stretch_max"].clone());
+                    r["stretch_min"] = hi;
+                    r["stretch_max"] = lo;
+                    "stretch range inverted".to_string()
+                }
+                1 => {
+                    let new = [json!(0.0), json!(-1.0), json!(1e300), Value::Null]
+                        .choose(rng)
+                        .unwrap()
+                        .clone();
+                    let what = format!("stretch_max → {new}");
+                    r["stretch_max"] = new;
+                    what
+                }
+                _ => {
+                    r["mode"] = json!("biaxial");
+                    "mode → biaxial".to_string()
+                }
+            };
+            (what, "stretch range changed")
+        }
+        _ => match rng.gen_range(0..3) {
+            0 => {
+                let m = *dea_fit::material::hyperelastic::MODEL_NAMES
+                    .choose(rng)
+                    .unwrap();
+                let what = format!("model {} → {m}", v["hyperelastic"]["model"]);
+                v["hyperelastic"]["model"] = json!(m);
+                (what, "model renamed")
+            }
+            1 => {
+                let new = *[
+                    "dea-fit/hyperelastic-fit/1",
+                    "dea-fit/relaxation-fit/1",
+                    "dea-fit/identified/2",
+                ]
+                .choose(rng)
+                .unwrap();
+                v["schema"] = json!(new);
+                (format!("schema → {new}"), "schema changed")
+            }
+            _ => {
+                let new = [Value::Null, json!([]), json!("scene.toml")]
+                    .choose(rng)
+                    .unwrap()
+                    .clone();
+                let what = format!("provenance → {new}");
+                v["provenance"] = new;
+                (what, "provenance changed")
+            }
+        },
     };
     let bytes = serde_json::to_vec_pretty(&v).expect("JSON prints");
     Mutated {

@@ -15,6 +15,7 @@ use dea_fit::units::{parse_quantity, Dimension};
 use rand::seq::SliceRandom;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
+use serde_json::Value;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -29,10 +30,13 @@ pub enum Reader {
     /// An actuator trace, as identification reads it: the trace on the worked
     /// example's stack (its measured voltage rebuilt as the input), simulated.
     Trace,
+    /// An identified material file (`dea-fit/identified/1`) as a scene's whole
+    /// material (`[material] identified = ...`), simulated.
+    Identified,
 }
 
 impl Reader {
-    pub const ALL: [Reader; 7] = [
+    pub const ALL: [Reader; 8] = [
         Reader::Tensile,
         Reader::Relaxation,
         Reader::Lcr,
@@ -40,6 +44,7 @@ impl Reader {
         Reader::Scene,
         Reader::Fit,
         Reader::Trace,
+        Reader::Identified,
     ];
 
     pub fn name(self) -> &'static str {
@@ -51,6 +56,7 @@ impl Reader {
             Reader::Scene => "scene",
             Reader::Fit => "fit",
             Reader::Trace => "trace",
+            Reader::Identified => "identified",
         }
     }
 
@@ -79,6 +85,17 @@ pub enum Oracle {
     /// If accepted, the scene's material parameters are these (a fit file read by
     /// name gives its values in model order, whatever order the file lists them in).
     Params(Vec<f64>),
+    /// If accepted, the scene's material is this (an identified file read by name,
+    /// every part).
+    Material(Material),
+}
+
+/// The material an identified file states, by name: the hyperelastic parameters in
+/// model order, and the parts it holds (Nv and the arms' (k, τ), εr).
+pub struct Material {
+    params: Vec<f64>,
+    viscous: Option<(f64, Vec<(f64, f64)>)>,
+    eps_r: Option<f64>,
 }
 
 /// How a case ended.
@@ -117,6 +134,19 @@ const FIT_HOST: &str = "datasets/scenes/stack_step_5kV_damped.toml";
 /// The worked example whose stack scene hosts the trace cases.
 const TRACE_HOST_DIR: &str = "datasets/identify";
 
+/// The host scene's material block, which a material file's case replaces.
+const HOST_MATERIAL: &str = "hyperelastic = { preset = \"vhb4910-yeoh\" }\nviscous = { preset = \"seed-table-4.2\" }\nrelative_permittivity = 4.7\n";
+
+/// [`FIT_HOST`] with its material block replaced by `material`.
+fn host(material: &str) -> Vec<u8> {
+    let text = String::from_utf8(file(FIT_HOST).1).unwrap();
+    assert!(
+        text.contains(HOST_MATERIAL),
+        "{FIT_HOST}: the material block changed"
+    );
+    text.replace(HOST_MATERIAL, material).into_bytes()
+}
+
 /// The shipped files a reader's cases start from; each seed is the file set of a
 /// case before mutation.
 pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
@@ -141,6 +171,11 @@ pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
             .into_iter()
             .filter(|p| p.ends_with(".json"))
             .collect(),
+        Reader::Identified => dir("tests/data/identified")
+            .into_iter()
+            .filter(|p| p.ends_with(".json"))
+            .chain(["tests/data/bad_cli/files/material_file_identified.json".into()])
+            .collect(),
     };
     paths
         .iter()
@@ -154,17 +189,20 @@ pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
                     }))
                 }
                 Reader::Fit => {
-                    let host = String::from_utf8(file(FIT_HOST).1).unwrap().replace(
-                        "hyperelastic = { preset = \"vhb4910-yeoh\" }",
-                        "hyperelastic = { fit = \"fit.json\" }",
-                    );
-                    assert!(
-                        host.contains("fit.json"),
-                        "{FIT_HOST}: no preset to replace"
-                    );
+                    let material = HOST_MATERIAL
+                        .replace("{ preset = \"vhb4910-yeoh\" }", "{ fit = \"fit.json\" }");
                     set = vec![
-                        ("scene.toml".into(), host.into_bytes()),
+                        ("scene.toml".into(), host(&material)),
                         ("fit.json".into(), set[0].1.clone()),
+                    ];
+                }
+                Reader::Identified => {
+                    set = vec![
+                        (
+                            "scene.toml".into(),
+                            host("identified = \"identified.json\"\n"),
+                        ),
+                        ("identified.json".into(), set[0].1.clone()),
                     ];
                 }
                 _ => {}
@@ -174,55 +212,193 @@ pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
         .collect()
 }
 
+/// The values of a material file's parameter list by name, in the order of `want`
+/// (name, unit): Err(why it must be refused) for a count that does not match, a
+/// name missing or repeated, a unit that does not match; Ok(None) when a value is
+/// not a number (the reader refuses it by type).
+fn by_name(params: &[Value], want: &[(String, String)]) -> Result<Option<Vec<f64>>, String> {
+    if params.len() != want.len() {
+        return Err("parameter count does not match the model".into());
+    }
+    let mut values = Vec::new();
+    for (name, unit) in want {
+        let found: Vec<_> = params.iter().filter(|p| p["name"] == *name).collect();
+        match found.as_slice() {
+            [p] if p["unit"] == *unit => match p["value"].as_f64() {
+                Some(x) => values.push(x),
+                None => return Ok(None),
+            },
+            [_] => return Err("parameter unit does not match the model".into()),
+            _ => return Err("parameter name missing or repeated".into()),
+        }
+    }
+    Ok(Some(values))
+}
+
+/// The parameters a hyperelastic part (`{model, form, parameters}`) must read as, by
+/// name in model order ([`by_name`]; an unknown model must be refused); Ok(None)
+/// when it is not shaped like one.
+fn hyperelastic_by_name(v: &Value) -> Result<Option<Vec<f64>>, String> {
+    let (Some(model), Some(params)) = (v["model"].as_str(), v["parameters"].as_array()) else {
+        return Ok(None);
+    };
+    let form = serde_json::from_value(v["form"].clone()).unwrap_or(OgdenForm::Seed);
+    let Ok(m) = ModelSpec::new(model, form).build() else {
+        return Err("unknown model".into());
+    };
+    let want: Vec<(String, String)> = m
+        .params()
+        .iter()
+        .map(|p| (p.name.clone(), p.unit.to_string()))
+        .collect();
+    by_name(params, &want)
+}
+
+/// An oracle from a by-name reading.
+fn oracle_of<T>(read: Result<Option<T>, String>, f: impl FnOnce(T) -> Oracle) -> Oracle {
+    match read {
+        Ok(Some(x)) => f(x),
+        Ok(None) => Oracle::Any,
+        Err(why) => Oracle::Refuse(why),
+    }
+}
+
 /// What a fit file must read as: its parameters by name in model order, or the
 /// reason it must be refused (unknown model, a name, unit or count that does not
 /// match the model). `Any` when it is not shaped like a fit file at all.
 fn fit_oracle(json: &[u8]) -> Oracle {
-    let Ok(v) = serde_json::from_slice::<serde_json::Value>(json) else {
+    let Ok(v) = serde_json::from_slice::<Value>(json) else {
         return Oracle::Any;
     };
-    let (Some(model), Some(params)) = (v["model"].as_str(), v["parameters"].as_array()) else {
+    oracle_of(hyperelastic_by_name(&v), Oracle::Params)
+}
+
+/// What an identified material file must read as: every part by name (the
+/// hyperelastic parameters in model order; `nv`, then each arm's `k` and `tau` for
+/// arms 1…N, N from the count of `armJ.k` names; `eps_r`), or the reason it must be
+/// refused: another schema, provenance that is not an object, no hyperelastic part,
+/// a part whose names, units or count do not match, or an uncertainty that is not
+/// one (a negative σ, a σ without `identifiable`, an `identifiable` that is not a
+/// boolean).
+fn identified_oracle(json: &[u8]) -> Oracle {
+    let Ok(v) = serde_json::from_slice::<Value>(json) else {
         return Oracle::Any;
     };
-    let form = serde_json::from_value(v["form"].clone()).unwrap_or(OgdenForm::Seed);
-    let Ok(m) = ModelSpec::new(model, form).build() else {
-        return Oracle::Refuse("unknown model".into());
-    };
-    let want = m.params();
-    if params.len() != want.len() {
-        return Oracle::Refuse("parameter count does not match the model".into());
+    if v["schema"] != dea_fit::material::file::IDENTIFIED_SCHEMA {
+        return Oracle::Refuse("schema is not dea-fit/identified/1".into());
     }
-    let mut values = Vec::new();
-    for w in want {
-        let found: Vec<_> = params.iter().filter(|p| p["name"] == w.name).collect();
-        match found.as_slice() {
-            [p] if p["unit"] == w.unit => match p["value"].as_f64() {
-                Some(x) => values.push(x),
-                None => return Oracle::Any,
-            },
-            [_] => return Oracle::Refuse("parameter unit does not match the model".into()),
-            _ => return Oracle::Refuse("parameter name missing or repeated".into()),
+    if !v["provenance"].is_object() {
+        return Oracle::Refuse("provenance is not a JSON object".into());
+    }
+    if !v["hyperelastic"].is_object() {
+        return Oracle::Refuse("no hyperelastic part".into());
+    }
+    let lists = ["hyperelastic", "viscous", "dielectric"]
+        .iter()
+        .filter_map(|k| v[*k]["parameters"].as_array());
+    for p in lists.flatten() {
+        let (se, id) = (&p["std_error"], &p["identifiable"]);
+        if !(id.is_null() || id.is_boolean()) {
+            return Oracle::Refuse("identifiable is not a boolean".into());
+        }
+        if se.as_f64().is_some_and(|s| s < 0.0) {
+            return Oracle::Refuse("a negative std_error".into());
+        }
+        if id.is_null() && se.is_number() {
+            return Oracle::Refuse("a std_error without identifiable".into());
         }
     }
-    Oracle::Params(values)
+    let viscous = match &v["viscous"] {
+        Value::Null => Ok(Some(None)),
+        part => {
+            let params = part["parameters"].as_array().cloned().unwrap_or_default();
+            let arms = params
+                .iter()
+                .filter_map(|p| p["name"].as_str())
+                .filter(|n| n.starts_with("arm") && n.ends_with(".k"))
+                .count();
+            let mut want = vec![("nv".to_string(), "Pa s".to_string())];
+            for j in 1..=arms {
+                want.push((format!("arm{j}.k"), "Pa".into()));
+                want.push((format!("arm{j}.tau"), "s".into()));
+            }
+            by_name(&params, &want)
+                .map(|v| v.map(|v| Some((v[0], v[1..].chunks(2).map(|a| (a[0], a[1])).collect()))))
+        }
+    };
+    let eps_r = match &v["dielectric"] {
+        Value::Null => Ok(Some(None)),
+        part => {
+            let params = part["parameters"].as_array().cloned().unwrap_or_default();
+            by_name(&params, &[("eps_r".into(), "1".into())]).map(|v| v.map(|v| Some(v[0])))
+        }
+    };
+    oracle_of(hyperelastic_by_name(&v["hyperelastic"]), |params| {
+        oracle_of(viscous, |viscous| {
+            oracle_of(eps_r, |eps_r| {
+                Oracle::Material(Material {
+                    params,
+                    viscous,
+                    eps_r,
+                })
+            })
+        })
+    })
+}
+
+impl Material {
+    /// How `scene`'s material differs from this one, if it does (exactly: both
+    /// sides parse the same decimal text, and the reader's η is k·τ).
+    fn differs(&self, scene: &Scene) -> Option<String> {
+        let m = &scene.material;
+        if m.params != self.params {
+            return Some(format!(
+                "hyperelastic: read {:?}, the file says {:?}",
+                m.params, self.params
+            ));
+        }
+        if let Some((nv, arms)) = &self.viscous {
+            let read: Vec<(f64, f64)> = m
+                .viscous
+                .arms
+                .iter()
+                .map(|a| (a.k_pa, a.eta_pa_s))
+                .collect();
+            let want: Vec<(f64, f64)> = arms.iter().map(|&(k, tau)| (k, k * tau)).collect();
+            if m.viscous.nv_pa_s != *nv || read != want {
+                return Some(format!(
+                    "viscous: read nv {} and (k, η) {read:?}, the file says nv {nv} and {want:?}",
+                    m.viscous.nv_pa_s
+                ));
+            }
+        }
+        match self.eps_r {
+            Some(e) if e != m.eps_r => Some(format!("eps_r: read {}, the file says {e}", m.eps_r)),
+            _ => None,
+        }
+    }
 }
 
 /// A case from a seed: text mutations for every reader, structure-aware ones for
-/// scenes and fit files half of the time.
+/// scenes, fit files and identified files half of the time.
 pub fn generate(r: Reader, seeds: &[Vec<(String, Vec<u8>)>], rng: &mut ChaCha8Rng) -> Case {
     let mut files = seeds.choose(rng).unwrap().clone();
-    let main = usize::from(r == Reader::Fit);
-    let structured = matches!(r, Reader::Scene | Reader::Fit) && rng.gen_bool(0.5);
+    // a material file's case mutates the file, beside the scene that reads it
+    let main = usize::from(matches!(r, Reader::Fit | Reader::Identified));
+    let structured =
+        matches!(r, Reader::Scene | Reader::Fit | Reader::Identified) && rng.gen_bool(0.5);
     let seed_text = String::from_utf8_lossy(&files[main].1).into_owned();
     let (m, refuse) = match r {
         Reader::Scene if structured => mutate::scene(&seed_text, rng),
         Reader::Fit if structured => (mutate::fit(&seed_text, rng), None),
+        Reader::Identified if structured => (mutate::identified(&seed_text, rng), None),
         _ => (mutate::text(&files[main].1, rng), None),
     };
     let Mutated { bytes, what, kind } = m;
     let oracle = match (r, refuse) {
         (_, Some(why)) => Oracle::Refuse(why),
         (Reader::Fit, None) => fit_oracle(&bytes),
+        (Reader::Identified, None) => identified_oracle(&bytes),
         _ => Oracle::Any,
     };
     files[main].1 = bytes;
@@ -251,7 +427,7 @@ pub fn replay(r: Reader, case: &Case, dir: &Path) -> String {
         Reader::Relaxation => format!("dea-fit relaxation {f} --strain 0.5 --max-terms 3 {out}"),
         Reader::Lcr => format!("dea-fit permittivity {f} --diameter 42.8mm --thickness 2.2mm"),
         Reader::Manifest => format!("dea-fit composite {f}"),
-        Reader::Scene | Reader::Fit => format!(
+        Reader::Scene | Reader::Fit | Reader::Identified => format!(
             "dea-fit simulate {f} --no-report --out {}",
             dir.join("trajectory.csv").display()
         ),
@@ -404,7 +580,7 @@ pub fn run(r: Reader, case: &Case, dir: &Path) -> Verdict {
             }
             check_fit("composite", f.status, Some(0.0), out)
         }
-        Reader::Scene | Reader::Fit => simulate(&path, &case.oracle),
+        Reader::Scene | Reader::Fit | Reader::Identified => simulate(&path, &case.oracle),
         Reader::Trace => {
             let base = Scene::read(&repo(&format!("{TRACE_HOST_DIR}/stack.toml"))).unwrap();
             let Ok(t) = dea_fit::io::trace::read(&path) else {
@@ -444,6 +620,14 @@ fn simulate(path: &Path, oracle: &Oracle) -> Verdict {
             return Verdict::Failed {
                 class: "fit file: parameters not read by name".into(),
                 detail: format!("read {:?}, the file says {want:?}", scene.material.params),
+            }
+        }
+        Oracle::Material(want) => {
+            if let Some(detail) = want.differs(&scene) {
+                return Verdict::Failed {
+                    class: "identified file: material not read by name".into(),
+                    detail,
+                };
             }
         }
         _ => {}

@@ -407,17 +407,9 @@ fn prepare(
         ))
         .with_hint("fix some constants (--fix) or give longer traces"));
     }
-    // The input as given must start: the simulator's guard (domain, rest state,
-    // step and memory budget) on each trace at the starting constants.
+    // The input as given must start at the starting constants.
     for e in &problem.experiments {
-        let mut scene = e.scene.clone();
-        params::set_theta(&mut scene, &problem.theta);
-        crate::sim::budget::check(&scene).map_err(|err| {
-            Error::settings(format!(
-                "{}: the scene at its starting constants cannot run this trace: {err}",
-                e.name
-            ))
-        })?;
+        e.check_start(&problem.theta)?;
     }
     Ok((problem, all, given))
 }

@@ -571,17 +571,12 @@ fn one_spelling_of_statuses_and_no_debug_names() {
     assert!(all.contains('—'), "{all}");
 }
 
-/// `identify` when no start can simulate the traces: a trace of a stiffer actuator
-/// (C10 = 200 kPa, pull-in near 35 kV) driven by a 25 kV step, identified with only
-/// the dashpot nv free on the worked example's stack (C10 = 69.3 kPa: pull-in at
-/// 20.8 kV). Every start pulls in, whatever nv: the run is `failed` (exit 1), says
-/// which starts failed and why, in text and in JSON (`fit_file` null), and writes no
-/// fit file and no report. The same scene with a constant fixed where it has no rest
-/// state cannot start at all: that input is refused (exit 2) before any search.
-#[test]
-fn identify_without_any_start_that_simulates_is_failed() {
+/// `stiff.toml` and `stiff.csv` in `dir`: the worked example's stack made stiffer
+/// (C10 = 200 kPa, pull-in near 35 kV) and its trace of a 25 kV step (1 s, 200
+/// samples, 0.5 µm contraction noise), which the worked example's constants (pull-in
+/// at 20.8 kV) cannot run.
+fn stiff_trace(dir: &std::path::Path) {
     let stack = repo().join("datasets/identify/stack.toml");
-    let dir = tempfile::tempdir().unwrap();
     let stiff = std::fs::read_to_string(&stack)
         .unwrap()
         .replace("C10 = \"69.3 kPa\"", "C10 = \"200 kPa\"")
@@ -589,9 +584,9 @@ fn identify_without_any_start_that_simulates_is_failed() {
         .replace("span = \"3 s\"", "span = \"1 s\"")
         .replace("samples = 1500", "samples = 200");
     assert!(stiff.contains("200 kPa") && stiff.contains("25 kV") && stiff.contains("= 200"));
-    std::fs::write(dir.path().join("stiff.toml"), stiff).unwrap();
+    std::fs::write(dir.join("stiff.toml"), stiff).unwrap();
     let synth = run(
-        dir.path(),
+        dir,
         &[
             "synth",
             "trace",
@@ -605,6 +600,20 @@ fn identify_without_any_start_that_simulates_is_failed() {
         ],
     );
     assert_eq!(synth.status.code(), Some(0), "{}", text(&synth));
+}
+
+/// `identify` when no start can simulate the traces: a trace of a stiffer actuator
+/// (C10 = 200 kPa, pull-in near 35 kV) driven by a 25 kV step, identified with only
+/// the dashpot nv free on the worked example's stack (C10 = 69.3 kPa: pull-in at
+/// 20.8 kV). Every start pulls in, whatever nv: the run is `failed` (exit 1), says
+/// which starts failed and why, in text and in JSON (`fit_file` null), and writes no
+/// fit file and no report. The same scene with a constant fixed where it has no rest
+/// state cannot start at all: that input is refused (exit 2) before any search.
+#[test]
+fn identify_without_any_start_that_simulates_is_failed() {
+    let stack = repo().join("datasets/identify/stack.toml");
+    let dir = tempfile::tempdir().unwrap();
+    stiff_trace(dir.path());
     let scene = stack.display().to_string();
     let args = |json: bool| {
         let mut a = vec![
@@ -673,4 +682,52 @@ fn identify_without_any_start_that_simulates_is_failed() {
         "{}",
         text(&o)
     );
+}
+
+/// A held-out trace the identified constants cannot run (the worked example's step
+/// identified, the stiff 25 kV trace held out: the identified stack pulls in) is a
+/// finding about the constants, not a refused input: status `warning` (exit 0), the
+/// warning names the trace and the pull-in, the JSON's validation says why, and the
+/// fit file is written.
+#[test]
+fn identify_with_a_held_out_trace_it_cannot_predict_warns() {
+    let d = repo().join("datasets/identify");
+    let dir = tempfile::tempdir().unwrap();
+    stiff_trace(dir.path());
+    let p = |f: &str| d.join(f).display().to_string();
+    let args = [
+        "identify",
+        &p("step.csv"),
+        "--scene",
+        &p("stack.toml"),
+        "--free",
+        "C10,eps_r",
+        "--starts",
+        "1",
+        "--validate",
+        "stiff.csv",
+        "--no-report",
+        "--out",
+        "fit.json",
+        "--json",
+    ];
+    let o = run(dir.path(), &args);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    check_agrees(&args, &o);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    assert_eq!(v["status"], "warning");
+    let why = v["validation"][0]["failed"].as_str().unwrap_or("");
+    assert!(why.starts_with("pull_in"), "{}", v["validation"]);
+    assert!(
+        v["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|w| w.as_str().unwrap_or("").contains(
+                "stiff.csv: the identified constants do not predict this held-out trace: pull_in"
+            )),
+        "{}",
+        v["warnings"]
+    );
+    assert!(dir.path().join("fit.json").exists());
 }

@@ -2,6 +2,7 @@
 //! simulator in the loop (`dea_fit::identify`).
 
 use dea_fit::fit::lm::{Checkpoint, Control};
+use dea_fit::fit::Status;
 use dea_fit::identify::failure::Failure;
 use dea_fit::identify::material::{material_file, validate, Validation};
 use dea_fit::identify::noise::{Sigma, SigmaSource};
@@ -162,6 +163,10 @@ pub fn run(a: Args) -> Result<i32> {
     let base = Scene::read(&a.scene)?;
     let (exps, traces) = experiments(&a.traces, &base)?;
     let (held, _) = experiments(&a.validate, &base)?;
+    // a held-out trace the scene cannot start on is refused before the search
+    for e in &held {
+        e.check_start(&dea_fit::identify::params::theta(&e.scene))?;
+    }
     // The experiments as given, for the material file and the report.
     let mut kept = exps.clone();
     let settings = Settings {
@@ -226,7 +231,7 @@ pub fn run(a: Args) -> Result<i32> {
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
-    let id = match run {
+    let mut id = match run {
         Run::Identified(id) => *id,
         Run::Failed(f) => return Ok(failed(&f, a.output.json)),
     };
@@ -244,6 +249,13 @@ pub fn run(a: Args) -> Result<i32> {
         .iter()
         .map(|e| validate(&id, e))
         .collect::<Result<_>>()?;
+    // a held-out trace the identified constants cannot run is a finding, not an error
+    for w in validation.iter().filter_map(Validation::warning) {
+        id.warnings.push(w);
+        if id.status == Status::Ok {
+            id.status = Status::Warning;
+        }
+    }
     let provenance = serde_json::json!({
         "tool": format!("dea-fit {}", env!("CARGO_PKG_VERSION")),
         "traces": traces,
@@ -383,6 +395,17 @@ fn summary(id: &Identification, validation: &[Validation]) -> String {
         }
     }
     for v in validation {
+        if let Some(why) = &v.failed {
+            ch.push(vec![
+                format!("{} (held out)", v.file),
+                "—".into(),
+                "".into(),
+                "".into(),
+                "".into(),
+                format!("not predicted: {why}"),
+                "—".into(),
+            ]);
+        }
         for c in &v.channels {
             ch.push(vec![
                 format!("{} (held out)", v.file),

@@ -256,17 +256,21 @@ pub fn identify_with(
     let design = search::starts(&problem, x_start, settings.starts, settings.seed)?;
     let ms = search::run_all(&problem, &design, &settings.lm, control);
     let mut iterations: usize = ms.runs.iter().map(|r| r.1.iterations).sum();
-    let solver = |problem: &Problem, iterations: usize, termination: String| SolverSummary {
-        method: "multi-start bounded Levenberg-Marquardt (argmin), forward-sensitivity Jacobian"
-            .into(),
-        starts: settings.starts,
-        starts_at_best: ms.at_best,
-        iterations,
-        simulator_runs: problem.counts.get().0 + problem.counts.get().1,
-        sensitivity_runs: problem.counts.get().1,
-        seconds: t0.elapsed().as_secs_f64(),
-        termination,
-        final_costs: ms.waterfall(),
+    let solver = |problem: &Problem, iterations: usize, termination: String| {
+        let (plain, sens) = problem.counts.get();
+        SolverSummary {
+            method:
+                "multi-start bounded Levenberg-Marquardt (argmin), forward-sensitivity Jacobian"
+                    .into(),
+            starts: settings.starts,
+            starts_at_best: ms.at_best,
+            iterations,
+            simulator_runs: plain + sens,
+            sensitivity_runs: sens,
+            seconds: t0.elapsed().as_secs_f64(),
+            termination,
+            final_costs: ms.waterfall(),
+        }
     };
     let Some(best) = ms.best().cloned() else {
         let s = solver(&problem, iterations, "every start failed".into());
@@ -407,17 +411,9 @@ fn prepare(
         ))
         .with_hint("fix some constants (--fix) or give longer traces"));
     }
-    // The input as given must start: the simulator's guard (domain, rest state,
-    // step and memory budget) on each trace at the starting constants.
+    // The input as given must start at the starting constants.
     for e in &problem.experiments {
-        let mut scene = e.scene.clone();
-        params::set_theta(&mut scene, &problem.theta);
-        crate::sim::budget::check(&scene).map_err(|err| {
-            Error::settings(format!(
-                "{}: the scene at its starting constants cannot run this trace: {err}",
-                e.name
-            ))
-        })?;
+        e.check_start(&problem.theta)?;
     }
     Ok((problem, all, given))
 }

@@ -75,6 +75,23 @@ impl Experiment {
     pub fn rows(&self) -> usize {
         self.scene.time.samples.len() + 1
     }
+
+    /// Refuse an experiment that cannot start at the constants θ: the simulator's
+    /// guard ([`crate::sim::budget::check`]: domain, rest state, step and memory
+    /// budget) on its scene. Input as given that cannot run is unusable, unlike a
+    /// run that starts and fails ([`super::failure`]).
+    pub fn check_start(&self, theta: &[f64]) -> crate::Result<()> {
+        let mut scene = self.scene.clone();
+        set_theta(&mut scene, theta);
+        crate::sim::budget::check(&scene)
+            .map(|_| ())
+            .map_err(|err| {
+                crate::Error::settings(format!(
+                    "{}: the scene at its starting constants cannot run this trace: {err}",
+                    self.name
+                ))
+            })
+    }
 }
 
 /// Counts of the work done, shared by every copy of a problem (the starts of a

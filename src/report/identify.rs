@@ -219,12 +219,19 @@ pub fn write(
                 ]
             })
             .collect();
-        let _ = writeln!(
-            md,
-            "Held-out trace {}:\n```\n{}```\n",
-            v.file,
-            table(&["channel", "RMSE", "%RMSE"], &rows)
-        );
+        match &v.failed {
+            Some(why) => {
+                let _ = writeln!(md, "Held-out trace {}: not predicted: {why}\n", v.file);
+            }
+            None => {
+                let _ = writeln!(
+                    md,
+                    "Held-out trace {}:\n```\n{}```\n",
+                    v.file,
+                    table(&["channel", "RMSE", "%RMSE"], &rows)
+                );
+            }
+        }
     }
     for w in &id.warnings {
         let _ = writeln!(md, "- warning: {w}");

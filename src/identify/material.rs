@@ -87,7 +87,9 @@ pub struct Validation {
     pub channels: Vec<Prediction>,
 }
 
-/// Predict `exp` (a trace not used in the fit) with the identified θ.
+/// Predict `exp` (a trace not used in the fit) with the identified θ. Its scene
+/// must hold the material as identified (the model and arms a selection chose, see
+/// [`super::selection`]), so that θ fits its layout.
 pub fn validate(id: &Identification, exp: &Experiment) -> Result<Validation> {
     let mut scene = exp.scene.clone();
     params::set_theta(&mut scene, &id.theta);

@@ -325,17 +325,17 @@ pub fn run(a: Args) -> Result<i32> {
 
 /// The printed summary: parameters, channels, solver, status and warnings.
 fn summary(id: &Identification, validation: &[Validation]) -> String {
-    use dea_fit::report::format::si;
+    use dea_fit::report::format::{constant, si};
     let mut rows = Vec::new();
-    for p in &id.parameters {
+    let derived = id.derived.iter().map(|p| (p, " (derived)"));
+    for (p, note) in id.parameters.iter().map(|p| (p, "")).chain(derived) {
+        let v = |x: f64| constant(&p.name, x, &p.unit);
         rows.push(vec![
-            p.name.clone(),
-            si(p.value, &p.unit),
-            p.std_error
-                .map(|s| si(s, &p.unit))
-                .unwrap_or_else(|| "—".into()),
+            format!("{}{note}", p.name),
+            v(p.value),
+            p.std_error.map(v).unwrap_or_else(|| "—".into()),
             p.ci95
-                .map(|c| format!("[{}, {}]", si(c[0], &p.unit), si(c[1], &p.unit)))
+                .map(|c| format!("[{}, {}]", v(c[0]), v(c[1])))
                 .unwrap_or_else(|| "—".into()),
             if p.identifiable { "yes" } else { "no" }.into(),
         ]);

@@ -32,6 +32,7 @@ pub fn material_file(
     let uncertainty = id
         .parameters
         .iter()
+        .chain(&id.derived)
         .map(|p| ParamUncertainty {
             name: p.name.clone(),
             unit: p.unit.clone(),
@@ -60,6 +61,7 @@ pub fn material_file(
             arms: m.viscous.arms.clone(),
         }),
         eps_r: Some(m.eps_r),
+        composite: m.composite,
         uncertainty,
         provenance,
     })

@@ -8,6 +8,7 @@ mod estimation;
 mod exit_status;
 mod fuzz;
 mod identify;
+mod identify_mass_fraction;
 mod material_file;
 mod models;
 mod permittivity;

@@ -56,6 +56,7 @@ fn material() -> IdentifiedMaterial {
             }],
         }),
         eps_r: Some(4.7),
+        composite: None,
         uncertainty: vec![
             unc("C10", "Pa", 69.3e3, Some(410.0), true),
             unc("C20", "Pa", -888.0, Some(2.1e3), false),

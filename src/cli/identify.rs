@@ -7,7 +7,7 @@ use dea_fit::identify::failure::Failure;
 use dea_fit::identify::material::{material_file, validate, Validation};
 use dea_fit::identify::noise::{Sigma, SigmaSource};
 use dea_fit::identify::problem::{ChannelKind, Experiment};
-use dea_fit::identify::selection::{select_arms, Candidate};
+use dea_fit::identify::selection::{flags, select, Candidate, Choose, Comparison};
 use dea_fit::identify::{identify_with, Identification, Run, Settings};
 use dea_fit::io::trace;
 use dea_fit::observe::{Progress, Trace as TraceFile};
@@ -56,6 +56,11 @@ pub struct Args {
     /// within ΔAICc ≤ 2 of the best identifiable candidate; the comparison is printed.
     #[arg(long, value_name = "auto")]
     arms: Option<String>,
+    /// `auto`: fit the invariant models (neo-hookean, mooney-rivlin, gent, yeoh) in
+    /// place of the scene's and keep the fewest constants within ΔAICc ≤ 2 of the best
+    /// identifiable candidate; with --arms auto every model with every number of arms.
+    #[arg(long, value_name = "auto")]
+    hyperelastic: Option<String>,
     /// Profile likelihoods of these free constants, comma-separated (plotted in the
     /// report, the profile 95 % interval printed).
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
@@ -88,6 +93,8 @@ struct Printed<'a> {
     id: &'a Identification,
     #[serde(skip_serializing_if = "Option::is_none")]
     arms_selection: Option<&'a [Candidate]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    hyperelastic_selection: Option<&'a [Candidate]>,
     validation: &'a [Validation],
     fit_file: String,
 }
@@ -133,6 +140,18 @@ fn parse_sigma(text: &str) -> Result<(ChannelKind, Sigma)> {
     Ok((kind, Sigma::Absolute(v)))
 }
 
+/// `--NAME auto`, or an error for anything else.
+fn auto(flag: &str, value: Option<&str>, hint: &str) -> Result<bool> {
+    match value {
+        None => Ok(false),
+        Some("auto") => Ok(true),
+        Some(other) => Err(
+            Error::settings(format!("--{flag} {other}: only auto is understood"))
+                .with_hint(hint.to_string()),
+        ),
+    }
+}
+
 /// The experiments of trace files on `base`, each file read once, with their
 /// provenance entries (file and sha256).
 fn experiments(
@@ -160,15 +179,25 @@ fn stem(p: &Path) -> String {
 
 /// Run the subcommand.
 pub fn run(a: Args) -> Result<i32> {
+    let choose = Choose {
+        arms: auto(
+            "arms",
+            a.arms.as_deref(),
+            "give the arms in the scene, or --arms auto to choose 0 to 4",
+        )?,
+        hyperelastic: auto(
+            "hyperelastic",
+            a.hyperelastic.as_deref(),
+            "give the model in the scene, or --hyperelastic auto to choose an invariant model",
+        )?,
+    };
     let base = Scene::read(&a.scene)?;
     let (exps, traces) = experiments(&a.traces, &base)?;
-    let (held, _) = experiments(&a.validate, &base)?;
+    let (mut held, _) = experiments(&a.validate, &base)?;
     // a held-out trace the scene cannot start on is refused before the search
     for e in &held {
         e.check_start(&dea_fit::identify::params::theta(&e.scene))?;
     }
-    // The experiments as given, for the material file and the report.
-    let mut kept = exps.clone();
     let settings = Settings {
         free: a.free.clone(),
         fix: a.fix.clone(),
@@ -215,17 +244,19 @@ pub fn run(a: Args) -> Result<i32> {
         c.max_wall = a.max_time.map(std::time::Duration::from_secs_f64);
         c
     };
-    let (run, selection) = match a.arms.as_deref() {
-        None => (identify_with(exps, &settings, &control)?, None),
-        Some("auto") => {
-            let (id, table) = select_arms(exps, &settings, &control)?;
-            (id, Some(table))
+    // The experiments as identified (with the chosen model and arms, when a
+    // selection chose them), for the material file and the report.
+    let (run, kept, selection) = match choose {
+        Choose {
+            arms: false,
+            hyperelastic: false,
+        } => {
+            let kept = exps.clone();
+            (identify_with(exps, &settings, &control)?, kept, None)
         }
-        Some(other) => {
-            return Err(
-                Error::settings(format!("--arms {other}: only auto is understood"))
-                    .with_hint("give the arms in the scene, or --arms auto to choose 0 to 4"),
-            )
+        _ => {
+            let (id, kept, comparison) = select(exps, &settings, choose, &control)?;
+            (Run::Identified(Box::new(id)), kept, Some(comparison))
         }
     };
     if let Some(b) = &bar {
@@ -235,15 +266,10 @@ pub fn run(a: Args) -> Result<i32> {
         Run::Identified(id) => *id,
         Run::Failed(f) => return Ok(failed(&f, a.output.json)),
     };
-    // With as many arms as θ has (θ = model parameters, k and τ per arm, nv, εr):
-    // `--arms auto` may have chosen another number than the scene's.
-    let n_arms = (id.theta.len() - base.material.params.len() - 2) / 2;
-    let placeholder = dea_fit::material::file::Arm {
-        k_pa: 1.0,
-        eta_pa_s: 1.0,
-    };
-    for e in &mut kept {
-        e.scene.material.viscous.arms.resize(n_arms, placeholder);
+    // The held-out traces on the material as identified (a selection may have
+    // changed its model and arms).
+    for e in &mut held {
+        e.scene.material = kept[0].scene.material.clone();
     }
     let validation: Vec<Validation> = held
         .iter()
@@ -267,6 +293,7 @@ pub fn run(a: Args) -> Result<i32> {
             "free": id.parameters.iter().map(|p| p.name.clone()).collect::<Vec<_>>(),
             "fixed": id.fixed.iter().map(|(n, v)| serde_json::json!({"name": n, "value": v})).collect::<Vec<_>>(),
             "starts": a.starts, "seed": a.seed, "rtol": a.rtol, "sigma": a.sigma,
+            "arms": a.arms, "hyperelastic": a.hyperelastic,
         },
     });
     let file = material_file(&id, &kept[0].scene, provenance)?;
@@ -293,7 +320,14 @@ pub fn run(a: Args) -> Result<i32> {
     if a.output.json {
         let p = Printed {
             id: &id,
-            arms_selection: selection.as_deref(),
+            arms_selection: selection
+                .as_ref()
+                .filter(|c| c.choose.arms)
+                .map(|c| c.candidates.as_slice()),
+            hyperelastic_selection: selection
+                .as_ref()
+                .filter(|c| c.choose.hyperelastic)
+                .map(|c| c.candidates.as_slice()),
             validation: &validation,
             fit_file: out.display().to_string(),
         };
@@ -302,8 +336,8 @@ pub fn run(a: Args) -> Result<i32> {
             serde_json::to_string_pretty(&p).expect("an identification serialises")
         );
     } else {
-        if let Some(t) = &selection {
-            print!("{}", arms_table(t, n_arms));
+        if let Some(c) = &selection {
+            print!("{}", selection_table(c));
         }
         print!("{}", summary(&id, &validation));
         println!("fit: {}", out.display());
@@ -355,17 +389,17 @@ fn failed(f: &Failure, json: bool) -> i32 {
 
 /// The printed summary: parameters, channels, solver, status and warnings.
 fn summary(id: &Identification, validation: &[Validation]) -> String {
-    use dea_fit::report::format::si;
+    use dea_fit::report::format::{constant, si};
     let mut rows = Vec::new();
-    for p in &id.parameters {
+    let derived = id.derived.iter().map(|p| (p, " (derived)"));
+    for (p, note) in id.parameters.iter().map(|p| (p, "")).chain(derived) {
+        let v = |x: f64| constant(&p.name, x, &p.unit);
         rows.push(vec![
-            p.name.clone(),
-            si(p.value, &p.unit),
-            p.std_error
-                .map(|s| si(s, &p.unit))
-                .unwrap_or_else(|| "—".into()),
+            format!("{}{note}", p.name),
+            v(p.value),
+            p.std_error.map(v).unwrap_or_else(|| "—".into()),
             p.ci95
-                .map(|c| format!("[{}, {}]", si(c[0], &p.unit), si(c[1], &p.unit)))
+                .map(|c| format!("[{}, {}]", v(c[0]), v(c[1])))
                 .unwrap_or_else(|| "—".into()),
             if p.identifiable { "yes" } else { "no" }.into(),
         ]);
@@ -451,34 +485,66 @@ fn summary(id: &Identification, validation: &[Validation]) -> String {
     s
 }
 
-/// The `--arms auto` comparison, with the chosen row marked.
-fn arms_table(t: &[Candidate], chosen: usize) -> String {
-    let or_dash = |v: Option<f64>, digits: usize| {
-        v.map(|v| format!("{v:.digits$}"))
-            .unwrap_or_else(|| "—".into())
-    };
-    let rows: Vec<Vec<String>> = t
+/// The comparison of `--arms auto` / `--hyperelastic auto`, with the chosen row
+/// marked (the model column when the model was chosen, the arms column when the
+/// arms were).
+fn selection_table(c: &Comparison) -> String {
+    let opt = |v: Option<f64>| v.map(|a| format!("{a:.2}")).unwrap_or_else(|| "—".into());
+    let rows: Vec<Vec<String>> = c
+        .candidates
         .iter()
-        .map(|c| {
-            vec![
-                format!("{}{}", c.arms, if c.arms == chosen { " ←" } else { "" }),
-                c.free.to_string(),
-                or_dash(c.chi2_per_dof, 4),
-                or_dash(c.aicc, 2),
-                or_dash(c.bic, 2),
-                c.status.to_string(),
-                if c.eligible { "yes" } else { "no" }.into(),
-            ]
+        .enumerate()
+        .map(|(i, k)| {
+            let mark = if i == c.chosen { " ←" } else { "" };
+            let mut row = Vec::new();
+            if c.choose.hyperelastic {
+                row.push(k.model.clone());
+            }
+            if c.choose.arms {
+                row.push(k.arms.to_string());
+            }
+            row.last_mut().expect("a chosen column").push_str(mark);
+            row.extend([
+                k.free.to_string(),
+                k.chi2_per_dof
+                    .map(|c| format!("{c:.4}"))
+                    .unwrap_or_else(|| "—".into()),
+                opt(k.aicc),
+                opt(k.delta_aicc),
+                opt(k.bic),
+                k.status.to_string(),
+                if k.eligible { "yes" } else { "no" }.into(),
+            ]);
+            row
         })
         .collect();
-    let mut s = table(
-        &[
-            "arms", "free", "χ²/dof", "AICc", "BIC", "status", "eligible",
-        ],
-        &rows,
-    );
+    let mut header = Vec::new();
+    if c.choose.hyperelastic {
+        header.push("model");
+    }
+    if c.choose.arms {
+        header.push("arms");
+    }
+    header.extend([
+        "free", "χ²/dof", "AICc", "ΔAICc", "BIC", "status", "eligible",
+    ]);
+    let mut s = table(&header, &rows);
+    for k in c.candidates.iter().filter(|k| k.failure.is_some()) {
+        s.push_str(&format!(
+            "{} with {} arm(s) failed: {}\n",
+            k.model,
+            k.arms,
+            k.failure.as_deref().unwrap_or("")
+        ));
+    }
+    let (k, from) = (&c.candidates[c.chosen], &c.candidates[c.sigma_from]);
     s.push_str(&format!(
-        "--arms auto: {chosen} arm(s), the fewest within ΔAICc ≤ 2 of the best eligible candidate (a common σ from the 4-arm fit)\n"
+        "{}: {} with {} arm(s), the fewest free constants within ΔAICc ≤ 2 of the best eligible candidate (a common σ from the {} fit with {} arm(s))\n",
+        flags(c.choose),
+        k.model,
+        k.arms,
+        from.model,
+        from.arms
     ));
     s
 }

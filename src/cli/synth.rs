@@ -412,6 +412,15 @@ fn trace(a: Args) -> Result<i32> {
         );
     }
     let _ = writeln!(s, "# param eps_r = {:e}", m.eps_r);
+    if let Some(c) = &m.composite {
+        let _ = writeln!(
+            s,
+            "# param mass_fraction = {:e} (eps_r by the {} rule fitted at {} Hz)",
+            c.mass_fraction,
+            c.mixture.rule.name(),
+            c.freq_hz
+        );
+    }
     let shown = &a.noise;
     let _ = writeln!(
         s,

@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
 /// Schema tag of composite fit files.
-pub const SCHEMA: &str = "dea-fit/composite-fit/1";
+pub const SCHEMA: &str = crate::material::file::COMPOSITE_SCHEMA;
 
 /// Upper bound of the fitted filler permittivity: a rule that needs more saturates.
 pub const EPS_FILLER_MAX: f64 = 1e7;

@@ -210,8 +210,18 @@ fn explain(free: &[Constant], j: usize, w: Weakness, weakest: &[usize], ctx: &Co
     };
     let has = |pred: &dyn Fn(Role) -> bool| pred(c.role) || partners.iter().any(|p| pred(p.role));
     let modulus = |r: Role| matches!(r, Role::LeadingModulus | Role::HigherOrder | Role::ArmK(_));
-    let why = if !ctx.capacitance && has(&|r| r == Role::EpsR) && has(&modulus) {
-        "contraction alone cannot separate εr from the moduli: the Maxwell pressure scales with εr and the elastic stress with the moduli, so only their ratio is seen; measure the capacitance too (C ∝ εr) or fix eps_r".to_string()
+    let dielectric = std::iter::once(c)
+        .chain(partners.iter().copied())
+        .find(|k| k.role.is_dielectric());
+    let why = if let Some(d) = dielectric.filter(|_| !ctx.capacitance && has(&modulus)) {
+        format!(
+            "contraction alone cannot separate εr{} from the moduli: the Maxwell pressure scales with εr and the elastic stress with the moduli, so only their ratio is seen; measure the capacitance too (C ∝ εr) or fix {}",
+            match d.role {
+                Role::MassFraction => " (here the filler mass fraction)",
+                _ => "",
+            },
+            d.name
+        )
     } else if c.role == Role::HigherOrder {
         format!(
             "the traces reach a strain of only {:.2} %, where the terms beyond the leading modulus are below the noise; fix {} or add a trace with larger strain",

@@ -32,6 +32,7 @@ pub fn material_file(
     let uncertainty = id
         .parameters
         .iter()
+        .chain(&id.derived)
         .map(|p| ParamUncertainty {
             name: p.name.clone(),
             unit: p.unit.clone(),
@@ -60,6 +61,7 @@ pub fn material_file(
             arms: m.viscous.arms.clone(),
         }),
         eps_r: Some(m.eps_r),
+        composite: m.composite,
         uncertainty,
         provenance,
     })
@@ -104,7 +106,9 @@ impl Validation {
 }
 
 /// Predict `exp` (a trace not used in the fit, checked to start before the search:
-/// [`Experiment::check_start`]) with the identified θ.
+/// [`Experiment::check_start`]) with the identified θ. Its scene must hold the
+/// material as identified (the model and arms a selection chose, see
+/// [`super::selection`]), so that θ fits its layout.
 pub fn validate(id: &Identification, exp: &Experiment) -> Result<Validation> {
     let mut scene = exp.scene.clone();
     params::set_theta(&mut scene, &id.theta);

@@ -183,6 +183,10 @@ pub struct Identification {
     pub bic: f64,
     /// Uncertainty and identifiability.
     pub assessment: Assessment,
+    /// Constants that follow from the free ones: εr of a free filler mass fraction
+    /// (σ by dεr/dw, the interval the rule's image of w's).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub derived: Vec<Estimate>,
     /// Profile likelihoods asked for (`--profiles`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub profiles: Vec<profile::Profile>,
@@ -335,6 +339,7 @@ pub fn identify_with(
             .map(|c| (c.name.clone(), theta[c.index]))
             .collect(),
         parameters: assessment.estimates.clone(),
+        derived: derived(&problem.free, &assessment.estimates),
         warnings,
         experiments,
         solver: solver(&problem, iterations, termination.to_string()),
@@ -493,6 +498,34 @@ fn unresolved_drive(e: &Experiment) -> Option<String> {
             crate::report::format::si(dt, "s")
         )
     })
+}
+
+/// εr of every free constant that sets it through a mixing rule (a filler mass
+/// fraction w): εr(w), σ = |dεr/dw|·σ_w, the interval [εr(w₋), εr(w₊)] of w's (w
+/// within its domain), identifiable when w is.
+fn derived(free: &[params::Constant], estimates: &[Estimate]) -> Vec<Estimate> {
+    use crate::material::check::MASS_FRACTION;
+    let inside = |w: f64| w.clamp(MASS_FRACTION.min, MASS_FRACTION.max);
+    free.iter()
+        .zip(estimates)
+        .filter_map(|(c, e)| {
+            let m = c.mixture?;
+            Some(Estimate {
+                name: "eps_r".into(),
+                value: m.eps_r(e.value),
+                unit: "1".into(),
+                std_error: e.std_error.map(|s| (m.deps_dw(e.value) * s).abs()),
+                ci95: e.ci95.map(|[a, b]| {
+                    let (a, b) = (m.eps_r(inside(a)), m.eps_r(inside(b)));
+                    [a.min(b), a.max(b)]
+                }),
+                identifiable: e.identifiable,
+                reason: e.reason.clone(),
+                start: m.eps_r(e.start),
+                at_bound: e.at_bound,
+            })
+        })
+        .collect()
 }
 
 /// The free constants `settings.profiles` names, as indices into the free list; a

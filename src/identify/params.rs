@@ -7,16 +7,34 @@
 //! (Pa·s), then `eps_r`. Identification keeps every arm integrated (no lumping), so
 //! θ's layout follows the scene's arms one to one.
 //!
+//! **The filler mass fraction.** When the scene's εr is a composite's mixing rule
+//! (`relative_permittivity = { composite = ..., mass_fraction = ... }`), the last
+//! entry of θ is the filler mass fraction w (`mass_fraction`, dimensionless) in
+//! place of `eps_r`: [`set_theta`] puts εr = εr(w) into the scene
+//! ([`crate::material::dielectric::Mixture`]), and the Jacobian column of w is the
+//! simulator's εr column times dεr/dw = ∂εr/∂φ·dφ/dw ([`Constant::dsim_dvalue`]),
+//! exact. εr is then not a constant of its own: it is the same physics, so `eps_r`
+//! is refused by name with the reason, and reported as derived from w.
+//!
 //! **Search coordinates x.** A constant that is positive by physics (arm k and τ, εr,
 //! Gent's Jm, a positive leading modulus C10 or μ, a positive nv) is searched as
 //! x = ln θ, so that a step is a ratio and the bound θ > 0 can never be crossed.
 //! A constant that may take either sign or be zero (higher polynomial terms such as
 //! C20, C30 or C01, Ogden pairs, nv = 0) is searched as x = θ/s with a scale s
-//! (its magnitude, or a fraction of μ0 when it is zero).
+//! (its magnitude, or a fraction of μ0 when it is zero). A mass fraction is searched
+//! linearly too, x = w/[`MASS_FRACTION_SCALE`] within [0, 0.999]
+//! ([`crate::material::check::MASS_FRACTION`]): 0, the pure matrix, must stay
+//! reachable, which ln w cannot.
 
 use crate::error::{Error, Result};
+use crate::material::check::MASS_FRACTION;
+use crate::material::dielectric::Mixture;
 use crate::material::file::Arm;
 use crate::sim::scene::Scene;
+
+/// Mass fraction per unit of the search coordinate of `mass_fraction` (the starts
+/// spread ±3 units, ±30 % about the scene's value).
+pub const MASS_FRACTION_SCALE: f64 = 0.1;
 
 /// How a constant is seen by the search.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -75,6 +93,17 @@ pub struct Constant {
     pub start_box: (f64, f64),
     /// What this constant is, for the identifiability reasons.
     pub role: Role,
+    /// The mixing rule through which this constant (a filler mass fraction) sets
+    /// the simulator's εr; None: the constant is its θ entry in the simulator.
+    pub mixture: Option<Mixture>,
+}
+
+impl Constant {
+    /// d(the simulator's parameter)/d(this constant) at its value v: dεr/dw for a
+    /// mass fraction ([`Mixture::deps_dw`]), else 1.
+    pub fn dsim_dvalue(&self, v: f64) -> f64 {
+        self.mixture.map_or(1.0, |m| m.deps_dw(v))
+    }
 }
 
 /// What a constant is in the model.
@@ -93,6 +122,15 @@ pub enum Role {
     Nv,
     /// Relative permittivity.
     EpsR,
+    /// Filler mass fraction (εr through a mixing rule).
+    MassFraction,
+}
+
+impl Role {
+    /// εr or what sets it.
+    pub fn is_dielectric(self) -> bool {
+        matches!(self, Role::EpsR | Role::MassFraction)
+    }
 }
 
 /// Every constant of a scene's material, in θ order.
@@ -138,6 +176,7 @@ pub fn constants(scene: &Scene) -> Vec<Constant> {
             bounds,
             start_box,
             role,
+            mixture: None,
         });
     }
     let np = m.params.len();
@@ -177,12 +216,32 @@ pub fn constants(scene: &Scene) -> Vec<Constant> {
             bounds: (0.0, 1e4 * scale),
             start_box: (0.0, 3.0 * scale),
             role: Role::Nv,
+            mixture: None,
         }
     });
-    let mut eps = positive("eps_r".into(), "1", k + 1, m.eps_r, 100.0, Role::EpsR);
-    eps.bounds.0 = eps.bounds.0.max(1.0);
-    eps.start_box.0 = eps.start_box.0.max(1.0);
-    out.push(eps);
+    out.push(match &m.composite {
+        Some(c) => {
+            let (w, s) = (c.mass_fraction, MASS_FRACTION_SCALE);
+            let (lo, hi) = (MASS_FRACTION.min, MASS_FRACTION.max);
+            Constant {
+                name: "mass_fraction".into(),
+                unit: "1",
+                index: k + 1,
+                start: w,
+                space: Space::Linear { scale: s },
+                bounds: (lo, hi),
+                start_box: ((w - 3.0 * s).max(lo), (w + 3.0 * s).min(hi)),
+                role: Role::MassFraction,
+                mixture: Some(c.mixture),
+            }
+        }
+        None => {
+            let mut eps = positive("eps_r".into(), "1", k + 1, m.eps_r, 100.0, Role::EpsR);
+            eps.bounds.0 = eps.bounds.0.max(1.0);
+            eps.start_box.0 = eps.start_box.0.max(1.0);
+            eps
+        }
+    });
     out
 }
 
@@ -206,6 +265,7 @@ fn positive(
         bounds: (v / range, v * range),
         start_box: (v / spread, v * spread),
         role,
+        mixture: None,
     }
 }
 
@@ -218,7 +278,7 @@ pub fn theta(scene: &Scene) -> Vec<f64> {
         th.push(a.eta_pa_s / a.k_pa);
     }
     th.push(m.viscous.nv_pa_s);
-    th.push(m.eps_r);
+    th.push(m.composite.map_or(m.eps_r, |c| c.mass_fraction));
     th
 }
 
@@ -236,7 +296,13 @@ pub fn set_theta(scene: &mut Scene, th: &[f64]) {
     }
     let n = th.len();
     m.viscous.nv_pa_s = th[n - 2];
-    m.eps_r = th[n - 1];
+    match &mut m.composite {
+        Some(c) => {
+            c.mass_fraction = th[n - 1];
+            m.eps_r = c.eps_r();
+        }
+        None => m.eps_r = th[n - 1],
+    }
 }
 
 /// The constants a run moves, and the values `--fix` sets (index in θ, value).
@@ -255,6 +321,14 @@ pub struct Chosen {
 pub fn choose(all: &[Constant], free: Option<&[String]>, fix: &[String]) -> Result<Chosen> {
     let known: Vec<&str> = all.iter().map(|c| c.name.as_str()).collect();
     let find = |name: &str, flag: &str| -> Result<&Constant> {
+        if name == "eps_r" && all.iter().any(|c| c.role == Role::MassFraction) {
+            return Err(Error::settings(format!(
+                "{flag} eps_r: this scene's εr is its composite's mixing rule at the filler mass fraction, εr = εr(mass_fraction): they are one constant, not two"
+            ))
+            .with_hint(format!(
+                "{flag} mass_fraction (εr is reported as derived from it), or give material.relative_permittivity as a number to identify eps_r itself"
+            )));
+        }
         all.iter().find(|c| c.name == name).ok_or_else(|| {
             let near = crate::material::check::did_you_mean(name, &known)
                 .map(|k| format!("did you mean {k}? "))
@@ -287,12 +361,17 @@ pub fn choose(all: &[Constant], free: Option<&[String]>, fix: &[String]) -> Resu
         };
         let c = find(name, "--fix")?;
         if let Some(v) = value {
-            let x = parse_value(v, c.unit).map_err(|e| {
+            let x = parse_value(v, c).map_err(|e| {
                 Error::settings(format!("--fix {name}={v}: {e}")).with_hint(format!(
                     "give {name} in {} (e.g. {name}=1.5e5) or with a unit",
                     c.unit
                 ))
             })?;
+            if c.role == Role::MassFraction {
+                MASS_FRACTION.check(name, x).map_err(|bad| {
+                    Error::settings(format!("--fix {name}={v}: {}", bad.msg)).with_hint(bad.hint)
+                })?;
+            }
             if !x.is_finite()
                 || (matches!(c.space, Space::Log) && x <= 0.0)
                 || x < c.bounds.0.min(0.0)
@@ -320,17 +399,19 @@ pub fn choose(all: &[Constant], free: Option<&[String]>, fix: &[String]) -> Resu
     })
 }
 
-/// A value in SI: a bare number, or a number with a unit of the constant's dimension.
-fn parse_value(v: &str, unit: &str) -> std::result::Result<f64, String> {
+/// A value in SI: a bare number, or a number with a unit of the constant's dimension
+/// (a mass fraction also as a percentage).
+fn parse_value(v: &str, c: &Constant) -> std::result::Result<f64, String> {
     use crate::units::{parse_quantity, Dimension};
     if let Ok(x) = v.parse::<f64>() {
         return Ok(x);
     }
-    let dim = match unit {
-        "Pa" => Dimension::Stress,
-        "s" => Dimension::Time,
-        "Pa s" => Dimension::Viscosity,
-        _ => return Err(format!("expected a number (SI unit {unit})")),
+    let dim = match (c.role, c.unit) {
+        (Role::MassFraction, _) => Dimension::Fraction,
+        (_, "Pa") => Dimension::Stress,
+        (_, "s") => Dimension::Time,
+        (_, "Pa s") => Dimension::Viscosity,
+        (_, unit) => return Err(format!("expected a number (SI unit {unit})")),
     };
     parse_quantity(v, dim).map(|q| q.value)
 }

@@ -6,7 +6,8 @@
 //! different units combine correctly (½‖r‖² is half the χ²). The Jacobian is exact:
 //! ∂r/∂x_j = (∂m_c/∂θ_k)·(dθ_k/dx_j)/σ_ec with ∂m/∂θ from the simulator's forward
 //! sensitivities ([`crate::sim::Sensitivities`]) and dθ/dx from the search
-//! coordinates ([`super::params::Space`]).
+//! coordinates ([`super::params::Space`]), times dεr/dw for a filler mass fraction,
+//! whose simulator parameter is εr ([`super::params::Constant::dsim_dvalue`]).
 
 use super::params::{set_theta, Constant};
 use crate::fit::lm::LeastSquares;
@@ -311,7 +312,8 @@ impl Problem {
                     r[row] = (m - y) / ch.sigma;
                     if let (Some(j), Some(se)) = (jac.as_deref_mut(), o.sensitivities) {
                         for (col, c) in self.free.iter().enumerate() {
-                            let d = sensitivity(ch.kind, se, i, c.index);
+                            let d = sensitivity(ch.kind, se, i, c.index)
+                                * c.dsim_dvalue(c.space.theta(x[col]));
                             j[(row, col)] = d * c.space.dtheta_dx(x[col]) / ch.sigma;
                         }
                     }

@@ -49,6 +49,15 @@ pub const PERMITTIVITY: Domain = d(
     false,
     "vacuum has εr = 1, elastomers 2–10, ceramic-filled composites up to ≈ 1e4",
 );
+/// Filler mass fraction w of a composite (εr from a mixing rule), in [0, 1).
+pub const MASS_FRACTION: Domain = d(
+    "filler mass fraction",
+    "",
+    0.0,
+    0.999,
+    true,
+    "0 is the pure matrix; a mass fraction is below 1, and beyond 99.9 % filler the composite is a powder, not an elastomer",
+);
 /// Hyperelastic stress coefficients (C10, μi, …; may be negative).
 pub const MODULUS: Domain = d(
     "stress coefficient",

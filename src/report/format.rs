@@ -29,6 +29,15 @@ pub fn si(v: f64, unit: &str) -> String {
     format!("{} {p}{unit}", sig(v * f, 5))
 }
 
+/// A value of the constant `name` for a table: a fraction (`mass_fraction`, SI unit
+/// 1) as a percentage, anything else by [`si`].
+pub fn constant(name: &str, v: f64, unit: &str) -> String {
+    match (name.ends_with("_fraction"), unit) {
+        (true, "1") if v.is_finite() => format!("{} %", sig(100.0 * v, 5)),
+        _ => si(v, unit),
+    }
+}
+
 /// `v` with `n` significant digits, without exponent for moderate magnitudes.
 pub fn sig(v: f64, n: usize) -> String {
     if v == 0.0 || !v.is_finite() {

@@ -3,7 +3,7 @@
 //! constants, the correlation matrix as a picture, the multi-start waterfall, and a
 //! Markdown page linking them.
 
-use super::format::{si, sig, table};
+use super::format::{constant, si, sig, table};
 use super::plot::{nth_line, Chart, Series, Style};
 use crate::error::{Error, Result};
 use crate::identify::material::Validation;
@@ -35,16 +35,18 @@ pub fn write(
 ) -> Result<PathBuf> {
     let mut md = String::from("# Identification from actuator traces\n\n");
     let _ = writeln!(md, "status: **{}**\n", id.status);
+    let derived = id.derived.iter().map(|p| (p, " (derived)"));
     let rows: Vec<Vec<String>> = id
         .parameters
         .iter()
-        .map(|p| {
+        .map(|p| (p, ""))
+        .chain(derived)
+        .map(|(p, note)| {
+            let v = |x: f64| constant(&p.name, x, &p.unit);
             vec![
-                p.name.clone(),
-                si(p.value, &p.unit),
-                p.std_error
-                    .map(|s| si(s, &p.unit))
-                    .unwrap_or_else(|| "—".into()),
+                format!("{}{note}", p.name),
+                v(p.value),
+                p.std_error.map(v).unwrap_or_else(|| "—".into()),
                 if p.identifiable {
                     "yes".into()
                 } else {

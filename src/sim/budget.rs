@@ -28,8 +28,8 @@ use super::scene::{Actuator, Scene, Source};
 use super::Sample;
 use crate::error::{Error, Result};
 use crate::material::check::{
-    check_hyperelastic, d, ARM_MODULUS, ARM_TIME, DASHPOT, MODULUS, OGDEN_EXPONENT, PERMITTIVITY,
-    SHEAR_MODULUS,
+    check_hyperelastic, d, ARM_MODULUS, ARM_TIME, DASHPOT, MASS_FRACTION, MODULUS, OGDEN_EXPONENT,
+    PERMITTIVITY, SHEAR_MODULUS,
 };
 // the range type is the material's (`material::check`); the simulator's table holds
 // the material's ranges too (TABLE, docs/scenes.md)
@@ -237,12 +237,13 @@ pub const SOURCE_RESISTANCE: Domain =
 pub const REST_STRETCH: Domain = d("rest stretch under the load", "", 0.05, 10.0, false, "beyond 10 (or below 0.05) the load is far past what the material can carry and the model is extrapolated without limit");
 
 /// Every domain, in the order of docs/scenes.md's table.
-pub const TABLE: [&Domain; 33] = [
+pub const TABLE: [&Domain; 34] = [
     &LENGTH,
     &ELECTRODE,
     &COUNT,
     &ELECTRODE_COUNT,
     &PERMITTIVITY,
+    &MASS_FRACTION,
     &DENSITY,
     &RESISTIVITY,
     &ACTUATOR_MASS,
@@ -342,6 +343,12 @@ pub fn validate(s: &Scene) -> std::result::Result<(), Violation> {
         )?;
     }
     PERMITTIVITY.check("material.relative_permittivity", m.eps_r)?;
+    if let Some(c) = &m.composite {
+        MASS_FRACTION.check(
+            "material.relative_permittivity.mass_fraction",
+            c.mass_fraction,
+        )?;
+    }
     DENSITY.check("material.density", m.density)?;
     if let Some(r) = m.resistivity {
         RESISTIVITY.check("material.resistivity_ohm_m", r)?;

@@ -7,9 +7,11 @@ use super::input::{Term, Waveform};
 use super::integrate::Method;
 use super::presets;
 use crate::error::{Error, Location, Result};
-use crate::material::check::{did_you_mean, Domain, Violation};
+use crate::material::check::{did_you_mean, Domain, Violation, MASS_FRACTION};
+use crate::material::dielectric::MixingRule;
 use crate::material::file::{
-    self, expected_params, FittedRanges, HyperelasticPart, IdentifiedMaterial, Viscous,
+    self, expected_params, CompositePermittivity, FittedRanges, HyperelasticPart,
+    IdentifiedMaterial, Viscous,
 };
 use crate::material::hyperelastic::{ModelSpec, OgdenForm, StrainEnergy, MODEL_NAMES};
 use crate::units::{parse_quantity, Dimension};
@@ -85,6 +87,9 @@ pub struct Material {
     pub viscous: Viscous,
     /// Relative permittivity εr.
     pub eps_r: f64,
+    /// Where εr comes from when it is a composite's mixing rule (εr = εr(w) of the
+    /// filler mass fraction w); None when εr is given as a number.
+    pub composite: Option<CompositePermittivity>,
     /// Density (kg/m³).
     pub density: f64,
     /// Volume resistivity (Ω·m); None = no leakage.
@@ -709,6 +714,51 @@ fn read_identified(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<Option<Identi
     Ok(Some(m))
 }
 
+/// `material.relative_permittivity`: a number, or a composite's mixing rule at a
+/// filler mass fraction (`{ composite = "x.json", mass_fraction = "20 %", rule =
+/// "bruggeman", frequency = "100 Hz" }`; rule and frequency optional: the rule the
+/// fit ranks first, at its lowest frequency).
+fn read_permittivity(
+    c: &Ctx,
+    t: &toml::Table,
+    dir: &Path,
+) -> Result<(f64, Option<CompositePermittivity>)> {
+    let key = "material.relative_permittivity";
+    let Some(toml::Value::Table(p)) = t.get("relative_permittivity") else {
+        let e = c.number(t, "material", "relative_permittivity")?.ok_or_else(|| {
+            c.err(key, "is missing").with_hint(
+                "e.g. relative_permittivity = 4.7, or { composite = \"fits/x.json\", mass_fraction = \"20 %\" }",
+            )
+        })?;
+        return Ok((e, None));
+    };
+    c.known(p, key, &["composite", "rule", "frequency", "mass_fraction"])?;
+    let f = c.string(p, key, "composite")?.ok_or_else(|| {
+        c.err(&format!("{key}.composite"), "is missing")
+            .with_hint("the composite fit (dea-fit composite --out) whose mixing rule gives εr")
+    })?;
+    let rule = match c.string(p, key, "rule")? {
+        None => None,
+        Some(r) => Some(MixingRule::parse(r).ok_or_else(|| {
+            let names: Vec<&str> = MixingRule::ALL.iter().map(|m| m.name()).collect();
+            c.unknown_name(&format!("{key}.rule"), r, &names)
+        })?),
+    };
+    let freq = c.quantity(p, key, "frequency", Dimension::Frequency)?;
+    let w = c.need(p, key, "mass_fraction", Dimension::Fraction)?;
+    MASS_FRACTION
+        .check(&format!("{key}.mass_fraction"), w)
+        .map_err(|v| c.violation(v))?;
+    let path = c.file_ref(dir, &format!("{key}.composite"), f)?;
+    let (mixture, freq_hz) = file::read_mixture(&path, rule, freq)?;
+    let comp = CompositePermittivity {
+        mixture,
+        freq_hz,
+        mass_fraction: w,
+    };
+    Ok((comp.eps_r(), Some(comp)))
+}
+
 fn read_material(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<(Material, Option<f64>)> {
     let s = "material";
     c.known(
@@ -726,7 +776,7 @@ fn read_material(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<(Material, Opti
     )?;
     let identified = read_identified(c, t, dir)?;
     let (hyper, viscous, eps_r) = match identified {
-        Some(m) => (m.hyperelastic, m.viscous, m.eps_r),
+        Some(m) => (m.hyperelastic, m.viscous, m.eps_r.map(|e| (e, m.composite))),
         None => {
             let h = match t.get("hyperelastic") {
                 Some(toml::Value::Table(h)) => h,
@@ -743,12 +793,9 @@ fn read_material(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<(Material, Opti
         Some(v) => v,
         None => read_viscous(c, c.opt_table(t, "viscous")?, dir)?,
     };
-    let eps_r = match eps_r {
+    let (eps_r, composite) = match eps_r {
         Some(e) => e,
-        None => c.number(t, s, "relative_permittivity")?.ok_or_else(|| {
-            c.err("material.relative_permittivity", "is missing")
-                .with_hint("e.g. relative_permittivity = 4.7")
-        })?,
+        None => read_permittivity(c, t, dir)?,
     };
     let model: Arc<dyn StrainEnergy> = Arc::from(hyper.spec.build()?);
     let density = c.need(t, s, "density", Dimension::Density)?;
@@ -762,6 +809,7 @@ fn read_material(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<(Material, Opti
             fit: hyper.ranges.map(Arc::new),
             viscous,
             eps_r,
+            composite,
             density,
             resistivity,
         },

@@ -1,15 +1,18 @@
 //! The identified material file (`dea-fit identify`, schema `dea-fit/identified/1`):
-//! the hyperelastic part, the viscous part (optional), εr (optional), each
-//! parameter with value, SI unit, standard error and whether the traces pinned it
-//! down, and the provenance of the identification. The format is in docs/scenes.md
-//! ("Fit files as material").
+//! the hyperelastic part, the viscous part (optional), εr (optional; with the
+//! filler mass fraction and the mixing rule it came from, when the scene's εr was a
+//! composite's), each parameter with value, SI unit, standard error and whether the
+//! traces pinned it down, and the provenance of the identification. The format is
+//! in docs/scenes.md ("Fit files as material").
 
+use super::composite::{check_mixture, eps_at, CompositePermittivity};
 use super::hyperelastic::PartJson;
 use super::viscous::ViscousJson;
 use super::{by_name, err, read_text, typed, violation, FileParam, IDENTIFIED_SCHEMA};
 use super::{HyperelasticPart, Viscous};
 use crate::error::{Error, Result};
 use crate::material::check::PERMITTIVITY;
+use crate::material::dielectric::Mixture;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -38,6 +41,9 @@ pub struct IdentifiedMaterial {
     pub viscous: Option<Viscous>,
     /// Relative permittivity εr, if identified.
     pub eps_r: Option<f64>,
+    /// The mixing rule and filler mass fraction εr is (εr = εr(w)), when the
+    /// identification's scene took εr from a composite.
+    pub composite: Option<CompositePermittivity>,
     /// The free parameters' uncertainty, by name; a parameter of the parts without
     /// an entry was held fixed.
     pub uncertainty: Vec<ParamUncertainty>,
@@ -46,10 +52,23 @@ pub struct IdentifiedMaterial {
     pub provenance: serde_json::Value,
 }
 
-/// The dielectric part as the file holds it: `eps_r` [1].
+/// The dielectric part as the file holds it: `eps_r` [1], and with a `composite`
+/// rule also `mass_fraction` [1] (εr = εr(w) of the rule).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 struct DielectricJson {
     parameters: Vec<FileParam>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    composite: Option<RuleJson>,
+}
+
+/// The mixing rule εr(w) came from: the rule, its constants, the phase densities
+/// and the frequency of its fit.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct RuleJson {
+    #[serde(flatten)]
+    mixture: Mixture,
+    #[serde(rename = "freq_Hz")]
+    freq_hz: f64,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -80,7 +99,16 @@ impl IdentifiedMaterial {
             hyperelastic: Some(self.hyperelastic.to_json(u)?),
             viscous: self.viscous.as_ref().map(|v| v.to_json(u)),
             dielectric: self.eps_r.map(|e| DielectricJson {
-                parameters: vec![FileParam::with("eps_r", "1", e, u)],
+                parameters: std::iter::once(FileParam::with("eps_r", "1", e, u))
+                    .chain(
+                        self.composite
+                            .map(|c| FileParam::with("mass_fraction", "1", c.mass_fraction, u)),
+                    )
+                    .collect(),
+                composite: self.composite.map(|c| RuleJson {
+                    mixture: c.mixture,
+                    freq_hz: c.freq_hz,
+                }),
             }),
             provenance: self.provenance.clone(),
         };
@@ -134,23 +162,9 @@ impl IdentifiedMaterial {
             .as_ref()
             .map(|v| Viscous::from_json(path, "viscous", v))
             .transpose()?;
-        let eps_r = match &j.dielectric {
-            None => None,
-            Some(d) => {
-                let key = "dielectric.parameters";
-                let v = by_name(
-                    path,
-                    &d.parameters,
-                    key,
-                    &[("eps_r".into(), "1")],
-                    "the dielectric part",
-                )?;
-                Some(
-                    PERMITTIVITY
-                        .check(&format!("{key}.eps_r"), v[0])
-                        .map_err(|e| violation(path, e))?,
-                )
-            }
+        let (eps_r, composite) = match &j.dielectric {
+            None => (None, None),
+            Some(d) => dielectric(path, d)?,
         };
         if !j.provenance.is_object() {
             return Err(
@@ -200,8 +214,55 @@ impl IdentifiedMaterial {
             hyperelastic,
             viscous,
             eps_r,
+            composite,
             uncertainty,
             provenance: j.provenance,
         })
     }
+}
+
+/// εr of the dielectric part, and the composite it is the rule of, if any (then
+/// εr must be the rule's εr(w) to 10⁻⁹: an edited value is refused).
+fn dielectric(
+    path: &Path,
+    d: &DielectricJson,
+) -> Result<(Option<f64>, Option<CompositePermittivity>)> {
+    let key = "dielectric.parameters";
+    let mut expected = vec![("eps_r".to_string(), "1")];
+    if d.composite.is_some() {
+        expected.push(("mass_fraction".into(), "1"));
+    }
+    let what = match d.composite {
+        Some(_) => "the dielectric part of a composite",
+        None => "the dielectric part",
+    };
+    let v = by_name(path, &d.parameters, key, &expected, what)?;
+    let eps = PERMITTIVITY
+        .check(&format!("{key}.eps_r"), v[0])
+        .map_err(|e| violation(path, e))?;
+    let Some(r) = &d.composite else {
+        return Ok((Some(eps), None));
+    };
+    check_mixture(path, "dielectric.composite", &r.mixture)?;
+    let rule = eps_at(path, &format!("{key}.mass_fraction"), &r.mixture, v[1])?;
+    if (rule - eps).abs() > 1e-9 * rule {
+        return Err(err(
+            path,
+            &format!("{key}.eps_r"),
+            format!(
+                "{eps} is not the {} rule's εr at mass_fraction {} ({rule})",
+                r.mixture.rule.name(),
+                v[1]
+            ),
+        )
+        .with_hint("εr follows from the mass fraction: the file was edited; identify again"));
+    }
+    Ok((
+        Some(eps),
+        Some(CompositePermittivity {
+            mixture: r.mixture,
+            freq_hz: r.freq_hz,
+            mass_fraction: v[1],
+        }),
+    ))
 }

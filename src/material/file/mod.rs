@@ -7,15 +7,21 @@
 //! - a relaxation fit (`dea-fit relaxation --out`, [`RELAXATION_SCHEMA`]) holds the
 //!   Maxwell arms of a [`Viscous`] part (its own model has no Kelvin–Voigt dashpot);
 //! - an identified material (`dea-fit identify`, [`IDENTIFIED_SCHEMA`]) holds all
-//!   of them and εr, each parameter with its uncertainty ([`IdentifiedMaterial`]).
+//!   of them and εr (and the filler mass fraction it came from, when the scene's εr
+//!   was a composite's mixing rule), each parameter with its uncertainty
+//!   ([`IdentifiedMaterial`]);
+//! - a composite fit (`dea-fit composite --out`, [`COMPOSITE_SCHEMA`]) holds the
+//!   mixing rules a scene's εr(w) can come from ([`CompositePermittivity`]).
 //!
-//! The estimators (`fit::`) write the first two; this module, below both `fit` and
+//! The estimators (`fit::`) write the first two and the last; this module, below both `fit` and
 //! `sim`, defines the material part of each and reads it.
 
+mod composite;
 mod hyperelastic;
 mod identified;
 mod viscous;
 
+pub use composite::{read_mixture, CompositePermittivity};
 pub use hyperelastic::{expected_params, FittedRanges, HyperelasticPart, StretchRange};
 pub use identified::{IdentifiedMaterial, ParamUncertainty};
 pub use viscous::{Arm, Viscous};
@@ -31,6 +37,8 @@ pub const HYPERELASTIC_SCHEMA: &str = "dea-fit/hyperelastic-fit/1";
 pub const RELAXATION_SCHEMA: &str = "dea-fit/relaxation-fit/1";
 /// Schema tag of identified material files.
 pub const IDENTIFIED_SCHEMA: &str = "dea-fit/identified/1";
+/// Schema tag of composite fit files.
+pub const COMPOSITE_SCHEMA: &str = "dea-fit/composite-fit/1";
 
 /// Read the hyperelastic part of a hyperelastic fit or an identified material file.
 /// Its parameters are in the model's order.
@@ -139,7 +147,10 @@ fn read_text(path: &Path, accepted: &[&'static str], what: &str) -> Result<(Stri
                     HYPERELASTIC_SCHEMA => {
                         "this is a hyperelastic fit: use it as material.hyperelastic = { fit = ... }"
                     }
-                    _ => "write it with dea-fit hyperelastic --out, dea-fit relaxation --out or dea-fit identify",
+                    COMPOSITE_SCHEMA => {
+                        "this is a composite fit: use it as material.relative_permittivity = { composite = ..., mass_fraction = ... }"
+                    }
+                    _ => "write it with dea-fit hyperelastic --out, relaxation --out, composite --out or identify",
                 };
                 Err(err(path, "schema", format!("expected {want}, found \"{s}\"")).with_hint(hint))
             }

@@ -666,16 +666,10 @@ fn model_stack(model: &str, input: &str) -> Scene {
 
 /// The scene text of [`model_stack`].
 fn model_stack_text(model: &str, input: &str) -> String {
+    let actuator = super::support::SEED_STACK_ACTUATOR;
     format!(
         r#"name = "model_stack"
-[actuator]
-kind = "stack"
-radius = "2.25 mm"
-layer_thickness = "500 um"
-electrode_thickness = "50 um"
-layers = 10
-electrodes = 11
-[material]
+{actuator}[material]
 hyperelastic = {model}
 viscous = {{ nv = "1875 Pa s" }}
 relative_permittivity = 4.7

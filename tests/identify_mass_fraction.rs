@@ -46,16 +46,10 @@ fn composite_fit(dir: &Path) -> PathBuf {
 /// stepped to 5 kV through a 10 ms rise, 300 samples over 0.5 s; written into
 /// `dir` (relative file references resolve there) and read.
 fn stack(dir: &Path, permittivity: &str) -> Scene {
+    let actuator = super::support::SEED_STACK_ACTUATOR;
     let text = format!(
         r#"name = "composite_stack"
-[actuator]
-kind = "stack"
-radius = "2.25 mm"
-layer_thickness = "500 um"
-electrode_thickness = "50 um"
-layers = 10
-electrodes = 11
-[material]
+{actuator}[material]
 hyperelastic = {{ model = "neo-hookean", parameters = {{ mu = "138.6 kPa" }} }}
 viscous = {{ nv = "1875 Pa s" }}
 relative_permittivity = {permittivity}

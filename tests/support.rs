@@ -8,6 +8,17 @@ pub fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// The `[actuator]` table of the seed's stack (seed Table 4.1: 10 layers of 500 µm
+/// VHB between 50 µm electrodes, 2.25 mm radius), for scenes written in tests.
+pub const SEED_STACK_ACTUATOR: &str = r#"[actuator]
+kind = "stack"
+radius = "2.25 mm"
+layer_thickness = "500 um"
+electrode_thickness = "50 um"
+layers = 10
+electrodes = 11
+"#;
+
 /// Run `dea-fit` with `args` in `cwd`.
 pub fn run(cwd: &Path, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_dea-fit"))

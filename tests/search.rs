@@ -292,12 +292,14 @@ fn the_latin_hypercube_puts_one_start_in_every_stratum_reproducibly() {
 fn starts_at_best_counts_within_the_stated_tolerance() {
     // 1e-6 relative: 1 + 5e-7 is at the best, 1 + 2e-6 is not; NaN and ∞ never are.
     assert_eq!(
-        starts_at_best(&[1.0, 1.0 + 5e-7, 1.0 + 2e-6, f64::INFINITY, f64::NAN]),
+        starts_at_best(&[1.0, 1.0 + 5e-7, 1.0 + 2e-6, f64::INFINITY, f64::NAN], 0.0),
         2
     );
     // The absolute floor for an exact fit.
-    assert_eq!(starts_at_best(&[0.0, 1e-25, 1e-19, 1e-17]), 3);
-    assert_eq!(starts_at_best(&[f64::NAN, f64::INFINITY]), 0);
+    assert_eq!(starts_at_best(&[0.0, 1e-25, 1e-19, 1e-17], 0.0), 3);
+    assert_eq!(starts_at_best(&[f64::NAN, f64::INFINITY], 0.0), 0);
+    // Searches stopped at a noise floor of 1e-3 (½χ²): within 2e-3 of the best.
+    assert_eq!(starts_at_best(&[1.0, 1.0 + 1.9e-3, 1.0 + 2.2e-3], 1e-3), 2);
 }
 
 /// r = (p² − 1, 0.3 (p − 1)): the global minimum p = 1 (cost 0) and a local one near

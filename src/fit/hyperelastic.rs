@@ -489,7 +489,10 @@ fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Es
     let mut notes = Vec::new();
     let stable_ok = |p: &[f64]| diagnostics::drucker(model, p).iter().all(|d| d.stable);
     let best_cost = results.iter().map(|r| r.0).fold(f64::INFINITY, f64::min);
-    let at_best = multistart::starts_at_best(&results.iter().map(|r| r.0).collect::<Vec<_>>());
+    let at_best = multistart::starts_at_best(
+        &results.iter().map(|r| r.0).collect::<Vec<_>>(),
+        lm_settings.min_decrease,
+    );
     let chosen = if s.stable {
         let mut stable: Vec<&(f64, Vec<f64>)> =
             results.iter().filter(|r| stable_ok(&r.1)).collect();

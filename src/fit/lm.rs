@@ -33,6 +33,12 @@ pub trait LeastSquares {
     }
 }
 
+/// Relative damping of the Gauss-Newton step of the noise-floor test
+/// ([`LmSettings::min_decrease`]): enough to keep the normal equations of
+/// constants the data do not pin down positive definite, far too little to shorten
+/// the step along any direction the data see.
+const GN_DAMPING: f64 = 1e-9;
+
 /// Stopping rules.
 #[derive(Debug, Clone, Copy)]
 pub struct LmSettings {
@@ -44,6 +50,14 @@ pub struct LmSettings {
     pub xtol: f64,
     /// Projected-gradient infinity norm (relative to the cost) below which it stops.
     pub gtol: f64,
+    /// Absolute decrease of the cost below which a step is not worth taking: the
+    /// search stops (converged, "noise floor") when the linear model predicts less
+    /// for the Gauss-Newton step (damped by [`GN_DAMPING`] only), without
+    /// evaluating it. 0 disables the test. For residuals
+    /// scaled by their noise (cost = ½χ²) a value of 10⁻³ means no estimate can move
+    /// by more than about √(2·10⁻³) ≈ 0.045 standard errors, while the trials below
+    /// it only chase the simulator's integration noise in the cost.
+    pub min_decrease: f64,
 }
 
 impl Default for LmSettings {
@@ -53,6 +67,7 @@ impl Default for LmSettings {
             ftol: 1e-12,
             xtol: 1e-10,
             gtol: 1e-12,
+            min_decrease: 0.0,
         }
     }
 }
@@ -222,14 +237,13 @@ impl Lm {
         if gnorm <= settings.gtol * (1.0 + self.cost) {
             return Some(Termination::Converged("gradient"));
         }
-        let mut x_new = vec![0.0; n];
-        let mut r_new = DVector::zeros(self.r.len());
-        loop {
+        // Damped normal equations over the free variables (held ones fixed at 0).
+        let normal = |mu: f64| {
             let mut sys = a.clone();
             let mut rhs = -&g;
             for i in 0..n {
                 if free[i] {
-                    sys[(i, i)] += self.mu * a[(i, i)].max(1e-12 * (1.0 + a[(i, i)]));
+                    sys[(i, i)] += mu * a[(i, i)].max(1e-12 * (1.0 + a[(i, i)]));
                 } else {
                     for j in 0..n {
                         sys[(i, j)] = 0.0;
@@ -239,7 +253,23 @@ impl Lm {
                     rhs[i] = 0.0;
                 }
             }
-            let Some(step) = sys.cholesky().map(|c| c.solve(&rhs)) else {
+            sys.cholesky().map(|c| c.solve(&rhs))
+        };
+        // The noise floor: even the (barely damped) Gauss-Newton step predicts a
+        // decrease ½·gᵀ·δ below `min_decrease`. The damped step's own prediction
+        // would not do: in a long curved valley it is small at every iteration
+        // while the full step still sees the valley's floor far below.
+        if settings.min_decrease > 0.0 {
+            if let Some(gn) = normal(GN_DAMPING) {
+                if -0.5 * g.dot(&gn) < settings.min_decrease {
+                    return Some(Termination::Converged("noise floor"));
+                }
+            }
+        }
+        let mut x_new = vec![0.0; n];
+        let mut r_new = DVector::zeros(self.r.len());
+        loop {
+            let Some(step) = normal(self.mu) else {
                 self.mu *= self.nu;
                 self.nu *= 2.0;
                 if !self.mu.is_finite() || self.mu > 1e300 {
@@ -256,6 +286,8 @@ impl Lm {
             if dx_norm <= settings.xtol * (x_norm + settings.xtol) {
                 return Some(Termination::Converged("step"));
             }
+            // Predicted decrease of the linear model for the (projected) step.
+            let pred = -(g.dot(&dx)) - 0.5 * (&a * &dx).dot(&dx);
             self.evaluations += 1;
             let ok = problem.eval(&x_new, &mut r_new, None);
             let cost_new = if ok {
@@ -263,8 +295,6 @@ impl Lm {
             } else {
                 f64::INFINITY
             };
-            // Predicted decrease of the linear model for the (projected) step.
-            let pred = -(g.dot(&dx)) - 0.5 * (&a * &dx).dot(&dx);
             let rho = if pred > 0.0 {
                 (self.cost - cost_new) / pred
             } else {

@@ -63,15 +63,18 @@ pub fn latin_hypercube(bounds: &[(f64, f64)], n: usize, seed: u64) -> Result<Vec
 }
 
 /// How many of `costs` are at the best (finite) one, by [`AT_BEST_REL`] and
-/// [`AT_BEST_ABS`]; 0 when none is finite.
-pub fn starts_at_best(costs: &[f64]) -> usize {
+/// [`AT_BEST_ABS`], widened by twice the searches' noise floor
+/// ([`LmSettings::min_decrease`]: a search stopped there is within about that of
+/// its minimum, so two stops in one minimum differ by up to twice it); 0 when
+/// none is finite.
+pub fn starts_at_best(costs: &[f64], min_decrease: f64) -> usize {
     let best = costs.iter().copied().fold(f64::INFINITY, f64::min);
     if !best.is_finite() {
         return 0;
     }
     costs
         .iter()
-        .filter(|&&c| c <= best * (1.0 + AT_BEST_REL) + AT_BEST_ABS)
+        .filter(|&&c| c <= best * (1.0 + AT_BEST_REL) + AT_BEST_ABS + 2.0 * min_decrease)
         .count()
 }
 
@@ -134,7 +137,7 @@ where
         .filter(|&i| costs[i].is_finite())
         .min_by(|&a, &b| costs[a].total_cmp(&costs[b]));
     MultiStart {
-        at_best: starts_at_best(&costs),
+        at_best: starts_at_best(&costs, settings.min_decrease),
         best,
         runs,
     }

@@ -6,7 +6,7 @@ use super::plot::{band, nth_line, Chart, Series, Style};
 use crate::error::Result;
 use crate::io::write::atomic_write;
 use crate::sim::sampling::Band;
-use crate::sim::{Outcome, Sensitivities};
+use crate::sim::{Outcome, Rows as SensRows, Sensitivities};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -19,7 +19,7 @@ fn opt(v: f64) -> String {
 }
 
 /// The rows (sample × parameter) of one output in [`Sensitivities`].
-type Rows = fn(&Sensitivities) -> &Vec<Vec<f64>>;
+type Rows = fn(&Sensitivities) -> &SensRows;
 
 /// The sensitivity outputs of a trajectory: the column of the quantity, its SI unit
 /// (empty: dimensionless) and its rows.
@@ -68,7 +68,7 @@ pub struct ScaledSensitivity {
 
 /// Scaled sensitivities of every parameter, largest stretch effect first.
 pub fn scaled_sensitivities(se: &Sensitivities) -> Vec<ScaledSensitivity> {
-    let big = |rows: &[Vec<f64>], j: usize| {
+    let big = |rows: &SensRows, j: usize| {
         rows.iter()
             .map(|r| (se.theta[j] * r[j]).abs())
             .filter(|v| v.is_finite())
@@ -324,7 +324,7 @@ pub fn write(o: &Outcome, dir: &Path) -> Result<PathBuf> {
                         points: o
                             .samples
                             .iter()
-                            .zip(&se.stretch)
+                            .zip(se.stretch.iter())
                             .filter(|(_, r)| r[j].is_finite())
                             .map(|(s, r)| (s.time_s, se.theta[j] * r[j]))
                             .collect(),

@@ -186,14 +186,69 @@ pub struct Sensitivities {
     /// Parameter values θ (SI).
     pub theta: Vec<f64>,
     /// ∂λ/∂θj (`Sample::stretch`).
-    pub stretch: Vec<Vec<f64>>,
+    pub stretch: Rows,
     /// ∂L/∂θj (m per unit of θj; `Sample::length_m`).
-    pub length: Vec<Vec<f64>>,
+    pub length: Rows,
     /// ∂C/∂θj (F per unit of θj; `Sample::capacitance_f`).
-    pub capacitance: Vec<Vec<f64>>,
+    pub capacitance: Rows,
     /// ∂I/∂θj (A per unit of θj; `Sample::current_a`, which depends on λ̇, V and
     /// the source state: [`Plant::output_sensitivities`]).
-    pub current: Vec<Vec<f64>>,
+    pub current: Rows,
+    /// Scratch row of [`Plant::output_sensitivities`] (no allocation per sample).
+    #[serde(skip)]
+    scratch: Vec<derivatives::OutputSensitivity>,
+}
+
+/// One channel's sensitivities: a row of nθ values per sample (`rows[k][j]` =
+/// ∂(channel)/∂θj at sample k), stored flat; serialised as a list of rows.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Rows {
+    width: usize,
+    len: usize,
+    data: Vec<f64>,
+}
+
+impl Rows {
+    fn new(width: usize) -> Rows {
+        Rows {
+            width,
+            ..Rows::default()
+        }
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// No samples.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The rows, sample by sample.
+    pub fn iter(&self) -> impl Iterator<Item = &[f64]> + '_ {
+        (0..self.len).map(|k| &self[k])
+    }
+
+    fn push(&mut self, row: impl Iterator<Item = f64>) {
+        self.data.extend(row);
+        self.len += 1;
+        debug_assert_eq!(self.data.len(), self.len * self.width);
+    }
+}
+
+impl std::ops::Index<usize> for Rows {
+    type Output = [f64];
+    fn index(&self, k: usize) -> &[f64] {
+        &self.data[k * self.width..(k + 1) * self.width]
+    }
+}
+
+impl Serialize for Rows {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.collect_seq(self.iter())
+    }
 }
 
 impl Sensitivities {
@@ -205,13 +260,20 @@ impl Sensitivities {
         p.initial_state_sensitivity(&mut s0);
         // row-major n × nθ → column per parameter
         let cols: Vec<f64> = (0..np * n).map(|k| s0[(k % n) * np + k / n]).collect();
+        let zero = derivatives::OutputSensitivity {
+            stretch: 0.0,
+            length: 0.0,
+            capacitance: 0.0,
+            current: 0.0,
+        };
         let mut se = Sensitivities {
             params: p.sensitivity_params(),
             theta: p.theta(),
-            stretch: Vec::new(),
-            length: Vec::new(),
-            capacitance: Vec::new(),
-            current: Vec::new(),
+            stretch: Rows::new(np),
+            length: Rows::new(np),
+            capacitance: Rows::new(np),
+            current: Rows::new(np),
+            scratch: vec![zero; np],
         };
         se.record(p, 0.0, y0, &cols);
         se
@@ -220,32 +282,24 @@ impl Sensitivities {
     /// The row of a sample at (t, y) from the state sensitivities `s` (column by
     /// column, `s[j·n + i]` = ∂yi/∂θj).
     fn record(&mut self, p: &Plant, t: f64, y: &[f64], s: &[f64]) {
-        let np = self.theta.len();
-        let zero = derivatives::OutputSensitivity {
-            stretch: 0.0,
-            length: 0.0,
-            capacitance: 0.0,
-            current: 0.0,
-        };
-        let mut d = vec![zero; np];
-        p.output_sensitivities(t, y, s, &mut d);
-        self.stretch.push(d.iter().map(|d| d.stretch).collect());
-        self.length.push(d.iter().map(|d| d.length).collect());
-        self.capacitance
-            .push(d.iter().map(|d| d.capacitance).collect());
-        self.current.push(d.iter().map(|d| d.current).collect());
+        let d = &mut self.scratch;
+        p.output_sensitivities(t, y, s, d);
+        self.stretch.push(d.iter().map(|d| d.stretch));
+        self.length.push(d.iter().map(|d| d.length));
+        self.capacitance.push(d.iter().map(|d| d.capacitance));
+        self.current.push(d.iter().map(|d| d.current));
     }
 
     /// The NaN row of a pull-in sample.
     fn record_unknown(&mut self) {
-        let nan = vec![f64::NAN; self.theta.len()];
+        let np = self.theta.len();
         for ch in [
             &mut self.stretch,
             &mut self.length,
             &mut self.capacitance,
             &mut self.current,
         ] {
-            ch.push(nan.clone());
+            ch.push(std::iter::repeat_n(f64::NAN, np));
         }
     }
 }

@@ -38,7 +38,8 @@ pub struct Args {
     /// Print the card and its constants as JSON on stdout.
     #[arg(long)]
     json: bool,
-    /// Exit with status 1 when the card is approximate (a warning says where).
+    /// Exit with status 1 when the card has a warning: approximate, or from a fit
+    /// whose status is ill_posed, unstable, not_converged or failed.
     #[arg(long)]
     strict: bool,
 }
@@ -88,7 +89,10 @@ fn summary(card: &export::Card) -> String {
             "source: {} ({}{})\n",
             f.path,
             f.kind,
-            f.status.as_ref().map(|x| format!(", status {x}")).unwrap_or_default()
+            f.status
+                .as_ref()
+                .map(|x| format!(", status {x}"))
+                .unwrap_or_default()
         ));
     }
     let rows: Vec<Vec<String>> = card

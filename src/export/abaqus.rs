@@ -12,7 +12,9 @@
 //!   by E0/R. kᵢ = 0: the volumetric response of an incompressible solid does not
 //!   relax.
 
-use super::{alone_warning, mu0, num, ogden_n, ogden_terms, scaled, Draft, Material, Options, Target};
+use super::{
+    alone_warning, mu0, num, ogden_n, ogden_terms, scaled, Draft, Material, Options, Target,
+};
 use crate::error::Result;
 use crate::material::hyperelastic::OgdenForm;
 
@@ -30,18 +32,30 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
         .relaxation
         .as_ref()
         .map_or(1.0, |r| r.instantaneous_pa() / r.reference_pa);
-    let moduli = if m.relaxation.is_some() { ", MODULI=INSTANTANEOUS" } else { "" };
+    let moduli = if m.relaxation.is_some() {
+        ", MODULI=INSTANTANEOUS"
+    } else {
+        ""
+    };
     if let Some(h0) = &m.hyperelastic {
         let h = scaled(h0, scale)?;
         let p = &h.params;
-        let (keyword, values): (String, Vec<(String, f64, &'static str)>) = match h.spec.name.as_str() {
+        let (keyword, values): (String, Vec<(String, f64, &'static str)>) = match h
+            .spec
+            .name
+            .as_str()
+        {
             "neo-hookean" => (
                 "NEO HOOKE".into(),
                 vec![("C10".into(), p[0] / 2.0, "Pa"), ("D1".into(), 0.0, "1/Pa")],
             ),
             "mooney-rivlin" => (
                 "MOONEY-RIVLIN".into(),
-                vec![("C10".into(), p[0], "Pa"), ("C01".into(), p[1], "Pa"), ("D1".into(), 0.0, "1/Pa")],
+                vec![
+                    ("C10".into(), p[0], "Pa"),
+                    ("C01".into(), p[1], "Pa"),
+                    ("D1".into(), 0.0, "1/Pa"),
+                ],
             ),
             "yeoh" => (
                 "YEOH".into(),
@@ -54,7 +68,13 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
                     ("D3".into(), 0.0, "1/Pa"),
                 ],
             ),
-            "gent" => return Err(super::no_model(Target::Abaqus, "Gent", "ansys, febio or comsol")),
+            "gent" => {
+                return Err(super::no_model(
+                    Target::Abaqus,
+                    "Gent",
+                    "ansys, febio or comsol",
+                ))
+            }
             name => {
                 let n = ogden_n(name).expect("a known model");
                 let mut v = Vec::new();

@@ -24,7 +24,11 @@ fn tbdata(d: &mut Draft, values: &[(String, f64, &'static str)]) {
         .map(|(n, v, u)| num(d.constant(n.clone(), *v, u)))
         .collect();
     for (i, chunk) in written.chunks(PER_COMMAND).enumerate() {
-        d.line(format!("TBDATA,{},{}", 1 + i * PER_COMMAND, chunk.join(",")));
+        d.line(format!(
+            "TBDATA,{},{}",
+            1 + i * PER_COMMAND,
+            chunk.join(",")
+        ));
     }
 }
 
@@ -43,10 +47,17 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
         let p = &h.params;
         let s = |n: &str, v: f64, u: &'static str| (n.to_string(), v, u);
         let (head, values) = match h.spec.name.as_str() {
-            "neo-hookean" => ("TB,HYPER,1,,,NEO".to_string(), vec![s("mu", p[0], "Pa"), s("d", 0.0, "1/Pa")]),
+            "neo-hookean" => (
+                "TB,HYPER,1,,,NEO".to_string(),
+                vec![s("mu", p[0], "Pa"), s("d", 0.0, "1/Pa")],
+            ),
             "mooney-rivlin" => (
                 "TB,HYPER,1,,2,MOONEY".into(),
-                vec![s("C10", p[0], "Pa"), s("C01", p[1], "Pa"), s("d", 0.0, "1/Pa")],
+                vec![
+                    s("C10", p[0], "Pa"),
+                    s("C01", p[1], "Pa"),
+                    s("d", 0.0, "1/Pa"),
+                ],
             ),
             "yeoh" => (
                 "TB,HYPER,1,,3,YEOH".into(),

@@ -51,7 +51,13 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
             }
             "yeoh" => {
                 for (i, v) in p.iter().enumerate() {
-                    param(d, &format!("c{}", i + 1), *v, "Pa", &format!("Yeoh: c{} (C{}0)", i + 1, i + 1));
+                    param(
+                        d,
+                        &format!("c{}", i + 1),
+                        *v,
+                        "Pa",
+                        &format!("Yeoh: c{} (C{}0)", i + 1, i + 1),
+                    );
                 }
             }
             "gent" => {
@@ -61,8 +67,20 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
             name => {
                 let n = ogden_n(name).expect("a known model");
                 for (i, (mu, a)) in ogden_terms(&h, OgdenForm::Original).into_iter().enumerate() {
-                    param(d, &format!("mu{}", i + 1), mu, "Pa", &format!("Ogden ({n} terms): shear modulus mu{}", i + 1));
-                    param(d, &format!("alpha{}", i + 1), a, "1", &format!("Ogden ({n} terms): exponent alpha{}", i + 1));
+                    param(
+                        d,
+                        &format!("mu{}", i + 1),
+                        mu,
+                        "Pa",
+                        &format!("Ogden ({n} terms): shear modulus mu{}", i + 1),
+                    );
+                    param(
+                        d,
+                        &format!("alpha{}", i + 1),
+                        a,
+                        "1",
+                        &format!("Ogden ({n} terms): exponent alpha{}", i + 1),
+                    );
                 }
                 if h0.spec.form != Some(OgdenForm::Original) {
                     d.note("Ogden: the fit's seed-form mu_i (2mu/alpha^2) converted to COMSOL's form (mu/alpha): mu_i = 2*mu_seed/alpha_i, exact");
@@ -85,8 +103,26 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
             d.warn(alone_warning(r, true));
         }
         for (i, &(tau, e)) in r.terms.iter().enumerate() {
-            param(d, &format!("G{}", i + 1), e / 3.0, "Pa", &format!("Viscoelasticity, generalized Maxwell: branch {} shear modulus", i + 1));
-            param(d, &format!("tau{}", i + 1), tau, "s", &format!("Viscoelasticity, generalized Maxwell: branch {} relaxation time", i + 1));
+            param(
+                d,
+                &format!("G{}", i + 1),
+                e / 3.0,
+                "Pa",
+                &format!(
+                    "Viscoelasticity, generalized Maxwell: branch {} shear modulus",
+                    i + 1
+                ),
+            );
+            param(
+                d,
+                &format!("tau{}", i + 1),
+                tau,
+                "s",
+                &format!(
+                    "Viscoelasticity, generalized Maxwell: branch {} relaxation time",
+                    i + 1
+                ),
+            );
         }
         d.note("generalized Maxwell branches G_m = E_m/3 (shear modulus of an incompressible solid) in parallel with the long-term hyperelastic material");
     }

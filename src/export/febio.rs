@@ -15,7 +15,10 @@
 //!   the elastic stress, as QLV does; with the fit's constants as the elastic
 //!   material, g0 = E∞/R, gᵢ = Eᵢ/R (at most 6 terms).
 
-use super::{mu0, needs_hyperelastic, num, ogden_terms, too_many_terms, Draft, Material, Options, Target, BULK_RATIO};
+use super::{
+    mu0, needs_hyperelastic, num, ogden_terms, too_many_terms, Draft, Material, Options, Target,
+    BULK_RATIO,
+};
 use crate::error::Result;
 use crate::material::hyperelastic::OgdenForm;
 
@@ -40,7 +43,11 @@ pub(super) fn document(header: &[String], body: &str) -> String {
 /// `<name>value</name>` at `indent` tabs, the value recorded as a constant.
 fn param(d: &mut Draft, indent: usize, name: &str, v: f64, unit: &'static str) {
     let v = d.constant(name, v, unit);
-    d.line(format!("{}<{name}>{}</{name}>", "\t".repeat(indent), num(v)));
+    d.line(format!(
+        "{}<{name}>{}</{name}>",
+        "\t".repeat(indent),
+        num(v)
+    ));
 }
 
 pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {

@@ -14,7 +14,10 @@
 //!   hyperelastic constants are the long-term response, the fit's scaled by E∞/R.
 //!   At most 6 terms.
 
-use super::{mu0, needs_hyperelastic, num, ogden_n, ogden_terms, scaled, too_many_terms, Draft, Material, Options, Target, BULK_RATIO};
+use super::{
+    mu0, needs_hyperelastic, num, ogden_n, ogden_terms, scaled, too_many_terms, Draft, Material,
+    Options, Target, BULK_RATIO,
+};
 use crate::error::{Error, Result};
 use crate::material::hyperelastic::OgdenForm;
 
@@ -53,15 +56,20 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
         return Err(needs_hyperelastic(Target::Lsdyna));
     };
     let Some(rho) = opts.density else {
-        return Err(Error::settings("an LS-DYNA material card holds the mass density (RO)")
-            .with_hint("give --density, e.g. --density 1000kg/m3"));
+        return Err(
+            Error::settings("an LS-DYNA material card holds the mass density (RO)")
+                .with_hint("give --density, e.g. --density 1000kg/m3"),
+        );
     };
     if let Some(r) = &m.relaxation {
         if r.terms.len() > MAX_TERMS {
             return Err(too_many_terms(Target::Lsdyna, r.terms.len(), MAX_TERMS));
         }
     }
-    let scale = m.relaxation.as_ref().map_or(1.0, |r| r.long_term_pa / r.reference_pa);
+    let scale = m
+        .relaxation
+        .as_ref()
+        .map_or(1.0, |r| r.long_term_pa / r.reference_pa);
     let h = scaled(h0, scale)?;
     let mu = mu0(&h)?;
     // ν of K = BULK_RATIO·μ0: ν = (3K − 2μ)/(2(3K + μ))
@@ -69,7 +77,13 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
     let p = &h.params;
     let ogden = ogden_n(&h.spec.name);
     let keyword = match (h.spec.name.as_str(), ogden) {
-        ("gent", _) => return Err(super::no_model(Target::Lsdyna, "Gent", "ansys, febio or comsol")),
+        ("gent", _) => {
+            return Err(super::no_model(
+                Target::Lsdyna,
+                "Gent",
+                "ansys, febio or comsol",
+            ))
+        }
         (_, Some(_)) => "*MAT_OGDEN_RUBBER_TITLE",
         _ => "*MAT_HYPERELASTIC_RUBBER_TITLE",
     };
@@ -105,14 +119,22 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
                 .map(|(i, t)| field(d.constant(format!("MU{}", i + 1), t.0, "Pa")))
                 .collect();
             let names: Vec<String> = (1..=terms.len()).map(|i| format!("mu{i}")).collect();
-            card(d, &names.iter().map(String::as_str).collect::<Vec<_>>(), &mus);
+            card(
+                d,
+                &names.iter().map(String::as_str).collect::<Vec<_>>(),
+                &mus,
+            );
             let alphas: Vec<String> = terms
                 .iter()
                 .enumerate()
                 .map(|(i, t)| field(d.constant(format!("ALPHA{}", i + 1), t.1, "1")))
                 .collect();
             let names: Vec<String> = (1..=terms.len()).map(|i| format!("alpha{i}")).collect();
-            card(d, &names.iter().map(String::as_str).collect::<Vec<_>>(), &alphas);
+            card(
+                d,
+                &names.iter().map(String::as_str).collect::<Vec<_>>(),
+                &alphas,
+            );
             if h0.spec.form != Some(OgdenForm::Original) {
                 d.note("Ogden: the fit's seed-form mu_i (2mu/alpha^2) converted to LS-DYNA's original form (mu/alpha): mu_i = 2*mu_seed/alpha_i, exact");
             }

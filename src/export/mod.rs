@@ -212,7 +212,10 @@ pub fn read(paths: &[PathBuf]) -> Result<Material> {
             MaterialFile::Relaxation(_) => "relaxation fit",
             MaterialFile::Identified(_) => "identified material",
         };
-        if let Some(s) = status.as_deref().filter(|s| !matches!(*s, "ok" | "warning")) {
+        if let Some(s) = status
+            .as_deref()
+            .filter(|s| !matches!(*s, "ok" | "warning"))
+        {
             warnings.push(format!(
                 "{} has status {s}: its constants are not what the data determine (see the fit's warnings); the card carries them as they are",
                 p.display()
@@ -233,7 +236,11 @@ pub fn read(paths: &[PathBuf]) -> Result<Material> {
         let (h, v) = match part {
             MaterialFile::Hyperelastic(h) => (Some(h), None),
             MaterialFile::Relaxation(r) => {
-                if let Some((q, _)) = relax.as_ref().map(|r| (&r.0, ())).or(arms.as_ref().map(|a| (&a.0, ()))) {
+                if let Some((q, _)) = relax
+                    .as_ref()
+                    .map(|r| (&r.0, ()))
+                    .or(arms.as_ref().map(|a| (&a.0, ())))
+                {
                     return Err(twice("viscoelastic", q));
                 }
                 relax = Some((p.clone(), r));
@@ -255,14 +262,21 @@ pub fn read(paths: &[PathBuf]) -> Result<Material> {
         }
     }
     let mut notes = Vec::new();
-    let mu0 = |h: &HyperelasticPart| -> Result<f64> { Ok(h.evaluator()?.initial_shear_modulus(&h.params)) };
+    let mu0 = |h: &HyperelasticPart| -> Result<f64> {
+        Ok(h.evaluator()?.initial_shear_modulus(&h.params))
+    };
     let relaxation = match (&relax, &arms) {
         (Some((rp, r)), _) => {
-            let terms: Vec<(f64, f64)> = r.arms.iter().map(|a| (a.eta_pa_s / a.k_pa, a.k_pa)).collect();
+            let terms: Vec<(f64, f64)> = r
+                .arms
+                .iter()
+                .map(|a| (a.eta_pa_s / a.k_pa, a.k_pa))
+                .collect();
             match (&r.qlv, &hyper) {
                 (Some(q), Some((hp, h))) => {
                     let e_ref = 3.0 * mu0(h)?;
-                    let same = (e_ref - q.reference_modulus_pa).abs() <= 1e-9 * e_ref.abs().max(q.reference_modulus_pa.abs());
+                    let same = (e_ref - q.reference_modulus_pa).abs()
+                        <= 1e-9 * e_ref.abs().max(q.reference_modulus_pa.abs());
                     if q.hyperelastic_model != h.spec.name || !same {
                         return Err(Error::input(
                             Location::file(rp),
@@ -317,12 +331,19 @@ pub fn read(paths: &[PathBuf]) -> Result<Material> {
             }
         }
         (None, Some((_, v))) => {
-            let h = &hyper.as_ref().expect("an identified material has a hyperelastic part").1;
+            let h = &hyper
+                .as_ref()
+                .expect("an identified material has a hyperelastic part")
+                .1;
             let k_inf = 3.0 * mu0(h)?;
             Some(Relaxation {
                 formulation: Formulation::Parallel,
                 long_term_pa: k_inf,
-                terms: v.arms.iter().map(|a| (a.eta_pa_s / a.k_pa, a.k_pa)).collect(),
+                terms: v
+                    .arms
+                    .iter()
+                    .map(|a| (a.eta_pa_s / a.k_pa, a.k_pa))
+                    .collect(),
                 reference_pa: k_inf,
                 nv_pa_s: v.nv_pa_s,
                 qlv_model: None,
@@ -332,7 +353,10 @@ pub fn read(paths: &[PathBuf]) -> Result<Material> {
     };
     if let Some(r) = &relaxation {
         if !(r.reference_pa > 0.0 && r.long_term_pa > 0.0) {
-            let src = relax.as_ref().map(|r| r.0.clone()).unwrap_or_else(|| paths[0].clone());
+            let src = relax
+                .as_ref()
+                .map(|r| r.0.clone())
+                .unwrap_or_else(|| paths[0].clone());
             return Err(Error::input(
                 Location::file(src),
                 format!("the long-term modulus is {} Pa: a solid that relaxes to no stress has no hyperelastic reference, and the codes' Prony series need g_inf > 0", r.long_term_pa),
@@ -361,7 +385,13 @@ pub fn read(paths: &[PathBuf]) -> Result<Material> {
 fn sanitize(stem: &str) -> String {
     let mut s: String = stem
         .chars()
-        .map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
         .take(64)
         .collect();
     if !s.starts_with(|c: char| c.is_ascii_alphabetic()) {
@@ -400,8 +430,8 @@ pub struct Card {
     pub target: Target,
     /// Material name in the card.
     pub material: String,
-    /// `exact` when the card is the fit's model (the read-back tests check it) or
-    /// `approximate` when a warning says where it is not.
+    /// The conversion: `exact` when the card is the fit's model (the read-back
+    /// tests check it), `approximate` when a warning says where it is not.
     pub status: &'static str,
     /// The input files.
     pub sources: Vec<SourceFile>,
@@ -416,9 +446,10 @@ pub struct Card {
 }
 
 impl Card {
-    /// The exit status under `--strict`: 1 for an approximate card.
+    /// The exit status under `--strict`: 1 for a card with a warning (approximate,
+    /// or from a fit whose status blocks).
     pub fn exit_code(&self, strict: bool) -> i32 {
-        i32::from(strict && self.status != "exact")
+        i32::from(strict && !self.warnings.is_empty())
     }
 }
 
@@ -472,6 +503,7 @@ pub fn card(m: &Material, target: Target, opts: &Options) -> Result<Card> {
         Target::Comsol => comsol::write(m, opts, &mut d)?,
     }
     viscous_statements(m, target, &mut d);
+    let exact = d.warnings.is_empty();
     let mut warnings = m.warnings.clone();
     warnings.append(&mut d.warnings);
     let mut notes = m.notes.clone();
@@ -490,13 +522,20 @@ pub fn card(m: &Material, target: Target, opts: &Options) -> Result<Card> {
             "source: {} ({}{})",
             s.path,
             s.kind,
-            s.status.as_ref().map(|x| format!(", status {x}")).unwrap_or_default()
+            s.status
+                .as_ref()
+                .map(|x| format!(", status {x}"))
+                .unwrap_or_default()
         ));
     }
     header.push("units: SI (Pa, s, kg/m^3); stresses nominal in the fit, the card's own measure in the code".into());
     header.push(format!(
         "status: {}",
-        if warnings.is_empty() { "exact (the card is the fit's model; docs/export.md)" } else { "approximate (see the warnings)" }
+        if exact {
+            "exact (the card is the fit's model; docs/export.md)"
+        } else {
+            "approximate (see the warnings)"
+        }
     ));
     header.extend(warnings.iter().map(|w| format!("warning: {w}")));
     header.extend(notes.iter().map(|n| format!("note: {n}")));
@@ -528,7 +567,7 @@ pub fn card(m: &Material, target: Target, opts: &Options) -> Result<Card> {
         tool_version: env!("CARGO_PKG_VERSION"),
         target,
         material: m.name.clone(),
-        status: if warnings.is_empty() { "exact" } else { "approximate" },
+        status: if exact { "exact" } else { "approximate" },
         sources: m.sources.clone(),
         constants: d.constants,
         warnings,
@@ -675,7 +714,9 @@ fn too_many_terms(target: Target, n: usize, max: usize) -> Error {
         "{} takes at most {max} viscoelastic terms, the fit has {n}",
         target.title()
     ))
-    .with_hint(format!("fit the relaxation with --terms {max} or fewer (or --max-terms {max})"))
+    .with_hint(format!(
+        "fit the relaxation with --terms {max} or fewer (or --max-terms {max})"
+    ))
 }
 
 /// A number as the cards write it: the shortest decimal that reads back as the

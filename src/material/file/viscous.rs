@@ -215,8 +215,12 @@ pub(super) fn relaxation_part(path: &Path, fit: &RelaxationJson) -> Result<Relax
     let qlv = match (fit.formulation, &fit.qlv) {
         (Formulation::Parallel, _) => None,
         (Formulation::Qlv, None) => {
-            return Err(err(path, "qlv", "missing: a QLV fit names its hyperelastic reference")
-                .with_hint("the file was edited: fit the data again with --hyperelastic"))
+            return Err(err(
+                path,
+                "qlv",
+                "missing: a QLV fit names its hyperelastic reference",
+            )
+            .with_hint("the file was edited: fit the data again with --hyperelastic"))
         }
         (Formulation::Qlv, Some(q)) => {
             let e_ref = SHEAR_MODULUS

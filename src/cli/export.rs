@@ -38,8 +38,9 @@ pub struct Args {
     /// Print the card and its constants as JSON on stdout.
     #[arg(long)]
     json: bool,
-    /// Exit with status 1 when the card has a warning: approximate, or from a fit
-    /// whose status is ill_posed, unstable, not_converged or failed.
+    /// Exit with status 1 unless the card is exact: approximate (a warning says
+    /// where), or made from a fit whose status is ill_posed, unstable,
+    /// not_converged or failed.
     #[arg(long)]
     strict: bool,
 }

@@ -430,8 +430,10 @@ pub struct Card {
     pub target: Target,
     /// Material name in the card.
     pub material: String,
-    /// The conversion: `exact` when the card is the fit's model (the read-back
-    /// tests check it), `approximate` when a warning says where it is not.
+    /// `exact` when the card is the fit's model (the read-back tests check it),
+    /// `approximate` when a warning says where it is not, or the blocking status
+    /// of a fit it was made from (`ill_posed`, `unstable`, `not_converged`,
+    /// `failed`): the card is only as good as its fit.
     pub status: &'static str,
     /// The input files.
     pub sources: Vec<SourceFile>,
@@ -446,10 +448,10 @@ pub struct Card {
 }
 
 impl Card {
-    /// The exit status under `--strict`: 1 for a card with a warning (approximate,
-    /// or from a fit whose status blocks).
+    /// The exit status: 1 under `--strict` for any status but `exact` (README,
+    /// "Exit status and statuses"), else 0.
     pub fn exit_code(&self, strict: bool) -> i32 {
-        i32::from(strict && !self.warnings.is_empty())
+        i32::from(strict && self.status != "exact")
     }
 }
 
@@ -504,6 +506,20 @@ pub fn card(m: &Material, target: Target, opts: &Options) -> Result<Card> {
     }
     viscous_statements(m, target, &mut d);
     let exact = d.warnings.is_empty();
+    // the card is only as good as its fit: a fit's blocking status is the card's
+    let blocking = m.sources.iter().find_map(|s| {
+        s.status
+            .as_deref()
+            .filter(|s| !matches!(*s, "ok" | "warning"))
+    });
+    let status: &'static str = match blocking {
+        Some("ill_posed") => "ill_posed",
+        Some("unstable") => "unstable",
+        Some("not_converged") => "not_converged",
+        Some(_) => "failed",
+        None if exact => "exact",
+        None => "approximate",
+    };
     let mut warnings = m.warnings.clone();
     warnings.append(&mut d.warnings);
     let mut notes = m.notes.clone();
@@ -530,7 +546,7 @@ pub fn card(m: &Material, target: Target, opts: &Options) -> Result<Card> {
     }
     header.push("units: SI (Pa, s, kg/m^3); stresses nominal in the fit, the card's own measure in the code".into());
     header.push(format!(
-        "status: {}",
+        "status: {status}; conversion {}",
         if exact {
             "exact (the card is the fit's model; docs/export.md)"
         } else {
@@ -567,7 +583,7 @@ pub fn card(m: &Material, target: Target, opts: &Options) -> Result<Card> {
         tool_version: env!("CARGO_PKG_VERSION"),
         target,
         material: m.name.clone(),
-        status: if exact { "exact" } else { "approximate" },
+        status,
         sources: m.sources.clone(),
         constants: d.constants,
         warnings,

@@ -118,9 +118,8 @@ enum Hyper {
 impl Hyper {
     /// Uniaxial nominal stress of the incompressible solid.
     fn stress(&self, l: f64) -> f64 {
-        let (i1, i2) = (l * l + 2.0 / l, 2.0 * l + 1.0 / (l * l));
+        let i1 = l * l + 2.0 / l;
         let inv = |w1: f64, w2: f64| 2.0 * (l - 1.0 / (l * l)) * (w1 + w2 / l);
-        let _ = i2;
         match self {
             Hyper::Poly { c10, c01, c20, c30 } => {
                 let x = i1 - 3.0;
@@ -177,7 +176,7 @@ fn parse_abaqus(text: &str) -> Parsed {
     let mut p = Parsed::default();
     let mut kw = String::new();
     let mut data: Vec<f64> = Vec::new();
-    let mut flush = |kw: &str, data: &[f64], p: &mut Parsed| {
+    let flush = |kw: &str, data: &[f64], p: &mut Parsed| {
         let k = kw.to_ascii_uppercase();
         if k.starts_with("*HYPERELASTIC") {
             p.hyper = Some(if k.contains("NEO HOOKE") {
@@ -229,7 +228,7 @@ fn parse_abaqus(text: &str) -> Parsed {
 fn parse_ansys(text: &str) -> Parsed {
     let mut p = Parsed::default();
     let mut table: Option<(String, Vec<f64>)> = None;
-    let mut done = |t: Option<(String, Vec<f64>)>, p: &mut Parsed| {
+    let done = |t: Option<(String, Vec<f64>)>, p: &mut Parsed| {
         let Some((head, c)) = t else { return };
         let h: Vec<&str> = head.split(',').collect();
         match (h[1], h[5]) {
@@ -413,9 +412,19 @@ fn parse(t: Target, text: &str) -> Parsed {
 /// hyperelastic part and the relaxation function E(t) with its reading.
 struct Model {
     hyper: Option<HyperelasticPart>,
-    /// (E∞, terms (τ, E), QLV reference E_ref if QLV).
-    relax: Option<(f64, Vec<(f64, f64)>, Option<f64>)>,
+    relax: Option<Relax>,
 }
+
+/// E∞, the terms (τ, E) and, for a QLV fit, its reference E_ref.
+#[derive(Debug)]
+struct Relax {
+    e_inf: f64,
+    terms: Vec<(f64, f64)>,
+    e_ref: Option<f64>,
+}
+
+/// A function of time.
+type Fun = Box<dyn Fn(f64) -> f64>;
 
 fn model(files: &[String]) -> Model {
     let mut m = Model {
@@ -434,7 +443,11 @@ fn model(files: &[String]) -> Model {
                     .collect();
                 match r.qlv {
                     Some(q) => {
-                        m.relax = Some((r.long_term_pa, terms, Some(q.reference_modulus_pa)))
+                        m.relax = Some(Relax {
+                            e_inf: r.long_term_pa,
+                            terms,
+                            e_ref: Some(q.reference_modulus_pa),
+                        })
                     }
                     None => parallel = Some((r.long_term_pa, terms)),
                 }
@@ -459,7 +472,11 @@ fn model(files: &[String]) -> Model {
             Some(h) => 3.0 * h.evaluator().unwrap().initial_shear_modulus(&h.params),
             None => e_inf,
         };
-        m.relax = Some((k_inf, terms, None));
+        m.relax = Some(Relax {
+            e_inf: k_inf,
+            terms,
+            e_ref: None,
+        });
     }
     m
 }
@@ -513,11 +530,19 @@ fn cards_read_back_give_the_fit_stress() {
                         );
                     }
                 }
-                (hyper, Some(v), Some((e_inf, terms, qlv))) => {
+                (
+                    hyper,
+                    Some(v),
+                    Some(Relax {
+                        e_inf,
+                        terms,
+                        e_ref: qlv,
+                    }),
+                ) => {
                     let e0 = e_at(*e_inf, terms, 0.0);
                     // the card's relaxation function relative to its hyperelastic block,
                     // and its small-strain modulus E(t)
-                    let (g, e_card): (Box<dyn Fn(f64) -> f64>, Box<dyn Fn(f64) -> f64>) = match v {
+                    let (g, e_card): (Fun, Fun) = match v {
                         Visco::Relative(gs) => {
                             let gs = gs.clone();
                             let g = move |s: f64| {

@@ -157,16 +157,6 @@ impl Relaxation {
     pub fn instantaneous_pa(&self) -> f64 {
         self.long_term_pa + self.terms.iter().map(|t| t.1).sum::<f64>()
     }
-
-    /// E(t) (Pa).
-    pub fn modulus_at(&self, t: f64) -> f64 {
-        self.long_term_pa
-            + self
-                .terms
-                .iter()
-                .map(|&(tau, e)| e * (-t / tau).exp())
-                .sum::<f64>()
-    }
 }
 
 /// What a card is made from: at most one hyperelastic and one viscoelastic part,
@@ -236,11 +226,7 @@ pub fn read(paths: &[PathBuf]) -> Result<Material> {
         let (h, v) = match part {
             MaterialFile::Hyperelastic(h) => (Some(h), None),
             MaterialFile::Relaxation(r) => {
-                if let Some((q, _)) = relax
-                    .as_ref()
-                    .map(|r| (&r.0, ()))
-                    .or(arms.as_ref().map(|a| (&a.0, ())))
-                {
+                if let Some(q) = relax.as_ref().map(|r| &r.0).or(arms.as_ref().map(|a| &a.0)) {
                     return Err(twice("viscoelastic", q));
                 }
                 relax = Some((p.clone(), r));
@@ -262,9 +248,6 @@ pub fn read(paths: &[PathBuf]) -> Result<Material> {
         }
     }
     let mut notes = Vec::new();
-    let mu0 = |h: &HyperelasticPart| -> Result<f64> {
-        Ok(h.evaluator()?.initial_shear_modulus(&h.params))
-    };
     let relaxation = match (&relax, &arms) {
         (Some((rp, r)), _) => {
             let terms: Vec<(f64, f64)> = r
@@ -656,7 +639,7 @@ fn viscous_statements(m: &Material, target: Target, d: &mut Draft) {
 /// For a parallel-reading material written as a stress-relaxing card: the card's
 /// viscous overstress over the seed's, P_h(λ)/(E∞·(λ − 1)), at [`STRETCHES`] in
 /// uniaxial tension (→ 1 as λ → 1). None if the model has no finite stress there.
-pub fn stress_proportional_ratios(h: &HyperelasticPart, r: &Relaxation) -> Option<Vec<f64>> {
+fn stress_proportional_ratios(h: &HyperelasticPart, r: &Relaxation) -> Option<Vec<f64>> {
     let model = h.evaluator().ok()?;
     let v: Vec<f64> = STRETCHES
         .iter()

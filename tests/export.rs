@@ -741,7 +741,7 @@ fn bad_input_is_refused_with_where_and_what() {
             vec![&neo, &yeoh, "--to", "abaqus"],
             "a second hyperelastic part",
         ),
-        (vec![&yeoh, "--to", "ansys", "--density", "-3"], "--density"),
+        (vec![&yeoh, "--to", "ansys", "--density=-3"], "--density"),
     ];
     for (args, msg) in cases {
         let o = run(

@@ -17,6 +17,7 @@
 pub mod bench;
 pub mod data;
 pub mod error;
+pub mod export;
 pub mod fit;
 pub mod identify;
 pub mod io;

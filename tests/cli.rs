@@ -424,7 +424,7 @@ fn json_diff(got: &Value, want: &Value, path: &str, rtol: f64) -> Option<String>
 ///
 /// Regenerate only after a deliberate change of the output (a new field, a changed
 /// dataset, a better estimator), and say why in the commit.
-fn golden(name: &str, got: &str, same: impl Fn(&str) -> Option<String>) {
+pub fn golden(name: &str, got: &str, same: impl Fn(&str) -> Option<String>) {
     let path = repo().join("tests/golden").join(name);
     if std::env::var("UPDATE_GOLDEN").is_ok_and(|v| v == "1") {
         std::fs::create_dir_all(path.parent().expect("parent")).expect("mkdir");

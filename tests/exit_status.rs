@@ -43,7 +43,8 @@ fn printed_status(o: &Output) -> Option<String> {
 }
 
 /// Statuses that block (exit 1) under `--strict`.
-const BLOCKING: [&str; 6] = [
+const BLOCKING: [&str; 7] = [
+    "approximate",
     "blocking",
     "ill_posed",
     "unstable",
@@ -98,6 +99,7 @@ fn every_command_status_agrees_with_exit_code() {
     let one_fraction = file("status_composite_one_fraction.toml");
     let nan_scene = file("status_scene_nan.toml");
     let missing = file("status_does_not_exist.csv");
+    let yeoh_fit = shipped("tests/data/export/vhb4910-yeoh.json");
     let h = &uniaxial[..];
     cases(&[
         // hyperelastic
@@ -152,6 +154,11 @@ fn every_command_status_agrees_with_exit_code() {
         // simulate: a damped scene; one whose εr once made the state non-finite (refused now)
         (&["simulate", &scene, "--no-report", "--strict"], 0),
         (&["simulate", &nan_scene, "--no-report"], 2),
+        // export: an exact card; an approximate one (blocking under --strict); a CSV
+        (&["export", &yeoh_fit, "--to", "abaqus", "--strict"], 0),
+        (&["export", &yeoh_fit, "--to", "febio"], 0),
+        (&["export", &yeoh_fit, "--to", "febio", "--strict"], 1),
+        (&["export", h, "--to", "abaqus"], 2),
         // static: the curve; too few points to look for a peak
         (&["static", &scene, "--strict"], 0),
         (&["static", &scene, "--points", "2"], 2),

@@ -6,6 +6,7 @@ mod cli;
 mod datasets;
 mod estimation;
 mod exit_status;
+mod export;
 mod fuzz;
 mod identify;
 mod identify_mass_fraction;

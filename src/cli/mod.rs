@@ -5,6 +5,7 @@ mod bench_identify;
 mod bench_relaxation;
 mod bench_simulate;
 mod composite;
+mod export;
 mod hyperelastic;
 mod identify;
 mod permittivity;
@@ -42,6 +43,8 @@ enum Command {
     Simulate(simulate::Args),
     /// Static voltage–stretch curve and pull-in of a scene's actuator.
     Static(static_curve::Args),
+    /// Write the material card of a fit for an FE code (Abaqus, ANSYS, LS-DYNA, FEBio, COMSOL).
+    Export(export::Args),
     /// Measure speed against accuracy and write tables and charts under reports/.
     Bench(bench::Args),
 }
@@ -58,6 +61,7 @@ pub fn run(cli: Cli) -> Result<i32> {
         Command::Bench(a) => bench::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Static(a) => static_curve::run(a),
+        Command::Export(a) => export::run(a),
     }
 }
 

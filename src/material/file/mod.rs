@@ -24,7 +24,7 @@ mod viscous;
 pub use composite::{read_mixture, CompositePermittivity};
 pub use hyperelastic::{expected_params, FittedRanges, HyperelasticPart, StretchRange};
 pub use identified::{IdentifiedMaterial, ParamUncertainty};
-pub use viscous::{Arm, Viscous};
+pub use viscous::{Arm, QlvReference, RelaxationPart, Viscous};
 
 use crate::error::{Error, Location, Result};
 use crate::material::check::{did_you_mean, Violation};
@@ -61,13 +61,58 @@ pub fn read_hyperelastic(path: &Path) -> Result<HyperelasticPart> {
 pub fn read_viscous(path: &Path) -> Result<(Vec<Arm>, Option<f64>)> {
     let (text, schema) = read_text(path, &[RELAXATION_SCHEMA, IDENTIFIED_SCHEMA], "viscous")?;
     match schema {
-        RELAXATION_SCHEMA => Ok((viscous::relaxation_arms(path, &typed(path, &text)?)?, None)),
+        RELAXATION_SCHEMA => Ok((
+            viscous::relaxation_part(path, &typed(path, &text)?)?.arms,
+            None,
+        )),
         _ => match IdentifiedMaterial::parse(path, &text)?.viscous {
             Some(v) => Ok((v.arms, Some(v.nv_pa_s))),
             None => Err(err(path, "viscous", "missing: this identified material has no viscous part")
                 .with_hint("give the scene's material.viscous another way (preset, arms) or identify with arms")),
         },
     }
+}
+
+/// The material parts a file holds, by its schema tag: a hyperelastic fit's
+/// hyperelastic part, a relaxation fit's Prony series (with its formulation), or
+/// an identified material whole.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MaterialFile {
+    /// A hyperelastic fit (`dea-fit hyperelastic`).
+    Hyperelastic(HyperelasticPart),
+    /// A relaxation fit (`dea-fit relaxation`).
+    Relaxation(RelaxationPart),
+    /// An identified material (`dea-fit identify`).
+    Identified(IdentifiedMaterial),
+}
+
+/// The material parts of a hyperelastic fit, a relaxation fit or an identified
+/// material file, each checked as the scene readers check it, and the status the
+/// estimator gave the fit (`ok`, `warning`, `ill_posed`, …; None for an identified
+/// material, which states none). A composite fit holds no mechanical constants and
+/// is refused.
+pub fn read_material(path: &Path) -> Result<(MaterialFile, Option<String>)> {
+    let (text, schema) = read_text(
+        path,
+        &[HYPERELASTIC_SCHEMA, RELAXATION_SCHEMA, IDENTIFIED_SCHEMA],
+        "mechanical",
+    )?;
+    #[derive(Deserialize)]
+    struct StatusJson {
+        #[serde(default)]
+        status: Option<String>,
+    }
+    let status = typed::<StatusJson>(path, &text)?.status;
+    let part = match schema {
+        HYPERELASTIC_SCHEMA => {
+            MaterialFile::Hyperelastic(HyperelasticPart::from_json(path, "", &typed(path, &text)?)?)
+        }
+        RELAXATION_SCHEMA => {
+            MaterialFile::Relaxation(viscous::relaxation_part(path, &typed(path, &text)?)?)
+        }
+        _ => MaterialFile::Identified(IdentifiedMaterial::parse(path, &text)?),
+    };
+    Ok((part, status))
 }
 
 /// One parameter as a material file holds it: name, SI unit and value, and, in an

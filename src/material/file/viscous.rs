@@ -4,7 +4,8 @@
 
 use super::{by_name, err, join, violation, FileParam, ParamUncertainty};
 use crate::error::Result;
-use crate::material::check::{ARM_MODULUS, ARM_TIME, DASHPOT, MODULUS};
+use crate::material::check::{ARM_MODULUS, ARM_TIME, DASHPOT, MODULUS, SHEAR_MODULUS};
+use crate::material::viscoelastic::Formulation;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -102,13 +103,17 @@ impl Viscous {
     }
 }
 
-/// The material part of a relaxation fit file: its parameters, Prony terms and
-/// Kelvin–Maxwell arms (the rest of the file is the estimator's report).
+/// The material part of a relaxation fit file: its parameters, Prony terms,
+/// Kelvin–Maxwell arms, the formulation they belong to and, for a QLV fit, the
+/// hyperelastic reference (the rest of the file is the estimator's report).
 #[derive(Debug, Clone, Deserialize)]
 pub(super) struct RelaxationJson {
     parameters: Vec<FileParam>,
     prony: Vec<PronyJson>,
     kelvin_maxwell: Vec<ArmJson>,
+    formulation: Formulation,
+    #[serde(default)]
+    qlv: Option<QlvJson>,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -126,18 +131,55 @@ struct ArmJson {
     n_pa_s: f64,
 }
 
-/// The seed's Maxwell arms kⱼ = Eⱼ, ηⱼ = Eⱼ·τⱼ of a relaxation fit's N Prony terms,
-/// read by name: `E_inf`, `E1…EN` (Pa) and `tau1…tauN` (s), plausible, and agreeing
-/// with the file's `prony` and `kelvin_maxwell` lists (see docs/scenes.md for how
-/// they enter the simulator).
-pub(super) fn relaxation_arms(path: &Path, fit: &RelaxationJson) -> Result<Vec<Arm>> {
+#[derive(Debug, Clone, Deserialize)]
+struct QlvJson {
+    hyperelastic_model: String,
+    #[serde(rename = "reference_modulus_Pa")]
+    reference_modulus_pa: f64,
+    instantaneous_scale: f64,
+}
+
+/// The hyperelastic fit a QLV relaxation fit relaxes: σ(t) = ∫ G(t − s) dσₑ(s) with
+/// G(t) = E(t)/E_ref, σₑ the uniaxial stress of that fit and E_ref = 3μ0 its
+/// small-strain Young's modulus.
+#[derive(Debug, Clone, PartialEq)]
+pub struct QlvReference {
+    /// Its model (`yeoh`, `ogden3`, …).
+    pub hyperelastic_model: String,
+    /// E_ref = 3μ0 of that fit (Pa): the modulus the Prony moduli are relative to.
+    pub reference_modulus_pa: f64,
+    /// G(0) = (E∞ + ΣEᵢ)/E_ref: the instantaneous response is G(0)·σₑ.
+    pub instantaneous_scale: f64,
+}
+
+/// The material part of a relaxation fit: the Prony series E(t) = E∞ + Σ Eᵢ·e^(−t/τᵢ)
+/// (its terms as the seed's Maxwell arms kⱼ = Eⱼ, ηⱼ = Eⱼ·τⱼ) and the formulation
+/// it belongs to (`material::viscoelastic::Formulation`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RelaxationPart {
+    /// E∞ (Pa): in the parallel reading the equilibrium (secant) modulus at the
+    /// tested strain; in the QLV reading g∞·E_ref.
+    pub long_term_pa: f64,
+    /// The terms, in the file's order (sorted by τ).
+    pub arms: Vec<Arm>,
+    /// Parallel (the seed's arms) or QLV.
+    pub formulation: Formulation,
+    /// The hyperelastic reference of a QLV fit (None for a parallel fit).
+    pub qlv: Option<QlvReference>,
+}
+
+/// The Prony series of a relaxation fit, read by name: `E_inf`, `E1…EN` (Pa) and
+/// `tau1…tauN` (s), plausible, agreeing with the file's `prony` and
+/// `kelvin_maxwell` lists (see docs/scenes.md for how the arms enter the
+/// simulator), and, for a QLV fit, with its stated G(0) = (E∞ + ΣEᵢ)/E_ref.
+pub(super) fn relaxation_part(path: &Path, fit: &RelaxationJson) -> Result<RelaxationPart> {
     let n = fit.prony.len();
     let mut expected: Vec<(String, &str)> = vec![("E_inf".into(), "Pa")];
     expected.extend((1..=n).map(|i| (format!("E{i}"), "Pa")));
     expected.extend((1..=n).map(|i| (format!("tau{i}"), "s")));
     let what = format!("a {n}-term Prony series");
     let vals = by_name(path, &fit.parameters, "parameters", &expected, &what)?;
-    MODULUS
+    let e_inf = MODULUS
         .check("parameters.E_inf", vals[0])
         .map_err(|e| violation(path, e))?;
     let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs());
@@ -170,5 +212,44 @@ pub(super) fn relaxation_arms(path: &Path, fit: &RelaxationJson) -> Result<Vec<A
             eta_pa_s: a.n_pa_s,
         });
     }
-    Ok(arms)
+    let qlv = match (fit.formulation, &fit.qlv) {
+        (Formulation::Parallel, _) => None,
+        (Formulation::Qlv, None) => {
+            return Err(err(
+                path,
+                "qlv",
+                "missing: a QLV fit names its hyperelastic reference",
+            )
+            .with_hint("the file was edited: fit the data again with --hyperelastic"))
+        }
+        (Formulation::Qlv, Some(q)) => {
+            let e_ref = SHEAR_MODULUS
+                .check("qlv.reference_modulus_Pa", q.reference_modulus_pa / 3.0)
+                .map_err(|e| violation(path, e))?
+                * 3.0;
+            let e0 = e_inf + arms.iter().map(|a| a.k_pa).sum::<f64>();
+            if !same(q.instantaneous_scale, e0 / e_ref) {
+                return Err(err(
+                    path,
+                    "qlv.instantaneous_scale",
+                    format!(
+                        "{} is not (E∞ + ΣEᵢ)/E_ref = {e0} Pa / {e_ref} Pa",
+                        q.instantaneous_scale
+                    ),
+                )
+                .with_hint("the file was edited: fit the data again"));
+            }
+            Some(QlvReference {
+                hyperelastic_model: q.hyperelastic_model.clone(),
+                reference_modulus_pa: e_ref,
+                instantaneous_scale: q.instantaneous_scale,
+            })
+        }
+    };
+    Ok(RelaxationPart {
+        long_term_pa: e_inf,
+        arms,
+        formulation: fit.formulation,
+        qlv,
+    })
 }

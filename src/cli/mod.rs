@@ -8,6 +8,7 @@ mod composite;
 mod hyperelastic;
 mod identify;
 mod permittivity;
+mod rank;
 mod relaxation;
 mod simulate;
 mod static_curve;
@@ -42,6 +43,8 @@ enum Command {
     Simulate(simulate::Args),
     /// Static voltage–stretch curve and pull-in of a scene's actuator.
     Static(static_curve::Args),
+    /// Rank fillers and composites by what they buy an actuator (sweeps, shards, Slurm).
+    Rank(rank::Args),
     /// Measure speed against accuracy and write tables and charts under reports/.
     Bench(bench::Args),
 }
@@ -58,6 +61,7 @@ pub fn run(cli: Cli) -> Result<i32> {
         Command::Bench(a) => bench::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Static(a) => static_curve::run(a),
+        Command::Rank(a) => rank::run(a),
     }
 }
 

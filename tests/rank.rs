@@ -108,11 +108,12 @@ fn figures_match_hand_computation() {
     assert_eq!(e.state, State::Ok);
     let lam_d = 1.0 - value(&e.static_stroke);
     close(curve(lam_d), v, 1e-9, "V(λd)");
-    // Pull-in at λ = 4^(-1/3), V = 0.687·z0·sqrt(μ/ε) (Zhao & Suo 2007; golden
-    // section to 1e-10 in λ, so V to 1e-12 and λ to 1e-9).
+    // Pull-in at λ = 4^(-1/3), V = 0.687·z0·sqrt(μ/ε) (Zhao & Suo 2007). At a
+    // maximum V changes only to second order in λ, so rounding (1e-16 of V) hides λ
+    // within ≈ sqrt(1e-16) = 1e-8: λ to 1e-7, V to 1e-12.
     let pi = e.pull_in.expect("a pull-in");
     let lam_p = 4f64.powf(-1.0 / 3.0);
-    close(1.0 - pi.stroke, lam_p, 1e-9, "λ pull-in");
+    close(1.0 - pi.stroke, lam_p, 1e-7, "λ pull-in");
     close(pi.voltage_v, curve(lam_p), 1e-12, "V pull-in");
     // Breakdown: sqrt(μ/ε)·sqrt(1/λ − λ²) = Eb, solved here by Newton on the cubic
     // λ³ + cλ − 1 = 0 with c = (Eb/sqrt(μ/ε))² (bisection in the code to 1e-12).
@@ -211,14 +212,15 @@ fn stroke_is_monotonic_in_modulus_and_permittivity() {
     }
 }
 
-/// The trade-off: at fixed voltage and small strain the stroke follows εr/Y. With
+/// The trade-off: at fixed voltage and small strain the stroke follows εr/Y (here
+/// 20 V across 50 µm, strokes near 1e-4). With
 /// Guth–Gold stiffening (X(0.1) = 1.391) it falls under Maxwell Garnett (by hand:
 /// εr 5.2 → 6.928 with εf 6000 at 10 vol %, −4.2 %) and rises under Lichtenecker
 /// (×(6000/5.2)^0.1 = 2.024, +45.5 %).
 #[test]
 fn maxwell_garnett_loses_and_lichtenecker_gains_stroke_under_guth_gold() {
     let dir = tempfile::tempdir().unwrap();
-    let mut m = head("voltage = \"100 V\"");
+    let mut m = head("voltage = \"20 V\"");
     m.push_str(&matrix("TC", 5.2, 30.0, "300 V/um"));
     m.push_str("[[filler]]\nname = \"BaTiO3\"\ndensity = \"6.02 g/cm3\"\neps_r = 6000\n");
     for rule in ["maxwell-garnett", "lichtenecker"] {
@@ -230,17 +232,18 @@ fn maxwell_garnett_loses_and_lichtenecker_gains_stroke_under_guth_gold() {
     let ev = evaluate(&d, &Sweep::default());
     let stroke = |i: usize| value(&ev[i].evaluation.static_stroke);
     let x = 1.0 + 2.5 * 0.1 + 14.1 * 0.01;
-    let (em, ef, phi) = (5.2, 6000.0, 0.1);
+    let (em, ef, phi): (f64, f64, f64) = (5.2, 6000.0, 0.1);
     let mg = em * (ef + 2.0 * em + 2.0 * phi * (ef - em)) / (ef + 2.0 * em - phi * (ef - em));
     let li = (phi * ef.ln() + (1.0 - phi) * em.ln()).exp();
     for (i, eps, name) in [(0, mg, "maxwell-garnett"), (2, li, "lichtenecker")] {
         assert!((value(&ev[i + 1].evaluation.eps_r) - eps).abs() < 1e-12 * eps);
         assert!((value(&ev[i + 1].evaluation.youngs_modulus) - 3e4 * 3.0 * x).abs() < 1e-9 * 9e4 * x);
-        // Small strain (0.2 %): the stroke ratio is εr/Y's to 2·Δstroke ≈ 1e-4;
-        // 1e-3 is the stated tolerance.
+        // Neo-Hookean: stroke s = a(1 + 2a + …) with a ∝ εr/Y, so the ratio of two
+        // strokes is εr/Y's × (1 + 2Δa), Δa ≤ 4e-5 here: 2e-4 relative is the
+        // stated tolerance.
         let ratio = stroke(i + 1) / stroke(i);
         let hand = eps / em / x;
-        assert!((ratio - hand).abs() < 1e-3, "{name}: stroke ratio {ratio} vs εr/Y ratio {hand}");
+        assert!((ratio / hand - 1.0).abs() < 2e-4, "{name}: stroke ratio {ratio} vs εr/Y ratio {hand}");
     }
     assert!(stroke(1) < stroke(0), "Maxwell Garnett: the stroke falls with loading");
     assert!((stroke(1) / stroke(0) - 0.958).abs() < 2e-3, "−4 % by hand");
@@ -250,26 +253,28 @@ fn maxwell_garnett_loses_and_lichtenecker_gains_stroke_under_guth_gold() {
 }
 
 /// A breakdown field that falls with loading moves the breakdown-limited optimum of
-/// the largest stroke inside the range (here 10 vol %: Fm ∝ εr·Eb²/Y peaks there);
-/// held at the matrix's value, the optimum sits at the end of the range.
+/// the largest stroke inside the range (here 10 vol %: the stroke at breakdown solves
+/// 1/λ − λ² = Fm for a neo-Hookean layer, and Fm ∝ εr·Eb²/Y peaks there); held at the
+/// matrix's value (10 V/µm, below every pull-in field), it sits at the range's end.
 #[test]
 fn falling_breakdown_field_moves_the_optimum_inside() {
     let dir = tempfile::tempdir().unwrap();
     let mut m = head("voltage = \"100 V\"");
     m.push_str(&matrix("TC", 5.2, 30.0, "20 V/um"));
+    m.push_str(&matrix("TC10", 5.2, 30.0, "10 V/um"));
     m.push_str("[[filler]]\nname = \"BaTiO3\"\ndensity = \"6.02 g/cm3\"\neps_r = 6000\n");
-    let series = |name: &str| {
-        format!("[[series]]\nname = \"{name}\"\nmatrix = \"TC\"\nfiller = \"BaTiO3\"\nbasis = \"volume\"\nloadings = \"0:0.3:7\"\npermittivity = {{ rule = \"lichtenecker\" }}\n")
+    let series = |name: &str, matrix: &str| {
+        format!("[[series]]\nname = \"{name}\"\nmatrix = \"{matrix}\"\nfiller = \"BaTiO3\"\nbasis = \"volume\"\nloadings = \"0:0.3:7\"\npermittivity = {{ rule = \"lichtenecker\" }}\n")
     };
-    m.push_str(&series("falling"));
+    m.push_str(&series("falling", "TC"));
     for (x, eb) in [(0.1, 17), (0.2, 14), (0.3, 11)] {
         m.push_str(&format!("[[series.measured]]\nloading = {x}\nbreakdown = \"{eb} V/um\"\n"));
     }
-    m.push_str(&series("held"));
+    m.push_str(&series("held", "TC10"));
     let d = design(dir.path(), &m);
     let ev = evaluate(&d, &Sweep::default());
     let list: Vec<Evaluation> = ev.iter().map(|e| e.evaluation.clone()).collect();
-    assert!(list.iter().filter(|e| e.series == "falling").all(|e| e.max_stroke_limit == Limit::Breakdown));
+    assert!(list.iter().all(|e| e.max_stroke_limit == Limit::Breakdown));
     let r = ranking::rank(&list, Objective::MaxStroke, [Objective::MaxStroke, Objective::Fm]);
     let best = |s: &str| r.best.iter().find(|b| b.series == s).unwrap();
     assert!((best("falling").loading - 0.1).abs() < 1e-12, "{:?}", best("falling"));

@@ -107,7 +107,8 @@ impl Present {
         Ok((by, [a, b]))
     }
 
-    /// The flags as words, for the merge job of a Slurm script.
+    /// The flags as words, for the merge job of a Slurm script (paths as given: the
+    /// jobs run in the directory the script was written in).
     fn words(&self) -> Vec<String> {
         let mut w = vec![
             "--by".into(),
@@ -121,11 +122,11 @@ impl Present {
             w.push("--json".into());
         }
         if let Some(c) = &self.csv {
-            w.extend(["--csv".into(), absolute(c).display().to_string()]);
+            w.extend(["--csv".into(), c.display().to_string()]);
         }
         match (&self.report, self.no_report) {
             (_, true) => w.push("--no-report".into()),
-            (Some(r), false) => w.extend(["--report".into(), absolute(r).display().to_string()]),
+            (Some(r), false) => w.extend(["--report".into(), r.display().to_string()]),
             (None, false) => {}
         }
         if self.strict {
@@ -133,10 +134,6 @@ impl Present {
         }
         w
     }
-}
-
-fn absolute(p: &Path) -> PathBuf {
-    std::env::current_dir().map_or(p.to_path_buf(), |d| d.join(p))
 }
 
 /// A progress bar over `n` candidate evaluations (hidden when stderr is not a terminal).
@@ -179,7 +176,7 @@ pub fn run(a: Args) -> Result<i32> {
             shard::slurm_script(&SlurmJob {
                 tasks: n,
                 exe,
-                design: cwd.join(&design),
+                design: design.clone(),
                 cwd,
                 sweep: a.sweep.clone(),
                 merge_flags: a.present.words(),

@@ -143,9 +143,15 @@ enum Place {
     Beyond,
 }
 
+/// Whether two loadings are the same (to 1e-9: a swept loading computed as
+/// 0.6·2/6 is the measured 0.2).
+pub fn same_loading(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9
+}
+
 /// Locate `x` among sorted knots (the first knot is 0 and x ≥ 0).
 fn place(knots: &[f64], x: f64) -> Place {
-    if let Some(i) = knots.iter().position(|&k| k == x) {
+    if let Some(i) = knots.iter().position(|&k| same_loading(k, x)) {
         return Place::At(i);
     }
     match knots.iter().position(|&k| k > x) {
@@ -228,7 +234,7 @@ pub fn build(d: &Design, si: usize, loading: f64) -> Result<Candidate> {
     let fitted = s
         .measured
         .iter()
-        .find(|p| p.loading == loading)
+        .find(|p| same_loading(p.loading, loading))
         .and_then(|p| p.hyperelastic.as_ref());
     let (hyperelastic, youngs_modulus) = match fitted {
         Some(h) => (h.value.clone(), youngs(h)?),
@@ -404,7 +410,7 @@ fn measured_at(
 ) -> Option<(f64, String)> {
     points
         .iter()
-        .find(|p| p.loading == x)
+        .find(|p| same_loading(p.loading, x))
         .and_then(|p| get(p).map(|v| (v, p.source.clone())))
 }
 

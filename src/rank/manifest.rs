@@ -994,7 +994,7 @@ fn read_series(
         let mk = format!("{key}.measured[{j}]");
         let x = m.get_ref();
         let at = loading(cx, x.loading.get_ref(), &x.loading.span(), &format!("{mk}.loading"))?;
-        if at == 0.0 || measured.iter().any(|o| o.loading == at) {
+        if at == 0.0 || measured.iter().any(|o| super::candidate::same_loading(o.loading, at)) {
             return Err(cx
                 .err(&x.loading.span(), format!("{mk}.loading = {at}: the matrix or another measured point already holds it"))
                 .with_hint("measured points are composites (loading > 0), one per loading; the matrix's values are in [[matrix]]"));

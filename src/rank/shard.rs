@@ -214,7 +214,7 @@ pub struct SlurmJob {
     pub exe: PathBuf,
     /// The directory the jobs run in (absolute).
     pub cwd: PathBuf,
-    /// The design manifest (absolute).
+    /// The design manifest, as given (relative to `cwd`).
     pub design: PathBuf,
     /// The `--sweep` values.
     pub sweep: Vec<String>,

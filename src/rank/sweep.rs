@@ -18,8 +18,9 @@ use rayon::prelude::*;
 /// Most points a range may hold (a sweep beyond it is a slip of the count).
 pub const MAX_RANGE_POINTS: usize = 1_000_000;
 
-/// `start:stop:count` → `count` evenly spaced values (ends included); each end a
-/// quantity of `dim` (a bare number is SI; `1kV`, `40 %`).
+/// `start:stop:count` → `count` evenly spaced values (ends included, each rounded
+/// to 12 significant digits); each end a quantity of `dim` (a bare number is SI;
+/// `1kV`, `40 %`).
 pub fn range(text: &str, dim: Dimension) -> std::result::Result<Vec<f64>, String> {
     let parts: Vec<&str> = text.split(':').collect();
     let [a, b, n] = parts[..] else {
@@ -43,10 +44,12 @@ pub fn range(text: &str, dim: Dimension) -> std::result::Result<Vec<f64>, String
             "'{text}': one point needs start = stop (or a count of 2 or more)"
         ));
     }
+    // Rounded to 12 significant digits: 0:0.6:7 gives 0.2, not 0.19999999999999998.
+    let round = |v: f64| format!("{v:.11e}").parse::<f64>().unwrap_or(v);
     Ok((0..n)
         .map(|i| match n {
             1 => a,
-            _ => a + (b - a) * i as f64 / (n - 1) as f64,
+            _ => round(a + (b - a) * i as f64 / (n - 1) as f64),
         })
         .collect())
 }

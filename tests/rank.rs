@@ -129,7 +129,12 @@ fn figures_match_hand_computation() {
     close(value(&e.max_stroke), 1.0 - lam_b, 1e-8, "max stroke");
     // Blocked force: ε(V/z0)²·A at rest (stack, λ0 = 1).
     let area = std::f64::consts::PI * 5e-3 * 5e-3;
-    close(value(&e.blocked_force), EPS0 * eps_r * (v / Z0).powi(2) * area, 1e-12, "blocked force");
+    close(
+        value(&e.blocked_force),
+        EPS0 * eps_r * (v / Z0).powi(2) * area,
+        1e-12,
+        "blocked force",
+    );
     // Energy in: ½CV² + Vol·μ(λ²/2 + 1/λ − 3/2) (the work on the layer; the code's
     // 600-point Gauss–Legendre quadrature is exact to 1e-12 for this smooth P).
     let cap = 10.0 * EPS0 * eps_r * area / (Z0 * lam_d * lam_d);
@@ -147,8 +152,15 @@ fn figures_match_hand_computation() {
     assert!(t > 1e-4 && t < 2e-2, "t10–90 {t}");
     // Provenance: matrix numbers are the manifest's (measured), with their line.
     assert_eq!(e.eps_r.provenance, dea_fit::rank::Provenance::Measured);
-    assert!(e.eps_r.source.contains("design.toml:"), "{}", e.eps_r.source);
-    assert_eq!(e.static_stroke.provenance, dea_fit::rank::Provenance::Predicted);
+    assert!(
+        e.eps_r.source.contains("design.toml:"),
+        "{}",
+        e.eps_r.source
+    );
+    assert_eq!(
+        e.static_stroke.provenance,
+        dea_fit::rank::Provenance::Predicted
+    );
 }
 
 /// Past pull-in at the drive: the state says so, the stroke, response and energy
@@ -167,15 +179,32 @@ fn pulled_in_candidates_are_not_ranked_on_garbage() {
     let soft = &ev[0].evaluation;
     assert_eq!(soft.state, State::PullIn, "{}", soft.state_note);
     assert!(soft.static_stroke.value.is_none());
-    assert!(soft.static_stroke.note.as_deref().unwrap().contains("pulled in"));
+    assert!(soft
+        .static_stroke
+        .note
+        .as_deref()
+        .unwrap()
+        .contains("pulled in"));
     assert!(soft.response_time.value.is_none() && soft.energy_in.value.is_none());
     let list: Vec<Evaluation> = ev.iter().map(|e| e.evaluation.clone()).collect();
-    let r = ranking::rank(&list, Objective::Stroke, [Objective::Stroke, Objective::Speed]);
-    assert_eq!(r.ranks, vec![None, Some(1)], "the pulled-in one is not ranked");
+    let r = ranking::rank(
+        &list,
+        Objective::Stroke,
+        [Objective::Stroke, Objective::Speed],
+    );
+    assert_eq!(
+        r.ranks,
+        vec![None, Some(1)],
+        "the pulled-in one is not ranked"
+    );
     assert_eq!(r.order, vec![1, 0], "ranked first, then the unranked");
     assert!(r.pareto.front.iter().all(|p| p.index == 1));
     // Its largest stroke before pull-in is still a figure (ranked on max-stroke).
-    let r = ranking::rank(&list, Objective::MaxStroke, [Objective::Stroke, Objective::Speed]);
+    let r = ranking::rank(
+        &list,
+        Objective::MaxStroke,
+        [Objective::Stroke, Objective::Speed],
+    );
     assert!(r.ranks.iter().all(|x| x.is_some()));
 }
 
@@ -203,10 +232,22 @@ fn stroke_is_monotonic_in_modulus_and_permittivity() {
     for i in 0..eps.len() {
         for j in 0..mus.len() {
             if j + 1 < mus.len() {
-                assert!(s(i, j + 1) < s(i, j), "stiffer at εr {}: {} ≥ {}", eps[i], s(i, j + 1), s(i, j));
+                assert!(
+                    s(i, j + 1) < s(i, j),
+                    "stiffer at εr {}: {} ≥ {}",
+                    eps[i],
+                    s(i, j + 1),
+                    s(i, j)
+                );
             }
             if i + 1 < eps.len() {
-                assert!(s(i + 1, j) > s(i, j), "larger εr at μ {}: {} ≤ {}", mus[j], s(i + 1, j), s(i, j));
+                assert!(
+                    s(i + 1, j) > s(i, j),
+                    "larger εr at μ {}: {} ≤ {}",
+                    mus[j],
+                    s(i + 1, j),
+                    s(i, j)
+                );
             }
         }
     }
@@ -237,19 +278,33 @@ fn maxwell_garnett_loses_and_lichtenecker_gains_stroke_under_guth_gold() {
     let li = (phi * ef.ln() + (1.0 - phi) * em.ln()).exp();
     for (i, eps, name) in [(0, mg, "maxwell-garnett"), (2, li, "lichtenecker")] {
         assert!((value(&ev[i + 1].evaluation.eps_r) - eps).abs() < 1e-12 * eps);
-        assert!((value(&ev[i + 1].evaluation.youngs_modulus) - 3e4 * 3.0 * x).abs() < 1e-9 * 9e4 * x);
+        assert!(
+            (value(&ev[i + 1].evaluation.youngs_modulus) - 3e4 * 3.0 * x).abs() < 1e-9 * 9e4 * x
+        );
         // Neo-Hookean: stroke s = a(1 + 2a + …) with a ∝ εr/Y, so the ratio of two
         // strokes is εr/Y's × (1 + 2Δa), Δa ≤ 4e-5 here: 2e-4 relative is the
         // stated tolerance.
         let ratio = stroke(i + 1) / stroke(i);
         let hand = eps / em / x;
-        assert!((ratio / hand - 1.0).abs() < 2e-4, "{name}: stroke ratio {ratio} vs εr/Y ratio {hand}");
+        assert!(
+            (ratio / hand - 1.0).abs() < 2e-4,
+            "{name}: stroke ratio {ratio} vs εr/Y ratio {hand}"
+        );
     }
-    assert!(stroke(1) < stroke(0), "Maxwell Garnett: the stroke falls with loading");
+    assert!(
+        stroke(1) < stroke(0),
+        "Maxwell Garnett: the stroke falls with loading"
+    );
     assert!((stroke(1) / stroke(0) - 0.958).abs() < 2e-3, "−4 % by hand");
-    assert!(stroke(3) > stroke(2), "Lichtenecker: the stroke rises with loading");
+    assert!(
+        stroke(3) > stroke(2),
+        "Lichtenecker: the stroke rises with loading"
+    );
     // The rules that produced each curve are named.
-    assert!(ev[1].evaluation.rules.contains("maxwell-garnett") && ev[1].evaluation.rules.contains("guth-gold"));
+    assert!(
+        ev[1].evaluation.rules.contains("maxwell-garnett")
+            && ev[1].evaluation.rules.contains("guth-gold")
+    );
 }
 
 /// A breakdown field that falls with loading moves the breakdown-limited optimum of
@@ -268,26 +323,49 @@ fn falling_breakdown_field_moves_the_optimum_inside() {
     };
     m.push_str(&series("falling", "TC"));
     for (x, eb) in [(0.1, 17), (0.2, 14), (0.3, 11)] {
-        m.push_str(&format!("[[series.measured]]\nloading = {x}\nbreakdown = \"{eb} V/um\"\n"));
+        m.push_str(&format!(
+            "[[series.measured]]\nloading = {x}\nbreakdown = \"{eb} V/um\"\n"
+        ));
     }
     m.push_str(&series("held", "TC10"));
     let d = design(dir.path(), &m);
     let ev = evaluate(&d, &Sweep::default());
     let list: Vec<Evaluation> = ev.iter().map(|e| e.evaluation.clone()).collect();
     assert!(list.iter().all(|e| e.max_stroke_limit == Limit::Breakdown));
-    let r = ranking::rank(&list, Objective::MaxStroke, [Objective::MaxStroke, Objective::Fm]);
+    let r = ranking::rank(
+        &list,
+        Objective::MaxStroke,
+        [Objective::MaxStroke, Objective::Fm],
+    );
     let best = |s: &str| r.best.iter().find(|b| b.series == s).unwrap();
-    assert!((best("falling").loading - 0.1).abs() < 1e-12, "{:?}", best("falling"));
+    assert!(
+        (best("falling").loading - 0.1).abs() < 1e-12,
+        "{:?}",
+        best("falling")
+    );
     assert!(!best("falling").at_edge);
     assert!((best("falling").resolution.unwrap() - 0.025).abs() < 1e-12);
     assert!((best("held").loading - 0.3).abs() < 1e-12 && best("held").at_edge);
     // Interpolated breakdown fields are predicted, measured ones measured.
-    let at = |x: f64| list.iter().find(|e| e.series == "falling" && (e.loading - x).abs() < 1e-9).unwrap();
-    assert_eq!(at(0.1).breakdown_field.provenance, dea_fit::rank::Provenance::Measured);
-    assert_eq!(at(0.05).breakdown_field.provenance, dea_fit::rank::Provenance::Predicted);
+    let at = |x: f64| {
+        list.iter()
+            .find(|e| e.series == "falling" && (e.loading - x).abs() < 1e-9)
+            .unwrap()
+    };
+    assert_eq!(
+        at(0.1).breakdown_field.provenance,
+        dea_fit::rank::Provenance::Measured
+    );
+    assert_eq!(
+        at(0.05).breakdown_field.provenance,
+        dea_fit::rank::Provenance::Predicted
+    );
     assert!((value(&at(0.05).breakdown_field) - 18.5e6).abs() < 1e-6);
     // Held at the matrix's value: a warning, and the run's status says so.
-    assert!(r.warnings.iter().any(|w| w.contains("held: no measured tan δ") || w.contains("held at the matrix")));
+    assert!(r
+        .warnings
+        .iter()
+        .any(|w| w.contains("held: no measured tan δ") || w.contains("held at the matrix")));
     assert_eq!(r.status, ranking::Status::Warning);
 }
 
@@ -318,7 +396,10 @@ fn results_do_not_depend_on_the_thread_count() {
     let sweep = Sweep::parse(&["voltage=600V:900V:2".into()]).unwrap();
     let pts = sweep::points(&d, &sweep);
     let on = |n: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .unwrap();
         let ev = pool.install(|| sweep::run(&d, &pts, &|| {}).unwrap());
         serde_json::to_string(&ev).unwrap()
     };
@@ -326,7 +407,11 @@ fn results_do_not_depend_on_the_thread_count() {
 }
 
 fn text(o: &std::process::Output) -> String {
-    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
 }
 
 /// Three shards merged give the single run's JSON, CSV, table and report byte for
@@ -335,7 +420,10 @@ fn text(o: &std::process::Output) -> String {
 fn shards_merge_into_the_single_run_byte_for_byte() {
     let dir = tempfile::tempdir().unwrap();
     let w = dir.path();
-    let design = repo().join("datasets/design/silicone_fillers.toml").display().to_string();
+    let design = repo()
+        .join("datasets/design/silicone_fillers.toml")
+        .display()
+        .to_string();
     let sweep = ["--sweep", "voltage=600V:900V:2"];
     let out = |args: &[&str]| {
         let o = run(w, args);
@@ -359,35 +447,108 @@ fn shards_merge_into_the_single_run_byte_for_byte() {
         let o = out(&a);
         assert!(String::from_utf8_lossy(&o).contains("status: "));
     }
-    let json2 = out(&["rank", "merge", "s2.json", "s0.json", "s1.json", "--json", "--csv", "two.csv", "--report", "rep2"]);
-    let table2 = out(&["rank", "merge", "s0.json", "s1.json", "s2.json", "--no-report"]);
+    let json2 = out(&[
+        "rank", "merge", "s2.json", "s0.json", "s1.json", "--json", "--csv", "two.csv", "--report",
+        "rep2",
+    ]);
+    let table2 = out(&[
+        "rank",
+        "merge",
+        "s0.json",
+        "s1.json",
+        "s2.json",
+        "--no-report",
+    ]);
     assert!(json1 == json2, "merged JSON differs from the single run");
-    assert_eq!(String::from_utf8_lossy(&table1), String::from_utf8_lossy(&table2));
-    assert_eq!(std::fs::read(w.join("one.csv")).unwrap(), std::fs::read(w.join("two.csv")).unwrap());
-    for f in ["index.md", "ranking.svg", "objective-vs-loading.svg", "pareto.svg", "stroke-voltage.svg"] {
-        assert_eq!(std::fs::read(w.join("rep1").join(f)).unwrap(), std::fs::read(w.join("rep2").join(f)).unwrap(), "{f}");
+    assert_eq!(
+        String::from_utf8_lossy(&table1),
+        String::from_utf8_lossy(&table2)
+    );
+    assert_eq!(
+        std::fs::read(w.join("one.csv")).unwrap(),
+        std::fs::read(w.join("two.csv")).unwrap()
+    );
+    for f in [
+        "index.md",
+        "ranking.svg",
+        "objective-vs-loading.svg",
+        "pareto.svg",
+        "stroke-voltage.svg",
+    ] {
+        assert_eq!(
+            std::fs::read(w.join("rep1").join(f)).unwrap(),
+            std::fs::read(w.join("rep2").join(f)).unwrap(),
+            "{f}"
+        );
     }
     let v: serde_json::Value = serde_json::from_slice(&json1).unwrap();
     assert_eq!(v["candidates"].as_array().unwrap().len(), 58);
     assert!(v["pareto"]["front"].as_array().is_some() && v["best_loading"].as_array().is_some());
     let c0 = &v["candidates"][0];
-    for k in ["name", "filler", "loading", "rank", "eps_r", "youngs_modulus", "fm", "static_stroke", "max_stroke", "blocked_force", "response_time", "energy_in", "loss_per_cycle"] {
+    for k in [
+        "name",
+        "filler",
+        "loading",
+        "rank",
+        "eps_r",
+        "youngs_modulus",
+        "fm",
+        "static_stroke",
+        "max_stroke",
+        "blocked_force",
+        "response_time",
+        "energy_in",
+        "loss_per_cycle",
+    ] {
         assert!(c0.get(k).is_some(), "candidates[0] has no {k}");
     }
-    assert!(c0["eps_r"]["provenance"].is_string() && c0["eps_r"]["source"].is_string() && c0["eps_r"]["unit"] == "1");
+    assert!(
+        c0["eps_r"]["provenance"].is_string()
+            && c0["eps_r"]["source"].is_string()
+            && c0["eps_r"]["unit"] == "1"
+    );
 
     // Refusals, each naming what is wrong (exit 2, nothing merged).
     let refused = |args: &[&str], says: &str| {
         let o = run(w, args);
         assert_eq!(o.status.code(), Some(2), "{args:?}:\n{}", text(&o));
-        assert!(text(&o).contains(says), "{args:?} should say {says:?}:\n{}", text(&o));
+        assert!(
+            text(&o).contains(says),
+            "{args:?} should say {says:?}:\n{}",
+            text(&o)
+        );
     };
-    refused(&["rank", "merge", "s0.json", "s2.json"], "1 of 3 shards missing: 1");
-    refused(&["rank", "merge", "s0.json", "s1.json", "s1.json", "s2.json"], "shard 1/3 is given twice");
-    out(&["rank", design.as_str(), "--sweep", "voltage=600V:900V:3", "--shard", "1/3", "--out", "other.json"]);
-    refused(&["rank", "merge", "s0.json", "other.json", "s2.json"], "belongs to another run");
-    std::fs::write(w.join("junk.json"), "{\"schema\": \"dea-fit/hyperelastic-fit/1\"}").unwrap();
-    refused(&["rank", "merge", "s0.json", "junk.json"], "expected \"dea-fit/rank-shard/1\"");
+    refused(
+        &["rank", "merge", "s0.json", "s2.json"],
+        "1 of 3 shards missing: 1",
+    );
+    refused(
+        &["rank", "merge", "s0.json", "s1.json", "s1.json", "s2.json"],
+        "shard 1/3 is given twice",
+    );
+    out(&[
+        "rank",
+        design.as_str(),
+        "--sweep",
+        "voltage=600V:900V:3",
+        "--shard",
+        "1/3",
+        "--out",
+        "other.json",
+    ]);
+    refused(
+        &["rank", "merge", "s0.json", "other.json", "s2.json"],
+        "belongs to another run",
+    );
+    std::fs::write(
+        w.join("junk.json"),
+        "{\"schema\": \"dea-fit/hyperelastic-fit/1\"}",
+    )
+    .unwrap();
+    refused(
+        &["rank", "merge", "s0.json", "junk.json"],
+        "expected \"dea-fit/rank-shard/1\"",
+    );
     // A shard is never written over a file that is not a shard.
     let o = run(w, &["rank", &design, "--shard", "0/3", "--out", "one.csv"]);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
@@ -398,8 +559,23 @@ fn shards_merge_into_the_single_run_byte_for_byte() {
 #[test]
 fn slurm_script_holds_the_array_and_the_merge() {
     let dir = tempfile::tempdir().unwrap();
-    let design = repo().join("datasets/design/silicone_fillers.toml").display().to_string();
-    let o = run(dir.path(), &["rank", &design, "--sweep", "loading=0:0.3:4", "--slurm", "4", "--csv", "rank.csv"]);
+    let design = repo()
+        .join("datasets/design/silicone_fillers.toml")
+        .display()
+        .to_string();
+    let o = run(
+        dir.path(),
+        &[
+            "rank",
+            &design,
+            "--sweep",
+            "loading=0:0.3:4",
+            "--slurm",
+            "4",
+            "--csv",
+            "rank.csv",
+        ],
+    );
     assert!(o.status.success(), "{}", text(&o));
     let s = String::from_utf8_lossy(&o.stdout);
     for want in [
@@ -437,22 +613,74 @@ fn shipped_design_data_regenerate() {
         let name = f.unwrap().file_name().to_string_lossy().into_owned();
         copy(&format!("datasets/composites/sylgard_batio3/{name}"));
     }
-    let o = run(w, &["composite", "datasets/composites/sylgard_batio3.toml", "--out", "c.json"]);
+    let o = run(
+        w,
+        &[
+            "composite",
+            "datasets/composites/sylgard_batio3.toml",
+            "--out",
+            "c.json",
+        ],
+    );
     assert!(o.status.success(), "{}", text(&o));
     assert!(
-        std::fs::read(w.join("c.json")).unwrap() == std::fs::read(repo().join("datasets/design/fits/sylgard_batio3-composite.json")).unwrap(),
+        std::fs::read(w.join("c.json")).unwrap()
+            == std::fs::read(repo().join("datasets/design/fits/sylgard_batio3-composite.json"))
+                .unwrap(),
         "datasets/design/fits/sylgard_batio3-composite.json is not what dea-fit composite writes"
     );
     for (wt, mu, seed) in [("20", "323.8kPa", "2020"), ("40", "403.6kPa", "2040")] {
         let csv = format!("s{wt}.csv");
-        let o = run(w, &["synth", "hyperelastic", "--model", "neo-hookean", "--param", &format!("mu={mu}"), "--mode", "equibiaxial", "--stretch", "1.0:1.6:13", "--noise", "0.01", "--seed", seed, "--out", &csv]);
+        let o = run(
+            w,
+            &[
+                "synth",
+                "hyperelastic",
+                "--model",
+                "neo-hookean",
+                "--param",
+                &format!("mu={mu}"),
+                "--mode",
+                "equibiaxial",
+                "--stretch",
+                "1.0:1.6:13",
+                "--noise",
+                "0.01",
+                "--seed",
+                seed,
+                "--out",
+                &csv,
+            ],
+        );
         assert!(o.status.success(), "{}", text(&o));
-        let shipped = repo().join(format!("datasets/design/tensile/sylgard_batio3_{wt}wt_equibiaxial.csv"));
-        assert_eq!(std::fs::read(w.join(&csv)).unwrap(), std::fs::read(&shipped).unwrap(), "{}", shipped.display());
-        let o = run(w, &["hyperelastic", &csv, "--model", "neo-hookean", "--out", "f.json", "--no-report", "--json"]);
+        let shipped = repo().join(format!(
+            "datasets/design/tensile/sylgard_batio3_{wt}wt_equibiaxial.csv"
+        ));
+        assert_eq!(
+            std::fs::read(w.join(&csv)).unwrap(),
+            std::fs::read(&shipped).unwrap(),
+            "{}",
+            shipped.display()
+        );
+        let o = run(
+            w,
+            &[
+                "hyperelastic",
+                &csv,
+                "--model",
+                "neo-hookean",
+                "--out",
+                "f.json",
+                "--no-report",
+                "--json",
+            ],
+        );
         assert!(o.status.success(), "{}", text(&o));
         let fitted = dea_fit::material::file::read_hyperelastic(&w.join("f.json")).unwrap();
-        let shipped = dea_fit::material::file::read_hyperelastic(&repo().join(format!("datasets/design/fits/sylgard_batio3_{wt}wt-neo-hookean.json"))).unwrap();
+        let shipped = dea_fit::material::file::read_hyperelastic(&repo().join(format!(
+            "datasets/design/fits/sylgard_batio3_{wt}wt-neo-hookean.json"
+        )))
+        .unwrap();
         // The exact linear solve on the same bytes: equal to rounding.
         assert!((fitted.params[0] - shipped.params[0]).abs() < 1e-9 * shipped.params[0]);
         std::fs::remove_file(w.join("f.json")).unwrap();
@@ -464,16 +692,30 @@ fn shipped_design_data_regenerate() {
 #[test]
 fn shipped_design_ranks() {
     let dir = tempfile::tempdir().unwrap();
-    let design = repo().join("datasets/design/silicone_fillers.toml").display().to_string();
+    let design = repo()
+        .join("datasets/design/silicone_fillers.toml")
+        .display()
+        .to_string();
     let o = run(dir.path(), &["rank", &design, "--json", "--no-report"]);
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert_eq!(v["status"], "warning", "held loss and breakdown fields are warnings");
+    assert_eq!(
+        v["status"], "warning",
+        "held loss and breakdown fields are warnings"
+    );
     let cands = v["candidates"].as_array().unwrap();
     assert_eq!(cands.len(), 29);
-    let find = |name: &str| cands.iter().find(|c| c["name"] == name).unwrap_or_else(|| panic!("{name}"));
+    let find = |name: &str| {
+        cands
+            .iter()
+            .find(|c| c["name"] == name)
+            .unwrap_or_else(|| panic!("{name}"))
+    };
     let s = |name: &str| find(name)["static_stroke"]["value"].as_f64();
-    assert!(s("BJB TC-5005 + BaTiO3 (maxwell-garnett) 10 vol%") < s("BJB TC-5005 + BaTiO3 (maxwell-garnett) 0 vol%"));
+    assert!(
+        s("BJB TC-5005 + BaTiO3 (maxwell-garnett) 10 vol%")
+            < s("BJB TC-5005 + BaTiO3 (maxwell-garnett) 0 vol%")
+    );
     // Lichtenecker raises εr/Y so far that the soft matrix pulls in at 800 V: said so.
     let li = find("BJB TC-5005 + BaTiO3 (lichtenecker) 20 vol%");
     assert_eq!(li["state"], "pull_in");
@@ -481,7 +723,111 @@ fn shipped_design_ranks() {
     // The fitted composite's εr and the fitted modulus at 20 wt% are marked so.
     let sb = find("Sylgard 184 + BaTiO3 20 wt%");
     assert_eq!(sb["youngs_modulus"]["provenance"], "fitted");
-    assert!(sb["youngs_modulus"]["source"].as_str().unwrap().ends_with("sylgard_batio3_20wt-neo-hookean.json"));
-    assert_eq!(find("Sylgard 184 + BaTiO3 10 wt%")["eps_r"]["provenance"], "fitted");
-    assert_eq!(find("Sylgard 184 + BaTiO3 10 wt%")["youngs_modulus"]["provenance"], "predicted");
+    assert!(sb["youngs_modulus"]["source"]
+        .as_str()
+        .unwrap()
+        .ends_with("sylgard_batio3_20wt-neo-hookean.json"));
+    assert_eq!(
+        find("Sylgard 184 + BaTiO3 10 wt%")["eps_r"]["provenance"],
+        "fitted"
+    );
+    assert_eq!(
+        find("Sylgard 184 + BaTiO3 10 wt%")["youngs_modulus"]["provenance"],
+        "predicted"
+    );
+}
+
+/// Mutated design manifests (a line dropped or repeated, a number replaced by an
+/// extreme one, a byte flipped; ChaCha8, fixed seed): the reader refuses with an
+/// error or accepts, never panics, and the first points of an accepted design
+/// evaluate to finite figures or to none with a reason.
+#[test]
+fn mutated_manifests_are_refused_or_evaluated() {
+    use rand::{Rng, SeedableRng};
+    let path = repo().join("datasets/design/silicone_fillers.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let extremes = [
+        "0",
+        "-1",
+        "1e300",
+        "-0.0",
+        "nan",
+        "inf",
+        "\"1e-300 V/um\"",
+        "\"1 MV\"",
+        "\"\"",
+        "[]",
+    ];
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    let (mut refused, mut accepted) = (0, 0);
+    for case in 0..150 {
+        let mut l: Vec<String> = lines.iter().map(|s| s.to_string()).collect();
+        let i = rng.gen_range(0..l.len());
+        match case % 4 {
+            0 => {
+                l.remove(i);
+            }
+            1 => l.insert(i, l[i].clone()),
+            2 => {
+                if let Some((k, _)) = l[i].split_once(" = ") {
+                    l[i] = format!("{k} = {}", extremes[rng.gen_range(0..extremes.len())]);
+                }
+            }
+            _ => {
+                let mut b = l[i].clone().into_bytes();
+                if !b.is_empty() {
+                    let j = rng.gen_range(0..b.len());
+                    let pool = b"x=\"[]{}.,0-";
+                    b[j] = pool[rng.gen_range(0..pool.len())];
+                }
+                l[i] = String::from_utf8_lossy(&b).into_owned();
+            }
+        }
+        let bytes = l.join("\n").into_bytes();
+        let read = std::panic::catch_unwind(|| manifest::parse(&path, &bytes));
+        let Ok(read) = read else {
+            panic!(
+                "case {case}: the reader panicked on\n{}",
+                String::from_utf8_lossy(&bytes)
+            );
+        };
+        let Ok(d) = read else {
+            refused += 1;
+            continue;
+        };
+        accepted += 1;
+        let pts = sweep::points(&d, &Sweep::default());
+        let ev =
+            sweep::run(&d, &pts[..pts.len().min(6)], &|| {}).expect("an accepted design evaluates");
+        for e in ev {
+            let e = e.evaluation;
+            for f in [
+                &e.eps_r,
+                &e.youngs_modulus,
+                &e.fm,
+                &e.static_stroke,
+                &e.max_stroke,
+                &e.response_time,
+                &e.energy_in,
+            ] {
+                match f.value {
+                    Some(v) => assert!(
+                        v.is_finite(),
+                        "case {case}: {} has a non-finite figure",
+                        e.name
+                    ),
+                    None => assert!(
+                        f.note.is_some() || e.state == State::Failed,
+                        "case {case}: {}: no value, no reason",
+                        e.name
+                    ),
+                }
+            }
+        }
+    }
+    assert!(
+        refused > 20 && accepted > 20,
+        "refused {refused}, accepted {accepted}"
+    );
 }

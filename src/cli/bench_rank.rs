@@ -41,7 +41,9 @@ fn cpu_seconds() -> f64 {
 /// Run the benchmark.
 pub fn run(a: &RankArgs) -> Result<super::bench::Verdict> {
     if a.loadings.is_empty() || a.loadings.contains(&0) {
-        return Err(Error::settings("--loadings: give counts of 1 or more, e.g. 6,25,100,400"));
+        return Err(Error::settings(
+            "--loadings: give counts of 1 or more, e.g. 6,25,100,400",
+        ));
     }
     let d = manifest::read(&a.design)?;
     super::claim_dir(&a.out_dir)?;
@@ -51,10 +53,18 @@ pub fn run(a: &RankArgs) -> Result<super::bench::Verdict> {
         n => vec![1, n],
     };
     let mut verdict = super::bench::Verdict::default();
-    let mut csv = String::from("points,threads,wall_s,cpu_s,evaluations_per_s,evaluations_per_cpu_s,failed\n");
+    let mut csv = String::from(
+        "points,threads,wall_s,cpu_s,evaluations_per_s,evaluations_per_cpu_s,failed\n",
+    );
     let mut series: Vec<Series> = Vec::new();
-    println!("dea-fit bench rank: {} on {cores} core(s)", a.design.display());
-    println!("{:>8} {:>8} {:>10} {:>10} {:>12} {:>14}", "points", "threads", "wall (s)", "CPU (s)", "evals/s", "evals/CPU-s");
+    println!(
+        "dea-fit bench rank: {} on {cores} core(s)",
+        a.design.display()
+    );
+    println!(
+        "{:>8} {:>8} {:>10} {:>10} {:>12} {:>14}",
+        "points", "threads", "wall (s)", "CPU (s)", "evals/s", "evals/CPU-s"
+    );
     for (k, &t) in threads.iter().enumerate() {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(t)
@@ -67,13 +77,30 @@ pub fn run(a: &RankArgs) -> Result<super::bench::Verdict> {
             let (c0, t0) = (cpu_seconds(), Instant::now());
             let ev = pool.install(|| sweep::run(&d, &points, &|| {}))?;
             let (wall, cpu) = (t0.elapsed().as_secs_f64(), cpu_seconds() - c0);
-            let failed = ev.iter().filter(|e| e.evaluation.state == State::Failed).count();
+            let failed = ev
+                .iter()
+                .filter(|e| e.evaluation.state == State::Failed)
+                .count();
             if failed > 0 {
-                verdict.failed.push(format!("{} points on {t} thread(s): {failed} evaluation(s) failed", points.len()));
+                verdict.failed.push(format!(
+                    "{} points on {t} thread(s): {failed} evaluation(s) failed",
+                    points.len()
+                ));
             }
             let n = points.len() as f64;
-            let _ = writeln!(csv, "{},{t},{wall:e},{cpu:e},{:e},{:e},{failed}", points.len(), n / wall, n / cpu);
-            println!("{:>8} {t:>8} {wall:>10.3} {cpu:>10.3} {:>12.0} {:>14.0}", points.len(), n / wall, n / cpu);
+            let _ = writeln!(
+                csv,
+                "{},{t},{wall:e},{cpu:e},{:e},{:e},{failed}",
+                points.len(),
+                n / wall,
+                n / cpu
+            );
+            println!(
+                "{:>8} {t:>8} {wall:>10.3} {cpu:>10.3} {:>12.0} {:>14.0}",
+                points.len(),
+                n / wall,
+                n / cpu
+            );
             pts_line.push((n, n / wall));
         }
         series.push(Series {

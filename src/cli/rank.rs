@@ -97,8 +97,11 @@ impl Present {
         let by = Objective::parse(&self.by)?;
         let pair: Vec<&str> = self.pareto.split(',').collect();
         let [a, b] = pair[..] else {
-            return Err(Error::settings(format!("--pareto {}: expected two objectives A,B", self.pareto))
-                .with_hint("e.g. --pareto stroke,speed"));
+            return Err(Error::settings(format!(
+                "--pareto {}: expected two objectives A,B",
+                self.pareto
+            ))
+            .with_hint("e.g. --pareto stroke,speed"));
         };
         let (a, b) = (Objective::parse(a)?, Objective::parse(b)?);
         if a == b {
@@ -139,7 +142,9 @@ impl Present {
 /// A progress bar over `n` candidate evaluations (hidden when stderr is not a terminal).
 fn progress(n: usize) -> ProgressBar {
     let bar = ProgressBar::new(n as u64);
-    if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} candidates {elapsed} ({per_sec})") {
+    if let Ok(style) =
+        ProgressStyle::with_template("{bar:40} {pos}/{len} candidates {elapsed} ({per_sec})")
+    {
         bar.set_style(style);
     }
     bar
@@ -161,13 +166,22 @@ pub fn run(a: Args) -> Result<i32> {
     let info = RunInfo::new(&d, &sweep, points.len());
     if let Some(n) = a.slurm {
         if n == 0 || n > shard::MAX_SLURM_TASKS {
-            return Err(Error::settings(format!("--slurm {n}: expected 1 … {}", shard::MAX_SLURM_TASKS))
-                .with_hint("Slurm's default MaxArraySize is 1001; put more work into each shard"));
+            return Err(Error::settings(format!(
+                "--slurm {n}: expected 1 … {}",
+                shard::MAX_SLURM_TASKS
+            ))
+            .with_hint("Slurm's default MaxArraySize is 1001; put more work into each shard"));
         }
         if a.shard_dir.is_empty()
-            || !a.shard_dir.chars().all(|c| c.is_ascii_alphanumeric() || "._/-".contains(c))
+            || !a
+                .shard_dir
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || "._/-".contains(c))
         {
-            return Err(Error::settings(format!("--shard-dir '{}': use letters, digits and . _ / -", a.shard_dir)));
+            return Err(Error::settings(format!(
+                "--shard-dir '{}': use letters, digits and . _ / -",
+                a.shard_dir
+            )));
         }
         let exe = std::env::current_exe().map_err(|e| Error::io("dea-fit", e))?;
         let cwd = std::env::current_dir().map_err(|e| Error::io(".", e))?;
@@ -194,7 +208,10 @@ pub fn run(a: Args) -> Result<i32> {
     bar.finish_and_clear();
     match (shard, &a.out) {
         (Some(s), Some(out)) => {
-            let failed = evals.iter().filter(|e| e.evaluation.state == State::Failed).count();
+            let failed = evals
+                .iter()
+                .filter(|e| e.evaluation.state == State::Failed)
+                .count();
             let file = ShardFile {
                 schema: shard::SCHEMA.into(),
                 run: info.clone(),
@@ -244,7 +261,9 @@ fn present(info: &RunInfo, evals: &[Evaluated], p: &Present) -> Result<i32> {
     if let Some(c) = &p.csv {
         super::write_noted(c, report::csv(evals, &r).as_bytes())?;
     }
-    let page = dir.map(|d| report::write(&d, info, evals, &r, p.top)).transpose()?;
+    let page = dir
+        .map(|d| report::write(&d, info, evals, &r, p.top))
+        .transpose()?;
     if p.json {
         println!("{}", report::json(info, evals, &r));
     } else {

@@ -22,8 +22,8 @@
 //!   composite held at the matrix's value — both with a warning.
 //! * **Density**: φρf + (1 − φ)ρm.
 
-use super::short;
 use super::manifest::{Design, MeasuredPoint, PermittivityModel, Series, Stated};
+use super::short;
 use super::{Figure, Provenance};
 use crate::fit::composite::Basis;
 use crate::material::dielectric::volume_fraction;
@@ -226,8 +226,13 @@ pub fn build(d: &Design, si: usize, loading: f64) -> Result<Candidate> {
     let hknots = std::iter::once(Ok((0.0, 1.0, "")))
         .chain(s.measured.iter().filter_map(|p| {
             p.hyperelastic.as_ref().map(|h| {
-                mu0(&h.value)
-                    .map(|mu| (p.loading, mu / (mu_m * rule.factor(phi_of(p.loading))), h.source.as_str()))
+                mu0(&h.value).map(|mu| {
+                    (
+                        p.loading,
+                        mu / (mu_m * rule.factor(phi_of(p.loading))),
+                        h.source.as_str(),
+                    )
+                })
             })
         }))
         .collect::<Result<Vec<_>>>()?;
@@ -278,7 +283,15 @@ pub fn build(d: &Design, si: usize, loading: f64) -> Result<Candidate> {
     };
 
     // Loss and breakdown: measured, interpolated, or held.
-    let tan_delta = interpolated(s, &m.tan_delta, loading, "tan δ", "1", |p| p.tan_delta, &mut warnings);
+    let tan_delta = interpolated(
+        s,
+        &m.tan_delta,
+        loading,
+        "tan δ",
+        "1",
+        |p| p.tan_delta,
+        &mut warnings,
+    );
     let breakdown = interpolated(
         s,
         &m.breakdown,
@@ -359,7 +372,11 @@ fn scaled(h: &HyperelasticPart, x: f64) -> HyperelasticPart {
 fn eps_model(d: &Design, s: &Series, phi: f64, x: f64) -> (f64, Provenance, String) {
     let m = &d.matrices[s.matrix];
     let f = &d.fillers[s.filler.expect("a filler")];
-    match s.permittivity.as_ref().expect("a filler has a permittivity model") {
+    match s
+        .permittivity
+        .as_ref()
+        .expect("a filler has a permittivity model")
+    {
         PermittivityModel::Rule { .. } if x == 0.0 => {
             (m.eps_r.value, m.eps_r.provenance, m.eps_r.source.clone())
         }
@@ -435,7 +452,11 @@ fn correction(knots: &[(f64, f64, &str)], x: f64) -> (f64, String) {
     };
     (
         r,
-        format!(", × {} (corrected through the measured {})", short(r), names()),
+        format!(
+            ", × {} (corrected through the measured {})",
+            short(r),
+            names()
+        ),
     )
 }
 
@@ -479,7 +500,10 @@ fn interpolated(
         Place::Beyond => {
             let last = &knots[knots.len() - 1];
             let why = match knots.len() {
-                1 => format!("{}: no measured {what} of a composite: held at the matrix's value", s.name),
+                1 => format!(
+                    "{}: no measured {what} of a composite: held at the matrix's value",
+                    s.name
+                ),
                 _ => format!(
                     "{}: {what} beyond the measured loadings held at its value at {}",
                     s.name,
@@ -487,7 +511,13 @@ fn interpolated(
                 ),
             };
             warnings.push(why.clone());
-            Figure::new(last.1, unit, Provenance::Predicted, format!("held: {}", last.2)).noted(why)
+            Figure::new(
+                last.1,
+                unit,
+                Provenance::Predicted,
+                format!("held: {}", last.2),
+            )
+            .noted(why)
         }
     }
 }

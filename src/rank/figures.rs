@@ -31,9 +31,9 @@
 //!   amplitude V/2, with the capacitance at the drive: an upper bound, C grows with
 //!   the stroke).
 
-use super::short;
 use super::candidate::Candidate;
 use super::manifest::{Design, Level};
+use super::short;
 use super::{Figure, Provenance};
 use crate::fit::composite::Basis;
 use crate::report::format::si;
@@ -206,13 +206,21 @@ fn weakest(p: &[Provenance]) -> Provenance {
         Provenance::Fitted => 1,
         Provenance::Predicted => 2,
     };
-    *p.iter().max_by_key(|x| order(x)).unwrap_or(&Provenance::Measured)
+    *p.iter()
+        .max_by_key(|x| order(x))
+        .unwrap_or(&Provenance::Measured)
 }
 
 /// Evaluate candidate `c` at drive `level` on `template` (from [`step_scene`]);
 /// `index` is the point's place in the sweep. Never fails: what could not be
 /// computed is a figure without value and the state `failed`, with the reason.
-pub fn evaluate(template: &Scene, scene_name: &str, c: &Candidate, level: Level, index: usize) -> Evaluated {
+pub fn evaluate(
+    template: &Scene,
+    scene_name: &str,
+    c: &Candidate,
+    level: Level,
+    index: usize,
+) -> Evaluated {
     let v = |f: &Figure| f.value.unwrap_or(f64::NAN);
     let (eps, y, eb) = (v(&c.eps_r), v(&c.youngs_modulus), v(&c.breakdown));
     let cat = weakest(&[c.eps_r.provenance, c.youngs_modulus.provenance]);
@@ -321,15 +329,29 @@ pub fn evaluate(template: &Scene, scene_name: &str, c: &Candidate, level: Level,
         stroke: stroke(l),
     });
     let (lam_lim, limit, why) = match (lam_b, pull) {
-        (Some(l), _) => (l, Limit::Breakdown, "the field reaches the breakdown field first".to_string()),
-        (None, Some(q)) => (q.stretch, Limit::PullIn, "pull-in comes first (below the breakdown field)".to_string()),
+        (Some(l), _) => (
+            l,
+            Limit::Breakdown,
+            "the field reaches the breakdown field first".to_string(),
+        ),
+        (None, Some(q)) => (
+            q.stretch,
+            Limit::PullIn,
+            "pull-in comes first (below the breakdown field)".to_string(),
+        ),
         (None, None) => (
             STRETCH_MIN,
             Limit::Range,
             format!("neither pull-in nor breakdown down to stretch {STRETCH_MIN}: a lower bound"),
         ),
     };
-    e.max_stroke = Figure::new(stroke(lam_lim), "1", Provenance::Predicted, format!("static curve; {sim_src}")).noted(why);
+    e.max_stroke = Figure::new(
+        stroke(lam_lim),
+        "1",
+        Provenance::Predicted,
+        format!("static curve; {sim_src}"),
+    )
+    .noted(why);
     e.max_stroke_limit = limit;
     let curve = (0..KEPT_POINTS)
         .filter_map(|i| {
@@ -344,8 +366,18 @@ pub fn evaluate(template: &Scene, scene_name: &str, c: &Candidate, level: Level,
     // The static state at the drive.
     let (_, dc0, _) = p.capacitance(lam0);
     e.blocked_force = match vd / gap(&a, lam0) >= eb {
-        true => Figure::none("N", Provenance::Predicted, &sim_src, "the drive field at rest reaches the breakdown field"),
-        false => Figure::new(-0.5 * vd * vd * dc0 / p.l0, "N", Provenance::Predicted, format!("−½V²·C′(λ0)/L0; {sim_src}")),
+        true => Figure::none(
+            "N",
+            Provenance::Predicted,
+            &sim_src,
+            "the drive field at rest reaches the breakdown field",
+        ),
+        false => Figure::new(
+            -0.5 * vd * vd * dc0 / p.l0,
+            "N",
+            Provenance::Predicted,
+            format!("−½V²·C′(λ0)/L0; {sim_src}"),
+        ),
     };
     let lam_d = match pull {
         Some(q) if vd >= q.voltage_v => Err(format!(
@@ -368,11 +400,18 @@ pub fn evaluate(template: &Scene, scene_name: &str, c: &Candidate, level: Level,
                 false => State::Failed,
             };
             e.static_stroke = Figure::none("1", Provenance::Predicted, &sim_src, &why);
-            for f in [&mut e.response_time, &mut e.energy_in, &mut e.loss_per_cycle] {
+            for f in [
+                &mut e.response_time,
+                &mut e.energy_in,
+                &mut e.loss_per_cycle,
+            ] {
                 f.note = Some(why.clone());
             }
             e.state_note = why;
-            return Evaluated { evaluation: e, curve };
+            return Evaluated {
+                evaluation: e,
+                curve,
+            };
         }
     };
     let field_d = vd / gap(&a, lam_d);
@@ -384,18 +423,39 @@ pub fn evaluate(template: &Scene, scene_name: &str, c: &Candidate, level: Level,
         );
         e.state = State::Breakdown;
         e.static_stroke = Figure::none("1", Provenance::Predicted, &sim_src, &why);
-        for f in [&mut e.response_time, &mut e.energy_in, &mut e.loss_per_cycle] {
+        for f in [
+            &mut e.response_time,
+            &mut e.energy_in,
+            &mut e.loss_per_cycle,
+        ] {
             f.note = Some(why.clone());
         }
         e.state_note = why;
-        return Evaluated { evaluation: e, curve };
+        return Evaluated {
+            evaluation: e,
+            curve,
+        };
     }
     e.state = State::Ok;
-    e.state_note = format!("static stroke at {} below pull-in and breakdown", si(vd, "V"));
-    e.static_stroke = Figure::new(stroke(lam_d), "1", Provenance::Predicted, format!("static equilibrium; {sim_src}"));
+    e.state_note = format!(
+        "static stroke at {} below pull-in and breakdown",
+        si(vd, "V")
+    );
+    e.static_stroke = Figure::new(
+        stroke(lam_d),
+        "1",
+        Provenance::Predicted,
+        format!("static equilibrium; {sim_src}"),
+    );
     let (cd, _, _) = p.capacitance(lam_d);
-    let work = 0.5 * cd * vd * vd + sim::elastic_energy(&p, lam0, lam_d) - p.f_load * p.l0 * (lam_d - lam0);
-    e.energy_in = Figure::new(work, "J", Provenance::Predicted, format!("½CV² + ∫(Vol·P − F·L0)dλ to the static stroke; {sim_src}"));
+    let work = 0.5 * cd * vd * vd + sim::elastic_energy(&p, lam0, lam_d)
+        - p.f_load * p.l0 * (lam_d - lam0);
+    e.energy_in = Figure::new(
+        work,
+        "J",
+        Provenance::Predicted,
+        format!("½CV² + ∫(Vol·P − F·L0)dλ to the static stroke; {sim_src}"),
+    );
     e.loss_per_cycle = Figure::new(
         PI * cd * (0.5 * vd).powi(2) * v(&c.tan_delta),
         "J",
@@ -405,11 +465,19 @@ pub fn evaluate(template: &Scene, scene_name: &str, c: &Candidate, level: Level,
 
     // The damped step.
     e.response_time = step_response(&mut scene, vd, eb, stroke(lam_d), &sim_src);
-    if e.response_time.value.is_none() && e.response_time.note.as_deref().is_some_and(|n| n.starts_with("failed")) {
+    if e.response_time.value.is_none()
+        && e.response_time
+            .note
+            .as_deref()
+            .is_some_and(|n| n.starts_with("failed"))
+    {
         e.state = State::Failed;
         e.state_note = e.response_time.note.clone().unwrap_or_default();
     }
-    Evaluated { evaluation: e, curve }
+    Evaluated {
+        evaluation: e,
+        curve,
+    }
 }
 
 /// The stretch on the stable branch (from the rest state `lam0`, where the field is
@@ -424,7 +492,12 @@ fn breakdown_stretch(
     field: &impl Fn(f64) -> f64,
 ) -> Option<f64> {
     let lams: Vec<f64> = std::iter::once(lam0)
-        .chain(curve.iter().map(|q| q.stretch).filter(|&l| l > bottom && l < lam0))
+        .chain(
+            curve
+                .iter()
+                .map(|q| q.stretch)
+                .filter(|&l| l > bottom && l < lam0),
+        )
         .chain([bottom])
         .collect();
     let i = lams.iter().position(|&l| field(l) >= eb)?;
@@ -448,7 +521,10 @@ fn breakdown_stretch(
 /// 10–90 % time of the contraction after a step to `vd`, from the simulator.
 fn step_response(scene: &mut Scene, vd: f64, eb: f64, static_stroke: f64, src: &str) -> Figure {
     scene.input = Waveform {
-        terms: vec![Term::Step { at: 0.0, amplitude: vd }],
+        terms: vec![Term::Step {
+            at: 0.0,
+            amplitude: vd,
+        }],
     };
     let none = |why: String| Figure::none("s", Provenance::Predicted, src, why);
     let tr = match sim::trajectory(scene, &RunOptions::default()) {
@@ -458,7 +534,9 @@ fn step_response(scene: &mut Scene, vd: f64, eb: f64, static_stroke: f64, src: &
     match tr.status {
         RunStatus::Completed => {}
         RunStatus::PullIn => {
-            return none("pulls in during the step (its dynamic overshoot passes the pull-in)".into())
+            return none(
+                "pulls in during the step (its dynamic overshoot passes the pull-in)".into(),
+            )
         }
         RunStatus::Failed => return none(format!("failed: {}", tr.message)),
     }

@@ -502,7 +502,12 @@ impl Ctx<'_> {
 
     /// A viscous part: a preset, a fit file (relaxation or identified, with an
     /// optional nv), or arms and nv.
-    fn viscous(&self, v: &Spanned<ViscousSpec>, key: &str, note: &Option<String>) -> Result<Stated<Viscous>> {
+    fn viscous(
+        &self,
+        v: &Spanned<ViscousSpec>,
+        key: &str,
+        note: &Option<String>,
+    ) -> Result<Stated<Viscous>> {
         let span = v.span();
         let s = v.get_ref();
         let kinds = [s.preset.is_some(), s.fit.is_some(), s.arms.is_some()];
@@ -536,7 +541,10 @@ impl Ctx<'_> {
             let (arms, stated) = file::read_viscous(&path)?;
             if stated.is_some() && nv.is_some() {
                 return Err(self
-                    .err(&span, format!("{key}.nv conflicts with the nv of {key}.fit"))
+                    .err(
+                        &span,
+                        format!("{key}.nv conflicts with the nv of {key}.fit"),
+                    )
                     .with_hint("an identified material states its dashpot: drop nv here"));
             }
             return Ok(Stated {
@@ -560,12 +568,14 @@ impl Ctx<'_> {
             )?;
             let eta = match (&at.eta, &at.tau) {
                 (Some(e), None) => self.quantity(e, Dimension::Viscosity, "eta")?,
-                (None, Some(t)) => k * self.checked(
-                    &t.span(),
-                    &crate::material::check::ARM_TIME,
-                    &format!("{k_key}.tau"),
-                    self.quantity(t, Dimension::Time, "tau")?,
-                )?,
+                (None, Some(t)) => {
+                    k * self.checked(
+                        &t.span(),
+                        &crate::material::check::ARM_TIME,
+                        &format!("{k_key}.tau"),
+                        self.quantity(t, Dimension::Time, "tau")?,
+                    )?
+                }
                 _ => {
                     return Err(self
                         .err(&a.span(), format!("{k_key} takes eta or tau (one of them)"))
@@ -627,8 +637,13 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
     let scene = Scene::read(&scene_path)?;
     if scene.control.is_some() {
         return Err(cx
-            .err(&sc.span(), "actuator.scene: a closed-loop scene cannot be driven by a step")
-            .with_hint("give an open-loop scene (with [[input]]): its input is replaced by the drive"));
+            .err(
+                &sc.span(),
+                "actuator.scene: a closed-loop scene cannot be driven by a step",
+            )
+            .with_hint(
+                "give an open-loop scene (with [[input]]): its input is replaced by the drive",
+            ));
     }
 
     // The drive.
@@ -644,8 +659,13 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
             let x = *f.get_ref();
             if !(x > 0.0 && x <= 1.0) {
                 return Err(cx
-                    .err(&f.span(), format!("drive.breakdown_fraction must be in (0, 1], found {x}"))
-                    .with_hint("the drive is this share of each candidate's breakdown voltage at rest"));
+                    .err(
+                        &f.span(),
+                        format!("drive.breakdown_fraction must be in (0, 1], found {x}"),
+                    )
+                    .with_hint(
+                        "the drive is this share of each candidate's breakdown voltage at rest",
+                    ));
             }
             Level::BreakdownFraction(x)
         }
@@ -688,7 +708,10 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
         let name = m.name.get_ref().trim().to_string();
         if name.is_empty() || matrices.iter().any(|o| o.name == name) {
             return Err(cx
-                .err(&m.name.span(), format!("{key}.name: empty or repeated '{name}'"))
+                .err(
+                    &m.name.span(),
+                    format!("{key}.name: empty or repeated '{name}'"),
+                )
                 .with_hint("every matrix needs its own name"));
         }
         let density = cx.checked(
@@ -697,8 +720,18 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
             &format!("{key}.density"),
             cx.quantity(&m.density, Dimension::Density, "density")?,
         )?;
-        let eps = cx.checked(&m.eps_r.span(), &PERMITTIVITY, &format!("{key}.eps_r"), *m.eps_r.get_ref())?;
-        let tan = cx.checked(&m.tan_delta.span(), &TAN_DELTA, &format!("{key}.tan_delta"), *m.tan_delta.get_ref())?;
+        let eps = cx.checked(
+            &m.eps_r.span(),
+            &PERMITTIVITY,
+            &format!("{key}.eps_r"),
+            *m.eps_r.get_ref(),
+        )?;
+        let tan = cx.checked(
+            &m.tan_delta.span(),
+            &TAN_DELTA,
+            &format!("{key}.tan_delta"),
+            *m.tan_delta.get_ref(),
+        )?;
         let eb = cx.checked(
             &m.breakdown.span(),
             &BREAKDOWN,
@@ -722,15 +755,22 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
             eps_r: with(eps, &m.eps_r.span()),
             tan_delta: with(tan, &m.tan_delta.span()),
             breakdown: with(eb, &m.breakdown.span()),
-            hyperelastic: cx.hyperelastic(&m.hyperelastic, &format!("{key}.hyperelastic"), &m.source)?,
+            hyperelastic: cx.hyperelastic(
+                &m.hyperelastic,
+                &format!("{key}.hyperelastic"),
+                &m.source,
+            )?,
             viscous,
             name,
             density,
         });
     }
     if matrices.is_empty() {
-        return Err(Error::input(Location::file(path), "the manifest names no [[matrix]]")
-            .with_hint("add a [[matrix]] table (name, density, eps_r, tan_delta, breakdown, hyperelastic)"));
+        return Err(
+            Error::input(Location::file(path), "the manifest names no [[matrix]]").with_hint(
+                "add a [[matrix]] table (name, density, eps_r, tan_delta, breakdown, hyperelastic)",
+            ),
+        );
     }
 
     // Fillers.
@@ -740,7 +780,10 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
         let name = f.name.get_ref().trim().to_string();
         if name.is_empty() || fillers.iter().any(|o| o.name == name) {
             return Err(cx
-                .err(&f.name.span(), format!("{key}.name: empty or repeated '{name}'"))
+                .err(
+                    &f.name.span(),
+                    format!("{key}.name: empty or repeated '{name}'"),
+                )
                 .with_hint("every filler needs its own name"));
         }
         fillers.push(Filler {
@@ -751,7 +794,12 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
                 cx.quantity(&f.density, Dimension::Density, "density")?,
             )?,
             eps_r: Stated {
-                value: cx.checked(&f.eps_r.span(), &PERMITTIVITY, &format!("{key}.eps_r"), *f.eps_r.get_ref())?,
+                value: cx.checked(
+                    &f.eps_r.span(),
+                    &PERMITTIVITY,
+                    &format!("{key}.eps_r"),
+                    *f.eps_r.get_ref(),
+                )?,
                 provenance: Provenance::Measured,
                 source: cx.here(&f.eps_r.span(), &f.source),
             },
@@ -767,13 +815,19 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
         if series[..i].iter().any(|o| o.name == last.name) {
             let at = s.name.as_ref().map(|n| n.span()).unwrap_or(s.matrix.span());
             return Err(cx
-                .err(&at, format!("series[{i}]: a second series named '{}'", last.name))
+                .err(
+                    &at,
+                    format!("series[{i}]: a second series named '{}'", last.name),
+                )
                 .with_hint("series of the same matrix and filler need their own name = \"...\""));
         }
     }
     if series.is_empty() {
-        return Err(Error::input(Location::file(path), "the manifest names no [[series]]")
-            .with_hint("add a [[series]] table (matrix, filler, basis, loadings, permittivity)"));
+        return Err(
+            Error::input(Location::file(path), "the manifest names no [[series]]").with_hint(
+                "add a [[series]] table (matrix, filler, basis, loadings, permittivity)",
+            ),
+        );
     }
 
     // The design hash: the manifest and every file read, in order.
@@ -815,7 +869,10 @@ fn loading(cx: &Ctx, t: &Text, span: &Span, key: &str) -> Result<f64> {
     match (0.0..1.0).contains(&v) {
         true => Ok(v),
         false => Err(cx
-            .err(span, format!("{key} = {v} is not a filler fraction in [0, 1)"))
+            .err(
+                span,
+                format!("{key} = {v} is not a filler fraction in [0, 1)"),
+            )
             .with_hint("write 20 % as 0.2 or \"20 %\"")),
     }
 }
@@ -832,7 +889,14 @@ fn read_series(
     let matrix = matrices
         .iter()
         .position(|m| m.name == *s.matrix.get_ref())
-        .ok_or_else(|| cx.unknown(&s.matrix.span(), &format!("{key}.matrix"), s.matrix.get_ref(), &matrix_names))?;
+        .ok_or_else(|| {
+            cx.unknown(
+                &s.matrix.span(),
+                &format!("{key}.matrix"),
+                s.matrix.get_ref(),
+                &matrix_names,
+            )
+        })?;
     let filler = match &s.filler {
         None => None,
         Some(f) => {
@@ -841,7 +905,14 @@ fn read_series(
                 fillers
                     .iter()
                     .position(|x| x.name == *f.get_ref())
-                    .ok_or_else(|| cx.unknown(&f.span(), &format!("{key}.filler"), f.get_ref(), &filler_names))?,
+                    .ok_or_else(|| {
+                        cx.unknown(
+                            &f.span(),
+                            &format!("{key}.filler"),
+                            f.get_ref(),
+                            &filler_names,
+                        )
+                    })?,
             )
         }
     };
@@ -864,7 +935,9 @@ fn read_series(
             if given {
                 return Err(cx
                     .err(&anchor, format!("{key}.{k} needs a filler"))
-                    .with_hint("a series without filler is the matrix alone: drop the key, or name a filler"));
+                    .with_hint(
+                    "a series without filler is the matrix alone: drop the key, or name a filler",
+                ));
             }
         }
         return Ok(Series {
@@ -882,7 +955,14 @@ fn read_series(
         Some(b) => match b.get_ref().as_str() {
             "weight" => Basis::Weight,
             "volume" => Basis::Volume,
-            o => return Err(cx.unknown(&b.span(), &format!("{key}.basis"), o, &["weight", "volume"])),
+            o => {
+                return Err(cx.unknown(
+                    &b.span(),
+                    &format!("{key}.basis"),
+                    o,
+                    &["weight", "volume"],
+                ))
+            }
         },
         None => {
             return Err(cx
@@ -915,7 +995,12 @@ fn read_series(
     let stiffening = match &s.stiffening {
         None => Stiffening::GuthGold,
         Some(x) => Stiffening::parse(x.get_ref()).ok_or_else(|| {
-            cx.unknown(&x.span(), &format!("{key}.stiffening"), x.get_ref(), &Stiffening::NAMES)
+            cx.unknown(
+                &x.span(),
+                &format!("{key}.stiffening"),
+                x.get_ref(),
+                &Stiffening::NAMES,
+            )
         })?,
     };
     let Some(p) = &s.permittivity else {
@@ -928,21 +1013,33 @@ fn read_series(
     let rule = match &ps.rule {
         None => None,
         Some(r) => Some(MixingRule::parse(r.get_ref()).ok_or_else(|| {
-            cx.unknown(&r.span(), &format!("{key}.permittivity.rule"), r.get_ref(), &rule_names)
+            cx.unknown(
+                &r.span(),
+                &format!("{key}.permittivity.rule"),
+                r.get_ref(),
+                &rule_names,
+            )
         })?),
     };
     let permittivity = match &ps.composite {
         Some(c) => {
             if ps.shape.is_some() {
                 return Err(cx
-                    .err(&p.span(), format!("{key}.permittivity.shape goes with a stated rule"))
+                    .err(
+                        &p.span(),
+                        format!("{key}.permittivity.shape goes with a stated rule"),
+                    )
                     .with_hint("a composite fit states Yamada's n itself"));
             }
             let freq = match &ps.frequency {
                 Some(q) => Some(cx.quantity(q, Dimension::Frequency, "frequency")?),
                 None => None,
             };
-            let file = cx.file(&c.span(), &format!("{key}.permittivity.composite"), c.get_ref())?;
+            let file = cx.file(
+                &c.span(),
+                &format!("{key}.permittivity.composite"),
+                c.get_ref(),
+            )?;
             let (mixture, freq_hz) = file::read_mixture(&file, rule, freq)?;
             let (m, fl) = (&matrices[matrix], &fillers[f]);
             for (what, theirs, ours) in [
@@ -964,12 +1061,20 @@ fn read_series(
         None => {
             if ps.frequency.is_some() {
                 return Err(cx
-                    .err(&p.span(), format!("{key}.permittivity.frequency goes with a composite fit"))
-                    .with_hint("a stated rule uses the εr of the matrix and the filler as written"));
+                    .err(
+                        &p.span(),
+                        format!("{key}.permittivity.frequency goes with a composite fit"),
+                    )
+                    .with_hint(
+                        "a stated rule uses the εr of the matrix and the filler as written",
+                    ));
             }
             let Some(rule) = rule else {
                 return Err(cx
-                    .err(&p.span(), format!("{key}.permittivity needs rule or composite"))
+                    .err(
+                        &p.span(),
+                        format!("{key}.permittivity needs rule or composite"),
+                    )
                     .with_hint(format!("rule = one of {}", rule_names.join(", "))));
             };
             let shape = match (&ps.shape, rule.has_shape()) {
@@ -977,12 +1082,17 @@ fn read_series(
                 (Some(n), true) => return Err(cx.err(&n.span(), "shape must be a positive number")),
                 (None, true) => {
                     return Err(cx
-                        .err(&p.span(), format!("{key}.permittivity: yamada needs shape = n"))
+                        .err(
+                            &p.span(),
+                            format!("{key}.permittivity: yamada needs shape = n"),
+                        )
                         .with_hint("n = 3 is Maxwell Garnett; fitted series give n ≈ 3–10"))
                 }
                 (Some(n), false) => {
-                    return Err(cx
-                        .err(&n.span(), format!("{key}.permittivity.shape goes with yamada only")))
+                    return Err(cx.err(
+                        &n.span(),
+                        format!("{key}.permittivity.shape goes with yamada only"),
+                    ))
                 }
                 (None, false) => 3.0,
             };
@@ -993,18 +1103,37 @@ fn read_series(
     for (j, m) in s.measured.iter().enumerate() {
         let mk = format!("{key}.measured[{j}]");
         let x = m.get_ref();
-        let at = loading(cx, x.loading.get_ref(), &x.loading.span(), &format!("{mk}.loading"))?;
-        if at == 0.0 || measured.iter().any(|o| super::candidate::same_loading(o.loading, at)) {
+        let at = loading(
+            cx,
+            x.loading.get_ref(),
+            &x.loading.span(),
+            &format!("{mk}.loading"),
+        )?;
+        if at == 0.0
+            || measured
+                .iter()
+                .any(|o| super::candidate::same_loading(o.loading, at))
+        {
             return Err(cx
                 .err(&x.loading.span(), format!("{mk}.loading = {at}: the matrix or another measured point already holds it"))
                 .with_hint("measured points are composites (loading > 0), one per loading; the matrix's values are in [[matrix]]"));
         }
         let eps_r = match &x.eps_r {
-            Some(e) => Some(cx.checked(&e.span(), &PERMITTIVITY, &format!("{mk}.eps_r"), *e.get_ref())?),
+            Some(e) => Some(cx.checked(
+                &e.span(),
+                &PERMITTIVITY,
+                &format!("{mk}.eps_r"),
+                *e.get_ref(),
+            )?),
             None => None,
         };
         let tan_delta = match &x.tan_delta {
-            Some(e) => Some(cx.checked(&e.span(), &TAN_DELTA, &format!("{mk}.tan_delta"), *e.get_ref())?),
+            Some(e) => Some(cx.checked(
+                &e.span(),
+                &TAN_DELTA,
+                &format!("{mk}.tan_delta"),
+                *e.get_ref(),
+            )?),
             None => None,
         };
         let breakdown = match &x.breakdown {

@@ -294,13 +294,20 @@ fn front(evals: &[Evaluation], obj: [Objective; 2]) -> Pareto {
             _ => None,
         })
         .collect();
-    pts.sort_by(|a, b| b.1.total_cmp(&a.1).then(b.2.total_cmp(&a.2)).then(a.0.cmp(&b.0)));
+    pts.sort_by(|a, b| {
+        b.1.total_cmp(&a.1)
+            .then(b.2.total_cmp(&a.2))
+            .then(a.0.cmp(&b.0))
+    });
     let mut front = Vec::new();
     let mut best2 = f64::NEG_INFINITY;
     let mut i = 0;
     while i < pts.len() {
         let g1 = pts[i].1;
-        let group_end = pts[i..].iter().position(|p| p.1 != g1).map_or(pts.len(), |k| i + k);
+        let group_end = pts[i..]
+            .iter()
+            .position(|p| p.1 != g1)
+            .map_or(pts.len(), |k| i + k);
         let top = pts[i].2;
         if top > best2 {
             for p in pts[i..group_end].iter().filter(|p| p.2 == top) {
@@ -326,7 +333,10 @@ fn front(evals: &[Evaluation], obj: [Objective; 2]) -> Pareto {
 fn best_loadings(evals: &[Evaluation], by: Objective) -> Vec<BestLoading> {
     let mut keys: Vec<(String, u64)> = Vec::new();
     for e in evals {
-        let k = (e.series.clone(), e.voltage.value.unwrap_or(f64::NAN).to_bits());
+        let k = (
+            e.series.clone(),
+            e.voltage.value.unwrap_or(f64::NAN).to_bits(),
+        );
         if !keys.contains(&k) {
             keys.push(k);
         }
@@ -335,7 +345,9 @@ fn best_loadings(evals: &[Evaluation], by: Objective) -> Vec<BestLoading> {
         .filter_map(|(series, vbits)| {
             let group: Vec<&Evaluation> = evals
                 .iter()
-                .filter(|e| e.series == series && e.voltage.value.unwrap_or(f64::NAN).to_bits() == vbits)
+                .filter(|e| {
+                    e.series == series && e.voltage.value.unwrap_or(f64::NAN).to_bits() == vbits
+                })
                 .collect();
             let mut loadings: Vec<f64> = group.iter().map(|e| e.loading).collect();
             loadings.sort_by(f64::total_cmp);
@@ -349,10 +361,13 @@ fn best_loadings(evals: &[Evaluation], by: Objective) -> Vec<BestLoading> {
                 })?;
             let (e, v) = best;
             let at = loadings.iter().position(|&x| x == e.loading).unwrap_or(0);
-            let gaps: Vec<f64> = [at.checked_sub(1).map(|j| e.loading - loadings[j]), loadings.get(at + 1).map(|x| x - e.loading)]
-                .into_iter()
-                .flatten()
-                .collect();
+            let gaps: Vec<f64> = [
+                at.checked_sub(1).map(|j| e.loading - loadings[j]),
+                loadings.get(at + 1).map(|x| x - e.loading),
+            ]
+            .into_iter()
+            .flatten()
+            .collect();
             Some(BestLoading {
                 series,
                 filler: e.filler.clone(),

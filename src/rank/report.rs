@@ -4,10 +4,10 @@
 //! Each is a pure function of the run's identity, its evaluations and the ranking,
 //! so a merged sweep writes the same bytes as a single run.
 
-use super::short;
 use super::figures::{Evaluated, Evaluation};
 use super::ranking::{Objective, Ranking};
 use super::shard::RunInfo;
+use super::short;
 use super::Figure;
 use crate::error::Result;
 use crate::fit::composite::Basis;
@@ -119,7 +119,11 @@ pub fn json(info: &RunInfo, evals: &[Evaluated], r: &Ranking) -> String {
 /// and the status line.
 pub fn table(info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: usize) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "{}: {} points ({}); drive {}", info.design, info.points, info.sweep, info.drive);
+    let _ = writeln!(
+        s,
+        "{}: {} points ({}); drive {}",
+        info.design, info.points, info.sweep, info.drive
+    );
     let _ = writeln!(s, "ranked by {} ({})", r.by.name(), r.by.label());
     let ranked = r.ranks.iter().filter(|x| x.is_some()).count();
     let shown_n = if top == 0 { ranked } else { top.min(ranked) };
@@ -146,26 +150,63 @@ pub fn table(info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: usize) -> St
             row
         })
         .collect();
-    let mut header = vec!["#", "candidate", "drive", "εr", "Y", "Fm", "stroke", "max stroke (limit)", "t10–90"];
+    let mut header = vec![
+        "#",
+        "candidate",
+        "drive",
+        "εr",
+        "Y",
+        "Fm",
+        "stroke",
+        "max stroke (limit)",
+        "t10–90",
+    ];
     if extra {
         header.push(r.by.name());
     }
     s.push_str(&text_table(&header, &rows));
     if ranked > shown_n {
-        let _ = writeln!(s, "… {} more ranked (--top 0 shows all; --csv, --json)", ranked - shown_n);
+        let _ = writeln!(
+            s,
+            "… {} more ranked (--top 0 shows all; --csv, --json)",
+            ranked - shown_n
+        );
     }
-    let unranked: Vec<&Evaluation> = r.order[ranked..].iter().map(|&i| &evals[i].evaluation).collect();
+    let unranked: Vec<&Evaluation> = r.order[ranked..]
+        .iter()
+        .map(|&i| &evals[i].evaluation)
+        .collect();
     if !unranked.is_empty() {
-        let _ = writeln!(s, "not ranked on {}: {} candidate(s)", r.by.name(), unranked.len());
-        for e in unranked.iter().take(if top == 0 { usize::MAX } else { top }) {
-            let _ = writeln!(s, "  {} at {}: {}", e.name, fmt_fig(&e.voltage, |v| si(v, "V")), r.by.why_not(e));
+        let _ = writeln!(
+            s,
+            "not ranked on {}: {} candidate(s)",
+            r.by.name(),
+            unranked.len()
+        );
+        for e in unranked
+            .iter()
+            .take(if top == 0 { usize::MAX } else { top })
+        {
+            let _ = writeln!(
+                s,
+                "  {} at {}: {}",
+                e.name,
+                fmt_fig(&e.voltage, |v| si(v, "V")),
+                r.by.why_not(e)
+            );
         }
         if top != 0 && unranked.len() > top {
             let _ = writeln!(s, "  … {} more", unranked.len() - top);
         }
     }
     let [a, b] = r.pareto.objectives;
-    let _ = writeln!(s, "Pareto front ({} against {}): {} candidate(s)", a.name(), b.name(), r.pareto.front.len());
+    let _ = writeln!(
+        s,
+        "Pareto front ({} against {}): {} candidate(s)",
+        a.name(),
+        b.name(),
+        r.pareto.front.len()
+    );
     for p in &r.pareto.front {
         let _ = writeln!(
             s,
@@ -194,13 +235,28 @@ pub fn table(info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: usize) -> St
                     None => "—".into(),
                     Some(_) => format!("{} {unit}", short(100.0 * b.loading)),
                 },
-                b.resolution.map_or("—".into(), |x| format!("± {} {unit}", short(100.0 * x))),
+                b.resolution
+                    .map_or("—".into(), |x| format!("± {} {unit}", short(100.0 * x))),
                 fmt_objective(r.by, b.value),
-                if b.at_edge { "end of the swept range".into() } else { String::new() },
+                if b.at_edge {
+                    "end of the swept range".into()
+                } else {
+                    String::new()
+                },
             ]
         })
         .collect();
-    s.push_str(&text_table(&["series", "drive", "best loading", "resolution", r.by.name(), ""], &rows));
+    s.push_str(&text_table(
+        &[
+            "series",
+            "drive",
+            "best loading",
+            "resolution",
+            r.by.name(),
+            "",
+        ],
+        &rows,
+    ));
     for w in &r.warnings {
         let _ = writeln!(s, "warning: {w}");
     }
@@ -214,12 +270,38 @@ pub fn csv(evals: &[Evaluated], r: &Ranking) -> String {
     let num = |f: &Figure| f.value.map_or(String::new(), |v| v.to_string());
     let prov = |f: &Figure| f.provenance.to_string();
     let _ = w.write_record([
-        "index", "name", "series", "matrix", "filler", "loading", "basis", "volume_fraction", "rules",
-        "voltage_V", "eps_r", "eps_r_provenance", "youngs_modulus_Pa", "youngs_modulus_provenance",
-        "beta_per_Pa", "fm", "tan_delta", "tan_delta_provenance", "breakdown_field_V_per_m",
-        "breakdown_field_provenance", "state", "static_stroke", "pull_in_V", "breakdown_V",
-        "max_stroke", "max_stroke_limit", "blocked_force_N", "response_time_s", "energy_in_J",
-        "loss_per_cycle_J", "rank", "objective",
+        "index",
+        "name",
+        "series",
+        "matrix",
+        "filler",
+        "loading",
+        "basis",
+        "volume_fraction",
+        "rules",
+        "voltage_V",
+        "eps_r",
+        "eps_r_provenance",
+        "youngs_modulus_Pa",
+        "youngs_modulus_provenance",
+        "beta_per_Pa",
+        "fm",
+        "tan_delta",
+        "tan_delta_provenance",
+        "breakdown_field_V_per_m",
+        "breakdown_field_provenance",
+        "state",
+        "static_stroke",
+        "pull_in_V",
+        "breakdown_V",
+        "max_stroke",
+        "max_stroke_limit",
+        "blocked_force_N",
+        "response_time_s",
+        "energy_in_J",
+        "loss_per_cycle_J",
+        "rank",
+        "objective",
     ]);
     for (i, ev) in evals.iter().enumerate() {
         let e = &ev.evaluation;
@@ -247,7 +329,8 @@ pub fn csv(evals: &[Evaluated], r: &Ranking) -> String {
             e.state.to_string(),
             num(&e.static_stroke),
             e.pull_in.map_or(String::new(), |p| p.voltage_v.to_string()),
-            e.breakdown.map_or(String::new(), |p| p.voltage_v.to_string()),
+            e.breakdown
+                .map_or(String::new(), |p| p.voltage_v.to_string()),
             num(&e.max_stroke),
             e.max_stroke_limit.to_string(),
             num(&e.blocked_force),
@@ -266,14 +349,28 @@ const LEADERS: usize = 10;
 
 /// Write the report into `dir` (claimed by the caller): the charts and index.md.
 /// Returns the page's path.
-pub fn write(dir: &Path, info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: usize) -> Result<PathBuf> {
+pub fn write(
+    dir: &Path,
+    info: &RunInfo,
+    evals: &[Evaluated],
+    r: &Ranking,
+    top: usize,
+) -> Result<PathBuf> {
     let by = r.by;
     let unit = shown_unit(by);
     let label = |o: Objective| match shown_unit(o) {
         "" => o.label().to_string(),
-        u => format!("{} ({u})", o.label().split(" (").next().unwrap_or(o.label())),
+        u => format!(
+            "{} ({u})",
+            o.label().split(" (").next().unwrap_or(o.label())
+        ),
     };
-    let ranked: Vec<usize> = r.order.iter().copied().filter(|&i| r.ranks[i].is_some()).collect();
+    let ranked: Vec<usize> = r
+        .order
+        .iter()
+        .copied()
+        .filter(|&i| r.ranks[i].is_some())
+        .collect();
 
     // Ranking bars.
     let bars: Vec<Series> = ranked
@@ -285,7 +382,12 @@ pub fn write(dir: &Path, info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: 
             let v = shown(by, by.value(e).unwrap_or(0.0));
             let x = (k + 1) as f64;
             Series {
-                label: format!("#{} {} at {}", k + 1, e.name, si(e.voltage.value.unwrap_or(f64::NAN), "V")),
+                label: format!(
+                    "#{} {} at {}",
+                    k + 1,
+                    e.name,
+                    si(e.voltage.value.unwrap_or(f64::NAN), "V")
+                ),
                 points: band(&[x - 0.4, x + 0.4], &[0.0, 0.0], &[v, v]),
                 color: k,
                 style: Style::Band,
@@ -302,7 +404,9 @@ pub fn write(dir: &Path, info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: 
     .write_svg(&dir.join("ranking.svg"))?;
 
     // Objective against filler volume fraction, per series, at the leader's drive.
-    let lead_v = ranked.first().and_then(|&i| evals[i].evaluation.voltage.value);
+    let lead_v = ranked
+        .first()
+        .and_then(|&i| evals[i].evaluation.voltage.value);
     let mut series_names: Vec<&str> = Vec::new();
     for ev in evals {
         if !series_names.contains(&ev.evaluation.series.as_str()) {
@@ -324,7 +428,10 @@ pub fn write(dir: &Path, info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: 
                 label: format!("{name} ({rules})"),
                 points: pts
                     .iter()
-                    .filter_map(|e| by.value(e).map(|v| (100.0 * e.volume_fraction, shown(by, v))))
+                    .filter_map(|e| {
+                        by.value(e)
+                            .map(|v| (100.0 * e.volume_fraction, shown(by, v)))
+                    })
                     .collect(),
                 color: c,
                 style: if pts.len() == 1 { Style::Points } else { style },
@@ -353,7 +460,12 @@ pub fn write(dir: &Path, info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: 
             _ => None,
         })
         .collect();
-    let front: Vec<(f64, f64)> = r.pareto.front.iter().map(|p| (shown(a, p.values[0]), shown(b, p.values[1]))).collect();
+    let front: Vec<(f64, f64)> = r
+        .pareto
+        .front
+        .iter()
+        .map(|p| (shown(a, p.values[0]), shown(b, p.values[1])))
+        .collect();
     Chart {
         title: format!("Pareto front: {} against {}", a.name(), b.name()),
         x_label: label(a),
@@ -395,7 +507,11 @@ pub fn write(dir: &Path, info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: 
         let k = names.len() - 1;
         curves.push(Series {
             label: format!("{} (to {})", e.name, e.max_stroke_limit),
-            points: ev.curve.iter().map(|p| (1e-3 * p.voltage_v, 100.0 * p.stroke)).collect(),
+            points: ev
+                .curve
+                .iter()
+                .map(|p| (1e-3 * p.voltage_v, 100.0 * p.stroke))
+                .collect(),
             color: k,
             style: Style::Line,
         });
@@ -459,13 +575,30 @@ pub fn write(dir: &Path, info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: 
             b.name,
             by.name(),
             fmt_objective(by, b.value),
-            b.resolution.map_or(String::new(), |x| format!(", resolution ± {}", short(x))),
-            if b.at_edge { "; at the end of the swept range" } else { "" }
+            b.resolution
+                .map_or(String::new(), |x| format!(", resolution ± {}", short(x))),
+            if b.at_edge {
+                "; at the end of the swept range"
+            } else {
+                ""
+            }
         );
     }
-    let _ = writeln!(md, "\n## Pareto front ({} against {})\n", a.name(), b.name());
+    let _ = writeln!(
+        md,
+        "\n## Pareto front ({} against {})\n",
+        a.name(),
+        b.name()
+    );
     for p in &r.pareto.front {
-        let _ = writeln!(md, "* {} at {}: {}, {}", p.name, si(p.voltage_v, "V"), fmt_objective(a, p.values[0]), fmt_objective(b, p.values[1]));
+        let _ = writeln!(
+            md,
+            "* {} at {}: {}, {}",
+            p.name,
+            si(p.voltage_v, "V"),
+            fmt_objective(a, p.values[0]),
+            fmt_objective(b, p.values[1])
+        );
     }
     if !r.warnings.is_empty() {
         let _ = writeln!(md, "\n## Warnings\n");

@@ -95,21 +95,30 @@ pub fn write(path: &Path, s: &ShardFile) -> Result<()> {
 pub fn read(path: &Path) -> Result<ShardFile> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
-        Error::input(Location::at(path, e.line(), e.column()), format!("not a rank shard file: {e}"))
-            .with_hint("shard files are written by dea-fit rank --shard K/N --out FILE")
+        Error::input(
+            Location::at(path, e.line(), e.column()),
+            format!("not a rank shard file: {e}"),
+        )
+        .with_hint("shard files are written by dea-fit rank --shard K/N --out FILE")
     })?;
     match v.get("schema").and_then(|s| s.as_str()) {
         Some(SCHEMA) => {}
         other => {
             return Err(Error::input(
                 Location::file(path),
-                format!("schema: expected \"{SCHEMA}\", found {}", other.map_or("none".into(), |s| format!("\"{s}\""))),
+                format!(
+                    "schema: expected \"{SCHEMA}\", found {}",
+                    other.map_or("none".into(), |s| format!("\"{s}\""))
+                ),
             )
             .with_hint("shard files are written by dea-fit rank --shard K/N --out FILE"))
         }
     }
     serde_json::from_value(v).map_err(|e| {
-        Error::input(Location::file(path), format!("not a rank shard file of its schema: {e}"))
+        Error::input(
+            Location::file(path),
+            format!("not a rank shard file of its schema: {e}"),
+        )
     })
 }
 
@@ -117,7 +126,9 @@ pub fn read(path: &Path) -> Result<ShardFile> {
 /// refusing anything but exactly the N shards of one run.
 pub fn merge(paths: &[PathBuf]) -> Result<(RunInfo, Vec<Evaluated>)> {
     let Some(first) = paths.first() else {
-        return Err(Error::settings("no shard files given").with_hint("dea-fit rank merge shard-*.json"));
+        return Err(
+            Error::settings("no shard files given").with_hint("dea-fit rank merge shard-*.json")
+        );
     };
     let shards: Vec<ShardFile> = paths.iter().map(|p| read(p)).collect::<Result<_>>()?;
     let (run, n) = (shards[0].run.clone(), shards[0].shard.n);
@@ -125,7 +136,11 @@ pub fn merge(paths: &[PathBuf]) -> Result<(RunInfo, Vec<Evaluated>)> {
     for (p, s) in paths.iter().zip(&shards) {
         if s.run != run || s.shard.n != n {
             let what = if s.run.sha256 != run.sha256 {
-                format!("design hash {} vs {}", &s.run.sha256[..12.min(s.run.sha256.len())], &run.sha256[..12.min(run.sha256.len())])
+                format!(
+                    "design hash {} vs {}",
+                    &s.run.sha256[..12.min(s.run.sha256.len())],
+                    &run.sha256[..12.min(run.sha256.len())]
+                )
             } else if s.run.sweep != run.sweep {
                 format!("sweep '{}' vs '{}'", s.run.sweep, run.sweep)
             } else if s.shard.n != n {
@@ -137,11 +152,16 @@ pub fn merge(paths: &[PathBuf]) -> Result<(RunInfo, Vec<Evaluated>)> {
                 Location::file(p),
                 format!("belongs to another run than {} ({what})", first.display()),
             )
-            .with_hint("merge the shards of one sweep: the same manifest and files, sweep and shard count"));
+            .with_hint(
+                "merge the shards of one sweep: the same manifest and files, sweep and shard count",
+            ));
         }
         let k = s.shard.k;
         if k >= n {
-            return Err(Error::input(Location::file(p), format!("shard {k} of {n} does not exist")));
+            return Err(Error::input(
+                Location::file(p),
+                format!("shard {k} of {n} does not exist"),
+            ));
         }
         if let Some(other) = seen[k] {
             return Err(Error::input(
@@ -152,7 +172,10 @@ pub fn merge(paths: &[PathBuf]) -> Result<(RunInfo, Vec<Evaluated>)> {
         }
         seen[k] = Some(p);
     }
-    let missing: Vec<String> = (0..n).filter(|&k| seen[k].is_none()).map(|k| k.to_string()).collect();
+    let missing: Vec<String> = (0..n)
+        .filter(|&k| seen[k].is_none())
+        .map(|k| k.to_string())
+        .collect();
     if !missing.is_empty() {
         return Err(Error::settings(format!(
             "{} of {n} shards missing: {} (of the run of {})",
@@ -237,7 +260,11 @@ pub fn slurm_script(j: &SlurmJob) -> String {
         .iter()
         .map(|s| format!(" --sweep {}", quote(s)))
         .collect();
-    let merge: String = j.merge_flags.iter().map(|f| format!(" {}", quote(f))).collect();
+    let merge: String = j
+        .merge_flags
+        .iter()
+        .map(|f| format!(" {}", quote(f)))
+        .collect();
     format!(
         r#"#!/bin/sh
 # A {n}-shard dea-fit rank sweep on Slurm, written by

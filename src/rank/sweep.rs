@@ -8,9 +8,9 @@
 //! indices.
 
 use super::candidate;
-use super::short;
 use super::figures::{evaluate, step_scene, Evaluated};
 use super::manifest::{Design, Level};
+use super::short;
 use crate::error::{Error, Result};
 use crate::units::{parse_quantity, Dimension};
 use rayon::prelude::*;
@@ -82,7 +82,10 @@ impl Sweep {
                 "loading" => {
                     let v = range(r, Dimension::Fraction).map_err(bad)?;
                     if let Some(x) = v.iter().find(|x| !(0.0..1.0).contains(*x)) {
-                        return Err(bad(format!("loading {} is not a fraction in [0, 1)", short(*x))));
+                        return Err(bad(format!(
+                            "loading {} is not a fraction in [0, 1)",
+                            short(*x)
+                        )));
                     }
                     if s.loadings.replace(v).is_some() {
                         return Err(bad("loading is swept twice".into()));
@@ -90,7 +93,10 @@ impl Sweep {
                 }
                 "voltage" => {
                     let v = range(r, Dimension::Voltage).map_err(bad)?;
-                    if let Some(x) = v.iter().find(|x| !(**x >= 0.0 && **x <= crate::sim::budget::VOLTAGE.max)) {
+                    if let Some(x) = v
+                        .iter()
+                        .find(|x| !(**x >= 0.0 && **x <= crate::sim::budget::VOLTAGE.max))
+                    {
                         return Err(bad(format!("{} V is not a drive voltage", short(*x))));
                     }
                     if s.voltages.replace(v).is_some() {
@@ -98,8 +104,9 @@ impl Sweep {
                     }
                 }
                 other => {
-                    return Err(bad(format!("unknown key '{other}'"))
-                        .with_hint("sweep loading or voltage"))
+                    return Err(
+                        bad(format!("unknown key '{other}'")).with_hint("sweep loading or voltage")
+                    )
                 }
             }
             s.text.push(format!("{}={}", key.trim(), r.trim()));

@@ -424,17 +424,23 @@ pub fn write(
                 .collect();
             let rules = pts.first().map_or(String::new(), |e| e.rules.clone());
             let (c, style) = crate::report::plot::nth_line(k);
+            let valued: Vec<(f64, f64)> = pts
+                .iter()
+                .filter_map(|e| {
+                    by.value(e)
+                        .map(|v| (100.0 * e.volume_fraction, shown(by, v)))
+                })
+                .collect();
             Series {
                 label: format!("{name} ({rules})"),
-                points: pts
-                    .iter()
-                    .filter_map(|e| {
-                        by.value(e)
-                            .map(|v| (100.0 * e.volume_fraction, shown(by, v)))
-                    })
-                    .collect(),
+                // a single ranked point is drawn as a marker (a line of one point is invisible)
+                style: if valued.len() < 2 {
+                    Style::Points
+                } else {
+                    style
+                },
+                points: valued,
                 color: c,
-                style: if pts.len() == 1 { Style::Points } else { style },
             }
         })
         .collect();

@@ -23,6 +23,7 @@ pub mod identify;
 pub mod io;
 pub mod material;
 pub mod observe;
+pub mod rank;
 pub mod report;
 pub mod sim;
 pub mod units;

@@ -39,6 +39,8 @@ pub enum Dimension {
     Viscosity,
     /// A dimensionless fraction (SI: 1), e.g. `0.5 %`.
     Fraction,
+    /// Electric field strength (SI: V/m), e.g. a breakdown field `80 V/um`.
+    ElectricField,
 }
 
 impl Dimension {
@@ -153,6 +155,16 @@ impl Dimension {
                 ("MPa·s", 1e6),
             ],
             Dimension::Fraction => &[("%", 0.01)],
+            Dimension::ElectricField => &[
+                ("V/m", 1.0),
+                ("kV/m", 1e3),
+                ("V/mm", 1e3),
+                ("kV/mm", 1e6),
+                ("V/um", 1e6),
+                ("V/µm", 1e6),
+                ("MV/m", 1e6),
+                ("kV/cm", 1e5),
+            ],
             Dimension::Density => &[
                 ("kg/m3", 1.0),
                 ("kg/m^3", 1.0),
@@ -186,6 +198,7 @@ impl Dimension {
             Dimension::Mass => "kg",
             Dimension::Viscosity => "Pa·s",
             Dimension::Fraction => "1",
+            Dimension::ElectricField => "V/m",
         }
     }
 

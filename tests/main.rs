@@ -13,6 +13,7 @@ mod identify_mass_fraction;
 mod material_file;
 mod models;
 mod permittivity;
+mod rank;
 mod relaxation;
 mod sampling;
 mod scene_input;

@@ -34,6 +34,8 @@ enum What {
     /// Identification from a rig-log-sized trace: parameter error against time over
     /// simulator tolerances and start counts.
     Identify(IdentifyArgs),
+    /// Ranking: candidate evaluations per second against sweep size and threads.
+    Rank(super::bench_rank::RankArgs),
 }
 
 #[derive(Debug, clap::Args)]
@@ -92,6 +94,7 @@ pub fn run(a: Args) -> Result<i32> {
         What::Relaxation => super::bench_relaxation::run()?,
         What::Simulate(s) => super::bench_simulate::run(&s.scenes)?,
         What::Identify(i) => super::bench_identify::run(&i.scene)?,
+        What::Rank(r) => super::bench_rank::run(&r)?,
     };
     Ok(verdict.report(a.strict))
 }

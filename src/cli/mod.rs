@@ -2,6 +2,7 @@
 
 mod bench;
 mod bench_identify;
+mod bench_rank;
 mod bench_relaxation;
 mod bench_simulate;
 mod composite;
@@ -9,6 +10,7 @@ mod export;
 mod hyperelastic;
 mod identify;
 mod permittivity;
+mod rank;
 mod relaxation;
 mod simulate;
 mod static_curve;
@@ -45,6 +47,8 @@ enum Command {
     Static(static_curve::Args),
     /// Write the material card of a fit for an FE code (Abaqus, ANSYS, LS-DYNA, FEBio, COMSOL).
     Export(export::Args),
+    /// Rank fillers and composites by what they buy an actuator (sweeps, shards, Slurm).
+    Rank(rank::Args),
     /// Measure speed against accuracy and write tables and charts under reports/.
     Bench(bench::Args),
 }
@@ -62,6 +66,7 @@ pub fn run(cli: Cli) -> Result<i32> {
         Command::Simulate(a) => simulate::run(a),
         Command::Static(a) => static_curve::run(a),
         Command::Export(a) => export::run(a),
+        Command::Rank(a) => rank::run(a),
     }
 }
 

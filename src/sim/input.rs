@@ -294,8 +294,29 @@ impl Waveform {
             .fold(f64::INFINITY, f64::min)
     }
 
-    /// Largest absolute value, sampled at the kinks and densely in between.
+    /// Largest absolute value over [t0, t1]. A sum of steps and ramps is linear
+    /// between its kinks, so the largest |value| is at an end of a piece: the right
+    /// value at its start or the left limit at its end (2·v(midpoint) − v(start),
+    /// exact on a linear piece). Other waveforms are sampled at the kinks and densely
+    /// in between.
     pub fn max_abs(&self, t0: f64, t1: f64) -> f64 {
+        let v = |t: f64| self.eval(t).0;
+        if self
+            .terms
+            .iter()
+            .all(|t| matches!(t, Term::Step { .. } | Term::Ramp { .. }))
+        {
+            let mut ts: Vec<f64> = [t0, t1].into_iter().chain(self.kinks(t0, t1)).collect();
+            ts.sort_by(f64::total_cmp);
+            ts.dedup();
+            return ts
+                .windows(2)
+                .map(|w| {
+                    let a = v(w[0]);
+                    a.abs().max((2.0 * v(0.5 * (w[0] + w[1])) - a).abs())
+                })
+                .fold(v(t1).abs(), f64::max);
+        }
         let n = 20_000;
         (0..=n)
             .map(|i| t0 + (t1 - t0) * i as f64 / n as f64)

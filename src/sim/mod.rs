@@ -363,8 +363,8 @@ fn sample_finite(s: &Sample) -> bool {
     .all(|v| v.is_finite())
 }
 
-/// Hyperelastic energy Vol·∫P dλ from a to b (20-point composite Gauss–Legendre).
-fn elastic_energy(p: &Plant, a: f64, b: f64) -> f64 {
+/// Hyperelastic energy Vol·∫P dλ from a to b (200-panel composite 3-point Gauss–Legendre).
+pub fn elastic_energy(p: &Plant, a: f64, b: f64) -> f64 {
     const X: [f64; 3] = [-0.774_596_669_241_483_4, 0.0, 0.774_596_669_241_483_4];
     const W: [f64; 3] = [5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0];
     let n = 200;

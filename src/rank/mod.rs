@@ -1,0 +1,109 @@
+//! Materials design: rank fillers and composites by what they buy an actuator
+//! (`dea-fit rank`, docs/rank.md).
+//!
+//! ```text
+//! design.toml ──manifest::read (units → SI, file:line:col errors)──► Design
+//! Design + Sweep ──sweep::points──► Point (series, loading, voltage), in one fixed order
+//! Point ──candidate::build──► Candidate (εr, modulus, tan δ, Eb with provenance; the material)
+//! Candidate + drive ──figures::evaluate (static curve, pull-in, breakdown, damped step)──► Evaluation
+//! Evaluations ──ranking::rank──► Ranking (order by an objective, Pareto front, best loading per series)
+//! Ranking ──report──► table, CSV, JSON, reports/rank-<name>/{*.svg, index.md}
+//! ```
+//! A slice of the points (`--shard K/N`) is written as a shard file
+//! ([`shard`]); `rank merge` joins the shards of one sweep into the evaluations a
+//! single run gives, so the same ranking follows byte for byte.
+
+pub mod candidate;
+pub mod figures;
+pub mod manifest;
+pub mod ranking;
+pub mod report;
+pub mod shard;
+pub mod sweep;
+
+use serde::{Deserialize, Serialize};
+
+/// A computed number for names, notes and sources: 4 significant digits, trailing
+/// zeros dropped (0.05 → "0.05", 4.999999999999999 → "5", 734.9057 → "734.9").
+pub fn short(v: f64) -> String {
+    let s = crate::report::format::sig(v, 4);
+    match s.contains('.') && !s.contains('e') {
+        true => s.trim_end_matches('0').trim_end_matches('.').to_string(),
+        false => s,
+    }
+}
+
+/// Where a number comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Provenance {
+    /// Written in the design manifest as a measured value (its line says where).
+    Measured,
+    /// From a fit file (hyperelastic, relaxation, identified, composite).
+    Fitted,
+    /// From a stated model (a mixing rule, a stiffening rule, an interpolation) or
+    /// the simulator.
+    Predicted,
+}
+
+impl std::fmt::Display for Provenance {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Provenance::Measured => "measured",
+            Provenance::Fitted => "fitted",
+            Provenance::Predicted => "predicted",
+        })
+    }
+}
+
+/// One number of the output with its unit and where it comes from. `value` is
+/// `None` where the figure does not exist (a stroke past pull-in); `note` says why.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Figure {
+    /// Value (SI), or none.
+    pub value: Option<f64>,
+    /// SI unit (`1` for dimensionless).
+    pub unit: String,
+    /// Measured, fitted or predicted.
+    pub provenance: Provenance,
+    /// The file (with line) or the rule it comes from.
+    pub source: String,
+    /// Why there is no value, or what limits it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+}
+
+impl Figure {
+    /// A figure with a value.
+    pub fn new(value: f64, unit: &str, provenance: Provenance, source: impl Into<String>) -> Self {
+        Figure {
+            value: Some(value),
+            unit: unit.to_string(),
+            provenance,
+            source: source.into(),
+            note: None,
+        }
+    }
+
+    /// A figure without a value, with the reason.
+    pub fn none(
+        unit: &str,
+        provenance: Provenance,
+        source: impl Into<String>,
+        why: impl Into<String>,
+    ) -> Self {
+        Figure {
+            value: None,
+            unit: unit.to_string(),
+            provenance,
+            source: source.into(),
+            note: Some(why.into()),
+        }
+    }
+
+    /// The same figure with a note.
+    pub fn noted(mut self, note: impl Into<String>) -> Self {
+        self.note = Some(note.into());
+        self
+    }
+}

@@ -1,0 +1,385 @@
+//! Ranking of evaluated candidates: the order by one objective, the Pareto front
+//! over two, the best loading of every series, and the run's status.
+//!
+//! A candidate is ranked on an objective only where the objective has a value: one
+//! past pull-in or breakdown at the drive has no static stroke, no response and no
+//! energy figures, and is listed after the ranked ones with the reason — never
+//! ranked on the numbers of a state it cannot reach. Ties keep the run's order.
+
+use super::figures::{Evaluation, State};
+use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+
+/// What to rank by.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Objective {
+    /// Static stroke at the drive (larger is better).
+    Stroke,
+    /// Largest stroke before pull-in or breakdown.
+    MaxStroke,
+    /// Blocked force at the drive.
+    Force,
+    /// 10–90 % response time of a step (smaller is better).
+    Speed,
+    /// Figure of merit 3ε0εrEb²/Y.
+    Fm,
+    /// εr/Y.
+    Beta,
+    /// Dielectric loss per cycle (smaller is better).
+    Loss,
+}
+
+impl Objective {
+    /// Every objective.
+    pub const ALL: [Objective; 7] = [
+        Objective::Stroke,
+        Objective::MaxStroke,
+        Objective::Force,
+        Objective::Speed,
+        Objective::Fm,
+        Objective::Beta,
+        Objective::Loss,
+    ];
+
+    /// Name as written on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Objective::Stroke => "stroke",
+            Objective::MaxStroke => "max-stroke",
+            Objective::Force => "force",
+            Objective::Speed => "speed",
+            Objective::Fm => "fm",
+            Objective::Beta => "beta",
+            Objective::Loss => "loss",
+        }
+    }
+
+    /// Parse a name.
+    pub fn parse(s: &str) -> Result<Objective> {
+        Self::ALL
+            .into_iter()
+            .find(|o| o.name() == s.trim())
+            .ok_or_else(|| {
+                let names: Vec<&str> = Self::ALL.iter().map(|o| o.name()).collect();
+                Error::settings(format!("unknown objective '{s}'"))
+                    .with_hint(format!("use one of {}", names.join(", ")))
+            })
+    }
+
+    /// The figure it reads, with its unit, for tables and axes.
+    pub fn label(self) -> &'static str {
+        match self {
+            Objective::Stroke => "static stroke at the drive",
+            Objective::MaxStroke => "largest stroke before pull-in or breakdown",
+            Objective::Force => "blocked force (N)",
+            Objective::Speed => "10–90 % response time (s)",
+            Objective::Fm => "figure of merit Fm",
+            Objective::Beta => "εr/Y (1/Pa)",
+            Objective::Loss => "dielectric loss per cycle (J)",
+        }
+    }
+
+    /// Whether a larger value is better.
+    pub fn higher_is_better(self) -> bool {
+        !matches!(self, Objective::Speed | Objective::Loss)
+    }
+
+    /// The value of the objective for an evaluation (None: not ranked on it).
+    pub fn value(self, e: &Evaluation) -> Option<f64> {
+        let f = match self {
+            Objective::Stroke => &e.static_stroke,
+            Objective::MaxStroke => &e.max_stroke,
+            Objective::Force => &e.blocked_force,
+            Objective::Speed => &e.response_time,
+            Objective::Fm => &e.fm,
+            Objective::Beta => &e.beta,
+            Objective::Loss => &e.loss_per_cycle,
+        };
+        f.value.filter(|v| v.is_finite())
+    }
+
+    /// Why an evaluation has no value of the objective.
+    pub fn why_not(self, e: &Evaluation) -> String {
+        let f = match self {
+            Objective::Stroke => &e.static_stroke,
+            Objective::MaxStroke => &e.max_stroke,
+            Objective::Force => &e.blocked_force,
+            Objective::Speed => &e.response_time,
+            Objective::Fm => &e.fm,
+            Objective::Beta => &e.beta,
+            Objective::Loss => &e.loss_per_cycle,
+        };
+        f.note.clone().unwrap_or_else(|| e.state_note.clone())
+    }
+
+    /// A value oriented so that larger is better.
+    fn goodness(self, v: f64) -> f64 {
+        match self.higher_is_better() {
+            true => v,
+            false => -v,
+        }
+    }
+}
+
+/// The status of a ranking run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Status {
+    /// Every candidate evaluated; every property from data or a stated model.
+    Ok,
+    /// Some properties were held or extrapolated (the warnings say which).
+    Warning,
+    /// Some candidates could not be evaluated (they are listed, not ranked):
+    /// blocking under `--strict`.
+    Incomplete,
+    /// No candidate could be ranked.
+    Failed,
+}
+
+impl std::fmt::Display for Status {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Status::Ok => "ok",
+            Status::Warning => "warning",
+            Status::Incomplete => "incomplete",
+            Status::Failed => "failed",
+        })
+    }
+}
+
+impl Status {
+    /// Exit code: 1 for `failed`, and for `incomplete` under `--strict`.
+    pub fn exit_code(self, strict: bool) -> i32 {
+        match self {
+            Status::Failed => 1,
+            Status::Incomplete if strict => 1,
+            _ => 0,
+        }
+    }
+}
+
+/// A member of the Pareto front.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FrontPoint {
+    /// Index of the evaluation.
+    pub index: usize,
+    /// Candidate name.
+    pub name: String,
+    /// Drive voltage (V).
+    #[serde(rename = "voltage_V")]
+    pub voltage_v: f64,
+    /// Values of the two objectives.
+    pub values: [f64; 2],
+}
+
+/// The Pareto front over two objectives.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Pareto {
+    /// The two objectives.
+    pub objectives: [Objective; 2],
+    /// Candidates no other candidate beats on both (better or equal on both and
+    /// strictly better on one), ordered by the first objective, best first.
+    pub front: Vec<FrontPoint>,
+}
+
+/// The best loading of a series at one drive level.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BestLoading {
+    /// Series.
+    pub series: String,
+    /// Filler.
+    pub filler: Option<String>,
+    /// Drive voltage (V) of the best candidate.
+    #[serde(rename = "voltage_V")]
+    pub voltage_v: f64,
+    /// The best candidate's name and index.
+    pub name: String,
+    /// Its index.
+    pub index: usize,
+    /// Its loading.
+    pub loading: f64,
+    /// Its basis.
+    pub basis: crate::fit::composite::Basis,
+    /// The objective there.
+    pub value: f64,
+    /// Half the distance to the neighbouring loadings of the sweep (the optimum's
+    /// resolution); null with one loading.
+    pub resolution: Option<f64>,
+    /// The best loading is an end of the swept range: the optimum may lie beyond.
+    pub at_edge: bool,
+}
+
+/// The ranking of a run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Ranking {
+    /// Objective.
+    pub by: Objective,
+    /// Evaluations in output order: ranked (best first), then unranked (run order).
+    pub order: Vec<usize>,
+    /// Rank (1-based) of each evaluation by index in `evals` (None: unranked).
+    pub ranks: Vec<Option<usize>>,
+    /// Pareto front.
+    pub pareto: Pareto,
+    /// Best loading per series and drive level.
+    pub best: Vec<BestLoading>,
+    /// Status.
+    pub status: Status,
+    /// Distinct warnings, in the order they first appear.
+    pub warnings: Vec<String>,
+}
+
+/// Rank `evals` (in run order) by `by`, with the Pareto front over `pareto`.
+pub fn rank(evals: &[Evaluation], by: Objective, pareto: [Objective; 2]) -> Ranking {
+    let mut ranked: Vec<(usize, f64)> = evals
+        .iter()
+        .enumerate()
+        .filter_map(|(i, e)| by.value(e).map(|v| (i, by.goodness(v))))
+        .collect();
+    ranked.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+    let mut ranks = vec![None; evals.len()];
+    for (r, (i, _)) in ranked.iter().enumerate() {
+        ranks[*i] = Some(r + 1);
+    }
+    let order: Vec<usize> = ranked
+        .iter()
+        .map(|x| x.0)
+        .chain((0..evals.len()).filter(|&i| ranks[i].is_none()))
+        .collect();
+
+    let mut warnings: Vec<String> = Vec::new();
+    for w in evals.iter().flat_map(|e| e.warnings.iter()) {
+        if !warnings.contains(w) {
+            warnings.push(w.clone());
+        }
+    }
+    let failed: Vec<&Evaluation> = evals.iter().filter(|e| e.state == State::Failed).collect();
+    if let Some(f) = failed.first() {
+        warnings.push(format!(
+            "{} candidate(s) could not be evaluated (first: {}: {})",
+            failed.len(),
+            f.name,
+            f.state_note
+        ));
+    }
+    let status = if ranked.is_empty() {
+        Status::Failed
+    } else if !failed.is_empty() {
+        Status::Incomplete
+    } else if !warnings.is_empty() {
+        Status::Warning
+    } else {
+        Status::Ok
+    };
+    Ranking {
+        by,
+        pareto: front(evals, pareto),
+        best: best_loadings(evals, by),
+        order,
+        ranks,
+        status,
+        warnings,
+    }
+}
+
+/// The Pareto front: sorted by the first objective's goodness (then the second's),
+/// a group of equal first values is on the front where its best second value beats
+/// every strictly better first value's.
+fn front(evals: &[Evaluation], obj: [Objective; 2]) -> Pareto {
+    let mut pts: Vec<(usize, f64, f64)> = evals
+        .iter()
+        .enumerate()
+        .filter_map(|(i, e)| match (obj[0].value(e), obj[1].value(e)) {
+            (Some(a), Some(b)) => Some((i, obj[0].goodness(a), obj[1].goodness(b))),
+            _ => None,
+        })
+        .collect();
+    pts.sort_by(|a, b| {
+        b.1.total_cmp(&a.1)
+            .then(b.2.total_cmp(&a.2))
+            .then(a.0.cmp(&b.0))
+    });
+    let mut front = Vec::new();
+    let mut best2 = f64::NEG_INFINITY;
+    let mut i = 0;
+    while i < pts.len() {
+        let g1 = pts[i].1;
+        let group_end = pts[i..]
+            .iter()
+            .position(|p| p.1 != g1)
+            .map_or(pts.len(), |k| i + k);
+        let top = pts[i].2;
+        if top > best2 {
+            for p in pts[i..group_end].iter().filter(|p| p.2 == top) {
+                let e = &evals[p.0];
+                front.push(FrontPoint {
+                    index: e.index,
+                    name: e.name.clone(),
+                    voltage_v: e.voltage.value.unwrap_or(f64::NAN),
+                    values: [obj[0].goodness(p.1), obj[1].goodness(p.2)],
+                });
+            }
+            best2 = top;
+        }
+        i = group_end;
+    }
+    Pareto {
+        objectives: obj,
+        front,
+    }
+}
+
+/// For every series and drive voltage, the loading with the best objective.
+fn best_loadings(evals: &[Evaluation], by: Objective) -> Vec<BestLoading> {
+    let mut keys: Vec<(String, u64)> = Vec::new();
+    for e in evals {
+        let k = (
+            e.series.clone(),
+            e.voltage.value.unwrap_or(f64::NAN).to_bits(),
+        );
+        if !keys.contains(&k) {
+            keys.push(k);
+        }
+    }
+    keys.into_iter()
+        .filter_map(|(series, vbits)| {
+            let group: Vec<&Evaluation> = evals
+                .iter()
+                .filter(|e| {
+                    e.series == series && e.voltage.value.unwrap_or(f64::NAN).to_bits() == vbits
+                })
+                .collect();
+            let mut loadings: Vec<f64> = group.iter().map(|e| e.loading).collect();
+            loadings.sort_by(f64::total_cmp);
+            loadings.dedup();
+            let best = group
+                .iter()
+                .filter_map(|e| by.value(e).map(|v| (*e, v)))
+                .fold(None::<(&Evaluation, f64)>, |acc, (e, v)| match acc {
+                    Some((_, bv)) if by.goodness(bv) >= by.goodness(v) => acc,
+                    _ => Some((e, v)),
+                })?;
+            let (e, v) = best;
+            let at = loadings.iter().position(|&x| x == e.loading).unwrap_or(0);
+            let gaps: Vec<f64> = [
+                at.checked_sub(1).map(|j| e.loading - loadings[j]),
+                loadings.get(at + 1).map(|x| x - e.loading),
+            ]
+            .into_iter()
+            .flatten()
+            .collect();
+            Some(BestLoading {
+                series,
+                filler: e.filler.clone(),
+                voltage_v: f64::from_bits(vbits),
+                name: e.name.clone(),
+                index: e.index,
+                loading: e.loading,
+                basis: e.basis,
+                value: v,
+                resolution: gaps.iter().copied().reduce(f64::min).map(|g| 0.5 * g),
+                at_edge: loadings.len() > 1 && (at == 0 || at == loadings.len() - 1),
+            })
+        })
+        .collect()
+}

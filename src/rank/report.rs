@@ -1,0 +1,618 @@
+//! What a ranking run writes: the table (stdout), the JSON, the CSV and the report
+//! (`index.md` with SVG charts: ranking bars, objective against loading per series
+//! naming its rules, the Pareto chart, stroke–voltage curves of the leaders).
+//! Each is a pure function of the run's identity, its evaluations and the ranking,
+//! so a merged sweep writes the same bytes as a single run.
+
+use super::figures::{Evaluated, Evaluation};
+use super::ranking::{Objective, Ranking};
+use super::shard::RunInfo;
+use super::short;
+use super::Figure;
+use crate::error::Result;
+use crate::fit::composite::Basis;
+use crate::report::format::{si, sig, table as text_table};
+use crate::report::plot::{band, Chart, Series, Style};
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Schema tag of the JSON output.
+pub const SCHEMA: &str = "dea-fit/rank/1";
+
+/// A value of an objective in the unit tables and charts show.
+pub fn shown(o: Objective, v: f64) -> f64 {
+    match o {
+        Objective::Stroke | Objective::MaxStroke => 100.0 * v,
+        Objective::Beta => 1e6 * v,
+        _ => v,
+    }
+}
+
+/// The unit of [`shown`] values.
+pub fn shown_unit(o: Objective) -> &'static str {
+    match o {
+        Objective::Stroke | Objective::MaxStroke => "%",
+        Objective::Force => "N",
+        Objective::Speed => "s",
+        Objective::Fm => "",
+        Objective::Beta => "1/MPa",
+        Objective::Loss => "J",
+    }
+}
+
+/// An objective's value as text.
+fn fmt_objective(o: Objective, v: f64) -> String {
+    match o {
+        Objective::Stroke | Objective::MaxStroke => format!("{} %", sig(100.0 * v, 4)),
+        Objective::Force => si(v, "N"),
+        Objective::Speed => si(v, "s"),
+        Objective::Loss => si(v, "J"),
+        Objective::Fm => sig(v, 4),
+        Objective::Beta => format!("{} /MPa", sig(1e6 * v, 4)),
+    }
+}
+
+/// A figure as text ("—" without a value).
+fn fmt_fig(f: &Figure, fmt: impl Fn(f64) -> String) -> String {
+    f.value.map_or("—".into(), fmt)
+}
+
+fn pct(v: f64) -> String {
+    format!("{} %", sig(100.0 * v, 4))
+}
+
+/// The whole output as JSON: what `--json` prints.
+#[derive(Serialize)]
+struct Output<'a> {
+    schema: &'static str,
+    run: &'a RunInfo,
+    by: Objective,
+    status: super::ranking::Status,
+    warnings: &'a [String],
+    candidates: Vec<Row<'a>>,
+    pareto: &'a super::ranking::Pareto,
+    best_loading: &'a [super::ranking::BestLoading],
+}
+
+#[derive(Serialize)]
+struct Row<'a> {
+    rank: Option<usize>,
+    objective: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    not_ranked: Option<String>,
+    #[serde(flatten)]
+    evaluation: &'a Evaluation,
+}
+
+/// The JSON output.
+pub fn json(info: &RunInfo, evals: &[Evaluated], r: &Ranking) -> String {
+    let candidates = r
+        .order
+        .iter()
+        .map(|&i| {
+            let e = &evals[i].evaluation;
+            let v = r.by.value(e);
+            Row {
+                rank: r.ranks[i],
+                objective: v,
+                not_ranked: v.is_none().then(|| r.by.why_not(e)),
+                evaluation: e,
+            }
+        })
+        .collect();
+    let out = Output {
+        schema: SCHEMA,
+        run: info,
+        by: r.by,
+        status: r.status,
+        warnings: &r.warnings,
+        candidates,
+        pareto: &r.pareto,
+        best_loading: &r.best,
+    };
+    serde_json::to_string_pretty(&out).expect("the ranking serialises")
+}
+
+/// The table printed on stdout: the first `top` ranked candidates (all with 0), the
+/// unranked ones counted by state, the Pareto front, the best loadings, warnings
+/// and the status line.
+pub fn table(info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: usize) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{}: {} points ({}); drive {}",
+        info.design, info.points, info.sweep, info.drive
+    );
+    let _ = writeln!(s, "ranked by {} ({})", r.by.name(), r.by.label());
+    let ranked = r.ranks.iter().filter(|x| x.is_some()).count();
+    let shown_n = if top == 0 { ranked } else { top.min(ranked) };
+    // The objective gets its own column unless one of the fixed ones shows it.
+    let extra = matches!(r.by, Objective::Force | Objective::Beta | Objective::Loss);
+    let rows: Vec<Vec<String>> = r.order[..shown_n]
+        .iter()
+        .map(|&i| {
+            let e = &evals[i].evaluation;
+            let mut row = vec![
+                r.ranks[i].map_or("—".into(), |x| x.to_string()),
+                e.name.clone(),
+                fmt_fig(&e.voltage, |v| si(v, "V")),
+                fmt_fig(&e.eps_r, |v| sig(v, 4)),
+                fmt_fig(&e.youngs_modulus, |v| si(v, "Pa")),
+                fmt_fig(&e.fm, |v| sig(v, 3)),
+                fmt_fig(&e.static_stroke, pct),
+                format!("{} ({})", fmt_fig(&e.max_stroke, pct), e.max_stroke_limit),
+                fmt_fig(&e.response_time, |v| si(v, "s")),
+            ];
+            if extra {
+                row.push(r.by.value(e).map_or("—".into(), |v| fmt_objective(r.by, v)));
+            }
+            row
+        })
+        .collect();
+    let mut header = vec![
+        "#",
+        "candidate",
+        "drive",
+        "εr",
+        "Y",
+        "Fm",
+        "stroke",
+        "max stroke (limit)",
+        "t10–90",
+    ];
+    if extra {
+        header.push(r.by.name());
+    }
+    s.push_str(&text_table(&header, &rows));
+    if ranked > shown_n {
+        let _ = writeln!(
+            s,
+            "… {} more ranked (--top 0 shows all; --csv, --json)",
+            ranked - shown_n
+        );
+    }
+    let unranked: Vec<&Evaluation> = r.order[ranked..]
+        .iter()
+        .map(|&i| &evals[i].evaluation)
+        .collect();
+    if !unranked.is_empty() {
+        let _ = writeln!(
+            s,
+            "not ranked on {}: {} candidate(s)",
+            r.by.name(),
+            unranked.len()
+        );
+        for e in unranked
+            .iter()
+            .take(if top == 0 { usize::MAX } else { top })
+        {
+            let _ = writeln!(
+                s,
+                "  {} at {}: {}",
+                e.name,
+                fmt_fig(&e.voltage, |v| si(v, "V")),
+                r.by.why_not(e)
+            );
+        }
+        if top != 0 && unranked.len() > top {
+            let _ = writeln!(s, "  … {} more", unranked.len() - top);
+        }
+    }
+    let [a, b] = r.pareto.objectives;
+    let _ = writeln!(
+        s,
+        "Pareto front ({} against {}): {} candidate(s)",
+        a.name(),
+        b.name(),
+        r.pareto.front.len()
+    );
+    for p in &r.pareto.front {
+        let _ = writeln!(
+            s,
+            "  {} at {}: {} {}, {} {}",
+            p.name,
+            si(p.voltage_v, "V"),
+            a.name(),
+            fmt_objective(a, p.values[0]),
+            b.name(),
+            fmt_objective(b, p.values[1])
+        );
+    }
+    let _ = writeln!(s, "best loading per series ({}):", r.by.name());
+    let rows: Vec<Vec<String>> = r
+        .best
+        .iter()
+        .map(|b| {
+            let unit = match b.basis {
+                Basis::Weight => "wt%",
+                Basis::Volume => "vol%",
+            };
+            vec![
+                b.series.clone(),
+                si(b.voltage_v, "V"),
+                match &b.filler {
+                    None => "—".into(),
+                    Some(_) => format!("{} {unit}", short(100.0 * b.loading)),
+                },
+                b.resolution
+                    .map_or("—".into(), |x| format!("± {} {unit}", short(100.0 * x))),
+                fmt_objective(r.by, b.value),
+                if b.at_edge {
+                    "end of the swept range".into()
+                } else {
+                    String::new()
+                },
+            ]
+        })
+        .collect();
+    s.push_str(&text_table(
+        &[
+            "series",
+            "drive",
+            "best loading",
+            "resolution",
+            r.by.name(),
+            "",
+        ],
+        &rows,
+    ));
+    for w in &r.warnings {
+        let _ = writeln!(s, "warning: {w}");
+    }
+    let _ = writeln!(s, "status: {}", r.status);
+    s
+}
+
+/// Every evaluation as CSV, in run order, with rank and objective.
+pub fn csv(evals: &[Evaluated], r: &Ranking) -> String {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let num = |f: &Figure| f.value.map_or(String::new(), |v| v.to_string());
+    let prov = |f: &Figure| f.provenance.to_string();
+    let _ = w.write_record([
+        "index",
+        "name",
+        "series",
+        "matrix",
+        "filler",
+        "loading",
+        "basis",
+        "volume_fraction",
+        "rules",
+        "voltage_V",
+        "eps_r",
+        "eps_r_provenance",
+        "youngs_modulus_Pa",
+        "youngs_modulus_provenance",
+        "beta_per_Pa",
+        "fm",
+        "tan_delta",
+        "tan_delta_provenance",
+        "breakdown_field_V_per_m",
+        "breakdown_field_provenance",
+        "state",
+        "static_stroke",
+        "pull_in_V",
+        "breakdown_V",
+        "max_stroke",
+        "max_stroke_limit",
+        "blocked_force_N",
+        "response_time_s",
+        "energy_in_J",
+        "loss_per_cycle_J",
+        "rank",
+        "objective",
+    ]);
+    for (i, ev) in evals.iter().enumerate() {
+        let e = &ev.evaluation;
+        let _ = w.write_record([
+            e.index.to_string(),
+            e.name.clone(),
+            e.series.clone(),
+            e.matrix.clone(),
+            e.filler.clone().unwrap_or_default(),
+            e.loading.to_string(),
+            e.basis.to_string(),
+            e.volume_fraction.to_string(),
+            e.rules.clone(),
+            num(&e.voltage),
+            num(&e.eps_r),
+            prov(&e.eps_r),
+            num(&e.youngs_modulus),
+            prov(&e.youngs_modulus),
+            num(&e.beta),
+            num(&e.fm),
+            num(&e.tan_delta),
+            prov(&e.tan_delta),
+            num(&e.breakdown_field),
+            prov(&e.breakdown_field),
+            e.state.to_string(),
+            num(&e.static_stroke),
+            e.pull_in.map_or(String::new(), |p| p.voltage_v.to_string()),
+            e.breakdown
+                .map_or(String::new(), |p| p.voltage_v.to_string()),
+            num(&e.max_stroke),
+            e.max_stroke_limit.to_string(),
+            num(&e.blocked_force),
+            num(&e.response_time),
+            num(&e.energy_in),
+            num(&e.loss_per_cycle),
+            r.ranks[i].map_or(String::new(), |x| x.to_string()),
+            r.by.value(e).map_or(String::new(), |v| v.to_string()),
+        ]);
+    }
+    String::from_utf8(w.into_inner().expect("a CSV in memory")).expect("UTF-8 CSV")
+}
+
+/// How many leaders the bar and stroke–voltage charts show.
+const LEADERS: usize = 10;
+
+/// Write the report into `dir` (claimed by the caller): the charts and index.md.
+/// Returns the page's path.
+pub fn write(
+    dir: &Path,
+    info: &RunInfo,
+    evals: &[Evaluated],
+    r: &Ranking,
+    top: usize,
+) -> Result<PathBuf> {
+    let by = r.by;
+    let unit = shown_unit(by);
+    let label = |o: Objective| match shown_unit(o) {
+        "" => o.label().to_string(),
+        u => format!(
+            "{} ({u})",
+            o.label().split(" (").next().unwrap_or(o.label())
+        ),
+    };
+    let ranked: Vec<usize> = r
+        .order
+        .iter()
+        .copied()
+        .filter(|&i| r.ranks[i].is_some())
+        .collect();
+
+    // Ranking bars.
+    let bars: Vec<Series> = ranked
+        .iter()
+        .take(LEADERS)
+        .enumerate()
+        .map(|(k, &i)| {
+            let e = &evals[i].evaluation;
+            let v = shown(by, by.value(e).unwrap_or(0.0));
+            let x = (k + 1) as f64;
+            Series {
+                label: format!(
+                    "#{} {} at {}",
+                    k + 1,
+                    e.name,
+                    si(e.voltage.value.unwrap_or(f64::NAN), "V")
+                ),
+                points: band(&[x - 0.4, x + 0.4], &[0.0, 0.0], &[v, v]),
+                color: k,
+                style: Style::Band,
+            }
+        })
+        .collect();
+    Chart {
+        title: format!("{}: the {} best by {}", info.design, bars.len(), by.name()),
+        x_label: "rank".into(),
+        y_label: label(by),
+        series: bars,
+        log_x: false,
+    }
+    .write_svg(&dir.join("ranking.svg"))?;
+
+    // Objective against filler volume fraction, per series, at the leader's drive.
+    let lead_v = ranked
+        .first()
+        .and_then(|&i| evals[i].evaluation.voltage.value);
+    let mut series_names: Vec<&str> = Vec::new();
+    for ev in evals {
+        if !series_names.contains(&ev.evaluation.series.as_str()) {
+            series_names.push(&ev.evaluation.series);
+        }
+    }
+    let lines: Vec<Series> = series_names
+        .iter()
+        .enumerate()
+        .map(|(k, name)| {
+            let pts: Vec<&Evaluation> = evals
+                .iter()
+                .map(|x| &x.evaluation)
+                .filter(|e| e.series == *name && lead_v.is_none_or(|v| e.voltage.value == Some(v)))
+                .collect();
+            let rules = pts.first().map_or(String::new(), |e| e.rules.clone());
+            let (c, style) = crate::report::plot::nth_line(k);
+            let valued: Vec<(f64, f64)> = pts
+                .iter()
+                .filter_map(|e| {
+                    by.value(e)
+                        .map(|v| (100.0 * e.volume_fraction, shown(by, v)))
+                })
+                .collect();
+            Series {
+                label: format!("{name} ({rules})"),
+                // a single ranked point is drawn as a marker (a line of one point is invisible)
+                style: if valued.len() < 2 {
+                    Style::Points
+                } else {
+                    style
+                },
+                points: valued,
+                color: c,
+            }
+        })
+        .collect();
+    Chart {
+        title: format!(
+            "{} against filler volume fraction{}",
+            by.name(),
+            lead_v.map_or(String::new(), |v| format!(" at {}", si(v, "V")))
+        ),
+        x_label: "filler volume fraction φ (%)".into(),
+        y_label: label(by),
+        series: lines,
+        log_x: false,
+    }
+    .write_svg(&dir.join("objective-vs-loading.svg"))?;
+
+    // Pareto chart.
+    let [a, b] = r.pareto.objectives;
+    let all: Vec<(f64, f64)> = evals
+        .iter()
+        .filter_map(|x| match (a.value(&x.evaluation), b.value(&x.evaluation)) {
+            (Some(p), Some(q)) => Some((shown(a, p), shown(b, q))),
+            _ => None,
+        })
+        .collect();
+    let front: Vec<(f64, f64)> = r
+        .pareto
+        .front
+        .iter()
+        .map(|p| (shown(a, p.values[0]), shown(b, p.values[1])))
+        .collect();
+    Chart {
+        title: format!("Pareto front: {} against {}", a.name(), b.name()),
+        x_label: label(a),
+        y_label: label(b),
+        series: vec![
+            Series {
+                label: "candidates".into(),
+                points: all,
+                color: 8,
+                style: Style::Points,
+            },
+            Series {
+                label: format!("front ({} candidates)", front.len()),
+                points: front.clone(),
+                color: 1,
+                style: Style::Line,
+            },
+            Series {
+                label: "front members".into(),
+                points: front,
+                color: 1,
+                style: Style::Points,
+            },
+        ],
+        log_x: false,
+    }
+    .write_svg(&dir.join("pareto.svg"))?;
+
+    // Static stroke–voltage curves of the leaders, each with its drive point.
+    let mut names: Vec<&str> = Vec::new();
+    let mut curves = Vec::new();
+    for &i in &ranked {
+        let ev = &evals[i];
+        let e = &ev.evaluation;
+        if names.contains(&e.name.as_str()) || names.len() == 5 {
+            continue;
+        }
+        names.push(&e.name);
+        let k = names.len() - 1;
+        curves.push(Series {
+            label: format!("{} (to {})", e.name, e.max_stroke_limit),
+            points: ev
+                .curve
+                .iter()
+                .map(|p| (1e-3 * p.voltage_v, 100.0 * p.stroke))
+                .collect(),
+            color: k,
+            style: Style::Line,
+        });
+        if let (Some(v), Some(st)) = (e.voltage.value, e.static_stroke.value) {
+            curves.push(Series {
+                label: format!("drive {}", si(v, "V")),
+                points: vec![(1e-3 * v, 100.0 * st)],
+                color: k,
+                style: Style::Points,
+            });
+        }
+    }
+    Chart {
+        title: "static stroke against voltage: the leaders".into(),
+        x_label: "voltage (kV)".into(),
+        y_label: "static stroke (%)".into(),
+        series: curves,
+        log_x: false,
+    }
+    .write_svg(&dir.join("stroke-voltage.svg"))?;
+
+    // The page.
+    let mut md = String::new();
+    let _ = writeln!(md, "# Ranking: {}\n", info.design);
+    let _ = writeln!(
+        md,
+        "Manifest `{}` (sha256 `{}`), actuator `{}`; drive {}; sweep: {}; {} points. Ranked by **{}** ({}). Status: **{}**.\n",
+        info.manifest, info.sha256, info.scene, info.drive, info.sweep, info.points, by.name(), by.label(), r.status
+    );
+    let _ = writeln!(md, "![ranking](ranking.svg)\n\n![objective against loading](objective-vs-loading.svg)\n\n![Pareto](pareto.svg)\n\n![stroke against voltage](stroke-voltage.svg)\n");
+    let _ = writeln!(md, "## The leaders\n");
+    let _ = writeln!(md, "| # | candidate | drive | εr | Y | Fm | {} ({unit}) | state | max stroke | limit | t10–90 |", by.name());
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|");
+    for &i in ranked.iter().take(if top == 0 { usize::MAX } else { top }) {
+        let e = &evals[i].evaluation;
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} ({}) | {} ({}) | {} | {} | {} | {} | {} | {} |",
+            r.ranks[i].unwrap_or(0),
+            e.name,
+            fmt_fig(&e.voltage, |v| si(v, "V")),
+            fmt_fig(&e.eps_r, |v| sig(v, 4)),
+            e.eps_r.provenance,
+            fmt_fig(&e.youngs_modulus, |v| si(v, "Pa")),
+            e.youngs_modulus.provenance,
+            fmt_fig(&e.fm, |v| sig(v, 3)),
+            by.value(e).map_or("—".into(), |v| sig(shown(by, v), 4)),
+            e.state,
+            fmt_fig(&e.max_stroke, pct),
+            e.max_stroke_limit,
+            fmt_fig(&e.response_time, |v| si(v, "s")),
+        );
+    }
+    let _ = writeln!(md, "\n## Best loading per series\n");
+    for b in &r.best {
+        let _ = writeln!(
+            md,
+            "* {} at {}: {} ({} = {}{}{})",
+            b.series,
+            si(b.voltage_v, "V"),
+            b.name,
+            by.name(),
+            fmt_objective(by, b.value),
+            b.resolution
+                .map_or(String::new(), |x| format!(", resolution ± {}", short(x))),
+            if b.at_edge {
+                "; at the end of the swept range"
+            } else {
+                ""
+            }
+        );
+    }
+    let _ = writeln!(
+        md,
+        "\n## Pareto front ({} against {})\n",
+        a.name(),
+        b.name()
+    );
+    for p in &r.pareto.front {
+        let _ = writeln!(
+            md,
+            "* {} at {}: {}, {}",
+            p.name,
+            si(p.voltage_v, "V"),
+            fmt_objective(a, p.values[0]),
+            fmt_objective(b, p.values[1])
+        );
+    }
+    if !r.warnings.is_empty() {
+        let _ = writeln!(md, "\n## Warnings\n");
+        for w in &r.warnings {
+            let _ = writeln!(md, "* {w}");
+        }
+    }
+    let page = dir.join("index.md");
+    crate::io::write::atomic_write(&page, md.as_bytes())?;
+    Ok(page)
+}

@@ -1,0 +1,833 @@
+//! `dea-fit rank` (issue 11): catalogue figures and the static stroke against hand
+//! computation, pulled-in candidates never ranked on garbage, monotonic sanity, the
+//! trade-off directions of the mixing rules under Guth–Gold stiffening, the
+//! breakdown-limited optimum, thread-count independence, shard/merge byte for byte
+//! with its refusals, the Slurm script, and the shipped design's data regenerated.
+
+use crate::support::{repo, run};
+use dea_fit::rank::figures::{Evaluated, Evaluation, Limit, State};
+use dea_fit::rank::manifest::{self, Design};
+use dea_fit::rank::ranking::{self, Objective};
+use dea_fit::rank::sweep::{self, Sweep};
+use dea_fit::sim::plant::EPS0;
+use std::path::Path;
+
+/// A neo-Hookean stack without load or electrode thickness, so that its static
+/// curve has the closed form V(λ) = z0·sqrt(μ/ε)·sqrt(λ − λ⁴) (docs/model.md), an
+/// overdamped dashpot and a source with a rise time; gravity off (λ0 = 1).
+const SCENE: &str = r#"name = "nh_stack"
+[actuator]
+kind = "stack"
+radius = "5 mm"
+layer_thickness = "50 um"
+layers = 10
+[material]
+hyperelastic = { model = "neo-hookean", parameters = { mu = "100 kPa" } }
+viscous = { nv = "100 Pa s" }
+relative_permittivity = 3.0
+density = "1000 kg/m3"
+[load]
+gravity = 0
+[source]
+rise_time = "1 ms"
+[[input]]
+kind = "step"
+amplitude = "100 V"
+[time]
+span = "50 ms"
+samples = 100
+rtol = 1e-4
+"#;
+
+const Z0: f64 = 50e-6;
+
+/// The manifest head: the scene above and a drive.
+fn head(drive: &str) -> String {
+    format!(
+        "name = \"test\"\n[actuator]\nscene = \"nh_stack.toml\"\n[drive]\n{drive}\nfrequency = \"100 Hz\"\nstep_span = \"50 ms\"\nstep_samples = 100\n"
+    )
+}
+
+/// A matrix table.
+fn matrix(name: &str, eps: f64, mu_kpa: f64, eb: &str) -> String {
+    format!(
+        "[[matrix]]\nname = \"{name}\"\ndensity = \"1000 kg/m3\"\neps_r = {eps}\ntan_delta = 0.01\nbreakdown = \"{eb}\"\nhyperelastic = {{ model = \"neo-hookean\", parameters = {{ mu = \"{mu_kpa} kPa\" }} }}\nviscous = {{ nv = \"100 Pa s\" }}\n"
+    )
+}
+
+/// Write the scene and `manifest` into `dir` and read the design.
+fn design(dir: &Path, manifest: &str) -> Design {
+    std::fs::write(dir.join("nh_stack.toml"), SCENE).unwrap();
+    let p = dir.join("design.toml");
+    std::fs::write(&p, manifest).unwrap();
+    manifest::read(&p).unwrap_or_else(|e| panic!("{e}\n{manifest}"))
+}
+
+/// Every point of a design, evaluated.
+fn evaluate(d: &Design, sweep: &Sweep) -> Vec<Evaluated> {
+    sweep::run(d, &sweep::points(d, sweep), &|| {}).expect("the sweep runs")
+}
+
+fn value(f: &dea_fit::rank::Figure) -> f64 {
+    f.value.unwrap_or_else(|| panic!("no value: {:?}", f.note))
+}
+
+/// sqrt(μ/ε) of the neo-Hookean layer (V/m).
+fn field_scale(mu: f64, eps_r: f64) -> f64 {
+    (mu / (EPS0 * eps_r)).sqrt()
+}
+
+/// Catalogue figures, the static stroke, pull-in, breakdown, blocked force, energy
+/// and loss of a neo-Hookean stack against their closed forms.
+#[test]
+fn figures_match_hand_computation() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = format!(
+        "{}{}[[series]]\nmatrix = \"M\"\n",
+        head("voltage = \"400 V\""),
+        matrix("M", 3.0, 100.0, "30 V/um")
+    );
+    let d = design(dir.path(), &m);
+    let ev = evaluate(&d, &Sweep::default());
+    assert_eq!(ev.len(), 1);
+    let e = &ev[0].evaluation;
+    let (mu, eps_r, eb, v) = (1e5, 3.0, 30e6, 400.0);
+    // Catalogue: Y = 3μ, β = εr/Y, Fm = 3ε0εrEb²/Y (exact arithmetic: 1e-12).
+    let y = 3.0 * mu;
+    let close = |a: f64, b: f64, tol: f64, what: &str| {
+        assert!((a - b).abs() <= tol * b.abs(), "{what}: {a} vs {b}")
+    };
+    close(value(&e.youngs_modulus), y, 1e-12, "Y");
+    close(value(&e.beta), eps_r / y, 1e-12, "β");
+    close(value(&e.fm), 3.0 * EPS0 * eps_r * eb * eb / y, 1e-12, "Fm");
+    close(value(&e.tan_delta), 0.01, 0.0, "tan δ");
+    // The static stroke lies on the closed-form curve: V(λ) at λ = 1 − stroke is the
+    // drive (Newton to 1e-14 in λ: 1e-9 of V is a margin of five orders).
+    let k = Z0 * field_scale(mu, eps_r);
+    let curve = |lam: f64| k * (lam - lam.powi(4)).sqrt();
+    assert_eq!(e.state, State::Ok);
+    let lam_d = 1.0 - value(&e.static_stroke);
+    close(curve(lam_d), v, 1e-9, "V(λd)");
+    // Pull-in at λ = 4^(-1/3), V = 0.687·z0·sqrt(μ/ε) (Zhao & Suo 2007). At a
+    // maximum V changes only to second order in λ, so rounding (1e-16 of V) hides λ
+    // within ≈ sqrt(1e-16) = 1e-8: λ to 1e-7, V to 1e-12.
+    let pi = e.pull_in.expect("a pull-in");
+    let lam_p = 4f64.powf(-1.0 / 3.0);
+    close(1.0 - pi.stroke, lam_p, 1e-7, "λ pull-in");
+    close(pi.voltage_v, curve(lam_p), 1e-12, "V pull-in");
+    // Breakdown: sqrt(μ/ε)·sqrt(1/λ − λ²) = Eb, solved here by Newton on the cubic
+    // λ³ + cλ − 1 = 0 with c = (Eb/sqrt(μ/ε))² (bisection in the code to 1e-12).
+    let c = (eb / field_scale(mu, eps_r)).powi(2);
+    let mut lam_b: f64 = 1.0;
+    for _ in 0..50 {
+        lam_b -= (lam_b.powi(3) + c * lam_b - 1.0) / (3.0 * lam_b * lam_b + c);
+    }
+    let b = e.breakdown.expect("breakdown on the stable branch");
+    assert!(lam_b > lam_p, "the test wants breakdown before pull-in");
+    close(1.0 - b.stroke, lam_b, 1e-9, "λ breakdown");
+    assert_eq!(e.max_stroke_limit, Limit::Breakdown);
+    close(value(&e.max_stroke), 1.0 - lam_b, 1e-8, "max stroke");
+    // Blocked force: ε(V/z0)²·A at rest (stack, λ0 = 1).
+    let area = std::f64::consts::PI * 5e-3 * 5e-3;
+    close(
+        value(&e.blocked_force),
+        EPS0 * eps_r * (v / Z0).powi(2) * area,
+        1e-12,
+        "blocked force",
+    );
+    // Energy in: ½CV² + Vol·μ(λ²/2 + 1/λ − 3/2) (the work on the layer; the code's
+    // 600-point Gauss–Legendre quadrature is exact to 1e-12 for this smooth P).
+    let cap = 10.0 * EPS0 * eps_r * area / (Z0 * lam_d * lam_d);
+    let vol = area * 10.0 * Z0;
+    let w = 0.5 * cap * v * v + vol * mu * (lam_d * lam_d / 2.0 + 1.0 / lam_d - 1.5);
+    close(value(&e.energy_in), w, 1e-9, "energy in");
+    close(
+        value(&e.loss_per_cycle),
+        std::f64::consts::PI * cap * (v / 2.0).powi(2) * 0.01,
+        1e-12,
+        "loss per cycle",
+    );
+    // The step settles (overdamped, rise time 1 ms): a 10–90 % time exists, a few ms.
+    let t = value(&e.response_time);
+    assert!(t > 1e-4 && t < 2e-2, "t10–90 {t}");
+    // Provenance: matrix numbers are the manifest's (measured), with their line.
+    assert_eq!(e.eps_r.provenance, dea_fit::rank::Provenance::Measured);
+    assert!(
+        e.eps_r.source.contains("design.toml:"),
+        "{}",
+        e.eps_r.source
+    );
+    assert_eq!(
+        e.static_stroke.provenance,
+        dea_fit::rank::Provenance::Predicted
+    );
+}
+
+/// Past pull-in at the drive: the state says so, the stroke, response and energy
+/// have no value (with the reason), and the candidate is not ranked on them.
+#[test]
+fn pulled_in_candidates_are_not_ranked_on_garbage() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = format!(
+        "{}{}{}[[series]]\nmatrix = \"soft\"\n[[series]]\nmatrix = \"stiff\"\n",
+        head("voltage = \"2500 V\""),
+        matrix("soft", 3.0, 100.0, "300 V/um"),
+        matrix("stiff", 3.0, 400.0, "300 V/um")
+    );
+    let d = design(dir.path(), &m);
+    let ev = evaluate(&d, &Sweep::default());
+    let soft = &ev[0].evaluation;
+    assert_eq!(soft.state, State::PullIn, "{}", soft.state_note);
+    assert!(soft.static_stroke.value.is_none());
+    assert!(soft
+        .static_stroke
+        .note
+        .as_deref()
+        .unwrap()
+        .contains("pulled in"));
+    assert!(soft.response_time.value.is_none() && soft.energy_in.value.is_none());
+    let list: Vec<Evaluation> = ev.iter().map(|e| e.evaluation.clone()).collect();
+    let r = ranking::rank(
+        &list,
+        Objective::Stroke,
+        [Objective::Stroke, Objective::Speed],
+    );
+    assert_eq!(
+        r.ranks,
+        vec![None, Some(1)],
+        "the pulled-in one is not ranked"
+    );
+    assert_eq!(r.order, vec![1, 0], "ranked first, then the unranked");
+    assert!(r.pareto.front.iter().all(|p| p.index == 1));
+    // Its largest stroke before pull-in is still a figure (ranked on max-stroke).
+    let r = ranking::rank(
+        &list,
+        Objective::MaxStroke,
+        [Objective::Stroke, Objective::Speed],
+    );
+    assert!(r.ranks.iter().all(|x| x.is_some()));
+}
+
+/// Monotonic sanity on a grid of moduli and permittivities: a stiffer candidate with
+/// the same εr never gets more static stroke, a larger εr at equal stiffness never
+/// less.
+#[test]
+fn stroke_is_monotonic_in_modulus_and_permittivity() {
+    let dir = tempfile::tempdir().unwrap();
+    let (eps, mus) = ([2.5, 3.5, 5.0], [60.0, 100.0, 180.0, 320.0]);
+    let mut m = head("voltage = \"300 V\"");
+    for (i, e) in eps.iter().enumerate() {
+        for (j, mu) in mus.iter().enumerate() {
+            m.push_str(&matrix(&format!("m{i}{j}"), *e, *mu, "300 V/um"));
+        }
+    }
+    for i in 0..eps.len() {
+        for j in 0..mus.len() {
+            m.push_str(&format!("[[series]]\nmatrix = \"m{i}{j}\"\n"));
+        }
+    }
+    let d = design(dir.path(), &m);
+    let ev = evaluate(&d, &Sweep::default());
+    let s = |i: usize, j: usize| value(&ev[i * mus.len() + j].evaluation.static_stroke);
+    for i in 0..eps.len() {
+        for j in 0..mus.len() {
+            if j + 1 < mus.len() {
+                assert!(
+                    s(i, j + 1) < s(i, j),
+                    "stiffer at εr {}: {} ≥ {}",
+                    eps[i],
+                    s(i, j + 1),
+                    s(i, j)
+                );
+            }
+            if i + 1 < eps.len() {
+                assert!(
+                    s(i + 1, j) > s(i, j),
+                    "larger εr at μ {}: {} ≤ {}",
+                    mus[j],
+                    s(i + 1, j),
+                    s(i, j)
+                );
+            }
+        }
+    }
+}
+
+/// The trade-off: at fixed voltage and small strain the stroke follows εr/Y (here
+/// 20 V across 50 µm, strokes near 1e-4). With
+/// Guth–Gold stiffening (X(0.1) = 1.391) it falls under Maxwell Garnett (by hand:
+/// εr 5.2 → 6.928 with εf 6000 at 10 vol %, −4.2 %) and rises under Lichtenecker
+/// (×(6000/5.2)^0.1 = 2.024, +45.5 %).
+#[test]
+fn maxwell_garnett_loses_and_lichtenecker_gains_stroke_under_guth_gold() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut m = head("voltage = \"20 V\"");
+    m.push_str(&matrix("TC", 5.2, 30.0, "300 V/um"));
+    m.push_str("[[filler]]\nname = \"BaTiO3\"\ndensity = \"6.02 g/cm3\"\neps_r = 6000\n");
+    for rule in ["maxwell-garnett", "lichtenecker"] {
+        m.push_str(&format!(
+            "[[series]]\nname = \"{rule}\"\nmatrix = \"TC\"\nfiller = \"BaTiO3\"\nbasis = \"volume\"\nloadings = [0, 0.1]\npermittivity = {{ rule = \"{rule}\" }}\nstiffening = \"guth-gold\"\n"
+        ));
+    }
+    let d = design(dir.path(), &m);
+    let ev = evaluate(&d, &Sweep::default());
+    let stroke = |i: usize| value(&ev[i].evaluation.static_stroke);
+    let x = 1.0 + 2.5 * 0.1 + 14.1 * 0.01;
+    let (em, ef, phi): (f64, f64, f64) = (5.2, 6000.0, 0.1);
+    let mg = em * (ef + 2.0 * em + 2.0 * phi * (ef - em)) / (ef + 2.0 * em - phi * (ef - em));
+    let li = (phi * ef.ln() + (1.0 - phi) * em.ln()).exp();
+    for (i, eps, name) in [(0, mg, "maxwell-garnett"), (2, li, "lichtenecker")] {
+        assert!((value(&ev[i + 1].evaluation.eps_r) - eps).abs() < 1e-12 * eps);
+        assert!(
+            (value(&ev[i + 1].evaluation.youngs_modulus) - 3e4 * 3.0 * x).abs() < 1e-9 * 9e4 * x
+        );
+        // Neo-Hookean: stroke s = a(1 + 2a + …) with a ∝ εr/Y, so the ratio of two
+        // strokes is εr/Y's × (1 + 2Δa), Δa ≤ 4e-5 here: 2e-4 relative is the
+        // stated tolerance.
+        let ratio = stroke(i + 1) / stroke(i);
+        let hand = eps / em / x;
+        assert!(
+            (ratio / hand - 1.0).abs() < 2e-4,
+            "{name}: stroke ratio {ratio} vs εr/Y ratio {hand}"
+        );
+    }
+    assert!(
+        stroke(1) < stroke(0),
+        "Maxwell Garnett: the stroke falls with loading"
+    );
+    assert!((stroke(1) / stroke(0) - 0.958).abs() < 2e-3, "−4 % by hand");
+    assert!(
+        stroke(3) > stroke(2),
+        "Lichtenecker: the stroke rises with loading"
+    );
+    // The rules that produced each curve are named.
+    assert!(
+        ev[1].evaluation.rules.contains("maxwell-garnett")
+            && ev[1].evaluation.rules.contains("guth-gold")
+    );
+}
+
+/// A breakdown field that falls with loading moves the breakdown-limited optimum of
+/// the largest stroke inside the range (here 10 vol %: the stroke at breakdown solves
+/// 1/λ − λ² = Fm for a neo-Hookean layer, and Fm ∝ εr·Eb²/Y peaks there); held at the
+/// matrix's value (10 V/µm, below every pull-in field), it sits at the range's end.
+#[test]
+fn falling_breakdown_field_moves_the_optimum_inside() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut m = head("voltage = \"100 V\"");
+    m.push_str(&matrix("TC", 5.2, 30.0, "20 V/um"));
+    m.push_str(&matrix("TC10", 5.2, 30.0, "10 V/um"));
+    m.push_str("[[filler]]\nname = \"BaTiO3\"\ndensity = \"6.02 g/cm3\"\neps_r = 6000\n");
+    let series = |name: &str, matrix: &str| {
+        format!("[[series]]\nname = \"{name}\"\nmatrix = \"{matrix}\"\nfiller = \"BaTiO3\"\nbasis = \"volume\"\nloadings = \"0:0.3:7\"\npermittivity = {{ rule = \"lichtenecker\" }}\n")
+    };
+    m.push_str(&series("falling", "TC"));
+    for (x, eb) in [(0.1, 17), (0.2, 14), (0.3, 11)] {
+        m.push_str(&format!(
+            "[[series.measured]]\nloading = {x}\nbreakdown = \"{eb} V/um\"\n"
+        ));
+    }
+    m.push_str(&series("held", "TC10"));
+    let d = design(dir.path(), &m);
+    let ev = evaluate(&d, &Sweep::default());
+    let list: Vec<Evaluation> = ev.iter().map(|e| e.evaluation.clone()).collect();
+    assert!(list.iter().all(|e| e.max_stroke_limit == Limit::Breakdown));
+    let r = ranking::rank(
+        &list,
+        Objective::MaxStroke,
+        [Objective::MaxStroke, Objective::Fm],
+    );
+    let best = |s: &str| r.best.iter().find(|b| b.series == s).unwrap();
+    assert!(
+        (best("falling").loading - 0.1).abs() < 1e-12,
+        "{:?}",
+        best("falling")
+    );
+    assert!(!best("falling").at_edge);
+    assert!((best("falling").resolution.unwrap() - 0.025).abs() < 1e-12);
+    assert!((best("held").loading - 0.3).abs() < 1e-12 && best("held").at_edge);
+    // Interpolated breakdown fields are predicted, measured ones measured.
+    let at = |x: f64| {
+        list.iter()
+            .find(|e| e.series == "falling" && (e.loading - x).abs() < 1e-9)
+            .unwrap()
+    };
+    assert_eq!(
+        at(0.1).breakdown_field.provenance,
+        dea_fit::rank::Provenance::Measured
+    );
+    assert_eq!(
+        at(0.05).breakdown_field.provenance,
+        dea_fit::rank::Provenance::Predicted
+    );
+    assert!((value(&at(0.05).breakdown_field) - 18.5e6).abs() < 1e-6);
+    // Held at the matrix's value: a warning, and the run's status says so.
+    assert!(r
+        .warnings
+        .iter()
+        .any(|w| w.contains("held: no measured tan δ") || w.contains("held at the matrix")));
+    assert_eq!(r.status, ranking::Status::Warning);
+}
+
+/// The Pareto front of the shipped design: no member is beaten on both objectives
+/// by any candidate, every other candidate with both values is beaten by a member.
+#[test]
+fn pareto_front_is_the_non_dominated_set() {
+    let d = manifest::read(&repo().join("datasets/design/silicone_fillers.toml")).unwrap();
+    let ev = evaluate(&d, &Sweep::default());
+    let list: Vec<Evaluation> = ev.iter().map(|e| e.evaluation.clone()).collect();
+    let (a, b) = (Objective::Stroke, Objective::Speed);
+    let r = ranking::rank(&list, a, [a, b]);
+    let g = |e: &Evaluation| Some((a.value(e)?, -b.value(e)?));
+    let beats = |p: (f64, f64), q: (f64, f64)| p.0 >= q.0 && p.1 >= q.1 && (p.0 > q.0 || p.1 > q.1);
+    let on: Vec<usize> = r.pareto.front.iter().map(|p| p.index).collect();
+    assert!(!on.is_empty());
+    for (i, e) in list.iter().enumerate() {
+        let Some(q) = g(e) else { continue };
+        let dominated = list.iter().filter_map(g).any(|p| beats(p, q));
+        assert_eq!(on.contains(&i), !dominated, "{}", e.name);
+    }
+}
+
+/// The same evaluations, bit for bit, on one thread and on two.
+#[test]
+fn results_do_not_depend_on_the_thread_count() {
+    let d = manifest::read(&repo().join("datasets/design/silicone_fillers.toml")).unwrap();
+    let sweep = Sweep::parse(&["voltage=600V:900V:2".into()]).unwrap();
+    let pts = sweep::points(&d, &sweep);
+    let on = |n: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .unwrap();
+        let ev = pool.install(|| sweep::run(&d, &pts, &|| {}).unwrap());
+        serde_json::to_string(&ev).unwrap()
+    };
+    assert_eq!(on(1), on(2));
+}
+
+fn text(o: &std::process::Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+/// Three shards merged give the single run's JSON, CSV, table and report byte for
+/// byte; a missing, repeated or foreign shard is refused with its name.
+#[test]
+fn shards_merge_into_the_single_run_byte_for_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    let w = dir.path();
+    let design = repo()
+        .join("datasets/design/silicone_fillers.toml")
+        .display()
+        .to_string();
+    let sweep = ["--sweep", "voltage=600V:900V:2"];
+    let out = |args: &[&str]| {
+        let o = run(w, args);
+        assert!(o.status.success(), "{args:?}:\n{}", text(&o));
+        o.stdout
+    };
+    let single = |extra: &[&str]| {
+        let mut a = vec!["rank", design.as_str()];
+        a.extend(sweep);
+        a.extend(extra);
+        out(&a)
+    };
+    let json1 = single(&["--json", "--csv", "one.csv", "--report", "rep1"]);
+    let table1 = single(&["--no-report"]);
+    for k in 0..3 {
+        let spec = format!("{k}/3");
+        let file = format!("s{k}.json");
+        let mut a = vec!["rank", design.as_str()];
+        a.extend(sweep);
+        a.extend(["--shard", &spec, "--out", &file]);
+        let o = out(&a);
+        assert!(String::from_utf8_lossy(&o).contains("status: "));
+    }
+    let json2 = out(&[
+        "rank", "merge", "s2.json", "s0.json", "s1.json", "--json", "--csv", "two.csv", "--report",
+        "rep2",
+    ]);
+    let table2 = out(&[
+        "rank",
+        "merge",
+        "s0.json",
+        "s1.json",
+        "s2.json",
+        "--no-report",
+    ]);
+    assert!(json1 == json2, "merged JSON differs from the single run");
+    assert_eq!(
+        String::from_utf8_lossy(&table1),
+        String::from_utf8_lossy(&table2)
+    );
+    assert_eq!(
+        std::fs::read(w.join("one.csv")).unwrap(),
+        std::fs::read(w.join("two.csv")).unwrap()
+    );
+    for f in [
+        "index.md",
+        "ranking.svg",
+        "objective-vs-loading.svg",
+        "pareto.svg",
+        "stroke-voltage.svg",
+    ] {
+        assert_eq!(
+            std::fs::read(w.join("rep1").join(f)).unwrap(),
+            std::fs::read(w.join("rep2").join(f)).unwrap(),
+            "{f}"
+        );
+    }
+    let v: serde_json::Value = serde_json::from_slice(&json1).unwrap();
+    assert_eq!(v["candidates"].as_array().unwrap().len(), 58);
+    assert!(v["pareto"]["front"].as_array().is_some() && v["best_loading"].as_array().is_some());
+    let c0 = &v["candidates"][0];
+    for k in [
+        "name",
+        "filler",
+        "loading",
+        "rank",
+        "eps_r",
+        "youngs_modulus",
+        "fm",
+        "static_stroke",
+        "max_stroke",
+        "blocked_force",
+        "response_time",
+        "energy_in",
+        "loss_per_cycle",
+    ] {
+        assert!(c0.get(k).is_some(), "candidates[0] has no {k}");
+    }
+    assert!(
+        c0["eps_r"]["provenance"].is_string()
+            && c0["eps_r"]["source"].is_string()
+            && c0["eps_r"]["unit"] == "1"
+    );
+
+    // Refusals, each naming what is wrong (exit 2, nothing merged).
+    let refused = |args: &[&str], says: &str| {
+        let o = run(w, args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}:\n{}", text(&o));
+        assert!(
+            text(&o).contains(says),
+            "{args:?} should say {says:?}:\n{}",
+            text(&o)
+        );
+    };
+    refused(
+        &["rank", "merge", "s0.json", "s2.json"],
+        "1 of 3 shards missing: 1",
+    );
+    refused(
+        &["rank", "merge", "s0.json", "s1.json", "s1.json", "s2.json"],
+        "shard 1/3 is given twice",
+    );
+    out(&[
+        "rank",
+        design.as_str(),
+        "--sweep",
+        "voltage=600V:900V:3",
+        "--shard",
+        "1/3",
+        "--out",
+        "other.json",
+    ]);
+    refused(
+        &["rank", "merge", "s0.json", "other.json", "s2.json"],
+        "belongs to another run",
+    );
+    std::fs::write(
+        w.join("junk.json"),
+        "{\"schema\": \"dea-fit/hyperelastic-fit/1\"}",
+    )
+    .unwrap();
+    refused(
+        &["rank", "merge", "s0.json", "junk.json"],
+        "expected \"dea-fit/rank-shard/1\"",
+    );
+    // A shard is never written over a file that is not a shard.
+    let o = run(w, &["rank", &design, "--shard", "0/3", "--out", "one.csv"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("is not a rank shard file"));
+}
+
+/// The Slurm script: an N-task array of shards and a merge after it.
+#[test]
+fn slurm_script_holds_the_array_and_the_merge() {
+    let dir = tempfile::tempdir().unwrap();
+    let design = repo()
+        .join("datasets/design/silicone_fillers.toml")
+        .display()
+        .to_string();
+    let o = run(
+        dir.path(),
+        &[
+            "rank",
+            &design,
+            "--sweep",
+            "loading=0:0.3:4",
+            "--slurm",
+            "4",
+            "--csv",
+            "rank.csv",
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let s = String::from_utf8_lossy(&o.stdout);
+    for want in [
+        "#SBATCH --array=0-3",
+        "--shard \"$SLURM_ARRAY_TASK_ID/4\"",
+        "--sweep 'loading=0:0.3:4'",
+        "--dependency=afterok:$array",
+        "rank merge rank-shards/shard-*.json",
+        "'--csv'",
+    ] {
+        assert!(s.contains(want), "missing {want:?} in\n{s}");
+    }
+    assert!(names_empty(dir.path()), "--slurm writes nothing");
+    let o = run(dir.path(), &["rank", &design, "--slurm", "0"]);
+    assert_eq!(o.status.code(), Some(2));
+}
+
+fn names_empty(p: &Path) -> bool {
+    crate::support::names_in(p).is_empty()
+}
+
+/// The shipped design's inputs regenerate: the composite fit byte for byte, the
+/// synthetic tensile series byte for byte and their fits to the shipped μ.
+#[test]
+fn shipped_design_data_regenerate() {
+    let dir = tempfile::tempdir().unwrap();
+    let w = dir.path();
+    let copy = |rel: &str| {
+        let to = w.join(rel);
+        std::fs::create_dir_all(to.parent().unwrap()).unwrap();
+        std::fs::copy(repo().join(rel), &to).unwrap();
+    };
+    copy("datasets/composites/sylgard_batio3.toml");
+    for f in std::fs::read_dir(repo().join("datasets/composites/sylgard_batio3")).unwrap() {
+        let name = f.unwrap().file_name().to_string_lossy().into_owned();
+        copy(&format!("datasets/composites/sylgard_batio3/{name}"));
+    }
+    let o = run(
+        w,
+        &[
+            "composite",
+            "datasets/composites/sylgard_batio3.toml",
+            "--out",
+            "c.json",
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        std::fs::read(w.join("c.json")).unwrap()
+            == std::fs::read(repo().join("datasets/design/fits/sylgard_batio3-composite.json"))
+                .unwrap(),
+        "datasets/design/fits/sylgard_batio3-composite.json is not what dea-fit composite writes"
+    );
+    for (wt, mu, seed) in [("20", "323.8kPa", "2020"), ("40", "403.6kPa", "2040")] {
+        let csv = format!("s{wt}.csv");
+        let o = run(
+            w,
+            &[
+                "synth",
+                "hyperelastic",
+                "--model",
+                "neo-hookean",
+                "--param",
+                &format!("mu={mu}"),
+                "--mode",
+                "equibiaxial",
+                "--stretch",
+                "1.0:1.6:13",
+                "--noise",
+                "0.01",
+                "--seed",
+                seed,
+                "--out",
+                &csv,
+            ],
+        );
+        assert!(o.status.success(), "{}", text(&o));
+        let shipped = repo().join(format!(
+            "datasets/design/tensile/sylgard_batio3_{wt}wt_equibiaxial.csv"
+        ));
+        assert_eq!(
+            std::fs::read(w.join(&csv)).unwrap(),
+            std::fs::read(&shipped).unwrap(),
+            "{}",
+            shipped.display()
+        );
+        let o = run(
+            w,
+            &[
+                "hyperelastic",
+                &csv,
+                "--model",
+                "neo-hookean",
+                "--out",
+                "f.json",
+                "--no-report",
+                "--json",
+            ],
+        );
+        assert!(o.status.success(), "{}", text(&o));
+        let fitted = dea_fit::material::file::read_hyperelastic(&w.join("f.json")).unwrap();
+        let shipped = dea_fit::material::file::read_hyperelastic(&repo().join(format!(
+            "datasets/design/fits/sylgard_batio3_{wt}wt-neo-hookean.json"
+        )))
+        .unwrap();
+        // The exact linear solve on the same bytes: equal to rounding.
+        assert!((fitted.params[0] - shipped.params[0]).abs() < 1e-9 * shipped.params[0]);
+        std::fs::remove_file(w.join("f.json")).unwrap();
+    }
+}
+
+/// The shipped design runs: every figure has a provenance, the TC-5005 series show
+/// the trade-off in both directions, and the status agrees with the exit code.
+#[test]
+fn shipped_design_ranks() {
+    let dir = tempfile::tempdir().unwrap();
+    let design = repo()
+        .join("datasets/design/silicone_fillers.toml")
+        .display()
+        .to_string();
+    let o = run(dir.path(), &["rank", &design, "--json", "--no-report"]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(
+        v["status"], "warning",
+        "held loss and breakdown fields are warnings"
+    );
+    let cands = v["candidates"].as_array().unwrap();
+    assert_eq!(cands.len(), 29);
+    let find = |name: &str| {
+        cands
+            .iter()
+            .find(|c| c["name"] == name)
+            .unwrap_or_else(|| panic!("{name}"))
+    };
+    let s = |name: &str| find(name)["static_stroke"]["value"].as_f64();
+    assert!(
+        s("BJB TC-5005 + BaTiO3 (maxwell-garnett) 10 vol%")
+            < s("BJB TC-5005 + BaTiO3 (maxwell-garnett) 0 vol%")
+    );
+    // Lichtenecker raises εr/Y so far that the soft matrix pulls in at 800 V: said so.
+    let li = find("BJB TC-5005 + BaTiO3 (lichtenecker) 20 vol%");
+    assert_eq!(li["state"], "pull_in");
+    assert!(li["rank"].is_null() && li["not_ranked"].as_str().unwrap().contains("pulled in"));
+    // The fitted composite's εr and the fitted modulus at 20 wt% are marked so.
+    let sb = find("Sylgard 184 + BaTiO3 20 wt%");
+    assert_eq!(sb["youngs_modulus"]["provenance"], "fitted");
+    assert!(sb["youngs_modulus"]["source"]
+        .as_str()
+        .unwrap()
+        .ends_with("sylgard_batio3_20wt-neo-hookean.json"));
+    assert_eq!(
+        find("Sylgard 184 + BaTiO3 10 wt%")["eps_r"]["provenance"],
+        "fitted"
+    );
+    assert_eq!(
+        find("Sylgard 184 + BaTiO3 10 wt%")["youngs_modulus"]["provenance"],
+        "predicted"
+    );
+}
+
+/// Mutated design manifests (a line dropped or repeated, a number replaced by an
+/// extreme one, a byte flipped; ChaCha8, fixed seed): the reader refuses with an
+/// error or accepts, never panics, and the first points of an accepted design
+/// evaluate to finite figures or to none with a reason.
+#[test]
+fn mutated_manifests_are_refused_or_evaluated() {
+    use rand::{Rng, SeedableRng};
+    let path = repo().join("datasets/design/silicone_fillers.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let extremes = [
+        "0",
+        "-1",
+        "1e300",
+        "-0.0",
+        "nan",
+        "inf",
+        "\"1e-300 V/um\"",
+        "\"1 MV\"",
+        "\"\"",
+        "[]",
+    ];
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    let (mut refused, mut accepted) = (0, 0);
+    for case in 0..150 {
+        let mut l: Vec<String> = lines.iter().map(|s| s.to_string()).collect();
+        let i = rng.gen_range(0..l.len());
+        match case % 4 {
+            0 => {
+                l.remove(i);
+            }
+            1 => l.insert(i, l[i].clone()),
+            2 => {
+                if let Some((k, _)) = l[i].split_once(" = ") {
+                    l[i] = format!("{k} = {}", extremes[rng.gen_range(0..extremes.len())]);
+                }
+            }
+            _ => {
+                let mut b = l[i].clone().into_bytes();
+                if !b.is_empty() {
+                    let j = rng.gen_range(0..b.len());
+                    let pool = b"x=\"[]{}.,0-";
+                    b[j] = pool[rng.gen_range(0..pool.len())];
+                }
+                l[i] = String::from_utf8_lossy(&b).into_owned();
+            }
+        }
+        let bytes = l.join("\n").into_bytes();
+        let read = std::panic::catch_unwind(|| manifest::parse(&path, &bytes));
+        let Ok(read) = read else {
+            panic!(
+                "case {case}: the reader panicked on\n{}",
+                String::from_utf8_lossy(&bytes)
+            );
+        };
+        let Ok(d) = read else {
+            refused += 1;
+            continue;
+        };
+        accepted += 1;
+        let pts = sweep::points(&d, &Sweep::default());
+        let ev =
+            sweep::run(&d, &pts[..pts.len().min(6)], &|| {}).expect("an accepted design evaluates");
+        for e in ev {
+            let e = e.evaluation;
+            for f in [
+                &e.eps_r,
+                &e.youngs_modulus,
+                &e.fm,
+                &e.static_stroke,
+                &e.max_stroke,
+                &e.response_time,
+                &e.energy_in,
+            ] {
+                match f.value {
+                    Some(v) => assert!(
+                        v.is_finite(),
+                        "case {case}: {} has a non-finite figure",
+                        e.name
+                    ),
+                    None => assert!(
+                        f.note.is_some() || e.state == State::Failed,
+                        "case {case}: {}: no value, no reason",
+                        e.name
+                    ),
+                }
+            }
+        }
+    }
+    assert!(
+        refused > 20 && accepted > 20,
+        "refused {refused}, accepted {accepted}"
+    );
+}

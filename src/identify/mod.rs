@@ -473,31 +473,28 @@ fn warnings(
     w
 }
 
-/// A measured drive that changes faster than the trace samples it: two of its
-/// corners (a step's start and end) within two sample intervals. The rise between
-/// them was not recorded, so the constants that act at that rate (the dashpot nv,
-/// fast arms) are fitted to a guessed shape of it.
+/// A measured drive that changes faster than the trace samples it: a step of the
+/// measured input (a jump within one or two sample intervals,
+/// [`crate::sim::input::Measured::steps`]). The rise within it was not recorded,
+/// so the constants that act at that rate (the dashpot nv, fast arms) are fitted
+/// to a guessed shape of it.
 fn unresolved_drive(e: &Experiment) -> Option<String> {
+    use crate::report::format::si;
     let measured = e.scene.input.terms.iter().find_map(|t| match t {
         crate::sim::input::Term::Measured(m) => Some(m),
         _ => None,
     })?;
-    let dt = e
-        .scene
-        .time
-        .samples
-        .windows(2)
-        .map(|w| w[1] - w[0])
-        .fold(f64::INFINITY, f64::min);
-    let piece = measured.shortest_piece();
-    (piece <= 2.0 * dt).then(|| {
-        format!(
-            "{}: the drive changes between corners {} apart, within two sample intervals ({} each): the shape of that rise was not recorded, so nv and the fast arms are fitted to a guess of it; sample faster or drive with a slower ramp",
-            e.name,
-            crate::report::format::si(piece, "s"),
-            crate::report::format::si(dt, "s")
-        )
-    })
+    let &(t0, t1) = measured.steps().first()?;
+    let more = match measured.steps().len() {
+        1 => String::new(),
+        k => format!(" (and {} more)", k - 1),
+    };
+    Some(format!(
+        "{}: the drive jumps at {} within {}{more}, one or two sample intervals: the shape of that rise was not recorded, so nv and the fast arms are fitted to a guess of it; sample faster or drive with a slower ramp",
+        e.name,
+        si(t0, "s"),
+        si(t1 - t0, "s"),
+    ))
 }
 
 /// εr of every free constant that sets it through a mixing rule (a filler mass

@@ -135,7 +135,8 @@ fn estimate<'a>(
 }
 
 /// At a 0.85 % contraction the higher Yeoh terms C20 and C30 are below the noise: both
-/// are reported not identifiable, by name, with the small-strain reason; C10 is.
+/// are reported not identifiable, by name, with the small-strain reason (also when
+/// one drifts to a bound of its search); C10 is.
 #[test]
 fn small_strain_does_not_pin_down_higher_yeoh_terms() {
     let id = identify_from(
@@ -151,9 +152,88 @@ fn small_strain_does_not_pin_down_higher_yeoh_terms() {
         assert!(!e.identifiable, "{name}: {e:?}");
         let why = e.reason.as_deref().unwrap_or("");
         assert!(why.contains("strain of only"), "{name}: {why}");
+        // a term the trace is indifferent to may drift to a bound: then it has no σ
+        assert!(!e.at_bound || e.std_error.is_none(), "{name}: {e:?}");
     }
     assert!(estimate(&id, "C10").identifiable);
     assert_eq!(id.status.to_string(), "ill_posed");
+}
+
+/// A constant that ends at a bound of its search (here C20 at the top of its range,
+/// with a Jacobian whose curvature alone would give it a small σ) is held there by
+/// the bound, not the trace: not identifiable, no σ and no interval (a symmetric
+/// interval about a minimum that is not one would be a lie), the reason naming the
+/// bound and the range; the other constants' σ is that of the problem with C20
+/// held (its column left out): for C10 alone, σ_x = s/‖J₁‖, s² = RSS/(n − 1).
+/// A constant inside its bounds with the same columns is identifiable.
+#[test]
+fn a_constant_at_a_bound_of_its_search_is_not_identifiable() {
+    use dea_fit::identify::assessment::{assess, Context};
+    use dea_fit::identify::params::{Constant, Role, Space};
+    use nalgebra::DMatrix;
+    let c10 = Constant {
+        name: "C10".into(),
+        unit: "Pa",
+        index: 0,
+        start: 69.3e3,
+        space: Space::Log,
+        bounds: (693.0, 6.93e6),
+        start_box: (6.93e3, 693e3),
+        role: Role::LeadingModulus,
+        mixture: None,
+    };
+    let c20 = Constant {
+        name: "C20".into(),
+        unit: "Pa",
+        index: 1,
+        start: -888.0,
+        space: Space::Linear { scale: 888.0 },
+        bounds: (-89_688.0, 87_912.0),
+        start_box: (-3552.0, 1776.0),
+        role: Role::HigherOrder,
+        mixture: None,
+    };
+    let n = 40;
+    let jac = DMatrix::from_fn(n, 2, |i, j| {
+        let t = i as f64 / n as f64;
+        if j == 0 {
+            1.0 + t
+        } else {
+            t * t - 0.3
+        }
+    });
+    let rss = 2.0 * (n as f64 - 2.0);
+    let ctx = Context {
+        capacitance: true,
+        max_strain: 0.2,
+        span: 1.0,
+        min_dt: 1e-3,
+        arm_tau: vec![],
+    };
+    let free = [c10.clone(), c20.clone()];
+    let x_at = [69.3e3_f64.ln(), 87_912.0 / 888.0];
+    let a = assess(&free, &x_at, &jac, rss, &ctx);
+    let e20 = &a.estimates[1];
+    assert!(e20.at_bound && !e20.identifiable, "{e20:?}");
+    assert!(e20.std_error.is_none() && e20.ci95.is_none(), "{e20:?}");
+    let why = e20.reason.as_deref().unwrap_or("");
+    assert!(
+        why.starts_with("at the upper bound of its search (87.912 kPa)")
+            && why.contains("outside the range searched (-89.688 kPa to 87.912 kPa"),
+        "{why}"
+    );
+    assert!(a.correlation[1].iter().all(Option::is_none));
+    let e10 = &a.estimates[0];
+    assert!(e10.identifiable && !e10.at_bound, "{e10:?}");
+    let s = (rss / (n as f64 - 1.0)).sqrt();
+    let want = e10.value * s / jac.column(0).norm();
+    let got = e10.std_error.expect("σ of C10");
+    assert!((got - want).abs() <= 1e-12 * want, "σ {got} against {want}");
+    // the same point inside the bounds: both identifiable, C20 with an interval
+    let x_in = [69.3e3_f64.ln(), 10.0];
+    let a = assess(&free, &x_in, &jac, rss, &ctx);
+    assert!(a.estimates.iter().all(|e| e.identifiable && !e.at_bound));
+    assert!(a.estimates[1].ci95.is_some());
 }
 
 /// A stack with one arm (τ = 0.2 s) and a dashpot, stepped for 1 s.

@@ -445,12 +445,6 @@ fn warnings(
             }
         }
     }
-    for e in assessment.estimates.iter().filter(|e| e.at_bound) {
-        w.push(format!(
-            "{} ended at a bound of its search ({:.4e} {}): the traces push it beyond",
-            e.name, e.value, e.unit
-        ));
-    }
     for e in assessment.estimates.iter().filter(|e| !e.identifiable) {
         w.push(format!(
             "{} is not identifiable: {}",

@@ -665,6 +665,13 @@ fn worked_example_runs_end_to_end() {
         "the recorded 10 ms rise is not flagged: {}",
         v["warnings"]
     );
+    assert!(
+        !v["warnings"]
+            .to_string()
+            .contains("correlated from sample to sample"),
+        "the fit explains the trace to its noise: {}",
+        v["warnings"]
+    );
     let rmse = v["validation"][0]["channels"][0]["rmse"].as_f64().unwrap();
     assert!(rmse.is_finite() && rmse > 0.0);
     let fit = dir.path().join(v["fit_file"].as_str().unwrap());
@@ -754,6 +761,42 @@ fn a_rise_the_trace_did_not_record_is_flagged() {
     assert!(
         warnings.contains("fast.csv: the drive jumps at 200.00 ms within 2.0000 ms")
             && warnings.contains("not recorded"),
+        "{warnings}"
+    );
+}
+
+/// A fit that does not explain the trace to its noise (the worked example's step
+/// with the first arm fixed at a third of its true stiffness, only C10 free): the
+/// residuals then follow the missing relaxation from sample to sample, and the
+/// warning says so by trace and channel (σ taken from such residuals is not the
+/// noise). The same trace with the arm free has no such warning (above).
+#[test]
+fn residuals_with_structure_are_flagged() {
+    let d = super::support::repo().join("datasets/identify");
+    let dir = tempfile::tempdir().unwrap();
+    let p = |f: &str| d.join(f).display().to_string();
+    let o = super::support::run(
+        dir.path(),
+        &[
+            "identify",
+            &p("step.csv"),
+            "--scene",
+            &p("stack.toml"),
+            "--free",
+            "C10",
+            "--fix",
+            "arm1.k=35kPa",
+            "--starts",
+            "1",
+            "--no-report",
+            "--json",
+        ],
+    );
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    let warnings = v["warnings"].to_string();
+    assert!(
+        warnings
+            .contains("step.csv contraction: the residuals are correlated from sample to sample"),
         "{warnings}"
     );
 }

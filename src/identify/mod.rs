@@ -320,7 +320,8 @@ pub fn identify_with(
     let assessment = assess(&problem.free, &x, &jac, rss, &ctx);
     let profiles = profiles(&problem, &x, rss, &jac, &profiled, settings);
     let experiments = channel_fits(&problem, &given, &r);
-    let warnings = warnings(&problem, &assessment, &runs, ms.at_best, settings.starts);
+    let mut warnings = warnings(&problem, &assessment, &runs, ms.at_best, settings.starts);
+    warnings.extend(structured_residuals(&problem, &r));
     let status = if !matches!(termination, Termination::Converged(_)) {
         Status::NotConverged
     } else if assessment.estimates.iter().any(|e| !e.identifiable) {
@@ -465,6 +466,36 @@ fn warnings(
         ));
     }
     w
+}
+
+/// Lag-1 autocorrelation of a channel's residuals above which they hold structure
+/// the model does not explain (white noise gives ρ₁ ≈ 0 ± 1/√n; the warning also
+/// needs 5/√n, so chance never reaches it).
+pub const MAX_RESIDUAL_CORRELATION: f64 = 0.5;
+
+/// Channels whose residuals at the optimum are correlated from one sample to the
+/// next (ρ₁ above [`MAX_RESIDUAL_CORRELATION`] and 5/√n): the fit misses something
+/// the trace shows (a drive it did not record, a fixed constant that is wrong, a
+/// model too simple), or the noise is not white. Either way σ taken from these
+/// residuals is not the noise, and the intervals are too narrow.
+fn structured_residuals(problem: &Problem, r: &DVector<f64>) -> Vec<String> {
+    channel_rows(problem)
+        .into_iter()
+        .filter_map(|(ei, ci, rows)| {
+            let n = rows.len();
+            let x = &r.as_slice()[rows];
+            let ss: f64 = x.iter().map(|v| v * v).sum();
+            let lag: f64 = x.windows(2).map(|w| w[0] * w[1]).sum();
+            let rho = lag / ss;
+            (n >= 20 && rho > MAX_RESIDUAL_CORRELATION.max(5.0 / (n as f64).sqrt())).then(|| {
+                let e = &problem.experiments[ei];
+                format!(
+                    "{} {}: the residuals are correlated from sample to sample (lag-1 ρ = {rho:.2}): they hold structure the model does not explain (a drive the trace did not record, a fixed constant that is wrong, a model too simple) or the noise is not white; σ taken from them is then not the noise, and the intervals are too narrow",
+                    e.name, e.channels[ci].kind
+                )
+            })
+        })
+        .collect()
 }
 
 /// A measured drive that changes faster than the trace samples it: a step of the

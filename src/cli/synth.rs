@@ -443,7 +443,7 @@ fn trace(a: Args) -> Result<i32> {
     let _ = writeln!(s, "{}", header.join(","));
     let vn = noise_of("voltage");
     for smp in &out.samples {
-        let mut v = smp.input_v;
+        let mut v = smp.voltage_v;
         if let Some(n) = vn {
             v += n.sigma(v) * unit.sample(&mut rng);
         }

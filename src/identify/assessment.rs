@@ -8,7 +8,9 @@
 //! always positive); for a linear one σ_θ = s·σ_x and θ ± t·σ_θ.
 //!
 //! **Not identifiable** when σ_θ/|θ| > [`MAX_REL_SIGMA`], or |ρ| > [`MAX_CORRELATION`]
-//! with another free constant, or the information matrix is singular. The weakest
+//! with another free constant, or the information matrix is singular, or the
+//! constant ended at a bound of its search (the bound holds it, not the trace: it
+//! gets no σ or interval, and the others' covariance is taken with it held there). The weakest
 //! direction of the column-normalised Jacobian (its smallest singular vector) names
 //! the constants that trade off against each other; the known cases get their own
 //! explanation (small strains and higher polynomial terms, εr against the moduli
@@ -86,6 +88,14 @@ pub struct Assessment {
 
 /// Assess the optimum `x` (search coordinates) with Jacobian `jac` of the scaled
 /// residuals and 2·cost = `rss`.
+///
+/// A constant that ended at a bound of its search is held there by the bound, not
+/// by the trace (otherwise the search would have moved it inside): it gets no σ and
+/// no interval and is not identifiable; the others' σ, intervals and correlations
+/// are those of the optimum with it held at the bound (its column left out, as an
+/// active constraint). Whether it drifted there along a direction the trace does
+/// not pin down, or the trace pushed it, the problem with every constant free says
+/// (its weakness there, in the reason).
 pub fn assess(
     free: &[Constant],
     x: &[f64],
@@ -93,67 +103,153 @@ pub fn assess(
     rss: f64,
     ctx: &Context,
 ) -> Assessment {
-    let u = uncertainty(jac, rss);
-    let weakest = weakest_direction(free, jac);
-    let t = u.t95.unwrap_or(1.96);
-    let mut estimates: Vec<Estimate> = free
+    let values: Vec<f64> = free
         .iter()
         .zip(x)
+        .map(|(c, &xj)| c.space.theta(xj))
+        .collect();
+    let bound: Vec<Option<Side>> = free
+        .iter()
+        .zip(&values)
+        .map(|(c, &v)| at_bound(c, v))
+        .collect();
+    // every constant free: what the trace pins down, and the weakest direction
+    let full = uncertainty(jac, rss);
+    let weakest = weakest_direction(jac);
+    // the constants inside their bounds, and each one's column in the held problem
+    let inside: Vec<usize> = (0..free.len()).filter(|&j| bound[j].is_none()).collect();
+    let column = |j: usize| inside.iter().position(|&k| k == j);
+    let held = uncertainty(&jac.select_columns(inside.iter()), rss);
+    let correlation: Vec<Vec<Option<f64>>> = (0..free.len())
+        .map(|j| {
+            (0..free.len())
+                .map(|l| match (column(j), column(l)) {
+                    (Some(a), Some(b)) => held.correlation[a][b],
+                    _ => None,
+                })
+                .collect()
+        })
+        .collect();
+    let mut estimates: Vec<Estimate> = free
+        .iter()
         .enumerate()
-        .map(|(j, (c, &xj))| {
-            let value = c.space.theta(xj);
-            let (sd, ci) = match u.std_error[j] {
-                Some(sx) => match c.space {
-                    Space::Log => (
-                        Some(value * sx),
-                        Some([value * (-t * sx).exp(), value * (t * sx).exp()]),
-                    ),
-                    Space::Linear { scale } => {
-                        let s = scale * sx;
-                        (Some(s), Some([value - t * s, value + t * s]))
-                    }
-                },
-                None => (None, None),
-            };
-            let tol = 1e-6 * (c.bounds.1 - c.bounds.0).abs().max(f64::MIN_POSITIVE);
+        .map(|(j, c)| {
+            let (sd, ci) = in_theta(
+                c,
+                values[j],
+                column(j).and_then(|a| held.std_error[a]),
+                held.t95,
+            );
             Estimate {
                 name: c.name.clone(),
-                value,
+                value: values[j],
                 unit: c.unit.to_string(),
                 std_error: sd,
                 ci95: ci,
                 identifiable: true,
                 reason: None,
                 start: c.start,
-                at_bound: (value - c.bounds.0).abs() <= tol || (value - c.bounds.1).abs() <= tol,
+                at_bound: bound[j].is_some(),
             }
         })
         .collect();
     for j in 0..free.len() {
-        let partner = (0..free.len())
+        // with every constant free (for a constant at a bound: why it went there)
+        let free_sd = in_theta(&free[j], values[j], full.std_error[j], full.t95).0;
+        let free_partner = (0..free.len())
             .filter(|&k| k != j)
-            .filter_map(|k| u.correlation[j][k].map(|r| (k, r)))
-            .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()));
-        let e = &estimates[j];
-        let rel = e.std_error.map(|s| s / e.value.abs());
-        let why = match (rel, partner) {
-            (None, _) => Some(Weakness::Singular),
-            (Some(r), _) if r.is_nan() || r > MAX_REL_SIGMA => Some(Weakness::Loose(r)),
-            (_, Some((k, rho))) if rho.abs() > MAX_CORRELATION => Some(Weakness::Traded(k, rho)),
-            _ => None,
+            .filter_map(|k| full.correlation[j][k].map(|r| (k, r)));
+        let why = match bound[j] {
+            Some(side) => Some((
+                Weakness::AtBound(side),
+                weakness(free_sd, values[j], free_partner),
+            )),
+            None => {
+                // inside: its σ with the bounded ones held, and a trade-off with
+                // a held one
+                let a = column(j).expect("inside");
+                let partners = (0..inside.len())
+                    .filter(|&b| b != a)
+                    .filter_map(|b| held.correlation[a][b].map(|r| (inside[b], r)))
+                    .chain(free_partner.filter(|&(k, _)| bound[k].is_some()));
+                weakness(estimates[j].std_error, values[j], partners).map(|w| (w, None))
+            }
         };
-        if let Some(w) = why {
-            let reason = explain(free, j, w, &weakest.0, ctx);
+        if let Some((w, cause)) = why {
             estimates[j].identifiable = false;
-            estimates[j].reason = Some(reason);
+            estimates[j].reason = Some(explain(free, j, w, cause, &weakest.0, ctx));
         }
     }
     let names: Vec<String> = weakest.0.iter().map(|&k| free[k].name.clone()).collect();
     Assessment {
         estimates,
-        correlation: u.correlation,
-        condition: u.condition,
+        correlation,
+        condition: full.condition,
         weakest: (names, weakest.1),
+    }
+}
+
+/// σ and 95 % interval in θ of a constant at `value` with σ_x (search coordinates):
+/// θ·σ_x and θ·exp(±t·σ_x) in log space, s·σ_x and θ ± t·s·σ_x in linear.
+fn in_theta(
+    c: &Constant,
+    value: f64,
+    sx: Option<f64>,
+    t95: Option<f64>,
+) -> (Option<f64>, Option<[f64; 2]>) {
+    let t = t95.unwrap_or(1.96);
+    match (sx, c.space) {
+        (None, _) => (None, None),
+        (Some(sx), Space::Log) => (
+            Some(value * sx),
+            Some([value * (-t * sx).exp(), value * (t * sx).exp()]),
+        ),
+        (Some(sx), Space::Linear { scale }) => {
+            let s = scale * sx;
+            (Some(s), Some([value - t * s, value + t * s]))
+        }
+    }
+}
+
+/// Why a constant with σ `sd` at `value`, correlated with the free constants
+/// `partners` (index, ρ), is not pinned down, if it is not.
+fn weakness(
+    sd: Option<f64>,
+    value: f64,
+    partners: impl Iterator<Item = (usize, f64)>,
+) -> Option<Weakness> {
+    let partner = partners.max_by(|p, q| p.1.abs().total_cmp(&q.1.abs()));
+    match (sd.map(|s| s / value.abs()), partner) {
+        (None, _) => Some(Weakness::Singular),
+        (Some(r), _) if r.is_nan() || r > MAX_REL_SIGMA => Some(Weakness::Loose(r)),
+        (_, Some((k, rho))) if rho.abs() > MAX_CORRELATION => Some(Weakness::Traded(k, rho)),
+        _ => None,
+    }
+}
+
+/// Which bound of its search a constant ended at.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Side {
+    Lower,
+    Upper,
+}
+
+/// The bound `value` lies at (within 10⁻⁶ of the searched range, in the constant's
+/// search coordinate), if any.
+fn at_bound(c: &Constant, value: f64) -> Option<Side> {
+    let (lo, hi) = c.bounds;
+    let near = |a: f64, b: f64| match c.space {
+        Space::Log if a > 0.0 && b > 0.0 && lo > 0.0 => {
+            (a / b).ln().abs() <= 1e-6 * (hi / lo).ln().abs()
+        }
+        _ => (a - b).abs() <= 1e-6 * (hi - lo).abs().max(f64::MIN_POSITIVE),
+    };
+    if near(value, lo) {
+        Some(Side::Lower)
+    } else if near(value, hi) {
+        Some(Side::Upper)
+    } else {
+        None
     }
 }
 
@@ -166,12 +262,14 @@ enum Weakness {
     Loose(f64),
     /// Correlated with free constant k.
     Traded(usize, f64),
+    /// Held at a bound of the search.
+    AtBound(Side),
 }
 
 /// The free constants (indices) with |component| > 0.3 in the smallest singular
 /// vector of the column-normalised Jacobian, and that singular value relative to
 /// the largest.
-fn weakest_direction(free: &[Constant], jac: &DMatrix<f64>) -> (Vec<usize>, f64) {
+fn weakest_direction(jac: &DMatrix<f64>) -> (Vec<usize>, f64) {
     let mut norm = jac.clone();
     for j in 0..norm.ncols() {
         let s = norm.column(j).norm();
@@ -180,20 +278,59 @@ fn weakest_direction(free: &[Constant], jac: &DMatrix<f64>) -> (Vec<usize>, f64)
         }
     }
     let Some(svd) = crate::fit::linear::svd(norm, false, true) else {
-        return ((0..free.len()).collect(), 0.0);
+        return ((0..jac.ncols()).collect(), 0.0);
     };
     let sv = &svd.singular_values;
     let last = sv.len() - 1;
     let vt = svd.v_t.expect("requested");
-    let members = (0..free.len())
+    let members = (0..jac.ncols())
         .filter(|&k| vt[(last, k)].abs() > 0.3)
         .collect();
     (members, sv[last] / sv[0].max(f64::MIN_POSITIVE))
 }
 
-/// The reason in words for constant j.
-fn explain(free: &[Constant], j: usize, w: Weakness, weakest: &[usize], ctx: &Context) -> String {
+/// The reason in words for constant j; for one at a bound, `cause` is its weakness
+/// with every constant free (it drifted there along it), None if it has none (the
+/// trace pushed it there).
+fn explain(
+    free: &[Constant],
+    j: usize,
+    w: Weakness,
+    cause: Option<Weakness>,
+    weakest: &[usize],
+    ctx: &Context,
+) -> String {
     let c = &free[j];
+    let how = match w {
+        Weakness::Singular => "the trace's information about it is singular".to_string(),
+        Weakness::Loose(r) => format!("σ/value = {r:.2}"),
+        Weakness::Traded(k, rho) => format!("correlated with {} (ρ = {rho:.4})", free[k].name),
+        Weakness::AtBound(side) => {
+            let (word, b) = match side {
+                Side::Lower => ("lower", c.bounds.0),
+                Side::Upper => ("upper", c.bounds.1),
+            };
+            format!(
+                "at the {word} bound of its search ({}): the bound, not the trace, holds it there, so it has no σ or interval",
+                si(b, c.unit)
+            )
+        }
+    };
+    if let Weakness::AtBound(_) = w {
+        return match cause {
+            Some(cause) => format!(
+                "{how}; it drifted there: with every constant free, {}",
+                explain(free, j, cause, None, weakest, ctx)
+            ),
+            None => format!(
+                "{how}: the value the trace wants lies outside the range searched ({} to {}, set around the scene's {}); start the scene nearer it, or fix {}",
+                si(c.bounds.0, c.unit),
+                si(c.bounds.1, c.unit),
+                si(c.start, c.unit),
+                c.name
+            ),
+        };
+    }
     let partners: Vec<&Constant> = match w {
         Weakness::Traded(k, _) => vec![&free[k]],
         _ if weakest.contains(&j) => weakest
@@ -202,11 +339,6 @@ fn explain(free: &[Constant], j: usize, w: Weakness, weakest: &[usize], ctx: &Co
             .map(|&k| &free[k])
             .collect(),
         _ => Vec::new(),
-    };
-    let how = match w {
-        Weakness::Singular => "the trace's information about it is singular".to_string(),
-        Weakness::Loose(r) => format!("σ/value = {r:.2}"),
-        Weakness::Traded(k, rho) => format!("correlated with {} (ρ = {rho:.4})", free[k].name),
     };
     let has = |pred: &dyn Fn(Role) -> bool| pred(c.role) || partners.iter().any(|p| pred(p.role));
     let modulus = |r: Role| matches!(r, Role::LeadingModulus | Role::HigherOrder | Role::ArmK(_));

@@ -328,7 +328,8 @@ pub fn identify_with(
     let assessment = assess(&problem.free, &x, &jac, rss, &ctx);
     let profiles = profiles(&problem, &x, rss, &jac, &profiled, settings);
     let experiments = channel_fits(&problem, &given, &r);
-    let warnings = warnings(&problem, &assessment, &runs, ms.at_best, settings.starts);
+    let mut warnings = warnings(&problem, &assessment, &runs, ms.at_best, settings.starts);
+    warnings.extend(structured_residuals(&problem, &r));
     let status = if !matches!(termination, Termination::Converged(_)) {
         Status::NotConverged
     } else if assessment.estimates.iter().any(|e| !e.identifiable) {
@@ -453,12 +454,6 @@ fn warnings(
             }
         }
     }
-    for e in assessment.estimates.iter().filter(|e| e.at_bound) {
-        w.push(format!(
-            "{} ended at a bound of its search ({:.4e} {}): the traces push it beyond",
-            e.name, e.value, e.unit
-        ));
-    }
     for e in assessment.estimates.iter().filter(|e| !e.identifiable) {
         w.push(format!(
             "{} is not identifiable: {}",
@@ -481,31 +476,58 @@ fn warnings(
     w
 }
 
-/// A measured drive that changes faster than the trace samples it: two of its
-/// corners (a step's start and end) within two sample intervals. The rise between
-/// them was not recorded, so the constants that act at that rate (the dashpot nv,
-/// fast arms) are fitted to a guessed shape of it.
+/// Lag-1 autocorrelation of a channel's residuals above which they hold structure
+/// the model does not explain (white noise gives ρ₁ ≈ 0 ± 1/√n; the warning also
+/// needs 5/√n, so chance never reaches it).
+pub const MAX_RESIDUAL_CORRELATION: f64 = 0.5;
+
+/// Channels whose residuals at the optimum are correlated from one sample to the
+/// next (ρ₁ above [`MAX_RESIDUAL_CORRELATION`] and 5/√n): the fit misses something
+/// the trace shows (a drive it did not record, a fixed constant that is wrong, a
+/// model too simple), or the noise is not white. Either way σ taken from these
+/// residuals is not the noise, and the intervals are too narrow.
+fn structured_residuals(problem: &Problem, r: &DVector<f64>) -> Vec<String> {
+    channel_rows(problem)
+        .into_iter()
+        .filter_map(|(ei, ci, rows)| {
+            let n = rows.len();
+            let x = &r.as_slice()[rows];
+            let ss: f64 = x.iter().map(|v| v * v).sum();
+            let lag: f64 = x.windows(2).map(|w| w[0] * w[1]).sum();
+            let rho = lag / ss;
+            (n >= 20 && rho > MAX_RESIDUAL_CORRELATION.max(5.0 / (n as f64).sqrt())).then(|| {
+                let e = &problem.experiments[ei];
+                format!(
+                    "{} {}: the residuals are correlated from sample to sample (lag-1 ρ = {rho:.2}): they hold structure the model does not explain (a drive the trace did not record, a fixed constant that is wrong, a model too simple) or the noise is not white; σ taken from them is then not the noise, and the intervals are too narrow",
+                    e.name, e.channels[ci].kind
+                )
+            })
+        })
+        .collect()
+}
+
+/// A measured drive that changes faster than the trace samples it: a step of the
+/// measured input (a jump within one or two sample intervals,
+/// [`crate::sim::input::Measured::steps`]). The rise within it was not recorded,
+/// so the constants that act at that rate (the dashpot nv, fast arms) are fitted
+/// to a guessed shape of it.
 fn unresolved_drive(e: &Experiment) -> Option<String> {
+    use crate::report::format::si;
     let measured = e.scene.input.terms.iter().find_map(|t| match t {
         crate::sim::input::Term::Measured(m) => Some(m),
         _ => None,
     })?;
-    let dt = e
-        .scene
-        .time
-        .samples
-        .windows(2)
-        .map(|w| w[1] - w[0])
-        .fold(f64::INFINITY, f64::min);
-    let piece = measured.shortest_piece();
-    (piece <= 2.0 * dt).then(|| {
-        format!(
-            "{}: the drive changes between corners {} apart, within two sample intervals ({} each): the shape of that rise was not recorded, so nv and the fast arms are fitted to a guess of it; sample faster or drive with a slower ramp",
-            e.name,
-            crate::report::format::si(piece, "s"),
-            crate::report::format::si(dt, "s")
-        )
-    })
+    let &(t0, t1) = measured.steps().first()?;
+    let more = match measured.steps().len() {
+        1 => String::new(),
+        k => format!(" (and {} more)", k - 1),
+    };
+    Some(format!(
+        "{}: the drive jumps at {} within {}{more}, one or two sample intervals: the shape of that rise was not recorded, so nv and the fast arms are fitted to a guess of it; sample faster or drive with a slower ramp",
+        e.name,
+        si(t0, "s"),
+        si(t1 - t0, "s"),
+    ))
 }
 
 /// εr of every free constant that sets it through a mixing rule (a filler mass

@@ -15,25 +15,39 @@
 //!    1.4826·MAD is its robust estimate, unaffected by the few samples at corners).
 //!    The test uses σ = max(σ̂, [`NOISE_FLOOR`] × range), so a noiseless record is
 //!    not split at the rounding of its digits.
-//! 2. **Steps.** Interval i is part of a rise when its increment differs from the
-//!    local slope (median of the [`STEP_NEIGHBOURS`] neighbouring intervals on each
-//!    side) by more than [`STEP_SIGMAS`]·√2·σ; consecutive rises of one sign form a
-//!    step, a pair of corners at its first and last sample joined by a straight line.
+//! 2. **Steps.** Interval i departs from the local slope (median of the
+//!    [`STEP_NEIGHBOURS`] neighbouring intervals on each side) when its increment
+//!    differs from it by more than [`STEP_SIGMAS`]·√2·σ; consecutive departures of
+//!    one sign form a rise, less its first and last intervals that go on as the
+//!    slope before (after) it does (so a slope corner, whose neighbours straddle
+//!    two slopes, is no rise). Where one or two intervals of a rise change by more
+//!    than [`STEP_DOMINANCE`] times the intervals beside them, the sampling did not
+//!    resolve that jump: it is a step, a pair of corners at its first and last
+//!    sample joined by a straight line ([`Measured::steps`]). A rise resolved over
+//!    more intervals (a supply's first-order rise sampled at a few points per time
+//!    constant) is a fast but smooth change: its first and last samples are
+//!    corners, kept only if they pay (below), and the pieces follow its shape.
 //! 3. **Corners.** At each remaining sample c, a cubic plus a hinge (t − t_c)₊ is
 //!    fitted over up to w samples on each side, w in [`WINDOWS`] (never across a
 //!    corner found already); the hinge coefficient's t-ratio against σ measures a
 //!    slope jump that no smooth signal explains. A window whose residual sum of
 //!    squares exceeds its noise expectation (dof + 4·√(2·dof))·σ² holds more than a
 //!    cubic and a corner and is not used. The largest ratio above [`CORNER_SIGMAS`] becomes a
-//!    corner, its time refined to the hinge position of least squares within
-//!    [`REFINE_SAMPLES`] sample intervals, and the test is repeated on the split segments
-//!    until no ratio exceeds the threshold (greedy, so two close corners are found
-//!    as two).
+//!    corner, located by [`refine`] within [`REFINE_SAMPLES`] sample intervals, and
+//!    the test is repeated on the split segments until no ratio exceeds the
+//!    threshold (greedy, so two close corners are found as two).
 //!    A corner stays only where splitting its segment there lowers the BIC of
 //!    the pieces (step 4) on the two sides, by more than [`CORNER_SIGMAS`]² σ²
 //!    in RSS, against one piece over both (also with the two sides' knots): a smooth
 //!    peak that a hinge imitates over a long window is one spline with a few more
-//!    knots. The least useful corner is removed until every one pays.
+//!    knots. The least useful corner is removed until every one pays. Each
+//!    corner that stays is located again between its final neighbours: the two
+//!    straight lines (or parabolas, where the signal curves) on either side that
+//!    meet at the corner time of least squares, over the longest windows the
+//!    noise test admits (the corner time's standard error is about
+//!    σ/(Δs·√w) for a slope jump Δs per interval and w samples a side: long
+//!    windows place a weak corner within a sample interval, where a cubic and a
+//!    hinge over a short one could not).
 //! 4. **Pieces.** Between two corners, a cubic Hermite spline (C¹) with knots at
 //!    sample quantiles is fitted by least squares; its number of intervals K (1, 2,
 //!    …, growing by an eighth) minimises BIC with the known σ, RSS/σ² + 2(K + 1)·ln m (m samples). At a
@@ -57,6 +71,11 @@ pub const STEP_SIGMAS: f64 = 8.0;
 pub const WINDOWS: [usize; 4] = [20, 40, 80, 160];
 /// Intervals on each side whose median slope is the local slope of the step test.
 pub const STEP_NEIGHBOURS: usize = 6;
+/// A rise is a step (a jump the sampling did not resolve) where one or two of its
+/// intervals change by more than this multiple of the intervals beside them: a
+/// first-order rise sampled at 1.4 time constants or coarser. A rise resolved over
+/// more intervals is a fast but smooth change between two corners.
+pub const STEP_DOMINANCE: f64 = 2.0;
 /// Fewest samples on each side of a candidate corner (the hinge needs both sides).
 const MIN_SIDE: usize = 4;
 
@@ -69,6 +88,8 @@ pub struct Measured {
     pieces: Vec<[f64; 4]>,
     /// Corner times (s), increasing, including the first and last sample.
     corners: Vec<f64>,
+    /// Steps (s): start and end of each jump the sampling did not resolve.
+    steps: Vec<(f64, f64)>,
     /// The noise σ used by the tests (V).
     noise: f64,
 }
@@ -153,6 +174,12 @@ impl Measured {
         &self.corners
     }
 
+    /// Start and end (s) of each step: a jump within one or two sample intervals,
+    /// whose shape between the samples was not recorded (a straight line here).
+    pub fn steps(&self) -> &[(f64, f64)] {
+        &self.steps
+    }
+
     /// The noise standard deviation the corner test used (units of the values).
     pub fn noise(&self) -> f64 {
         self.noise
@@ -202,57 +229,103 @@ fn median(x: &mut [f64]) -> f64 {
     }
 }
 
-/// Rises: runs of intervals [a, b] (sample a to sample b + 1) that jump (step 2).
-fn find_steps(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize)> {
+/// Rises found by the step test (step 2), as sample indices (first, last).
+#[derive(Debug, Default)]
+struct Rises {
+    /// Unresolved jumps (one or two intervals): a pair of corners each.
+    steps: Vec<(usize, usize)>,
+    /// Fast but resolved changes: their ends are corner candidates.
+    resolved: Vec<(usize, usize)>,
+}
+
+/// The rises of the step test (step 2): runs of intervals that jump against the
+/// local slope, each split into a step (one or two intervals that dominate their
+/// neighbours) or kept as a resolved change.
+fn find_rises(t: &[f64], v: &[f64], sigma: f64) -> Rises {
     let n = t.len();
     let slope = |j: usize| (v[j + 1] - v[j]) / (t[j + 1] - t[j]);
-    let mut runs: Vec<(usize, usize)> = Vec::new();
-    let mut sign_of_run = 0.0;
+    // each interval's departure from the local slope
     let mut buf = Vec::with_capacity(2 * STEP_NEIGHBOURS);
+    let e: Vec<f64> = (0..n - 1)
+        .map(|i| {
+            buf.clear();
+            let lo = i.saturating_sub(STEP_NEIGHBOURS);
+            let hi = (i + STEP_NEIGHBOURS).min(n - 2);
+            buf.extend((lo..=hi).filter(|&j| j != i).map(slope));
+            let local = if buf.is_empty() {
+                0.0
+            } else {
+                median(&mut buf)
+            };
+            (v[i + 1] - v[i]) - local * (t[i + 1] - t[i])
+        })
+        .collect();
+    let threshold = STEP_SIGMAS * std::f64::consts::SQRT_2 * sigma;
+    let mut runs: Vec<(usize, usize)> = Vec::new();
     for i in 0..n - 1 {
-        buf.clear();
-        let lo = i.saturating_sub(STEP_NEIGHBOURS);
-        let hi = (i + STEP_NEIGHBOURS).min(n - 2);
-        buf.extend((lo..=hi).filter(|&j| j != i).map(slope));
-        let local = if buf.is_empty() {
-            0.0
-        } else {
-            median(&mut buf)
-        };
-        let e = (v[i + 1] - v[i]) - local * (t[i + 1] - t[i]);
-        if e.abs() <= STEP_SIGMAS * std::f64::consts::SQRT_2 * sigma {
+        if e[i].abs() <= threshold {
             continue;
         }
         match runs.last_mut() {
-            Some(r) if r.1 + 1 == i && e.signum() == sign_of_run => r.1 = i,
-            _ => {
-                runs.push((i, i));
-                sign_of_run = e.signum();
-            }
+            Some(r) if r.1 + 1 == i && e[i].signum() == e[r.1].signum() => r.1 = i,
+            _ => runs.push((i, i)),
         }
     }
-    runs
+    let size = |i: Option<usize>| i.and_then(|i| e.get(i)).map_or(0.0, |x| x.abs());
+    // the median slope of the intervals in lo..hi (clipped), if any
+    let side = |lo: usize, hi: usize, buf: &mut Vec<f64>| {
+        buf.clear();
+        buf.extend((lo..hi.min(n - 1)).map(slope));
+        (!buf.is_empty()).then(|| median(buf))
+    };
+    // an interval that goes on as the slope before the run (or after it) does is
+    // no part of the rise: the median of both sides makes a run at a slope corner
+    let agrees = |i: usize, s: Option<f64>| {
+        s.is_some_and(|s| ((v[i + 1] - v[i]) - s * (t[i + 1] - t[i])).abs() <= threshold)
+    };
+    let mut rises = Rises::default();
+    for (a, b) in runs {
+        let before = side(a.saturating_sub(STEP_NEIGHBOURS), a, &mut buf);
+        let after = side(b + 1, b + 1 + STEP_NEIGHBOURS, &mut buf);
+        let (mut a, mut b) = (a, b);
+        while a <= b && agrees(a, before) {
+            a += 1;
+        }
+        while b > a && agrees(b, after) {
+            b -= 1;
+        }
+        if a > b || (a == b && agrees(a, after)) {
+            continue;
+        }
+        // the block of one or two intervals that dominates the intervals beside it
+        let block = (a..=b)
+            .flat_map(|k| [(k, k), (k, k + 1)])
+            .filter(|&(_, m)| m <= b)
+            .map(|(k, m)| {
+                let inside = size(Some(k)).min(size(Some(m)));
+                let beside = size(k.checked_sub(1)).max(size(Some(m + 1)));
+                (k, m, inside, beside)
+            })
+            .filter(|x| x.2 > STEP_DOMINANCE * x.3)
+            .max_by(|x, y| x.2.total_cmp(&y.2));
+        match block {
+            Some((k, m, ..)) => rises.steps.push((k, m + 1)),
+            None => rises.resolved.push((a, b + 1)),
+        }
+    }
+    rises
 }
 
-/// Least squares on a cubic plus a hinge at x_h over samples `lo..=hi` (x scaled
+/// Least squares on a cubic plus a hinge at t_c over samples `lo..=hi` (x scaled
 /// about t_c): the hinge coefficient's t-ratio against `sigma` and the RSS.
-fn hinge_fit(
-    t: &[f64],
-    v: &[f64],
-    lo: usize,
-    hi: usize,
-    tc: f64,
-    th: f64,
-    sigma: f64,
-) -> (f64, f64) {
+fn hinge_fit(t: &[f64], v: &[f64], lo: usize, hi: usize, tc: f64, sigma: f64) -> (f64, f64) {
     let h = (t[hi] - tc).abs().max((tc - t[lo]).abs());
-    let xh = (th - tc) / h;
     let mut a = [[0.0; 5]; 5];
     let mut b = [0.0; 5];
     let mut yy = 0.0;
     for i in lo..=hi {
         let x = (t[i] - tc) / h;
-        let f = [1.0, x, x * x, x * x * x, (x - xh).max(0.0)];
+        let f = [1.0, x, x * x, x * x * x, x.max(0.0)];
         for r in 0..5 {
             for c in 0..5 {
                 a[r][c] += f[r] * f[c];
@@ -308,13 +381,12 @@ fn find_corners(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize, f64, boo
     let n = t.len();
     // boundaries: sample index and corner time; a step's two corners are samples
     let mut bounds: Vec<(usize, f64)> = vec![(0, t[0]), (n - 1, t[n - 1])];
-    let mut steps = Vec::new();
-    let mut step_ends = Vec::new();
-    for (a, b) in find_steps(t, v, sigma) {
+    let rises = find_rises(t, v, sigma);
+    let steps: Vec<usize> = rises.steps.iter().map(|s| s.0).collect();
+    let step_ends: Vec<usize> = rises.steps.iter().map(|s| s.1).collect();
+    for &(a, b) in rises.steps.iter().chain(&rises.resolved) {
         bounds.push((a, t[a]));
-        bounds.push((b + 1, t[b + 1]));
-        steps.push(a);
-        step_ends.push(b + 1);
+        bounds.push((b, t[b]));
     }
     bounds.sort_by_key(|b| b.0);
     bounds.dedup_by_key(|b| b.0);
@@ -332,7 +404,7 @@ fn find_corners(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize, f64, boo
             if c - a < MIN_SIDE || b - c < MIN_SIDE {
                 continue;
             }
-            let (r, rss) = hinge_fit(t, v, a, b, t[c], t[c], sigma);
+            let (r, rss) = hinge_fit(t, v, a, b, t[c], sigma);
             // a window whose residual exceeds the noise holds more than a cubic and
             // a corner: its ratio means nothing
             let dof = (b - a + 1 - 5) as f64;
@@ -355,8 +427,16 @@ fn find_corners(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize, f64, boo
         if best <= CORNER_SIGMAS {
             break;
         }
-        let tc = refine(t, v, a, b, c, sigma);
         let k = bounds.partition_point(|x| x.0 <= c);
+        let between = (bounds[k - 1].1, bounds[k].1);
+        let Some(tc) = [refine(t, v, a, b, c, sigma), t[c]]
+            .into_iter()
+            .find(|&x| x > between.0 && x < between.1)
+        else {
+            // no time for it between its neighbours' (refined) times
+            r[c].0 = 0.0;
+            continue;
+        };
         bounds.insert(k, (c, tc));
         for j in c.saturating_sub(reach)..=(c + reach).min(n - 1) {
             r[j] = ratio(&bounds, j);
@@ -386,31 +466,267 @@ fn find_corners(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize, f64, boo
             _ => break,
         }
     }
+    // every slope corner located on the final segments: its sides reach to the
+    // neighbouring corners (less a margin for their own uncertainty)
+    for i in 1..bounds.len().saturating_sub(1) {
+        let c = bounds[i].0;
+        if is_step(c) || step_ends.contains(&c) {
+            continue;
+        }
+        let (lo, hi) = (
+            (bounds[i - 1].0 + NEIGHBOUR_MARGIN).min(c),
+            bounds[i + 1].0.saturating_sub(NEIGHBOUR_MARGIN).max(c),
+        );
+        let tc = refine(t, v, lo, hi, c, sigma);
+        if tc > bounds[i - 1].1 && tc < bounds[i + 1].1 {
+            bounds[i].1 = tc;
+        }
+    }
     bounds
         .windows(2)
         .map(|w| (w[0].0, w[1].0, w[0].1, is_step(w[0].0)))
         .collect()
 }
 
-/// The hinge time of least squares within [`REFINE_SAMPLES`] sample intervals
-/// either side of c (inside the window `lo..=hi`).
+/// Samples kept clear of a neighbouring corner when a corner's sides are fitted.
+const NEIGHBOUR_MARGIN: usize = 2;
+
+/// The corner time of least squares near sample c (step 3, module doc): a smooth
+/// polynomial of degree d (1, 2 or 3) plus a hinge b·(t − t_h)₊, over up to w
+/// samples on each side (w in [`REFINE_WINDOWS`], inside `lo..=hi`); for d = 1 the
+/// two straight lines that meet at t_h. The corner time t_h minimises the RSS
+/// within [`REFINE_SAMPLES`] sample intervals of c. Of the (d, w) whose RSS is
+/// consistent with the noise, the one that places t_h best ([`join_spread`]) is
+/// used; c's own time when none is.
 fn refine(t: &[f64], v: &[f64], lo: usize, hi: usize, c: usize, sigma: f64) -> f64 {
-    let (a, b) = (
-        t[c.saturating_sub(REFINE_SAMPLES).max(lo + 1)],
-        t[(c + REFINE_SAMPLES).min(hi - 1)],
+    let widest = REFINE_WINDOWS[REFINE_WINDOWS.len() - 1];
+    let sums = JoinSums::new(
+        t,
+        v,
+        (lo.max(c.saturating_sub(widest)), hi.min(c + widest)),
+        c,
     );
-    let steps = 20 * REFINE_SAMPLES;
-    (0..=steps)
-        .map(|j| a + (b - a) * j as f64 / steps as f64)
-        .map(|th| (th, hinge_fit(t, v, lo, hi, t[c], th, sigma).1))
-        .min_by(|x, y| x.1.total_cmp(&y.1))
-        .map(|x| x.0)
-        .unwrap_or(t[c])
+    let mut best: Option<(f64, f64)> = None; // (spread, time)
+    let mut tried: Vec<(usize, usize, usize)> = Vec::new();
+    for degree in 1..=3 {
+        for w in REFINE_WINDOWS {
+            let (a, b) = (lo.max(c.saturating_sub(w)), hi.min(c + w));
+            if c < a + MIN_SIDE + degree
+                || b < c + MIN_SIDE + degree
+                || tried.contains(&(a, b, degree))
+            {
+                continue;
+            }
+            tried.push((a, b, degree));
+            let Some((th, rss)) = best_join(&sums, (a, b), c, degree) else {
+                continue;
+            };
+            let dof = (b - a + 1 - degree - 2) as f64;
+            if rss > sigma * sigma * (dof + 2.0 * (2.0 * dof).sqrt()) {
+                continue;
+            }
+            let Some(se) = join_spread(t, (a, b), th, degree) else {
+                continue;
+            };
+            if best.is_none_or(|x| se < x.0) {
+                best = Some((se, th));
+            }
+        }
+    }
+    best.map_or(t[c], |x| x.1)
 }
 
 /// How far (in sample intervals) a corner's time is refined from the sample of the
-/// largest t-ratio.
-const REFINE_SAMPLES: usize = 4;
+/// largest t-ratio (a weak corner's ratio peaks up to several intervals off).
+const REFINE_SAMPLES: usize = 16;
+
+/// Samples on each side of a corner over which the join is fitted when its time
+/// is refined: a long window locates a weak corner best, a short one holds only a
+/// polynomial and a hinge where the signal curves (shorter ones give unstable
+/// standard errors).
+const REFINE_WINDOWS: [usize; 6] = [20, 40, 80, 160, 320, 640];
+
+/// The join time t_h of least RSS in the search range around c (see [`refine`]):
+/// the RSS at every sample, then a golden-section search between the neighbours
+/// of the best. `None` if no fit is possible.
+fn best_join(s: &JoinSums, (a, b): (usize, usize), c: usize, degree: usize) -> Option<(f64, f64)> {
+    let t = s.t;
+    let rss = |th: f64| s.rss((a, b), th, degree).unwrap_or(f64::INFINITY);
+    let (i0, i1) = (
+        c.saturating_sub(REFINE_SAMPLES).max(a + 1),
+        (c + REFINE_SAMPLES).min(b - 1),
+    );
+    let k = (i0..=i1).min_by(|&x, &y| rss(t[x]).total_cmp(&rss(t[y])))?;
+    let fk = rss(t[k]);
+    if !fk.is_finite() {
+        return None;
+    }
+    // golden section between the neighbours of the best sample
+    let (mut x0, mut x1) = (t[k.saturating_sub(1).max(i0)], t[(k + 1).min(i1)]);
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut p, mut q) = (x1 - g * (x1 - x0), x0 + g * (x1 - x0));
+    let (mut fp, mut fq) = (rss(p), rss(q));
+    for _ in 0..40 {
+        if fp <= fq {
+            x1 = q;
+            (q, fq) = (p, fp);
+            p = x1 - g * (x1 - x0);
+            fp = rss(p);
+        } else {
+            x0 = p;
+            (p, fp) = (q, fq);
+            q = x0 + g * (x1 - x0);
+            fq = rss(q);
+        }
+    }
+    let th = 0.5 * (x0 + x1);
+    let f = rss(th);
+    Some(if f <= fk { (th, f) } else { (t[k], fk) })
+}
+
+/// Highest power of u in the prefix sums: x^d·x^d for d ≤ 3.
+const MOMENTS: usize = 7;
+
+/// Prefix sums for the least squares of a join over any window inside `a0..=b0`
+/// and any join time: with u = (t − t_c)/h and y = v − v_c, `pu[j][i]` = Σ u^j
+/// (j < [`MOMENTS`]) and `py[j][i]` = Σ u^j·y (j ≤ 3) over the first i samples
+/// from a0, and `yy[i]` = Σ y²; a window's moments about any u_h then follow
+/// binomially in O(1).
+struct JoinSums<'a> {
+    t: &'a [f64],
+    a0: usize,
+    tc: f64,
+    h: f64,
+    pu: [Vec<f64>; MOMENTS],
+    py: [Vec<f64>; 4],
+    yy: Vec<f64>,
+}
+
+impl<'a> JoinSums<'a> {
+    fn new(t: &'a [f64], v: &'a [f64], (a0, b0): (usize, usize), c: usize) -> JoinSums<'a> {
+        let (tc, vc) = (t[c], v[c]);
+        let h = (t[b0] - tc).max(tc - t[a0]).max(f64::MIN_POSITIVE);
+        let m = b0 - a0 + 2;
+        let mut pu: [Vec<f64>; MOMENTS] = std::array::from_fn(|_| Vec::with_capacity(m));
+        let mut py: [Vec<f64>; 4] = std::array::from_fn(|_| Vec::with_capacity(m));
+        let mut yy = Vec::with_capacity(m);
+        let (mut su, mut sy, mut s2) = ([0.0; MOMENTS], [0.0; 4], 0.0);
+        for i in a0..=b0 + 1 {
+            pu.iter_mut().zip(&su).for_each(|(p, s)| p.push(*s));
+            py.iter_mut().zip(&sy).for_each(|(p, s)| p.push(*s));
+            yy.push(s2);
+            if i > b0 {
+                break;
+            }
+            let (u, y) = ((t[i] - tc) / h, v[i] - vc);
+            let mut uj = 1.0;
+            for j in 0..MOMENTS {
+                su[j] += uj;
+                if j < 4 {
+                    sy[j] += uj * y;
+                }
+                uj *= u;
+            }
+            s2 += y * y;
+        }
+        JoinSums {
+            t,
+            a0,
+            tc,
+            h,
+            pu,
+            py,
+            yy,
+        }
+    }
+
+    /// Σ x^k (k < [`MOMENTS`]) and Σ x^k·y (k ≤ 3) over samples lo..hi
+    /// (exclusive), x = u − uh: Σ (u − uh)^k = Σ_j C(k, j)·(−uh)^(k−j)·Σ u^j.
+    fn moments(&self, lo: usize, hi: usize, uh: f64) -> ([f64; MOMENTS], [f64; 4]) {
+        let (lo, hi) = (lo - self.a0, hi - self.a0);
+        let su: [f64; MOMENTS] = std::array::from_fn(|j| self.pu[j][hi] - self.pu[j][lo]);
+        let sy: [f64; 4] = std::array::from_fn(|j| self.py[j][hi] - self.py[j][lo]);
+        let mut pw = [1.0; MOMENTS];
+        for k in 1..MOMENTS {
+            pw[k] = pw[k - 1] * -uh;
+        }
+        let shift = |k: usize, s: &[f64]| -> f64 {
+            let mut binom = 1.0;
+            let mut sum = 0.0;
+            for j in 0..=k {
+                sum += binom * pw[k - j] * s[j];
+                binom *= (k - j) as f64 / (j + 1) as f64;
+            }
+            sum
+        };
+        (
+            std::array::from_fn(|k| shift(k, &su)),
+            std::array::from_fn(|k| shift(k, &sy)),
+        )
+    }
+
+    /// The RSS of the least squares on samples `a..=b` of 1, x, …, x^d and the
+    /// hinge x₊ in x = (t − th)/h.
+    fn rss(&self, (a, b): (usize, usize), th: f64, degree: usize) -> Option<f64> {
+        let m = degree + 2;
+        let uh = (th - self.tc) / self.h;
+        let split = a + self.t[a..=b].partition_point(|&x| x <= th);
+        let (full, full_y) = self.moments(a, b + 1, uh);
+        let (right, right_y) = self.moments(split, b + 1, uh);
+        // column r < m − 1 is x^r; the last is the hinge x₊ (x^r·x₊ = x₊^(r+1))
+        let power = |r: usize| if r + 1 == m { 1 } else { r };
+        let hinge = |r: usize| r + 1 == m;
+        let mut ata = nalgebra::SMatrix::<f64, 5, 5>::identity();
+        let mut atb = nalgebra::SVector::<f64, 5>::zeros();
+        for r in 0..m {
+            for q in 0..m {
+                let k = power(r) + power(q);
+                ata[(r, q)] = if hinge(r) || hinge(q) {
+                    right[k]
+                } else {
+                    full[k]
+                };
+            }
+            atb[r] = if hinge(r) { right_y[1] } else { full_y[r] };
+        }
+        let beta = ata.cholesky()?.solve(&atb);
+        let yy = self.yy[b + 1 - self.a0] - self.yy[a - self.a0];
+        Some((yy - (0..m).map(|r| beta[r] * atb[r]).sum::<f64>()).max(0.0))
+    }
+}
+
+/// How poorly the samples `a..=b` place a join at th: σ_h²·b²/σ², the variance of
+/// the join time in units of s² per (slope jump/noise)² — [(JᵀJ)⁻¹] of the join
+/// time's column, the samples after th (∂fit/∂t_h = −b·[t > t_h]; the polynomial's
+/// own shift lies in its columns), after the polynomial of `degree` and the hinge.
+/// It does not depend on the data, so windows and degrees compare by it without
+/// the noise of a fitted slope jump; `None` if singular.
+fn join_spread(t: &[f64], (a, b): (usize, usize), th: f64, degree: usize) -> Option<f64> {
+    let m = degree + 2;
+    let h = (t[b] - t[a]).max(f64::MIN_POSITIVE);
+    let mut jtj = nalgebra::SMatrix::<f64, 6, 6>::identity();
+    for r in 0..=m {
+        jtj[(r, r)] = 0.0;
+    }
+    let mut row = [0.0; 6];
+    for &ti in &t[a..=b] {
+        let x = (ti - th) / h;
+        let mut xk = 1.0;
+        for r in row.iter_mut().take(degree + 1) {
+            *r = xk;
+            xk *= x;
+        }
+        row[m - 1] = x.max(0.0);
+        row[m] = if x > 0.0 { 1.0 } else { 0.0 };
+        for r in 0..=m {
+            for q in 0..=m {
+                jtj[(r, q)] += row[r] * row[q];
+            }
+        }
+    }
+    let var = jtj.try_inverse()?[(m, m)];
+    (var.is_finite() && var > 0.0).then_some(var)
+}
 
 /// Hermite pieces on each segment, joined at the corners (step 4).
 fn build(t: &[f64], v: &[f64], noise: f64, segs: &[(usize, usize, f64, bool)]) -> Measured {
@@ -431,8 +747,46 @@ fn build(t: &[f64], v: &[f64], noise: f64, segs: &[(usize, usize, f64, bool)]) -
         pieces.extend(ps);
     }
     first.push(pieces.len());
-    // join the values at the corners: a step takes its neighbours' values, two
-    // smooth sides meet halfway
+    // two smooth sides of a corner meet halfway between their fitted values, and
+    // each side is fitted again through that value (the whole side adapts, not
+    // only its last piece)
+    let mut ends: Vec<[Option<f64>; 2]> = vec![[None, None]; segs.len()];
+    for k in 1..segs.len() {
+        if !segs[k - 1].3 && !segs[k].3 {
+            let m = 0.5 * (pieces[first[k] - 1][2] + pieces[first[k]][0]);
+            ends[k - 1][1] = Some(m);
+            ends[k][0] = Some(m);
+        }
+    }
+    for (k, fixed) in ends.iter().enumerate() {
+        if *fixed == [None, None] {
+            continue;
+        }
+        let (a, b) = (first[k], first[k + 1]);
+        let ks = &knots[a..=b];
+        let lo = t.partition_point(|&x| x < ks[0]);
+        let hi = t.partition_point(|&x| x <= ks[ks.len() - 1]);
+        match hermite_lsq(&t[lo..hi], &v[lo..hi], ks, *fixed).filter(|_| hi - lo >= 4) {
+            Some((u, _)) => {
+                for j in 0..b - a {
+                    pieces[a + j] = [u[2 * j], u[2 * j + 1], u[2 * j + 2], u[2 * j + 3]];
+                }
+            }
+            // a straight piece (too few samples): through the held values
+            None => {
+                let y0 = fixed[0].unwrap_or(pieces[a][0]);
+                let y1 = fixed[1].unwrap_or(pieces[b - 1][2]);
+                let sl = (y1 - y0) / (ks[ks.len() - 1] - ks[0]);
+                if b - a == 1 {
+                    pieces[a] = [y0, sl, y1, sl];
+                } else {
+                    pieces[a][0] = y0;
+                    pieces[b - 1][2] = y1;
+                }
+            }
+        }
+    }
+    // a step takes its neighbours' values
     for k in 0..segs.len() {
         let (a, b) = (first[k], first[k + 1] - 1);
         if segs[k].3 {
@@ -448,18 +802,21 @@ fn build(t: &[f64], v: &[f64], noise: f64, segs: &[(usize, usize, f64, bool)]) -
             };
             let s = (y1 - y0) / (knots[b + 1] - knots[a]);
             pieces[a] = [y0, s, y1, s];
-        } else if k + 1 < segs.len() && !segs[k + 1].3 {
-            let m = 0.5 * (pieces[b][2] + pieces[b + 1][0]);
-            pieces[b][2] = m;
-            pieces[b + 1][0] = m;
         }
     }
     let mut corners: Vec<f64> = segs.iter().map(|s| s.2).collect();
     corners.push(t[n - 1]);
+    let steps = segs
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.3)
+        .map(|(k, s)| (s.2, corners[k + 1]))
+        .collect();
     Measured {
         knots,
         pieces,
         corners,
+        steps,
         noise,
     }
 }
@@ -477,7 +834,7 @@ fn fit_segment(t: &[f64], v: &[f64], s: &Segment, sigma: f64) -> (Vec<f64>, Vec<
         let sl = (y1 - y0) / (s.t1 - s.t0);
         return (vec![s.t0, s.t1], vec![[y0, sl, y1, sl]]);
     }
-    let Some((_, knots, u)) = segment_fit(t, v, s.t0, s.t1, sigma, m as f64) else {
+    let Some((_, knots, u)) = segment_fit(t, v, (s.t0, s.t1), sigma, m as f64, true) else {
         let (y0, y1) = line_fit(ts, vs, s.t0, s.t1);
         let sl = (y1 - y0) / (s.t1 - s.t0);
         return (vec![s.t0, s.t1], vec![[y0, sl, y1, sl]]);
@@ -494,8 +851,8 @@ fn fit_segment(t: &[f64], v: &[f64], s: &Segment, sigma: f64) -> (Vec<f64>, Vec<
 /// RSS the split saves must exceed [`CORNER_SIGMAS`]² σ² (as a hinge's t-ratio).
 fn corner_gain(t: &[f64], v: &[f64], (a, c, b): (f64, f64, f64), sigma: f64, m: f64) -> f64 {
     let (Some(l), Some(r)) = (
-        segment_fit(t, v, a, c, sigma, m),
-        segment_fit(t, v, c, b, sigma, m),
+        segment_fit(t, v, (a, c), sigma, m, false),
+        segment_fit(t, v, (c, b), sigma, m, false),
     ) else {
         return f64::INFINITY;
     };
@@ -503,10 +860,11 @@ fn corner_gain(t: &[f64], v: &[f64], (a, c, b): (f64, f64, f64), sigma: f64, m: 
     let hi = t.partition_point(|&x| x <= b);
     let mut knots = l.1.clone();
     knots.extend_from_slice(&r.1[1..]);
-    let joined = hermite_lsq(&t[lo..hi], &v[lo..hi], &knots).map_or(f64::INFINITY, |(_, rss)| {
-        rss / (sigma * sigma) + 2.0 * knots.len() as f64 * m.ln()
-    });
-    let merged = segment_fit(t, v, a, b, sigma, m).map_or(f64::INFINITY, |f| f.0);
+    let joined = hermite_lsq(&t[lo..hi], &v[lo..hi], &knots, [None, None])
+        .map_or(f64::INFINITY, |(_, rss)| {
+            rss / (sigma * sigma) + 2.0 * knots.len() as f64 * m.ln()
+        });
+    let merged = segment_fit(t, v, (a, b), sigma, m, false).map_or(f64::INFINITY, |f| f.0);
     // the split has two unknowns more than the joined spline (a second value and
     // slope at c): refund their BIC and ask, as of a hinge, a 6σ saving instead
     merged.min(joined) - l.0 - r.0 + 2.0 * m.ln() - CORNER_SIGMAS * CORNER_SIGMAS
@@ -514,15 +872,18 @@ fn corner_gain(t: &[f64], v: &[f64], (a, c, b): (f64, f64, f64), sigma: f64, m: 
 
 /// The spline of least BIC on the samples in [t0, t1]: (score, knots, unknowns),
 /// score = RSS/σ² + p·ln `m` with p = 2(K + 1) unknowns for K intervals (BIC with
-/// a known σ; `m` is the sample count the penalty is counted on). `None` with
-/// fewer than 4 samples.
+/// a known σ; `m` is the sample count the penalty is counted on); with `graded`,
+/// each K also with its first interval graded ([`graded_knots`]). The corner test
+/// ([`corner_gain`]) compares even knots only: graded knots right after a corner
+/// would let a C¹ spline turn within two samples, as sharply as the corner it
+/// tests. `None` with fewer than 4 samples.
 fn segment_fit(
     t: &[f64],
     v: &[f64],
-    t0: f64,
-    t1: f64,
+    (t0, t1): (f64, f64),
     sigma: f64,
     m: f64,
+    graded: bool,
 ) -> Option<(f64, Vec<f64>, Vec<f64>)> {
     let lo = t.partition_point(|&x| x < t0);
     let hi = t.partition_point(|&x| x <= t1);
@@ -534,16 +895,40 @@ fn segment_fit(
     let mut best: Option<(f64, Vec<f64>, Vec<f64>)> = None;
     let mut k = 1usize;
     while k == 1 || 4 * k <= n {
-        let knots = quantile_knots(ts, t0, t1, k);
-        if let Some((u, rss)) = hermite_lsq(ts, vs, &knots) {
-            let score = rss / (sigma * sigma) + 2.0 * knots.len() as f64 * m.ln();
-            if best.as_ref().is_none_or(|b| score < b.0) {
-                best = Some((score, knots, u));
+        let even = quantile_knots(ts, t0, t1, k);
+        let graded = graded.then(|| graded_knots(ts, &even)).flatten();
+        for knots in [Some(even), graded].into_iter().flatten() {
+            if let Some((u, rss)) = hermite_lsq(ts, vs, &knots, [None, None]) {
+                let score = rss / (sigma * sigma) + 2.0 * knots.len() as f64 * m.ln();
+                if best.as_ref().is_none_or(|b| score < b.0) {
+                    best = Some((score, knots, u));
+                }
             }
         }
         k += 1 + k / 8;
     }
     best
+}
+
+/// `knots` with the first interval graded: more knots at the samples 2, 2√2, 4, …
+/// (a ratio of √2) after its start, so that a transient that starts at a corner (a supply's rise,
+/// decaying over a few samples) is followed without spending knots on the rest
+/// of the segment. `None` when the first interval has no room for them.
+fn graded_knots(ts: &[f64], knots: &[f64]) -> Option<Vec<f64>> {
+    let mut out = vec![knots[0]];
+    let mut x = 2.0_f64;
+    while (x as usize) < ts.len() && ts[x as usize] < knots[1] {
+        let knot = ts[x as usize];
+        if knot > *out.last().expect("non-empty") {
+            out.push(knot);
+        }
+        x *= std::f64::consts::SQRT_2;
+    }
+    if out.len() == 1 {
+        return None;
+    }
+    out.extend_from_slice(&knots[1..]);
+    Some(out)
 }
 
 /// Values at t0 and t1 of the least-squares line through the samples (the mean
@@ -579,9 +964,15 @@ fn quantile_knots(ts: &[f64], t0: f64, t1: f64, k: usize) -> Vec<f64> {
 }
 
 /// Least-squares C¹ cubic Hermite spline on `knots`: unknowns (y_j, s_j) per knot,
-/// banded normal equations (half-bandwidth 3) solved by banded Cholesky. Returns
-/// the unknowns and the RSS.
-fn hermite_lsq(ts: &[f64], vs: &[f64], knots: &[f64]) -> Option<(Vec<f64>, f64)> {
+/// banded normal equations (half-bandwidth 3) solved by banded Cholesky; the value
+/// at the first and at the last knot held where `fixed` gives it. Returns the
+/// unknowns and the RSS.
+fn hermite_lsq(
+    ts: &[f64],
+    vs: &[f64],
+    knots: &[f64],
+    fixed: [Option<f64>; 2],
+) -> Option<(Vec<f64>, f64)> {
     const W: usize = 4;
     let nu = 2 * knots.len();
     let mut a = vec![[0.0; W]; nu]; // a[i][d] = A[i][i + d]
@@ -609,6 +1000,22 @@ fn hermite_lsq(ts: &[f64], vs: &[f64], knots: &[f64]) -> Option<(Vec<f64>, f64)>
             }
             b[2 * j + r] += f[r] * y;
         }
+    }
+    // a held value: its column moves to the right-hand side, its row becomes y = value
+    for (i, value) in [(0, fixed[0]), (nu - 2, fixed[1])] {
+        let Some(value) = value else { continue };
+        for r in i.saturating_sub(W - 1)..(i + W).min(nu) {
+            let coupling = if r < i { a[r][i - r] } else { a[i][r - i] };
+            if r != i {
+                b[r] -= coupling * value;
+            }
+        }
+        for r in i.saturating_sub(W - 1)..i {
+            a[r][i - r] = 0.0;
+        }
+        a[i] = [0.0; W];
+        a[i][0] = 1.0;
+        b[i] = value;
     }
     let scale = a.iter().map(|r| r[0]).fold(0.0, f64::max);
     for r in a.iter_mut() {

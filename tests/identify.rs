@@ -765,6 +765,17 @@ fn a_rise_the_trace_did_not_record_is_flagged() {
     );
 }
 
+/// `dea-fit identify` in `dir` on the worked example's step trace and stack scene
+/// (datasets/identify), one start, then `args`.
+fn worked_step(dir: &Path, args: &[&str]) -> std::process::Output {
+    let d = super::support::repo().join("datasets/identify");
+    let (trace, scene) = (d.join("step.csv"), d.join("stack.toml"));
+    let (trace, scene) = (trace.display().to_string(), scene.display().to_string());
+    let mut all = vec!["identify", &trace, "--scene", &scene, "--starts", "1"];
+    all.extend_from_slice(args);
+    super::support::run(dir, &all)
+}
+
 /// A fit that does not explain the trace to its noise (the worked example's step
 /// with the first arm fixed at a third of its true stiffness, only C10 free): the
 /// residuals then follow the missing relaxation from sample to sample, and the
@@ -772,22 +783,14 @@ fn a_rise_the_trace_did_not_record_is_flagged() {
 /// noise). The same trace with the arm free has no such warning (above).
 #[test]
 fn residuals_with_structure_are_flagged() {
-    let d = super::support::repo().join("datasets/identify");
     let dir = tempfile::tempdir().unwrap();
-    let p = |f: &str| d.join(f).display().to_string();
-    let o = super::support::run(
+    let o = worked_step(
         dir.path(),
         &[
-            "identify",
-            &p("step.csv"),
-            "--scene",
-            &p("stack.toml"),
             "--free",
             "C10",
             "--fix",
             "arm1.k=35kPa",
-            "--starts",
-            "1",
             "--no-report",
             "--json",
         ],
@@ -1185,20 +1188,12 @@ fn svg_texts(svg: &str, attr: &str) -> Vec<String> {
 /// tick "0.0").
 #[test]
 fn the_report_charts_each_channels_sensitivities_to_the_free_constants() {
-    let d = super::support::repo().join("datasets/identify");
     let dir = tempfile::tempdir().unwrap();
-    let p = |f: &str| d.join(f).display().to_string();
-    let o = super::support::run(
+    let o = worked_step(
         dir.path(),
         &[
-            "identify",
-            &p("step.csv"),
-            "--scene",
-            &p("stack.toml"),
             "--free",
             "C10,nv,eps_r",
-            "--starts",
-            "1",
             "--report",
             "rep",
             "--out",

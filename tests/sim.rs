@@ -38,14 +38,7 @@ gravity = 0.0
 fn seed_stack(viscous: &str, extra: &str, time: &str) -> String {
     format!(
         r#"
-[actuator]
-kind = "stack"
-radius = "2.25 mm"
-layer_thickness = "500 um"
-electrode_thickness = "50 um"
-layers = 10
-electrodes = 11
-[material]
+{actuator}[material]
 hyperelastic = {{ preset = "vhb4910-yeoh" }}
 viscous = {viscous}
 relative_permittivity = 4.7
@@ -54,7 +47,8 @@ resistivity_ohm_m = 3.1e8
 {extra}
 [time]
 {time}
-"#
+"#,
+        actuator = super::support::SEED_STACK_ACTUATOR
     )
 }
 

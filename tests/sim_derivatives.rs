@@ -48,14 +48,7 @@ fn stack(model: &str, viscous: &str, source: &str, drive: &str) -> Scene {
 fn stack_timed(model: &str, viscous: &str, source: &str, drive: &str, time: &str) -> Scene {
     scene(&format!(
         r#"
-[actuator]
-kind = "stack"
-radius = "2.25 mm"
-layer_thickness = "500 um"
-electrode_thickness = "50 um"
-layers = 10
-electrodes = 11
-[material]
+{actuator}[material]
 hyperelastic = {model}
 viscous = {viscous}
 relative_permittivity = 4.7
@@ -68,7 +61,8 @@ mass = "0.05 kg"
 [time]
 span = "1 s"
 {time}
-"#
+"#,
+        actuator = super::support::SEED_STACK_ACTUATOR
     ))
 }
 

@@ -256,19 +256,22 @@ pub fn read(paths: &[PathBuf]) -> Result<Material> {
                 .map(|a| (a.eta_pa_s / a.k_pa, a.k_pa))
                 .collect();
             match (&r.qlv, &hyper) {
-                (Some(q), Some((hp, h))) => {
-                    let e_ref = 3.0 * mu0(h)?;
-                    let same = (e_ref - q.reference_modulus_pa).abs()
-                        <= 1e-9 * e_ref.abs().max(q.reference_modulus_pa.abs());
-                    if q.hyperelastic_model != h.spec.name || !same {
-                        return Err(Error::input(
-                            Location::file(rp),
-                            format!(
-                                "qlv: this QLV fit relaxes a {} fit with 3mu0 = {} Pa; {} is a {} fit with 3mu0 = {e_ref} Pa",
-                                q.hyperelastic_model, q.reference_modulus_pa, hp.display(), h.spec.name
-                            ),
-                        )
-                        .with_hint("give the hyperelastic fit the relaxation was fitted with (dea-fit relaxation --hyperelastic), or export the relaxation fit alone"));
+                // QLV: a hyperelastic fit given with it must be the one it relaxes.
+                (Some(q), h) => {
+                    if let Some((hp, h)) = h {
+                        let e_ref = 3.0 * mu0(h)?;
+                        let same = (e_ref - q.reference_modulus_pa).abs()
+                            <= 1e-9 * e_ref.abs().max(q.reference_modulus_pa.abs());
+                        if q.hyperelastic_model != h.spec.name || !same {
+                            return Err(Error::input(
+                                Location::file(rp),
+                                format!(
+                                    "qlv: this QLV fit relaxes a {} fit with 3mu0 = {} Pa; {} is a {} fit with 3mu0 = {e_ref} Pa",
+                                    q.hyperelastic_model, q.reference_modulus_pa, hp.display(), h.spec.name
+                                ),
+                            )
+                            .with_hint("give the hyperelastic fit the relaxation was fitted with (dea-fit relaxation --hyperelastic), or export the relaxation fit alone"));
+                        }
                     }
                     Some(Relaxation {
                         formulation: Formulation::Qlv,
@@ -279,14 +282,6 @@ pub fn read(paths: &[PathBuf]) -> Result<Material> {
                         qlv_model: Some(q.hyperelastic_model.clone()),
                     })
                 }
-                (Some(q), None) => Some(Relaxation {
-                    formulation: Formulation::Qlv,
-                    long_term_pa: r.long_term_pa,
-                    terms,
-                    reference_pa: q.reference_modulus_pa,
-                    nv_pa_s: 0.0,
-                    qlv_model: Some(q.hyperelastic_model.clone()),
-                }),
                 (None, Some((_, h))) => {
                     let k_inf = 3.0 * mu0(h)?;
                     notes.push(format!(

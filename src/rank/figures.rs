@@ -392,13 +392,31 @@ pub fn evaluate(
             other => format!("no static equilibrium at {}: {other}", si(vd, "V")),
         }),
     };
+    // Pulled in, or no equilibrium, or broken down at the static stroke: the
+    // static and dynamic figures have no value, and the reason is the state's note.
+    let lam_d = lam_d
+        .map_err(|why| match why.starts_with("pulled in") {
+            true => (State::PullIn, why),
+            false => (State::Failed, why),
+        })
+        .and_then(|l| {
+            let field_d = vd / gap(&a, l);
+            match field_d >= eb {
+                true => Err((
+                    State::Breakdown,
+                    format!(
+                        "breaks down: the field {} at the static stroke reaches Eb = {}",
+                        si(field_d, "V/m"),
+                        si(eb, "V/m")
+                    ),
+                )),
+                false => Ok(l),
+            }
+        });
     let lam_d = match lam_d {
         Ok(l) => l,
-        Err(why) => {
-            e.state = match why.starts_with("pulled in") {
-                true => State::PullIn,
-                false => State::Failed,
-            };
+        Err((state, why)) => {
+            e.state = state;
             e.static_stroke = Figure::none("1", Provenance::Predicted, &sim_src, &why);
             for f in [
                 &mut e.response_time,
@@ -414,28 +432,6 @@ pub fn evaluate(
             };
         }
     };
-    let field_d = vd / gap(&a, lam_d);
-    if field_d >= eb {
-        let why = format!(
-            "breaks down: the field {} at the static stroke reaches Eb = {}",
-            si(field_d, "V/m"),
-            si(eb, "V/m")
-        );
-        e.state = State::Breakdown;
-        e.static_stroke = Figure::none("1", Provenance::Predicted, &sim_src, &why);
-        for f in [
-            &mut e.response_time,
-            &mut e.energy_in,
-            &mut e.loss_per_cycle,
-        ] {
-            f.note = Some(why.clone());
-        }
-        e.state_note = why;
-        return Evaluated {
-            evaluation: e,
-            curve,
-        };
-    }
     e.state = State::Ok;
     e.state_note = format!(
         "static stroke at {} below pull-in and breakdown",

@@ -7,6 +7,7 @@
 //! ranked on the numbers of a state it cannot reach. Ties keep the run's order.
 
 use super::figures::{Evaluation, State};
+use super::Figure;
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 
@@ -85,9 +86,9 @@ impl Objective {
         !matches!(self, Objective::Speed | Objective::Loss)
     }
 
-    /// The value of the objective for an evaluation (None: not ranked on it).
-    pub fn value(self, e: &Evaluation) -> Option<f64> {
-        let f = match self {
+    /// The figure of an evaluation this objective ranks on.
+    fn figure(self, e: &Evaluation) -> &Figure {
+        match self {
             Objective::Stroke => &e.static_stroke,
             Objective::MaxStroke => &e.max_stroke,
             Objective::Force => &e.blocked_force,
@@ -95,22 +96,20 @@ impl Objective {
             Objective::Fm => &e.fm,
             Objective::Beta => &e.beta,
             Objective::Loss => &e.loss_per_cycle,
-        };
-        f.value.filter(|v| v.is_finite())
+        }
+    }
+
+    /// The value of the objective for an evaluation (None: not ranked on it).
+    pub fn value(self, e: &Evaluation) -> Option<f64> {
+        self.figure(e).value.filter(|v| v.is_finite())
     }
 
     /// Why an evaluation has no value of the objective.
     pub fn why_not(self, e: &Evaluation) -> String {
-        let f = match self {
-            Objective::Stroke => &e.static_stroke,
-            Objective::MaxStroke => &e.max_stroke,
-            Objective::Force => &e.blocked_force,
-            Objective::Speed => &e.response_time,
-            Objective::Fm => &e.fm,
-            Objective::Beta => &e.beta,
-            Objective::Loss => &e.loss_per_cycle,
-        };
-        f.note.clone().unwrap_or_else(|| e.state_note.clone())
+        self.figure(e)
+            .note
+            .clone()
+            .unwrap_or_else(|| e.state_note.clone())
     }
 
     /// A value oriented so that larger is better.

@@ -171,6 +171,27 @@ pub struct Evaluation {
     pub warnings: Vec<String>,
 }
 
+impl Evaluation {
+    /// Every figure of the evaluation with its field name, in the order above.
+    pub fn figures(&self) -> [(&'static str, &Figure); 13] {
+        [
+            ("voltage", &self.voltage),
+            ("eps_r", &self.eps_r),
+            ("youngs_modulus", &self.youngs_modulus),
+            ("beta", &self.beta),
+            ("fm", &self.fm),
+            ("tan_delta", &self.tan_delta),
+            ("breakdown_field", &self.breakdown_field),
+            ("static_stroke", &self.static_stroke),
+            ("max_stroke", &self.max_stroke),
+            ("blocked_force", &self.blocked_force),
+            ("response_time", &self.response_time),
+            ("energy_in", &self.energy_in),
+            ("loss_per_cycle", &self.loss_per_cycle),
+        ]
+    }
+}
+
 /// An evaluation with its static stroke–voltage curve (for the report).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Evaluated {

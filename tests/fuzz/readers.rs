@@ -33,10 +33,15 @@ pub enum Reader {
     /// An identified material file (`dea-fit/identified/1`) as a scene's whole
     /// material (`[material] identified = ...`), simulated.
     Identified,
+    /// A rank design manifest with its scene and fit files beside it (the manifest
+    /// or its composite fit mutated), every point evaluated and ranked.
+    Design,
+    /// One or two material files for `dea-fit export`, each code's card made.
+    Export,
 }
 
 impl Reader {
-    pub const ALL: [Reader; 8] = [
+    pub const ALL: [Reader; 10] = [
         Reader::Tensile,
         Reader::Relaxation,
         Reader::Lcr,
@@ -45,6 +50,8 @@ impl Reader {
         Reader::Fit,
         Reader::Trace,
         Reader::Identified,
+        Reader::Design,
+        Reader::Export,
     ];
 
     pub fn name(self) -> &'static str {
@@ -57,6 +64,8 @@ impl Reader {
             Reader::Fit => "fit",
             Reader::Trace => "trace",
             Reader::Identified => "identified",
+            Reader::Design => "design",
+            Reader::Export => "export",
         }
     }
 
@@ -147,6 +156,12 @@ fn host(material: &str) -> Vec<u8> {
     text.replace(HOST_MATERIAL, material).into_bytes()
 }
 
+/// The design example whose manifest, scene and fit files seed the design cases.
+const DESIGN_DIR: &str = "datasets/design";
+
+/// The material files of the export cases.
+const EXPORT_DIR: &str = "tests/data/export";
+
 /// The shipped files a reader's cases start from; each seed is the file set of a
 /// case before mutation.
 pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
@@ -176,6 +191,12 @@ pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
             .filter(|p| p.ends_with(".json"))
             .chain(["tests/data/bad_cli/files/material_file_identified.json".into()])
             .collect(),
+        Reader::Design => vec![format!("{DESIGN_DIR}/silicone_fillers.toml")],
+        Reader::Export => dir(EXPORT_DIR)
+            .into_iter()
+            .filter(|p| p.ends_with(".json"))
+            .chain(["tests/data/identified/stack-step-identified.json".into()])
+            .collect(),
     };
     paths
         .iter()
@@ -196,6 +217,13 @@ pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
                         ("fit.json".into(), set[0].1.clone()),
                     ];
                 }
+                Reader::Design => {
+                    set.push(file(&format!("{DESIGN_DIR}/stack_silicone.toml")));
+                    set.extend(dir(&format!("{DESIGN_DIR}/fits")).iter().map(|e| {
+                        let (n, b) = file(e);
+                        (format!("fits/{n}"), b)
+                    }))
+                }
                 Reader::Identified => {
                     set = vec![
                         (
@@ -208,6 +236,19 @@ pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
                 _ => {}
             }
             set
+        })
+        .chain(match r {
+            // a hyperelastic fit with the relaxation fit of each reading
+            Reader::Export => ["vhb4910-relaxation.json", "vhb4910-relaxation-qlv.json"]
+                .iter()
+                .map(|f| {
+                    vec![
+                        file(&format!("{EXPORT_DIR}/vhb4910-yeoh.json")),
+                        file(&format!("{EXPORT_DIR}/{f}")),
+                    ]
+                })
+                .collect(),
+            _ => Vec::new(),
         })
         .collect()
 }
@@ -383,22 +424,39 @@ impl Material {
 /// scenes, fit files and identified files half of the time.
 pub fn generate(r: Reader, seeds: &[Vec<(String, Vec<u8>)>], rng: &mut ChaCha8Rng) -> Case {
     let mut files = seeds.choose(rng).unwrap().clone();
-    // a material file's case mutates the file, beside the scene that reads it
-    let main = usize::from(matches!(r, Reader::Fit | Reader::Identified));
+    // a material file's case mutates the file, beside the scene that reads it; an
+    // export case one of its files; a design case its manifest or, a quarter of the
+    // time, its composite fit
+    let main = match r {
+        Reader::Fit | Reader::Identified => 1,
+        Reader::Export => rng.gen_range(0..files.len()),
+        Reader::Design if rng.gen_bool(0.25) => files
+            .iter()
+            .position(|f| f.0.ends_with("composite.json"))
+            .expect("the design's composite fit"),
+        _ => 0,
+    };
+    let name = files[main].0.clone();
+    // what a mutated export file is: a hyperelastic fit, an identified material or
+    // a relaxation fit
+    let hyperelastic_fit = r == Reader::Export && !name.contains("relaxation");
+    let identified = r == Reader::Identified || (hyperelastic_fit && name.contains("identified"));
+    let toml = name.ends_with(".toml") && matches!(r, Reader::Scene | Reader::Design);
     let structured =
-        matches!(r, Reader::Scene | Reader::Fit | Reader::Identified) && rng.gen_bool(0.5);
+        (toml || r == Reader::Fit || identified || hyperelastic_fit) && rng.gen_bool(0.5);
     let seed_text = String::from_utf8_lossy(&files[main].1).into_owned();
-    let (m, refuse) = match r {
-        Reader::Scene if structured => mutate::scene(&seed_text, rng),
-        Reader::Fit if structured => (mutate::fit(&seed_text, rng), None),
-        Reader::Identified if structured => (mutate::identified(&seed_text, rng), None),
+    let (m, refuse) = match () {
+        _ if structured && toml => mutate::scene(&seed_text, rng),
+        _ if structured && identified => (mutate::identified(&seed_text, rng), None),
+        _ if structured => (mutate::fit(&seed_text, rng), None),
         _ => (mutate::text(&files[main].1, rng), None),
     };
     let Mutated { bytes, what, kind } = m;
     let oracle = match (r, refuse) {
         (_, Some(why)) => Oracle::Refuse(why),
-        (Reader::Fit, None) => fit_oracle(&bytes),
         (Reader::Identified, None) => identified_oracle(&bytes),
+        (Reader::Fit, None) => fit_oracle(&bytes),
+        (Reader::Export, None) if hyperelastic_fit && !identified => fit_oracle(&bytes),
         _ => Oracle::Any,
     };
     files[main].1 = bytes;
@@ -435,6 +493,19 @@ pub fn replay(r: Reader, case: &Case, dir: &Path) -> String {
             "dea-fit identify {f} --scene {} --free eps_r --starts 1 {out}",
             repo(&format!("{TRACE_HOST_DIR}/stack.toml")).display()
         ),
+        Reader::Design => format!("dea-fit rank {f} --no-report"),
+        Reader::Export => {
+            let files: Vec<String> = case
+                .files
+                .iter()
+                .map(|(n, _)| dir.join(n).display().to_string())
+                .collect();
+            format!(
+                "dea-fit export {} --to abaqus --density 1000kg/m3 --out {}",
+                files.join(" "),
+                dir.join("card.inp").display()
+            )
+        }
     }
 }
 
@@ -581,6 +652,11 @@ pub fn run(r: Reader, case: &Case, dir: &Path) -> Verdict {
             check_fit("composite", f.status, Some(0.0), out)
         }
         Reader::Scene | Reader::Fit | Reader::Identified => simulate(&path, &case.oracle),
+        Reader::Design => design(&path),
+        Reader::Export => {
+            let paths: Vec<PathBuf> = case.files.iter().map(|(n, _)| dir.join(n)).collect();
+            export(&paths, &case.oracle)
+        }
         Reader::Trace => {
             let base = Scene::read(&repo(&format!("{TRACE_HOST_DIR}/stack.toml"))).unwrap();
             let Ok(t) = dea_fit::io::trace::read(&path) else {
@@ -592,6 +668,88 @@ pub fn run(r: Reader, case: &Case, dir: &Path) -> Verdict {
             }
         }
     }
+}
+
+/// Read a design manifest, evaluate every point of its own sweep and rank them: no
+/// figure of any state has a non-finite value, and a candidate ranked `ok` has its
+/// static stroke.
+fn design(path: &Path) -> Verdict {
+    use dea_fit::rank::{figures::State, manifest, ranking, sweep};
+    let Ok(d) = manifest::read(path) else {
+        return Verdict::Refused;
+    };
+    let Ok(s) = sweep::Sweep::parse(&[]) else {
+        panic!("an empty sweep parses")
+    };
+    let points = sweep::points(&d, &s);
+    let Ok(evals) = sweep::run(&d, &points, &|| {}) else {
+        return Verdict::Refused;
+    };
+    for e in evals.iter().map(|x| &x.evaluation) {
+        for (name, f) in e.figures() {
+            if let Some(v) = f.value.filter(|v| !v.is_finite()) {
+                return Verdict::Failed {
+                    class: format!("rank: {name} with a non-finite value"),
+                    detail: format!("{}: {name} = {v} (state {:?})", e.name, e.state),
+                };
+            }
+        }
+        if e.state == State::Ok && e.static_stroke.value.is_none() {
+            return Verdict::Failed {
+                class: "rank: state ok without a static stroke".into(),
+                detail: e.name.clone(),
+            };
+        }
+    }
+    let list: Vec<_> = evals.iter().map(|x| x.evaluation.clone()).collect();
+    use ranking::Objective;
+    ranking::rank(
+        &list,
+        Objective::Stroke,
+        [Objective::Stroke, Objective::Speed],
+    );
+    Verdict::Accepted
+}
+
+/// Read material files for export and make every code's card: a hyperelastic fit
+/// is read by name (the [`fit_oracle`]), and a card holds finite constants only.
+fn export(paths: &[PathBuf], oracle: &Oracle) -> Verdict {
+    use dea_fit::export::{self, Options, Target};
+    let Ok(m) = export::read(paths) else {
+        return Verdict::Refused;
+    };
+    let read = m.hyperelastic.as_ref().map(|h| h.params.clone());
+    match oracle {
+        Oracle::Refuse(why) => {
+            return Verdict::Failed {
+                class: format!("export accepted: {why}"),
+                detail: "the material files were read".into(),
+            }
+        }
+        Oracle::Params(want) if read.as_ref() != Some(want) => {
+            return Verdict::Failed {
+                class: "export: fit file parameters not read by name".into(),
+                detail: format!("read {read:?}, the file says {want:?}"),
+            }
+        }
+        _ => {}
+    }
+    let opts = Options {
+        density: Some(1000.0),
+    };
+    for t in Target::ALL {
+        let Ok(card) = export::card(&m, t, &opts) else {
+            continue;
+        };
+        let values = card.constants.iter().map(|c| c.value);
+        if let Err(detail) = finite(&format!("{} constant", t.name()), values) {
+            return Verdict::Failed {
+                class: format!("export: a {} card with a non-finite constant", t.name()),
+                detail,
+            };
+        }
+    }
+    Verdict::Accepted
 }
 
 fn points_finite(s: &permittivity::SamplePermittivity) -> Result<(), String> {

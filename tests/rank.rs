@@ -831,3 +831,149 @@ fn mutated_manifests_are_refused_or_evaluated() {
         "refused {refused}, accepted {accepted}"
     );
 }
+
+/// A matrix table whose μ comes from the fit file `fit.json` beside the manifest.
+fn fitted_matrix(name: &str, eps: f64) -> String {
+    matrix(name, eps, 1.0, "300 V/um").replace(
+        "{ model = \"neo-hookean\", parameters = { mu = \"1 kPa\" } }",
+        "{ fit = \"fit.json\" }",
+    )
+}
+
+/// The shipped neo-Hookean fit of the 20 wt% Sylgard/BaTiO3 composite as `fit.json`
+/// in `dir`: its μ and the standard error it states.
+fn fit_file(dir: &Path) -> (f64, f64) {
+    let src = repo().join("datasets/design/fits/sylgard_batio3_20wt-neo-hookean.json");
+    let text = std::fs::read_to_string(src).unwrap();
+    std::fs::write(dir.join("fit.json"), &text).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let p = &v["parameters"][0];
+    (
+        p["value"].as_f64().unwrap(),
+        p["std_error"].as_f64().unwrap(),
+    )
+}
+
+/// Confidence (issue 11): a matrix whose μ is fitted carries the fit's standard
+/// error to Y (σ_Y = 3σ_μ; 1e-9, the rounding of the central difference dμ0/dμ
+/// with a step of 1e-6 of μ) and, to first order, to every
+/// figure: the static stroke's σ is the change of the stroke when μ is written
+/// 1σ higher in the manifest (the same perturbation computed another way; the
+/// difference of two strokes 0.4 % apart, so 1e-6 relative of σ is rounding), and
+/// at small strain, where the stroke goes as 1/Y, σ_s/s is σ_Y/Y (5 %: the strain
+/// is 0.1 %, and the curve's own nonlinearity is below that). A matrix written
+/// in the manifest has no standard error.
+#[test]
+fn fitted_constants_give_the_figures_standard_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mu, sigma) = fit_file(dir.path());
+    let m = format!(
+        "{}{}{}[[series]]\nmatrix = \"F\"\n[[series]]\nmatrix = \"S\"\n",
+        head("voltage = \"400 V\""),
+        fitted_matrix("F", 3.0),
+        matrix("S", 3.0, (mu + sigma) / 1e3, "300 V/um"),
+    );
+    let d = design(dir.path(), &m);
+    let ev = evaluate(&d, &Sweep::default());
+    let (f, s) = (&ev[0].evaluation, &ev[1].evaluation);
+    let y = f.youngs_modulus.std_error.expect("σ of the fitted Y");
+    assert!((y - 3.0 * sigma).abs() <= 1e-9 * y, "σ_Y {y} vs 3σ_μ");
+    let stroke = value(&f.static_stroke);
+    let shifted = value(&s.static_stroke);
+    let u = f.static_stroke.std_error.expect("σ of the stroke");
+    assert!(
+        (u - (stroke - shifted).abs()).abs() <= 1e-6 * u,
+        "σ {u} vs the stroke's change {}",
+        (stroke - shifted).abs()
+    );
+    let rel = (u / stroke) / (sigma / mu);
+    assert!((rel - 1.0).abs() < 0.05, "σ_s/s over σ_μ/μ = {rel}");
+    assert_eq!(s.static_stroke.std_error, None, "a stated μ is exact");
+    assert_eq!(s.youngs_modulus.std_error, None);
+}
+
+/// Two candidates are told apart when their objectives differ by more than 2σ of
+/// the difference: the same fitted matrix at εr 3.0 and 3.0001 (0.003 %, far
+/// inside the 0.36 % σ of μ) cannot be, at εr 3.3 it can; the JSON says which, and
+/// the flag is exactly the stated rule for every adjacent pair.
+#[test]
+fn candidates_within_their_standard_errors_are_not_told_apart() {
+    let dir = tempfile::tempdir().unwrap();
+    fit_file(dir.path());
+    let mut m = head("voltage = \"400 V\"");
+    for (name, eps) in [("A", 3.0), ("B", 3.0001), ("C", 3.3)] {
+        m.push_str(&fitted_matrix(name, eps));
+    }
+    for name in ["A", "B", "C"] {
+        m.push_str(&format!("[[series]]\nmatrix = \"{name}\"\n"));
+    }
+    let d = design(dir.path(), &m);
+    let ev: Vec<Evaluation> = evaluate(&d, &Sweep::default())
+        .into_iter()
+        .map(|e| e.evaluation)
+        .collect();
+    let r = ranking::rank(
+        &ev,
+        Objective::Stroke,
+        [Objective::Stroke, Objective::Speed],
+    );
+    // ranked C, B, A by stroke
+    assert_eq!(r.order, [2, 1, 0]);
+    assert_eq!(r.apart, [Some(false), Some(true), None]);
+    for w in r.order.windows(2) {
+        let (a, b) = (&ev[w[0]].static_stroke, &ev[w[1]].static_stroke);
+        let diff = (value(a) - value(b)).abs();
+        let s = a.std_error.unwrap().hypot(b.std_error.unwrap());
+        assert_eq!(r.apart[w[1]], Some(diff > ranking::APART * s));
+    }
+    std::fs::write(dir.path().join("design.toml"), &m).unwrap();
+    let o = run(
+        dir.path(),
+        &["rank", "design.toml", "--no-report", "--json"],
+    );
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    let flags: Vec<_> = v["candidates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| (c["name"].clone(), c["apart_from_above"].clone()))
+        .collect();
+    assert_eq!(
+        flags,
+        [
+            ("C".into(), serde_json::Value::Null),
+            ("B".into(), true.into()),
+            ("A".into(), false.into())
+        ]
+    );
+}
+
+/// The design hash (which shards of one sweep must share) covers the files the
+/// actuator scene reads: with the scene's material a fit file, another fit file
+/// under the same name gives another hash.
+#[test]
+fn the_design_hash_covers_the_files_the_scene_reads() {
+    let dir = tempfile::tempdir().unwrap();
+    fit_file(dir.path());
+    let m = format!(
+        "{}{}[[series]]\nmatrix = \"M\"\n",
+        head("voltage = \"400 V\""),
+        matrix("M", 3.0, 100.0, "30 V/um")
+    );
+    let hash = || {
+        let scene = SCENE.replace(
+            "{ model = \"neo-hookean\", parameters = { mu = \"100 kPa\" } }",
+            "{ fit = \"fit.json\" }",
+        );
+        std::fs::write(dir.path().join("nh_stack.toml"), scene).unwrap();
+        std::fs::write(dir.path().join("design.toml"), &m).unwrap();
+        manifest::read(&dir.path().join("design.toml"))
+            .unwrap()
+            .sha256
+    };
+    let before = hash();
+    assert_eq!(hash(), before, "the same files, the same hash");
+    let other = repo().join("datasets/design/fits/sylgard_batio3_40wt-neo-hookean.json");
+    std::fs::copy(other, dir.path().join("fit.json")).unwrap();
+    assert_ne!(hash(), before);
+}

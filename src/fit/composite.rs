@@ -83,6 +83,10 @@ pub struct RuleFit {
     pub rule: MixingRule,
     /// εm, εf (and Yamada's n), with standard errors and 95 % intervals.
     pub parameters: Vec<Parameter>,
+    /// Correlation of the parameters' estimates (of their logarithms, which the
+    /// search fits: to first order the same as of the values); None where undefined.
+    #[serde(default)]
+    pub correlation: Vec<Vec<Option<f64>>>,
     /// Effective filler permittivity the rule implies.
     pub eps_filler_eff: f64,
     /// RMS relative error (%).
@@ -404,6 +408,7 @@ pub fn fit_rule(rule: MixingRule, phi: &[f64], eps: &[f64]) -> Option<RuleFit> {
         rule,
         eps_filler_eff: p[1].exp(),
         parameters,
+        correlation: unc.correlation,
         rms_rel_pct: 100.0 * (rss / n as f64).sqrt(),
         aicc,
         bic,

@@ -21,13 +21,20 @@
 //!   beyond the last measured loading held at its value, and with no measured
 //!   composite held at the matrix's value — both with a warning.
 //! * **Density**: φρf + (1 − φ)ρm.
+//!
+//! Standard errors ([`Candidate::one_sigma`]) come from the fit files only: εr of a
+//! composite fit's rule from its εm, εf (and n) with their correlation (GUM, first
+//! order) times the correction; Y of a fitted part from the σ of its μ0; a predicted
+//! Y carries the relative σ of the fitted parts it is corrected through,
+//! interpolated in x as the correction is (the matrix's at x = 0, zero when it is
+//! written in the manifest).
 
 use super::manifest::{Design, MeasuredPoint, PermittivityModel, Series, Stated};
 use super::short;
 use super::{Figure, Provenance};
 use crate::fit::composite::Basis;
 use crate::material::dielectric::volume_fraction;
-use crate::material::file::{Arm, HyperelasticPart, Viscous};
+use crate::material::file::{self, Arm, HyperelasticPart, Viscous};
 use crate::Result;
 
 /// Stiffening of an elastomer by rigid spherical filler: the modulus of the
@@ -133,6 +140,37 @@ pub struct Candidate {
     pub warnings: Vec<String>,
 }
 
+impl Candidate {
+    /// The candidate with each property that has a standard error moved up by
+    /// 1σ, one at a time, named: `Y` (the hyperelastic and viscous parts scaled
+    /// together, the direction the stiffening rule moves them) and `εr`. The
+    /// figures' first-order standard errors follow from these ([`super::sweep::run`]).
+    pub fn one_sigma(&self) -> Vec<(&'static str, Candidate)> {
+        let up = |f: &Figure| match (f.value, f.std_error) {
+            (Some(v), Some(s)) if s > 0.0 && v.is_finite() => Some((v, s)),
+            _ => None,
+        };
+        let mut out = Vec::new();
+        if let Some((y, s)) = up(&self.youngs_modulus) {
+            let x = 1.0 + s / y;
+            let mut c = self.clone();
+            c.hyperelastic = HyperelasticPart {
+                ranges: self.hyperelastic.ranges.clone(),
+                ..scaled(&self.hyperelastic, x)
+            };
+            c.viscous = scaled_viscous(&self.viscous, x);
+            c.youngs_modulus.value = Some(y + s);
+            out.push(("Y", c));
+        }
+        if let Some((e, s)) = up(&self.eps_r) {
+            let mut c = self.clone();
+            c.eps_r.value = Some(e + s);
+            out.push(("εr", c));
+        }
+        out
+    }
+}
+
 /// Where x lies among the knots of a piecewise-linear table.
 enum Place {
     /// On knot i.
@@ -204,18 +242,20 @@ pub fn build(d: &Design, si: usize, loading: f64) -> Result<Candidate> {
 
     // εr: measured, else the model corrected through the measured values.
     let model = |x: f64| eps_model(d, s, phi_of(x), x);
+    let model_value = |x: f64| model(x).0;
     let knots: Vec<(f64, f64, &str)> = std::iter::once((0.0, 1.0, ""))
         .chain(s.measured.iter().filter_map(|p| {
             p.eps_r
-                .map(|e| (p.loading, e / model(p.loading).0, p.source.as_str()))
+                .map(|e| (p.loading, e / model_value(p.loading), p.source.as_str()))
         }))
         .collect();
     let eps_r = match measured_at(&s.measured, loading, |p| p.eps_r) {
         Some((v, src)) => Figure::new(v, "1", Provenance::Measured, src),
         None => {
-            let (v, prov, src) = model(loading);
+            let (v, prov, src, sigma) = model(loading);
             let (r, how) = correction(&knots, loading);
             Figure::new(v * r, "1", prov, format!("{src}{how}"))
+                .with_std_error(sigma.map(|s| s * r))
         }
     };
 
@@ -234,6 +274,14 @@ pub fn build(d: &Design, si: usize, loading: f64) -> Result<Candidate> {
                     )
                 })
             })
+        }))
+        .collect::<Result<Vec<_>>>()?;
+    // relative σ of μ0 at the knots of the correction (the matrix's at 0)
+    let sknots = std::iter::once(Ok((0.0, rel_std_error(&m.hyperelastic)?)))
+        .chain(s.measured.iter().filter_map(|p| {
+            p.hyperelastic
+                .as_ref()
+                .map(|h| rel_std_error(h).map(|r| (p.loading, r)))
         }))
         .collect::<Result<Vec<_>>>()?;
     let fitted = s
@@ -256,7 +304,10 @@ pub fn build(d: &Design, si: usize, loading: f64) -> Result<Candidate> {
                 short(phi),
                 m.hyperelastic.source
             );
-            (part, Figure::new(y, "Pa", Provenance::Predicted, src))
+            let rel = linear(&sknots, loading);
+            let y = Figure::new(y, "Pa", Provenance::Predicted, src)
+                .with_std_error((rel > 0.0).then_some(rel * y));
+            (part, y)
         }
     };
     if phi > rule.valid_to() {
@@ -267,20 +318,7 @@ pub fn build(d: &Design, si: usize, loading: f64) -> Result<Candidate> {
             rule.valid_to()
         ));
     }
-    let stiff = mu0(&hyperelastic)? / mu_m;
-    let viscous = Viscous {
-        nv_pa_s: m.viscous.value.nv_pa_s * stiff,
-        arms: m
-            .viscous
-            .value
-            .arms
-            .iter()
-            .map(|a| Arm {
-                k_pa: a.k_pa * stiff,
-                eta_pa_s: a.eta_pa_s * stiff,
-            })
-            .collect(),
-    };
+    let viscous = scaled_viscous(&m.viscous.value, mu0(&hyperelastic)? / mu_m);
 
     // Loss and breakdown: measured, interpolated, or held.
     let tan_delta = interpolated(
@@ -334,7 +372,7 @@ fn eps_rule(s: &Series) -> String {
 
 /// A manifest value as a figure.
 fn stated(s: &Stated<f64>, unit: &str) -> Figure {
-    Figure::new(s.value, unit, s.provenance, s.source.clone())
+    Figure::new(s.value, unit, s.provenance, s.source.clone()).with_std_error(s.std_error)
 }
 
 /// μ0 of a hyperelastic part.
@@ -344,12 +382,32 @@ fn mu0(h: &HyperelasticPart) -> Result<f64> {
 
 /// Y = 3μ0 of a stated part.
 fn youngs(h: &Stated<HyperelasticPart>) -> Result<Figure> {
-    Ok(Figure::new(
-        3.0 * mu0(&h.value)?,
-        "Pa",
-        h.provenance,
-        h.source.clone(),
-    ))
+    Ok(
+        Figure::new(3.0 * mu0(&h.value)?, "Pa", h.provenance, h.source.clone())
+            .with_std_error(h.std_error.map(|s| 3.0 * s)),
+    )
+}
+
+/// The relative standard error of μ0 of a stated part (0 where none is stated).
+fn rel_std_error(h: &Stated<HyperelasticPart>) -> Result<f64> {
+    h.std_error
+        .map_or(Ok(0.0), |s| mu0(&h.value).map(|m| s / m))
+}
+
+/// The viscous part with Nv and every arm's modulus and viscosity times `x` (the
+/// relaxation times unchanged).
+fn scaled_viscous(v: &Viscous, x: f64) -> Viscous {
+    Viscous {
+        nv_pa_s: v.nv_pa_s * x,
+        arms: v
+            .arms
+            .iter()
+            .map(|a| Arm {
+                k_pa: a.k_pa * x,
+                eta_pa_s: a.eta_pa_s * x,
+            })
+            .collect(),
+    }
 }
 
 /// The part with every stress coefficient (unit Pa) times `x`.
@@ -368,8 +426,9 @@ fn scaled(h: &HyperelasticPart, x: f64) -> HyperelasticPart {
     }
 }
 
-/// The series' εr model at volume fraction φ (loading x): value, provenance, source.
-fn eps_model(d: &Design, s: &Series, phi: f64, x: f64) -> (f64, Provenance, String) {
+/// The series' εr model at volume fraction φ (loading x): value, provenance, source
+/// and, for a composite fit, the standard error its εm, εf (and n) give the value.
+fn eps_model(d: &Design, s: &Series, phi: f64, x: f64) -> (f64, Provenance, String, Option<f64>) {
     let m = &d.matrices[s.matrix];
     let f = &d.fillers[s.filler.expect("a filler")];
     match s
@@ -377,9 +436,12 @@ fn eps_model(d: &Design, s: &Series, phi: f64, x: f64) -> (f64, Provenance, Stri
         .as_ref()
         .expect("a filler has a permittivity model")
     {
-        PermittivityModel::Rule { .. } if x == 0.0 => {
-            (m.eps_r.value, m.eps_r.provenance, m.eps_r.source.clone())
-        }
+        PermittivityModel::Rule { .. } if x == 0.0 => (
+            m.eps_r.value,
+            m.eps_r.provenance,
+            m.eps_r.source.clone(),
+            m.eps_r.std_error,
+        ),
         PermittivityModel::Rule { rule, shape } => (
             rule.eval(m.eps_r.value, f.eps_r.value, phi, *shape),
             Provenance::Predicted,
@@ -392,11 +454,13 @@ fn eps_model(d: &Design, s: &Series, phi: f64, x: f64) -> (f64, Provenance, Stri
                 short(f.eps_r.value),
                 f.eps_r.source
             ),
+            None,
         ),
         PermittivityModel::Composite {
             mixture,
             freq_hz,
             file,
+            spread,
         } => (
             match s.basis {
                 Basis::Weight => mixture.eps_r(x),
@@ -415,6 +479,15 @@ fn eps_model(d: &Design, s: &Series, phi: f64, x: f64) -> (f64, Provenance, Stri
                 short(mixture.eps_filler),
                 short(phi)
             ),
+            {
+                let k = if mixture.rule.has_shape() { 3 } else { 2 };
+                let theta = [mixture.eps_matrix, mixture.eps_filler, mixture.shape_n];
+                let grad = file::gradient(&theta[..k], |p| {
+                    let n = p.get(2).copied().unwrap_or(mixture.shape_n);
+                    mixture.rule.eval(p[0], p[1], phi, n)
+                });
+                spread.propagate(&grad)
+            },
         ),
     }
 }
@@ -431,13 +504,23 @@ fn measured_at(
         .and_then(|p| get(p).map(|v| (v, p.source.clone())))
 }
 
+/// The piecewise-linear function through (x, y) knots (sorted, the first at 0) at
+/// x ≥ 0, held at the last value beyond the last knot.
+fn linear(knots: &[(f64, f64)], x: f64) -> f64 {
+    let xs: Vec<f64> = knots.iter().map(|k| k.0).collect();
+    match place(&xs, x) {
+        Place::At(i) => knots[i].1,
+        Place::Between(i, w) => knots[i].1 + w * (knots[i + 1].1 - knots[i].1),
+        Place::Beyond => knots[knots.len() - 1].1,
+    }
+}
+
 /// The correction factor at x through knots (loading, factor, source) starting at
 /// (0, 1): linear between knots, held beyond the last; with the words for the source.
 fn correction(knots: &[(f64, f64, &str)], x: f64) -> (f64, String) {
     if knots.len() < 2 {
         return (1.0, String::new());
     }
-    let xs: Vec<f64> = knots.iter().map(|k| k.0).collect();
     let names = || {
         knots[1..]
             .iter()
@@ -445,11 +528,8 @@ fn correction(knots: &[(f64, f64, &str)], x: f64) -> (f64, String) {
             .collect::<Vec<_>>()
             .join("; ")
     };
-    let r = match place(&xs, x) {
-        Place::At(i) => knots[i].1,
-        Place::Between(i, w) => knots[i].1 + w * (knots[i + 1].1 - knots[i].1),
-        Place::Beyond => knots[knots.len() - 1].1,
-    };
+    let pairs: Vec<(f64, f64)> = knots.iter().map(|k| (k.0, k.1)).collect();
+    let r = linear(&pairs, x);
     (
         r,
         format!(

@@ -173,22 +173,50 @@ pub struct Evaluation {
 
 impl Evaluation {
     /// Every figure of the evaluation with its field name, in the order above.
-    pub fn figures(&self) -> [(&'static str, &Figure); 13] {
+    pub fn figures_mut(&mut self) -> [(&'static str, &mut Figure); 13] {
         [
-            ("voltage", &self.voltage),
-            ("eps_r", &self.eps_r),
-            ("youngs_modulus", &self.youngs_modulus),
-            ("beta", &self.beta),
-            ("fm", &self.fm),
-            ("tan_delta", &self.tan_delta),
-            ("breakdown_field", &self.breakdown_field),
-            ("static_stroke", &self.static_stroke),
-            ("max_stroke", &self.max_stroke),
-            ("blocked_force", &self.blocked_force),
-            ("response_time", &self.response_time),
-            ("energy_in", &self.energy_in),
-            ("loss_per_cycle", &self.loss_per_cycle),
+            ("voltage", &mut self.voltage),
+            ("eps_r", &mut self.eps_r),
+            ("youngs_modulus", &mut self.youngs_modulus),
+            ("beta", &mut self.beta),
+            ("fm", &mut self.fm),
+            ("tan_delta", &mut self.tan_delta),
+            ("breakdown_field", &mut self.breakdown_field),
+            ("static_stroke", &mut self.static_stroke),
+            ("max_stroke", &mut self.max_stroke),
+            ("blocked_force", &mut self.blocked_force),
+            ("response_time", &mut self.response_time),
+            ("energy_in", &mut self.energy_in),
+            ("loss_per_cycle", &mut self.loss_per_cycle),
         ]
+    }
+
+    /// The first-order standard errors of the figures from evaluations of the same
+    /// candidate with one property moved up by its σ each (`shifted`, named;
+    /// [`super::candidate::Candidate::one_sigma`]): u(f) = √Σᵢ (fᵢ − f)², the
+    /// properties being independent (they come from different experiments). A
+    /// shift that moves the candidate into another state (pulled in, broken down)
+    /// leaves every figure without a standard error, and a warning says so.
+    pub fn spread(&mut self, shifted: Vec<(&str, Evaluation)>) {
+        if let Some((what, s)) = shifted.iter().find(|(_, s)| s.state != self.state) {
+            self.warnings.push(format!(
+                "{}: with {what} 1σ higher the state is {} ({}), so its figures have no standard error",
+                self.name, s.state, s.state_note
+            ));
+            return;
+        }
+        let values: Vec<[Option<f64>; 13]> = shifted
+            .into_iter()
+            .map(|(_, mut s)| s.figures_mut().map(|(_, f)| f.value))
+            .collect();
+        for (i, (_, f)) in self.figures_mut().into_iter().enumerate() {
+            let Some(v) = f.value else { continue };
+            let var = values
+                .iter()
+                .map(|o| o[i].map(|w| (w - v).powi(2)))
+                .sum::<Option<f64>>();
+            f.std_error = var.filter(|x| x.is_finite() && *x > 0.0).map(f64::sqrt);
+        }
     }
 }
 

@@ -44,7 +44,7 @@ use crate::error::{Error, Location, Result};
 use crate::fit::composite::Basis;
 use crate::material::check::{check_hyperelastic, d, did_you_mean, Domain, PERMITTIVITY};
 use crate::material::dielectric::{MixingRule, Mixture};
-use crate::material::file::{self, Arm, HyperelasticPart, Viscous};
+use crate::material::file::{self, Arm, HyperelasticPart, Spread, Viscous};
 use crate::material::hyperelastic::{ModelSpec, OgdenForm, MODEL_NAMES};
 use crate::sim::scene::Scene;
 use crate::sim::{budget, presets};
@@ -207,6 +207,10 @@ struct MeasuredSpec {
 pub struct Stated<T> {
     /// The value (SI).
     pub value: T,
+    /// Its standard error where a fit file states one (of μ0 for a hyperelastic
+    /// part, in Pa): None for a value written in the manifest or a preset, which
+    /// the ranking's confidence takes as exact.
+    pub std_error: Option<f64>,
     /// Measured (written in the manifest), fitted (a fit file) or predicted.
     pub provenance: Provenance,
     /// `manifest:line (note)` or the fit file.
@@ -284,6 +288,8 @@ pub enum PermittivityModel {
         freq_hz: f64,
         /// The fit file.
         file: String,
+        /// The standard errors and correlation of εm, εf (and n) it states.
+        spread: Spread,
     },
 }
 
@@ -332,8 +338,8 @@ pub struct Design {
     pub path: PathBuf,
     /// Design name.
     pub name: String,
-    /// SHA-256 over the manifest and every file it reads (the scene and fit files):
-    /// shards of one sweep carry it.
+    /// SHA-256 over the manifest and every file it reads (the scene, the files the
+    /// scene reads, and fit files): shards of one sweep carry it.
     pub sha256: String,
     /// The actuator scene (its material is replaced per candidate).
     pub scene: Scene,
@@ -447,6 +453,7 @@ impl Ctx<'_> {
                         params: presets::VHB4910_YEOH_PA.to_vec(),
                         ranges: None,
                     },
+                    std_error: None,
                     provenance: Provenance::Fitted,
                     source: "preset vhb4910-yeoh (seed Table 3.2, Wissler & Mazza 2005)".into(),
                 }),
@@ -455,8 +462,12 @@ impl Ctx<'_> {
         }
         if let Some(f) = &s.fit {
             let path = self.file(&span, &format!("{key}.fit"), f)?;
+            let (value, spread) = file::read_hyperelastic_spread(&path)?;
+            let model = value.evaluator()?;
+            let grad = file::gradient(&value.params, |p| model.initial_shear_modulus(p));
             return Ok(Stated {
-                value: file::read_hyperelastic(&path)?,
+                std_error: spread.propagate(&grad),
+                value,
                 provenance: Provenance::Fitted,
                 source: path.display().to_string(),
             });
@@ -495,6 +506,7 @@ impl Ctx<'_> {
                 params,
                 ranges: None,
             },
+            std_error: None,
             provenance: Provenance::Measured,
             source: self.here(&span, note),
         })
@@ -531,6 +543,7 @@ impl Ctx<'_> {
             return presets::viscous(p)
                 .map(|value| Stated {
                     value,
+                    std_error: None,
                     provenance: Provenance::Fitted,
                     source: format!("preset {p}"),
                 })
@@ -552,6 +565,7 @@ impl Ctx<'_> {
                     nv_pa_s: stated.or(nv).unwrap_or(0.0),
                     arms,
                 },
+                std_error: None,
                 provenance: Provenance::Fitted,
                 source: path.display().to_string(),
             });
@@ -598,6 +612,7 @@ impl Ctx<'_> {
                 nv_pa_s: nv.unwrap_or(0.0),
                 arms,
             },
+            std_error: None,
             provenance: Provenance::Measured,
             source: self.here(&span, note),
         })
@@ -635,6 +650,8 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
     let sc = &spec.actuator.scene;
     let scene_path = cx.file(&sc.span(), "actuator.scene", sc.get_ref())?;
     let scene = Scene::read(&scene_path)?;
+    // what the scene reads (its material's fit files) counts for the design hash
+    cx.files.borrow_mut().extend(scene.files.iter().cloned());
     if scene.control.is_some() {
         return Err(cx
             .err(
@@ -740,6 +757,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
         )?;
         let with = |v: f64, s: &Span| Stated {
             value: v,
+            std_error: None,
             provenance: Provenance::Measured,
             source: cx.here(s, &m.source),
         };
@@ -747,6 +765,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
             Some(v) => cx.viscous(v, &format!("{key}.viscous"), &m.source)?,
             None => Stated {
                 value: scene.material.viscous.clone(),
+                std_error: None,
                 provenance: Provenance::Measured,
                 source: format!("{} [material] viscous", scene_path.display()),
             },
@@ -800,6 +819,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
                     &format!("{key}.eps_r"),
                     *f.eps_r.get_ref(),
                 )?,
+                std_error: None,
                 provenance: Provenance::Measured,
                 source: cx.here(&f.eps_r.span(), &f.source),
             },
@@ -1040,7 +1060,7 @@ fn read_series(
                 &format!("{key}.permittivity.composite"),
                 c.get_ref(),
             )?;
-            let (mixture, freq_hz) = file::read_mixture(&file, rule, freq)?;
+            let (mixture, freq_hz, spread) = file::read_mixture(&file, rule, freq)?;
             let (m, fl) = (&matrices[matrix], &fillers[f]);
             for (what, theirs, ours) in [
                 ("matrix", mixture.rho_matrix, m.density),
@@ -1056,6 +1076,7 @@ fn read_series(
                 mixture,
                 freq_hz,
                 file: file.display().to_string(),
+                spread,
             }
         }
         None => {

@@ -71,6 +71,13 @@ pub struct Figure {
     /// Why there is no value, or what limits it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
+    /// Standard error (SI) from the standard errors the fit files state, to first
+    /// order ([`sweep::run`]): values written in the manifest count as exact, so
+    /// it is a lower bound of the whole uncertainty. None: no fitted constant
+    /// with a standard error reaches it, or a 1σ change moves the candidate into
+    /// another state (a warning says so).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub std_error: Option<f64>,
 }
 
 impl Figure {
@@ -82,6 +89,7 @@ impl Figure {
             provenance,
             source: source.into(),
             note: None,
+            std_error: None,
         }
     }
 
@@ -98,7 +106,14 @@ impl Figure {
             provenance,
             source: source.into(),
             note: Some(why.into()),
+            std_error: None,
         }
+    }
+
+    /// The same figure with a standard error.
+    pub fn with_std_error(mut self, s: Option<f64>) -> Self {
+        self.std_error = s;
+        self
     }
 
     /// The same figure with a note.

@@ -104,6 +104,11 @@ impl Objective {
         self.figure(e).value.filter(|v| v.is_finite())
     }
 
+    /// The standard error of the objective for an evaluation, where known.
+    pub fn std_error(self, e: &Evaluation) -> Option<f64> {
+        self.figure(e).std_error.filter(|s| s.is_finite())
+    }
+
     /// Why an evaluation has no value of the objective.
     pub fn why_not(self, e: &Evaluation) -> String {
         self.figure(e)
@@ -218,6 +223,11 @@ pub struct Ranking {
     pub order: Vec<usize>,
     /// Rank (1-based) of each evaluation by index in `evals` (None: unranked).
     pub ranks: Vec<Option<usize>>,
+    /// Whether each ranked evaluation (by index in `evals`) can be told apart from
+    /// the one ranked just above it: the difference of their objectives exceeds
+    /// [`APART`] standard errors of the difference. None for the first, and where
+    /// either objective has no standard error.
+    pub apart: Vec<Option<bool>>,
     /// Pareto front.
     pub pareto: Pareto,
     /// Best loading per series and drive level.
@@ -227,6 +237,10 @@ pub struct Ranking {
     /// Distinct warnings, in the order they first appear.
     pub warnings: Vec<String>,
 }
+
+/// How many standard errors of their difference two objectives must differ by to
+/// be told apart: 2, about 95 % two-sided for a normal difference.
+pub const APART: f64 = 2.0;
 
 /// Rank `evals` (in run order) by `by`, with the Pareto front over `pareto`.
 pub fn rank(evals: &[Evaluation], by: Objective, pareto: [Objective; 2]) -> Ranking {
@@ -239,6 +253,17 @@ pub fn rank(evals: &[Evaluation], by: Objective, pareto: [Objective; 2]) -> Rank
     let mut ranks = vec![None; evals.len()];
     for (r, (i, _)) in ranked.iter().enumerate() {
         ranks[*i] = Some(r + 1);
+    }
+    let mut apart = vec![None; evals.len()];
+    for w in ranked.windows(2) {
+        let (a, b) = (&evals[w[0].0], &evals[w[1].0]);
+        let (va, vb) = (by.value(a), by.value(b));
+        apart[w[1].0] = match (va, vb, by.std_error(a), by.std_error(b)) {
+            (Some(va), Some(vb), Some(sa), Some(sb)) => {
+                Some((va - vb).abs() > APART * sa.hypot(sb))
+            }
+            _ => None,
+        };
     }
     let order: Vec<usize> = ranked
         .iter()
@@ -276,6 +301,7 @@ pub fn rank(evals: &[Evaluation], by: Objective, pareto: [Objective; 2]) -> Rank
         best: best_loadings(evals, by),
         order,
         ranks,
+        apart,
         status,
         warnings,
     }

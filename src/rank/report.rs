@@ -5,7 +5,7 @@
 //! so a merged sweep writes the same bytes as a single run.
 
 use super::figures::{Evaluated, Evaluation};
-use super::ranking::{Objective, Ranking};
+use super::ranking::{Objective, Ranking, APART};
 use super::shard::RunInfo;
 use super::short;
 use super::Figure;
@@ -80,6 +80,10 @@ struct Row<'a> {
     rank: Option<usize>,
     objective: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    objective_std_error: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    apart_from_above: Option<bool>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     not_ranked: Option<String>,
     #[serde(flatten)]
     evaluation: &'a Evaluation,
@@ -96,6 +100,8 @@ pub fn json(info: &RunInfo, evals: &[Evaluated], r: &Ranking) -> String {
             Row {
                 rank: r.ranks[i],
                 objective: v,
+                objective_std_error: v.and(r.by.std_error(e)),
+                apart_from_above: r.apart[i],
                 not_ranked: v.is_none().then(|| r.by.why_not(e)),
                 evaluation: e,
             }
@@ -133,8 +139,12 @@ pub fn table(info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: usize) -> St
         .iter()
         .map(|&i| {
             let e = &evals[i].evaluation;
+            let close = r.apart[i] == Some(false);
             let mut row = vec![
-                r.ranks[i].map_or("—".into(), |x| x.to_string()),
+                r.ranks[i].map_or("—".into(), |x| match close {
+                    true => format!("{x}≈"),
+                    false => x.to_string(),
+                }),
                 e.name.clone(),
                 fmt_fig(&e.voltage, |v| si(v, "V")),
                 fmt_fig(&e.eps_r, |v| sig(v, 4)),
@@ -147,6 +157,10 @@ pub fn table(info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: usize) -> St
             if extra {
                 row.push(r.by.value(e).map_or("—".into(), |v| fmt_objective(r.by, v)));
             }
+            row.push(
+                r.by.std_error(e)
+                    .map_or("—".into(), |v| fmt_objective(r.by, v)),
+            );
             row
         })
         .collect();
@@ -164,7 +178,16 @@ pub fn table(info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: usize) -> St
     if extra {
         header.push(r.by.name());
     }
+    let sigma = format!("σ {}", r.by.name());
+    header.push(&sigma);
     s.push_str(&text_table(&header, &rows));
+    if r.apart[..].iter().any(|a| a.is_some()) {
+        let _ = writeln!(
+            s,
+            "σ: first-order standard error from the fit files' standard errors (values written in the manifest count as exact); n≈: cannot be told apart from the candidate above (within {} σ of their difference)",
+            APART
+        );
+    }
     if ranked > shown_n {
         let _ = writeln!(
             s,
@@ -302,6 +325,8 @@ pub fn csv(evals: &[Evaluated], r: &Ranking) -> String {
         "loss_per_cycle_J",
         "rank",
         "objective",
+        "objective_std_error",
+        "apart_from_above",
     ]);
     for (i, ev) in evals.iter().enumerate() {
         let e = &ev.evaluation;
@@ -339,6 +364,8 @@ pub fn csv(evals: &[Evaluated], r: &Ranking) -> String {
             num(&e.loss_per_cycle),
             r.ranks[i].map_or(String::new(), |x| x.to_string()),
             r.by.value(e).map_or(String::new(), |v| v.to_string()),
+            r.by.std_error(e).map_or(String::new(), |v| v.to_string()),
+            r.apart[i].map_or(String::new(), |a| a.to_string()),
         ]);
     }
     String::from_utf8(w.into_inner().expect("a CSV in memory")).expect("UTF-8 CSV")

@@ -197,7 +197,9 @@ impl Shard {
 }
 
 /// Evaluate `points` of the design in parallel; `on_done` is called after each.
-/// The result is in the order of `points`.
+/// The result is in the order of `points`. A candidate with properties that have
+/// standard errors is evaluated once more per such property, moved up by its σ,
+/// for the figures' standard errors ([`super::figures::Evaluation::spread`]).
 pub fn run(d: &Design, points: &[Point], on_done: &(dyn Fn() + Sync)) -> Result<Vec<Evaluated>> {
     let template = step_scene(d);
     let scene_name = d.scene_path.display().to_string();
@@ -205,7 +207,16 @@ pub fn run(d: &Design, points: &[Point], on_done: &(dyn Fn() + Sync)) -> Result<
         .par_iter()
         .map(|pt| {
             let c = candidate::build(d, pt.series, pt.loading)?;
-            let e = evaluate(&template, &scene_name, &c, pt.level, pt.index);
+            let mut e = evaluate(&template, &scene_name, &c, pt.level, pt.index);
+            let shifted = c
+                .one_sigma()
+                .into_iter()
+                .map(|(what, c)| {
+                    let s = evaluate(&template, &scene_name, &c, pt.level, pt.index);
+                    (what, s.evaluation)
+                })
+                .collect();
+            e.evaluation.spread(shifted);
             on_done();
             Ok(e)
         })

@@ -198,6 +198,10 @@ pub struct Scene {
     pub control: Option<Pid>,
     /// Time and tolerances.
     pub time: TimeSpec,
+    /// Every file the scene read besides itself (fit files, identified and
+    /// composite files, tables), in the order read: what a hash of its inputs
+    /// must cover (the design hash of `dea-fit rank`).
+    pub files: Vec<PathBuf>,
 }
 
 /// The reader's context: the file, its text, and the byte offset of every key and
@@ -207,6 +211,8 @@ struct Ctx<'a> {
     file: &'a Path,
     text: &'a str,
     spans: HashMap<String, usize>,
+    /// The files referenced so far ([`Scene::files`]).
+    files: std::cell::RefCell<Vec<PathBuf>>,
 }
 
 fn collect_spans(prefix: &str, t: &toml::de::DeTable, out: &mut HashMap<String, usize>) {
@@ -414,7 +420,10 @@ impl Ctx<'_> {
     fn file_ref(&self, dir: &Path, key: &str, f: &str) -> Result<PathBuf> {
         let p = dir.join(f);
         match p.is_file() {
-            true => Ok(p),
+            true => {
+                self.files.borrow_mut().push(p.clone());
+                Ok(p)
+            }
             false => Err(self
                 .err(key, format!("cannot read '{}'", p.display()))
                 .with_hint("the path is relative to the scene file")),
@@ -446,6 +455,7 @@ impl Scene {
             file: path,
             text,
             spans,
+            files: Default::default(),
         };
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         c.known(
@@ -498,6 +508,7 @@ impl Scene {
             input,
             control,
             time,
+            files: c.files.take(),
         };
         budget::validate(&scene).map_err(|v| c.violation(v))?;
         budget::rest_state(&scene).map_err(|v| c.violation(v))?;
@@ -750,7 +761,7 @@ fn read_permittivity(
         .check(&format!("{key}.mass_fraction"), w)
         .map_err(|v| c.violation(v))?;
     let path = c.file_ref(dir, &format!("{key}.composite"), f)?;
-    let (mixture, freq_hz) = file::read_mixture(&path, rule, freq)?;
+    let (mixture, freq_hz, _) = file::read_mixture(&path, rule, freq)?;
     let comp = CompositePermittivity {
         mixture,
         freq_hz,

@@ -686,7 +686,7 @@ fn design(path: &Path) -> Verdict {
         return Verdict::Refused;
     };
     for e in evals.iter().map(|x| &x.evaluation) {
-        for (name, f) in e.figures() {
+        for (name, f) in e.clone().figures_mut() {
             if let Some(v) = f.value.filter(|v| !v.is_finite()) {
                 return Verdict::Failed {
                     class: format!("rank: {name} with a non-finite value"),

@@ -4,7 +4,7 @@
 //! becomes a [`Mixture`], and with the filler mass fraction w the scene's
 //! εr = εr(w) ([`CompositePermittivity`]). Read by name, like every material file.
 
-use super::{by_name, err, read_text, typed, violation, FileParam, COMPOSITE_SCHEMA};
+use super::{by_name, err, read_text, typed, violation, FileParam, Spread, COMPOSITE_SCHEMA};
 use crate::error::Result;
 use crate::material::check::{fmt_g, MASS_FRACTION, PERMITTIVITY};
 use crate::material::dielectric::{MixingRule, Mixture};
@@ -48,6 +48,8 @@ struct PhaseJson {
 struct RuleJson {
     rule: MixingRule,
     parameters: Vec<FileParam>,
+    #[serde(default)]
+    correlation: serde_json::Value,
     status: String,
 }
 
@@ -102,12 +104,13 @@ pub(super) fn eps_at(path: &Path, key: &str, m: &Mixture, w: f64) -> Result<f64>
 /// composite fit `path` at the fitted frequency within 1 % of `freq_hz` (None: the
 /// lowest, the one nearest an actuator's drive), and that frequency. A rule whose
 /// fit there is not `ok` or `warning`, and phases without densities (a mass
-/// fraction needs them), are refused with the key and what to do.
+/// fraction needs them), are refused with the key and what to do. The spread is
+/// that of the rule's εm, εf (and n), in that order.
 pub fn read_mixture(
     path: &Path,
     rule: Option<MixingRule>,
     freq_hz: Option<f64>,
-) -> Result<(Mixture, f64)> {
+) -> Result<(Mixture, f64, Spread)> {
     let (text, _) = read_text(path, &[COMPOSITE_SCHEMA], "composite")?;
     let j: CompositeJson = typed(path, &text)?;
     let fitted: Vec<String> = j.fits.iter().map(|f| hz(f.freq_hz)).collect();
@@ -194,5 +197,7 @@ pub fn read_mixture(
         rho_filler: density(&j.filler, "filler")?,
     };
     check_mixture(path, &key, &mixture)?;
-    Ok((mixture, fit.freq_hz))
+    let names: Vec<String> = expected.into_iter().map(|e| e.0).collect();
+    let spread = Spread::by_name(&r.parameters, &names, &r.correlation);
+    Ok((mixture, fit.freq_hz, spread))
 }

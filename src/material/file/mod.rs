@@ -19,11 +19,13 @@
 mod composite;
 mod hyperelastic;
 mod identified;
+mod spread;
 mod viscous;
 
 pub use composite::{read_mixture, CompositePermittivity};
 pub use hyperelastic::{expected_params, FittedRanges, HyperelasticPart, StretchRange};
 pub use identified::{IdentifiedMaterial, ParamUncertainty};
+pub use spread::{gradient, Spread};
 pub use viscous::{Arm, QlvReference, RelaxationPart, Viscous};
 
 use crate::error::{Error, Location, Result};
@@ -52,6 +54,29 @@ pub fn read_hyperelastic(path: &Path) -> Result<HyperelasticPart> {
         HYPERELASTIC_SCHEMA => HyperelasticPart::from_json(path, "", &typed(path, &text)?),
         _ => Ok(IdentifiedMaterial::parse(path, &text)?.hyperelastic),
     }
+}
+
+/// [`read_hyperelastic`], with the standard errors and correlation the file states
+/// for the parameters (model order): a hyperelastic fit states both, an identified
+/// material the standard errors only.
+pub fn read_hyperelastic_spread(path: &Path) -> Result<(HyperelasticPart, Spread)> {
+    let part = read_hyperelastic(path)?;
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let v: serde_json::Value = typed(path, &text)?;
+    let node = match v.get("hyperelastic") {
+        Some(h) if h.is_object() => h,
+        _ => &v,
+    };
+    let params: Vec<FileParam> =
+        serde_json::from_value(node["parameters"].clone()).unwrap_or_default();
+    let names: Vec<String> = part
+        .evaluator()?
+        .params()
+        .iter()
+        .map(|p| p.name.clone())
+        .collect();
+    let spread = Spread::by_name(&params, &names, &v["correlation"]);
+    Ok((part, spread))
 }
 
 /// Read the viscous part of a relaxation fit or an identified material file: the

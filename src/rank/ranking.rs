@@ -223,6 +223,11 @@ pub struct Ranking {
     pub order: Vec<usize>,
     /// Rank (1-based) of each evaluation by index in `evals` (None: unranked).
     pub ranks: Vec<Option<usize>>,
+    /// For each evaluation (by index in `evals`), the earlier evaluation it repeats:
+    /// the matrix alone, the 0 % point of several series of one matrix, gives the
+    /// same candidate in each. A repeat is neither ranked nor on the Pareto front
+    /// (it stays in its series' best loading), and goes last in `order`.
+    pub same_as: Vec<Option<usize>>,
     /// Whether each ranked evaluation (by index in `evals`) can be told apart from
     /// the one ranked just above it: the difference of their objectives exceeds
     /// [`APART`] standard errors of the difference. None for the first, and where
@@ -242,11 +247,26 @@ pub struct Ranking {
 /// be told apart: 2, about 95 % two-sided for a normal difference.
 pub const APART: f64 = 2.0;
 
+/// Whether `b` repeats `a`: the same matrix alone (both at loading 0) at the same
+/// drive, in the same state, with every figure the same.
+fn repeats(a: &Evaluation, b: &Evaluation) -> bool {
+    let values = |e: &Evaluation| e.clone().figures_mut().map(|(_, f)| f.value);
+    a.matrix == b.matrix
+        && a.loading == 0.0
+        && b.loading == 0.0
+        && a.state == b.state
+        && values(a) == values(b)
+}
+
 /// Rank `evals` (in run order) by `by`, with the Pareto front over `pareto`.
 pub fn rank(evals: &[Evaluation], by: Objective, pareto: [Objective; 2]) -> Ranking {
+    let same_as: Vec<Option<usize>> = (0..evals.len())
+        .map(|i| (0..i).find(|&j| repeats(&evals[j], &evals[i])))
+        .collect();
     let mut ranked: Vec<(usize, f64)> = evals
         .iter()
         .enumerate()
+        .filter(|(i, _)| same_as[*i].is_none())
         .filter_map(|(i, e)| by.value(e).map(|v| (i, by.goodness(v))))
         .collect();
     ranked.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
@@ -268,7 +288,8 @@ pub fn rank(evals: &[Evaluation], by: Objective, pareto: [Objective; 2]) -> Rank
     let order: Vec<usize> = ranked
         .iter()
         .map(|x| x.0)
-        .chain((0..evals.len()).filter(|&i| ranks[i].is_none()))
+        .chain((0..evals.len()).filter(|&i| ranks[i].is_none() && same_as[i].is_none()))
+        .chain((0..evals.len()).filter(|&i| same_as[i].is_some()))
         .collect();
 
     let mut warnings: Vec<String> = Vec::new();
@@ -297,11 +318,12 @@ pub fn rank(evals: &[Evaluation], by: Objective, pareto: [Objective; 2]) -> Rank
     };
     Ranking {
         by,
-        pareto: front(evals, pareto),
+        pareto: front(evals, &same_as, pareto),
         best: best_loadings(evals, by),
         order,
         ranks,
         apart,
+        same_as,
         status,
         warnings,
     }
@@ -310,10 +332,11 @@ pub fn rank(evals: &[Evaluation], by: Objective, pareto: [Objective; 2]) -> Rank
 /// The Pareto front: sorted by the first objective's goodness (then the second's),
 /// a group of equal first values is on the front where its best second value beats
 /// every strictly better first value's.
-fn front(evals: &[Evaluation], obj: [Objective; 2]) -> Pareto {
+fn front(evals: &[Evaluation], same_as: &[Option<usize>], obj: [Objective; 2]) -> Pareto {
     let mut pts: Vec<(usize, f64, f64)> = evals
         .iter()
         .enumerate()
+        .filter(|(i, _)| same_as[*i].is_none())
         .filter_map(|(i, e)| match (obj[0].value(e), obj[1].value(e)) {
             (Some(a), Some(b)) => Some((i, obj[0].goodness(a), obj[1].goodness(b))),
             _ => None,

@@ -84,6 +84,8 @@ struct Row<'a> {
     #[serde(skip_serializing_if = "Option::is_none")]
     apart_from_above: Option<bool>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    same_as: Option<&'a str>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     not_ranked: Option<String>,
     #[serde(flatten)]
     evaluation: &'a Evaluation,
@@ -102,7 +104,14 @@ pub fn json(info: &RunInfo, evals: &[Evaluated], r: &Ranking) -> String {
                 objective: v,
                 objective_std_error: v.and(r.by.std_error(e)),
                 apart_from_above: r.apart[i],
-                not_ranked: v.is_none().then(|| r.by.why_not(e)),
+                same_as: r.same_as[i].map(|j| evals[j].evaluation.name.as_str()),
+                not_ranked: match r.same_as[i] {
+                    Some(j) => Some(format!(
+                        "the same candidate as {}",
+                        evals[j].evaluation.name
+                    )),
+                    None => v.is_none().then(|| r.by.why_not(e)),
+                },
                 evaluation: e,
             }
         })
@@ -195,10 +204,10 @@ pub fn table(info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: usize) -> St
             ranked - shown_n
         );
     }
-    let unranked: Vec<&Evaluation> = r.order[ranked..]
+    let (repeats, rest): (Vec<usize>, Vec<usize>) = r.order[ranked..]
         .iter()
-        .map(|&i| &evals[i].evaluation)
-        .collect();
+        .partition(|&&i| r.same_as[i].is_some());
+    let unranked: Vec<&Evaluation> = rest.iter().map(|&i| &evals[i].evaluation).collect();
     if !unranked.is_empty() {
         let _ = writeln!(
             s,
@@ -221,6 +230,14 @@ pub fn table(info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: usize) -> St
         if top != 0 && unranked.len() > top {
             let _ = writeln!(s, "  … {} more", unranked.len() - top);
         }
+    }
+    for &i in &repeats {
+        let first = r.same_as[i].map_or("", |j| evals[j].evaluation.name.as_str());
+        let _ = writeln!(
+            s,
+            "{}: the matrix alone, the same candidate as {first} (listed once)",
+            evals[i].evaluation.name
+        );
     }
     let [a, b] = r.pareto.objectives;
     let _ = writeln!(

@@ -99,7 +99,12 @@ pub fn write(fit: &HyperelasticFit, data: &Dataset, dir: &Path) -> Result<PathBu
         log_x: false,
     };
     let mut page = Page::new(format!("Hyperelastic fit: {}", fit.model));
-    let files: Vec<String> = fit.provenance.files.iter().map(|f| f.path.clone()).collect();
+    let files: Vec<String> = fit
+        .provenance
+        .files
+        .iter()
+        .map(|f| f.path.clone())
+        .collect();
     let mut data_line = vec![text("Data: ")];
     for (i, f) in fit.provenance.files.iter().enumerate() {
         if i > 0 {

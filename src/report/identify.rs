@@ -224,7 +224,12 @@ pub fn write(
         )?;
     }
     let corr = correlation(id, &dir.join("correlation.svg"))?;
-    page.svg(dir, "correlation.svg", "correlation of the free constants", corr)?;
+    page.svg(
+        dir,
+        "correlation.svg",
+        "correlation of the free constants",
+        corr,
+    )?;
     for v in validation {
         let rows: Vec<Vec<String>> = v
             .channels
@@ -253,7 +258,9 @@ pub fn write(
     }
     page.warnings(&id.warnings);
     let files: Vec<&str> = experiments.iter().map(|e| e.name.as_str()).collect();
-    let scene = experiments.first().map_or(String::new(), |e| e.scene.name.clone());
+    let scene = experiments
+        .first()
+        .map_or(String::new(), |e| e.scene.name.clone());
     let run = Run::new("identify", files.join(", "), scene).headline(
         id.parameters
             .iter()

@@ -86,6 +86,17 @@ impl From<crate::sim::RunStatus> for Tone {
     }
 }
 
+impl From<crate::rank::ranking::Status> for Tone {
+    fn from(s: crate::rank::ranking::Status) -> Tone {
+        use crate::rank::ranking::Status;
+        match s {
+            Status::Ok => Tone::Good,
+            Status::Warning => Tone::Caution,
+            Status::Incomplete | Status::Failed => Tone::Bad,
+        }
+    }
+}
+
 impl Tone {
     fn class(self) -> &'static str {
         match self {
@@ -107,13 +118,23 @@ pub struct Cell {
 
 #[derive(Debug, Clone, PartialEq)]
 enum Block {
-    Status { word: String, tone: Tone },
+    Status {
+        word: String,
+        tone: Tone,
+    },
     Heading(String),
     Subheading(String),
     Paragraph(Vec<Span>),
     List(Vec<Vec<Span>>),
-    Table { header: Vec<String>, rows: Vec<Vec<Cell>> },
-    Figure { file: String, alt: String, svg: String },
+    Table {
+        header: Vec<String>,
+        rows: Vec<Vec<Cell>>,
+    },
+    Figure {
+        file: String,
+        alt: String,
+        svg: String,
+    },
 }
 
 /// A report page: a title and blocks in reading order.
@@ -436,7 +457,10 @@ fn md_text(s: &str) -> String {
     let chars: Vec<char> = s.chars().collect();
     let mut o = String::with_capacity(s.len());
     for (i, &c) in chars.iter().enumerate() {
-        let word = |j: Option<usize>| j.and_then(|j| chars.get(j)).is_some_and(|c| c.is_alphanumeric());
+        let word = |j: Option<usize>| {
+            j.and_then(|j| chars.get(j))
+                .is_some_and(|c| c.is_alphanumeric())
+        };
         let escape = match c {
             '\\' | '`' | '*' | '[' | ']' | '<' | '>' => true,
             '_' => !(word(i.checked_sub(1)) && word(Some(i + 1))),
@@ -453,11 +477,7 @@ fn md_text(s: &str) -> String {
 /// Code in Markdown: a backtick fence one longer than the longest run of backticks
 /// inside, padded when the code starts or ends with one.
 fn md_code(s: &str) -> String {
-    let longest = s
-        .split(|c| c != '`')
-        .map(str::len)
-        .max()
-        .unwrap_or(0);
+    let longest = s.split(|c| c != '`').map(str::len).max().unwrap_or(0);
     let fence = "`".repeat(longest + 1);
     let pad = if s.starts_with('`') || s.ends_with('`') {
         " "
@@ -557,7 +577,10 @@ mod tests {
 
     #[test]
     fn markdown_escapes_markup_but_not_word_underscores() {
-        assert_eq!(md_text("a<b> *c* [d] mass_fraction _x_"), "a\\<b\\> \\*c\\* \\[d\\] mass_fraction \\_x\\_");
+        assert_eq!(
+            md_text("a<b> *c* [d] mass_fraction _x_"),
+            "a\\<b\\> \\*c\\* \\[d\\] mass_fraction \\_x\\_"
+        );
         assert_eq!(md_code("a`b"), "``a`b``");
         assert_eq!(md_code("`x"), "`` `x ``");
     }

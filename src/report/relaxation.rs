@@ -215,7 +215,12 @@ pub fn write(
         page.table(&["N", "rel. RMSE", "Δ", "eligible"], rows);
     }
     super::warnings_and_solver(&mut page, &fit.warnings, &fit.solver);
-    let files: Vec<&str> = fit.provenance.files.iter().map(|f| f.path.as_str()).collect();
+    let files: Vec<&str> = fit
+        .provenance
+        .files
+        .iter()
+        .map(|f| f.path.as_str())
+        .collect();
     let run = Run::new(
         "relaxation",
         files.join(", "),

@@ -182,7 +182,10 @@ fn list_page(root: &Path, entries: &[Entry]) -> Page {
         .iter()
         .filter_map(|e| e.meta.as_ref().ok().map(|m| (e, m)))
         .map(|(e, m)| {
-            let plain = |s: String| Cell { text: s, href: None };
+            let plain = |s: String| Cell {
+                text: s,
+                href: None,
+            };
             vec![
                 plain(m.written.replace('T', " ").replace('Z', " UTC")),
                 Cell {
@@ -198,7 +201,9 @@ fn list_page(root: &Path, entries: &[Entry]) -> Page {
         })
         .collect();
     page.linked_table(
-        &["written", "report", "kind", "input", "model", "status", "headline"],
+        &[
+            "written", "report", "kind", "input", "model", "status", "headline",
+        ],
         rows,
     );
     let bad: Vec<_> = entries

@@ -341,7 +341,11 @@ pub fn write(o: &Outcome, input: &str, dir: &Path) -> Result<PathBuf> {
         format!(
             "max stroke {}",
             si(
-                o.rest_length_m - o.samples.iter().map(|s| s.length_m).fold(f64::INFINITY, f64::min),
+                o.rest_length_m
+                    - o.samples
+                        .iter()
+                        .map(|s| s.length_m)
+                        .fold(f64::INFINITY, f64::min),
                 "m"
             )
         ),

@@ -98,6 +98,16 @@ impl From<crate::rank::ranking::Status> for Tone {
 }
 
 impl Tone {
+    /// The tone of a status as every output spells it (`ok`, `completed`: good;
+    /// `warning`, `pull_in`: caution; anything else: bad).
+    pub fn of(word: &str) -> Tone {
+        match word {
+            "ok" | "completed" => Tone::Good,
+            "warning" | "pull_in" => Tone::Caution,
+            _ => Tone::Bad,
+        }
+    }
+
     fn class(self) -> &'static str {
         match self {
             Tone::Good => "good",
@@ -114,6 +124,19 @@ pub struct Cell {
     pub text: String,
     /// Link target relative to the page (HTML only; Markdown shows the text).
     pub href: Option<String>,
+    /// A status shown coloured by its tone (HTML only).
+    pub tone: Option<Tone>,
+}
+
+impl Cell {
+    /// A cell of plain text.
+    pub fn text(text: impl Into<String>) -> Cell {
+        Cell {
+            text: text.into(),
+            href: None,
+            tone: None,
+        }
+    }
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -229,11 +252,7 @@ impl Page {
         self.linked_table(
             header,
             rows.into_iter()
-                .map(|r| {
-                    r.into_iter()
-                        .map(|text| Cell { text, href: None })
-                        .collect()
-                })
+                .map(|r| r.into_iter().map(Cell::text).collect())
                 .collect(),
         );
     }
@@ -352,12 +371,7 @@ impl Page {
                 }
                 Block::Table { header, rows } => html_table(&mut s, header, rows),
                 Block::Figure { alt, svg, .. } => {
-                    let _ = writeln!(
-                        s,
-                        "<figure>\n{}\n<figcaption>{}</figcaption>\n</figure>",
-                        inline_svg(svg, alt),
-                        esc(alt)
-                    );
+                    let _ = writeln!(s, "<figure>\n{}\n</figure>", inline_svg(svg, alt));
                 }
             }
         }
@@ -394,7 +408,7 @@ const VERSION: &str = env!("CARGO_PKG_VERSION");
 /// right-aligned, figures no wider than the page, coloured status.
 pub(crate) const STYLE: &str = "\
 body{margin:0;background:#fff;color:#1b1b1b;font:16px/1.5 system-ui,-apple-system,\"Segoe UI\",Roboto,\"Noto Sans\",\"DejaVu Sans\",Arial,sans-serif}
-main{max-width:62rem;margin:0 auto;padding:1.5rem 1.25rem 3rem}
+main{max-width:80rem;margin:0 auto;padding:1.5rem 1.25rem 3rem}
 h1{font-size:1.6rem;line-height:1.25;margin:0 0 .75rem}
 h2{font-size:1.25rem;margin:2.2rem 0 .6rem;padding-bottom:.2rem;border-bottom:1px solid #d0d0d0}
 h3{font-size:1.05rem;margin:1.6rem 0 .5rem}
@@ -402,19 +416,20 @@ p,li{max-width:52rem}
 code{font-family:ui-monospace,\"DejaVu Sans Mono\",Menlo,Consolas,monospace;font-size:.88em;background:#f2f2f2;padding:0 .25em;border-radius:3px;overflow-wrap:anywhere}
 a{color:#0b57a4}
 .status{font-size:1.05rem}
-.status strong{padding:.1em .55em;border-radius:4px}
+.status strong,td strong{padding:.1em .55em;border-radius:4px}
 .good{background:#e2f3df;color:#195e13}
 .caution{background:#fff0c2;color:#654800}
 .bad{background:#fbdede;color:#8c1111}
 .scroll{overflow-x:auto;margin:.8rem 0 1.2rem}
 table{border-collapse:collapse;font-size:.9rem}
 th,td{border:1px solid #b9b9b9;padding:.25rem .55rem;text-align:left;vertical-align:top}
+td{overflow-wrap:break-word}
 th{background:#efefef;font-weight:600}
 tbody tr:nth-child(even){background:#fafafa}
 .num{text-align:right;font-variant-numeric:tabular-nums;white-space:nowrap}
+td strong{white-space:nowrap}
 figure{margin:1.2rem 0 1.8rem}
 figure svg{display:block;width:100%;max-width:900px;height:auto;border:1px solid #e3e3e3}
-figcaption{font-size:.88rem;color:#555;margin-top:.3rem}
 footer{margin-top:3rem;padding-top:.5rem;border-top:1px solid #d0d0d0;font-size:.85rem;color:#555}
 @media print{main{max-width:none}figure,table{break-inside:avoid}}
 ";
@@ -544,10 +559,15 @@ fn html_table(s: &mut String, header: &[String], rows: &[Vec<Cell>]) {
     for r in rows {
         s.push_str("<tr>");
         for (j, c) in r.iter().enumerate() {
-            let body = match &c.href {
-                Some(h) => format!("<a href=\"{}\">{}</a>", esc(&href(h)), esc(&c.text)),
-                None => esc(&c.text),
+            // A long path may break after any of its slashes.
+            let shown = esc(&c.text).replace('/', "/<wbr>");
+            let mut body = match &c.href {
+                Some(h) => format!("<a href=\"{}\">{shown}</a>", esc(&href(h))),
+                None => shown,
             };
+            if let Some(t) = c.tone {
+                body = format!("<strong class=\"{}\">{body}</strong>", t.class());
+            }
             let _ = write!(s, "<td{}>{body}</td>", class(j.min(numeric.len() - 1)));
         }
         s.push_str("</tr>\n");

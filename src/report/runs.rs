@@ -9,7 +9,7 @@
 //! carries [`LIST_MARKER`]); a folder whose `index.html` is anything else (a page of
 //! your own, a run's page when reports are nested) keeps it, and gets no list.
 
-use super::page::{code, text, Cell, Page};
+use super::page::{code, text, Cell, Page, Tone};
 use crate::error::{Error, Result};
 use crate::io::write::atomic_write;
 use serde::{Deserialize, Serialize};
@@ -182,21 +182,22 @@ fn list_page(root: &Path, entries: &[Entry]) -> Page {
         .iter()
         .filter_map(|e| e.meta.as_ref().ok().map(|m| (e, m)))
         .map(|(e, m)| {
-            let plain = |s: String| Cell {
-                text: s,
-                href: None,
-            };
             vec![
-                plain(m.written.replace('T', " ").replace('Z', " UTC")),
+                Cell::text(m.written.replace('T', " ").replace('Z', " UTC")),
                 Cell {
                     text: m.title.clone(),
                     href: Some(format!("{}/{}", e.folder, m.page)),
+                    tone: None,
                 },
-                plain(m.kind.clone()),
-                plain(m.input.clone()),
-                plain(m.model.clone()),
-                plain(m.status.clone()),
-                plain(m.headline.join("; ")),
+                Cell::text(m.kind.clone()),
+                Cell::text(m.input.clone()),
+                Cell::text(m.model.clone()),
+                Cell {
+                    text: m.status.clone(),
+                    href: None,
+                    tone: (!m.status.is_empty()).then(|| Tone::of(&m.status)),
+                },
+                Cell::text(m.headline.join("; ")),
             ]
         })
         .collect();

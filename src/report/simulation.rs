@@ -238,7 +238,7 @@ pub fn write(o: &Outcome, input: &str, dir: &Path) -> Result<PathBuf> {
         text(format!(" — {}", o.fidelity.reason)),
     ]];
     for a in &o.fidelity.arms {
-        facts.push(vec![text(format!("arm: {a}"))]);
+        facts.push(vec![text(a.to_string())]);
     }
     facts.push(vec![text(format!(
         "axial mode: {}, ζ = {:.3e}, Q = {:.3e}",
@@ -288,10 +288,8 @@ pub fn write(o: &Outcome, input: &str, dir: &Path) -> Result<PathBuf> {
     if let Some(r) = o.tracking_rmse_pct {
         facts.push(vec![text(format!("tracking %RMSE (Eq. 3.28): {r:.2} %"))]);
     }
-    for w in &o.warnings {
-        facts.push(vec![text(format!("warning: {w}"))]);
-    }
     page.list(facts);
+    page.warnings(&o.warnings);
     page.chart(dir, "stroke.svg", "stroke", &stroke)?;
     page.chart(dir, "voltage.svg", "voltage", &voltage)?;
     page.chart(dir, "power.svg", "power", &power)?;

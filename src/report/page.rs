@@ -535,7 +535,7 @@ fn numeric_cell(s: &str) -> Option<bool> {
     if t.is_empty() || t == "—" || t == "–" || t == "n/a" {
         return None;
     }
-    let t = t.trim_start_matches(['[', '(', '-', '+', '−', '±', '#']);
+    let t = t.trim_start_matches(['[', '(', '-', '+', '−', '±', '#', ' ']);
     Some(t.starts_with(|c: char| c.is_ascii_digit() || c == '.') || t.starts_with("inf"))
 }
 

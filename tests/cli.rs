@@ -535,8 +535,9 @@ fn json_is_the_fit_file() {
     let v: Value = serde_json::from_str(&printed).expect("one JSON object on stdout");
     assert_eq!(v["model"], "yeoh");
     assert_eq!(v["schema"], "dea-fit/hyperelastic-fit/1");
-    // Nothing but the fit and the report: no leftover temporary file.
-    assert_eq!(names_in(dir.path()), ["fit.json", "report"]);
+    // Nothing but the fit, the report and the run list of the folder holding the
+    // report (docs/reports.md): no leftover temporary file.
+    assert_eq!(names_in(dir.path()), ["fit.json", "index.html", "report"]);
 }
 
 /// The report directory holds the figure of data vs model, the residuals and a page
@@ -549,7 +550,14 @@ fn report_has_figures_and_index() {
     let report = dir.path().join("report");
     assert_eq!(
         names_in(&report),
-        [".dea-fit-output", "fit.svg", "index.md", "residuals.svg"]
+        [
+            ".dea-fit-output",
+            "fit.svg",
+            "index.html",
+            "index.md",
+            "residuals.svg",
+            "run.json"
+        ]
     );
     for svg in ["fit.svg", "residuals.svg"] {
         let s = std::fs::read_to_string(report.join(svg)).expect("svg");
@@ -557,7 +565,7 @@ fn report_has_figures_and_index() {
     }
     let index = std::fs::read_to_string(report.join("index.md")).expect("index.md");
     assert!(index.contains("fit.svg") && index.contains("residuals.svg"));
-    assert!(text.contains(&format!("report: {}", report.join("index.md").display())));
+    assert!(text.contains(&format!("report: {}", report.join("index.html").display())));
     // --no-report writes none.
     let dir2 = tempdir();
     ok(&hyperelastic(

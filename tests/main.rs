@@ -8,6 +8,7 @@ mod estimation;
 mod exit_status;
 mod export;
 mod fuzz;
+mod html_report;
 mod identify;
 mod identify_mass_fraction;
 mod material_file;

@@ -169,7 +169,7 @@ fn hyperelastic(a: HyperArgs) -> Result<Verdict> {
     bar.finish_and_clear();
     let rows = rows?;
     let note = format!(
-        "dea-fit {}; budget {} s and at least {} runs per case; {} cases. Rerun: `dea-fit bench hyperelastic`.",
+        "dea-fit {}; budget {} s and at least {} runs per case; {} cases. Rerun: dea-fit bench hyperelastic.",
         env!("CARGO_PKG_VERSION"),
         budget.seconds,
         budget.min_repeats,

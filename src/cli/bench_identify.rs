@@ -4,9 +4,12 @@
 //! start counts. Writes `reports/bench/identify.{csv,svg,md}`.
 
 use dea_fit::bench::identify_rows;
+use dea_fit::fit::{permittivity::worst, Status};
 use dea_fit::io::write::atomic_write;
 use dea_fit::report::format::table;
+use dea_fit::report::page::{code, link, text, Page};
 use dea_fit::report::plot::{Chart, Series, Style};
+use dea_fit::report::runs::Run;
 use dea_fit::sim::scene::Scene;
 use dea_fit::Result;
 use std::fmt::Write as _;
@@ -76,35 +79,57 @@ pub fn run(scene: &Path) -> Result<super::bench::Verdict> {
     let dir = Path::new("reports").join("bench");
     super::claim_dir(&dir)?;
     atomic_write(&dir.join("identify.csv"), csv.as_bytes())?;
-    Chart {
+    let chart = Chart {
         title: "identification of a 7 s, 3500-sample trace, 9 constants: error vs time".into(),
         x_label: "wall time (s)".into(),
         y_label: "log10 max |Δθ/θ| (identifiable constants)".into(),
         series,
         log_x: true,
-    }
-    .write_svg(&dir.join("identify.svg"))?;
-    let tab = table(
-        &[
-            "rtol",
-            "starts",
-            "time [s]",
-            "per start [s]",
-            "max |Δθ/θ|",
-            "max |Δθ|/σ",
-            "identified",
-            "at best",
-            "sim runs",
-            "status",
-        ],
-        &table_rows,
-    );
-    let md = format!(
-        "# Identification: time against parameter error\n\nScene `{}` simulated at its constants, 1 % contraction and 0.1 % capacitance noise (seed 10); the search starts 20 % above every constant. Time: one whole identification (multi-start, σ re-estimation, polish, assessment) on this machine. Rerun: `dea-fit bench identify`.\n\n![error vs time](identify.svg)\n\n```\n{tab}```\n",
-        scene.display()
-    );
-    atomic_write(&dir.join("identify.md"), md.as_bytes())?;
+    };
+    let header = [
+        "rtol",
+        "starts",
+        "time [s]",
+        "per start [s]",
+        "max |Δθ/θ|",
+        "max |Δθ|/σ",
+        "identified",
+        "at best",
+        "sim runs",
+        "status",
+    ];
+    let tab = table(&header, &table_rows);
+    let status = rows.iter().fold(Status::Ok, |s, r| worst(s, r.status));
+    let mut page = Page::new("Identification: time against parameter error");
+    page.para(vec![
+        text("Scene "),
+        code(scene.display().to_string()),
+        text(" simulated at its constants, 1 % contraction and 0.1 % capacitance noise (seed 10); the search starts 20 % above every constant. Time: one whole identification (multi-start, σ re-estimation, polish, assessment) on this machine. Rerun: "),
+        code("dea-fit bench identify"),
+        text(". All rows: "),
+        link("identify.csv", "identify.csv"),
+        text("."),
+    ]);
+    page.status_line(status, status);
+    page.chart(&dir, "identify.svg", "error vs time", &chart)?;
+    page.table(&header, table_rows);
+    let fastest = rows
+        .iter()
+        .min_by(|a, b| a.seconds.total_cmp(&b.seconds))
+        .map(|r| {
+            format!(
+                "fastest {:.3} s (rtol {:e}, {} start(s)), max |Δθ/θ| {:.2e}",
+                r.seconds, r.rtol, r.starts, r.max_rel_error
+            )
+        });
+    let run = Run::new(
+        "bench identify",
+        scene.display().to_string(),
+        s.name.clone(),
+    )
+    .headline(fastest.into_iter().collect());
+    let html = page.write(&dir, "identify", run)?;
     print!("{tab}");
-    println!("wrote {}", dir.join("identify.md").display());
+    println!("report: {}", html.display());
     Ok(verdict)
 }

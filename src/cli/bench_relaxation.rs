@@ -5,12 +5,15 @@
 //! `reports/bench/relaxation-time.svg`.
 
 use dea_fit::fit::relaxation::{self, Loading, Method, Settings};
+use dea_fit::fit::{permittivity::worst, Status};
 use dea_fit::io::relaxation::{from_table, log_times, RelaxationOptions, Synthetic};
 use dea_fit::io::table::Table;
 use dea_fit::io::write::atomic_write;
 use dea_fit::material::viscoelastic::preset;
 use dea_fit::report::format::table;
+use dea_fit::report::page::{code, link, text, Page};
 use dea_fit::report::plot::{Chart, Series, Style};
+use dea_fit::report::runs::Run;
 use dea_fit::Result;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -23,6 +26,7 @@ const REPS: usize = 15;
 /// Run the benchmark.
 pub fn run() -> Result<super::bench::Verdict> {
     let mut verdict = super::bench::Verdict::default();
+    let mut status = Status::Ok;
     let truth = preset("seed-table-3.3")?.prony;
     let syn = Synthetic {
         prony: truth.clone(),
@@ -74,6 +78,7 @@ pub fn run() -> Result<super::bench::Verdict> {
                 .fold(0.0, f64::max);
             let name = ["grid", "refined"][mi].to_string();
             verdict.add(format!("{name} {terms} terms"), fit.status);
+            status = worst(status, fit.status);
             let _ = writeln!(
                 csv_out,
                 "{name},{terms},{best:.6e},{:.6e},{err:.6e}",
@@ -106,38 +111,48 @@ pub fn run() -> Result<super::bench::Verdict> {
             })
             .collect()
     };
-    Chart {
+    let error_chart = Chart {
         title: "Table 3.3 curve: max |ΔE/E| over 0.01–1000 s vs terms".into(),
         x_label: "Prony terms".into(),
         y_label: "max relative modulus error [%]".into(),
         series: series(&err_series),
         log_x: false,
-    }
-    .write_svg(&dir.join("relaxation.svg"))?;
-    Chart {
+    };
+    let time_chart = Chart {
         title: "fit time (200 points, fastest of 15) vs terms".into(),
         x_label: "Prony terms".into(),
         y_label: "time [ms]".into(),
         series: series(&time_series),
         log_x: false,
-    }
-    .write_svg(&dir.join("relaxation-time.svg"))?;
-    let tab = table(
-        &[
-            "method",
-            "terms",
-            "time [ms]",
-            "rel. RMSE [%]",
-            "max |ΔE/E| [%]",
-            "status",
-        ],
-        &rows,
+    };
+    let header = [
+        "method",
+        "terms",
+        "time [ms]",
+        "rel. RMSE [%]",
+        "max |ΔE/E| [%]",
+        "status",
+    ];
+    let tab = table(&header, &rows);
+    let mut page = Page::new("Relaxation estimator: terms and method against error and time");
+    page.para(vec![
+        text(format!("Data: the seed's Table 3.3 (E0 = 222 kPa) as a step to strain 0.5, 200 log-spaced points over 0.01–1000 s, 1 % relative noise (seed 4910). Time: fastest of {REPS} runs, single fit with the given term count. Rerun: ")),
+        code("dea-fit bench relaxation"),
+        text(". All rows: "),
+        link("relaxation.csv", "relaxation.csv"),
+        text("."),
+    ]);
+    page.status_line(status, status);
+    page.chart(&dir, "relaxation.svg", "error", &error_chart)?;
+    page.chart(&dir, "relaxation-time.svg", "time", &time_chart)?;
+    page.table(&header, rows);
+    let run = Run::new(
+        "bench relaxation",
+        "synthetic: seed Table 3.3",
+        "Prony, 1–6 terms",
     );
-    let md = format!(
-        "# Relaxation estimator: terms and method against error and time\n\nData: the seed's Table 3.3 (E0 = 222 kPa) as a step to strain 0.5, 200 log-spaced points over 0.01–1000 s, 1 % relative noise (seed 4910). Time: fastest of {REPS} runs, single fit with the given term count.\n\n![error](relaxation.svg)\n\n![time](relaxation-time.svg)\n\n```\n{tab}```\n"
-    );
-    atomic_write(&dir.join("relaxation.md"), md.as_bytes())?;
+    let html = page.write(&dir, "relaxation", run)?;
     print!("{tab}");
-    println!("wrote {}", dir.join("relaxation.md").display());
+    println!("report: {}", html.display());
     Ok(verdict)
 }

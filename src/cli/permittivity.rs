@@ -179,9 +179,7 @@ pub fn run(a: Args) -> Result<i32> {
     if let (Some(out), false) = (&a.out, refused) {
         super::write_fit_noted(out, json.as_bytes(), |old| old == json)?;
     }
-    let page = page
-        .map(|dir| write_samples(&run.samples, &run.warnings, dir))
-        .transpose()?;
+    let page = page.map(|dir| write_samples(&run, dir)).transpose()?;
     if a.json {
         println!("{json}");
     } else {

@@ -92,9 +92,9 @@ pub fn run(a: Args) -> Result<i32> {
             csv
         }
     };
-    if !a.no_report {
-        simulation::write(&o, &dir)?;
-    }
+    let page = (!a.no_report)
+        .then(|| simulation::write(&o, &a.scene.display().to_string(), &dir))
+        .transpose()?;
     let last = o.samples.last().copied();
     let summary = serde_json::json!({
         "scene": o.scene,
@@ -139,6 +139,9 @@ pub fn run(a: Args) -> Result<i32> {
         println!("status: {}", o.integrator.status);
         for w in &o.warnings {
             println!("warning: {w}");
+        }
+        if let Some(p) = &page {
+            println!("report: {}", p.display());
         }
     }
     Ok(match o.integrator.status {

@@ -1,5 +1,5 @@
 //! What a ranking run writes: the table (stdout), the JSON, the CSV and the report
-//! (`index.md` with SVG charts: ranking bars, objective against loading per series
+//! (`index.md` and `index.html` with SVG charts: ranking bars, objective against loading per series
 //! naming its rules, the Pareto chart, stroke–voltage curves of the leaders).
 //! Each is a pure function of the run's identity, its evaluations and the ranking,
 //! so a merged sweep writes the same bytes as a single run.
@@ -12,7 +12,9 @@ use super::Figure;
 use crate::error::Result;
 use crate::fit::composite::Basis;
 use crate::report::format::{si, sig, table as text_table};
+use crate::report::page::{code, strong, text, Page};
 use crate::report::plot::{band, Chart, Series, Style};
+use crate::report::runs::Run;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -391,8 +393,8 @@ pub fn csv(evals: &[Evaluated], r: &Ranking) -> String {
 /// How many leaders the bar and stroke–voltage charts show.
 const LEADERS: usize = 10;
 
-/// Write the report into `dir` (claimed by the caller): the charts and index.md.
-/// Returns the page's path.
+/// Write the report into `dir` (claimed by the caller): the charts and the page
+/// (`index.md`, `index.html`, `run.json`). Returns the HTML page's path.
 pub fn write(
     dir: &Path,
     info: &RunInfo,
@@ -438,14 +440,13 @@ pub fn write(
             }
         })
         .collect();
-    Chart {
+    let ranking_chart = Chart {
         title: format!("{}: the {} best by {}", info.design, bars.len(), by.name()),
         x_label: "rank".into(),
         y_label: label(by),
         series: bars,
         log_x: false,
-    }
-    .write_svg(&dir.join("ranking.svg"))?;
+    };
 
     // Objective against filler volume fraction, per series, at the leader's drive.
     let lead_v = ranked
@@ -488,7 +489,7 @@ pub fn write(
             }
         })
         .collect();
-    Chart {
+    let loading_chart = Chart {
         title: format!(
             "{} against filler volume fraction{}",
             by.name(),
@@ -498,8 +499,7 @@ pub fn write(
         y_label: label(by),
         series: lines,
         log_x: false,
-    }
-    .write_svg(&dir.join("objective-vs-loading.svg"))?;
+    };
 
     // Pareto chart.
     let [a, b] = r.pareto.objectives;
@@ -516,7 +516,7 @@ pub fn write(
         .iter()
         .map(|p| (shown(a, p.values[0]), shown(b, p.values[1])))
         .collect();
-    Chart {
+    let pareto_chart = Chart {
         title: format!("Pareto front: {} against {}", a.name(), b.name()),
         x_label: label(a),
         y_label: label(b),
@@ -541,8 +541,7 @@ pub fn write(
             },
         ],
         log_x: false,
-    }
-    .write_svg(&dir.join("pareto.svg"))?;
+    };
 
     // Static stroke–voltage curves of the leaders, each with its drive point.
     let mut names: Vec<&str> = Vec::new();
@@ -574,52 +573,95 @@ pub fn write(
             });
         }
     }
-    Chart {
+    let stroke_chart = Chart {
         title: "static stroke against voltage: the leaders".into(),
         x_label: "voltage (kV)".into(),
         y_label: "static stroke (%)".into(),
         series: curves,
         log_x: false,
-    }
-    .write_svg(&dir.join("stroke-voltage.svg"))?;
+    };
 
     // The page.
-    let mut md = String::new();
-    let _ = writeln!(md, "# Ranking: {}\n", info.design);
-    let _ = writeln!(
-        md,
-        "Manifest `{}` (sha256 `{}`), actuator `{}`; drive {}; sweep: {}; {} points. Ranked by **{}** ({}). Status: **{}**.\n",
-        info.manifest, info.sha256, info.scene, info.drive, info.sweep, info.points, by.name(), by.label(), r.status
+    let mut page = Page::new(format!("Ranking: {}", info.design));
+    page.para(vec![
+        text("Manifest "),
+        code(&info.manifest),
+        text(" (sha256 "),
+        code(&info.sha256),
+        text("), actuator "),
+        code(&info.scene),
+        text(format!(
+            "; drive {}; sweep: {}; {} points. Ranked by ",
+            info.drive, info.sweep, info.points
+        )),
+        strong(by.name()),
+        text(format!(" ({}).", by.label())),
+    ]);
+    page.status_line(r.status, r.status);
+    page.chart(dir, "ranking.svg", "ranking", &ranking_chart)?;
+    page.chart(
+        dir,
+        "objective-vs-loading.svg",
+        "objective against loading",
+        &loading_chart,
+    )?;
+    page.chart(dir, "pareto.svg", "Pareto", &pareto_chart)?;
+    page.chart(
+        dir,
+        "stroke-voltage.svg",
+        "stroke against voltage",
+        &stroke_chart,
+    )?;
+    page.heading("The leaders");
+    let objective = format!("{} ({unit})", by.name());
+    let rows: Vec<Vec<String>> = ranked
+        .iter()
+        .take(if top == 0 { usize::MAX } else { top })
+        .map(|&i| {
+            let e = &evals[i].evaluation;
+            vec![
+                r.ranks[i].unwrap_or(0).to_string(),
+                e.name.clone(),
+                fmt_fig(&e.voltage, |v| si(v, "V")),
+                format!(
+                    "{} ({})",
+                    fmt_fig(&e.eps_r, |v| sig(v, 4)),
+                    e.eps_r.provenance
+                ),
+                format!(
+                    "{} ({})",
+                    fmt_fig(&e.youngs_modulus, |v| si(v, "Pa")),
+                    e.youngs_modulus.provenance
+                ),
+                fmt_fig(&e.fm, |v| sig(v, 3)),
+                by.value(e).map_or("—".into(), |v| sig(shown(by, v), 4)),
+                e.state.to_string(),
+                fmt_fig(&e.max_stroke, pct),
+                e.max_stroke_limit.to_string(),
+                fmt_fig(&e.response_time, |v| si(v, "s")),
+            ]
+        })
+        .collect();
+    page.table(
+        &[
+            "#",
+            "candidate",
+            "drive",
+            "εr",
+            "Y",
+            "Fm",
+            &objective,
+            "state",
+            "max stroke",
+            "limit",
+            "t10–90",
+        ],
+        rows,
     );
-    let _ = writeln!(md, "![ranking](ranking.svg)\n\n![objective against loading](objective-vs-loading.svg)\n\n![Pareto](pareto.svg)\n\n![stroke against voltage](stroke-voltage.svg)\n");
-    let _ = writeln!(md, "## The leaders\n");
-    let _ = writeln!(md, "| # | candidate | drive | εr | Y | Fm | {} ({unit}) | state | max stroke | limit | t10–90 |", by.name());
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|");
-    for &i in ranked.iter().take(if top == 0 { usize::MAX } else { top }) {
-        let e = &evals[i].evaluation;
-        let _ = writeln!(
-            md,
-            "| {} | {} | {} | {} ({}) | {} ({}) | {} | {} | {} | {} | {} | {} |",
-            r.ranks[i].unwrap_or(0),
-            e.name,
-            fmt_fig(&e.voltage, |v| si(v, "V")),
-            fmt_fig(&e.eps_r, |v| sig(v, 4)),
-            e.eps_r.provenance,
-            fmt_fig(&e.youngs_modulus, |v| si(v, "Pa")),
-            e.youngs_modulus.provenance,
-            fmt_fig(&e.fm, |v| sig(v, 3)),
-            by.value(e).map_or("—".into(), |v| sig(shown(by, v), 4)),
-            e.state,
-            fmt_fig(&e.max_stroke, pct),
-            e.max_stroke_limit,
-            fmt_fig(&e.response_time, |v| si(v, "s")),
-        );
-    }
-    let _ = writeln!(md, "\n## Best loading per series\n");
-    for b in &r.best {
-        let _ = writeln!(
-            md,
-            "* {} at {}: {} ({} = {}{}{})",
+    page.heading("Best loading per series");
+    page.bullets(r.best.iter().map(|b| {
+        format!(
+            "{} at {}: {} ({} = {}{}{})",
             b.series,
             si(b.voltage_v, "V"),
             b.name,
@@ -632,31 +674,33 @@ pub fn write(
             } else {
                 ""
             }
-        );
-    }
-    let _ = writeln!(
-        md,
-        "\n## Pareto front ({} against {})\n",
-        a.name(),
-        b.name()
-    );
-    for p in &r.pareto.front {
-        let _ = writeln!(
-            md,
-            "* {} at {}: {}, {}",
+        )
+    }));
+    page.heading(format!("Pareto front ({} against {})", a.name(), b.name()));
+    page.bullets(r.pareto.front.iter().map(|p| {
+        format!(
+            "{} at {}: {}, {}",
             p.name,
             si(p.voltage_v, "V"),
             fmt_objective(a, p.values[0]),
             fmt_objective(b, p.values[1])
-        );
-    }
-    if !r.warnings.is_empty() {
-        let _ = writeln!(md, "\n## Warnings\n");
-        for w in &r.warnings {
-            let _ = writeln!(md, "* {w}");
-        }
-    }
-    let page = dir.join("index.md");
-    crate::io::write::atomic_write(&page, md.as_bytes())?;
-    Ok(page)
+        )
+    }));
+    page.warnings(&r.warnings);
+    let leader = ranked.first().map(|&i| {
+        let e = &evals[i].evaluation;
+        format!(
+            "leader {} ({} {})",
+            e.name,
+            by.name(),
+            by.value(e).map_or("—".into(), |v| fmt_objective(by, v))
+        )
+    });
+    let run = Run::new("rank", info.manifest.clone(), info.design.clone()).headline(
+        leader
+            .into_iter()
+            .chain(std::iter::once(format!("{} points", info.points)))
+            .collect(),
+    );
+    page.write(dir, "index", run)
 }

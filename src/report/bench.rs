@@ -1,12 +1,14 @@
 //! Report of `dea-fit bench hyperelastic`: the rows as CSV, speed-vs-accuracy
 //! charts as SVG, and a Markdown page linking them with the headline figures.
 
-use super::format::{si, table};
+use super::format::si;
+use super::page::{code, link, strong, text, Page};
 use super::plot::{Chart, Series, Style};
+use super::runs::Run;
 use crate::bench::{HyperRow, Study, TRELOAR_ALL, VHB_UNIAXIAL};
 use crate::error::{Error, Result};
+use crate::fit::Status;
 use crate::io::write::atomic_write;
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// CSV of the rows (one line per case, header from [`HyperRow`]'s fields).
@@ -75,28 +77,35 @@ fn ms(s: f64) -> f64 {
     s * 1e3
 }
 
-/// Write `hyperelastic.csv`, the `hyperelastic-*.svg` charts and `hyperelastic.md`
-/// into `dir`; returns the page. `note` (e.g. the measurement budget and machine)
+/// Write `hyperelastic.csv`, the `hyperelastic-*.svg` charts and the page
+/// (`hyperelastic.md`, `hyperelastic.html`, `hyperelastic.run.json`) into `dir`;
+/// returns the HTML page. `note` (e.g. the measurement budget and machine)
 /// goes under the title.
 pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<PathBuf> {
     atomic_write(&dir.join("hyperelastic.csv"), csv(rows)?.as_bytes())?;
-    let mut md = String::new();
-    let _ = writeln!(md, "# Hyperelastic estimator: speed against accuracy\n");
-    let _ = writeln!(md, "{note}\n");
-    let _ = writeln!(
-        md,
-        "All rows: [hyperelastic.csv](hyperelastic.csv). Times are wall clock on one thread, \
-         median over repeated runs; *fit* is the whole `fit::hyperelastic::fit` call \
-         (search, uncertainty, Drucker check, extrapolation), *search* the estimator alone. \
-         The objective is ½‖r‖² of the absolute residuals (Pa²).\n"
-    );
-    let _ = writeln!(md, "## Headline\n");
-    for h in headline(rows) {
-        let _ = writeln!(md, "- {h}");
-    }
+    let status = rows.iter().fold(Status::Ok, |s, r| {
+        crate::fit::permittivity::worst(s, r.status)
+    });
+    let mut page = Page::new("Hyperelastic estimator: speed against accuracy");
+    page.text(note);
+    page.status_line(status, status);
+    page.para(vec![
+        text("All rows: "),
+        link("hyperelastic.csv", "hyperelastic.csv"),
+        text(". Times are wall clock on one thread, median over repeated runs; "),
+        strong("fit"),
+        text(" is the whole "),
+        code("fit::hyperelastic::fit"),
+        text(" call (search, uncertainty, Drucker check, extrapolation), "),
+        strong("search"),
+        text(" the estimator alone. The objective is ½‖r‖² of the absolute residuals (Pa²)."),
+    ]);
+    page.heading("Headline");
+    let headlines = headline(rows);
+    page.bullets(headlines.iter().cloned());
 
     // Models: one chart per dataset.
-    let _ = writeln!(md, "\n## Every model on the shipped data\n");
+    page.heading("Every model on the shipped data");
     let mut datasets: Vec<&str> = Vec::new();
     for r in rows.iter().filter(|r| r.study == Study::Models) {
         if !datasets.contains(&r.dataset.as_str()) {
@@ -109,7 +118,7 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
             .filter(|r| r.study == Study::Models && r.dataset == *d)
             .collect();
         let name = format!("hyperelastic-models-{d}.svg");
-        Chart {
+        let chart = Chart {
             title: format!("{d}: fit time vs RMSE"),
             x_label: "median time per fit [ms] (log)".into(),
             y_label: "RMSE [kPa]".into(),
@@ -124,9 +133,9 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
                 })
                 .collect(),
             log_x: true,
-        }
-        .write_svg(&dir.join(&name))?;
-        let _ = writeln!(md, "### {d}\n\n![{d}]({name})\n");
+        };
+        page.subheading(d.to_string());
+        page.chart(dir, &name, d, &chart)?;
         let body: Vec<Vec<String>> = sel
             .iter()
             .map(|r| {
@@ -142,38 +151,36 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
                 ]
             })
             .collect();
-        let _ = writeln!(
-            md,
-            "```\n{}```\n",
-            table(
-                &[
-                    "model",
-                    "fit (median)",
-                    "fit (min)",
-                    "search",
-                    "runs",
-                    "RMSE",
-                    "starts at best",
-                    "status"
-                ],
-                &body
-            )
+        page.table(
+            &[
+                "model",
+                "fit (median)",
+                "fit (min)",
+                "search",
+                "runs",
+                "RMSE",
+                "starts at best",
+                "status",
+            ],
+            body,
         );
     }
 
     // Sweeps of one setting on Ogden-3 / Treloar.
-    for (study, file, title, what) in [
+    for (study, file, title, setting, what) in [
         (
             Study::Starts,
             "hyperelastic-starts.svg",
             "multi-start points",
-            "`Settings::max_starts` (the first N of the deterministic start list)",
+            "Settings::max_starts",
+            "the first N of the deterministic start list",
         ),
         (
             Study::Tolerance,
             "hyperelastic-ftol.svg",
             "LM cost tolerance",
-            "`Settings::ftol` (relative cost decrease at which each LM search stops)",
+            "Settings::ftol",
+            "relative cost decrease at which each LM search stops",
         ),
     ] {
         let sel: Vec<&HyperRow> = rows.iter().filter(|r| r.study == study).collect();
@@ -204,18 +211,20 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
             color: 7,
             style: Style::Dashed,
         });
-        Chart {
+        let chart = Chart {
             title: format!("Ogden-3, {TRELOAR_ALL}: {title}, objective vs time"),
             x_label: "median time per fit [ms] (log)".into(),
             y_label: "objective above the best reached [ppm]".into(),
             series,
             log_x: true,
-        }
-        .write_svg(&dir.join(file))?;
-        let _ = writeln!(
-            md,
-            "## Ogden-3 on {TRELOAR_ALL}: {title}\n\nVaried: {what}.\n\n![{title}]({file})\n"
-        );
+        };
+        page.heading(format!("Ogden-3 on {TRELOAR_ALL}: {title}"));
+        page.para(vec![
+            text("Varied: "),
+            code(setting),
+            text(format!(" ({what}).")),
+        ]);
+        page.chart(dir, file, title, &chart)?;
         let body: Vec<Vec<String>> = sel
             .iter()
             .map(|r| {
@@ -232,23 +241,19 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
                 ]
             })
             .collect();
-        let _ = writeln!(
-            md,
-            "```\n{}```\n",
-            table(
-                &[
-                    &sel[0].setting,
-                    "fit (median)",
-                    "search",
-                    "objective",
-                    "excess over best",
-                    "RMSE",
-                    "starts at best",
-                    "iterations",
-                    "status"
-                ],
-                &body
-            )
+        page.table(
+            &[
+                &sel[0].setting,
+                "fit (median)",
+                "search",
+                "objective",
+                "excess over best",
+                "RMSE",
+                "starts at best",
+                "iterations",
+                "status",
+            ],
+            body,
         );
     }
 
@@ -294,23 +299,27 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
             })
             .chain(links)
             .collect();
-        Chart {
+        let chart = Chart {
             title: format!("{TRELOAR_ALL}: variable projection vs full LM, same starts"),
             x_label: "median search time [ms] (log)".into(),
             y_label: "starts ending at the best objective [%]".into(),
             series,
             log_x: true,
-        }
-        .write_svg(&dir.join(file))?;
-        let _ = writeln!(
-            md,
-            "## Variable projection vs full LM on {TRELOAR_ALL}\n\n\
-             Both search from the same starts: the exponents from the model's start list, \
-             the linear coefficients solved exactly at them (`Settings::method`); both end \
-             with the same full-parameter polish. \"Starts at best\" counts the starts whose \
-             search ended within 1e-6 (relative) of that run's best objective; compare the \
-             objectives to see that both runs found the same best.\n\n![method]({file})\n"
-        );
+        };
+        page.heading(format!("Variable projection vs full LM on {TRELOAR_ALL}"));
+        page.para(vec![
+            text(
+                "Both search from the same starts: the exponents from the model's start list, \
+                 the linear coefficients solved exactly at them (",
+            ),
+            code("Settings::method"),
+            text(
+                "); both end with the same full-parameter polish. \"Starts at best\" counts the \
+                 starts whose search ended within 1e-6 (relative) of that run's best objective; \
+                 compare the objectives to see that both runs found the same best.",
+            ),
+        ]);
+        page.chart(dir, file, "method", &chart)?;
         let body: Vec<Vec<String>> = sel
             .iter()
             .map(|r| {
@@ -327,26 +336,39 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
                 ]
             })
             .collect();
-        let _ = writeln!(
-            md,
-            "```\n{}```",
-            table(
-                &[
-                    "model",
-                    "method",
-                    "search",
-                    "fit",
-                    "objective",
-                    "starts at best",
-                    "iterations",
-                    "evaluations",
-                    "status"
-                ],
-                &body
-            )
+        page.table(
+            &[
+                "model",
+                "method",
+                "search",
+                "fit",
+                "objective",
+                "starts at best",
+                "iterations",
+                "evaluations",
+                "status",
+            ],
+            body,
         );
     }
-    let page = dir.join("hyperelastic.md");
-    atomic_write(&page, md.as_bytes())?;
-    Ok(page)
+    let mut inputs: Vec<&str> = Vec::new();
+    for r in rows {
+        if !inputs.contains(&r.dataset.as_str()) {
+            inputs.push(&r.dataset);
+        }
+    }
+    // The run list shows the time per fit of the two headline cases only.
+    let short: Vec<String> = [
+        (VHB_UNIAXIAL, "yeoh", "Yeoh"),
+        (TRELOAR_ALL, "ogden3", "Ogden-3"),
+    ]
+    .iter()
+    .filter_map(|&(d, m, name)| {
+        find(rows, Study::Models, d, m)
+            .first()
+            .map(|r| format!("{name} on {d}: {} per fit", si(r.fit_median_s, "s")))
+    })
+    .collect();
+    let run = Run::new("bench hyperelastic", inputs.join(", "), "every model").headline(short);
+    page.write(dir, "hyperelastic", run)
 }

@@ -1,14 +1,14 @@
 //! Report of a hyperelastic fit: data vs model for every mode on one figure
 //! (modes without data drawn dashed as extrapolation), residuals, and a Markdown page.
 
-use super::format::{si, table};
+use super::format::si;
+use super::page::{code, text, Page};
 use super::plot::{Chart, Series, Style};
+use super::runs::Run;
 use crate::data::Dataset;
 use crate::error::Result;
 use crate::fit::hyperelastic::HyperelasticFit;
-use crate::io::write::atomic_write;
 use crate::material::hyperelastic::Mode;
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 fn mode_color(m: Mode) -> usize {
@@ -19,7 +19,8 @@ fn mode_color(m: Mode) -> usize {
     }
 }
 
-/// Write `fit.svg`, `residuals.svg` and `index.md` into `dir`; returns the page.
+/// Write `fit.svg`, `residuals.svg` and the page (`index.md`, `index.html`, `run.json`)
+/// into `dir`; returns the HTML page.
 pub fn write(fit: &HyperelasticFit, data: &Dataset, dir: &Path) -> Result<PathBuf> {
     let model = fit.evaluator()?;
     let p = fit.values();
@@ -83,51 +84,43 @@ pub fn write(fit: &HyperelasticFit, data: &Dataset, dir: &Path) -> Result<PathBu
             style,
         });
     }
-    Chart {
+    let fit_chart = Chart {
         title: format!("{}: data and model", fit.model),
         x_label: "stretch λ".into(),
         y_label: "nominal stress [MPa]".into(),
         series,
         log_x: false,
-    }
-    .write_svg(&dir.join("fit.svg"))?;
-    Chart {
+    };
+    let resid_chart = Chart {
         title: format!("{}: residuals (model − data)", fit.model),
         x_label: "stretch λ".into(),
         y_label: "residual [kPa]".into(),
         series: resid,
         log_x: false,
-    }
-    .write_svg(&dir.join("residuals.svg"))?;
-
-    let page = dir.join("index.md");
-    atomic_write(&page, markdown(fit).as_bytes())?;
-    Ok(page)
-}
-
-/// The Markdown summary of a fit.
-pub fn markdown(fit: &HyperelasticFit) -> String {
-    let mut s = String::new();
-    let _ = writeln!(s, "# Hyperelastic fit: {}\n", fit.model);
+    };
+    let mut page = Page::new(format!("Hyperelastic fit: {}", fit.model));
     let files: Vec<String> = fit
         .provenance
         .files
         .iter()
-        .map(|f| {
-            format!(
-                "`{}` ({} points, sha256 {}…)",
-                f.path,
-                f.points,
-                f.sha256.get(..12).unwrap_or(&f.sha256)
-            )
-        })
+        .map(|f| f.path.clone())
         .collect();
-    let _ = writeln!(s, "Data: {}\n", files.join(", "));
-    let _ = writeln!(s, "Status: **{}**\n", fit.status);
-    let _ = writeln!(
-        s,
-        "![data and model](fit.svg)\n\n![residuals](residuals.svg)\n"
-    );
+    let mut data_line = vec![text("Data: ")];
+    for (i, f) in fit.provenance.files.iter().enumerate() {
+        if i > 0 {
+            data_line.push(text(", "));
+        }
+        data_line.push(code(&f.path));
+        data_line.push(text(format!(
+            " ({} points, sha256 {}…)",
+            f.points,
+            f.sha256.get(..12).unwrap_or(&f.sha256)
+        )));
+    }
+    page.para(data_line);
+    page.status_line(fit.status, fit.status);
+    page.chart(dir, "fit.svg", "data and model", &fit_chart)?;
+    page.chart(dir, "residuals.svg", "residuals", &resid_chart)?;
     let rows: Vec<Vec<String>> = fit
         .parameters
         .iter()
@@ -142,43 +135,32 @@ pub fn markdown(fit: &HyperelasticFit) -> String {
             ]
         })
         .collect();
-    let _ = writeln!(
-        s,
-        "```\n{}```\n",
-        table(
-            &["parameter", "value", "std. error", "95 % interval"],
-            &rows
-        )
-    );
-    let _ = writeln!(
-        s,
-        "μ0 = {}, RMSE = {}, R² = {}, %RMSE (seed Eq. 3.28) = {}, AICc = {}, BIC = {:.2}\n",
+    page.table(&["parameter", "value", "std. error", "95 % interval"], rows);
+    let r2 = fit.r2.map(|v| format!("{v:.5}")).unwrap_or("n/a".into());
+    page.text(format!(
+        "μ0 = {}, RMSE = {}, R² = {r2}, %RMSE (seed Eq. 3.28) = {}, AICc = {}, BIC = {:.2}",
         si(fit.initial_shear_modulus_pa, "Pa"),
         si(fit.rmse_pa, "Pa"),
-        fit.r2.map(|v| format!("{v:.5}")).unwrap_or("n/a".into()),
         fit.rmse_pct
             .map(|v| format!("{v:.3} %"))
             .unwrap_or("n/a".into()),
         fit.aicc.map(|v| format!("{v:.2}")).unwrap_or("n/a".into()),
         fit.bic
-    );
-    let _ = writeln!(s, "## Drucker stability (stretch 0.1–10)\n");
-    for d in &fit.drucker {
-        let _ = writeln!(
-            s,
-            "- {}: {} (stable {:.3}–{:.3})",
+    ));
+    page.heading("Drucker stability (stretch 0.1–10)");
+    page.bullets(fit.drucker.iter().map(|d| {
+        format!(
+            "{}: {} (stable {:.3}–{:.3})",
             d.mode,
             if d.stable { "stable" } else { "UNSTABLE" },
             d.stretch_min,
             d.stretch_max
-        );
-    }
+        )
+    }));
     if let Some(sel) = &fit.selection {
-        let _ = writeln!(
-            s,
-            "\n## Model selection\n\nRule: {}.\n\nChosen: {}.\n",
-            sel.rule, sel.reason
-        );
+        page.heading("Model selection");
+        page.text(format!("Rule: {}.", sel.rule));
+        page.text(format!("Chosen: {}.", sel.reason));
         let rows: Vec<Vec<String>> = sel
             .candidates
             .iter()
@@ -196,15 +178,16 @@ pub fn markdown(fit: &HyperelasticFit) -> String {
                 ]
             })
             .collect();
-        let _ = writeln!(
-            s,
-            "```\n{}```",
-            table(
-                &["model", "k", "RMSE", "R²", "ΔAICc", "status", "eligible"],
-                &rows
-            )
+        page.table(
+            &["model", "k", "RMSE", "R²", "ΔAICc", "status", "eligible"],
+            rows,
         );
     }
-    s.push_str(&super::warnings_and_solver(&fit.warnings, &fit.solver));
-    s
+    super::warnings_and_solver(&mut page, &fit.warnings, &fit.solver);
+    let run = Run::new("hyperelastic", files.join(", "), fit.model.clone()).headline(vec![
+        format!("μ0 {}", si(fit.initial_shear_modulus_pa, "Pa")),
+        format!("RMSE {}", si(fit.rmse_pa, "Pa")),
+        format!("R² {r2}"),
+    ]);
+    page.write(dir, "index", run)
 }

@@ -3,16 +3,16 @@
 //! constants, the correlation matrix as a picture, the multi-start waterfall, and a
 //! Markdown page linking them.
 
-use super::format::{constant, si, sig, table};
+use super::format::{constant, si, sig};
+use super::page::{code, text, Page};
 use super::plot::{nth_line, Chart, Series, Style};
+use super::runs::Run;
 use crate::error::{Error, Result};
 use crate::identify::material::Validation;
 use crate::identify::params;
 use crate::identify::problem::{sensitivity, simulated, Channel, ChannelKind, Experiment};
 use crate::identify::Identification;
-use crate::io::write::atomic_write;
 use plotters::prelude::*;
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// Display unit and factor of a channel's SI values.
@@ -33,8 +33,16 @@ pub fn write(
     validation: &[Validation],
     dir: &Path,
 ) -> Result<PathBuf> {
-    let mut md = String::from("# Identification from actuator traces\n\n");
-    let _ = writeln!(md, "status: **{}**\n", id.status);
+    let mut page = Page::new("Identification from actuator traces");
+    let mut traces = vec![text("Traces: ")];
+    for (i, e) in experiments.iter().enumerate() {
+        if i > 0 {
+            traces.push(text(", "));
+        }
+        traces.push(code(&e.name));
+    }
+    page.para(traces);
+    page.status_line(id.status, id.status);
     let derived = id.derived.iter().map(|p| (p, " (derived)"));
     let rows: Vec<Vec<String>> = id
         .parameters
@@ -55,11 +63,7 @@ pub fn write(
             ]
         })
         .collect();
-    let _ = writeln!(
-        md,
-        "```\n{}```\n",
-        table(&["parameter", "value", "σ", "identifiable"], &rows)
-    );
+    page.table(&["parameter", "value", "σ", "identifiable"], rows);
     for (ei, (e, o)) in experiments.iter().zip(&id.runs).enumerate() {
         let s0 = o.samples[0];
         for (ci, c) in e.channels.iter().enumerate() {
@@ -77,27 +81,31 @@ pub fn write(
                 .map(|s| (s.time_s, simulated(c.kind, &s0, s) * f))
                 .collect();
             let name = format!("trace{}-{}.svg", ei + 1, c.kind);
-            Chart {
-                title: format!("{}: {}", e.name, c.kind),
-                x_label: "time (s)".into(),
-                y_label: format!("{} ({unit})", c.kind),
-                series: vec![
-                    Series {
-                        label: "measured".into(),
-                        points: data,
-                        color: 0,
-                        style: Style::Points,
-                    },
-                    Series {
-                        label: "identified model".into(),
-                        points: model,
-                        color: 1,
-                        style: Style::Line,
-                    },
-                ],
-                log_x: false,
-            }
-            .write_svg(&dir.join(&name))?;
+            page.chart(
+                dir,
+                &name,
+                &format!("{}: {}, measured and identified model", e.name, c.kind),
+                &Chart {
+                    title: format!("{}: {}", e.name, c.kind),
+                    x_label: "time (s)".into(),
+                    y_label: format!("{} ({unit})", c.kind),
+                    series: vec![
+                        Series {
+                            label: "measured".into(),
+                            points: data,
+                            color: 0,
+                            style: Style::Points,
+                        },
+                        Series {
+                            label: "identified model".into(),
+                            points: model,
+                            color: 1,
+                            style: Style::Line,
+                        },
+                    ],
+                    log_x: false,
+                },
+            )?;
             let sigma = id.experiments[ei].channels[ci].sigma;
             let res: Vec<(f64, f64)> = o
                 .samples
@@ -107,27 +115,31 @@ pub fn write(
                 .map(|(s, y)| (s.time_s, (simulated(c.kind, &s0, s) - y) / sigma))
                 .collect();
             let rname = format!("trace{}-{}-residuals.svg", ei + 1, c.kind);
-            Chart {
-                title: format!("{}: {} residual / σ", e.name, c.kind),
-                x_label: "time (s)".into(),
-                y_label: "(model − measured) / σ".into(),
-                series: vec![Series {
-                    label: "residual".into(),
-                    points: res,
-                    color: 2,
-                    style: Style::Points,
-                }],
-                log_x: false,
-            }
-            .write_svg(&dir.join(&rname))?;
-            let _ = writeln!(md, "![{name}]({name})\n![{rname}]({rname})\n");
-            if let Some(sname) = sensitivity_chart(id, e, ei, c, sigma, dir)? {
+            page.chart(
+                dir,
+                &rname,
+                &format!("{}: {} residual / σ", e.name, c.kind),
+                &Chart {
+                    title: format!("{}: {} residual / σ", e.name, c.kind),
+                    x_label: "time (s)".into(),
+                    y_label: "(model − measured) / σ".into(),
+                    series: vec![Series {
+                        label: "residual".into(),
+                        points: res,
+                        color: 2,
+                        style: Style::Points,
+                    }],
+                    log_x: false,
+                },
+            )?;
+            if let Some((sname, chart)) = sensitivity_chart(id, e, ei, c, sigma) {
                 let noise = format!("{} {unit}", sig(sigma * f, 4));
-                let _ = writeln!(
-                    md,
-                    "Scaled sensitivities of the {kind}: θ·∂y/∂θ / σ for each free constant θ, the first-order change of the simulated {kind} y, in units of its noise σ = {noise}, for a 100 % change of θ, at the identified constants. A constant whose curve is small everywhere is weakly pinned down by this channel; two constants with proportional curves cannot be told apart by it.\n\n![{sname}]({sname})\n",
+                page.text(format!(
+                    "Scaled sensitivities of the {kind}: θ·∂y/∂θ / σ for each free constant θ, the first-order change of the simulated {kind} y, in units of its noise σ = {noise}, for a 100 % change of θ, at the identified constants. A constant whose curve is small everywhere is weakly pinned down by this channel; two constants with proportional curves cannot be told apart by it.",
                     kind = c.kind,
-                );
+                ));
+                let alt = format!("{}: {} sensitivities", e.name, c.kind);
+                page.chart(dir, &sname, &alt, &chart)?;
             }
         }
     }
@@ -144,23 +156,26 @@ pub fn write(
             )
         })
         .collect();
-    Chart {
-        title: format!(
-            "multi-start: {} of {} starts at the best cost",
-            id.solver.starts_at_best, id.solver.starts
-        ),
-        x_label: "start (sorted by final cost)".into(),
-        y_label: "log10(cost − best + 0.001)".into(),
-        series: vec![Series {
-            label: "final ½χ²".into(),
-            points: costs,
-            color: 3,
-            style: Style::Points,
-        }],
-        log_x: false,
-    }
-    .write_svg(&dir.join("waterfall.svg"))?;
-    let _ = writeln!(md, "![waterfall](waterfall.svg)\n");
+    page.chart(
+        dir,
+        "waterfall.svg",
+        "waterfall",
+        &Chart {
+            title: format!(
+                "multi-start: {} of {} starts at the best cost",
+                id.solver.starts_at_best, id.solver.starts
+            ),
+            x_label: "start (sorted by final cost)".into(),
+            y_label: "log10(cost − best + 0.001)".into(),
+            series: vec![Series {
+                label: "final ½χ²".into(),
+                points: costs,
+                color: 3,
+                style: Style::Points,
+            }],
+            log_x: false,
+        },
+    )?;
     for p in &id.profiles {
         let (unit, f) = match p.unit.as_str() {
             "Pa" => ("kPa", 1e-3),
@@ -179,34 +194,42 @@ pub fn write(
                 (a.min(p.0), b.max(p.0))
             });
         let name = format!("profile-{}.svg", p.name);
-        Chart {
-            title: format!("profile likelihood of {}", p.name),
-            x_label: format!("{} ({unit})", p.name),
-            y_label: "Δχ² (others re-fitted)".into(),
-            series: vec![
-                Series {
-                    label: "profile".into(),
-                    points: pts,
-                    color: 0,
-                    style: Style::Line,
-                },
-                Series {
-                    label: "95 % (3.84)".into(),
-                    points: vec![
-                        (lo, crate::identify::profile::DELTA_CHI2_95),
-                        (hi, crate::identify::profile::DELTA_CHI2_95),
-                    ],
-                    color: 1,
-                    style: Style::Dashed,
-                },
-            ],
-            log_x: false,
-        }
-        .write_svg(&dir.join(&name))?;
-        let _ = writeln!(md, "![{name}]({name})\n");
+        page.chart(
+            dir,
+            &name,
+            &name,
+            &Chart {
+                title: format!("profile likelihood of {}", p.name),
+                x_label: format!("{} ({unit})", p.name),
+                y_label: "Δχ² (others re-fitted)".into(),
+                series: vec![
+                    Series {
+                        label: "profile".into(),
+                        points: pts,
+                        color: 0,
+                        style: Style::Line,
+                    },
+                    Series {
+                        label: "95 % (3.84)".into(),
+                        points: vec![
+                            (lo, crate::identify::profile::DELTA_CHI2_95),
+                            (hi, crate::identify::profile::DELTA_CHI2_95),
+                        ],
+                        color: 1,
+                        style: Style::Dashed,
+                    },
+                ],
+                log_x: false,
+            },
+        )?;
     }
-    correlation(id, &dir.join("correlation.svg"))?;
-    let _ = writeln!(md, "![correlation](correlation.svg)\n");
+    let corr = correlation(id, &dir.join("correlation.svg"))?;
+    page.svg(
+        dir,
+        "correlation.svg",
+        "correlation of the free constants",
+        corr,
+    )?;
     for v in validation {
         let rows: Vec<Vec<String>> = v
             .channels
@@ -222,29 +245,35 @@ pub fn write(
             })
             .collect();
         match &v.failed {
-            Some(why) => {
-                let _ = writeln!(md, "Held-out trace {}: not predicted: {why}\n", v.file);
-            }
+            Some(why) => page.para(vec![
+                text("Held-out trace "),
+                code(&v.file),
+                text(format!(": not predicted: {why}")),
+            ]),
             None => {
-                let _ = writeln!(
-                    md,
-                    "Held-out trace {}:\n```\n{}```\n",
-                    v.file,
-                    table(&["channel", "RMSE", "%RMSE"], &rows)
-                );
+                page.para(vec![text("Held-out trace "), code(&v.file), text(":")]);
+                page.table(&["channel", "RMSE", "%RMSE"], rows);
             }
         }
     }
-    for w in &id.warnings {
-        let _ = writeln!(md, "- warning: {w}");
-    }
-    let page = dir.join("index.md");
-    atomic_write(&page, md.as_bytes())?;
-    Ok(page)
+    page.warnings(&id.warnings);
+    let files: Vec<&str> = experiments.iter().map(|e| e.name.as_str()).collect();
+    let scene = experiments
+        .first()
+        .map_or(String::new(), |e| e.scene.name.clone());
+    let run = Run::new("identify", files.join(", "), scene).headline(
+        id.parameters
+            .iter()
+            .take(4)
+            .map(|p| format!("{} {}", p.name, constant(&p.name, p.value, &p.unit)))
+            .chain(std::iter::once(format!("χ²/dof {:.3}", id.chi2_per_dof)))
+            .collect(),
+    );
+    page.write(dir, "index", run)
 }
 
 /// The chart of θk·∂y/∂θk / σ against time for channel `c` of experiment `ei` (`e`)
-/// and every free constant θk, at the identified constants: its file name, or None
+/// and every free constant θk, at the identified constants, with its file name; None
 /// when the run has no sensitivities.
 fn sensitivity_chart(
     id: &Identification,
@@ -252,12 +281,9 @@ fn sensitivity_chart(
     ei: usize,
     c: &Channel,
     sigma: f64,
-    dir: &Path,
-) -> Result<Option<String>> {
+) -> Option<(String, Chart)> {
     let o = &id.runs[ei];
-    let Some(se) = &o.sensitivities else {
-        return Ok(None);
-    };
+    let se = o.sensitivities.as_ref()?;
     let constants = params::constants(&e.scene);
     let series = id
         .parameters
@@ -284,27 +310,28 @@ fn sensitivity_chart(
         })
         .collect();
     let name = format!("sensitivities{}-{}.svg", ei + 1, c.kind);
-    Chart {
+    let chart = Chart {
         title: format!("{}: {} sensitivities θ·∂y/∂θ / σ", e.name, c.kind),
         x_label: "time (s)".into(),
         y_label: format!("θ·∂({})/∂θ / σ  (noise units)", c.kind),
         series,
         log_x: false,
-    }
-    .write_svg(&dir.join(&name))?;
-    Ok(Some(name))
+    };
+    Some((name, chart))
 }
 
 /// The correlation matrix of the free constants as coloured cells (blue −1 … white
-/// 0 … red +1; grey where undefined), with the names on both axes.
-fn correlation(id: &Identification, path: &Path) -> Result<()> {
+/// 0 … red +1; grey where undefined), with the names on both axes, as SVG text;
+/// `path` (where it goes) names it in an error.
+fn correlation(id: &Identification, path: &Path) -> Result<String> {
     let names: Vec<&str> = id.parameters.iter().map(|p| p.name.as_str()).collect();
     let k = names.len();
     let cell = 48i32;
     let margin = 90i32;
     let size = (margin + cell * k as i32 + 20) as u32;
     let fail = |e: String| Error::settings(format!("{}: {e}", path.display()));
-    let root = SVGBackend::new(path, (size, size)).into_drawing_area();
+    let mut svg = String::new();
+    let root = SVGBackend::with_string(&mut svg, (size, size)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| fail(e.to_string()))?;
     for (a, row) in id.assessment.correlation.iter().enumerate() {
         for (b, rho) in row.iter().enumerate() {
@@ -348,5 +375,6 @@ fn correlation(id: &Identification, path: &Path) -> Result<()> {
         .map_err(|e| fail(e.to_string()))?;
     }
     root.present().map_err(|e| fail(e.to_string()))?;
-    Ok(())
+    drop(root);
+    Ok(svg)
 }

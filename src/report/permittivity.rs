@@ -3,18 +3,20 @@
 //! fraction with the fitted mixing rules, and a Markdown page with the tables.
 
 use super::format::{sig, table, tolerance};
+use super::page::{code, text, Page};
 use super::plot::{Chart, Series, Style};
+use super::runs::Run;
 use crate::error::Result;
 use crate::fit::composite::{CompositeFit, FrequencyFit};
-use crate::fit::permittivity::SamplePermittivity;
-use crate::io::write::atomic_write;
-use std::fmt::Write as _;
+use crate::fit::permittivity::{PermittivityRun, SamplePermittivity};
 use std::path::{Path, PathBuf};
 
 /// At most this many samples are drawn on one figure (the tables list all).
 pub const MAX_DRAWN: usize = 24;
 
-fn freq_charts(samples: &[SamplePermittivity], dir: &Path) -> Result<()> {
+/// The εr and tan δ charts of `samples` (the first [`MAX_DRAWN`]), drawn into `dir`
+/// and shown on `page`.
+fn freq_charts(samples: &[SamplePermittivity], page: &mut Page, dir: &Path) -> Result<()> {
     let drawn = &samples[..samples.len().min(MAX_DRAWN)];
     let series = |f: &dyn Fn(&crate::fit::permittivity::PermittivityPoint) -> f64| {
         drawn
@@ -28,22 +30,29 @@ fn freq_charts(samples: &[SamplePermittivity], dir: &Path) -> Result<()> {
             })
             .collect()
     };
-    Chart {
+    let eps = Chart {
         title: "Relative permittivity".into(),
         x_label: "frequency (Hz)".into(),
         y_label: "εr′".into(),
         series: series(&|p| p.eps_r),
         log_x: true,
-    }
-    .write_svg(&dir.join("eps_r.svg"))?;
-    Chart {
+    };
+    let tan = Chart {
         title: "Loss tangent".into(),
         x_label: "frequency (Hz)".into(),
         y_label: "tan δ".into(),
         series: series(&|p| p.tan_delta),
         log_x: true,
+    };
+    page.chart(dir, "eps_r.svg", "εr", &eps)?;
+    page.chart(dir, "tan_delta.svg", "tan δ", &tan)?;
+    if samples.len() > MAX_DRAWN {
+        page.text(format!(
+            "The figures show the first {MAX_DRAWN} of {} samples.",
+            samples.len()
+        ));
     }
-    .write_svg(&dir.join("tan_delta.svg"))
+    Ok(())
 }
 
 /// Indices of the points nearest each decade (at most 8 rows per sample).
@@ -70,16 +79,18 @@ fn decade_rows(s: &SamplePermittivity) -> Vec<usize> {
     idx
 }
 
-/// Text table of one sample (all points, or the points nearest each decade when
-/// `decades`).
-pub fn sample_table(s: &SamplePermittivity, decades: bool) -> String {
+/// The header of a sample's table.
+const SAMPLE_HEADER: [&str; 6] = ["f (Hz)", "εr′", "± σ", "εr″", "tan δ", "σ (S/m)"];
+
+/// The rows of one sample's table (all points, or the points nearest each decade
+/// when `decades`).
+fn sample_rows(s: &SamplePermittivity, decades: bool) -> Vec<Vec<String>> {
     let idx: Vec<usize> = if decades {
         decade_rows(s)
     } else {
         (0..s.points.len()).collect()
     };
-    let rows: Vec<Vec<String>> = idx
-        .iter()
+    idx.iter()
         .map(|&i| {
             let p = &s.points[i];
             vec![
@@ -91,53 +102,77 @@ pub fn sample_table(s: &SamplePermittivity, decades: bool) -> String {
                 format!("{:.3e}", p.conductivity),
             ]
         })
-        .collect();
-    table(&["f (Hz)", "εr′", "± σ", "εr″", "tan δ", "σ (S/m)"], &rows)
+        .collect()
 }
 
-fn samples_md(samples: &[SamplePermittivity], md: &mut String) {
+/// Text table of one sample (all points, or the points nearest each decade when
+/// `decades`).
+pub fn sample_table(s: &SamplePermittivity, decades: bool) -> String {
+    table(&SAMPLE_HEADER, &sample_rows(s, decades))
+}
+
+/// One section per sample: its source, status, table (points nearest each decade),
+/// warnings and notes.
+fn samples_section(samples: &[SamplePermittivity], page: &mut Page) {
     for s in samples {
-        let _ = writeln!(
-            md,
-            "\n## {}\n\n`{}` ({}, {}), status {}\n",
-            s.name,
-            s.provenance.path,
-            s.provenance.format,
-            s.provenance.pair.name(),
-            s.status
+        page.heading(s.name.clone());
+        page.para(vec![
+            code(&s.provenance.path),
+            text(format!(
+                " ({}, {}), status {}",
+                s.provenance.format,
+                s.provenance.pair.name(),
+                s.status
+            )),
+        ]);
+        page.table(&SAMPLE_HEADER, sample_rows(s, true));
+        page.bullets(
+            s.warnings
+                .iter()
+                .map(|w| format!("warning: {w}"))
+                .chain(s.notes.iter().cloned()),
         );
-        let _ = writeln!(md, "```\n{}```", sample_table(s, true));
-        for w in &s.warnings {
-            let _ = writeln!(md, "- warning: {w}");
-        }
-        for n in &s.notes {
-            let _ = writeln!(md, "- {n}");
-        }
     }
 }
 
-/// Write `eps_r.svg`, `tan_delta.svg` and `index.md` for a batch; returns the page.
-pub fn write_samples(
-    samples: &[SamplePermittivity],
-    warnings: &[String],
-    dir: &Path,
-) -> Result<PathBuf> {
-    freq_charts(samples, dir)?;
-    let mut md = String::from("# Permittivity\n\n![εr](eps_r.svg)\n\n![tan δ](tan_delta.svg)\n");
-    if samples.len() > MAX_DRAWN {
-        let _ = writeln!(
-            md,
-            "\nThe figures show the first {MAX_DRAWN} of {} samples.",
-            samples.len()
-        );
-    }
-    for w in warnings {
-        let _ = writeln!(md, "- warning: {w}");
-    }
-    samples_md(samples, &mut md);
-    let page = dir.join("index.md");
-    atomic_write(&page, md.as_bytes())?;
-    Ok(page)
+/// Write `eps_r.svg`, `tan_delta.svg` and the page (`index.md`, `index.html`,
+/// `run.json`) for a batch; returns the HTML page.
+pub fn write_samples(run: &PermittivityRun, dir: &Path) -> Result<PathBuf> {
+    let mut page = Page::new("Permittivity");
+    page.status_line(run.status, run.status);
+    freq_charts(&run.samples, &mut page, dir)?;
+    page.bullets(run.warnings.iter().map(|w| format!("warning: {w}")));
+    samples_section(&run.samples, &mut page);
+    let files: Vec<&str> = run
+        .samples
+        .iter()
+        .map(|s| s.provenance.path.as_str())
+        .collect();
+    let headline = run
+        .samples
+        .iter()
+        .take(3)
+        .filter_map(|s| {
+            let i = *decade_rows(s).iter().min_by(|&&a, &&b| {
+                let d = |k: usize| (s.points[k].freq_hz.log10() - 3.0).abs();
+                d(a).total_cmp(&d(b))
+            })?;
+            let p = &s.points[i];
+            Some(format!(
+                "{}: εr′ {:.3} at {} Hz",
+                s.name,
+                p.eps_r,
+                sig(p.freq_hz, 4)
+            ))
+        })
+        .collect();
+    let r = Run::new(
+        "permittivity",
+        files.join(", "),
+        format!("{} sample(s)", run.samples.len()),
+    )
+    .headline(headline);
+    page.write(dir, "index", r)
 }
 
 /// The frequency fit nearest 1 kHz (the figure's reference), if any.
@@ -148,10 +183,21 @@ pub fn reference_fit(fit: &CompositeFit) -> Option<&FrequencyFit> {
     })
 }
 
-/// Ranking table of one frequency.
-pub fn ranking_table(f: &FrequencyFit) -> String {
-    let rows: Vec<Vec<String>> = f
-        .rules
+/// The header of a frequency's ranking table.
+const RANKING_HEADER: [&str; 8] = [
+    "rule",
+    "εm",
+    "εf (effective)",
+    "n",
+    "RMS %",
+    "AICc",
+    "Δ",
+    "status",
+];
+
+/// The rows of the ranking of the mixing rules at one frequency.
+fn ranking_rows(f: &FrequencyFit) -> Vec<Vec<String>> {
+    f.rules
         .iter()
         .map(|r| {
             let par = |name: &str| {
@@ -180,30 +226,28 @@ pub fn ranking_table(f: &FrequencyFit) -> String {
                 r.status.to_string(),
             ]
         })
-        .collect();
-    table(
-        &[
-            "rule",
-            "εm",
-            "εf (effective)",
-            "n",
-            "RMS %",
-            "AICc",
-            "Δ",
-            "status",
-        ],
-        &rows,
-    )
+        .collect()
 }
 
-/// Write the composite report (`eps_r.svg`, `tan_delta.svg`, `mixing.svg`,
-/// `index.md`) into `dir`; returns the page.
+/// Ranking table of one frequency.
+pub fn ranking_table(f: &FrequencyFit) -> String {
+    table(&RANKING_HEADER, &ranking_rows(f))
+}
+
+/// Write the composite report (`eps_r.svg`, `tan_delta.svg`, `mixing.svg` and the page:
+/// `index.md`, `index.html`, `run.json`) into `dir`; returns the HTML page.
 pub fn write_composite(fit: &CompositeFit, dir: &Path) -> Result<PathBuf> {
-    freq_charts(&fit.samples, dir)?;
-    let mut md = format!(
-        "# {}\n\nMatrix: {} · filler: {}\n\n![εr](eps_r.svg)\n\n![tan δ](tan_delta.svg)\n",
-        fit.name, fit.matrix.name, fit.filler.name
-    );
+    let mut page = Page::new(fit.name.clone());
+    page.para(vec![
+        text(format!(
+            "Matrix: {} · filler: {} · manifest ",
+            fit.matrix.name, fit.filler.name
+        )),
+        code(&fit.provenance.manifest),
+    ]);
+    page.status_line(fit.status, fit.status);
+    freq_charts(&fit.samples, &mut page, dir)?;
+    let mut headline = Vec::new();
     if let Some(rf) = reference_fit(fit) {
         let phi_max = rf
             .data
@@ -245,7 +289,7 @@ pub fn write_composite(fit: &CompositeFit, dir: &Path) -> Result<PathBuf> {
                 },
             });
         }
-        Chart {
+        let chart = Chart {
             title: format!(
                 "εr against filler volume fraction at {} Hz",
                 sig(rf.freq_hz, 4)
@@ -254,14 +298,18 @@ pub fn write_composite(fit: &CompositeFit, dir: &Path) -> Result<PathBuf> {
             y_label: "εr′".into(),
             series,
             log_x: false,
+        };
+        page.chart(dir, "mixing.svg", "mixing rules", &chart)?;
+        page.heading(format!("Mixing rules at {} Hz", sig(rf.freq_hz, 4)));
+        page.table(&RANKING_HEADER, ranking_rows(rf));
+        if let Some(best) = rf.rules.iter().min_by(|a, b| a.delta.total_cmp(&b.delta)) {
+            headline.push(format!(
+                "best rule at {} Hz: {} (RMS {:.3} %)",
+                sig(rf.freq_hz, 4),
+                best.rule.name(),
+                best.rms_rel_pct
+            ));
         }
-        .write_svg(&dir.join("mixing.svg"))?;
-        let _ = writeln!(
-            md,
-            "\n![mixing rules](mixing.svg)\n\n## Mixing rules at {} Hz\n\n```\n{}```",
-            sig(rf.freq_hz, 4),
-            ranking_table(rf)
-        );
     }
     if !fit.summary.is_empty() {
         let rows: Vec<Vec<String>> = fit
@@ -281,14 +329,10 @@ pub fn write_composite(fit: &CompositeFit, dir: &Path) -> Result<PathBuf> {
                 ]
             })
             .collect();
-        let _ = writeln!(
-            md,
-            "\n## Over {} frequencies\n\n```\n{}```",
-            fit.fits.len(),
-            table(
-                &["rule", "best at", "median Δ", "εf effective", "unusable at"],
-                &rows
-            )
+        page.heading(format!("Over {} frequencies", fit.fits.len()));
+        page.table(
+            &["rule", "best at", "median Δ", "εf effective", "unusable at"],
+            rows,
         );
     }
     let frows: Vec<Vec<String>> = fit
@@ -305,22 +349,19 @@ pub fn write_composite(fit: &CompositeFit, dir: &Path) -> Result<PathBuf> {
             ]
         })
         .collect();
-    let _ = writeln!(
-        md,
-        "\n## Fractions\n\n```\n{}```",
-        table(&["sample", "as given", "volume", "weight"], &frows)
-    );
+    page.heading("Fractions");
+    page.table(&["sample", "as given", "volume", "weight"], frows);
     if !fit.claims.is_empty() {
-        md.push_str("\n## Claims\n\n");
-        for c in &fit.claims {
-            let _ = writeln!(md, "- {}", c.verdict);
-        }
+        page.heading("Claims");
+        page.bullets(fit.claims.iter().map(|c| c.verdict.clone()));
     }
-    for w in &fit.warnings {
-        let _ = writeln!(md, "- warning: {w}");
-    }
-    samples_md(&fit.samples, &mut md);
-    let page = dir.join("index.md");
-    atomic_write(&page, md.as_bytes())?;
-    Ok(page)
+    page.warnings(&fit.warnings);
+    samples_section(&fit.samples, &mut page);
+    let run = Run::new(
+        "composite",
+        fit.provenance.manifest.clone(),
+        format!("{} in {}", fit.filler.name, fit.matrix.name),
+    )
+    .headline(headline);
+    page.write(dir, "index", run)
 }

@@ -164,10 +164,15 @@ impl Chart {
 
     /// Render to an SVG file (written atomically).
     pub fn write_svg(&self, path: &Path) -> Result<()> {
+        crate::io::write::atomic_write(path, self.svg(path)?.as_bytes())
+    }
+
+    /// Render to SVG text; `path` (where it goes) names the chart in an error.
+    pub fn svg(&self, path: &Path) -> Result<String> {
         let mut svg = String::new();
         self.draw(&mut svg)
             .map_err(|e| Error::settings(format!("could not draw {}: {e}", path.display())))?;
-        crate::io::write::atomic_write(path, svg.as_bytes())
+        Ok(svg)
     }
 
     fn draw(&self, out: &mut String) -> std::result::Result<(), Box<dyn std::error::Error + '_>> {

@@ -3,18 +3,18 @@
 //! relaxation spectrum (grid NNLS and the fitted terms), storage and loss moduli
 //! against frequency, and a Markdown page.
 
-use super::format::{si, table};
+use super::format::si;
+use super::page::{code, text, Page};
 use super::plot::{Chart, Series, Style};
+use super::runs::Run;
 use crate::error::Result;
 use crate::fit::problem::{Residual, REL_FLOOR};
 use crate::fit::relaxation::{predict, unloads, QlvInput, RelaxationFit};
 use crate::io::relaxation::RelaxationData;
-use crate::io::write::atomic_write;
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-/// Write `fit.svg`, `residuals.svg`, `spectrum.svg`, `dynamic.svg` and `index.md` into
-/// `dir`; returns the page.
+/// Write `fit.svg`, `residuals.svg`, `spectrum.svg`, `dynamic.svg` and the page
+/// (`index.md`, `index.html`, `run.json`) into `dir`; returns the HTML page.
 pub fn write(
     fit: &RelaxationFit,
     data: &RelaxationData,
@@ -28,7 +28,7 @@ pub fn write(
         .filter(|&i| !log_x || data.time[i] > 0.0)
         .collect();
     let n = fit.prony.len();
-    Chart {
+    let fit_chart = Chart {
         title: format!("relaxation: data and {n}-term Prony fit"),
         x_label: "time [s]".into(),
         y_label: "nominal stress [kPa]".into(),
@@ -50,14 +50,13 @@ pub fn write(
             },
         ],
         log_x,
-    }
-    .write_svg(&dir.join("fit.svg"))?;
+    };
     let ymax = data.stress.iter().map(|v| v.abs()).fold(0.0, f64::max);
     let scale = |y: f64| match fit.residual {
         Residual::Rel => y.abs().max(REL_FLOOR * ymax),
         Residual::Abs => ymax,
     };
-    Chart {
+    let residuals_chart = Chart {
         title: match fit.residual {
             Residual::Rel => "relative residuals (model − data) / |data|".into(),
             Residual::Abs => "residuals (model − data) / peak |data|".into(),
@@ -77,9 +76,8 @@ pub fn write(
             style: Style::Points,
         }],
         log_x,
-    }
-    .write_svg(&dir.join("residuals.svg"))?;
-    Chart {
+    };
+    let spectrum_chart = Chart {
         title: "relaxation spectrum".into(),
         x_label: "relaxation time τ [s]".into(),
         y_label: "modulus [kPa]".into(),
@@ -106,8 +104,7 @@ pub fn write(
             },
         ],
         log_x: true,
-    }
-    .write_svg(&dir.join("spectrum.svg"))?;
+    };
     let prony = fit.prony_series()?;
     let (lo, hi) = (
         1.0 / fit.time_window_s[1] / 10.0,
@@ -117,7 +114,7 @@ pub fn write(
         .map(|i| lo * (hi / lo).powf(i as f64 / 120.0))
         .collect();
     let sl: Vec<(f64, f64)> = omegas.iter().map(|&w| prony.storage_loss(w)).collect();
-    Chart {
+    let dynamic_chart = Chart {
         title: "storage and loss moduli (from the fit)".into(),
         x_label: "angular frequency ω [rad/s]".into(),
         y_label: "modulus [kPa]".into(),
@@ -144,37 +141,29 @@ pub fn write(
             },
         ],
         log_x: true,
-    }
-    .write_svg(&dir.join("dynamic.svg"))?;
-    let page = dir.join("index.md");
-    atomic_write(&page, markdown(fit).as_bytes())?;
-    Ok(page)
-}
-
-/// The Markdown summary of a relaxation fit.
-pub fn markdown(fit: &RelaxationFit) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "# Relaxation fit: {} Prony terms ({} formulation)\n",
+    };
+    let mut page = Page::new(format!(
+        "Relaxation fit: {} Prony terms ({} formulation)",
         fit.prony.len(),
         fit.formulation
-    );
+    ));
     for f in &fit.provenance.files {
-        let _ = writeln!(
-            s,
-            "Data: `{}` ({} points, sha256 {}…); loading: {}.\n",
-            f.path,
-            f.points,
-            &f.sha256[..12.min(f.sha256.len())],
-            fit.loading
-        );
+        page.para(vec![
+            text("Data: "),
+            code(&f.path),
+            text(format!(
+                " ({} points, sha256 {}…); loading: {}.",
+                f.points,
+                &f.sha256[..12.min(f.sha256.len())],
+                fit.loading
+            )),
+        ]);
     }
-    let _ = writeln!(s, "Status: **{}**\n", fit.status);
-    let _ = writeln!(
-        s,
-        "![data and fit](fit.svg)\n\n![residuals](residuals.svg)\n\n![spectrum](spectrum.svg)\n\n![storage and loss](dynamic.svg)\n"
-    );
+    page.status_line(fit.status, fit.status);
+    page.chart(dir, "fit.svg", "data and fit", &fit_chart)?;
+    page.chart(dir, "residuals.svg", "residuals", &residuals_chart)?;
+    page.chart(dir, "spectrum.svg", "spectrum", &spectrum_chart)?;
+    page.chart(dir, "dynamic.svg", "storage and loss", &dynamic_chart)?;
     let rows: Vec<Vec<String>> = fit
         .prony
         .iter()
@@ -191,14 +180,9 @@ pub fn markdown(fit: &RelaxationFit) -> String {
             ]
         })
         .collect();
-    let _ = writeln!(
-        s,
-        "```\n{}```\n",
-        table(&["τ", "σ(τ)", "E = k", "σ(E)", "g", "n = k·τ"], &rows)
-    );
-    let _ = writeln!(
-        s,
-        "E∞ = {}, E0 = {}, g∞ = {:.4}; RMSE = {}, relative RMSE = {:.3} %, R² = {:.5}, AICc = {}, BIC = {:.2}\n",
+    page.table(&["τ", "σ(τ)", "E = k", "σ(E)", "g", "n = k·τ"], rows);
+    page.text(format!(
+        "E∞ = {}, E0 = {}, g∞ = {:.4}; RMSE = {}, relative RMSE = {:.3} %, R² = {:.5}, AICc = {}, BIC = {:.2}",
         si(fit.long_term_modulus_pa, "Pa"),
         si(fit.instantaneous_modulus_pa, "Pa"),
         fit.g_inf,
@@ -207,13 +191,11 @@ pub fn markdown(fit: &RelaxationFit) -> String {
         fit.r2,
         fit.aicc.map(|v| format!("{v:.2}")).unwrap_or("n/a".into()),
         fit.bic
-    );
+    ));
     if let Some(sel) = &fit.selection {
-        let _ = writeln!(
-            s,
-            "## Term count\n\nRule: {}.\n\nChosen: {}.\n",
-            sel.rule, sel.reason
-        );
+        page.heading("Term count");
+        page.text(format!("Rule: {}.", sel.rule));
+        page.text(format!("Chosen: {}.", sel.reason));
         let rows: Vec<Vec<String>> = sel
             .candidates
             .iter()
@@ -230,12 +212,24 @@ pub fn markdown(fit: &RelaxationFit) -> String {
                 ]
             })
             .collect();
-        let _ = writeln!(
-            s,
-            "```\n{}```",
-            table(&["N", "rel. RMSE", "Δ", "eligible"], &rows)
-        );
+        page.table(&["N", "rel. RMSE", "Δ", "eligible"], rows);
     }
-    s.push_str(&super::warnings_and_solver(&fit.warnings, &fit.solver));
-    s
+    super::warnings_and_solver(&mut page, &fit.warnings, &fit.solver);
+    let files: Vec<&str> = fit
+        .provenance
+        .files
+        .iter()
+        .map(|f| f.path.as_str())
+        .collect();
+    let run = Run::new(
+        "relaxation",
+        files.join(", "),
+        format!("Prony, {} terms ({})", fit.prony.len(), fit.formulation),
+    )
+    .headline(vec![
+        format!("E0 {}", si(fit.instantaneous_modulus_pa, "Pa")),
+        format!("E∞ {}", si(fit.long_term_modulus_pa, "Pa")),
+        format!("relative RMSE {:.3} %", 100.0 * fit.rel_rmse),
+    ]);
+    page.write(dir, "index", run)
 }

@@ -2,9 +2,10 @@
 //! and a Markdown summary; and the trajectory CSV.
 
 use super::format::si;
+use super::page::{code, strong, text, Page};
 use super::plot::{band, nth_line, Chart, Series, Style};
+use super::runs::Run;
 use crate::error::Result;
-use crate::io::write::atomic_write;
 use crate::sim::sampling::Band;
 use crate::sim::{Outcome, Rows as SensRows, Sensitivities};
 use std::fmt::Write as _;
@@ -171,12 +172,14 @@ fn trace(
     }
 }
 
-/// Write `stroke.svg`, `voltage.svg`, `power.svg` and `index.md` into `dir`.
-pub fn write(o: &Outcome, dir: &Path) -> Result<PathBuf> {
+/// Write `stroke.svg`, `voltage.svg`, `power.svg` (and `sensitivities.svg`) and the
+/// page (`index.md`, `index.html`, `run.json`) into `dir`; `input` names the scene
+/// file. Returns the HTML page.
+pub fn write(o: &Outcome, input: &str, dir: &Path) -> Result<PathBuf> {
     let pts = |f: &dyn Fn(&crate::sim::Sample) -> f64| -> Vec<(f64, f64)> {
         o.samples.iter().map(|s| (s.time_s, f(s))).collect()
     };
-    Chart {
+    let stroke = Chart {
         title: format!("{}: stroke", o.scene),
         x_label: "time (s)".into(),
         y_label: "contraction (mm)".into(),
@@ -189,9 +192,8 @@ pub fn write(o: &Outcome, dir: &Path) -> Result<PathBuf> {
             &|l| (o.rest_length_m - l) * 1e3,
         )],
         log_x: false,
-    }
-    .write_svg(&dir.join("stroke.svg"))?;
-    Chart {
+    };
+    let voltage = Chart {
         title: format!("{}: voltage", o.scene),
         x_label: "time (s)".into(),
         y_label: "voltage (kV)".into(),
@@ -210,9 +212,8 @@ pub fn write(o: &Outcome, dir: &Path) -> Result<PathBuf> {
             },
         ],
         log_x: false,
-    }
-    .write_svg(&dir.join("voltage.svg"))?;
-    Chart {
+    };
+    let power = Chart {
         title: format!("{}: power", o.scene),
         x_label: "time (s)".into(),
         y_label: "power (W)".into(),
@@ -226,30 +227,28 @@ pub fn write(o: &Outcome, dir: &Path) -> Result<PathBuf> {
             },
         ],
         log_x: false,
-    }
-    .write_svg(&dir.join("power.svg"))?;
+    };
     let x = o.extremes();
-    let mut md = String::new();
-    let _ = writeln!(md, "# Simulation: {}\n", o.scene);
-    let _ = writeln!(
-        md,
-        "- fidelity: **{}** — {}",
-        o.fidelity.model, o.fidelity.reason
-    );
+    let mut page = Page::new(format!("Simulation: {}", o.scene));
+    page.para(vec![text("Scene: "), code(input)]);
+    page.status_line(o.integrator.status, o.integrator.status);
+    let mut facts = vec![vec![
+        text("fidelity: "),
+        strong(o.fidelity.model.to_string()),
+        text(format!(" — {}", o.fidelity.reason)),
+    ]];
     for a in &o.fidelity.arms {
-        let _ = writeln!(md, "  - {a}");
+        facts.push(vec![text(a.to_string())]);
     }
-    let _ = writeln!(
-        md,
-        "- axial mode: {} , ζ = {:.3e}, Q = {:.3e}",
+    facts.push(vec![text(format!(
+        "axial mode: {}, ζ = {:.3e}, Q = {:.3e}",
         si(o.mode.frequency_hz, "Hz"),
         o.mode.damping_ratio,
         o.mode.q_factor
-    );
+    ))]);
     let i = &o.integrator;
-    let _ = writeln!(
-        md,
-        "- integrator: {} (rtol {:.0e}; {}): {} steps, {} rejected, {} restarts, {} f-evals — {}",
+    facts.push(vec![text(format!(
+        "integrator: {} (rtol {:.0e}; {}): {} steps, {} rejected, {} restarts, {} f-evals — {}",
         i.method,
         i.rtol,
         i.reason,
@@ -258,61 +257,60 @@ pub fn write(o: &Outcome, dir: &Path) -> Result<PathBuf> {
         i.stats.restarts,
         i.stats.rhs_evals,
         i.message
-    );
-    let _ = writeln!(
-        md,
-        "- stretch {:.6} … {:.6} (rest {:.6}); max current {}, max power {} (leakage up to {})",
+    ))]);
+    facts.push(vec![text(format!(
+        "stretch {:.6} … {:.6} (rest {:.6}); max current {}, max power {} (leakage up to {})",
         x.stretch_min,
         x.stretch_max,
         o.rest_stretch,
         si(x.current_max_a, "A"),
         si(x.power_max_w, "W"),
         si(x.leakage_max_w, "W")
-    );
+    ))]);
     for e in &o.events {
-        let _ = writeln!(
-            md,
-            "- **{}** at t = {:.6} s, V = {}, λ = {:.5}",
-            e.kind,
-            e.time_s,
-            si(e.voltage_v, "V"),
-            e.stretch
-        );
+        facts.push(vec![
+            strong(e.kind.to_string()),
+            text(format!(
+                " at t = {:.6} s, V = {}, λ = {:.5}",
+                e.time_s,
+                si(e.voltage_v, "V"),
+                e.stretch
+            )),
+        ]);
     }
     let en = &o.energy;
-    let _ = writeln!(
-        md,
-        "- energy: in {} = field {} + elastic {} + arms {} + kinetic {} + load {} + viscous {} + leakage {} + source {} (residual {})",
+    facts.push(vec![text(format!(
+        "energy: in {} = field {} + elastic {} + arms {} + kinetic {} + load {} + viscous {} + leakage {} + source {} (residual {})",
         si(en.input_j, "J"), si(en.field_j, "J"), si(en.elastic_j, "J"), si(en.arms_j, "J"),
         si(en.kinetic_j, "J"), si(en.load_j, "J"), si(en.viscous_j, "J"), si(en.leakage_j, "J"),
         si(en.source_j, "J"), si(en.residual_j, "J")
-    );
+    ))]);
     if let Some(r) = o.tracking_rmse_pct {
-        let _ = writeln!(md, "- tracking %RMSE (Eq. 3.28): {r:.2} %");
+        facts.push(vec![text(format!("tracking %RMSE (Eq. 3.28): {r:.2} %"))]);
     }
-    for w in &o.warnings {
-        let _ = writeln!(md, "- warning: {w}");
-    }
-    let _ = writeln!(
-        md,
-        "\n![stroke](stroke.svg)\n![voltage](voltage.svg)\n![power](power.svg)"
-    );
+    page.list(facts);
+    page.warnings(&o.warnings);
+    page.chart(dir, "stroke.svg", "stroke", &stroke)?;
+    page.chart(dir, "voltage.svg", "voltage", &voltage)?;
+    page.chart(dir, "power.svg", "power", &power)?;
     if let Some(se) = &o.sensitivities {
-        let _ = writeln!(
-            md,
-            "\n## Sensitivities\n\nLargest first-order change over the run for a 100 % change of each parameter (θ·∂/∂θ):\n\n| parameter | value | stretch | capacitance |\n|---|---|---|---|"
+        page.heading("Sensitivities");
+        page.text("Largest first-order change over the run for a 100 % change of each parameter (θ·∂/∂θ):");
+        page.table(
+            &["parameter", "value", "stretch", "capacitance"],
+            scaled_sensitivities(se)
+                .into_iter()
+                .map(|r| {
+                    vec![
+                        r.param,
+                        format!("{:.4e}", r.value),
+                        format!("{:.3e}", r.stretch),
+                        si(r.capacitance_f, "F"),
+                    ]
+                })
+                .collect(),
         );
-        for r in scaled_sensitivities(se) {
-            let _ = writeln!(
-                md,
-                "| {} | {:.4e} | {:.3e} | {} |",
-                r.param,
-                r.value,
-                r.stretch,
-                si(r.capacitance_f, "F")
-            );
-        }
-        Chart {
+        let chart = Chart {
             title: format!("{}: stretch sensitivities θ·∂λ/∂θ", o.scene),
             x_label: "time (s)".into(),
             y_label: "θ·∂λ/∂θ".into(),
@@ -334,11 +332,23 @@ pub fn write(o: &Outcome, dir: &Path) -> Result<PathBuf> {
                 })
                 .collect(),
             log_x: false,
-        }
-        .write_svg(&dir.join("sensitivities.svg"))?;
-        let _ = writeln!(md, "\n![sensitivities](sensitivities.svg)");
+        };
+        page.chart(dir, "sensitivities.svg", "sensitivities", &chart)?;
     }
-    let page = dir.join("index.md");
-    atomic_write(&page, md.as_bytes())?;
-    Ok(page)
+    let run = Run::new("simulate", input, o.fidelity.model.to_string()).headline(vec![
+        format!(
+            "max stroke {}",
+            si(
+                o.rest_length_m
+                    - o.samples
+                        .iter()
+                        .map(|s| s.length_m)
+                        .fold(f64::INFINITY, f64::min),
+                "m"
+            )
+        ),
+        format!("max power {}", si(x.power_max_w, "W")),
+        format!("{} event(s)", o.events.len()),
+    ]);
+    page.write(dir, "index", run)
 }

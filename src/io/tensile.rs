@@ -253,15 +253,20 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
         (None, None) => None,
     };
 
+    // Column names for errors, made once rather than per row.
+    let (kname, sname) = (
+        format!("'{}'", table.header[kc]),
+        format!("'{}'", table.header[sc]),
+    );
     let mut samples = Vec::with_capacity(table.rows.len());
     for row in &table.rows {
-        let x = table.number(row, kc, &format!("'{}'", table.header[kc]))?;
+        let x = table.number(row, kc, &kname)?;
         let lam = match kin {
             Kin::Stretch => x,
             Kin::Strain(f) => 1.0 + x * f,
             Kin::Displacement(f) => 1.0 + x * f,
         };
-        let y = table.number(row, sc, &format!("'{}'", table.header[sc]))?;
+        let y = table.number(row, sc, &sname)?;
         let p = match stress {
             Stress::Nominal(f) => y * f,
             Stress::True(f) => y * f / lam,
@@ -273,10 +278,10 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
         };
         let mode = match mode_col {
             Some(c) => {
-                let m = Mode::parse(&row.fields[c]).ok_or_else(|| {
+                let m = Mode::parse(table.field(row, c)).ok_or_else(|| {
                     Error::input(
                         table.loc(row, c),
-                        format!("unknown mode '{}'", row.fields[c]),
+                        format!("unknown mode '{}'", table.field(row, c)),
                     )
                     .with_hint("use uniaxial, equibiaxial or planar")
                 })?;
@@ -307,7 +312,7 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
             let converted = f.field == Field::Stretch && !matches!(kin, Kin::Stretch)
                 || f.field == Field::Stress && !matches!(stress, Stress::Nominal(_));
             let message = if converted {
-                format!("{} (from '{}')", f.message, row.fields[col])
+                format!("{} (from '{}')", f.message, table.field(row, col))
             } else {
                 f.message
             };

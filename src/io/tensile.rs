@@ -13,7 +13,7 @@
 use super::table::{split_header, Table};
 use crate::data::{Dataset, Field, Sample, Source};
 use crate::error::{Error, Location, Result};
-use crate::material::hyperelastic::Mode;
+use crate::material::hyperelastic::{Mode, StrainEnergy};
 use crate::units::Dimension;
 use std::path::Path;
 
@@ -351,4 +351,39 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
             conversions,
         }],
     })
+}
+
+/// Append synthetic tensile rows `stretch,nominal_stress_kPa` (stretch to 6 decimals,
+/// stress in kPa to 6) to `out`: the model's nominal stress at each stretch with
+/// Gaussian noise, relative (`noise`, a fraction of the stress) and absolute
+/// (`noise_abs`, Pa), drawn from `rng` (two draws per row). Used by `dea-fit synth
+/// hyperelastic` and `dea-fit bench scale`.
+pub fn synthetic_rows(
+    model: &dyn StrainEnergy,
+    p: &[f64],
+    mode: Mode,
+    stretches: impl Iterator<Item = f64>,
+    (noise, noise_abs): (f64, f64),
+    rng: &mut impl rand::Rng,
+    out: &mut String,
+) -> Result<()> {
+    use rand_distr::Distribution;
+    use std::fmt::Write as _;
+    let unit = rand_distr::Normal::new(0.0, 1.0).expect("a unit normal is valid");
+    for l in stretches {
+        let clean = model.nominal_stress(p, mode, l);
+        let e1: f64 = unit.sample(rng);
+        let e2: f64 = unit.sample(rng);
+        let y = clean * (1.0 + noise * e1) + noise_abs * e2;
+        if !y.is_finite() {
+            return Err(Error::settings(format!(
+                "the model gives a non-finite stress ({y}) at stretch {l}: no data written"
+            ))
+            .with_hint(
+                "keep --stretch inside the model's domain (e.g. below Gent's locking stretch)",
+            ));
+        }
+        let _ = writeln!(out, "{l:.6},{:.6}", y / 1e3);
+    }
+    Ok(())
 }

@@ -133,6 +133,45 @@ impl<'a> HyperProblem<'a> {
         }
     }
 
+    /// At most `per_mode` points of each mode, spread evenly over its stretches (the
+    /// mode's points sorted by stretch, every ((m − 1)/(per_mode − 1))-th taken, both
+    /// ends kept), in their original order and with their multipliers; `None` when no
+    /// mode has more than `per_mode` points (the problem is its own subsample).
+    /// A smooth loading curve keeps its shape, so a multi-start search on the
+    /// subsample finds the basin of the optimum at a cost independent of n.
+    pub fn subsample(&self, per_mode: usize) -> Option<HyperProblem<'a>> {
+        let per_mode = per_mode.max(2);
+        let mut keep = Vec::new();
+        let mut thinned = false;
+        for mode in Mode::ALL {
+            let mut idx: Vec<usize> = (0..self.len()).filter(|&i| self.modes[i] == mode).collect();
+            let m = idx.len();
+            if m <= per_mode {
+                keep.extend(idx);
+                continue;
+            }
+            thinned = true;
+            idx.sort_by(|&i, &j| self.stretch[i].total_cmp(&self.stretch[j]));
+            keep.extend(
+                (0..per_mode).map(|q| idx[(q * (m - 1) + (per_mode - 1) / 2) / (per_mode - 1)]),
+            );
+        }
+        if !thinned {
+            return None;
+        }
+        keep.sort_unstable();
+        keep.dedup();
+        Some(HyperProblem {
+            model: self.model,
+            modes: keep.iter().map(|&i| self.modes[i]).collect(),
+            stretch: keep.iter().map(|&i| self.stretch[i]).collect(),
+            stress: keep.iter().map(|&i| self.stress[i]).collect(),
+            scale: keep.iter().map(|&i| self.scale[i]).collect(),
+            evaluations: 0,
+            row: self.row.clone(),
+        })
+    }
+
     /// Number of points.
     pub fn len(&self) -> usize {
         self.stretch.len()

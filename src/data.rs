@@ -196,6 +196,11 @@ pub struct Dataset {
 impl Dataset {
     /// Append another dataset, renumbering its sources.
     pub fn extend(&mut self, other: Dataset) {
+        if self.sources.is_empty() && self.samples.is_empty() {
+            // The first file: its sources are numbered from 0 already.
+            *self = other;
+            return;
+        }
         let off = self.sources.len();
         self.samples.extend(other.samples.into_iter().map(|mut s| {
             s.source += off;

@@ -103,3 +103,73 @@ fn bench_rejects_bad_settings_and_missing_data() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("no/such/dir") && err.contains("hint"), "{err}");
 }
+
+/// `bench scale` on small sizes: every estimator timed at each size, a finite log-log
+/// slope per estimator (no timing threshold: the machine is shared), and the CSV,
+/// JSON, chart and page written. Bad size settings are refused.
+#[test]
+fn bench_scale_writes_rows_slopes_and_chart() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bench");
+    let run = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_dea-fit"))
+            .current_dir(root())
+            .args(["bench", "scale", "--budget", "0", "--min-repeats", "1"])
+            .args(["--out-dir", out.to_str().unwrap()])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let o = run(&[
+        "--min-rows",
+        "30",
+        "--max-rows",
+        "300",
+        "--max-fit-rows",
+        "90",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("scale.json")).unwrap()).unwrap();
+    let rows = json["rows"].as_array().unwrap();
+    // Sizes: 30, 95, 300 read; 30, 90 fitted by the automatic choices.
+    for (estimator, sizes) in [
+        ("read", vec![30, 95, 300]),
+        ("read+yeoh", vec![30, 95, 300]),
+        ("hyperelastic-auto", vec![30, 90]),
+        ("relaxation-auto", vec![30, 90]),
+    ] {
+        let got: Vec<u64> = rows
+            .iter()
+            .filter(|r| r["estimator"] == estimator)
+            .map(|r| r["rows"].as_u64().unwrap())
+            .collect();
+        assert_eq!(got, sizes, "{estimator}");
+        let slope = json["slopes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|s| s["estimator"] == estimator)
+            .unwrap();
+        assert!(slope["slope"].as_f64().unwrap().is_finite(), "{slope}");
+        assert!(stdout.contains(estimator), "{stdout}");
+    }
+    for r in rows {
+        let t = r["median_s"].as_f64().unwrap();
+        assert!(t > 0.0 && t.is_finite(), "{r}");
+    }
+    let csv = std::fs::read_to_string(out.join("scale.csv")).unwrap();
+    assert!(csv.starts_with("estimator,rows,median_s,min_s,repeats,per_row_s\n"));
+    assert_eq!(csv.lines().count(), 1 + rows.len());
+    assert!(std::fs::read_to_string(out.join("scale.svg"))
+        .unwrap()
+        .contains("<svg"));
+    assert!(std::fs::read_to_string(out.join("scale.md"))
+        .unwrap()
+        .contains("](scale.svg)"));
+
+    let o = run(&["--min-rows", "300", "--max-rows", "100"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--min-rows"));
+}

@@ -36,6 +36,9 @@ enum What {
     Identify(IdentifyArgs),
     /// Ranking: candidate evaluations per second against sweep size and threads.
     Rank(super::bench_rank::RankArgs),
+    /// Growth with input size: each reader and estimator timed at growing row counts,
+    /// with the log-log slope of time against rows (1 = linear).
+    Scale(super::bench_scale::ScaleArgs),
 }
 
 #[derive(Debug, clap::Args)]
@@ -95,6 +98,7 @@ pub fn run(a: Args) -> Result<i32> {
         What::Simulate(s) => super::bench_simulate::run(&s.scenes)?,
         What::Identify(i) => super::bench_identify::run(&i.scene)?,
         What::Rank(r) => super::bench_rank::run(&r)?,
+        What::Scale(s) => super::bench_scale::run(&s)?,
     };
     Ok(verdict.report(a.strict))
 }

@@ -4,6 +4,7 @@ mod bench;
 mod bench_identify;
 mod bench_rank;
 mod bench_relaxation;
+mod bench_scale;
 mod bench_simulate;
 mod composite;
 mod export;

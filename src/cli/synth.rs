@@ -172,7 +172,6 @@ fn hyperelastic(a: Args) -> Result<i32> {
         return Err(Error::settings("noise must be finite and ≥ 0"));
     }
     let mut rng = ChaCha8Rng::seed_from_u64(a.seed);
-    let unit = Normal::new(0.0, 1.0).expect("valid");
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -195,22 +194,15 @@ fn hyperelastic(a: Args) -> Result<i32> {
     let _ = writeln!(s, "# noise: relative {noise} and absolute {noise_abs:e} Pa (Gaussian, standard deviations), seed {} (ChaCha8)", a.seed);
     let _ = writeln!(s, "# mode: {mode}");
     let _ = writeln!(s, "stretch,nominal_stress_kPa");
-    for i in 0..count {
-        let l = l0 + (l1 - l0) * i as f64 / (count - 1) as f64;
-        let clean = model.nominal_stress(&p, mode, l);
-        let e1: f64 = unit.sample(&mut rng);
-        let e2: f64 = unit.sample(&mut rng);
-        let y = clean * (1.0 + noise * e1) + noise_abs * e2;
-        if !y.is_finite() {
-            return Err(Error::settings(format!(
-                "the model gives a non-finite stress ({y}) at stretch {l}: no data written"
-            ))
-            .with_hint(
-                "keep --stretch inside the model's domain (e.g. below Gent's locking stretch)",
-            ));
-        }
-        let _ = writeln!(s, "{l:.6},{:.6}", y / 1e3);
-    }
+    dea_fit::io::tensile::synthetic_rows(
+        model.as_ref(),
+        &p,
+        mode,
+        (0..count).map(|i| l0 + (l1 - l0) * i as f64 / (count - 1) as f64),
+        (noise, noise_abs),
+        &mut rng,
+        &mut s,
+    )?;
     // Drucker stability (dP/dλ > 0) over the requested stretches in this mode
     let check = dea_fit::fit::diagnostics::drucker(model.as_ref(), &p);
     let stable = check

@@ -436,42 +436,49 @@ fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Es
     };
     let nonlin: Vec<usize> = (0..k).filter(|&j| !model.params()[j].linear).collect();
     let theta_bounds: Vec<(f64, f64)> = nonlin.iter().map(|&j| bounds[j]).collect();
+    // The starts search a subsample of at most STARTS_PER_MODE points per mode (all
+    // the data when no mode has more): their cost no longer grows with n.
+    let mut sub = prob.subsample(STARTS_PER_MODE);
     let mut results = Vec::with_capacity(starts.len());
     let mut iterations = 0;
-    for start in &starts {
-        if s.method == Search::Full {
-            let (found, its) = full_search(&mut prob, &nonlin, start, &bounds, &lm_settings);
-            iterations += its;
-            results.extend(found);
-            continue;
-        }
-        let mut theta = start.clone();
-        let mut escapes = 0;
-        loop {
-            let mut full = vec![1.0; k];
-            for (&j, &v) in nonlin.iter().zip(&theta) {
-                full[j] = v;
+    {
+        let prob = sub.as_mut().unwrap_or(&mut prob);
+        let n = prob.len();
+        for start in &starts {
+            if s.method == Search::Full {
+                let (found, its) = full_search(prob, &nonlin, start, &bounds, &lm_settings);
+                iterations += its;
+                results.extend(found);
+                continue;
             }
-            let mut vp = VarPro::new(&mut prob, &full);
-            let res = lm::minimize(&mut vp, &theta, &theta_bounds, &lm_settings);
-            iterations += res.iterations;
-            // Recompute the projected linear coefficients at the final θ.
-            let mut r = DVector::zeros(n);
-            let ok = vp.eval(&res.x, &mut r, None);
-            // Coinciding exponents make the basis (nearly) rank-deficient: an
-            // (N−1)-term model in disguise, a saddle of the N-term objective.
-            // Separate them and search on.
-            if ok && escapes < MAX_ESCAPES {
-                if let Some(split) = split_coincident(&res.x, &theta_bounds) {
-                    theta = split;
-                    escapes += 1;
-                    continue;
+            let mut theta = start.clone();
+            let mut escapes = 0;
+            loop {
+                let mut full = vec![1.0; k];
+                for (&j, &v) in nonlin.iter().zip(&theta) {
+                    full[j] = v;
                 }
+                let mut vp = VarPro::new(prob, &full);
+                let res = lm::minimize(&mut vp, &theta, &theta_bounds, &lm_settings);
+                iterations += res.iterations;
+                // Recompute the projected linear coefficients at the final θ.
+                let mut r = DVector::zeros(n);
+                let ok = vp.eval(&res.x, &mut r, None);
+                // Coinciding exponents make the basis (nearly) rank-deficient: an
+                // (N−1)-term model in disguise, a saddle of the N-term objective.
+                // Separate them and search on.
+                if ok && escapes < MAX_ESCAPES {
+                    if let Some(split) = split_coincident(&res.x, &theta_bounds) {
+                        theta = split;
+                        escapes += 1;
+                        continue;
+                    }
+                }
+                if ok && res.cost.is_finite() {
+                    results.push((res.cost, vp.full.clone()));
+                }
+                break;
             }
-            if ok && res.cost.is_finite() {
-                results.push((res.cost, vp.full.clone()));
-            }
-            break;
         }
     }
     if results.is_empty() {
@@ -527,6 +534,47 @@ fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Es
             .1
             .clone()
     };
+    // The starts searched a subsample: carry the chosen point to all the data by the
+    // same search (variable projection from its nonlinear parameters; the full-LM
+    // polish below does it for a full search), kept if it lowers the cost there.
+    let mut evaluations_sub = sub.as_ref().map_or(0, |p| p.evaluations);
+    let chosen = match &sub {
+        Some(_) if s.method != Search::Full && !s.stable => {
+            // The subsample's best basins (its REFINED best distinct ends), each carried
+            // through subsamples ten times larger, then all the data (each level starts
+            // next to its optimum); the lowest cost on all the data wins.
+            let mut ends: Vec<&(f64, Vec<f64>)> = results.iter().collect();
+            ends.sort_by(|a, b| a.0.total_cmp(&b.0));
+            ends.dedup_by(|b, a| (b.0 - a.0).abs() <= 1e-9 * a.0.abs());
+            let mut best: Option<(f64, Vec<f64>)> = None;
+            for (_, end) in ends.into_iter().take(REFINED) {
+                let mut point = end.clone();
+                let mut per_mode = 10 * STARTS_PER_MODE;
+                while let Some(mut level) = prob.subsample(per_mode) {
+                    let its;
+                    (point, its) = refine(&mut level, point, &nonlin, &theta_bounds, &lm_settings);
+                    iterations += its;
+                    evaluations_sub += level.evaluations;
+                    per_mode *= 10;
+                }
+                let its;
+                (point, its) = refine(&mut prob, point, &nonlin, &theta_bounds, &lm_settings);
+                iterations += its;
+                let mut r = DVector::zeros(n);
+                prob.residuals(&point, &mut r);
+                let cost = r.norm_squared();
+                if best.as_ref().is_none_or(|b| cost < b.0) {
+                    best = Some((cost, point));
+                }
+            }
+            best.map_or(chosen, |b| b.1)
+        }
+        Some(_) if s.method != Search::Full => {
+            // --stable: the chosen stable point, carried to all the data.
+            refine(&mut prob, chosen, &nonlin, &theta_bounds, &lm_settings).0
+        }
+        _ => chosen,
+    };
     // Polish all parameters together from the chosen point.
     let polish = lm::minimize(&mut prob, &chosen, &bounds, &lm_settings);
     let params = if polish.cost.is_finite()
@@ -549,7 +597,7 @@ fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Es
         starts: starts.len(),
         starts_at_best: at_best,
         iterations: iterations + polish.iterations,
-        evaluations: prob.evaluations,
+        evaluations: prob.evaluations + evaluations_sub,
         termination: polish.termination,
         notes,
     })
@@ -561,6 +609,45 @@ fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Es
 /// exact synthetic set is ≈ 1e-15. 1e-9 lies orders below the first two and above
 /// the last, so it flags both interpolation and noise-free data.
 pub const TOO_GOOD: f64 = 1e-9;
+
+/// Points per mode on which the multi-start search runs: a mode with more is
+/// subsampled evenly in stretch ([`HyperProblem::subsample`]) and only the chosen start
+/// is carried to all the data. Every shipped dataset has fewer points per mode, so its
+/// fits are searched on all of it.
+pub const STARTS_PER_MODE: usize = 40;
+
+/// Distinct ends of the subsample's search carried to all the data: the landscape of
+/// an Ogden model is flat and several-basined, and the subsample's best basin need
+/// not be the data's.
+const REFINED: usize = 3;
+
+/// The variable-projection search on `prob` from the full parameter vector `start`
+/// (its nonlinear parameters are the start; the linear ones are projected): the
+/// point it ends at if that lowers the cost on `prob`, else `start`; and the
+/// iterations taken.
+fn refine(
+    prob: &mut HyperProblem,
+    start: Vec<f64>,
+    nonlin: &[usize],
+    theta_bounds: &[(f64, f64)],
+    lm_settings: &LmSettings,
+) -> (Vec<f64>, usize) {
+    let theta: Vec<f64> = nonlin.iter().map(|&j| start[j]).collect();
+    let mut vp = VarPro::new(prob, &start);
+    let res = lm::minimize(&mut vp, &theta, theta_bounds, lm_settings);
+    let mut r = DVector::zeros(vp.dims().0);
+    let ok = vp.eval(&res.x, &mut r, None) && res.cost.is_finite();
+    let refined = vp.full.clone();
+    let mut cost = |p: &[f64]| {
+        prob.residuals(p, &mut r);
+        r.norm_squared()
+    };
+    if ok && cost(&refined) <= cost(&start) {
+        (refined, res.iterations)
+    } else {
+        (start, res.iterations)
+    }
+}
 
 /// Restarts allowed per start to escape a degenerate (coinciding-exponent) point.
 const MAX_ESCAPES: usize = 2;

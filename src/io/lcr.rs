@@ -22,6 +22,7 @@ use crate::material::dielectric::Pair;
 use crate::units::{parse_engineering, parse_quantity, Dimension};
 use nalgebra::Complex;
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
@@ -588,11 +589,11 @@ fn frequency_problem(f: f64) -> Option<(String, &'static str)> {
 
 /// A located number in SI: engineering notation, SI prefixes, decimal comma.
 fn value(table: &Table, row: &Row, c: &Column, what: &str) -> Result<f64> {
-    let raw = &row.fields[c.col];
+    let raw = table.field(row, c.col);
     let text = if raw.contains(',') && !raw.contains('.') {
-        raw.replace(',', ".")
+        Cow::Owned(raw.replace(',', "."))
     } else {
-        raw.clone()
+        Cow::Borrowed(raw)
     };
     let v = parse_engineering(&text, c.symbol)
         .or_else(|| parse_engineering(&text, "Ohm"))

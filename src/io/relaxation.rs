@@ -231,12 +231,15 @@ pub fn from_table(table: &Table, opts: &RelaxationOptions) -> Result<RelaxationD
     let mut y = Vec::with_capacity(table.rows.len());
     let mut eps = Vec::new();
     let mut line = Vec::with_capacity(table.rows.len());
+    // Column names for errors, made once rather than per row.
+    let name = |c: usize| format!("'{}'", table.header[c]);
+    let (tname, sname, lname) = (name(tc), name(sc), load.map(|(lc, _)| name(lc)));
     for row in &table.rows {
-        let tv = table.number(row, tc, &format!("'{}'", table.header[tc]))? * tf;
+        let tv = table.number(row, tc, &tname)? * tf;
         if tv < 0.0 {
             return Err(Error::input(
                 table.loc(row, tc),
-                format!("time must be ≥ 0, found {}", row.fields[tc]),
+                format!("time must be ≥ 0, found {}", table.field(row, tc)),
             )
             .with_hint("measure time from the start of loading (t = 0)"));
         }
@@ -259,7 +262,7 @@ pub fn from_table(table: &Table, opts: &RelaxationOptions) -> Result<RelaxationD
                 .with_hint("sort the file by time and remove repeated rows"));
             }
         }
-        let sv = table.number(row, sc, &format!("'{}'", table.header[sc]))? * sf;
+        let sv = table.number(row, sc, &sname)? * sf;
         if sv.abs() > STRESS_MAX {
             return Err(Error::input(
                 table.loc(row, sc),
@@ -269,8 +272,8 @@ pub fn from_table(table: &Table, opts: &RelaxationOptions) -> Result<RelaxationD
                 "is the unit right? a column in Pa labelled MPa reads 10⁶ times too large",
             ));
         }
-        if let Some((lc, kind)) = load {
-            let v = table.number(row, lc, &format!("'{}'", table.header[lc]))?;
+        if let (Some((lc, kind)), Some(lname)) = (load, &lname) {
+            let v = table.number(row, lc, lname)?;
             let e = match kind {
                 Col::Strain(f) => v * f,
                 _ => {

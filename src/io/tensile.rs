@@ -13,7 +13,7 @@
 use super::table::{split_header, Table};
 use crate::data::{Dataset, Field, Sample, Source};
 use crate::error::{Error, Location, Result};
-use crate::material::hyperelastic::Mode;
+use crate::material::hyperelastic::{Mode, StrainEnergy};
 use crate::units::Dimension;
 use std::path::Path;
 
@@ -253,15 +253,20 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
         (None, None) => None,
     };
 
+    // Column names for errors, made once rather than per row.
+    let (kname, sname) = (
+        format!("'{}'", table.header[kc]),
+        format!("'{}'", table.header[sc]),
+    );
     let mut samples = Vec::with_capacity(table.rows.len());
     for row in &table.rows {
-        let x = table.number(row, kc, &format!("'{}'", table.header[kc]))?;
+        let x = table.number(row, kc, &kname)?;
         let lam = match kin {
             Kin::Stretch => x,
             Kin::Strain(f) => 1.0 + x * f,
             Kin::Displacement(f) => 1.0 + x * f,
         };
-        let y = table.number(row, sc, &format!("'{}'", table.header[sc]))?;
+        let y = table.number(row, sc, &sname)?;
         let p = match stress {
             Stress::Nominal(f) => y * f,
             Stress::True(f) => y * f / lam,
@@ -273,10 +278,10 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
         };
         let mode = match mode_col {
             Some(c) => {
-                let m = Mode::parse(&row.fields[c]).ok_or_else(|| {
+                let m = Mode::parse(table.field(row, c)).ok_or_else(|| {
                     Error::input(
                         table.loc(row, c),
-                        format!("unknown mode '{}'", row.fields[c]),
+                        format!("unknown mode '{}'", table.field(row, c)),
                     )
                     .with_hint("use uniaxial, equibiaxial or planar")
                 })?;
@@ -307,7 +312,7 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
             let converted = f.field == Field::Stretch && !matches!(kin, Kin::Stretch)
                 || f.field == Field::Stress && !matches!(stress, Stress::Nominal(_));
             let message = if converted {
-                format!("{} (from '{}')", f.message, row.fields[col])
+                format!("{} (from '{}')", f.message, table.field(row, col))
             } else {
                 f.message
             };
@@ -346,4 +351,39 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
             conversions,
         }],
     })
+}
+
+/// Append synthetic tensile rows `stretch,nominal_stress_kPa` (stretch to 6 decimals,
+/// stress in kPa to 6) to `out`: the model's nominal stress at each stretch with
+/// Gaussian noise, relative (`noise`, a fraction of the stress) and absolute
+/// (`noise_abs`, Pa), drawn from `rng` (two draws per row). Used by `dea-fit synth
+/// hyperelastic` and `dea-fit bench scale`.
+pub fn synthetic_rows(
+    model: &dyn StrainEnergy,
+    p: &[f64],
+    mode: Mode,
+    stretches: impl Iterator<Item = f64>,
+    (noise, noise_abs): (f64, f64),
+    rng: &mut impl rand::Rng,
+    out: &mut String,
+) -> Result<()> {
+    use rand_distr::Distribution;
+    use std::fmt::Write as _;
+    let unit = rand_distr::Normal::new(0.0, 1.0).expect("a unit normal is valid");
+    for l in stretches {
+        let clean = model.nominal_stress(p, mode, l);
+        let e1: f64 = unit.sample(rng);
+        let e2: f64 = unit.sample(rng);
+        let y = clean * (1.0 + noise * e1) + noise_abs * e2;
+        if !y.is_finite() {
+            return Err(Error::settings(format!(
+                "the model gives a non-finite stress ({y}) at stretch {l}: no data written"
+            ))
+            .with_hint(
+                "keep --stretch inside the model's domain (e.g. below Gent's locking stretch)",
+            ));
+        }
+        let _ = writeln!(out, "{l:.6},{:.6}", y / 1e3);
+    }
+    Ok(())
 }

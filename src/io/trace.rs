@@ -290,10 +290,12 @@ pub fn from_table(table: &Table) -> Result<Trace> {
         dom.check(&table.header[c], x)
             .map_err(|e| Error::input(table.loc(row, c), e.msg).with_hint(e.hint))
     };
+    // Column names for errors, made once rather than per row.
+    let names: Vec<String> = table.header.iter().map(|h| format!("'{h}'")).collect();
     for row in &table.rows {
         let need = |c: usize| {
-            table.number(row, c, &format!("'{}'", table.header[c])).map_err(|e| {
-                match row.fields[c].is_empty() {
+            table.number(row, c, &names[c]).map_err(|e| {
+                match table.field(row, c).is_empty() {
                     true => e.with_hint("every row needs a time and a voltage; leave only measured channels empty where they were not logged"),
                     false => e,
                 }
@@ -318,10 +320,10 @@ pub fn from_table(table: &Table) -> Result<Trace> {
         }
         v.push(plausible(&budget::VOLTAGE, row, vc, need(vc)? * vf)?);
         for (k, &(c, f, kind)) in chans.iter().enumerate() {
-            let x = match row.fields[c].is_empty() {
+            let x = match table.field(row, c).is_empty() {
                 true => f64::NAN,
                 false => {
-                    let x = table.number(row, c, &format!("'{}'", table.header[c]))? * f;
+                    let x = table.number(row, c, &names[c])? * f;
                     plausible(kind.domain(), row, c, x)?
                 }
             };

@@ -1,0 +1,373 @@
+//! `dea-fit bench scale`: how each reader and estimator's time grows with the size of
+//! its input. Times the tensile reader, reading + a Yeoh fit, `hyperelastic --model
+//! auto` and `relaxation --terms auto` at growing row counts (half-decade steps), fits
+//! the log-log slope of time against rows for each (1 = linear), and writes
+//! `scale.{csv,json,svg,md}` under the output directory.
+//!
+//! Data: tensile rows generated from the Ogden-3 fit of Treloar's three modes (over
+//! each mode's measured stretch range, 1 % relative noise, a third of the rows per
+//! mode); relaxation curves from the seed's Table 3.3 series (log-spaced over
+//! 0.01–1000 s, step to strain 0.5, 1 % noise), as `bench relaxation` uses.
+
+use super::bench::{progress_bar, Verdict};
+use dea_fit::bench::{measure, shipped_datasets, Budget, TRELOAR_ALL};
+use dea_fit::data::Dataset;
+use dea_fit::fit::hyperelastic::{self, Settings};
+use dea_fit::fit::relaxation::{self, Loading};
+use dea_fit::io::relaxation::{log_times, RelaxationData, RelaxationOptions, Synthetic};
+use dea_fit::io::table::Table;
+use dea_fit::io::tensile::{self, TensileOptions};
+use dea_fit::io::write::atomic_write;
+use dea_fit::material::hyperelastic::{Mode, ModelSpec, StrainEnergy};
+use dea_fit::material::viscoelastic::preset;
+use dea_fit::report::format::{si, table};
+use dea_fit::report::plot::{Chart, Series, Style};
+use dea_fit::{Error, Result};
+use rand::SeedableRng;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// What `bench scale` measures.
+#[derive(Debug, clap::Args)]
+pub struct ScaleArgs {
+    /// Fewest rows: the first size of every series.
+    #[arg(long, default_value_t = 1000)]
+    min_rows: usize,
+    /// Most rows read (the reader and reading + Yeoh fit).
+    #[arg(long, default_value_t = 1_000_000)]
+    max_rows: usize,
+    /// Most rows fitted by the automatic choices (`hyperelastic --model auto`,
+    /// `relaxation --terms auto`).
+    #[arg(long, default_value_t = 100_000)]
+    max_fit_rows: usize,
+    /// Seconds spent repeating each size (at least --min-repeats runs).
+    #[arg(long, default_value_t = 0.5)]
+    budget: f64,
+    /// Fewest timed runs per size.
+    #[arg(long, default_value_t = 3)]
+    min_repeats: usize,
+    /// Directory of the report.
+    #[arg(long, default_value = "reports/bench")]
+    out_dir: PathBuf,
+    /// Directory holding treloar/ (the truth of the generated tensile data).
+    #[arg(long, default_value = "datasets")]
+    data_dir: PathBuf,
+}
+
+/// One timed size.
+#[derive(Debug, Clone, Serialize)]
+struct Row {
+    estimator: &'static str,
+    rows: usize,
+    median_s: f64,
+    min_s: f64,
+    repeats: usize,
+    /// Median seconds per row.
+    per_row_s: f64,
+}
+
+/// The log-log slope of one estimator's times.
+#[derive(Debug, Clone, Serialize)]
+struct Slope {
+    estimator: &'static str,
+    /// d ln t / d ln n, least squares over the sizes (1: linear).
+    slope: f64,
+    sizes: usize,
+}
+
+#[derive(Serialize)]
+struct Report<'a> {
+    tool_version: &'static str,
+    budget_s: f64,
+    min_repeats: usize,
+    slopes: &'a [Slope],
+    rows: &'a [Row],
+}
+
+/// Row counts from `lo` to `hi` in half-decade steps (`hi` itself last).
+fn sizes(lo: usize, hi: usize) -> Vec<usize> {
+    let mut out = Vec::new();
+    let mut k = 0;
+    loop {
+        let n = (lo as f64 * 10f64.powf(k as f64 / 2.0)).round() as usize;
+        if n >= hi {
+            break;
+        }
+        out.push(n);
+        k += 1;
+    }
+    out.push(hi);
+    out
+}
+
+/// Least-squares slope of ln t against ln n (NaN with fewer than two sizes).
+fn log_log_slope(pts: &[(usize, f64)]) -> f64 {
+    let xy: Vec<(f64, f64)> = pts
+        .iter()
+        .map(|&(n, t)| ((n as f64).ln(), t.ln()))
+        .collect();
+    let m = xy.len() as f64;
+    let (mx, my) = (
+        xy.iter().map(|p| p.0).sum::<f64>() / m,
+        xy.iter().map(|p| p.1).sum::<f64>() / m,
+    );
+    let sxy: f64 = xy.iter().map(|(x, y)| (x - mx) * (y - my)).sum();
+    let sxx: f64 = xy.iter().map(|(x, _)| (x - mx) * (x - mx)).sum();
+    sxy / sxx
+}
+
+/// The generated tensile test: one CSV text per mode, `rows` in all.
+struct Tensile {
+    files: Vec<(Mode, String)>,
+}
+
+impl Tensile {
+    fn new(
+        model: &dyn StrainEnergy,
+        p: &[f64],
+        ranges: &[(Mode, f64, f64)],
+        rows: usize,
+    ) -> Result<Tensile> {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1944);
+        let mut files = Vec::new();
+        for (i, &(mode, l0, l1)) in ranges.iter().enumerate() {
+            // A share of the rows per mode; the first modes take the remainder.
+            let count = (rows / ranges.len() + usize::from(i < rows % ranges.len())).max(2);
+            let mut s = format!("# mode: {mode}\nstretch,nominal_stress_kPa\n");
+            tensile::synthetic_rows(
+                model,
+                p,
+                mode,
+                (0..count).map(|j| l0 + (l1 - l0) * j as f64 / (count - 1) as f64),
+                (0.01, 0.0),
+                &mut rng,
+                &mut s,
+            )?;
+            files.push((mode, s));
+        }
+        Ok(Tensile { files })
+    }
+
+    /// Read every file as `dea-fit hyperelastic` does.
+    fn read(&self) -> Result<Dataset> {
+        let mut data = Dataset::default();
+        for (mode, text) in &self.files {
+            let path = PathBuf::from(format!("scale-{mode}.csv"));
+            let opts = TensileOptions {
+                mode: Some(*mode),
+                ..TensileOptions::default()
+            };
+            data.extend(tensile::from_table(
+                &Table::parse(&path, text.as_bytes())?,
+                &opts,
+            )?);
+        }
+        Ok(data)
+    }
+}
+
+fn relaxation_data(rows: usize) -> Result<RelaxationData> {
+    let syn = Synthetic {
+        prony: preset("seed-table-3.3")?.prony,
+        strain: 0.5,
+        ramp_time: None,
+        times: log_times(0.01, 1000.0, rows, false),
+        noise: 0.01,
+        seed: 4910,
+        record_strain: false,
+    };
+    let csv = syn.csv(&["dea-fit bench scale"])?;
+    dea_fit::io::relaxation::from_table(
+        &Table::parse(Path::new("scale-relaxation.csv"), csv.as_bytes())?,
+        &RelaxationOptions::default(),
+    )
+}
+
+/// Run the benchmark.
+pub fn run(a: &ScaleArgs) -> Result<Verdict> {
+    if a.min_rows < 10 || a.max_rows <= a.min_rows || a.max_fit_rows <= a.min_rows {
+        return Err(Error::settings(format!(
+            "rows: expected 10 ≤ --min-rows ({}) < --max-rows ({}) and --max-fit-rows ({})",
+            a.min_rows, a.max_rows, a.max_fit_rows
+        ))
+        .with_hint("e.g. --min-rows 1000 --max-rows 1000000 --max-fit-rows 100000"));
+    }
+    let budget = Budget {
+        min_repeats: a.min_repeats,
+        seconds: a.budget,
+        ..Budget::default()
+    };
+    budget.check()?;
+    // The truth: Ogden-3 fitted to Treloar's three modes, over their stretch ranges.
+    let sets = shipped_datasets(&a.data_dir)
+        .map_err(|e| e.with_hint("run from the repository root or pass --data-dir"))?;
+    let treloar = &sets
+        .iter()
+        .find(|d| d.name == TRELOAR_ALL)
+        .ok_or_else(|| Error::settings("the shipped datasets hold no Treloar set"))?
+        .data;
+    let spec = ModelSpec::new("ogden3", Default::default());
+    let truth = hyperelastic::fit(treloar, &spec, &Settings::default())?;
+    let p: Vec<f64> = truth.parameters.iter().map(|q| q.value).collect();
+    let model = spec.build()?;
+    let ranges: Vec<(Mode, f64, f64)> = treloar
+        .modes()
+        .into_iter()
+        .filter_map(|m| treloar.stretch_range(m).map(|(lo, hi)| (m, lo, hi)))
+        .collect();
+
+    let read_sizes = sizes(a.min_rows, a.max_rows);
+    let fit_sizes = sizes(a.min_rows, a.max_fit_rows);
+    let bar = progress_bar(2 * read_sizes.len() + 2 * fit_sizes.len());
+    let settings = Settings::default();
+    let yeoh = ModelSpec::new("yeoh", Default::default());
+    let mut verdict = Verdict::default();
+    let mut rows: Vec<Row> = Vec::new();
+    let mut push = |estimator: &'static str, n: usize, t: dea_fit::bench::Timing| {
+        bar.set_message(format!("{estimator} {n}: {}", si(t.median_s, "s")));
+        bar.inc(1);
+        rows.push(Row {
+            estimator,
+            rows: n,
+            median_s: t.median_s,
+            min_s: t.min_s,
+            repeats: t.repeats,
+            per_row_s: t.median_s / n as f64,
+        });
+    };
+    for &n in &read_sizes {
+        let data = Tensile::new(model.as_ref(), &p, &ranges, n)?;
+        let (t, _) = measure(&budget, || data.read())?;
+        push("read", n, t);
+        let (t, fit) = measure(&budget, || {
+            hyperelastic::fit(&data.read()?, &yeoh, &settings)
+        })?;
+        verdict.add(format!("read+yeoh {n} rows"), fit.status);
+        push("read+yeoh", n, t);
+    }
+    for &n in &fit_sizes {
+        let data = Tensile::new(model.as_ref(), &p, &ranges, n)?.read()?;
+        let (t, (fit, _)) = measure(&budget, || hyperelastic::fit_auto(&data, &settings))?;
+        verdict.add(format!("hyperelastic auto {n} rows"), fit.status);
+        push("hyperelastic-auto", n, t);
+        let data = relaxation_data(n)?;
+        let loading = Loading {
+            strain: Some(0.5),
+            ramp_time: None,
+        };
+        let rs = relaxation::Settings::default();
+        let (t, fit) = measure(&budget, || relaxation::fit(&data, &loading, None, &rs))?;
+        verdict.add(format!("relaxation auto {n} rows"), fit.status);
+        push("relaxation-auto", n, t);
+    }
+    bar.finish_and_clear();
+
+    let names = ["read", "read+yeoh", "hyperelastic-auto", "relaxation-auto"];
+    let slopes: Vec<Slope> = names
+        .iter()
+        .map(|&e| {
+            let pts: Vec<(usize, f64)> = rows
+                .iter()
+                .filter(|r| r.estimator == e)
+                .map(|r| (r.rows, r.median_s))
+                .collect();
+            Slope {
+                estimator: e,
+                slope: log_log_slope(&pts),
+                sizes: pts.len(),
+            }
+        })
+        .collect();
+    write(a, &rows, &slopes)?;
+    for s in &slopes {
+        println!(
+            "{:<18} slope {:.2} over {} sizes",
+            s.estimator, s.slope, s.sizes
+        );
+    }
+    println!("report: {}", a.out_dir.join("scale.md").display());
+    Ok(verdict)
+}
+
+fn write(a: &ScaleArgs, rows: &[Row], slopes: &[Slope]) -> Result<()> {
+    let dir = &a.out_dir;
+    super::claim_dir(dir)?;
+    let io = |e: String| Error::settings(format!("could not write the bench report: {e}"));
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for r in rows {
+        w.serialize(r).map_err(|e| io(e.to_string()))?;
+    }
+    let csv = w.into_inner().map_err(|e| io(e.to_string()))?;
+    atomic_write(&dir.join("scale.csv"), &csv)?;
+    let report = Report {
+        tool_version: env!("CARGO_PKG_VERSION"),
+        budget_s: a.budget,
+        min_repeats: a.min_repeats,
+        slopes,
+        rows,
+    };
+    let json = serde_json::to_string_pretty(&report).map_err(|e| io(e.to_string()))?;
+    atomic_write(&dir.join("scale.json"), json.as_bytes())?;
+    Chart {
+        title: "time against input size (log-log; slope 1 = linear)".into(),
+        x_label: "log₁₀ rows".into(),
+        y_label: "log₁₀ median time [s]".into(),
+        series: slopes
+            .iter()
+            .enumerate()
+            .map(|(i, s)| Series {
+                label: format!("{} (slope {:.2})", s.estimator, s.slope),
+                points: rows
+                    .iter()
+                    .filter(|r| r.estimator == s.estimator)
+                    .map(|r| ((r.rows as f64).log10(), r.median_s.log10()))
+                    .collect(),
+                color: i,
+                style: Style::Line,
+            })
+            .collect(),
+        log_x: false,
+    }
+    .write_svg(&dir.join("scale.svg"))?;
+    let body: Vec<Vec<String>> = rows
+        .iter()
+        .map(|r| {
+            vec![
+                r.estimator.to_string(),
+                r.rows.to_string(),
+                si(r.median_s, "s"),
+                si(r.min_s, "s"),
+                r.repeats.to_string(),
+                si(r.per_row_s, "s"),
+            ]
+        })
+        .collect();
+    let tab = table(
+        &["estimator", "rows", "median", "fastest", "runs", "per row"],
+        &body,
+    );
+    let slope_tab = table(
+        &["estimator", "log-log slope", "sizes"],
+        &slopes
+            .iter()
+            .map(|s| {
+                vec![
+                    s.estimator.to_string(),
+                    format!("{:.2}", s.slope),
+                    s.sizes.to_string(),
+                ]
+            })
+            .collect::<Vec<_>>(),
+    );
+    let md = format!(
+        "# Time against input size\n\ndea-fit {}; budget {} s and at least {} runs per size. Rerun: `dea-fit bench scale`.\n\n\
+         Each estimator is timed at growing row counts (half-decade steps); the slope of ln t against ln n, fitted by least squares, is 1 when the cost grows linearly. \
+         *read*: the tensile reader (CSV text in memory → samples); *read+yeoh*: reading and the whole Yeoh fit call; *hyperelastic-auto*: `hyperelastic --model auto` on the samples; \
+         *relaxation-auto*: `relaxation --terms auto`. Tensile data: the Ogden-3 fit of Treloar's three modes, 1 % noise; relaxation: the seed's Table 3.3 series, 1 % noise.\n\n\
+         ![scale](scale.svg)\n\n```\n{slope_tab}```\n\nAll rows: [scale.csv](scale.csv), [scale.json](scale.json).\n\n```\n{tab}```\n",
+        env!("CARGO_PKG_VERSION"),
+        a.budget,
+        a.min_repeats
+    );
+    atomic_write(&dir.join("scale.md"), md.as_bytes())
+}

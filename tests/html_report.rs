@@ -3,7 +3,7 @@
 //! fetched from the network, text escaped; the folder's run list newest first with
 //! links that resolve; and one page rendered by headless Chromium.
 
-use crate::support::{names_in, repo, run};
+use crate::support::{names_in, repo, run, run_ok};
 use scraper::{ElementRef, Html, Selector};
 use std::path::Path;
 
@@ -96,7 +96,7 @@ fn assert_charts_inline(doc: &Html, dir: &Path) {
 #[test]
 fn hyperelastic_page_reads_offline() {
     let dir = tempfile::tempdir().expect("a temporary directory");
-    let o = run(
+    let o = run_ok(
         dir.path(),
         &[
             "hyperelastic",
@@ -108,12 +108,6 @@ fn hyperelastic_page_reads_offline() {
             "--out",
             "fit.json",
         ],
-    );
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
     );
     let rep = dir.path().join("reports/yeoh");
     let stdout = String::from_utf8_lossy(&o.stdout);
@@ -273,7 +267,7 @@ fn user_names_are_escaped() {
         dir.path().join(&file),
     )
     .unwrap();
-    let o = run(
+    run_ok(
         dir.path(),
         &[
             "permittivity",
@@ -285,12 +279,6 @@ fn user_names_are_escaped() {
             "--report",
             "reports/p <&>",
         ],
-    );
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
     );
     let doc = read_html(&dir.path().join("reports/p <&>/index.html"));
     let h2: Vec<String> = doc.select(&sel("h2")).map(text_of).collect();
@@ -338,7 +326,7 @@ fn run_list_is_newest_first_and_follows_the_folder() {
         );
     };
     fit("yeoh", "first run");
-    let o = run(
+    run_ok(
         dir.path(),
         &[
             "simulate",
@@ -348,12 +336,6 @@ fn run_list_is_newest_first_and_follows_the_folder() {
             "--out",
             "t.csv",
         ],
-    );
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
     );
     fit("neo-hookean", "third");
     let reports = dir.path().join("reports");
@@ -411,17 +393,11 @@ fn run_list_is_newest_first_and_follows_the_folder() {
     // Someone else's index.html is left alone.
     std::fs::create_dir(dir.path().join("mine")).unwrap();
     std::fs::write(dir.path().join("mine/index.html"), "<p>my notes</p>").unwrap();
-    let o = run(
+    run_ok(
         dir.path(),
         &[
             "simulate", &scene, "--report", "mine/sim", "--out", "t2.csv",
         ],
-    );
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
     );
     assert_eq!(
         std::fs::read_to_string(dir.path().join("mine/index.html")).unwrap(),
@@ -438,7 +414,7 @@ fn run_list_is_newest_first_and_follows_the_folder() {
 #[ignore = "needs chromium; .ci/run installs it and runs this with --ignored"]
 fn page_renders_in_chromium() {
     let dir = tempfile::tempdir().expect("a temporary directory");
-    let o = run(
+    run_ok(
         dir.path(),
         &[
             "hyperelastic",
@@ -450,12 +426,6 @@ fn page_renders_in_chromium() {
             "--out",
             "fit.json",
         ],
-    );
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
     );
     let page = dir.path().join("rep/index.html");
     let png = dir.path().join("page.png");

@@ -835,6 +835,21 @@ fn mutated_manifests_are_refused_or_evaluated() {
     );
 }
 
+/// Every point of a design evaluated with its own sweep, and ranked by stroke
+/// (the Pareto front against speed).
+fn by_stroke(d: &Design) -> (Vec<Evaluation>, ranking::Ranking) {
+    let ev: Vec<Evaluation> = evaluate(d, &Sweep::default())
+        .into_iter()
+        .map(|e| e.evaluation)
+        .collect();
+    let r = ranking::rank(
+        &ev,
+        Objective::Stroke,
+        [Objective::Stroke, Objective::Speed],
+    );
+    (ev, r)
+}
+
 /// A matrix table whose μ comes from the fit file `fit.json` beside the manifest.
 fn fitted_matrix(name: &str, eps: f64) -> String {
     matrix(name, eps, 1.0, "300 V/um").replace(
@@ -911,15 +926,7 @@ fn candidates_within_their_standard_errors_are_not_told_apart() {
         m.push_str(&format!("[[series]]\nmatrix = \"{name}\"\n"));
     }
     let d = design(dir.path(), &m);
-    let ev: Vec<Evaluation> = evaluate(&d, &Sweep::default())
-        .into_iter()
-        .map(|e| e.evaluation)
-        .collect();
-    let r = ranking::rank(
-        &ev,
-        Objective::Stroke,
-        [Objective::Stroke, Objective::Speed],
-    );
+    let (ev, r) = by_stroke(&d);
     // ranked C, B, A by stroke
     assert_eq!(r.order, [2, 1, 0]);
     assert_eq!(r.apart, [Some(false), Some(true), None]);
@@ -988,15 +995,7 @@ fn the_design_hash_covers_the_files_the_scene_reads() {
 #[test]
 fn the_matrix_alone_is_ranked_once() {
     let d = manifest::read(&repo().join("datasets/design/silicone_fillers.toml")).unwrap();
-    let ev: Vec<Evaluation> = evaluate(&d, &Sweep::default())
-        .into_iter()
-        .map(|e| e.evaluation)
-        .collect();
-    let r = ranking::rank(
-        &ev,
-        Objective::Stroke,
-        [Objective::Stroke, Objective::Speed],
-    );
+    let (ev, r) = by_stroke(&d);
     let name = |i: usize| ev[i].name.as_str();
     let repeats: Vec<(&str, &str)> = (0..ev.len())
         .filter_map(|i| r.same_as[i].map(|j| (name(i), name(j))))

@@ -19,6 +19,19 @@ layers = 10
 electrodes = 11
 "#;
 
+/// Run `dea-fit` with `args` in `cwd` and require exit status 0 (stderr shown
+/// otherwise).
+pub fn run_ok(cwd: &Path, args: &[&str]) -> Output {
+    let o = run(cwd, args);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
 /// Run `dea-fit` with `args` in `cwd`.
 pub fn run(cwd: &Path, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_dea-fit"))

@@ -260,9 +260,17 @@ fn repeats(a: &Evaluation, b: &Evaluation) -> bool {
 
 /// Rank `evals` (in run order) by `by`, with the Pareto front over `pareto`.
 pub fn rank(evals: &[Evaluation], by: Objective, pareto: [Objective; 2]) -> Ranking {
-    let same_as: Vec<Option<usize>> = (0..evals.len())
-        .map(|i| (0..i).find(|&j| repeats(&evals[j], &evals[i])))
+    // only the loading-0 points can repeat one another: compare those alone
+    let zero: Vec<usize> = (0..evals.len())
+        .filter(|&i| evals[i].loading == 0.0)
         .collect();
+    let mut same_as = vec![None; evals.len()];
+    for (k, &i) in zero.iter().enumerate() {
+        same_as[i] = zero[..k]
+            .iter()
+            .copied()
+            .find(|&j| repeats(&evals[j], &evals[i]));
+    }
     let mut ranked: Vec<(usize, f64)> = evals
         .iter()
         .enumerate()

@@ -45,26 +45,31 @@ pub const COMPOSITE_SCHEMA: &str = "dea-fit/composite-fit/1";
 /// Read the hyperelastic part of a hyperelastic fit or an identified material file.
 /// Its parameters are in the model's order.
 pub fn read_hyperelastic(path: &Path) -> Result<HyperelasticPart> {
+    Ok(hyperelastic_file(path)?.0)
+}
+
+/// The hyperelastic part of a file, with the file's text and schema tag.
+fn hyperelastic_file(path: &Path) -> Result<(HyperelasticPart, String, &'static str)> {
     let (text, schema) = read_text(
         path,
         &[HYPERELASTIC_SCHEMA, IDENTIFIED_SCHEMA],
         "hyperelastic",
     )?;
-    match schema {
-        HYPERELASTIC_SCHEMA => HyperelasticPart::from_json(path, "", &typed(path, &text)?),
-        _ => Ok(IdentifiedMaterial::parse(path, &text)?.hyperelastic),
-    }
+    let part = match schema {
+        HYPERELASTIC_SCHEMA => HyperelasticPart::from_json(path, "", &typed(path, &text)?)?,
+        _ => IdentifiedMaterial::parse(path, &text)?.hyperelastic,
+    };
+    Ok((part, text, schema))
 }
 
 /// [`read_hyperelastic`], with the standard errors and correlation the file states
 /// for the parameters (model order): a hyperelastic fit states both, an identified
 /// material the standard errors only.
 pub fn read_hyperelastic_spread(path: &Path) -> Result<(HyperelasticPart, Spread)> {
-    let part = read_hyperelastic(path)?;
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let (part, text, schema) = hyperelastic_file(path)?;
     let v: serde_json::Value = typed(path, &text)?;
-    let node = match v.get("hyperelastic") {
-        Some(h) if h.is_object() => h,
+    let node = match schema {
+        IDENTIFIED_SCHEMA => &v["hyperelastic"],
         _ => &v,
     };
     let params: Vec<FileParam> =

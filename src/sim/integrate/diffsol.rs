@@ -21,7 +21,6 @@ use std::cell::{Cell, RefCell};
 type M = NalgebraMat<f64>;
 type LS = NalgebraLU<f64>;
 
-
 /// Mutable slice of a diffsol nalgebra vector.
 fn slice_mut(v: &mut NalgebraVec<f64>) -> &mut [f64] {
     v.inner_mut().as_mut_slice()

@@ -9,8 +9,8 @@
 //! all buffers live in a [`Workspace`] created once per run.
 
 use super::{
-    budget_exhausted, initial_step, left_limit, non_finite, End, EventFn, Options, Stats,
-    StepFn, System,
+    budget_exhausted, initial_step, left_limit, non_finite, End, EventFn, Options, Stats, StepFn,
+    System,
 };
 
 /// Buffers reused by every step.

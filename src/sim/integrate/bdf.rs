@@ -34,7 +34,7 @@ use super::{
 /// Largest order.
 const MAX_ORDER: usize = 5;
 /// Newton iterations per attempt (SciPy's `NEWTON_MAXITER`).
-const NEWTON_MAXITER: usize = 4;
+const NEWTON_MAXITER: usize = 10;
 /// Fraction of Newton's tolerance below which one correction ends the iteration.
 const NEWTON_FLOOR: f64 = 0.1;
 /// A correction that no longer contracts ends the iteration as converged when it is

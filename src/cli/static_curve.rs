@@ -44,7 +44,7 @@ pub fn run(a: Args) -> Result<i32> {
     }
     let p = full_plant(&scene)?;
     let c = static_curve::static_curve(&p, a.points, a.stretch_min);
-    let v_in = crate::sim::drive_max(&scene);
+    let v_in = dea_fit::sim::drive_max(&scene);
     let (status, line) = match (c.search, c.pull_in) {
         (Search::PullIn, Some(pi)) if v_in >= pi.voltage_v => (
             "pull_in",

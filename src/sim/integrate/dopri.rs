@@ -1,6 +1,6 @@
 //! Our own explicit Dormand–Prince 5(4) (Dormand & Prince 1980) with Hairer's
 //! 4th-order continuous extension (dense output) and a PI step controller
-//! (Gustafsson 1991). It is the independent test oracle for the diffsol methods and
+//! (Gustafsson 1991). It is the independent test oracle for the implicit methods and
 //! the only method with a fixed-step mode (for convergence-order tests).
 //!
 //! Between restart times it writes the state at requested sample times from the

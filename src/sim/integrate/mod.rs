@@ -228,7 +228,7 @@ pub type EventFn<'a> = &'a dyn Fn(f64, &[f64]) -> f64;
 pub enum Extra<'a> {
     /// The state only.
     None,
-    /// Forward sensitivities ∂y/∂θ (diffsol methods), with the parameters' magnitudes
+    /// Forward sensitivities ∂y/∂θ (every method but dp54), with the parameters' magnitudes
     /// (each sensitivity's absolute tolerance is the state's divided by it).
     Sensitivities(&'a [f64]),
 }

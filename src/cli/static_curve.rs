@@ -44,10 +44,7 @@ pub fn run(a: Args) -> Result<i32> {
     }
     let p = full_plant(&scene)?;
     let c = static_curve::static_curve(&p, a.points, a.stretch_min);
-    let v_in = match &scene.control {
-        Some(pid) => pid.v_max,
-        None => scene.input.max_abs(0.0, scene.time.span),
-    };
+    let v_in = dea_fit::sim::drive_max(&scene);
     let (status, line) = match (c.search, c.pull_in) {
         (Search::PullIn, Some(pi)) if v_in >= pi.voltage_v => (
             "pull_in",

@@ -13,7 +13,8 @@ use super::params::{set_theta, Constant};
 use crate::fit::lm::LeastSquares;
 use crate::sim::scene::{FidelityChoice, Scene};
 use crate::sim::{
-    simulate, trajectory, Outcome, RunOptions, RunStatus, Sample, Sensitivities, Trajectory,
+    drive_max, simulate, trajectory, Outcome, RunOptions, RunStatus, Sample, Sensitivities,
+    Trajectory,
 };
 use nalgebra::{DMatrix, DVector};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -143,6 +144,9 @@ pub struct Problem {
     /// Step budget of each experiment's runs ([`WORK_FACTOR`] × the steps at the
     /// starting constants; None where that run failed, which the search reports).
     pub budgets: Vec<Option<usize>>,
+    /// Each experiment's largest |V| ([`crate::sim::drive_max`]): the drive does not
+    /// change with θ.
+    v_max: Vec<f64>,
     /// Work done so far (shared by clones).
     pub counts: Arc<Counts>,
     /// Why this copy's last evaluation failed ([`LeastSquares::failure`]); each
@@ -179,12 +183,14 @@ impl Problem {
                     .then(|| (WORK_FACTOR * o.stats.steps).max(MIN_BUDGET))
             })
             .collect();
+        let v_max = experiments.iter().map(|e| drive_max(&e.scene)).collect();
         Ok(Problem {
             experiments,
             free,
             theta,
             run,
             budgets,
+            v_max,
             counts: Arc::default(),
             failure: None,
         })
@@ -240,9 +246,15 @@ impl Problem {
             ..self.run
         };
         let mut out = Vec::with_capacity(self.experiments.len());
-        for (e, &budget) in self.experiments.iter_mut().zip(&self.budgets) {
+        for ((e, &budget), &v_max) in self
+            .experiments
+            .iter_mut()
+            .zip(&self.budgets)
+            .zip(&self.v_max)
+        {
             let opts = RunOptions {
                 max_steps: budget,
+                v_max: Some(v_max),
                 ..opts
             };
             set_theta(&mut e.scene, theta);

@@ -10,7 +10,7 @@
 
 use super::{
     budget_exhausted, left_limit, non_finite, End, EventFn, Extra, Method, Options, SampleFn,
-    Stats, StepFn, System,
+    Stats, StepFn, System, NEWTON_TOLERANCE,
 };
 use ::diffsol::{
     NalgebraLU, NalgebraMat, NalgebraVec, OdeBuilder, OdeEquations, OdeSolverMethod,
@@ -20,19 +20,6 @@ use std::cell::{Cell, RefCell};
 
 type M = NalgebraMat<f64>;
 type LS = NalgebraLU<f64>;
-
-/// Newton's convergence test, as a fraction of the error tolerance (diffsol's
-/// default is 0.2). The modified Newton iteration runs on a Jacobian up to 20 steps
-/// old; on a stiff component (the dashpot-damped inertial mode of a dynamic stack,
-/// h·λ ≈ −10³) it stops with that component off its slow manifold by tens of
-/// tolerances, and the next steps' error tests then fail in a cascade while the step
-/// resolves the spurious transient (the rig scene, datasets/scenes/stack_rig_7s.toml,
-/// at rtol 1e-4: 22 rejections in a row at t = 2.111 s, 252 error-test failures in
-/// 732 steps). At 10⁻³: 27 rejections in 819 steps at rtol 1e-6 (407 in 1483
-/// before), the plain run 1.57× and the sensitivity run 2× fewer instructions;
-/// scenes without the cascade pay 0–9 % more Newton iterations
-/// (docs/architecture.md).
-const NEWTON_TOLERANCE: f64 = 1e-3;
 
 /// Mutable slice of a diffsol nalgebra vector.
 fn slice_mut(v: &mut NalgebraVec<f64>) -> &mut [f64] {
@@ -249,15 +236,13 @@ pub(super) fn run<S: System>(
         stats,
     };
     let end = match (m, sens) {
-        (Method::Bdf, false) => problem.bdf::<LS>().map(|s| drv.drive(s, y)),
-        (Method::Bdf, true) => problem.bdf_sens::<LS>().map(|s| drv.drive(s, y)),
         (Method::Esdirk34, false) => problem.esdirk34::<LS>().map(|s| drv.drive(s, y)),
         (Method::Esdirk34, true) => problem.esdirk34_sens::<LS>().map(|s| drv.drive(s, y)),
         (Method::TrBdf2, false) => problem.tr_bdf2::<LS>().map(|s| drv.drive(s, y)),
         (Method::TrBdf2, true) => problem.tr_bdf2_sens::<LS>().map(|s| drv.drive(s, y)),
         (Method::Tsit45, false) => problem.tsit45().map(|s| drv.drive(s, y)),
         (Method::Tsit45, true) => problem.tsit45_sens().map(|s| drv.drive(s, y)),
-        (Method::Dp54, _) => unreachable!("dp54 is not a diffsol method"),
+        (Method::Bdf | Method::Dp54, _) => unreachable!("{m} is not a diffsol method"),
     };
     let end = end.unwrap_or_else(|e| End::Failed(format!("diffsol solver setup: {e}")));
     stats.rhs_evals += ad.counts.rhs.get();

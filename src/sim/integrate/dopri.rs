@@ -1,6 +1,6 @@
 //! Our own explicit Dormand–Prince 5(4) (Dormand & Prince 1980) with Hairer's
 //! 4th-order continuous extension (dense output) and a PI step controller
-//! (Gustafsson 1991). It is the independent test oracle for the diffsol methods and
+//! (Gustafsson 1991). It is the independent test oracle for the implicit methods and
 //! the only method with a fixed-step mode (for convergence-order tests).
 //!
 //! Between restart times it writes the state at requested sample times from the
@@ -9,7 +9,8 @@
 //! all buffers live in a [`Workspace`] created once per run.
 
 use super::{
-    budget_exhausted, left_limit, non_finite, End, EventFn, Options, Stats, StepFn, System,
+    budget_exhausted, initial_step, left_limit, non_finite, End, EventFn, Options, Stats, StepFn,
+    System,
 };
 
 /// Buffers reused by every step.
@@ -188,26 +189,15 @@ fn segment<S: System>(
         sys,
         t_end: left_limit(t0, t1),
     };
-    let n = y.len();
     let mut t = t0;
     let mut next_sample = 0;
     sys.rhs(t, y, &mut w.k[0]);
     stats.rhs_evals += 1;
     if w.h <= 0.0 || w.h > t1 - t0 {
-        // initial step from the derivative scale (Hairer's rule, simplified)
-        let (mut d0, mut d1) = (0.0, 0.0);
-        for i in 0..n {
-            let sc = o.atol * scale[i] + o.rtol * y[i].abs();
-            d0 += (y[i] / sc).powi(2);
-            d1 += (w.k[0][i] / sc).powi(2);
-        }
-        let (d0, d1) = ((d0 / n as f64).sqrt(), (d1 / n as f64).sqrt());
-        let h = if d0 < 1e-5 || d1 < 1e-5 {
-            1e-6
-        } else {
-            0.01 * d0 / d1
-        };
-        w.h = h.min(t1 - t0).min(o.h_max).min(o.h_init);
+        w.h = initial_step(y, &w.k[0], scale, o)
+            .min(t1 - t0)
+            .min(o.h_max)
+            .min(o.h_init);
     }
     if let Some(h) = o.fixed_step {
         w.h = h;

@@ -725,38 +725,112 @@ fn copy_dir(from: &Path, to: &Path) {
 
 /// The lines of the README's first fenced code block, comments stripped.
 fn readme_first_block() -> Vec<String> {
-    let readme = std::fs::read_to_string(repo().join("README.md")).expect("README.md");
-    readme
-        .lines()
-        .skip_while(|l| !l.starts_with("```"))
-        .skip(1)
-        .take_while(|l| !l.starts_with("```"))
-        .map(|l| l.split(" #").next().unwrap_or("").trim().to_string())
-        .filter(|l| !l.is_empty())
-        .collect()
+    readme_blocks().into_iter().next().unwrap_or_default()
 }
 
-/// The README's first command runs as written (from `hyperelastic` on), in a copy of
-/// the shipped datasets, and prints a fit; so the README cannot rot.
+/// Every fenced code block of the README as its commands: comments (` #` to the end
+/// of a line) stripped, lines continued with `\` joined, blank lines dropped.
+fn readme_blocks() -> Vec<Vec<String>> {
+    let readme = std::fs::read_to_string(repo().join("README.md")).expect("README.md");
+    let mut blocks = Vec::new();
+    let mut lines = readme.lines();
+    while lines.by_ref().any(|l| l.starts_with("```")) {
+        let mut block = Vec::new();
+        let mut pending = String::new();
+        for l in lines.by_ref().take_while(|l| !l.starts_with("```")) {
+            let l = l.split(" #").next().unwrap_or("").trim();
+            match l.strip_suffix('\\') {
+                Some(head) => {
+                    pending.push_str(head.trim());
+                    pending.push(' ');
+                }
+                None => {
+                    pending.push_str(l);
+                    if !pending.trim().is_empty() {
+                        block.push(pending.trim().to_string());
+                    }
+                    pending.clear();
+                }
+            }
+        }
+        assert!(pending.is_empty(), "a README block ends in a continued line");
+        blocks.push(block);
+    }
+    blocks
+}
+
+/// Commands of the README that are not run here, and why.
+const README_NOT_RUN: &[(&str, &str)] = &[
+    (
+        "cargo test --release",
+        "the suite itself; readme_test_command_is_what_ci_runs checks CI runs it",
+    ),
+    (
+        "cargo install --path .",
+        "a second release build (minutes); the binary it installs is the one run here",
+    ),
+];
+
+/// Every example command of the README runs as written (a POSIX shell in a temporary
+/// copy of the shipped datasets, the built `dea-fit` first on the PATH; `cargo run
+/// --release --` read as `dea-fit`), in the README's order (later examples read the
+/// fits earlier ones write), and exits 0; a `--json` example prints JSON. So the
+/// README cannot name a file that does not ship or a flag that does not exist.
 #[test]
-fn readme_first_command_runs() {
-    let block = readme_first_block();
-    let first = block.first().expect("the README opens with a code block");
-    let words: Vec<&str> = first.split_whitespace().collect();
-    let at = words
-        .iter()
-        .position(|w| *w == "hyperelastic")
-        .unwrap_or_else(|| panic!("no 'hyperelastic' in the README's first command: {first}"));
+fn readme_examples_run() {
     let dir = tempdir();
     copy_dir(&repo().join("datasets"), &dir.path().join("datasets"));
-    let o = hyperelastic(dir.path(), &words[at + 1..]);
-    let text = ok(&o);
-    assert!(
-        text.contains("chosen:") || text.contains("model:"),
-        "{text}"
-    );
-    assert!(dir.path().join("fit.json").exists());
-    assert!(dir.path().join("report/index.md").exists());
+    let bin = Path::new(env!("CARGO_BIN_EXE_dea-fit"));
+    let path = std::env::join_paths(
+        std::iter::once(bin.parent().expect("bin dir").to_path_buf()).chain(
+            std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default()),
+        ),
+    )
+    .expect("PATH");
+    let mut ran = 0;
+    for command in readme_blocks().into_iter().flatten() {
+        if README_NOT_RUN.iter().any(|(c, _)| *c == command) {
+            continue;
+        }
+        let line = match command.strip_prefix("cargo run --release -- ") {
+            Some(args) => format!("dea-fit {args}"),
+            None => command.clone(),
+        };
+        assert!(
+            line.starts_with("dea-fit "),
+            "a README command this test cannot run: '{command}' \
+             (run it here or list it in README_NOT_RUN with the reason)"
+        );
+        let o = std::process::Command::new("sh")
+            .args(["-c", &line])
+            .env("PATH", &path)
+            .current_dir(dir.path())
+            .output()
+            .expect("sh runs");
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "README example '{command}' failed:\n{}",
+            stderr(&o)
+        );
+        if line.contains("--json") && !line.contains('>') {
+            serde_json::from_slice::<Value>(&o.stdout).unwrap_or_else(|e| {
+                panic!("README example '{command}': not JSON on stdout: {e}")
+            });
+        }
+        ran += 1;
+    }
+    assert!(ran >= 30, "only {ran} README examples found");
+    // What the examples say they write.
+    for f in [
+        "fits/vhb4910-uniaxial-yeoh.json",
+        "fits/vhb4910-relaxation-qlv4.json",
+        "exports/vhb4910-uniaxial-yeoh-abaqus.inp",
+        "reports/index.html",
+        "sweep.sh",
+    ] {
+        assert!(dir.path().join(f).exists(), "{f} not written");
+    }
 }
 
 /// The README's second command is the test command, and CI runs exactly it.

@@ -9,7 +9,7 @@ use dea_fit::units::{parse_quantity, Dimension};
 use nalgebra::Complex;
 use proptest::prelude::*;
 use std::f64::consts::PI;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 const SEED_AREA: f64 = 1.439e-3;
 const SEED_D: f64 = 2.2e-3;
@@ -27,12 +27,9 @@ fn seed_geometry() -> Geometry {
     .unwrap()
 }
 
-/// A file of the shared reference copy beside the repository (`../shared/datasets/`;
-/// tests that need it are `#[ignore]`d where it is absent, see build.rs).
-fn shared(rel: &str) -> std::path::PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/datasets")
-        .join(rel)
+/// A shipped reference file (`datasets/`, each with its SOURCE note).
+fn shipped(rel: &str) -> PathBuf {
+    root().join("datasets").join(rel)
 }
 
 /// Seed coupon (Ch. 5): A = 1.439e-3 m², d = 2.2 mm, Sylgard 184 εr = 2.72 gives
@@ -137,16 +134,13 @@ fn dilute_limit_slopes() {
     }
 }
 
-/// The seed check table (shared/datasets/composites/mixing_rule_check_seed.csv),
-/// read in place: every rule value to its printed 2 decimals (tolerance 0.006).
+/// The seed check table (datasets/composites/mixing_rule_check_seed.csv, an
+/// independent calculation, see datasets/composites/README.md): every rule value to
+/// its printed 2 decimals (tolerance 0.006).
 #[test]
-#[cfg_attr(
-    not(shared_datasets),
-    ignore = "needs the shared reference copy ../shared/datasets (see build.rs)"
-)]
 fn mixing_rules_match_the_seed_check_table() {
-    let path = shared("composites/mixing_rule_check_seed.csv");
-    let text = std::fs::read_to_string(&path).expect("the shared seed check table");
+    let path = shipped("composites/mixing_rule_check_seed.csv");
+    let text = std::fs::read_to_string(&path).expect("the shipped seed check table");
     let (em, ef) = (5.2, 6000.0);
     let rules = [
         MixingRule::MaxwellGarnett,
@@ -188,14 +182,11 @@ fn mixing_rules_match_the_seed_check_table() {
     assert_eq!(rows, 4);
 }
 
-/// The real E4990A exports (an inductor) parse completely and are refused.
+/// The real E4990A exports (an inductor; datasets/lcr_samples/SOURCE.md) parse
+/// completely and are refused.
 #[test]
-#[cfg_attr(
-    not(shared_datasets),
-    ignore = "needs the shared reference copy ../shared/datasets (see build.rs)"
-)]
 fn real_e4990a_exports_parse_and_are_refused_as_inductive() {
-    let dir = shared("lcr_samples");
+    let dir = shipped("lcr_samples");
     for (file, pair, first, last) in [
         ("E4990A-example1.csv", Pair::RX, 20.0, 1000.0),
         ("E4990A-example2.csv", Pair::ZTheta, 20.0, 2000.0),
@@ -696,22 +687,20 @@ fn cli_permittivity_json_and_refusal() {
     }
     assert!((p["eps_r"].as_f64().unwrap() - 2.72).abs() < 0.03);
     assert!(v["warnings"].is_array());
-    let real = shared("lcr_samples/E4990A-example1.csv");
-    if cfg!(shared_datasets) {
-        let (code, _, err) = cli(&[
-            "permittivity",
-            real.to_str().unwrap(),
-            "--area",
-            "1.439e-3",
-            "--thickness",
-            "2.2mm",
-        ]);
-        assert_eq!(code, 2);
-        assert!(
-            err.contains("inductive at every frequency: not a capacitor"),
-            "{err}"
-        );
-    }
+    let real = shipped("lcr_samples/E4990A-example1.csv");
+    let (code, _, err) = cli(&[
+        "permittivity",
+        real.to_str().unwrap(),
+        "--area",
+        "1.439e-3",
+        "--thickness",
+        "2.2mm",
+    ]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("inductive at every frequency: not a capacitor"),
+        "{err}"
+    );
 }
 
 #[test]

@@ -725,16 +725,23 @@ fn copy_dir(from: &Path, to: &Path) {
 
 /// The lines of the README's first fenced code block, comments stripped.
 fn readme_first_block() -> Vec<String> {
-    readme_blocks().into_iter().next().unwrap_or_default()
+    command_blocks("README.md")
+        .into_iter()
+        .next()
+        .unwrap_or_default()
 }
 
-/// Every fenced code block of the README as its commands: comments (` #` to the end
-/// of a line) stripped, lines continued with `\` joined, blank lines dropped.
-fn readme_blocks() -> Vec<Vec<String>> {
-    let readme = std::fs::read_to_string(repo().join("README.md")).expect("README.md");
+/// The fenced code blocks without a language tag whose first line is a command
+/// (`dea-fit …` or `cargo …`) in the Markdown file `doc` (relative to the
+/// repository), as commands: comments (` #` to the end of a line) stripped, lines
+/// continued with `\` joined, blank lines dropped. Other blocks (printed output,
+/// TOML) are skipped.
+fn command_blocks(doc: &str) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(repo().join(doc)).expect(doc);
     let mut blocks = Vec::new();
-    let mut lines = readme.lines();
-    while lines.by_ref().any(|l| l.starts_with("```")) {
+    let mut lines = text.lines();
+    while let Some(fence) = lines.by_ref().find(|l| l.starts_with("```")) {
+        let tagged = fence.trim() != "```";
         let mut block = Vec::new();
         let mut pending = String::new();
         for l in lines.by_ref().take_while(|l| !l.starts_with("```")) {
@@ -753,8 +760,13 @@ fn readme_blocks() -> Vec<Vec<String>> {
                 }
             }
         }
-        assert!(pending.is_empty(), "a README block ends in a continued line");
-        blocks.push(block);
+        assert!(pending.is_empty(), "{doc}: a block ends in a continued line");
+        let commands = block
+            .first()
+            .is_some_and(|l| l.starts_with("dea-fit ") || l.starts_with("cargo "));
+        if !tagged && commands {
+            blocks.push(block);
+        }
     }
     blocks
 }
@@ -771,14 +783,11 @@ const README_NOT_RUN: &[(&str, &str)] = &[
     ),
 ];
 
-/// Every example command of the README runs as written (a POSIX shell in a temporary
-/// copy of the shipped datasets, the built `dea-fit` first on the PATH; `cargo run
-/// --release --` read as `dea-fit`), in the README's order (later examples read the
-/// fits earlier ones write), and exits 0; a `--json` example prints JSON. So the
-/// README cannot name a file that does not ship or a flag that does not exist.
-#[test]
-fn readme_examples_run() {
-    let dir = tempdir();
+/// Run every command of `doc`'s command blocks as written (a POSIX shell in `dir`, the
+/// built `dea-fit` first on the PATH; `cargo run --release --` read as `dea-fit`), in
+/// order (later examples read the fits earlier ones write); each must exit 0, and a
+/// `--json` example must print JSON. Returns how many ran.
+fn run_doc_examples(doc: &str, dir: &Path) -> usize {
     copy_dir(&repo().join("datasets"), &dir.path().join("datasets"));
     let bin = Path::new(env!("CARGO_BIN_EXE_dea-fit"));
     let path = std::env::join_paths(
@@ -788,7 +797,7 @@ fn readme_examples_run() {
     )
     .expect("PATH");
     let mut ran = 0;
-    for command in readme_blocks().into_iter().flatten() {
+    for command in command_blocks(doc).into_iter().flatten() {
         if README_NOT_RUN.iter().any(|(c, _)| *c == command) {
             continue;
         }
@@ -804,22 +813,32 @@ fn readme_examples_run() {
         let o = std::process::Command::new("sh")
             .args(["-c", &line])
             .env("PATH", &path)
-            .current_dir(dir.path())
+            .current_dir(dir)
             .output()
             .expect("sh runs");
         assert_eq!(
             o.status.code(),
             Some(0),
-            "README example '{command}' failed:\n{}",
+            "{doc}: example '{command}' failed:\n{}",
             stderr(&o)
         );
         if line.contains("--json") && !line.contains('>') {
-            serde_json::from_slice::<Value>(&o.stdout).unwrap_or_else(|e| {
-                panic!("README example '{command}': not JSON on stdout: {e}")
-            });
+            serde_json::from_slice::<Value>(&o.stdout)
+                .unwrap_or_else(|e| panic!("{doc}: example '{command}': not JSON on stdout: {e}"));
         }
         ran += 1;
     }
+    ran
+}
+
+/// Every example command of the README runs as written on a copy of the shipped
+/// datasets (see [`run_doc_examples`]). So the README cannot name a file that does
+/// not ship or a flag that does not exist.
+#[test]
+fn readme_examples_run() {
+    let dir = tempdir();
+    copy_dir(&repo().join("datasets"), &dir.path().join("datasets"));
+    let ran = run_doc_examples("README.md", dir.path());
     assert!(ran >= 30, "only {ran} README examples found");
     // What the examples say they write.
     for f in [
@@ -830,6 +849,63 @@ fn readme_examples_run() {
         "sweep.sh",
     ] {
         assert!(dir.path().join(f).exists(), "{f} not written");
+    }
+}
+
+/// docs/worked-example.md: every command runs as written, in order, on a copy of the
+/// shipped datasets, and the numbers the page quotes are what they print.
+#[test]
+fn worked_example_runs() {
+    let dir = tempdir();
+    copy_dir(&repo().join("datasets"), &dir.path().join("datasets"));
+    let ran = run_doc_examples("docs/worked-example.md", dir.path());
+    assert_eq!(ran, 5, "the page's five steps");
+    let page = std::fs::read_to_string(repo().join("docs/worked-example.md")).expect("page");
+    let run = |args: &[&str]| stdout(&crate::support::run_ok(dir.path(), args));
+    // Each quoted line of output must be printed as quoted (the runs are deterministic).
+    let outputs = [
+        run(&[
+            "hyperelastic",
+            "datasets/vhb4910/uniaxial.csv",
+            "--equibiaxial",
+            "datasets/vhb4910/equibiaxial.csv",
+            "--planar",
+            "datasets/vhb4910/planar.csv",
+            "--model",
+            "yeoh",
+            "--no-report",
+        ]),
+        run(&[
+            "relaxation",
+            "datasets/vhb4910/relaxation.csv",
+            "--strain",
+            "0.5",
+            "--no-report",
+        ]),
+        run(&[
+            "permittivity",
+            "datasets/vhb4910/lcr_cpd.csv",
+            "--diameter",
+            "30.00mm±0.05mm",
+            "--thickness",
+            "1.000mm±0.010mm",
+        ]),
+        run(&["static", "datasets/vhb4910/stack_fitted.toml"]),
+    ]
+    .concat();
+    for quoted in [
+        "C10        69.136 kPa",
+        "μ0 138.27 kPa  RMSE 3.1121 kPa",
+        "157.90 ms  ± 6.0446 ms  114.37 kPa",
+        "E∞ 43.204 kPa  E0 222.19 kPa",
+        "1000.00  4.6875  0.0494",
+        "pull-in at stretch 0.650071, 20997.4 V (rest stretch 1.015455)",
+    ] {
+        assert!(page.contains(quoted), "the page no longer quotes '{quoted}'");
+        assert!(
+            outputs.contains(quoted),
+            "the page quotes '{quoted}' but the commands print:\n{outputs}"
+        );
     }
 }
 

@@ -900,9 +900,10 @@ fn worked_example_runs() {
     ]
     .concat();
     for quoted in [
-        "C10        69.136 kPa",
+        "C10        69.14 ± 0.22 kPa    [68.70, 69.57] kPa",
         "μ0 138.27 kPa  RMSE 3.1121 kPa",
-        "157.90 ms  ± 6.0446 ms  114.37 kPa",
+        "157.9 ± 6.0 ms  114.4 ± 5.1 kPa",
+        "A = (7.069 ± 0.024)e-4 m², d = 1.000 ± 0.010 mm",
         "E∞ 43.204 kPa  E0 222.19 kPa",
         "1000.00  4.6875  0.0494",
         "pull-in at stretch 0.650071, 20997.4 V (rest stretch 1.015455)",

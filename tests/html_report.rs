@@ -134,8 +134,7 @@ fn hyperelastic_page_reads_offline() {
     assert!(
         headers.contains(&vec![
             "parameter".into(),
-            "value".into(),
-            "std. error".into(),
+            "value ± std. error".into(),
             "95 % interval".into()
         ]),
         "{headers:?}"

@@ -760,7 +760,10 @@ fn command_blocks(doc: &str) -> Vec<Vec<String>> {
                 }
             }
         }
-        assert!(pending.is_empty(), "{doc}: a block ends in a continued line");
+        assert!(
+            pending.is_empty(),
+            "{doc}: a block ends in a continued line"
+        );
         let commands = block
             .first()
             .is_some_and(|l| l.starts_with("dea-fit ") || l.starts_with("cargo "));
@@ -790,9 +793,9 @@ const README_NOT_RUN: &[(&str, &str)] = &[
 fn run_doc_examples(doc: &str, dir: &Path) -> usize {
     let bin = Path::new(env!("CARGO_BIN_EXE_dea-fit"));
     let path = std::env::join_paths(
-        std::iter::once(bin.parent().expect("bin dir").to_path_buf()).chain(
-            std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default()),
-        ),
+        std::iter::once(bin.parent().expect("bin dir").to_path_buf()).chain(std::env::split_paths(
+            &std::env::var_os("PATH").unwrap_or_default(),
+        )),
     )
     .expect("PATH");
     let mut ran = 0;
@@ -842,10 +845,16 @@ fn readme_examples_run() {
     // each of those is still in the README.
     let all: Vec<String> = command_blocks("README.md").into_iter().flatten().collect();
     for (c, _) in README_NOT_RUN {
-        assert!(all.iter().any(|a| a == c), "README_NOT_RUN names '{c}', no longer in the README");
+        assert!(
+            all.iter().any(|a| a == c),
+            "README_NOT_RUN names '{c}', no longer in the README"
+        );
     }
     assert_eq!(ran + README_NOT_RUN.len(), all.len());
-    assert!(ran >= 25, "{ran} README examples ran: were the code blocks found?");
+    assert!(
+        ran >= 25,
+        "{ran} README examples ran: were the code blocks found?"
+    );
     // What the examples say they write.
     for f in [
         "fits/vhb4910-uniaxial-yeoh.json",
@@ -908,7 +917,10 @@ fn worked_example_runs() {
         "1000.00  4.6875  0.0494",
         "pull-in at stretch 0.650071, 20997.4 V (rest stretch 1.015455)",
     ] {
-        assert!(page.contains(quoted), "the page no longer quotes '{quoted}'");
+        assert!(
+            page.contains(quoted),
+            "the page no longer quotes '{quoted}'"
+        );
         assert!(
             outputs.contains(quoted),
             "the page quotes '{quoted}' but the commands print:\n{outputs}"

@@ -662,7 +662,11 @@ fn shipped_vhb_sweep_regenerates_and_reads_its_eps() {
     assert_eq!(files.len(), 1);
     for (file, text) in &files {
         let shipped = std::fs::read_to_string(file).unwrap();
-        assert!(shipped == *text, "{} differs from its generator", file.display());
+        assert!(
+            shipped == *text,
+            "{} differs from its generator",
+            file.display()
+        );
     }
     let s = lcr::read(&files[0].0, &LcrOptions::default()).unwrap();
     let r = analyse(&s, "vhb", &m.samples[0].geometry, &m.settings, "test").unwrap();

@@ -987,7 +987,10 @@ fn synth_relaxation_is_recovered_by_the_estimator() {
         assert_eq!(params.len(), truth.len(), "{name}: {params:?}");
         for (p, want) in truth {
             let q = params.iter().find(|q| q["name"] == p).unwrap();
-            let (got, se) = (q["value"].as_f64().unwrap(), q["std_error"].as_f64().unwrap());
+            let (got, se) = (
+                q["value"].as_f64().unwrap(),
+                q["std_error"].as_f64().unwrap(),
+            );
             let err = (got - want).abs();
             assert!(
                 err < 4.0 * se && err < 0.03 * want,

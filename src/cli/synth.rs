@@ -115,9 +115,8 @@ pub fn run(a: Args) -> Result<i32> {
         "relaxation" => relaxation(a),
         "lcr" => lcr(a),
         "trace" => trace(a),
-        w => Err(Error::settings(format!("cannot synthesise '{w}'")).with_hint(
-            "use: dea-fit synth hyperelastic, relaxation, lcr, or trace SCENE",
-        )),
+        w => Err(Error::settings(format!("cannot synthesise '{w}'"))
+            .with_hint("use: dea-fit synth hyperelastic, relaxation, lcr, or trace SCENE")),
     }
 }
 
@@ -126,7 +125,9 @@ fn relative_noise(a: &Args, of: &str) -> Result<f64> {
     let noise = match a.noise.as_slice() {
         [] => 0.0,
         [x] => x.trim().parse::<f64>().map_err(|_| {
-            Error::settings(format!("--noise '{x}': expected a fraction of {of}, e.g. 0.01"))
+            Error::settings(format!(
+                "--noise '{x}': expected a fraction of {of}, e.g. 0.01"
+            ))
         })?,
         _ => {
             return Err(Error::settings(format!(
@@ -317,16 +318,18 @@ fn range(
     flag: &str,
     parse: impl Fn(&str) -> std::result::Result<f64, String>,
 ) -> Result<(f64, f64, usize)> {
-    let bad = |why: &str| {
-        Error::settings(format!("{flag} '{text}': expected START:STOP:COUNT{why}"))
-    };
+    let bad =
+        |why: &str| Error::settings(format!("{flag} '{text}': expected START:STOP:COUNT{why}"));
     let parts: Vec<&str> = text.split(':').collect();
     let [a, b, n] = parts.as_slice() else {
         return Err(bad(""));
     };
     let a = parse(a).map_err(|e| bad(&format!(" ({e})")))?;
     let b = parse(b).map_err(|e| bad(&format!(" ({e})")))?;
-    let n = n.trim().parse::<usize>().map_err(|_| bad(" (COUNT an integer)"))?;
+    let n = n
+        .trim()
+        .parse::<usize>()
+        .map_err(|_| bad(" (COUNT an integer)"))?;
     Ok((a, b, n))
 }
 
@@ -351,9 +354,7 @@ fn lcr(a: Args) -> Result<i32> {
     }
     let q = |flag: &str, v: &Option<String>, dim| -> Result<_> {
         v.as_deref()
-            .map(|t| {
-                parse_quantity(t, dim).map_err(|e| Error::settings(format!("{flag}: {e}")))
-            })
+            .map(|t| parse_quantity(t, dim).map_err(|e| Error::settings(format!("{flag}: {e}"))))
             .transpose()
     };
     let geometry = Geometry::new(

@@ -125,10 +125,14 @@ pub fn constrained_least_squares(
         SolverStatus::MaxTime => Some("its time limit was reached"),
         SolverStatus::NumericalError => Some("a numerical error"),
         SolverStatus::InsufficientProgress => Some("it made insufficient progress"),
-        SolverStatus::Unsolved | SolverStatus::CallbackTerminated => Some("it did not run to the end"),
+        SolverStatus::Unsolved | SolverStatus::CallbackTerminated => {
+            Some("it did not run to the end")
+        }
     };
     if let Some(why) = why {
-        return Err(format!("the QP solver (Clarabel) stopped without a solution: {why}"));
+        return Err(format!(
+            "the QP solver (Clarabel) stopped without a solution: {why}"
+        ));
     }
     let z = &solver.solution.x;
     let x = DVector::from_iterator(n, (0..n).map(|j| z[j] * d[j] * beta));

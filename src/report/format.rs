@@ -57,7 +57,11 @@ impl Scale {
         let (factor, suffix) = match unit {
             "1" | "" => {
                 // A bare number: plain from 1e-3 to 1e6, else a shared power of ten.
-                let k = if big > 0.0 { big.log10().floor() as i32 } else { 0 };
+                let k = if big > 0.0 {
+                    big.log10().floor() as i32
+                } else {
+                    0
+                };
                 if (-3..6).contains(&k) {
                     (1.0, String::new())
                 } else {
@@ -265,7 +269,10 @@ mod tests {
             "[68.63, 70.05] kPa"
         );
         let [v, ci] = constant_pm("mass_fraction", 0.2, Some(0.0126), Some([0.17, 0.23]), "1");
-        assert_eq!((v.as_str(), ci.as_str()), ("20.0 ± 1.3 %", "[17.0, 23.0] %"));
+        assert_eq!(
+            (v.as_str(), ci.as_str()),
+            ("20.0 ± 1.3 %", "[17.0, 23.0] %")
+        );
     }
 
     #[test]

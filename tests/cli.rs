@@ -725,38 +725,207 @@ fn copy_dir(from: &Path, to: &Path) {
 
 /// The lines of the README's first fenced code block, comments stripped.
 fn readme_first_block() -> Vec<String> {
-    let readme = std::fs::read_to_string(repo().join("README.md")).expect("README.md");
-    readme
-        .lines()
-        .skip_while(|l| !l.starts_with("```"))
-        .skip(1)
-        .take_while(|l| !l.starts_with("```"))
-        .map(|l| l.split(" #").next().unwrap_or("").trim().to_string())
-        .filter(|l| !l.is_empty())
-        .collect()
+    command_blocks("README.md")
+        .into_iter()
+        .next()
+        .unwrap_or_default()
 }
 
-/// The README's first command runs as written (from `hyperelastic` on), in a copy of
-/// the shipped datasets, and prints a fit; so the README cannot rot.
+/// The fenced code blocks without a language tag whose first line is a command
+/// (`dea-fit …` or `cargo …`) in the Markdown file `doc` (relative to the
+/// repository), as commands: comments (` #` to the end of a line) stripped, lines
+/// continued with `\` joined, blank lines dropped. Other blocks (printed output,
+/// TOML) are skipped.
+fn command_blocks(doc: &str) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(repo().join(doc)).expect(doc);
+    let mut blocks = Vec::new();
+    let mut lines = text.lines();
+    while let Some(fence) = lines.by_ref().find(|l| l.starts_with("```")) {
+        let tagged = fence.trim() != "```";
+        let mut block = Vec::new();
+        let mut pending = String::new();
+        for l in lines.by_ref().take_while(|l| !l.starts_with("```")) {
+            let l = l.split(" #").next().unwrap_or("").trim();
+            match l.strip_suffix('\\') {
+                Some(head) => {
+                    pending.push_str(head.trim());
+                    pending.push(' ');
+                }
+                None => {
+                    pending.push_str(l);
+                    if !pending.trim().is_empty() {
+                        block.push(pending.trim().to_string());
+                    }
+                    pending.clear();
+                }
+            }
+        }
+        assert!(
+            pending.is_empty(),
+            "{doc}: a block ends in a continued line"
+        );
+        let commands = block
+            .first()
+            .is_some_and(|l| l.starts_with("dea-fit ") || l.starts_with("cargo "));
+        if !tagged && commands {
+            blocks.push(block);
+        }
+    }
+    blocks
+}
+
+/// Commands of the README that are not run here, and why.
+const README_NOT_RUN: &[(&str, &str)] = &[
+    (
+        "cargo test --release",
+        "the suite itself; readme_test_command_is_what_ci_runs checks CI runs it",
+    ),
+    (
+        "cargo install --path .",
+        "a second release build (minutes); the binary it installs is the one run here",
+    ),
+];
+
+/// Run every command of `doc`'s command blocks as written (a POSIX shell in `dir`, the
+/// built `dea-fit` first on the PATH; `cargo run --release --` read as `dea-fit`), in
+/// order (later examples read the fits earlier ones write); each must exit 0, and a
+/// `--json` example must print JSON. Returns how many ran.
+fn run_doc_examples(doc: &str, dir: &Path) -> usize {
+    let bin = Path::new(env!("CARGO_BIN_EXE_dea-fit"));
+    let path = std::env::join_paths(
+        std::iter::once(bin.parent().expect("bin dir").to_path_buf()).chain(std::env::split_paths(
+            &std::env::var_os("PATH").unwrap_or_default(),
+        )),
+    )
+    .expect("PATH");
+    let mut ran = 0;
+    for command in command_blocks(doc).into_iter().flatten() {
+        if README_NOT_RUN.iter().any(|(c, _)| *c == command) {
+            continue;
+        }
+        let line = match command.strip_prefix("cargo run --release -- ") {
+            Some(args) => format!("dea-fit {args}"),
+            None => command.clone(),
+        };
+        assert!(
+            line.starts_with("dea-fit "),
+            "a README command this test cannot run: '{command}' \
+             (run it here or list it in README_NOT_RUN with the reason)"
+        );
+        let o = std::process::Command::new("sh")
+            .args(["-c", &line])
+            .env("PATH", &path)
+            .current_dir(dir)
+            .output()
+            .expect("sh runs");
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{doc}: example '{command}' failed:\n{}",
+            stderr(&o)
+        );
+        if line.contains("--json") && !line.contains('>') {
+            serde_json::from_slice::<Value>(&o.stdout)
+                .unwrap_or_else(|e| panic!("{doc}: example '{command}': not JSON on stdout: {e}"));
+        }
+        ran += 1;
+    }
+    ran
+}
+
+/// Every example command of the README runs as written on a copy of the shipped
+/// datasets (see [`run_doc_examples`]). So the README cannot name a file that does
+/// not ship or a flag that does not exist.
 #[test]
-fn readme_first_command_runs() {
-    let block = readme_first_block();
-    let first = block.first().expect("the README opens with a code block");
-    let words: Vec<&str> = first.split_whitespace().collect();
-    let at = words
-        .iter()
-        .position(|w| *w == "hyperelastic")
-        .unwrap_or_else(|| panic!("no 'hyperelastic' in the README's first command: {first}"));
+fn readme_examples_run() {
     let dir = tempdir();
     copy_dir(&repo().join("datasets"), &dir.path().join("datasets"));
-    let o = hyperelastic(dir.path(), &words[at + 1..]);
-    let text = ok(&o);
+    let ran = run_doc_examples("README.md", dir.path());
+    // Nothing was left out but the commands listed (with the reason) as not run, and
+    // each of those is still in the README.
+    let all: Vec<String> = command_blocks("README.md").into_iter().flatten().collect();
+    for (c, _) in README_NOT_RUN {
+        assert!(
+            all.iter().any(|a| a == c),
+            "README_NOT_RUN names '{c}', no longer in the README"
+        );
+    }
+    assert_eq!(ran + README_NOT_RUN.len(), all.len());
     assert!(
-        text.contains("chosen:") || text.contains("model:"),
-        "{text}"
+        ran >= 25,
+        "{ran} README examples ran: were the code blocks found?"
     );
-    assert!(dir.path().join("fit.json").exists());
-    assert!(dir.path().join("report/index.md").exists());
+    // What the examples say they write.
+    for f in [
+        "fits/vhb4910-uniaxial-yeoh.json",
+        "fits/vhb4910-relaxation-qlv4.json",
+        "exports/vhb4910-uniaxial-yeoh-abaqus.inp",
+        "reports/index.html",
+        "sweep.sh",
+    ] {
+        assert!(dir.path().join(f).exists(), "{f} not written");
+    }
+}
+
+/// docs/worked-example.md: every command runs as written, in order, on a copy of the
+/// shipped datasets, and the numbers the page quotes are what they print.
+#[test]
+fn worked_example_runs() {
+    let dir = tempdir();
+    copy_dir(&repo().join("datasets"), &dir.path().join("datasets"));
+    let ran = run_doc_examples("docs/worked-example.md", dir.path());
+    assert_eq!(ran, 5, "the page's five steps");
+    let page = std::fs::read_to_string(repo().join("docs/worked-example.md")).expect("page");
+    let run = |args: &[&str]| stdout(&crate::support::run_ok(dir.path(), args));
+    // Each quoted line of output must be printed as quoted (the runs are deterministic).
+    let outputs = [
+        run(&[
+            "hyperelastic",
+            "datasets/vhb4910/uniaxial.csv",
+            "--equibiaxial",
+            "datasets/vhb4910/equibiaxial.csv",
+            "--planar",
+            "datasets/vhb4910/planar.csv",
+            "--model",
+            "yeoh",
+            "--no-report",
+        ]),
+        run(&[
+            "relaxation",
+            "datasets/vhb4910/relaxation.csv",
+            "--strain",
+            "0.5",
+            "--no-report",
+        ]),
+        run(&[
+            "permittivity",
+            "datasets/vhb4910/lcr_cpd.csv",
+            "--diameter",
+            "30.00mm±0.05mm",
+            "--thickness",
+            "1.000mm±0.010mm",
+        ]),
+        run(&["static", "datasets/vhb4910/stack_fitted.toml"]),
+    ]
+    .concat();
+    for quoted in [
+        "C10        69.14 ± 0.22 kPa    [68.70, 69.57] kPa",
+        "μ0 138.27 kPa  RMSE 3.1121 kPa",
+        "157.9 ± 6.0 ms  114.4 ± 5.1 kPa",
+        "A = (7.069 ± 0.024)e-4 m², d = 1.000 ± 0.010 mm",
+        "E∞ 43.204 kPa  E0 222.19 kPa",
+        "1000.00  4.6875  0.0494",
+        "pull-in at stretch 0.650071, 20997.4 V (rest stretch 1.015455)",
+    ] {
+        assert!(
+            page.contains(quoted),
+            "the page no longer quotes '{quoted}'"
+        );
+        assert!(
+            outputs.contains(quoted),
+            "the page quotes '{quoted}' but the commands print:\n{outputs}"
+        );
+    }
 }
 
 /// The README's second command is the test command, and CI runs exactly it.

@@ -73,3 +73,36 @@ fn synthetic_vhb_data_scatter_about_their_generating_model() {
         assert!(any_noise);
     }
 }
+
+/// Reference files copied into `datasets/` are the bytes their SOURCE notes name
+/// (sha256 as stated there).
+#[test]
+fn copied_reference_files_match_their_source_checksums() {
+    for (file, sha) in [
+        (
+            "lcr_samples/E4990A-example1.csv",
+            "38c24a0227609ce8e35a16ae6d8aef02c0fe1b20038a11c06be80816225d7e1a",
+        ),
+        (
+            "lcr_samples/E4990A-example2.csv",
+            "db48e3c7aacea456522b93d3eb8ac751a20e90b365c18454b68a1a34f735b824",
+        ),
+        (
+            "composites/mixing_rule_check_seed.csv",
+            "1f8b0dd43042d3543a8910482c0a411eefa84b8de9234be4383db6acc9a6f6e8",
+        ),
+    ] {
+        let path = root().join("datasets").join(file);
+        let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert_eq!(dea_fit::io::sha256_hex(&bytes), sha, "{file}");
+        let notes = [
+            "datasets/lcr_samples/SOURCE.md",
+            "datasets/composites/README.md",
+        ]
+        .map(|n| std::fs::read_to_string(root().join(n)).expect("SOURCE note"));
+        assert!(
+            notes.iter().any(|n| n.contains(sha)),
+            "{file}: its checksum is in no SOURCE note"
+        );
+    }
+}

@@ -134,8 +134,7 @@ fn hyperelastic_page_reads_offline() {
     assert!(
         headers.contains(&vec![
             "parameter".into(),
-            "value".into(),
-            "std. error".into(),
+            "value ± std. error".into(),
             "95 % interval".into()
         ]),
         "{headers:?}"
@@ -186,7 +185,7 @@ fn every_report_kind_is_self_contained() {
                 "r.json".into(),
             ],
             "Relaxation fit: 2 Prony terms (parallel formulation)",
-            &["τ", "σ(τ)", "E = k", "σ(E)", "g", "n = k·τ"],
+            &["τ ± σ", "E = k ± σ", "g", "n = k·τ"],
         ),
         (
             "simulate",

@@ -9,7 +9,7 @@ use dea_fit::units::{parse_quantity, Dimension};
 use nalgebra::Complex;
 use proptest::prelude::*;
 use std::f64::consts::PI;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 const SEED_AREA: f64 = 1.439e-3;
 const SEED_D: f64 = 2.2e-3;
@@ -27,12 +27,9 @@ fn seed_geometry() -> Geometry {
     .unwrap()
 }
 
-/// A file of the shared reference copy beside the repository (`../shared/datasets/`;
-/// tests that need it are `#[ignore]`d where it is absent, see build.rs).
-fn shared(rel: &str) -> std::path::PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/datasets")
-        .join(rel)
+/// A shipped reference file (`datasets/`, each with its SOURCE note).
+fn shipped(rel: &str) -> PathBuf {
+    root().join("datasets").join(rel)
 }
 
 /// Seed coupon (Ch. 5): A = 1.439e-3 m², d = 2.2 mm, Sylgard 184 εr = 2.72 gives
@@ -137,16 +134,13 @@ fn dilute_limit_slopes() {
     }
 }
 
-/// The seed check table (shared/datasets/composites/mixing_rule_check_seed.csv),
-/// read in place: every rule value to its printed 2 decimals (tolerance 0.006).
+/// The seed check table (datasets/composites/mixing_rule_check_seed.csv, an
+/// independent calculation, see datasets/composites/README.md): every rule value to
+/// its printed 2 decimals (tolerance 0.006).
 #[test]
-#[cfg_attr(
-    not(shared_datasets),
-    ignore = "needs the shared reference copy ../shared/datasets (see build.rs)"
-)]
 fn mixing_rules_match_the_seed_check_table() {
-    let path = shared("composites/mixing_rule_check_seed.csv");
-    let text = std::fs::read_to_string(&path).expect("the shared seed check table");
+    let path = shipped("composites/mixing_rule_check_seed.csv");
+    let text = std::fs::read_to_string(&path).expect("the shipped seed check table");
     let (em, ef) = (5.2, 6000.0);
     let rules = [
         MixingRule::MaxwellGarnett,
@@ -188,14 +182,11 @@ fn mixing_rules_match_the_seed_check_table() {
     assert_eq!(rows, 4);
 }
 
-/// The real E4990A exports (an inductor) parse completely and are refused.
+/// The real E4990A exports (an inductor; datasets/lcr_samples/SOURCE.md) parse
+/// completely and are refused.
 #[test]
-#[cfg_attr(
-    not(shared_datasets),
-    ignore = "needs the shared reference copy ../shared/datasets (see build.rs)"
-)]
 fn real_e4990a_exports_parse_and_are_refused_as_inductive() {
-    let dir = shared("lcr_samples");
+    let dir = shipped("lcr_samples");
     for (file, pair, first, last) in [
         ("E4990A-example1.csv", Pair::RX, 20.0, 1000.0),
         ("E4990A-example2.csv", Pair::ZTheta, 20.0, 2000.0),
@@ -660,6 +651,33 @@ fn shipped_series_regenerates_and_is_recovered() {
     );
 }
 
+/// The worked example's LCR sweep (datasets/vhb4910/lcr.toml) is what its generator
+/// writes, and reads back as the εr = 4.7 and tan δ = 0.005 that made it: the mean
+/// over 13 frequencies with 0.3 % noise on Cp and on D is within 0.3 % (3.6σ of
+/// the mean).
+#[test]
+fn shipped_vhb_sweep_regenerates_and_reads_its_eps() {
+    let m = manifest::read(&root().join("datasets/vhb4910/lcr.toml")).unwrap();
+    let files = composite::synthesize(&m).unwrap();
+    assert_eq!(files.len(), 1);
+    for (file, text) in &files {
+        let shipped = std::fs::read_to_string(file).unwrap();
+        assert!(
+            shipped == *text,
+            "{} differs from its generator",
+            file.display()
+        );
+    }
+    let s = lcr::read(&files[0].0, &LcrOptions::default()).unwrap();
+    let r = analyse(&s, "vhb", &m.samples[0].geometry, &m.settings, "test").unwrap();
+    let n = r.points.len() as f64;
+    assert_eq!(n, 13.0);
+    let eps = r.points.iter().map(|p| p.eps_r).sum::<f64>() / n;
+    let tan = r.points.iter().map(|p| p.tan_delta).sum::<f64>() / n;
+    assert!((eps - 4.7).abs() < 0.003 * 4.7, "εr {eps}");
+    assert!((tan - 0.005).abs() < 0.003 * 0.005, "tan δ {tan}");
+}
+
 fn cli(args: &[&str]) -> (i32, String, String) {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_dea-fit"))
         .args(args)
@@ -696,22 +714,20 @@ fn cli_permittivity_json_and_refusal() {
     }
     assert!((p["eps_r"].as_f64().unwrap() - 2.72).abs() < 0.03);
     assert!(v["warnings"].is_array());
-    let real = shared("lcr_samples/E4990A-example1.csv");
-    if cfg!(shared_datasets) {
-        let (code, _, err) = cli(&[
-            "permittivity",
-            real.to_str().unwrap(),
-            "--area",
-            "1.439e-3",
-            "--thickness",
-            "2.2mm",
-        ]);
-        assert_eq!(code, 2);
-        assert!(
-            err.contains("inductive at every frequency: not a capacitor"),
-            "{err}"
-        );
-    }
+    let real = shipped("lcr_samples/E4990A-example1.csv");
+    let (code, _, err) = cli(&[
+        "permittivity",
+        real.to_str().unwrap(),
+        "--area",
+        "1.439e-3",
+        "--thickness",
+        "2.2mm",
+    ]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("inductive at every frequency: not a capacitor"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -773,4 +789,82 @@ fn negative_loss_is_refused_at_its_line() {
     )
     .expect("a D within the meter's accuracy is read");
     assert_eq!(s.points.len(), 2);
+}
+
+/// `dea-fit synth lcr` writes what `dea-fit permittivity` reads, in every pair it
+/// can record, with its generating command, constants, geometry, noise and seed in
+/// the `#` lines; the reader gets back the εr and tan δ that made it. 0.3 % noise on
+/// Cp and on D over 13 frequencies: the means within 0.3 % (3.6σ of the mean) and
+/// each frequency within 1.5 % (5σ).
+#[test]
+fn synth_lcr_is_recovered_by_the_reader() {
+    use crate::support::run_ok;
+    let dir = tempfile::tempdir().unwrap();
+    for pair in ["cp-d", "cs-rs", "cp-rp", "z-theta", "r-x", "g-b"] {
+        let out = format!("{pair}.csv");
+        run_ok(
+            dir.path(),
+            &[
+                "synth",
+                "lcr",
+                "--eps-r",
+                "4.7",
+                "--tan-delta",
+                "0.005",
+                "--diameter",
+                "30mm",
+                "--thickness",
+                "1mm",
+                "--stray",
+                "0.3pF",
+                "--sweep",
+                "100Hz:100kHz:4",
+                "--noise",
+                "0.003",
+                "--pair",
+                pair,
+                "--seed",
+                "5",
+                "--out",
+                &out,
+            ],
+        );
+        let text = std::fs::read_to_string(dir.path().join(&out)).unwrap();
+        for said in [
+            "# command: dea-fit synth lcr --eps-r 4.7",
+            "# param eps_r = 4.7e0, tan_delta = 5e-3",
+            "stray = 3e-13 F",
+            "# noise: relative 0.003 on Cp and on D",
+            "seed 5 (ChaCha8)",
+        ] {
+            assert!(text.contains(said), "{out} does not say '{said}':\n{text}");
+        }
+        let o = run_ok(
+            dir.path(),
+            &[
+                "permittivity",
+                &out,
+                "--diameter",
+                "30mm",
+                "--thickness",
+                "1mm",
+                "--stray",
+                "0.3pF",
+                "--json",
+            ],
+        );
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let points = v["samples"][0]["points"].as_array().unwrap();
+        assert_eq!(points.len(), 13, "{out}");
+        let col = |k: &str| -> Vec<f64> { points.iter().map(|p| p[k].as_f64().unwrap()).collect() };
+        for (k, want) in [("eps_r", 4.7), ("tan_delta", 0.005)] {
+            let xs = col(k);
+            let mean = xs.iter().sum::<f64>() / xs.len() as f64;
+            assert!((mean - want).abs() < 0.003 * want, "{out}: mean {k} {mean}");
+            assert!(
+                xs.iter().all(|x| (x - want).abs() < 0.015 * want),
+                "{out}: {k} {xs:?}"
+            );
+        }
+    }
 }

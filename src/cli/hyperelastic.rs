@@ -7,7 +7,7 @@ use dea_fit::fit::hyperelastic::{self, HyperelasticFit, Settings};
 use dea_fit::fit::problem::Residual;
 use dea_fit::io::tensile::{self, TensileOptions};
 use dea_fit::material::hyperelastic::{Mode, ModelSpec, OgdenForm};
-use dea_fit::report::format::{si, table};
+use dea_fit::report::format::{parameter_cells, si, table, PARAMETER_HEADER};
 use dea_fit::units::{parse_quantity, Dimension};
 use dea_fit::{Error, Result};
 use std::path::PathBuf;
@@ -228,22 +228,12 @@ pub fn summary(fit: &HyperelasticFit) -> String {
         .parameters
         .iter()
         .map(|p| {
-            vec![
-                p.name.clone(),
-                si(p.value, &p.unit),
-                p.std_error
-                    .map(|e| format!("± {}", si(e, &p.unit)))
-                    .unwrap_or("± n/a".into()),
-                p.ci95
-                    .map(|[a, b]| format!("[{}, {}]", si(a, &p.unit), si(b, &p.unit)))
-                    .unwrap_or("n/a".into()),
-            ]
+            let [v, ci] = parameter_cells(p);
+            vec![p.name.clone(), v, ci]
         })
         .collect();
-    s.push_str(&table(
-        &["parameter", "value", "std. error", "95 % interval"],
-        &rows,
-    ));
+    let [hv, hci] = PARAMETER_HEADER;
+    s.push_str(&table(&["parameter", hv, hci], &rows));
     s.push_str(&format!(
         "μ0 {}  RMSE {}  R² {}  %RMSE {}  AICc {}  BIC {:.2}\n",
         si(fit.initial_shear_modulus_pa, "Pa"),

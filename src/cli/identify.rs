@@ -389,23 +389,20 @@ fn failed(f: &Failure, json: bool) -> i32 {
 
 /// The printed summary: parameters, channels, solver, status and warnings.
 fn summary(id: &Identification, validation: &[Validation]) -> String {
-    use dea_fit::report::format::{constant, si};
+    use dea_fit::report::format::{constant_pm, si};
     let mut rows = Vec::new();
     let derived = id.derived.iter().map(|p| (p, " (derived)"));
     for (p, note) in id.parameters.iter().map(|p| (p, "")).chain(derived) {
-        let v = |x: f64| constant(&p.name, x, &p.unit);
+        let [v, ci] = constant_pm(&p.name, p.value, p.std_error, p.ci95, &p.unit);
         rows.push(vec![
             format!("{}{note}", p.name),
-            v(p.value),
-            p.std_error.map(v).unwrap_or_else(|| "—".into()),
-            p.ci95
-                .map(|c| format!("[{}, {}]", v(c[0]), v(c[1])))
-                .unwrap_or_else(|| "—".into()),
+            v,
+            ci,
             if p.identifiable { "yes" } else { "no" }.into(),
         ]);
     }
     let mut s = table(
-        &["parameter", "value", "σ", "95 % interval", "identifiable"],
+        &["parameter", "value ± σ", "95 % interval", "identifiable"],
         &rows,
     );
     let mut ch = Vec::new();

@@ -8,7 +8,7 @@ use dea_fit::fit::permittivity::{
 use dea_fit::io::lcr::LcrOptions;
 use dea_fit::io::manifest::sidecar;
 use dea_fit::material::dielectric::Pair;
-use dea_fit::report::format::tolerance;
+use dea_fit::report::format::{si, si_pm};
 use dea_fit::report::permittivity::{sample_table, write_samples};
 use dea_fit::units::{parse_quantity, Dimension, Quantity};
 use dea_fit::{Error, Result};
@@ -209,16 +209,24 @@ pub fn summary(run: &PermittivityRun) -> String {
     let mut s = String::new();
     let brief = run.samples.len() > 10;
     for smp in &run.samples {
+        let g = &smp.geometry;
         s.push_str(&format!(
-            "\n{} ({}, {} {}), A = {:.4e} m² ± {}, d = {:.4e} m ± {}\n",
+            "\n{} ({}, {} {}), A = {}, d = {}\n",
             smp.name,
             smp.provenance.path,
             smp.provenance.format,
             smp.provenance.pair.name(),
-            smp.geometry.area,
-            tolerance(smp.geometry.area_std, |v| format!("{v:.1e}")),
-            smp.geometry.thickness,
-            tolerance(smp.geometry.thickness_std, |v| format!("{v:.1e}"))
+            // an SI prefix on m² would read as (mm)², so the area takes a power of ten
+            if g.area_std > 0.0 {
+                format!("{} m²", si_pm(g.area, Some(g.area_std), "1"))
+            } else {
+                format!("{:.4e} m² (no tolerance)", g.area)
+            },
+            if g.thickness_std > 0.0 {
+                si_pm(g.thickness, Some(g.thickness_std), "m")
+            } else {
+                format!("{} (no tolerance)", si(g.thickness, "m"))
+            },
         ));
         s.push_str(&sample_table(smp, brief));
         for n in &smp.notes {

@@ -8,7 +8,7 @@ use dea_fit::fit::relaxation::{
 };
 use dea_fit::io::relaxation::{self as reader, RelaxationOptions};
 use dea_fit::material::viscoelastic::{preset, Preset};
-use dea_fit::report::format::{si, table};
+use dea_fit::report::format::{si, si_pm, table};
 use dea_fit::units::{parse_quantity, Dimension};
 use dea_fit::{Error, Result};
 use std::path::{Path, PathBuf};
@@ -230,11 +230,6 @@ fn same_fit(old: &str, new: &RelaxationFit) -> bool {
     })
 }
 
-fn pm(v: Option<f64>, unit: &str) -> String {
-    v.map(|e| format!("± {}", si(e, unit)))
-        .unwrap_or("± n/a".into())
-}
-
 /// The human-readable summary printed by `dea-fit relaxation`.
 pub fn summary(fit: &RelaxationFit) -> String {
     let mut s = String::new();
@@ -304,10 +299,8 @@ pub fn summary(fit: &RelaxationFit) -> String {
         .iter()
         .map(|p| {
             vec![
-                si(p.tau_s, "s"),
-                pm(p.tau_std_s, "s"),
-                si(p.modulus_pa, "Pa"),
-                pm(p.modulus_std_pa, "Pa"),
+                si_pm(p.tau_s, p.tau_std_s, "s"),
+                si_pm(p.modulus_pa, p.modulus_std_pa, "Pa"),
                 format!("{:.4}", p.g),
                 si(p.modulus_pa * p.tau_s, "Pa·s"),
             ]
@@ -315,7 +308,7 @@ pub fn summary(fit: &RelaxationFit) -> String {
         .collect();
     s.push_str(&format!("\nProny series ({} terms)\n", fit.prony.len()));
     s.push_str(&table(
-        &["τ", "std. error", "E", "std. error", "g", "arm n = E·τ"],
+        &["τ ± std. error", "E ± std. error", "g", "arm n = E·τ"],
         &rows,
     ));
     s.push_str(&format!(

@@ -1,8 +1,10 @@
 //! `dea-fit synth hyperelastic`: synthetic tensile data from known constants;
-//! `dea-fit synth trace SCENE`: an actuator trace simulated from a scene (the
-//! `io::trace` format). Gaussian noise from a seeded generator; the generating
-//! command and parameters are written into the file's comment lines. Each prints a
-//! `status:` line (`--strict`: a blocking status exits 1).
+//! `dea-fit synth relaxation`: a stress-relaxation curve from a Prony series (the
+//! `io::relaxation` format); `dea-fit synth lcr`: an LCR sweep of a lossy capacitor
+//! (the `io::lcr` plain-CSV format); `dea-fit synth trace SCENE`: an actuator trace
+//! simulated from a scene (the `io::trace` format). Gaussian noise from a seeded
+//! generator; the generating command and parameters are written into the file's
+//! comment lines. Each prints a `status:` line (`--strict`: a blocking status exits 1).
 
 use dea_fit::io::trace::ChannelKind;
 use dea_fit::material::hyperelastic::{Mode, ModelSpec, OgdenForm};
@@ -21,7 +23,7 @@ const MAX_POINTS: usize = 1_000_000;
 /// Generate synthetic data.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// What to generate: hyperelastic or trace.
+    /// What to generate: hyperelastic, relaxation, lcr or trace.
     what: String,
     /// The scene to simulate (synth trace).
     scene: Option<PathBuf>,
@@ -32,16 +34,55 @@ pub struct Args {
     #[arg(long, default_value = "seed")]
     ogden_form: String,
     /// Parameter NAME=VALUE (moduli with a unit, e.g. C10=69.3kPa; bare numbers SI).
+    /// synth relaxation: E_inf, E1…EN (stress units) and tau1…tauN (time units).
     #[arg(long = "param", value_name = "NAME=VALUE")]
     params: Vec<String>,
+    /// synth relaxation: a published Prony series in place of --param
+    /// (seed-table-3.3, seed-table-4.2).
+    #[arg(long)]
+    preset: Option<String>,
+    /// synth relaxation: the held engineering strain.
+    #[arg(long)]
+    strain: Option<f64>,
+    /// synth relaxation: the strain is reached by a linear ramp over this time from
+    /// t = 0 (e.g. 0.8s); default an ideal step.
+    #[arg(long)]
+    ramp_time: Option<String>,
+    /// synth relaxation: sample times START:STOP:COUNT in seconds, log-spaced.
+    #[arg(long, default_value = "0.01:1000:200")]
+    time: String,
+    /// synth lcr: the coupon's relative permittivity εr′ (flat in frequency).
+    #[arg(long)]
+    eps_r: Option<f64>,
+    /// synth lcr: its loss tangent tan δ (flat in frequency).
+    #[arg(long, default_value_t = 0.0)]
+    tan_delta: f64,
+    /// synth lcr: electrode area (m² or with a unit, e.g. 14.39cm2).
+    #[arg(long)]
+    area: Option<String>,
+    /// synth lcr: electrode diameter (e.g. 30mm).
+    #[arg(long)]
+    diameter: Option<String>,
+    /// synth lcr: coupon thickness (e.g. 1mm).
+    #[arg(long)]
+    thickness: Option<String>,
+    /// synth lcr: log sweep FMIN:FMAX:PER_DECADE (e.g. 100Hz:100kHz:4).
+    #[arg(long, default_value = "100Hz:1MHz:4")]
+    sweep: String,
+    /// synth lcr: lossless stray capacitance added to every Cp (e.g. 0.3pF).
+    #[arg(long, default_value = "0")]
+    stray: String,
+    /// synth lcr: the pair the file records (cp-d, cp-rp, cs-d, cs-rs, z-theta, r-x, g-b, …).
+    #[arg(long, default_value = "cp-d")]
+    pair: String,
     /// Mode: uniaxial, equibiaxial or planar.
     #[arg(long, default_value = "uniaxial")]
     mode: String,
     /// Stretches START:STOP:COUNT (evenly spaced).
     #[arg(long, default_value = "1.0:3.0:25")]
     stretch: String,
-    /// Noise. synth hyperelastic: relative standard deviation as a fraction of the
-    /// stress (e.g. 0.01). synth trace: CHANNEL=SIGMA, repeatable, an absolute
+    /// Noise. synth hyperelastic and relaxation: relative standard deviation as a
+    /// fraction of the stress (e.g. 0.01); synth lcr: of Cp and of D. synth trace: CHANNEL=SIGMA, repeatable, an absolute
     /// quantity (contraction=0.5um, voltage=5V) or a share (capacitance=0.2%).
     #[arg(long)]
     noise: Vec<String>,
@@ -71,10 +112,306 @@ pub struct Args {
 pub fn run(a: Args) -> Result<i32> {
     match a.what.as_str() {
         "hyperelastic" => hyperelastic(a),
+        "relaxation" => relaxation(a),
+        "lcr" => lcr(a),
         "trace" => trace(a),
         w => Err(Error::settings(format!("cannot synthesise '{w}'"))
-            .with_hint("use: dea-fit synth hyperelastic or dea-fit synth trace SCENE")),
+            .with_hint("use: dea-fit synth hyperelastic, relaxation, lcr, or trace SCENE")),
     }
+}
+
+/// The one relative `--noise` of synth hyperelastic, relaxation and lcr (0 without).
+fn relative_noise(a: &Args, of: &str) -> Result<f64> {
+    let noise = match a.noise.as_slice() {
+        [] => 0.0,
+        [x] => x.trim().parse::<f64>().map_err(|_| {
+            Error::settings(format!(
+                "--noise '{x}': expected a fraction of {of}, e.g. 0.01"
+            ))
+        })?,
+        _ => {
+            return Err(Error::settings(format!(
+                "synth {} takes one --noise (a fraction of {of})",
+                a.what
+            )))
+        }
+    };
+    if !(noise.is_finite() && noise >= 0.0) {
+        return Err(Error::settings("noise must be finite and ≥ 0"));
+    }
+    Ok(noise)
+}
+
+/// The command line that made a file, without its output path (the data do not
+/// depend on it).
+fn command_line() -> String {
+    let mut args: Vec<String> = Vec::new();
+    let mut it = std::env::args().skip(1);
+    while let Some(x) = it.next() {
+        match x.as_str() {
+            "--out" => {
+                it.next();
+            }
+            o if o.starts_with("--out=") => {}
+            _ => args.push(x),
+        }
+    }
+    format!("dea-fit {}", args.join(" "))
+}
+
+/// Refuse the flags of the other kinds of data (a flag that would be ignored).
+fn refuse_unused(a: &Args, used: &[&str]) -> Result<()> {
+    let given = [
+        ("SCENE", a.scene.is_some()),
+        ("--model", a.model.is_some()),
+        ("--param", !a.params.is_empty()),
+        ("--preset", a.preset.is_some()),
+        ("--strain", a.strain.is_some()),
+        ("--ramp-time", a.ramp_time.is_some()),
+        ("--eps-r", a.eps_r.is_some()),
+        ("--area", a.area.is_some()),
+        ("--diameter", a.diameter.is_some()),
+        ("--thickness", a.thickness.is_some()),
+    ];
+    match given.iter().find(|(f, set)| *set && !used.contains(f)) {
+        Some((f, _)) => Err(Error::settings(format!("synth {} takes no {f}", a.what))
+            .with_hint("see dea-fit synth --help: each kind of data has its own flags")),
+        None => Ok(()),
+    }
+}
+
+/// `synth relaxation`: σ(t) = E(t)·ε0 for an ideal step (or the exact hereditary
+/// integral of a linear ramp) of a Prony series E(t) = E∞ + Σ Eᵢ·exp(−t/τᵢ), at
+/// log-spaced times, with relative Gaussian noise: the file `dea-fit relaxation`
+/// reads (`time_s,stress_kPa`), parameters in its `#` lines.
+fn relaxation(a: Args) -> Result<i32> {
+    use dea_fit::io::relaxation::{log_times, Synthetic};
+    use dea_fit::material::viscoelastic::{preset, PRESET_NAMES};
+    refuse_unused(&a, &["--param", "--preset", "--strain", "--ramp-time"])?;
+    let noise = relative_noise(&a, "the stress")?;
+    let strain = a.strain.ok_or_else(|| {
+        Error::settings("synth relaxation needs --strain").with_hint("e.g. --strain 0.5")
+    })?;
+    if !(strain.is_finite() && strain > 0.0 && strain <= 10.0) {
+        return Err(Error::settings(format!(
+            "--strain {strain}: expected an engineering strain in (0, 10]"
+        )));
+    }
+    let (prony, source) = match (&a.preset, a.params.is_empty()) {
+        (Some(name), true) => {
+            let p = preset(name).map_err(|e| {
+                e.with_hint(format!("presets: {}", PRESET_NAMES.join(", ")))
+            })?;
+            (p.prony, format!("preset {}: {}", p.name, p.source))
+        }
+        (None, false) => (prony_from_params(&a.params)?, "--param".to_string()),
+        (Some(_), false) => {
+            return Err(Error::settings("give --preset or --param, not both"))
+        }
+        (None, true) => {
+            return Err(Error::settings("synth relaxation needs the series").with_hint(
+                "--preset seed-table-3.3, or --param E_inf=43kPa --param E1=106kPa --param tau1=0.15s …",
+            ))
+        }
+    };
+    let ramp_time = match &a.ramp_time {
+        None => None,
+        Some(t) => Some(
+            parse_quantity(t, Dimension::Time)
+                .map_err(|e| Error::settings(format!("--ramp-time: {e}")))?
+                .value,
+        ),
+    };
+    let (t0, t1, count) = range(&a.time, "--time", |x| {
+        x.trim().parse::<f64>().map_err(|_| x.to_string())
+    })?;
+    if !(t0 > 0.0 && t1 > t0 && t1.is_finite() && (2..=MAX_POINTS).contains(&count)) {
+        return Err(Error::settings(format!(
+            "--time '{}': expected 0 < START < STOP (s) and a COUNT from 2 to {MAX_POINTS}",
+            a.time
+        )));
+    }
+    let synthetic = Synthetic {
+        prony,
+        strain,
+        ramp_time,
+        times: log_times(t0, t1, count, false),
+        noise,
+        seed: a.seed,
+        record_strain: false,
+    };
+    let head = format!(
+        "synthetic data made by dea-fit {} (dea-fit synth relaxation)",
+        env!("CARGO_PKG_VERSION")
+    );
+    let command = format!("command: {}", command_line());
+    let source = format!("source: {source}");
+    let text = synthetic.csv(&[&head, &command, &source])?;
+    super::write_noted(&a.out, text.as_bytes())?;
+    eprintln!("wrote {} ({count} points)", a.out.display());
+    println!("status: ok");
+    Ok(0)
+}
+
+/// A Prony series from `--param E_inf=… E1=… tau1=…` (every index from 1 to N once).
+fn prony_from_params(params: &[String]) -> Result<dea_fit::material::viscoelastic::Prony> {
+    let mut e_inf = None;
+    let mut e: Vec<Option<f64>> = Vec::new();
+    let mut tau: Vec<Option<f64>> = Vec::new();
+    for kv in params {
+        let (k, v) = kv
+            .split_once('=')
+            .ok_or_else(|| Error::settings(format!("--param '{kv}': expected NAME=VALUE")))?;
+        let k = k.trim();
+        let bad_name = || {
+            Error::settings(format!("a Prony series has no parameter '{k}'"))
+                .with_hint("E_inf, E1…EN (stress) and tau1…tauN (time)")
+        };
+        // (index of the term, whether a time) for E1…EN, tau1…tauN; None for E_inf
+        let term = if k == "E_inf" {
+            None
+        } else if let Some(i) = k.strip_prefix("tau") {
+            Some((i, true))
+        } else if let Some(i) = k.strip_prefix('E') {
+            Some((i, false))
+        } else {
+            return Err(bad_name());
+        };
+        let dim = match term {
+            Some((_, true)) => Dimension::Time,
+            _ => Dimension::Stress,
+        };
+        let value = parse_quantity(v, dim)
+            .map_err(|e| Error::settings(format!("--param {k}: {e}")))?
+            .value;
+        let slot = match term {
+            None => &mut e_inf,
+            Some((i, is_tau)) => {
+                let i: usize = i.parse().ok().filter(|&i| i >= 1).ok_or_else(bad_name)?;
+                let list = if is_tau { &mut tau } else { &mut e };
+                if list.len() < i {
+                    list.resize(i, None);
+                }
+                &mut list[i - 1]
+            }
+        };
+        if slot.replace(value).is_some() {
+            return Err(Error::settings(format!("--param {k} given twice")));
+        }
+    }
+    let e_inf = e_inf.ok_or_else(|| Error::settings("missing --param E_inf=…"))?;
+    let n = e.len().max(tau.len());
+    let mut terms = Vec::with_capacity(n);
+    for i in 0..n {
+        match (tau.get(i).copied().flatten(), e.get(i).copied().flatten()) {
+            (Some(t), Some(m)) => terms.push((t, m)),
+            (None, _) => return Err(Error::settings(format!("missing --param tau{}=…", i + 1))),
+            (_, None) => return Err(Error::settings(format!("missing --param E{}=…", i + 1))),
+        }
+    }
+    dea_fit::material::viscoelastic::Prony::new(e_inf, &terms)
+}
+
+/// `START:STOP:COUNT` with START and STOP read by `parse`.
+fn range(
+    text: &str,
+    flag: &str,
+    parse: impl Fn(&str) -> std::result::Result<f64, String>,
+) -> Result<(f64, f64, usize)> {
+    let bad =
+        |why: &str| Error::settings(format!("{flag} '{text}': expected START:STOP:COUNT{why}"));
+    let parts: Vec<&str> = text.split(':').collect();
+    let [a, b, n] = parts.as_slice() else {
+        return Err(bad(""));
+    };
+    let a = parse(a).map_err(|e| bad(&format!(" ({e})")))?;
+    let b = parse(b).map_err(|e| bad(&format!(" ({e})")))?;
+    let n = n
+        .trim()
+        .parse::<usize>()
+        .map_err(|_| bad(" (COUNT an integer)"))?;
+    Ok((a, b, n))
+}
+
+/// `synth lcr`: a lossy parallel-plate capacitor, εr′ and tan δ flat in frequency,
+/// C0 = ε0·A/d, Cp = εr′·C0·(1 + e₁) + stray, D = tan δ·(1 + e₂) with relative
+/// Gaussian noise, written in the plain-CSV format `dea-fit permittivity` reads,
+/// as the chosen pair, parameters in its `#` lines.
+fn lcr(a: Args) -> Result<i32> {
+    use dea_fit::fit::permittivity::Geometry;
+    use dea_fit::io::lcr::{log_frequencies, synthetic_points, write_csv};
+    use dea_fit::material::dielectric::Pair;
+    refuse_unused(&a, &["--eps-r", "--area", "--diameter", "--thickness"])?;
+    let noise = relative_noise(&a, "Cp and of D")?;
+    let eps = a.eps_r.ok_or_else(|| {
+        Error::settings("synth lcr needs --eps-r").with_hint("e.g. --eps-r 4.7 --tan-delta 0.005")
+    })?;
+    if !(eps.is_finite() && eps >= 1.0 && a.tan_delta.is_finite() && a.tan_delta >= 0.0) {
+        return Err(Error::settings(format!(
+            "--eps-r {eps} --tan-delta {}: expected εr ≥ 1 and tan δ ≥ 0",
+            a.tan_delta
+        )));
+    }
+    let q = |flag: &str, v: &Option<String>, dim| -> Result<_> {
+        v.as_deref()
+            .map(|t| parse_quantity(t, dim).map_err(|e| Error::settings(format!("{flag}: {e}"))))
+            .transpose()
+    };
+    let geometry = Geometry::new(
+        q("--area", &a.area, Dimension::Area)?,
+        q("--diameter", &a.diameter, Dimension::Length)?,
+        q("--thickness", &a.thickness, Dimension::Length)?,
+    )?;
+    let stray = parse_quantity(&a.stray, Dimension::Capacitance)
+        .map_err(|e| Error::settings(format!("--stray: {e}")))?
+        .value;
+    let (pair, _) = Pair::parse(&a.pair).ok_or_else(|| {
+        Error::settings(format!("--pair '{}': unknown pair", a.pair))
+            .with_hint("cp-d, cp-rp, cs-d, cs-rs, z-theta, r-x, g-b, …")
+    })?;
+    let (f0, f1, per_decade) = range(&a.sweep, "--sweep", |x| {
+        parse_quantity(x, Dimension::Frequency)
+            .map(|q| q.value)
+            .map_err(|e| e.to_string())
+    })?;
+    let freqs = log_frequencies(f0, f1, per_decade)?;
+    if freqs.len() > MAX_POINTS {
+        return Err(Error::settings(format!(
+            "--sweep '{}': more than {MAX_POINTS} points",
+            a.sweep
+        )));
+    }
+    let normal = Normal::new(0.0, noise).map_err(|e| Error::settings(format!("--noise: {e}")))?;
+    let mut rng = ChaCha8Rng::seed_from_u64(a.seed);
+    let c0 = geometry.empty_capacitance();
+    let pts = synthetic_points(&freqs, c0, stray, &normal, &mut rng, |_| (eps, a.tan_delta));
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# synthetic LCR sweep made by dea-fit {} (dea-fit synth lcr)",
+        env!("CARGO_PKG_VERSION")
+    );
+    let _ = writeln!(s, "# command: {}", command_line());
+    let _ = writeln!(
+        s,
+        "# param eps_r = {eps:e}, tan_delta = {:e} (flat in frequency)",
+        a.tan_delta
+    );
+    let _ = writeln!(
+        s,
+        "# geometry: area = {:e} m2, thickness = {:e} m, empty-gap capacitance C0 = {c0:e} F (no fringe field), stray = {stray:e} F (lossless)",
+        geometry.area, geometry.thickness
+    );
+    let _ = writeln!(
+        s,
+        "# noise: relative {noise} on Cp and on D (Gaussian standard deviations), seed {} (ChaCha8)",
+        a.seed
+    );
+    s.push_str(&write_csv(pair, &pts));
+    super::write_noted(&a.out, s.as_bytes())?;
+    eprintln!("wrote {} ({} frequencies)", a.out.display(), freqs.len());
+    println!("status: ok");
+    Ok(0)
 }
 
 fn hyperelastic(a: Args) -> Result<i32> {
@@ -87,19 +424,7 @@ fn hyperelastic(a: Args) -> Result<i32> {
         return Err(Error::settings("synth hyperelastic takes no scene")
             .with_hint("did you mean synth trace SCENE?"));
     }
-    let noise = match a.noise.as_slice() {
-        [] => 0.0,
-        [x] => x.trim().parse::<f64>().map_err(|_| {
-            Error::settings(format!(
-                "--noise '{x}': expected a fraction of the stress, e.g. 0.01"
-            ))
-        })?,
-        _ => {
-            return Err(Error::settings(
-                "synth hyperelastic takes one --noise (a fraction of the stress)",
-            ))
-        }
-    };
+    let noise = relative_noise(&a, "the stress")?;
     let form = match a.ogden_form.as_str() {
         "seed" => OgdenForm::Seed,
         "original" => OgdenForm::Original,
@@ -367,19 +692,7 @@ fn trace(a: Args) -> Result<i32> {
         "# synthetic trace made by dea-fit {} (dea-fit synth trace)",
         env!("CARGO_PKG_VERSION")
     );
-    // the command without its output path (the data do not depend on it)
-    let mut args: Vec<String> = Vec::new();
-    let mut it = std::env::args().skip(1);
-    while let Some(x) = it.next() {
-        match x.as_str() {
-            "--out" => {
-                it.next();
-            }
-            o if o.starts_with("--out=") => {}
-            _ => args.push(x),
-        }
-    }
-    let _ = writeln!(s, "# command: dea-fit {}", args.join(" "));
+    let _ = writeln!(s, "# command: {}", command_line());
     let _ = writeln!(s, "# scene: {} ({})", scene.name, path.display());
     let names: Vec<String> = m.model.params().iter().map(|p| p.name.clone()).collect();
     let units: Vec<String> = m

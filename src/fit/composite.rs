@@ -15,13 +15,12 @@ use crate::error::{Error, Result};
 use crate::io::lcr;
 use crate::io::manifest::Manifest;
 use crate::material::dielectric::{volume_fraction, weight_fraction, MixingRule, Pair};
-use nalgebra::{Complex, DMatrix, DVector};
+use nalgebra::{DMatrix, DVector};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
+use rand_distr::Normal;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use std::f64::consts::PI;
 
 /// Schema tag of composite fit files.
 pub const SCHEMA: &str = crate::material::file::COMPOSITE_SCHEMA;
@@ -833,43 +832,28 @@ pub fn synthesize(m: &Manifest) -> Result<Vec<(std::path::PathBuf, String)>> {
         return Err(Error::settings("the manifest has no [synthetic] table")
             .with_hint("add [synthetic] with rule, eps_matrix, eps_filler, noise_pct, seed, ..."));
     };
-    if !(s.freq_min > 0.0 && s.freq_max > s.freq_min && s.points_per_decade > 0) {
-        return Err(Error::settings(
-            "[synthetic] needs 0 < freq_min < freq_max and points_per_decade ≥ 1",
-        ));
-    }
-    let decades = (s.freq_max / s.freq_min).log10();
-    let n = (decades * s.points_per_decade as f64).round() as usize + 1;
-    let freqs: Vec<f64> = (0..n)
-        .map(|i| {
-            let f = s.freq_min * 10f64.powf(i as f64 / s.points_per_decade as f64);
-            // Four significant digits, as a meter's frequency list prints them.
-            format!("{f:.3e}").parse().unwrap_or(f)
-        })
-        .collect();
+    let freqs = lcr::log_frequencies(s.freq_min, s.freq_max, s.points_per_decade)
+        .map_err(|e| e.with_hint("set [synthetic] freq_min, freq_max, points_per_decade"))?;
     let noise = Normal::new(0.0, s.noise_pct / 100.0)
         .map_err(|e| Error::settings(format!("noise_pct: {e}")))?;
     let mut out = Vec::new();
     for (i, sample) in m.samples.iter().enumerate() {
         let mut rng = ChaCha8Rng::seed_from_u64(s.seed + i as u64);
         let phi = sample.volume_fraction;
-        let c0 = sample.geometry.empty_capacitance();
-        let pts: Vec<(f64, Complex<f64>)> = freqs
-            .iter()
-            .map(|&f| {
+        let pts = lcr::synthetic_points(
+            &freqs,
+            sample.geometry.empty_capacitance(),
+            s.stray_pf * 1e-12,
+            &noise,
+            &mut rng,
+            |f| {
                 let dec = (f / 100.0).log10();
                 let em = s.eps_matrix + s.eps_matrix_per_decade * dec;
                 let ef = s.eps_filler * (1.0 + s.eps_filler_per_decade * dec);
-                let eps = s.rule.eval(em, ef, phi, s.shape);
                 let tan = s.tan_delta_matrix + (s.tan_delta_filler - s.tan_delta_matrix) * phi;
-                let omega = 2.0 * PI * f;
-                let cp = eps * c0 * (1.0 + noise.sample(&mut rng)) + s.stray_pf * 1e-12;
-                let d = tan * (1.0 + noise.sample(&mut rng));
-                // Loss belongs to the coupon only; the stray capacitance is lossless.
-                let g = omega * eps * c0 * d;
-                (f, Complex::new(g, omega * cp))
-            })
-            .collect();
+                (s.rule.eval(em, ef, phi, s.shape), tan)
+            },
+        );
         let text = match sample.format.as_deref().unwrap_or("csv-cp-d") {
             "csv-cp-d" => lcr::write_csv(Pair::CpD, &pts),
             "csv-cs-rs" => lcr::write_csv(Pair::CsRs, &pts),

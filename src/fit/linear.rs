@@ -111,11 +111,28 @@ pub fn constrained_least_squares(
         &cones,
         settings,
     )
-    .map_err(|e| format!("{e:?}"))?;
+    .map_err(|e| e.to_string())?;
     solver.solve();
-    match solver.solution.status {
-        SolverStatus::Solved | SolverStatus::AlmostSolved => {}
-        s => return Err(format!("the QP solver stopped with status {s:?}")),
+    let why = match solver.solution.status {
+        SolverStatus::Solved | SolverStatus::AlmostSolved => None,
+        SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => {
+            Some("the constraints admit no solution (primal infeasible)")
+        }
+        SolverStatus::DualInfeasible | SolverStatus::AlmostDualInfeasible => {
+            Some("the objective is unbounded (dual infeasible)")
+        }
+        SolverStatus::MaxIterations => Some("its iteration limit was reached"),
+        SolverStatus::MaxTime => Some("its time limit was reached"),
+        SolverStatus::NumericalError => Some("a numerical error"),
+        SolverStatus::InsufficientProgress => Some("it made insufficient progress"),
+        SolverStatus::Unsolved | SolverStatus::CallbackTerminated => {
+            Some("it did not run to the end")
+        }
+    };
+    if let Some(why) = why {
+        return Err(format!(
+            "the QP solver (Clarabel) stopped without a solution: {why}"
+        ));
     }
     let z = &solver.solution.x;
     let x = DVector::from_iterator(n, (0..n).map(|j| z[j] * d[j] * beta));

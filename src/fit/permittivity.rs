@@ -515,9 +515,12 @@ pub fn analyse(
         )),
     }
     if let Some(s) = settings.stray {
-        notes.push(format!(
-            "stray capacitance {s:.4e} F ± {stray_std:.2e} F subtracted from Cp"
-        ));
+        let value = if stray_std > 0.0 {
+            crate::report::format::si_pm(s, Some(stray_std), "F")
+        } else {
+            format!("{} (no tolerance)", crate::report::format::si(s, "F"))
+        };
+        notes.push(format!("stray capacitance {value} subtracted from Cp"));
     }
     Ok(SamplePermittivity {
         schema: SCHEMA.into(),

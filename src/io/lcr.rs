@@ -791,6 +791,49 @@ pub fn write_csv(pair: Pair, points: &[(f64, Complex<f64>)]) -> String {
     s
 }
 
+/// Log-spaced frequencies from `f_min` to `f_max` (Hz) at `per_decade` points per
+/// decade, each rounded to four significant digits as a meter's frequency list
+/// prints them. Refused unless 0 < f_min < f_max and per_decade ≥ 1.
+pub fn log_frequencies(f_min: f64, f_max: f64, per_decade: usize) -> Result<Vec<f64>> {
+    if !(f_min > 0.0 && f_max > f_min && f_max.is_finite() && per_decade > 0) {
+        return Err(Error::settings(format!(
+            "a log sweep needs 0 < f_min < f_max and at least 1 point per decade, found {f_min} Hz, {f_max} Hz, {per_decade}"
+        )));
+    }
+    let n = ((f_max / f_min).log10() * per_decade as f64).round() as usize + 1;
+    Ok((0..n)
+        .map(|i| {
+            let f = f_min * 10f64.powf(i as f64 / per_decade as f64);
+            format!("{f:.3e}").parse().unwrap_or(f)
+        })
+        .collect())
+}
+
+/// A synthetic sweep of a lossy capacitor: at each frequency f, εr′ and tan δ from
+/// `eps_tan(f)`, Cp = εr′·`c0`·(1 + e₁) + `stray` and D = tan δ·(1 + e₂) with e₁,
+/// e₂ drawn from `noise` (relative, in that order); the loss belongs to the coupon
+/// only (G = ω·εr′·c0·D: the stray capacitance is lossless). Returns (f, Y).
+pub fn synthetic_points(
+    freqs: &[f64],
+    c0: f64,
+    stray: f64,
+    noise: &rand_distr::Normal<f64>,
+    rng: &mut impl rand::Rng,
+    eps_tan: impl Fn(f64) -> (f64, f64),
+) -> Vec<(f64, Complex<f64>)> {
+    use rand_distr::Distribution;
+    freqs
+        .iter()
+        .map(|&f| {
+            let (eps, tan) = eps_tan(f);
+            let omega = 2.0 * PI * f;
+            let cp = eps * c0 * (1.0 + noise.sample(rng)) + stray;
+            let d = tan * (1.0 + noise.sample(rng));
+            (f, Complex::new(omega * eps * c0 * d, omega * cp))
+        })
+        .collect()
+}
+
 /// Write points in the E4990A block format (`!` header, CRLF, `+d.ddde+ddd`).
 pub fn write_e4990a(pair: Pair, points: &[(f64, Complex<f64>)]) -> String {
     let (ha, hb) = match pair {

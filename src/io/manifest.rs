@@ -234,7 +234,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Manifest> {
             Some(s) => cx.err(s, msg),
             None => Error::input(Location::file(path), msg),
         }
-        .with_hint("see the manifest format in datasets/composites/README.md")
+        .with_hint("see the manifest format in docs/composites.md")
     })?;
     let dir = path.parent().unwrap_or(Path::new(""));
     let phase = |p: &PhaseSpec| -> Result<Phase> {

@@ -8,8 +8,13 @@ pub fn si(v: f64, unit: &str) -> String {
     if unit == "1" || unit.is_empty() {
         return sig(v, 5);
     }
-    let a = v.abs();
-    let (f, p) = if a == 0.0 {
+    let (f, p) = prefix(v.abs());
+    format!("{} {p}{unit}", sig(v * f, 5))
+}
+
+/// The SI prefix for a magnitude `a` (≥ 0): the factor to multiply by and the prefix.
+fn prefix(a: f64) -> (f64, &'static str) {
+    if a == 0.0 {
         (1.0, "")
     } else if a >= 1e9 {
         (1e-9, "G")
@@ -23,11 +28,127 @@ pub fn si(v: f64, unit: &str) -> String {
         (1e3, "m")
     } else if a >= 1e-6 {
         (1e6, "µ")
-    } else {
+    } else if a >= 1e-9 {
         (1e9, "n")
-    };
-    format!("{} {p}{unit}", sig(v * f, 5))
+    } else if a >= 1e-12 {
+        (1e12, "p")
+    } else {
+        (1e15, "f")
+    }
 }
+
+/// How a value with a standard error is printed: one scale for both (an SI prefix,
+/// or a power of ten for a bare number far from 1), and the decimals that show σ to
+/// two significant digits.
+struct Scale {
+    /// Multiply SI values by this.
+    factor: f64,
+    /// Written after the numbers: " kPa", " %", "e7", "".
+    suffix: String,
+    /// Rounding step of both numbers (10^(place of σ's second digit)).
+    step: f64,
+    /// Decimals that step needs.
+    decimals: usize,
+}
+
+impl Scale {
+    fn new(v: f64, std: f64, unit: &str) -> Scale {
+        let big = v.abs().max(std);
+        let (factor, suffix) = match unit {
+            "1" | "" => {
+                // A bare number: plain from 1e-3 to 1e6, else a shared power of ten.
+                let k = if big > 0.0 {
+                    big.log10().floor() as i32
+                } else {
+                    0
+                };
+                if (-3..6).contains(&k) {
+                    (1.0, String::new())
+                } else {
+                    (10f64.powi(-k), format!("e{k}"))
+                }
+            }
+            "%" => (1.0, " %".to_string()),
+            u => {
+                let (f, p) = prefix(big);
+                (f, format!(" {p}{u}"))
+            }
+        };
+        let place = (std * factor).log10().floor() as i32 - 1;
+        Scale {
+            factor,
+            suffix,
+            step: 10f64.powi(place),
+            decimals: (-place).max(0) as usize,
+        }
+    }
+
+    fn num(&self, x: f64) -> String {
+        let r = (x * self.factor / self.step).round() * self.step;
+        // −0.0 would print as "-0.00"
+        let r = if r == 0.0 { 0.0 } else { r };
+        format!("{r:.*}", self.decimals)
+    }
+}
+
+/// A usable standard error: finite and > 0.
+fn usable(std: Option<f64>) -> Option<f64> {
+    std.filter(|s| s.is_finite() && *s > 0.0)
+}
+
+/// `v ± σ` in the value's own unit: one SI prefix for both (the larger's), σ to two
+/// significant digits and `v` to the same decimal place, the unit once:
+/// 17.328 Pa ± 0.79063 Pa → "17.33 ± 0.79 Pa", 69338 Pa ± 349 Pa → "69.34 ± 0.35 kPa".
+/// Without a usable σ (none, zero, not finite) the value by [`si`] and "(σ n/a)".
+/// Unit `"1"` is a bare number (a shared power of ten far from 1), `"%"` takes no
+/// prefix.
+pub fn si_pm(v: f64, std: Option<f64>, unit: &str) -> String {
+    let Some(s) = usable(std).filter(|_| v.is_finite()) else {
+        return format!("{} (σ n/a)", plain(v, unit));
+    };
+    let sc = Scale::new(v, s, unit);
+    let suffix = sc.suffix.trim_start();
+    match unit {
+        "1" | "" if !suffix.is_empty() => {
+            format!("({} ± {}){suffix}", sc.num(v), sc.num(s))
+        }
+        _ => format!("{} ± {}{}", sc.num(v), sc.num(s), sc.suffix),
+    }
+}
+
+/// The interval [lo, hi] printed with the prefix and decimals [`si_pm`] gives
+/// `v ± σ`, the unit once: "[68.63, 70.05] kPa". Without a usable σ, each end by [`si`].
+pub fn si_interval(lo: f64, hi: f64, v: f64, std: Option<f64>, unit: &str) -> String {
+    match usable(std).filter(|_| v.is_finite() && lo.is_finite() && hi.is_finite()) {
+        Some(s) => {
+            let sc = Scale::new(v, s, unit);
+            format!("[{}, {}]{}", sc.num(lo), sc.num(hi), sc.suffix)
+        }
+        None => format!("[{}, {}]", plain(lo, unit), plain(hi, unit)),
+    }
+}
+
+/// `v` by [`si`], a percentage with its sign.
+fn plain(v: f64, unit: &str) -> String {
+    match unit {
+        "%" => format!("{} %", sig(v, 5)),
+        u => si(v, u),
+    }
+}
+
+/// The table cells of a fitted parameter: value ± standard error (in the value's
+/// unit) and the 95 % interval, for the header [`PARAMETER_HEADER`].
+pub fn parameter_cells(p: &crate::fit::Parameter) -> [String; 2] {
+    [
+        si_pm(p.value, p.std_error, &p.unit),
+        p.ci95
+            .map(|[a, b]| si_interval(a, b, p.value, p.std_error, &p.unit))
+            .unwrap_or("n/a".into()),
+    ]
+}
+
+/// Column titles of [`parameter_cells`] (after the parameter's name).
+pub const PARAMETER_HEADER: [&str; 2] = ["value ± std. error", "95 % interval"];
 
 /// A value of the constant `name` for a table: a fraction (`mass_fraction`, SI unit
 /// 1) as a percentage, anything else by [`si`].
@@ -36,6 +157,27 @@ pub fn constant(name: &str, v: f64, unit: &str) -> String {
         (true, "1") if v.is_finite() => format!("{} %", sig(100.0 * v, 5)),
         _ => si(v, unit),
     }
+}
+
+/// [`constant`] with its standard error, as [`si_pm`] writes it (a fraction in %),
+/// and its 95 % interval in the same scale (None: "—").
+pub fn constant_pm(
+    name: &str,
+    v: f64,
+    std: Option<f64>,
+    ci95: Option<[f64; 2]>,
+    unit: &str,
+) -> [String; 2] {
+    let (k, unit) = match (name.ends_with("_fraction"), unit) {
+        (true, "1") => (100.0, "%"),
+        _ => (1.0, unit),
+    };
+    let std = std.map(|s| k * s);
+    [
+        si_pm(k * v, std, unit),
+        ci95.map(|[a, b]| si_interval(k * a, k * b, k * v, std, unit))
+            .unwrap_or("—".into()),
+    ]
 }
 
 /// `v` with `n` significant digits, without exponent for moderate magnitudes.
@@ -101,6 +243,36 @@ mod tests {
         assert_eq!(si(-888.0, "Pa"), "-888.00 Pa");
         assert_eq!(si(1.5e-5, "m"), "15.000 µm");
         assert_eq!(si(2.5, "1"), "2.5000");
+        assert_eq!(si(1.3056e-11, "F"), "13.056 pF");
+    }
+
+    /// The example, and σ in the value's own prefix whatever its size.
+    #[test]
+    fn value_and_error_share_the_unit() {
+        assert_eq!(si_pm(17.328, Some(0.79063), "Pa"), "17.33 ± 0.79 Pa");
+        assert_eq!(si_pm(69338.0, Some(349.18), "Pa"), "69.34 ± 0.35 kPa");
+        assert_eq!(si_pm(-904.18, Some(30.548), "Pa"), "-904 ± 31 Pa");
+        assert_eq!(si_pm(0.1579, Some(0.0060446), "s"), "157.9 ± 6.0 ms");
+        assert_eq!(si_pm(221.83, Some(28.399), "s"), "222 ± 28 s");
+        // σ larger than the value: the larger's prefix, the value still shown.
+        assert_eq!(si_pm(12.0, Some(3400.0), "Pa"), "0.0 ± 3.4 kPa");
+        // σ of the hundreds: rounded to its two digits.
+        assert_eq!(si_pm(812.3, Some(134.0), "Pa"), "810 ± 130 Pa");
+        // bare numbers, and far from 1 a shared power of ten
+        assert_eq!(si_pm(2.6993, Some(0.0028), "1"), "2.6993 ± 0.0028");
+        assert_eq!(si_pm(1e7, Some(2.5e11), "1"), "(0.0 ± 2.5)e11");
+        assert_eq!(si_pm(20.0, Some(1.26), "%"), "20.0 ± 1.3 %");
+        assert_eq!(si_pm(69338.0, None, "Pa"), "69.338 kPa (σ n/a)");
+        assert_eq!(si_pm(69338.0, Some(0.0), "Pa"), "69.338 kPa (σ n/a)");
+        assert_eq!(
+            si_interval(68631.0, 70046.0, 69338.0, Some(349.18), "Pa"),
+            "[68.63, 70.05] kPa"
+        );
+        let [v, ci] = constant_pm("mass_fraction", 0.2, Some(0.0126), Some([0.17, 0.23]), "1");
+        assert_eq!(
+            (v.as_str(), ci.as_str()),
+            ("20.0 ± 1.3 %", "[17.0, 23.0] %")
+        );
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! Report of a hyperelastic fit: data vs model for every mode on one figure
 //! (modes without data drawn dashed as extrapolation), residuals, and a Markdown page.
 
-use super::format::si;
+use super::format::{parameter_cells, si, PARAMETER_HEADER};
 use super::page::{code, text, Page};
 use super::plot::{Chart, Series, Style};
 use super::runs::Run;
@@ -125,17 +125,12 @@ pub fn write(fit: &HyperelasticFit, data: &Dataset, dir: &Path) -> Result<PathBu
         .parameters
         .iter()
         .map(|p| {
-            vec![
-                p.name.clone(),
-                si(p.value, &p.unit),
-                p.std_error.map(|e| si(e, &p.unit)).unwrap_or("n/a".into()),
-                p.ci95
-                    .map(|[a, b]| format!("[{}, {}]", si(a, &p.unit), si(b, &p.unit)))
-                    .unwrap_or("n/a".into()),
-            ]
+            let [v, ci] = parameter_cells(p);
+            vec![p.name.clone(), v, ci]
         })
         .collect();
-    page.table(&["parameter", "value", "std. error", "95 % interval"], rows);
+    let [hv, hci] = PARAMETER_HEADER;
+    page.table(&["parameter", hv, hci], rows);
     let r2 = fit.r2.map(|v| format!("{v:.5}")).unwrap_or("n/a".into());
     page.text(format!(
         "μ0 = {}, RMSE = {}, R² = {r2}, %RMSE (seed Eq. 3.28) = {}, AICc = {}, BIC = {:.2}",

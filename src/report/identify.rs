@@ -3,7 +3,7 @@
 //! constants, the correlation matrix as a picture, the multi-start waterfall, and a
 //! Markdown page linking them.
 
-use super::format::{constant, si, sig};
+use super::format::{constant, constant_pm, si, sig};
 use super::page::{code, text, Page};
 use super::plot::{nth_line, Chart, Series, Style};
 use super::runs::Run;
@@ -50,11 +50,10 @@ pub fn write(
         .map(|p| (p, ""))
         .chain(derived)
         .map(|(p, note)| {
-            let v = |x: f64| constant(&p.name, x, &p.unit);
+            let [v, _] = constant_pm(&p.name, p.value, p.std_error, None, &p.unit);
             vec![
                 format!("{}{note}", p.name),
-                v(p.value),
-                p.std_error.map(v).unwrap_or_else(|| "—".into()),
+                v,
                 if p.identifiable {
                     "yes".into()
                 } else {
@@ -63,7 +62,7 @@ pub fn write(
             ]
         })
         .collect();
-    page.table(&["parameter", "value", "σ", "identifiable"], rows);
+    page.table(&["parameter", "value ± σ", "identifiable"], rows);
     for (ei, (e, o)) in experiments.iter().zip(&id.runs).enumerate() {
         let s0 = o.samples[0];
         for (ci, c) in e.channels.iter().enumerate() {

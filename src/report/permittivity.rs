@@ -4,7 +4,7 @@
 
 use super::format::{sig, table, tolerance};
 use super::page::{code, text, Page};
-use super::plot::{Chart, Series, Style};
+use super::plot::{error_bars, Chart, Series, Style};
 use super::runs::Run;
 use crate::error::Result;
 use crate::fit::composite::{CompositeFit, FrequencyFit};
@@ -30,11 +30,24 @@ fn freq_charts(samples: &[SamplePermittivity], page: &mut Page, dir: &Path) -> R
             })
             .collect()
     };
+    // εr′ ± σ where the geometry's tolerances give one
+    let mut eps_series: Vec<Series> = series(&|p| p.eps_r);
+    for (i, s) in drawn.iter().enumerate() {
+        let bars = error_bars(s.points.iter().map(|p| (p.freq_hz, p.eps_r, p.eps_r_std)));
+        if !bars.is_empty() {
+            eps_series.push(Series {
+                label: format!("{} ± σ", s.name),
+                points: bars,
+                color: i,
+                style: Style::ErrorBars,
+            });
+        }
+    }
     let eps = Chart {
         title: "Relative permittivity".into(),
         x_label: "frequency (Hz)".into(),
         y_label: "εr′".into(),
-        series: series(&|p| p.eps_r),
+        series: eps_series,
         log_x: true,
     };
     let tan = Chart {

@@ -28,6 +28,19 @@ pub enum Style {
     /// Filled band: the points trace its outline, lower edge forward and upper edge
     /// back ([`band`]).
     Band,
+    /// Error bars: the points come in pairs (x, lo), (x, hi), each pair drawn as a
+    /// vertical bar with caps ([`error_bars`]).
+    ErrorBars,
+}
+
+/// The points of an [`Style::ErrorBars`] series: y ± σ at each x (a σ that is zero
+/// or not finite draws nothing).
+pub fn error_bars(points: impl IntoIterator<Item = (f64, f64, f64)>) -> Vec<(f64, f64)> {
+    points
+        .into_iter()
+        .filter(|&(_, _, s)| s.is_finite() && s > 0.0)
+        .flat_map(|(x, y, s)| [(x, y - s), (x, y + s)])
+        .collect()
 }
 
 /// The outline of a band between `lo` and `hi` at `x` (a [`Style::Band`] series).
@@ -123,6 +136,21 @@ fn tick_label(v: f64, lo: f64, hi: f64) -> String {
     }
 }
 
+/// The label of a tick at `v` on a logarithmic axis: the shortest decimal that
+/// reads it exactly ("0.01", "200", "1e+06" from 10⁶ on).
+fn log_tick_label(v: f64) -> String {
+    if !v.is_finite() || v <= 0.0 {
+        return format!("{v}");
+    }
+    if (1e-4..1e6).contains(&v) {
+        // ticks are m·10ᵏ: six significant digits hold them, trailing zeros dropped
+        let s = format!("{v:.6}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        format!("{v:e}")
+    }
+}
+
 impl Chart {
     /// The plot corner holding the fewest points (upper left on ties), where the
     /// legend hides the least data.
@@ -196,6 +224,11 @@ impl Chart {
                     .x_desc(self.x_label.as_str())
                     .y_desc(self.y_label.as_str())
                     .y_label_formatter(&|v| tick_label(*v, y0, y1))
+                    .x_label_formatter(&|v| match self.log_x {
+                        // a log axis' ticks are decades and their multiples
+                        true => log_tick_label(*v),
+                        false => tick_label(*v, x0, x1),
+                    })
                     .light_line_style(RGBColor(235, 235, 235))
                     .draw()?;
                 for s in &self.series {
@@ -234,6 +267,31 @@ impl Chart {
                                     Rectangle::new(
                                         [(x, y - 4), (x + 20, y + 4)],
                                         c.mix(0.45).filled(),
+                                    )
+                                })
+                        }
+                        Style::ErrorBars => {
+                            let pts: Vec<(f64, f64)> = pts.collect();
+                            chart
+                                .draw_series(pts.chunks_exact(2).map(|w| {
+                                    ErrorBar::new_vertical(
+                                        w[0].0,
+                                        w[0].1,
+                                        0.5 * (w[0].1 + w[1].1),
+                                        w[1].1,
+                                        c.stroke_width(1),
+                                        6,
+                                    )
+                                }))?
+                                .label(s.label.as_str())
+                                .legend(move |(x, y)| {
+                                    ErrorBar::new_vertical(
+                                        x + 10,
+                                        y - 5,
+                                        y,
+                                        y + 5,
+                                        c.stroke_width(1),
+                                        6,
                                     )
                                 })
                         }
@@ -287,5 +345,16 @@ mod tests {
             ["5.0e4", "1.0e5", "1.5e5"]
         );
         assert_eq!(labels(1.0, 1.002, &[1.0005]), ["1.0005"]);
+    }
+
+    /// Log-axis ticks read as the decades and multiples they are.
+    #[test]
+    fn log_tick_labels_are_exact() {
+        use super::log_tick_label;
+        let got: Vec<String> = [0.01, 0.2, 1.0, 30.0, 1000.0, 1e6]
+            .iter()
+            .map(|&v| log_tick_label(v))
+            .collect();
+        assert_eq!(got, ["0.01", "0.2", "1", "30", "1000", "1e6"]);
     }
 }

@@ -3,7 +3,7 @@
 //! relaxation spectrum (grid NNLS and the fitted terms), storage and loss moduli
 //! against frequency, and a Markdown page.
 
-use super::format::si;
+use super::format::{si, si_pm};
 use super::page::{code, text, Page};
 use super::plot::{Chart, Series, Style};
 use super::runs::Run;
@@ -169,18 +169,14 @@ pub fn write(
         .iter()
         .map(|p| {
             vec![
-                si(p.tau_s, "s"),
-                p.tau_std_s.map(|e| si(e, "s")).unwrap_or("n/a".into()),
-                si(p.modulus_pa, "Pa"),
-                p.modulus_std_pa
-                    .map(|e| si(e, "Pa"))
-                    .unwrap_or("n/a".into()),
+                si_pm(p.tau_s, p.tau_std_s, "s"),
+                si_pm(p.modulus_pa, p.modulus_std_pa, "Pa"),
                 format!("{:.4}", p.g),
                 si(p.modulus_pa * p.tau_s, "Pa·s"),
             ]
         })
         .collect();
-    page.table(&["τ", "σ(τ)", "E = k", "σ(E)", "g", "n = k·τ"], rows);
+    page.table(&["τ ± σ", "E = k ± σ", "g", "n = k·τ"], rows);
     page.text(format!(
         "E∞ = {}, E0 = {}, g∞ = {:.4}; RMSE = {}, relative RMSE = {:.3} %, R² = {:.5}, AICc = {}, BIC = {:.2}",
         si(fit.long_term_modulus_pa, "Pa"),

@@ -179,18 +179,28 @@ pub fn write(o: &Outcome, input: &str, dir: &Path) -> Result<PathBuf> {
     let pts = |f: &dyn Fn(&crate::sim::Sample) -> f64| -> Vec<(f64, f64)> {
         o.samples.iter().map(|s| (s.time_s, f(s))).collect()
     };
+    let mut stroke_series = vec![trace(
+        o,
+        "stroke",
+        0,
+        &|s| s.length_m,
+        &|i| i.length_m,
+        &|l| (o.rest_length_m - l) * 1e3,
+    )];
+    // A closed loop's reference contraction, on the same axis as the stroke.
+    if o.samples.iter().any(|s| s.reference.is_finite()) {
+        stroke_series.push(Series {
+            label: "reference (controller)".into(),
+            points: pts(&|s| s.reference * o.rest_length_m * 1e3),
+            color: 1,
+            style: Style::Dashed,
+        });
+    }
     let stroke = Chart {
         title: format!("{}: stroke", o.scene),
         x_label: "time (s)".into(),
         y_label: "contraction (mm)".into(),
-        series: vec![trace(
-            o,
-            "stroke",
-            0,
-            &|s| s.length_m,
-            &|i| i.length_m,
-            &|l| (o.rest_length_m - l) * 1e3,
-        )],
+        series: stroke_series,
         log_x: false,
     };
     let voltage = Chart {

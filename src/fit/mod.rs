@@ -3,6 +3,7 @@
 
 pub mod composite;
 pub mod diagnostics;
+pub mod drucker;
 pub mod hyperelastic;
 pub mod linear;
 pub mod lm;

@@ -6,6 +6,7 @@
 //! * Yeoh (seed Eq. 2.8): W = Σ_{i=1..3} Ci0(I1 − 3)^i, μ0 = 2·C10.
 
 use super::loadcase::{InvariantDerivs, Mode};
+use super::powers::{Laurent, LaurentKinematics, PowerSum, TangentPowers};
 use super::{ParamInfo, StrainEnergy};
 
 /// One term s·p·x^i·y^j with x = I1 − 3, y = I2 − 3.
@@ -103,6 +104,31 @@ impl StrainEnergy for Polynomial {
         let k = mode.kinematics(lam);
         let (i1, i2) = k.invariants();
         k.invariant_tangent(&self.derivs(p, i1, i2))
+    }
+    fn tangent_powers(&self, p: &[f64], mode: Mode) -> Option<TangentPowers> {
+        // P = f·(W1 + λ2²·W2) with W1 = Σ c·i·x^(i−1)·y^j, W2 = Σ c·j·x^i·y^(j−1): a
+        // Laurent polynomial in λ, and T = dP/dλ.
+        if p.len() != self.terms.len() {
+            return None;
+        }
+        let k = LaurentKinematics::of(mode);
+        let (mut w1, mut w2) = (Laurent::ZERO, Laurent::ZERO);
+        for (t, &c) in self.terms.iter().zip(p) {
+            let c = c * t.scale;
+            if t.i > 0 {
+                let b = k.x.pow(t.i - 1)?.mul(&k.y.pow(t.j)?)?;
+                w1 = w1.add_scaled(c * f64::from(t.i), &b);
+            }
+            if t.j > 0 {
+                let b = k.x.pow(t.i)?.mul(&k.y.pow(t.j - 1)?)?;
+                w2 = w2.add_scaled(c * f64::from(t.j), &b);
+            }
+        }
+        let stress = k.f.mul(&w1.add_scaled(1.0, &k.l2sq.mul(&w2)?))?;
+        Some(TangentPowers {
+            sum: PowerSum::Integer(stress.derivative()?),
+            bounded: false,
+        })
     }
     fn stress_jacobian(&self, p: &[f64], mode: Mode, lam: f64, out: &mut [f64]) {
         if p.len() != self.terms.len() || out.len() != self.terms.len() {

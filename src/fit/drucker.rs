@@ -19,6 +19,13 @@
 //! * otherwise the cell is halved, down to single grid steps, whose two ends are
 //!   evaluated by [`StrainEnergy::tangent`], as the dense sweep does.
 //!
+//! Before any of that, Descartes' rule of signs (which holds for sums of real
+//! powers) bounds the zeros of the sum in λ > 0 by the sign changes of its
+//! coefficients in order of exponent. With at most one change T has at most one
+//! simple zero, so the grid holds one sign up to it and the other after: the two
+//! ends and a bisection for the crossing (some ten evaluations) decide the mode.
+//! That is the common case of a fitted model.
+//!
 //! The margin (10⁻⁹ of the terms' magnitude, some 10⁶ times the rounding of either
 //! way of evaluating T) keeps a decided cell decided whichever way T is computed, so
 //! the result equals [`drucker_dense`]'s (the previous method, kept as the baseline
@@ -75,11 +82,7 @@ fn grid() -> &'static [(f64, f64)] {
 pub fn drucker(model: &dyn StrainEnergy, p: &[f64]) -> Vec<DruckerCheck> {
     Mode::ALL
         .iter()
-        .map(|&mode| {
-            let mut ok = [false; GRID];
-            signs(model, p, mode, &mut ok);
-            summarize(mode, &ok)
-        })
+        .map(|&mode| summarize(mode, &signs(model, p, mode)))
         .collect()
 }
 
@@ -89,11 +92,32 @@ pub fn drucker_dense(model: &dyn StrainEnergy, p: &[f64]) -> Vec<DruckerCheck> {
     Mode::ALL
         .iter()
         .map(|&mode| {
-            let mut ok = [false; GRID];
-            dense(model, p, mode, 0, GRID - 1, &mut ok);
-            summarize(mode, &ok)
+            let mut runs = Runs::default();
+            dense(model, p, mode, 0, GRID - 1, &mut runs);
+            summarize(mode, &runs)
         })
         .collect()
+}
+
+/// The sign of dP/dλ over the grid as runs (first index, last index, positive),
+/// in order, adjacent runs of opposite sign.
+#[derive(Debug, Default)]
+struct Runs(Vec<(usize, usize, bool)>);
+
+impl Runs {
+    /// Grid stretches `i..=j` have sign `ok` (a point already decided keeps its sign).
+    fn push(&mut self, i: usize, j: usize, ok: bool) {
+        let from = match self.0.last_mut() {
+            Some(last) if last.1 >= j => return,
+            Some(last) if last.2 == ok => {
+                last.1 = j;
+                return;
+            }
+            Some(last) => i.max(last.1 + 1),
+            None => i,
+        };
+        self.0.push((from, j, ok));
+    }
 }
 
 /// Whether dP/dλ at grid stretch `i` is finite and positive.
@@ -104,16 +128,9 @@ fn positive(model: &dyn StrainEnergy, p: &[f64], mode: Mode, i: usize) -> bool {
 }
 
 /// The sign at every grid stretch from `lo` to `hi` by direct evaluation.
-fn dense(
-    model: &dyn StrainEnergy,
-    p: &[f64],
-    mode: Mode,
-    lo: usize,
-    hi: usize,
-    ok: &mut [bool],
-) {
+fn dense(model: &dyn StrainEnergy, p: &[f64], mode: Mode, lo: usize, hi: usize, runs: &mut Runs) {
     for i in lo..=hi {
-        ok[i] = positive(model, p, mode, i);
+        runs.push(i, i, positive(model, p, mode, i));
     }
 }
 
@@ -158,10 +175,27 @@ fn bound(sa: f64, a: Parts, sb: f64, b: Parts) -> Cell {
     Cell::Undecided
 }
 
-/// The sign of dP/dλ at every grid stretch of `mode`, written into `ok`.
-fn signs(model: &dyn StrainEnergy, p: &[f64], mode: Mode, ok: &mut [bool; GRID]) {
+/// The last index of `lo..=hi` whose sign is that of `lo`, given that the sign
+/// changes once (bisection on direct evaluations).
+fn last_like_first(model: &dyn StrainEnergy, p: &[f64], mode: Mode, lo: usize, hi: usize, first: bool) -> usize {
+    let (mut a, mut b) = (lo, hi);
+    while b - a > 1 {
+        let m = (a + b) / 2;
+        if positive(model, p, mode, m) == first {
+            a = m
+        } else {
+            b = m
+        }
+    }
+    a
+}
+
+/// The sign of dP/dλ at every grid stretch of `mode`.
+fn signs(model: &dyn StrainEnergy, p: &[f64], mode: Mode) -> Runs {
+    let mut runs = Runs::default();
     let Some(tp) = model.tangent_powers(p, mode) else {
-        return dense(model, p, mode, 0, GRID - 1, ok);
+        dense(model, p, mode, 0, GRID - 1, &mut runs);
+        return runs;
     };
     let g = grid();
     let (mut lo, mut hi) = (0, GRID - 1);
@@ -170,96 +204,98 @@ fn signs(model: &dyn StrainEnergy, p: &[f64], mode: Mode, ok: &mut [bool; GRID])
         let one = grid_one();
         let finite = |i: usize| model.tangent(p, mode, g[i].1).is_finite();
         if !finite(one) {
-            return dense(model, p, mode, 0, GRID - 1, ok);
+            dense(model, p, mode, 0, GRID - 1, &mut runs);
+            return runs;
         }
-        // Smallest finite index: finite(one) holds; bisect on [0, one].
-        if !finite(0) {
-            let (mut bad, mut good) = (0, one);
-            while good - bad > 1 {
-                let m = (bad + good) / 2;
+        let find = |from: usize, to: usize| {
+            // The last finite index going from `from` (finite) towards `to`.
+            let (mut good, mut bad) = (from, to);
+            while good.abs_diff(bad) > 1 {
+                let m = (good + bad) / 2;
                 if finite(m) {
                     good = m
                 } else {
                     bad = m
                 }
             }
-            lo = good;
+            good
+        };
+        if !finite(0) {
+            lo = find(one, 0);
+            runs.push(0, lo - 1, false);
         }
         if !finite(GRID - 1) {
-            let (mut good, mut bad) = (one, GRID - 1);
-            while bad - good > 1 {
-                let m = (bad + good) / 2;
-                if finite(m) {
-                    good = m
-                } else {
-                    bad = m
+            hi = find(one, GRID - 1);
+        }
+    }
+    if tp.sum.sign_changes() <= 1 {
+        // At most one simple zero in λ > 0 (Descartes): one sign on either side of it.
+        let (a, b) = (positive(model, p, mode, lo), positive(model, p, mode, hi));
+        if a == b {
+            runs.push(lo, hi, a);
+        } else {
+            let m = last_like_first(model, p, mode, lo, hi, a);
+            runs.push(lo, m, a);
+            runs.push(m + 1, hi, b);
+        }
+    } else {
+        let parts = |i: usize| tp.sum.parts(g[i].0, g[i].1);
+        // Depth-first over cells, left to right, each carrying the parts at its ends.
+        let mut stack = Vec::with_capacity(32);
+        stack.push((lo, parts(lo), hi, parts(hi)));
+        while let Some((i, pi, j, pj)) = stack.pop() {
+            match bound(g[i].0, pi, g[j].0, pj) {
+                Cell::Positive => runs.push(i, j, true),
+                Cell::Negative => runs.push(i, j, false),
+                Cell::Undecided if j - i <= 1 => {
+                    runs.push(i, i, positive(model, p, mode, i));
+                    runs.push(j, j, positive(model, p, mode, j));
+                }
+                Cell::Undecided => {
+                    let m = (i + j) / 2;
+                    let pm = parts(m);
+                    stack.push((m, pm, j, pj));
+                    stack.push((i, pi, m, pm));
                 }
             }
-            hi = good;
-        }
-        // ok is false outside [lo, hi] already.
-    }
-    let parts = |i: usize| tp.sum.parts(g[i].0, g[i].1);
-    // Depth-first over cells, each carrying the parts at its ends.
-    let mut stack = Vec::with_capacity(32);
-    stack.push((lo, parts(lo), hi, parts(hi)));
-    while let Some((i, pi, j, pj)) = stack.pop() {
-        match bound(g[i].0, pi, g[j].0, pj) {
-            Cell::Positive => ok[i..=j].fill(true),
-            Cell::Negative => ok[i..=j].fill(false),
-            Cell::Undecided if j - i <= 1 => {
-                ok[i] = positive(model, p, mode, i);
-                ok[j] = positive(model, p, mode, j);
-            }
-            Cell::Undecided => {
-                let m = (i + j) / 2;
-                let pm = parts(m);
-                stack.push((m, pm, j, pj));
-                stack.push((i, pi, m, pm));
-            }
         }
     }
+    if hi < GRID - 1 {
+        runs.push(hi + 1, GRID - 1, false);
+    }
+    runs
 }
 
 /// The first grid index at or above λ = 1.
 fn grid_one() -> usize {
-    grid()
-        .iter()
-        .position(|&(_, l)| l >= 1.0)
-        .unwrap_or(GRID / 2)
+    static ONE: OnceLock<usize> = OnceLock::new();
+    *ONE.get_or_init(|| {
+        grid()
+            .iter()
+            .position(|&(_, l)| l >= 1.0)
+            .unwrap_or(GRID / 2)
+    })
 }
 
-/// The check of one mode from the sign at every grid stretch.
-fn summarize(mode: Mode, ok: &[bool; GRID]) -> DruckerCheck {
+/// The check of one mode from the sign runs over the grid.
+fn summarize(mode: Mode, runs: &Runs) -> DruckerCheck {
     let g = grid();
-    let mut unstable = Vec::new();
-    let mut i = 0;
-    while i < GRID {
-        if !ok[i] {
-            let start = i;
-            while i < GRID && !ok[i] {
-                i += 1;
-            }
-            unstable.push([g[start].1, g[i - 1].1]);
-        } else {
-            i += 1;
-        }
-    }
     let one = grid_one();
-    let (mut lo, mut hi) = (one, one);
-    if ok[one] {
-        while lo > 0 && ok[lo - 1] {
-            lo -= 1;
-        }
-        while hi + 1 < GRID && ok[hi + 1] {
-            hi += 1;
-        }
-    }
+    let unstable: Vec<[f64; 2]> = runs
+        .0
+        .iter()
+        .filter(|r| !r.2)
+        .map(|r| [g[r.0].1, g[r.1].1])
+        .collect();
+    let (stretch_min, stretch_max) = match runs.0.iter().find(|r| r.0 <= one && one <= r.1) {
+        Some(&(a, b, true)) => (g[a].1, g[b].1),
+        _ => (1.0, 1.0),
+    };
     DruckerCheck {
         mode,
         stable: unstable.is_empty(),
-        stretch_min: if ok[one] { g[lo].1 } else { 1.0 },
-        stretch_max: if ok[one] { g[hi].1 } else { 1.0 },
+        stretch_min,
+        stretch_max,
         unstable,
     }
 }

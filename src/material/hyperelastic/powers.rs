@@ -10,12 +10,13 @@
 
 use super::Mode;
 
-/// Exponents a [`Laurent`] polynomial can hold: [`LO`, `LO` + [`SPAN`]).
-const SPAN: usize = 48;
+/// Exponents a [`Laurent`] polynomial can hold: [`LO`, `LO` + [`SPAN`]) (the
+/// models here need −14 to 5).
+const SPAN: usize = 32;
 /// The smallest exponent a [`Laurent`] polynomial can hold.
-const LO: i32 = -24;
+const LO: i32 = -20;
 
-/// A Laurent polynomial Σ c_e·λ^e with integer exponents in [−24, 24), stored densely
+/// A Laurent polynomial Σ c_e·λ^e with integer exponents in [−20, 12), stored densely
 /// over the exponents in use (no allocation).
 #[derive(Debug, Clone, Copy)]
 pub struct Laurent {
@@ -180,6 +181,33 @@ pub struct Parts {
 }
 
 impl PowerSum {
+    /// Sign changes of the coefficients taken in order of exponent (zeros skipped).
+    /// By Descartes' rule of signs, which holds for real exponents too (Laguerre),
+    /// the sum has at most this many zeros in λ > 0, counted with multiplicity.
+    pub fn sign_changes(&self) -> usize {
+        let mut changes = 0;
+        let mut last = 0.0;
+        let mut step = |a: f64| {
+            if a != 0.0 {
+                if last != 0.0 && (a > 0.0) != (last > 0.0) {
+                    changes += 1;
+                }
+                last = a;
+            }
+        };
+        match self {
+            PowerSum::Integer(l) => l.terms().for_each(|(_, a)| step(a)),
+            PowerSum::Real(terms) => {
+                // Terms of equal exponent counted apart can only add changes: the
+                // count stays an upper bound.
+                let mut sorted = terms.clone();
+                sorted.sort_by(|x, y| x.1.total_cmp(&y.1));
+                sorted.iter().for_each(|&(a, _)| step(a));
+            }
+        }
+        changes
+    }
+
     /// (P, P′, N, N′) at s = ln λ (λ = e^s, given too so as not to recompute it).
     pub fn parts(&self, s: f64, lam: f64) -> Parts {
         let mut out = Parts::default();
@@ -228,6 +256,13 @@ mod tests {
         assert!((dx.eval(lam) - (4.0 * lam - 4.0 * lam.powi(-5))).abs() < 1e-13);
         // Out-of-range exponents are refused, not wrapped.
         assert!(Laurent::monomial(1.0, 40).is_none());
+        // λ² − 3 + 2λ⁻²: two sign changes; (λ − 1)²·… has its two zeros at λ = 1, √2.
+        let q = Laurent::monomial(1.0, 2)
+            .unwrap()
+            .add_scaled(-3.0, &Laurent::monomial(1.0, 0).unwrap())
+            .add_scaled(2.0, &Laurent::monomial(1.0, -2).unwrap());
+        assert_eq!(PowerSum::Integer(q).sign_changes(), 2);
+        assert_eq!(PowerSum::Real(vec![(1.0, 3.0), (-2.0, -1.5), (0.0, 0.0), (-1.0, 2.0)]).sign_changes(), 1);
         assert!(k.x.pow(20).is_none());
     }
 

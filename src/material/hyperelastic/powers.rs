@@ -9,6 +9,7 @@
 //! of real powers, Σ μi·ki·[(αi − 1)·λ^(αi−2) + (q·αi + 1)·λ^(−q·αi−2)] with λ3 = λ^−q.
 
 use super::Mode;
+use std::sync::OnceLock;
 
 /// Exponents a [`Laurent`] polynomial can hold: [`LO`, `LO` + [`SPAN`]) (the
 /// models here need −14 to 5).
@@ -59,10 +60,15 @@ impl Laurent {
     /// self + k·other.
     pub fn add_scaled(&self, k: f64, other: &Laurent) -> Laurent {
         let mut out = *self;
-        for (e, c) in other.terms() {
-            out.add_term(k * c, e).expect("both are in range");
-        }
+        out.add_assign_scaled(k, other);
         out
+    }
+
+    /// self += k·other.
+    pub fn add_assign_scaled(&mut self, k: f64, other: &Laurent) {
+        for (e, c) in other.terms() {
+            self.add_term(k * c, e).expect("both are in range");
+        }
     }
 
     /// self·other (None when an exponent of the product is out of range).
@@ -123,8 +129,15 @@ pub struct LaurentKinematics {
 }
 
 impl LaurentKinematics {
+    /// The quantities of `mode` (computed once).
+    pub fn of(mode: Mode) -> &'static LaurentKinematics {
+        static ALL: OnceLock<[LaurentKinematics; 3]> = OnceLock::new();
+        let all = ALL.get_or_init(|| Mode::ALL.map(Self::build));
+        &all[Mode::ALL.iter().position(|&m| m == mode).expect("a mode")]
+    }
+
     /// The quantities of `mode` (λ1 = λ; λ2², λ3² powers of λ as in [`super::loadcase`]).
-    pub fn of(mode: Mode) -> LaurentKinematics {
+    fn build(mode: Mode) -> LaurentKinematics {
         // Exponents of λ2² and λ3².
         let (e2, e3) = match mode {
             Mode::Uniaxial => (-1, -1),

@@ -123,9 +123,15 @@ fn drucker_checks(c: &mut Criterion) {
     let fitted = |set: &str, m: &str| {
         let spec = ModelSpec::new(m, base.ogden_form);
         let f = fit(&get(&sets, set).data, &spec, &base).expect("fit");
-        (format!("{m}-{set}"), spec.build().expect("model"), f.values())
+        (
+            format!("{m}-{set}"),
+            spec.build().expect("model"),
+            f.values(),
+        )
     };
-    let yeoh = ModelSpec::new("yeoh", base.ogden_form).build().expect("yeoh");
+    let yeoh = ModelSpec::new("yeoh", base.ogden_form)
+        .build()
+        .expect("yeoh");
     let cases = [
         fitted(VHB_UNIAXIAL, "yeoh"),
         ("yeoh-unstable".to_string(), yeoh, vec![1e5, -5e3, 50.0]),
@@ -134,7 +140,9 @@ fn drucker_checks(c: &mut Criterion) {
     for (name, model, p) in &cases {
         assert_eq!(drucker(model.as_ref(), p), drucker_dense(model.as_ref(), p));
         let mut g = c.benchmark_group(format!("drucker/{name}"));
-        g.bench_function("bounded", |b| b.iter(|| drucker(model.as_ref(), black_box(p))));
+        g.bench_function("bounded", |b| {
+            b.iter(|| drucker(model.as_ref(), black_box(p)))
+        });
         g.bench_function("dense", |b| {
             b.iter(|| drucker_dense(model.as_ref(), black_box(p)))
         });

@@ -1,12 +1,12 @@
 //! Closed forms, derivatives and invariants of every hyperelastic model.
 
 use dea_fit::fit::drucker::{drucker, drucker_dense, GRID};
+use dea_fit::material::hyperelastic::ogden::Ogden;
 use dea_fit::material::hyperelastic::powers::TangentPowers;
 use dea_fit::material::hyperelastic::ParamInfo;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use dea_fit::material::hyperelastic::ogden::Ogden;
 use dea_fit::material::hyperelastic::{Mode, ModelSpec, OgdenForm, StrainEnergy};
 use proptest::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Every model with a representative, Drucker-stable parameter vector (SI).
 fn cases() -> Vec<(Box<dyn StrainEnergy>, Vec<f64>)> {
@@ -313,8 +313,13 @@ proptest! {
 /// A random parameter vector for `name`: moduli of either sign over seven decades,
 /// Ogden exponents over their whole bound, Gent limits from 10⁻³ to 10⁴.
 fn random_params(name: &str, draws: &[(bool, f64, f64)]) -> Vec<f64> {
-    let modulus = |&(neg, mag, _): &(bool, f64, f64)| if neg { -1.0 } else { 1.0 } * 10f64.powf(mag);
-    let k = ModelSpec::new(name, OgdenForm::Seed).build().unwrap().params().len();
+    let modulus =
+        |&(neg, mag, _): &(bool, f64, f64)| if neg { -1.0 } else { 1.0 } * 10f64.powf(mag);
+    let k = ModelSpec::new(name, OgdenForm::Seed)
+        .build()
+        .unwrap()
+        .params()
+        .len();
     (0..k)
         .map(|j| {
             let d = &draws[j];

@@ -177,7 +177,14 @@ fn bound(sa: f64, a: Parts, sb: f64, b: Parts) -> Cell {
 
 /// The last index of `lo..=hi` whose sign is that of `lo`, given that the sign
 /// changes once (bisection on direct evaluations).
-fn last_like_first(model: &dyn StrainEnergy, p: &[f64], mode: Mode, lo: usize, hi: usize, first: bool) -> usize {
+fn last_like_first(
+    model: &dyn StrainEnergy,
+    p: &[f64],
+    mode: Mode,
+    lo: usize,
+    hi: usize,
+    first: bool,
+) -> usize {
     let (mut a, mut b) = (lo, hi);
     while b - a > 1 {
         let m = (a + b) / 2;

@@ -79,11 +79,10 @@ impl StrainEnergy for Gent {
         };
         let k = LaurentKinematics::of(mode);
         let gap = Laurent::monomial(jm, 0)?.add_scaled(-1.0, &k.x);
-        let q = k
-            .f
-            .derivative()?
-            .mul(&gap)?
-            .add_scaled(1.0, &k.f.mul(&k.x.derivative()?)?);
+        let q =
+            k.f.derivative()?
+                .mul(&gap)?
+                .add_scaled(1.0, &k.f.mul(&k.x.derivative()?)?);
         Some(TangentPowers {
             sum: PowerSum::Integer(Laurent::ZERO.add_scaled(0.5 * mu * jm, &q)),
             bounded: true,

@@ -7,8 +7,8 @@
 
 use super::loadcase::{InvariantDerivs, Mode};
 use super::powers::{Laurent, LaurentKinematics, PowerSum, TangentPowers};
-use std::sync::OnceLock;
 use super::{ParamInfo, StrainEnergy};
+use std::sync::OnceLock;
 
 /// One term s·p·x^i·y^j with x = I1 − 3, y = I2 − 3.
 #[derive(Debug, Clone, Copy)]
@@ -125,7 +125,8 @@ impl Polynomial {
                         let b = k.x.pow(t.i)?.mul(&k.y.pow(t.j - 1)?)?;
                         w2.add_assign_scaled(t.scale * f64::from(t.j), &b);
                     }
-                    k.f.mul(&w1.add_scaled(1.0, &k.l2sq.mul(&w2)?))?.derivative()
+                    k.f.mul(&w1.add_scaled(1.0, &k.l2sq.mul(&w2)?))?
+                        .derivative()
                 })
                 .collect()
         };

@@ -160,6 +160,9 @@ impl LaurentKinematics {
 }
 
 /// A sum of powers of λ.
+// The Laurent variant is held inline: one is built per mode and check, without an
+// allocation, and never stored in bulk.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone)]
 pub enum PowerSum {
     /// Integer exponents (polynomial models, Gent).
@@ -275,7 +278,10 @@ mod tests {
             .add_scaled(-3.0, &Laurent::monomial(1.0, 0).unwrap())
             .add_scaled(2.0, &Laurent::monomial(1.0, -2).unwrap());
         assert_eq!(PowerSum::Integer(q).sign_changes(), 2);
-        assert_eq!(PowerSum::Real(vec![(1.0, 3.0), (-2.0, -1.5), (0.0, 0.0), (-1.0, 2.0)]).sign_changes(), 1);
+        assert_eq!(
+            PowerSum::Real(vec![(1.0, 3.0), (-2.0, -1.5), (0.0, 0.0), (-1.0, 2.0)]).sign_changes(),
+            1
+        );
         assert!(k.x.pow(20).is_none());
     }
 

@@ -8,6 +8,7 @@ pub mod hyperelastic;
 pub mod linear;
 pub mod lm;
 pub mod multistart;
+pub mod nnls;
 pub mod permittivity;
 pub mod problem;
 pub mod relaxation;

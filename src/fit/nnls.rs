@@ -48,14 +48,16 @@ pub fn nnls(
             }
         })
         .collect();
-    let mut g = a.tr_mul(a);
-    let mut h = a.tr_mul(b);
-    for i in 0..k {
-        h[i] *= d[i];
-        for j in 0..k {
-            g[(i, j)] *= d[i] * d[j];
+    // G = D·AᵀA·D from the upper triangle (contiguous column dot products).
+    let mut g = DMatrix::zeros(k, k);
+    for j in 0..k {
+        for i in 0..=j {
+            let v = a.column(i).dot(&a.column(j)) * d[i] * d[j];
+            g[(i, j)] = v;
+            g[(j, i)] = v;
         }
     }
+    let h = DVector::from_fn(k, |i, _| a.column(i).dot(b) * d[i]);
     let x = solve_normal(&g, &h, start.unwrap_or(&vec![false; k]), &d)?;
     Ok(NnlsSolution {
         x: DVector::from_iterator(k, x.0.iter().zip(&d).map(|(v, s)| v * s)),
@@ -78,21 +80,24 @@ fn solve_normal(
     let mut passive: Vec<bool> = (0..k)
         .map(|j| start.get(j) == Some(&true) && usable(j))
         .collect();
-    let mut x = vec![0.0; k];
+    let mut x = DVector::zeros(k);
     let mut z = vec![0.0; k];
+    let mut w = DVector::zeros(k);
     let mut iterations = 0;
     // A warm start is made feasible by the inner loop before the first addition.
     let mut add_next = !passive.iter().any(|&p| p);
     loop {
         if add_next {
-            // w = h − G·x over the coefficients outside P.
+            // w = h − G·x, over the coefficients outside P.
+            w.copy_from(h);
+            w.gemv(-1.0, g, &x, 1.0);
             let best = (0..k)
                 .filter(|&j| !passive[j] && usable(j))
-                .map(|j| (j, h[j] - (0..k).map(|i| g[(j, i)] * x[i]).sum::<f64>()))
+                .map(|j| (j, w[j]))
                 .filter(|&(_, w)| w > tol)
                 .max_by(|a, b| a.1.total_cmp(&b.1));
             let Some((t, _)) = best else {
-                return Ok((x, iterations));
+                return Ok((x.iter().copied().collect(), iterations));
             };
             iterations += 1;
             if iterations > 3 * k.max(1) {

@@ -217,13 +217,11 @@ mod tests {
     fn random_problems_meet_kkt_and_clarabel() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-        let mut solved = 0;
         for case in 0..200 {
             let (n, k) = (rng.gen_range(12..30), rng.gen_range(1..12));
             let a = DMatrix::from_fn(n, k, |_, _| rng.gen_range(-1.0..1.0));
             let b = DVector::from_fn(n, |_, _| rng.gen_range(-1.0..1.0));
             let ours = nnls(&a, &b, None).expect("full column rank");
-            solved += 1;
             let qp = constrained_least_squares(&a, &b, &DMatrix::identity(k, k)).unwrap();
             let cost = |x: &DVector<f64>| (&a * x - &b).norm_squared();
             let qx = qp.x.map(|v| v.max(0.0));

@@ -7,6 +7,10 @@
 //!   LM baseline from the same starts.
 //! * `search/vhb4910-uniaxial/yeoh-{svd,lm}`: the search alone for Yeoh, the exact
 //!   linear least-squares solve against the naive baseline of an iterative LM.
+//! * `drucker/<model>/{bounded,dense}`: the Drucker check of the fitted Yeoh
+//!   (VHB 4910 uniaxial), of an unstable Yeoh and of the Ogden-3 Treloar fit, by
+//!   bounds on grid cells (what `fit` runs) against the dense 3 × 801 sweep
+//!   (the previous method) in the same run.
 //! * `search/rosenbrock-2/lm`: the LM on a 2-parameter problem (some twenty
 //!   iterations of microseconds), where the fixed cost of argmin's `Executor`
 //!   around `Lm::step` shows (docs/architecture.md, "argmin: what it bought, what
@@ -17,6 +21,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, SamplingMode};
 use dea_fit::bench::{shipped_datasets, NamedData, TRELOAR_ALL, VHB_UNIAXIAL};
+use dea_fit::fit::drucker::{drucker, drucker_dense};
 use dea_fit::fit::hyperelastic::{fit, Search, Settings};
 use dea_fit::fit::lm::{self, LeastSquares, LmSettings};
 use dea_fit::fit::problem::{svd_solve, HyperProblem};
@@ -112,6 +117,39 @@ fn yeoh_search(c: &mut Criterion) {
     g.finish();
 }
 
+fn drucker_checks(c: &mut Criterion) {
+    let sets = data();
+    let base = Settings::default();
+    let fitted = |set: &str, m: &str| {
+        let spec = ModelSpec::new(m, base.ogden_form);
+        let f = fit(&get(&sets, set).data, &spec, &base).expect("fit");
+        (
+            format!("{m}-{set}"),
+            spec.build().expect("model"),
+            f.values(),
+        )
+    };
+    let yeoh = ModelSpec::new("yeoh", base.ogden_form)
+        .build()
+        .expect("yeoh");
+    let cases = [
+        fitted(VHB_UNIAXIAL, "yeoh"),
+        ("yeoh-unstable".to_string(), yeoh, vec![1e5, -5e3, 50.0]),
+        fitted(TRELOAR_ALL, "ogden3"),
+    ];
+    for (name, model, p) in &cases {
+        assert_eq!(drucker(model.as_ref(), p), drucker_dense(model.as_ref(), p));
+        let mut g = c.benchmark_group(format!("drucker/{name}"));
+        g.bench_function("bounded", |b| {
+            b.iter(|| drucker(model.as_ref(), black_box(p)))
+        });
+        g.bench_function("dense", |b| {
+            b.iter(|| drucker_dense(model.as_ref(), black_box(p)))
+        });
+        g.finish();
+    }
+}
+
 /// Rosenbrock as least squares: r = (10(y − x²), 1 − x), from (−1.2, 1).
 struct Rosenbrock;
 
@@ -145,6 +183,6 @@ criterion_group! {
         .sample_size(10)
         .warm_up_time(Duration::from_millis(300))
         .measurement_time(Duration::from_secs(1));
-    targets = fits, yeoh_search, tiny_search
+    targets = fits, yeoh_search, drucker_checks, tiny_search
 }
 criterion_main!(benches);

@@ -1,9 +1,12 @@
 //! Closed forms, derivatives and invariants of every hyperelastic model.
 
-use dea_fit::fit::diagnostics::drucker;
+use dea_fit::fit::drucker::{drucker, drucker_dense, GRID};
 use dea_fit::material::hyperelastic::ogden::Ogden;
+use dea_fit::material::hyperelastic::powers::TangentPowers;
+use dea_fit::material::hyperelastic::ParamInfo;
 use dea_fit::material::hyperelastic::{Mode, ModelSpec, OgdenForm, StrainEnergy};
 use proptest::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Every model with a representative, Drucker-stable parameter vector (SI).
 fn cases() -> Vec<(Box<dyn StrainEnergy>, Vec<f64>)> {
@@ -303,6 +306,119 @@ proptest! {
         let m = ModelSpec::new("yeoh", OgdenForm::Seed).build().unwrap();
         for mode in Mode::ALL {
             prop_assert!(m.nominal_stress(&[c10, c20, c30], mode, 1.0).abs() <= 1e-9 * c10);
+        }
+    }
+}
+
+/// A random parameter vector for `name`: moduli of either sign over seven decades,
+/// Ogden exponents over their whole bound, Gent limits from 10⁻³ to 10⁴.
+fn random_params(name: &str, draws: &[(bool, f64, f64)]) -> Vec<f64> {
+    let modulus =
+        |&(neg, mag, _): &(bool, f64, f64)| if neg { -1.0 } else { 1.0 } * 10f64.powf(mag);
+    let k = ModelSpec::new(name, OgdenForm::Seed)
+        .build()
+        .unwrap()
+        .params()
+        .len();
+    (0..k)
+        .map(|j| {
+            let d = &draws[j];
+            match name {
+                "gent" if j == 1 => 10f64.powf(-3.0 + 7.0 * (d.2 + 20.0) / 40.0),
+                n if n.starts_with("ogden") && j % 2 == 1 => d.2,
+                _ => modulus(d),
+            }
+        })
+        .collect()
+}
+
+/// A model that counts its tangent evaluations.
+struct Counting<'a>(&'a dyn StrainEnergy, AtomicUsize);
+
+impl StrainEnergy for Counting<'_> {
+    fn name(&self) -> String {
+        self.0.name()
+    }
+    fn params(&self) -> &[ParamInfo] {
+        self.0.params()
+    }
+    fn nominal_stress(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
+        self.0.nominal_stress(p, mode, lam)
+    }
+    fn tangent(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
+        self.1.fetch_add(1, Ordering::Relaxed);
+        self.0.tangent(p, mode, lam)
+    }
+    fn tangent_powers(&self, p: &[f64], mode: Mode) -> Option<TangentPowers> {
+        self.0.tangent_powers(p, mode)
+    }
+    fn stress_jacobian(&self, p: &[f64], mode: Mode, lam: f64, out: &mut [f64]) {
+        self.0.stress_jacobian(p, mode, lam, out)
+    }
+    fn initial_shear_modulus(&self, p: &[f64]) -> f64 {
+        self.0.initial_shear_modulus(p)
+    }
+}
+
+/// The bounded check decides most of the grid without evaluating it: on every
+/// representative case (stable) and on an unstable Yeoh it evaluates the tangent at
+/// under a tenth of the 3 × 801 grid stretches the dense sweep does, with the same
+/// result.
+#[test]
+fn drucker_check_evaluates_few_stretches() {
+    let yeoh = ModelSpec::new("yeoh", OgdenForm::Seed).build().unwrap();
+    let mut all = cases();
+    all.push((yeoh, vec![1e5, -5e3, 50.0]));
+    for (m, p) in &all {
+        let c = Counting(m.as_ref(), AtomicUsize::new(0));
+        let d = drucker(&c, p);
+        let used = c.1.load(Ordering::Relaxed);
+        assert_eq!(d, drucker_dense(m.as_ref(), p), "{}", m.name());
+        assert!(used < 3 * GRID / 10, "{}: {used} evaluations", m.name());
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(400))]
+
+    /// The bounded check gives the dense sweep's result, stable or not, for random
+    /// parameters of every model and Ogden form.
+    #[test]
+    fn drucker_check_agrees_with_the_dense_sweep(
+        model in 0usize..8,
+        original in proptest::bool::ANY,
+        draws in proptest::collection::vec((proptest::bool::ANY, 0.0f64..7.0, -20.0f64..20.0), 8),
+    ) {
+        let name = dea_fit::material::hyperelastic::MODEL_NAMES[model];
+        let form = if original { OgdenForm::Original } else { OgdenForm::Seed };
+        let m = ModelSpec::new(name, form).build().unwrap();
+        let p = random_params(name, &draws);
+        prop_assert_eq!(drucker(m.as_ref(), &p), drucker_dense(m.as_ref(), &p), "{} {:?}", name, p);
+    }
+
+    /// The power form of the tangent is the tangent: the same value (a positive
+    /// factor apart for Gent, whose sign is compared) at random stretches.
+    #[test]
+    fn tangent_powers_are_the_tangent(
+        model in 0usize..8,
+        draws in proptest::collection::vec((proptest::bool::ANY, 0.0f64..7.0, -20.0f64..20.0), 8),
+        lam in 0.1f64..10.0,
+        mode in 0usize..3,
+    ) {
+        let name = dea_fit::material::hyperelastic::MODEL_NAMES[model];
+        let m = ModelSpec::new(name, OgdenForm::Seed).build().unwrap();
+        let p = random_params(name, &draws);
+        let mode = Mode::ALL[mode];
+        let t = m.tangent(&p, mode, lam);
+        let Some(tp) = m.tangent_powers(&p, mode) else {
+            return Ok(());
+        };
+        let q = tp.sum.parts(lam.ln(), lam);
+        let s = q.p - q.n;
+        if tp.bounded {
+            prop_assert!(!t.is_finite() || t.signum() == s.signum() || s.abs() <= 1e-9 * (q.p + q.n), "{} {:?}: {} vs {}", name, p, t, s);
+        } else {
+            prop_assert!((t - s).abs() <= 1e-9 * (q.p + q.n), "{} {:?} λ {}: {} vs {}", name, p, lam, t, s);
         }
     }
 }

@@ -529,7 +529,7 @@ fn hyperelastic(a: Args) -> Result<i32> {
         &mut s,
     )?;
     // Drucker stability (dP/dλ > 0) over the requested stretches in this mode
-    let check = dea_fit::fit::diagnostics::drucker(model.as_ref(), &p);
+    let check = dea_fit::fit::drucker::drucker(model.as_ref(), &p);
     let stable = check
         .iter()
         .find(|c| c.mode == mode)

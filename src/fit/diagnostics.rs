@@ -1,10 +1,8 @@
 //! Fit diagnostics: covariance and standard errors from the Jacobian, confidence
 //! intervals, correlation and condition number, information criteria, the seed's
-//! %RMSE (Eq. 3.28) and Drucker stability.
+//! %RMSE (Eq. 3.28). Drucker stability is [`super::drucker`].
 
-use crate::material::hyperelastic::{Mode, StrainEnergy};
 use nalgebra::DMatrix;
-use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
 /// Parameter uncertainty from the linearised model.
@@ -118,85 +116,6 @@ pub fn rmse_percent(rmse: f64, reference: &[f64]) -> Option<f64> {
             (a.min(y), b.max(y))
         });
     (hi > lo).then(|| 100.0 * rmse / (hi - lo))
-}
-
-/// Stretch range over which Drucker stability is checked.
-pub const DRUCKER_RANGE: (f64, f64) = (0.1, 10.0);
-
-/// Drucker stability of one mode over [`DRUCKER_RANGE`].
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct DruckerCheck {
-    /// Mode.
-    pub mode: Mode,
-    /// True if dP/dλ > 0 over the whole checked range.
-    pub stable: bool,
-    /// Lower end of the stable interval that contains λ = 1.
-    pub stretch_min: f64,
-    /// Upper end of the stable interval that contains λ = 1.
-    pub stretch_max: f64,
-    /// Intervals [a, b] of the checked range where dP/dλ ≤ 0 or is undefined.
-    pub unstable: Vec<[f64; 2]>,
-}
-
-/// Check dP/dλ > 0 on a log-spaced grid (400 points per decade pair) in each mode.
-pub fn drucker(model: &dyn StrainEnergy, p: &[f64]) -> Vec<DruckerCheck> {
-    const N: usize = 801;
-    let (a, b) = (DRUCKER_RANGE.0.ln(), DRUCKER_RANGE.1.ln());
-    let grid: Vec<f64> = (0..N)
-        .map(|i| (a + (b - a) * i as f64 / (N - 1) as f64).exp())
-        .collect();
-    Mode::ALL
-        .iter()
-        .map(|&mode| {
-            let ok: Vec<bool> = grid
-                .iter()
-                .map(|&l| {
-                    let t = model.tangent(p, mode, l);
-                    t.is_finite() && t > 0.0
-                })
-                .collect();
-            let mut unstable = Vec::new();
-            let mut i = 0;
-            while i < N {
-                if !ok[i] {
-                    let start = i;
-                    while i < N && !ok[i] {
-                        i += 1;
-                    }
-                    unstable.push([grid[start], grid[i - 1]]);
-                } else {
-                    i += 1;
-                }
-            }
-            let one = grid.iter().position(|&l| l >= 1.0).unwrap_or(N / 2);
-            let (mut lo, mut hi) = (one, one);
-            if ok[one] {
-                while lo > 0 && ok[lo - 1] {
-                    lo -= 1;
-                }
-                while hi + 1 < N && ok[hi + 1] {
-                    hi += 1;
-                }
-            }
-            DruckerCheck {
-                mode,
-                stable: unstable.is_empty(),
-                stretch_min: if ok[one] { grid[lo] } else { 1.0 },
-                stretch_max: if ok[one] { grid[hi] } else { 1.0 },
-                unstable,
-            }
-        })
-        .collect()
-}
-
-/// The grid of (mode, stretch) points at which `--stable` constrains dP/dλ ≥ 0.
-pub fn drucker_grid() -> Vec<(Mode, f64)> {
-    const N: usize = 121;
-    let (a, b) = (DRUCKER_RANGE.0.ln(), DRUCKER_RANGE.1.ln());
-    Mode::ALL
-        .iter()
-        .flat_map(|&m| (0..N).map(move |i| (m, (a + (b - a) * i as f64 / (N - 1) as f64).exp())))
-        .collect()
 }
 
 /// The warning for a fit that explains less of the data's variation than their mean

@@ -9,7 +9,8 @@
 //!   deterministic set of physically informed starts, then a full LM polish of all
 //!   parameters from the best start.
 
-use super::diagnostics::{self, DruckerCheck, DRUCKER_RANGE};
+use super::diagnostics;
+use super::drucker::{self, DruckerCheck, DRUCKER_RANGE};
 use super::linear::constrained_least_squares;
 use super::lm::{self, LeastSquares, LmSettings, Termination};
 use super::multistart;
@@ -376,7 +377,7 @@ fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Es
         prob.jacobian(&vec![0.0; k], &mut a);
         let b = prob.scaled_targets();
         if s.stable {
-            let grid = diagnostics::drucker_grid();
+            let grid = drucker::drucker_grid();
             let mut g = DMatrix::zeros(grid.len(), k);
             let mut e = vec![0.0; k];
             for j in 0..k {
@@ -494,7 +495,7 @@ fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Es
         });
     }
     let mut notes = Vec::new();
-    let stable_ok = |p: &[f64]| diagnostics::drucker(model, p).iter().all(|d| d.stable);
+    let stable_ok = |p: &[f64]| drucker::drucker(model, p).iter().all(|d| d.stable);
     let best_cost = results.iter().map(|r| r.0).fold(f64::INFINITY, f64::min);
     let at_best = multistart::starts_at_best(
         &results.iter().map(|r| r.0).collect::<Vec<_>>(),
@@ -875,7 +876,7 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
     }
 
     // Drucker stability.
-    let drucker = diagnostics::drucker(model, &p);
+    let drucker = drucker::drucker(model, &p);
     for d in &drucker {
         if d.stable {
             continue;

@@ -3,10 +3,12 @@
 
 pub mod composite;
 pub mod diagnostics;
+pub mod drucker;
 pub mod hyperelastic;
 pub mod linear;
 pub mod lm;
 pub mod multistart;
+pub mod nnls;
 pub mod permittivity;
 pub mod problem;
 pub mod relaxation;

@@ -8,8 +8,8 @@
 //!
 //! Two stages:
 //! 1. Non-negative least squares over a log-spaced τ grid (default 6 per decade over
-//!    the sampled window widened by ×3 at each end; Clarabel QP with E ≥ 0 as
-//!    constraints): where the relaxation spectrum lives.
+//!    the sampled window widened by ×3 at each end; Lawson–Hanson active set on
+//!    the normal equations, `fit/nnls.rs`): where the relaxation spectrum lives.
 //! 2. For a term count N: the grid spectrum's peaks are merged or split into N terms
 //!    (several deterministic ways: the multi-start), and τᵢ, Eᵢ, E∞ are refined together
 //!    by bounded Levenberg-Marquardt over (E∞, Eᵢ ≥ 0, ln τᵢ within the window widened
@@ -26,8 +26,8 @@
 //! identifiable and inside the sampled window.
 
 use super::diagnostics;
-use super::linear::constrained_least_squares;
 use super::lm::{self, LeastSquares, LmSettings, Termination};
+use super::nnls::nnls;
 use super::problem::{Residual, REL_FLOOR};
 use super::{Parameter, SolverReport, Status};
 use crate::error::{Error, Result};
@@ -105,8 +105,8 @@ pub struct Settings {
     pub method: Method,
     /// τ grid density of the NNLS stage, points per decade (default 6, which puts
     /// about three grid points between VHB 4910's two modes half a decade apart; range
-    /// 2–50). The Clarabel QP's cost grows steeply with the grid size (≈0.8 ms at 6
-    /// per decade over 6 decades, ≈2 ms at 10).
+    /// 2–50). The NNLS's cost grows with the grid size (the normal equations are
+    /// k² per point).
     pub grid_per_decade: usize,
     /// Iteration limit of each LM search (default 200).
     pub max_iterations: usize,
@@ -834,7 +834,7 @@ fn prepare(
 }
 
 /// Stage 1: NNLS over the τ grid. Returns (grid τ, scaled coefficients [e∞, e_grid…],
-/// QP iterations).
+/// active-set iterations).
 fn grid_nnls(
     prob: &mut Problem,
     window: (f64, f64),
@@ -849,25 +849,21 @@ fn grid_nnls(
     Ok((taus, c, it))
 }
 
-/// Non-negative least squares for E∞ and moduli at fixed τ (scaled units).
+/// Non-negative least squares for E∞ and moduli at fixed τ (scaled units), by
+/// Lawson–Hanson ([`nnls`]). Returns the coefficients and the active-set iterations.
 fn nnls_at(prob: &mut Problem, taus: &[f64]) -> Result<(Vec<f64>, usize)> {
     let n = prob.len();
     let mut a = DMatrix::zeros(n, taus.len() + 1);
-    let mut col = vec![0.0; n];
     for j in 0..=taus.len() {
-        prob.column(if j == 0 { None } else { Some(taus[j - 1]) }, &mut col);
-        a.column_mut(j).copy_from_slice(&col);
+        let tau = if j == 0 { None } else { Some(taus[j - 1]) };
+        prob.column(tau, a.column_mut(j).as_mut_slice());
     }
     let b = DVector::from_iterator(n, prob.y.iter().zip(&prob.w).map(|(y, w)| y * w));
-    let g = DMatrix::identity(taus.len() + 1, taus.len() + 1);
-    let qp = constrained_least_squares(&a, &b, &g).map_err(|e| {
+    let sol = nnls(&a, &b, None).map_err(|e| {
         Error::settings(format!("the non-negative least-squares stage failed: {e}"))
     })?;
     prob.evaluations += 1;
-    Ok((
-        qp.x.iter().map(|v| v.max(0.0)).collect(),
-        qp.iterations as usize,
-    ))
+    Ok((sol.x.iter().copied().collect(), sol.iterations))
 }
 
 /// Peaks of the grid spectrum: runs of consecutive non-zero grid moduli.
@@ -1517,12 +1513,12 @@ pub fn fit(
     let termination = a.tf.termination.to_string();
     let method = match settings.method {
         Method::Refined => format!(
-            "grid NNLS ({} τ, {}/decade, Clarabel) + merge/prune + bounded Levenberg-Marquardt over (E∞, Eᵢ, ln τᵢ), multi-start",
+            "grid NNLS ({} τ, {}/decade, Lawson–Hanson) + merge/prune + bounded Levenberg-Marquardt over (E∞, Eᵢ, ln τᵢ), multi-start",
             grid.0.len(),
             settings.grid_per_decade
         ),
         Method::Grid => format!(
-            "grid NNLS ({} τ, {}/decade, Clarabel) + merge/prune, moduli by NNLS at the merged τ (no refinement)",
+            "grid NNLS ({} τ, {}/decade, Lawson–Hanson) + merge/prune, moduli by NNLS at the merged τ (no refinement)",
             grid.0.len(),
             settings.grid_per_decade
         ),

@@ -3,6 +3,7 @@
 //! Linear in μ for fixed Jm.
 
 use super::loadcase::{InvariantDerivs, Mode};
+use super::powers::{Laurent, LaurentKinematics, PowerSum, TangentPowers};
 use super::{ParamInfo, StrainEnergy};
 
 /// The Gent model, parameters `mu` (Pa) and `Jm` (dimensionless).
@@ -68,6 +69,24 @@ impl StrainEnergy for Gent {
     fn tangent(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
         let k = mode.kinematics(lam);
         k.invariant_tangent(&Self::derivs(p, k.invariants().0))
+    }
+    fn tangent_powers(&self, p: &[f64], mode: Mode) -> Option<TangentPowers> {
+        // P = f·W1 with W1 = μ·Jm/(2·gap), gap = Jm − x: T = μ·Jm/(2·gap²)·Q with
+        // Q = f′·gap + f·x′, finite only where gap > 0 (an interval around λ = 1,
+        // since x = I1 − 3 falls to 0 at λ = 1 and rises on either side).
+        let &[mu, jm] = p else {
+            return None;
+        };
+        let k = LaurentKinematics::of(mode);
+        let gap = Laurent::monomial(jm, 0)?.add_scaled(-1.0, &k.x);
+        let q =
+            k.f.derivative()?
+                .mul(&gap)?
+                .add_scaled(1.0, &k.f.mul(&k.x.derivative()?)?);
+        Some(TangentPowers {
+            sum: PowerSum::Integer(Laurent::ZERO.add_scaled(0.5 * mu * jm, &q)),
+            bounded: true,
+        })
     }
     fn stress_jacobian(&self, p: &[f64], mode: Mode, lam: f64, out: &mut [f64]) {
         if p.len() != 2 || out.len() != 2 {

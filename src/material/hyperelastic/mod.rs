@@ -11,6 +11,7 @@ pub mod gent;
 pub mod loadcase;
 pub mod ogden;
 pub mod polynomial;
+pub mod powers;
 
 pub use loadcase::{Kinematics, Mode};
 
@@ -60,6 +61,13 @@ pub trait StrainEnergy: Send + Sync {
     fn nominal_stress(&self, p: &[f64], mode: Mode, lam: f64) -> f64;
     /// Tangent dP/dλ (Drucker stability requires it to be positive).
     fn tangent(&self, p: &[f64], mode: Mode, lam: f64) -> f64;
+    /// The tangent of `mode` as a positive factor times a sum of powers of λ
+    /// ([`powers`]), for the Drucker check to bound on whole stretch intervals; None
+    /// where the model has no such form (the check then evaluates
+    /// [`StrainEnergy::tangent`] at every stretch of its grid).
+    fn tangent_powers(&self, _p: &[f64], _mode: Mode) -> Option<powers::TangentPowers> {
+        None
+    }
     /// ∂P/∂p written into `out` (length = number of parameters). No allocation.
     fn stress_jacobian(&self, p: &[f64], mode: Mode, lam: f64, out: &mut [f64]);
     /// Small-strain shear modulus μ0 (Pa); Young's modulus is 3μ0.

@@ -10,6 +10,7 @@
 //! to search in. Parameters are ordered μ1, α1, μ2, α2, …; the stress is linear in the μi.
 
 use super::loadcase::Mode;
+use super::powers::{PowerSum, TangentPowers};
 use super::{OgdenForm, ParamInfo, StrainEnergy};
 
 /// Ogden model with `n` terms in a chosen coefficient form.
@@ -126,6 +127,32 @@ impl StrainEnergy for Ogden {
             .map(|t| self.dg(t[0], t[1], k.l[0]) * k.dl[0] - self.dg(t[0], t[1], k.l[2]) * k.dl[2])
             .sum();
         dg / k.l[0] - stress * k.dl[0] / k.l[0]
+    }
+    fn tangent_powers(&self, p: &[f64], mode: Mode) -> Option<TangentPowers> {
+        // P = Σ μi·ki·(λ^(αi−1) − λ^(−q·αi−1)) with λ3 = λ^−q and ki = 2/αi (seed) or 1
+        // (original), so T = Σ μi·ki·[(αi − 1)·λ^(αi−2) + (q·αi + 1)·λ^(−q·αi−2)]. The
+        // seed form's ki has no power-sum limit as αi → 0 (the pair tends to a
+        // logarithm): none then.
+        let q = match mode {
+            Mode::Uniaxial => 0.5,
+            Mode::Equibiaxial => 2.0,
+            Mode::Planar => 1.0,
+        };
+        let mut terms = Vec::with_capacity(p.len());
+        for t in self.terms(p)? {
+            let (mu, alpha) = (t[0], t[1]);
+            let k = match self.form {
+                OgdenForm::Seed if alpha.abs() < 1e-6 => return None,
+                OgdenForm::Seed => 2.0 / alpha,
+                OgdenForm::Original => 1.0,
+            };
+            terms.push((mu * k * (alpha - 1.0), alpha - 2.0));
+            terms.push((mu * k * (q * alpha + 1.0), -q * alpha - 2.0));
+        }
+        Some(TangentPowers {
+            sum: PowerSum::Real(terms),
+            bounded: false,
+        })
     }
     fn stress_jacobian(&self, p: &[f64], mode: Mode, lam: f64, out: &mut [f64]) {
         let (Some(terms), true) = (self.terms(p), out.len() == p.len()) else {

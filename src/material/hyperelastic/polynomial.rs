@@ -6,7 +6,9 @@
 //! * Yeoh (seed Eq. 2.8): W = Σ_{i=1..3} Ci0(I1 − 3)^i, μ0 = 2·C10.
 
 use super::loadcase::{InvariantDerivs, Mode};
+use super::powers::{Laurent, LaurentKinematics, PowerSum, TangentPowers};
 use super::{ParamInfo, StrainEnergy};
+use std::sync::OnceLock;
 
 /// One term s·p·x^i·y^j with x = I1 − 3, y = I2 − 3.
 #[derive(Debug, Clone, Copy)]
@@ -86,6 +88,56 @@ impl Polynomial {
     }
 }
 
+/// The tangent of each parameter's term alone in each mode (order of [`Mode::ALL`]).
+type TangentBases = [Vec<Laurent>; 3];
+
+impl Polynomial {
+    /// T = Σ p_k·B_k: the bases B_k of this model, computed once for every model of
+    /// the family (None if a power falls outside what [`Laurent`] holds).
+    fn tangent_bases(&self) -> Option<&'static TangentBases> {
+        static ALL: OnceLock<Vec<(&'static str, Option<TangentBases>)>> = OnceLock::new();
+        ALL.get_or_init(|| {
+            [Self::neo_hookean(), Self::mooney_rivlin(), Self::yeoh()]
+                .iter()
+                .map(|m| (m.name, m.build_tangent_bases()))
+                .collect()
+        })
+        .iter()
+        .find(|(name, _)| *name == self.name)?
+        .1
+        .as_ref()
+    }
+
+    /// P = f·(W1 + λ2²·W2) with W1 = Σ c·i·x^(i−1)·y^j, W2 = Σ c·j·x^i·y^(j−1) is a
+    /// Laurent polynomial in λ, and T = dP/dλ; one basis per term (c = 1).
+    fn build_tangent_bases(&self) -> Option<TangentBases> {
+        let one_mode = |mode: Mode| -> Option<Vec<Laurent>> {
+            let k = LaurentKinematics::of(mode);
+            self.terms
+                .iter()
+                .map(|t| {
+                    let (mut w1, mut w2) = (Laurent::ZERO, Laurent::ZERO);
+                    if t.i > 0 {
+                        let b = k.x.pow(t.i - 1)?.mul(&k.y.pow(t.j)?)?;
+                        w1.add_assign_scaled(t.scale * f64::from(t.i), &b);
+                    }
+                    if t.j > 0 {
+                        let b = k.x.pow(t.i)?.mul(&k.y.pow(t.j - 1)?)?;
+                        w2.add_assign_scaled(t.scale * f64::from(t.j), &b);
+                    }
+                    k.f.mul(&w1.add_scaled(1.0, &k.l2sq.mul(&w2)?))?
+                        .derivative()
+                })
+                .collect()
+        };
+        Some([
+            one_mode(Mode::ALL[0])?,
+            one_mode(Mode::ALL[1])?,
+            one_mode(Mode::ALL[2])?,
+        ])
+    }
+}
+
 impl StrainEnergy for Polynomial {
     fn name(&self) -> String {
         self.name.to_string()
@@ -103,6 +155,20 @@ impl StrainEnergy for Polynomial {
         let k = mode.kinematics(lam);
         let (i1, i2) = k.invariants();
         k.invariant_tangent(&self.derivs(p, i1, i2))
+    }
+    fn tangent_powers(&self, p: &[f64], mode: Mode) -> Option<TangentPowers> {
+        if p.len() != self.terms.len() {
+            return None;
+        }
+        let basis = &self.tangent_bases()?[Mode::ALL.iter().position(|&m| m == mode)?];
+        let mut sum = Laurent::ZERO;
+        for (b, &c) in basis.iter().zip(p) {
+            sum.add_assign_scaled(c, b);
+        }
+        Some(TangentPowers {
+            sum: PowerSum::Integer(sum),
+            bounded: false,
+        })
     }
     fn stress_jacobian(&self, p: &[f64], mode: Mode, lam: f64, out: &mut [f64]) {
         if p.len() != self.terms.len() || out.len() != self.terms.len() {

@@ -27,8 +27,8 @@
 //!   current state; the sensitivities carry on.
 
 use super::{
-    budget_exhausted, initial_step, left_limit, non_finite, End, EventFn, Options, SampleFn, Stats,
-    StepFn, System, NEWTON_TOLERANCE,
+    budget_exhausted, initial_step, left_limit, non_finite, End, EventFn, Left, Options, SampleFn,
+    Stats, StepFn, System, NEWTON_TOLERANCE,
 };
 
 /// Largest order.
@@ -93,26 +93,6 @@ impl Coefficients {
             c.error[q] = KAPPA[q] * c.gamma[q] + 1.0 / (q + 1) as f64;
         }
         c
-    }
-}
-
-/// The right-hand side and its Jacobians with the input's left limit at the
-/// segment end (inputs are right-continuous, and the segment ends at a kink).
-struct Left<'a, S> {
-    sys: &'a S,
-    t_end: f64,
-}
-
-impl<S: System> Left<'_, S> {
-    #[inline]
-    fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) {
-        self.sys.rhs(t.min(self.t_end), y, dy)
-    }
-    fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) {
-        self.sys.jacobian(t.min(self.t_end), y, jac)
-    }
-    fn param_jacobian(&self, t: f64, y: &[f64], dfdp: &mut [f64]) {
-        self.sys.param_jacobian(t.min(self.t_end), y, dfdp)
     }
 }
 

@@ -9,8 +9,8 @@
 //! all buffers live in a [`Workspace`] created once per run.
 
 use super::{
-    budget_exhausted, initial_step, left_limit, non_finite, End, EventFn, Options, Stats, StepFn,
-    System,
+    budget_exhausted, initial_step, left_limit, non_finite, End, EventFn, Left, Options, Stats,
+    StepFn, System,
 };
 
 /// Buffers reused by every step.
@@ -106,20 +106,6 @@ fn dense_eval(w: &Workspace, theta: f64, out: &mut [f64]) {
     let t1 = 1.0 - theta;
     for i in 0..w.n {
         out[i] = d[0][i] + theta * (d[1][i] + t1 * (d[2][i] + theta * (d[3][i] + t1 * d[4][i])));
-    }
-}
-
-/// The right-hand side with the input's left limit at the segment end (inputs are
-/// right-continuous, and the segment ends at an input kink).
-struct Left<'a, S> {
-    sys: &'a S,
-    t_end: f64,
-}
-
-impl<S: System> Left<'_, S> {
-    #[inline]
-    fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) {
-        self.sys.rhs(t.min(self.t_end), y, dy)
     }
 }
 

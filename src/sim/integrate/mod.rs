@@ -207,6 +207,26 @@ fn initial_step(y: &[f64], dy: &[f64], scale: &[f64], o: &Options) -> f64 {
     }
 }
 
+/// The right-hand side and its Jacobians with the input's left limit at the
+/// segment end (inputs are right-continuous, and the segment ends at a kink).
+pub(super) struct Left<'a, S> {
+    pub(super) sys: &'a S,
+    pub(super) t_end: f64,
+}
+
+impl<S: System> Left<'_, S> {
+    #[inline]
+    pub(super) fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) {
+        self.sys.rhs(t.min(self.t_end), y, dy)
+    }
+    pub(super) fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]) {
+        self.sys.jacobian(t.min(self.t_end), y, jac)
+    }
+    pub(super) fn param_jacobian(&self, t: f64, y: &[f64], dfdp: &mut [f64]) {
+        self.sys.param_jacobian(t.min(self.t_end), y, dfdp)
+    }
+}
+
 /// The time just before `b` at which the right-hand side of the interval [a, b]
 /// is evaluated for t ≥ b: inputs are right-continuous, and `b` is a kink.
 fn left_limit(a: f64, b: f64) -> f64 {

@@ -273,7 +273,7 @@ mod tests {
     fn column_shares_one_prefix() {
         let (u, c) = si_column(&[0.0, 5000.0, 20997.4], "V", 5);
         assert_eq!(u, "kV");
-        assert_eq!(c, ["0.0000", "5.0000", "20.997"].map(String::from));
+        assert_eq!(c, ["0.000", "5.000", "20.997"].map(String::from));
         let (u, c) = si_column(&[1.2e-10, 3.456e-10], "F", 4);
         assert_eq!(u, "pF");
         assert_eq!(c, ["120.0", "345.6"].map(String::from));

@@ -509,6 +509,94 @@ fn golden_vhb4910_yeoh_table() {
     });
 }
 
+/// `dea-fit static` on the seed's stack: the pull-in line, the curve's shape table
+/// (printed numbers are rounded, so compared as text) and the status.
+#[test]
+fn golden_static_stack_table() {
+    let o = run(&repo(), &["static", "datasets/scenes/stack_step_5kV.toml"]);
+    let text = ok(&o);
+    golden("static-stack_step_5kV.txt", &text, |want| {
+        (want != text).then(|| "the text differs".to_string())
+    });
+}
+
+/// `static --out`: the whole curve as CSV, units in the headers, equal to the
+/// `--json` curve; the capacitance is the stack's closed form
+/// C(λ) = N·εr·ε0·πR²/(H·λ²) (incompressible layers: area ∝ 1/λ, gap ∝ λ), to 1e-12
+/// relative (rounding only); the shape table spans the curve with the pull-in at the
+/// voltage maximum; a different old CSV is kept aside, never overwritten silently.
+#[test]
+fn static_out_writes_the_curve_as_csv() {
+    let dir = tempdir();
+    let scene = repo_file("datasets/scenes/stack_step_5kV.toml");
+    let json: Value = serde_json::from_str(&ok(&run(
+        dir.path(),
+        &["static", &scene, "--json", "--out", "curve.csv"],
+    )))
+    .expect("JSON");
+    assert_eq!(json["curve_file"], "curve.csv");
+    let csv = std::fs::read_to_string(dir.path().join("curve.csv")).expect("curve.csv");
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some("voltage_V,stretch,capacitance_F"));
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().expect("a number")).collect())
+        .collect();
+    let curve = json["curve"].as_array().expect("curve");
+    assert_eq!(rows.len(), curve.len());
+    assert!(
+        rows.len() > 190,
+        "the whole curve (200 points, 1 at rest dropped)"
+    );
+    let c_ref =
+        10.0 * 4.7 * 8.854_187_812_8e-12 * std::f64::consts::PI * 2.25e-3f64.powi(2) / 500e-6;
+    for (r, p) in rows.iter().zip(curve) {
+        assert_eq!(r[0], p["voltage_V"].as_f64().unwrap());
+        assert_eq!(r[1], p["stretch"].as_f64().unwrap());
+        assert_eq!(r[2], p["capacitance_F"].as_f64().unwrap());
+        assert!(
+            close(r[2] * r[1] * r[1], c_ref, 1e-12),
+            "C·λ² = {}",
+            r[2] * r[1] * r[1]
+        );
+    }
+    let v_pull_in = json["pull_in"]["voltage_V"].as_f64().expect("pull-in");
+    assert!(rows.iter().all(|r| r[0] <= v_pull_in));
+
+    // The text: the pull-in row between the rows around it, at the largest voltage.
+    let text = ok(&run(dir.path(), &["static", &scene, "--out", "curve.csv"]));
+    assert_eq!(
+        names_in(dir.path()),
+        ["curve.csv"],
+        "the same curve: refreshed"
+    );
+    let table: Vec<&str> = text
+        .lines()
+        .skip_while(|l| !l.starts_with("voltage (kV)"))
+        .skip(2)
+        .take_while(|l| !l.starts_with("curve:"))
+        .collect();
+    assert_eq!(table.len(), 11, "ten rows and the pull-in:\n{text}");
+    let volts: Vec<f64> = table
+        .iter()
+        .map(|l| l.split_whitespace().next().unwrap().parse().unwrap())
+        .collect();
+    let peak = table
+        .iter()
+        .position(|l| l.ends_with("pull-in"))
+        .expect("pull-in row");
+    assert!(volts.iter().all(|&v| v <= volts[peak]), "{volts:?}");
+    assert!(text.contains("curve: curve.csv\nstatus: ok\n"), "{text}");
+
+    // A different curve: the old file is kept aside, and stderr says so.
+    let o = run(
+        dir.path(),
+        &["static", &scene, "--out", "curve.csv", "--points", "20"],
+    );
+    ok(&o);
+    assert_eq!(names_in(dir.path()), ["curve.csv", "curve.previous-1.csv"]);
+    assert!(stderr(&o).contains("kept as"), "{}", stderr(&o));
+}
+
 // ---------------------------------------------------------------------------------
 // Fit files, --json, --strict, reports
 // ---------------------------------------------------------------------------------

@@ -3,6 +3,7 @@
 mod bad_cli;
 mod bench;
 mod cli;
+mod completions;
 mod datasets;
 mod estimation;
 mod exit_status;

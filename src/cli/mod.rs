@@ -6,10 +6,12 @@ mod bench_rank;
 mod bench_relaxation;
 mod bench_scale;
 mod bench_simulate;
+mod completions;
 mod composite;
 mod export;
 mod hyperelastic;
 mod identify;
+mod man;
 mod permittivity;
 mod rank;
 mod relaxation;
@@ -52,6 +54,10 @@ enum Command {
     Rank(rank::Args),
     /// Measure speed against accuracy and write tables and charts under reports/.
     Bench(bench::Args),
+    /// Print a shell completion script (bash, zsh, fish, elvish, powershell).
+    Completions(completions::Args),
+    /// Write the man pages (the top page on stdout, or one per command with --out).
+    Man(man::Args),
 }
 
 /// Run a parsed command line; returns the exit status.
@@ -68,6 +74,8 @@ pub fn run(cli: Cli) -> Result<i32> {
         Command::Static(a) => static_curve::run(a),
         Command::Export(a) => export::run(a),
         Command::Rank(a) => rank::run(a),
+        Command::Completions(a) => completions::run(a),
+        Command::Man(a) => man::run(a),
     }
 }
 

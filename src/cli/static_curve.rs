@@ -3,8 +3,10 @@
 //! Status: `ok` (the curve and its peak, or no peak down to `--stretch-min`, and the
 //! scene's input stays below any pull-in), `pull_in` (the scene's largest input
 //! voltage reaches the pull-in voltage: exit 1 under `--strict`), `failed` (the
-//! search could not look: exit 1).
+//! search could not look: exit 1). Text output: that line, the curve's shape as a
+//! table, the status; `--out` writes the whole curve as CSV.
 
+use dea_fit::report::static_curve as static_report;
 use dea_fit::sim::static_curve::{self, Search, MIN_POINTS};
 use dea_fit::sim::{full_plant, scene::Scene};
 use dea_fit::{Error, Result};
@@ -15,9 +17,13 @@ use std::path::PathBuf;
 pub struct Args {
     /// Scene file.
     scene: PathBuf,
-    /// Print JSON (`status`, `search`, `curve`, `pull_in`).
+    /// Print JSON (`status`, `message`, `search`, `curve`, `pull_in`, `curve_file`).
     #[arg(long)]
     json: bool,
+    /// Write the whole curve as CSV (`voltage_V,stretch,capacitance_F`); a different
+    /// old file is kept aside.
+    #[arg(long)]
+    out: Option<PathBuf>,
     /// Number of curve points (at least 10).
     #[arg(long, default_value_t = 200)]
     points: usize,
@@ -76,16 +82,24 @@ pub fn run(a: Args) -> Result<i32> {
             ),
         ),
     };
+    if let Some(out) = &a.out {
+        super::write_noted(out, static_report::curve_csv(&c).as_bytes())?;
+    }
     if a.json {
         let mut v = serde_json::to_value(&c).expect("serialisable");
         v["status"] = status.into();
         v["message"] = line.clone().into();
+        v["curve_file"] = a.out.as_ref().map(|o| o.display().to_string()).into();
         println!(
             "{}",
             serde_json::to_string_pretty(&v).expect("serialisable")
         );
     } else {
         println!("{}: {line}", scene.name);
+        print!("{}", static_report::shape_table(&c));
+        if let Some(out) = &a.out {
+            println!("curve: {}", out.display());
+        }
         println!("status: {status}");
     }
     Ok(match status {

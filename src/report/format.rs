@@ -204,6 +204,28 @@ pub fn tolerance(std: f64, fmt: impl Fn(f64) -> String) -> String {
     }
 }
 
+/// A table column of values in `unit` with one SI prefix for all (the largest
+/// magnitude's), `n` significant digits on the largest and the same decimals on the
+/// rest: the prefixed unit ("kV") and the cells.
+pub fn si_column(values: &[f64], unit: &str, n: usize) -> (String, Vec<String>) {
+    let max = values
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    let (f, p) = prefix(max);
+    let mag = if max == 0.0 {
+        0
+    } else {
+        (max * f).log10().floor() as i32
+    };
+    let decimals = (n as i32 - 1 - mag).max(0) as usize;
+    let cells = values
+        .iter()
+        .map(|v| format!("{:.decimals$}", v * f))
+        .collect();
+    (format!("{p}{unit}"), cells)
+}
+
 /// Render rows as a left-aligned text table with a header rule.
 pub fn table(header: &[&str], rows: &[Vec<String>]) -> String {
     let mut w: Vec<usize> = header.iter().map(|h| h.chars().count()).collect();
@@ -244,6 +266,17 @@ mod tests {
         assert_eq!(si(1.5e-5, "m"), "15.000 µm");
         assert_eq!(si(2.5, "1"), "2.5000");
         assert_eq!(si(1.3056e-11, "F"), "13.056 pF");
+    }
+
+    /// One prefix per column, from its largest value.
+    #[test]
+    fn column_shares_one_prefix() {
+        let (u, c) = si_column(&[0.0, 5000.0, 20997.4], "V", 5);
+        assert_eq!(u, "kV");
+        assert_eq!(c, ["0.000", "5.000", "20.997"].map(String::from));
+        let (u, c) = si_column(&[1.2e-10, 3.456e-10], "F", 4);
+        assert_eq!(u, "pF");
+        assert_eq!(c, ["120.0", "345.6"].map(String::from));
     }
 
     /// The example, and σ in the value's own prefix whatever its size.

@@ -12,6 +12,7 @@ pub mod plot;
 pub mod relaxation;
 pub mod runs;
 pub mod simulation;
+pub mod static_curve;
 
 /// The closing sections every fit page has: warnings, then the solver report.
 pub fn warnings_and_solver(

@@ -17,6 +17,9 @@ pub struct Point {
     /// Voltage (V).
     #[serde(rename = "voltage_V")]
     pub voltage_v: f64,
+    /// Capacitance C(λ) (F).
+    #[serde(rename = "capacitance_F")]
+    pub capacitance_f: f64,
 }
 
 /// What the peak search found.
@@ -72,6 +75,7 @@ pub fn static_curve(p: &Plant, n: usize, stretch_min: f64) -> StaticCurve {
             voltage_at(p, l).map(|v| Point {
                 stretch: l,
                 voltage_v: v,
+                capacitance_f: p.capacitance(l).0,
             })
         })
         .collect();
@@ -112,6 +116,7 @@ pub fn static_curve(p: &Plant, n: usize, stretch_min: f64) -> StaticCurve {
         Point {
             stretch: l,
             voltage_v: f(l),
+            capacitance_f: p.capacitance(l).0,
         }
     });
     StaticCurve {

@@ -174,16 +174,21 @@ impl Problem {
                 };
             }
         }
+        let v_max: Vec<f64> = experiments.iter().map(|e| drive_max(&e.scene)).collect();
         let budgets = experiments
             .iter_mut()
-            .map(|e| {
+            .zip(&v_max)
+            .map(|(e, &v_max)| {
                 set_theta(&mut e.scene, &theta);
+                let run = RunOptions {
+                    v_max: Some(v_max),
+                    ..run
+                };
                 let o = trajectory(&e.scene, &run).ok()?;
                 (o.status == RunStatus::Completed)
                     .then(|| (WORK_FACTOR * o.stats.steps).max(MIN_BUDGET))
             })
             .collect();
-        let v_max = experiments.iter().map(|e| drive_max(&e.scene)).collect();
         Ok(Problem {
             experiments,
             free,

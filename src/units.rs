@@ -39,6 +39,9 @@ pub enum Dimension {
     Viscosity,
     /// A dimensionless fraction (SI: 1), e.g. `0.5 %`.
     Fraction,
+    /// A pure number without a unit (a relative permittivity, a loss tangent):
+    /// `2.72 ± 2 %` would read as an absolute 0.02, so no unit is taken.
+    Number,
     /// Electric field strength (SI: V/m), e.g. a breakdown field `80 V/um`.
     ElectricField,
 }
@@ -155,6 +158,7 @@ impl Dimension {
                 ("MPa·s", 1e6),
             ],
             Dimension::Fraction => &[("%", 0.01)],
+            Dimension::Number => &[],
             Dimension::ElectricField => &[
                 ("V/m", 1.0),
                 ("kV/m", 1e3),
@@ -197,7 +201,7 @@ impl Dimension {
             Dimension::Current => "A",
             Dimension::Mass => "kg",
             Dimension::Viscosity => "Pa·s",
-            Dimension::Fraction => "1",
+            Dimension::Fraction | Dimension::Number => "1",
             Dimension::ElectricField => "V/m",
         }
     }
@@ -238,25 +242,52 @@ pub struct Quantity {
     pub tolerance: Option<f64>,
 }
 
-/// Parse a quantity of dimension `dim`. A bare number is taken as SI.
-pub fn parse_quantity(text: &str, dim: Dimension) -> Result<Quantity, String> {
-    let text = text.trim();
-    let (main, tol) = match text.split_once('±').or_else(|| text.split_once("+-")) {
-        Some((a, b)) => (a.trim(), Some(b.trim())),
-        None => (text, None),
-    };
-    let value = parse_one(main, dim, None)?;
-    let unit_of_main = split_number(main).1.trim().to_string();
-    let tolerance = match tol {
-        Some(t) => Some(parse_one(t, dim, Some(&unit_of_main))?),
-        None => None,
-    };
-    if let Some(t) = tolerance {
-        if t < 0.0 {
-            return Err(format!("tolerance in '{text}' must not be negative"));
-        }
+/// Parse a quantity of dimension `dim` that takes no uncertainty: `2.2mm`,
+/// `0.5 N/mm²`, or a bare number taken as SI. A `±` is refused, not dropped: where a
+/// value's σ is carried, the reader calls [`parse_uncertain`].
+pub fn parse_quantity(text: &str, dim: Dimension) -> Result<f64, String> {
+    if split_pm(text.trim()).is_some() {
+        return Err(format!(
+            "'{}' has a ± uncertainty, which this value does not take (it would be dropped); write the value alone",
+            text.trim()
+        ));
     }
-    Ok(Quantity { value, tolerance })
+    parse_one(text.trim(), dim, None)
+}
+
+/// Parse a quantity of dimension `dim` with an optional standard uncertainty:
+/// `2.2 mm ± 0.05 mm`, `2.2 mm ± 0.05` (the value's unit), `250 ± 12 kPa` (the
+/// uncertainty's unit for both, as in (250 ± 12) kPa); `+-` and `+/-` for `±`.
+pub fn parse_uncertain(text: &str, dim: Dimension) -> Result<Quantity, String> {
+    let text = text.trim();
+    let Some((main, tol)) = split_pm(text) else {
+        return Ok(Quantity {
+            value: parse_one(text, dim, None)?,
+            tolerance: None,
+        });
+    };
+    let unit_of = |s: &str| split_number(s).1.trim().to_string();
+    let (unit_main, unit_tol) = (unit_of(main), unit_of(tol));
+    let value = match unit_main.is_empty() {
+        true => parse_one(main, dim, Some(&unit_tol))?,
+        false => parse_one(main, dim, None)?,
+    };
+    let t = parse_one(tol, dim, Some(&unit_main))?;
+    if t < 0.0 {
+        return Err(format!("the uncertainty in '{text}' must not be negative"));
+    }
+    Ok(Quantity {
+        value,
+        tolerance: Some(t),
+    })
+}
+
+/// The two sides of `a ± b` (also `+/-`, `+-`), trimmed.
+fn split_pm(text: &str) -> Option<(&str, &str)> {
+    ["±", "+/-", "+-"]
+        .iter()
+        .find_map(|pm| text.split_once(pm))
+        .map(|(a, b)| (a.trim(), b.trim()))
 }
 
 fn split_number(s: &str) -> (&str, &str) {
@@ -301,6 +332,9 @@ fn parse_one(s: &str, dim: Dimension, default_unit: Option<&str>) -> Result<f64,
             Some(u) => format!(
                 "unknown unit '{unit}' in '{s}'; units are case-sensitive: did you mean '{u}'?"
             ),
+            None if dim.units().is_empty() => {
+                format!("'{s}': this is a pure number and takes no unit ('{unit}')")
+            }
             None => format!(
                 "unknown unit '{unit}' in '{s}'; expected one of {}",
                 dim.accepted()
@@ -353,28 +387,43 @@ mod tests {
 
     #[test]
     fn parses_values_units_and_tolerances() {
-        let q = parse_quantity("2.2mm±0.05mm", Dimension::Length).unwrap();
+        let q = parse_uncertain("2.2mm±0.05mm", Dimension::Length).unwrap();
         assert!((q.value - 2.2e-3).abs() < 1e-15);
         assert!((q.tolerance.unwrap() - 5e-5).abs() < 1e-15);
-        let q = parse_quantity("2.2 mm ± 0.05", Dimension::Length).unwrap();
+        let q = parse_uncertain("2.2 mm ± 0.05", Dimension::Length).unwrap();
         assert!((q.tolerance.unwrap() - 5e-5).abs() < 1e-15);
+        // (250 ± 12) kPa: the uncertainty's unit is the value's too
+        for t in [
+            "250 ± 12 kPa",
+            "250 +- 12 kPa",
+            "250 +/- 12 kPa",
+            "250 kPa ± 12",
+        ] {
+            let q = parse_uncertain(t, Dimension::Stress).unwrap();
+            assert!((q.value - 250e3).abs() < 1e-9, "{t}");
+            assert!((q.tolerance.unwrap() - 12e3).abs() < 1e-9, "{t}");
+        }
         assert_eq!(
-            parse_quantity("1.439e-3", Dimension::Area).unwrap().value,
+            parse_uncertain("2.72", Dimension::Fraction)
+                .unwrap()
+                .tolerance,
+            None
+        );
+        assert!(parse_uncertain("1 ± -2", Dimension::Fraction).is_err());
+        // where no σ is carried, a ± is refused rather than dropped
+        assert!(parse_quantity("250 kPa ± 12 kPa", Dimension::Stress)
+            .unwrap_err()
+            .contains("does not take"));
+        assert_eq!(
+            parse_quantity("1.439e-3", Dimension::Area).unwrap(),
             1.439e-3
         );
-        assert!((parse_quantity("22 mm^2", Dimension::Area).unwrap().value - 22e-6).abs() < 1e-18);
+        assert!((parse_quantity("22 mm^2", Dimension::Area).unwrap() - 22e-6).abs() < 1e-18);
         assert!(parse_quantity("3 ksi", Dimension::Stress)
             .unwrap_err()
             .contains("unknown unit 'ksi'"));
         assert!(parse_quantity("abc", Dimension::Length).is_err());
-        assert!(
-            (parse_quantity("0.5 N/mm²", Dimension::Stress)
-                .unwrap()
-                .value
-                - 5e5)
-                .abs()
-                < 1e-9
-        );
+        assert!((parse_quantity("0.5 N/mm²", Dimension::Stress).unwrap() - 5e5).abs() < 1e-9);
         assert!(parse_quantity("22 MM2", Dimension::Area)
             .unwrap_err()
             .contains("did you mean 'mm2'?"));
@@ -394,8 +443,8 @@ mod tests {
         assert_eq!(parse_engineering("1.0xy", ""), None);
         assert_eq!(parse_engineering("abc", ""), None);
         let q = parse_quantity("1.03 g/cm3", Dimension::Density).unwrap();
-        assert!((q.value - 1030.0).abs() < 1e-9);
-        let q = parse_quantity("0.3pF±0.05pF", Dimension::Capacitance).unwrap();
+        assert!((q - 1030.0).abs() < 1e-9);
+        let q = parse_uncertain("0.3pF±0.05pF", Dimension::Capacitance).unwrap();
         assert!((q.tolerance.unwrap() - 5e-14).abs() < 1e-26);
     }
 }

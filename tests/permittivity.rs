@@ -5,7 +5,7 @@ use dea_fit::fit::permittivity::{analyse, EdgeCorrection, Geometry, Settings};
 use dea_fit::io::lcr::{self, Format, LcrOptions};
 use dea_fit::io::manifest;
 use dea_fit::material::dielectric::*;
-use dea_fit::units::{parse_quantity, Dimension};
+use dea_fit::units::{parse_uncertain, Dimension};
 use nalgebra::Complex;
 use proptest::prelude::*;
 use std::f64::consts::PI;
@@ -20,9 +20,9 @@ fn root() -> PathBuf {
 
 fn seed_geometry() -> Geometry {
     Geometry::new(
-        Some(parse_quantity("1.439e-3", Dimension::Area).unwrap()),
+        Some(parse_uncertain("1.439e-3", Dimension::Area).unwrap()),
         None,
-        Some(parse_quantity("2.2mm±0.05mm", Dimension::Length).unwrap()),
+        Some(parse_uncertain("2.2mm±0.05mm", Dimension::Length).unwrap()),
     )
     .unwrap()
 }

@@ -1018,3 +1018,164 @@ fn the_matrix_alone_is_ranked_once() {
         .unwrap();
     assert_eq!(best.name, repeats[0].0);
 }
+
+/// Confidence from the manifest itself (issue 11): values written `value ± σ`
+/// reach every figure, each moved by 1σ in turn. σ of εr, Y = 3σ_μ and tan δ are
+/// the written σ (exact arithmetic: 1e-12; Y 1e-9, its dμ0/dμ is a central
+/// difference); Fm = 3ε0εrEb²/Y has the closed-form
+/// changes of its three inputs (1e-12); the static stroke and the loss per cycle
+/// have the changes of the same candidate written 1σ higher, one property at a
+/// time (the same perturbation computed another way: 1e-9 relative, rounding of
+/// differences of equal runs).
+#[test]
+fn manifest_uncertainties_reach_the_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    let written = |eps: &str, mu: &str, tan: &str, eb: &str, name: &str| {
+        format!(
+            "[[matrix]]\nname = \"{name}\"\ndensity = \"1000 kg/m3\"\neps_r = \"{eps}\"\ntan_delta = \"{tan}\"\nbreakdown = \"{eb}\"\nhyperelastic = {{ model = \"neo-hookean\", parameters = {{ mu = \"{mu}\" }} }}\nviscous = {{ nv = \"100 Pa s\" }}\n"
+        )
+    };
+    let mut m = head("voltage = \"400 V\"");
+    m.push_str(&written(
+        "3.0 ± 0.03",
+        "100 ± 2 kPa",
+        "0.01 +- 0.002",
+        "300 ± 30 V/um",
+        "U",
+    ));
+    for (name, eps, mu, tan) in [
+        ("E", "3.03", "100 kPa", "0.01"),
+        ("M", "3.0", "102 kPa", "0.01"),
+        ("T", "3.0", "100 kPa", "0.012"),
+        ("X", "3.0", "100 kPa", "0.01"),
+    ] {
+        m.push_str(&written(eps, mu, tan, "300 V/um", name));
+    }
+    for name in ["U", "E", "M", "T", "X"] {
+        m.push_str(&format!("[[series]]\nmatrix = \"{name}\"\n"));
+    }
+    let d = design(dir.path(), &m);
+    let ev = evaluate(&d, &Sweep::default());
+    let [u, e, mu, t, x] = [0, 1, 2, 3, 4].map(|i| &ev[i].evaluation);
+    let close = |a: f64, b: f64, tol: f64, what: &str| {
+        assert!((a - b).abs() <= tol * b.abs(), "{what}: {a} vs {b}")
+    };
+    let sigma = |f: &dea_fit::rank::Figure| f.std_error.expect("a standard error");
+    close(sigma(&u.eps_r), 0.03, 1e-12, "σ εr");
+    // Y: dμ0/dμ by a central difference (as for a fit file: 1e-9)
+    close(sigma(&u.youngs_modulus), 6e3, 1e-9, "σ Y");
+    close(sigma(&u.tan_delta), 0.002, 1e-12, "σ tan δ");
+    close(sigma(&u.breakdown_field), 30e6, 1e-12, "σ Eb");
+    let fm = value(&u.fm);
+    let dfm = [0.01, 1.0 / 1.02 - 1.0, 1.1f64.powi(2) - 1.0].map(|r| fm * r);
+    close(
+        sigma(&u.fm),
+        dfm.iter().map(|d| d * d).sum::<f64>().sqrt(),
+        1e-12,
+        "σ Fm",
+    );
+    type Get = fn(&Evaluation) -> &dea_fit::rank::Figure;
+    let figures: [(&str, Get); 2] = [
+        ("static stroke", |e| &e.static_stroke),
+        ("loss per cycle", |e| &e.loss_per_cycle),
+    ];
+    for (what, get) in figures {
+        let want = [e, mu, t]
+            .iter()
+            .map(|o| (value(get(o)) - value(get(x))).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        close(sigma(get(u)), want, 1e-9, what);
+    }
+    assert_eq!(x.static_stroke.std_error, None, "written without ±: exact");
+}
+
+/// A stated mixing rule carries the σ of the matrix's and the filler's εr to the
+/// predicted εr (first order, independent: the rule's derivative by a central
+/// difference of candidates written ±σ, 1e-4 relative, the O(σ²) curvature of
+/// Maxwell Garnett over a 1 % step), and tan δ between measured loadings carries
+/// √((1 − w)²u₀² + w²u₁²) (exact arithmetic, 1e-12).
+#[test]
+fn a_stated_rule_and_interpolation_carry_the_written_uncertainty() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut m = head("voltage = \"200 V\"");
+    m.push_str(
+        &matrix("TC", 5.0, 100.0, "300 V/um")
+            .replace("eps_r = 5", "eps_r = \"5 ± 0.05\"")
+            .replace("tan_delta = 0.01", "tan_delta = \"0.01 ± 0.002\""),
+    );
+    for (name, eps) in [("F", "50 ± 0.5"), ("Fhi", "50.5"), ("Flo", "49.5")] {
+        m.push_str(&format!(
+            "[[filler]]\nname = \"{name}\"\ndensity = \"5 g/cm3\"\neps_r = \"{eps}\"\n"
+        ));
+    }
+    for f in ["F", "Fhi", "Flo"] {
+        m.push_str(&format!(
+            "[[series]]\nname = \"{f}\"\nmatrix = \"TC\"\nfiller = \"{f}\"\nbasis = \"volume\"\nloadings = [0.1]\npermittivity = {{ rule = \"maxwell-garnett\" }}\nstiffening = \"none\"\n"
+        ));
+    }
+    m.push_str("[[series.measured]]\nloading = 0.2\ntan_delta = \"0.02 ± 0.004\"\n");
+    let d = design(dir.path(), &m);
+    let c = |si: usize| dea_fit::rank::candidate::build(&d, si, 0.1).unwrap();
+    let (f, hi, lo) = (c(0), c(1), c(2));
+    let v = |x: &dea_fit::rank::candidate::Candidate| value(&x.eps_r);
+    let from_filler = (v(&hi) - v(&lo)) / 2.0;
+    // the matrix's share: the rule at εm ± 0.05 by hand (Maxwell Garnett, φ = 0.1)
+    let mg = |em: f64, ef: f64| {
+        let b = (ef - em) / (ef + 2.0 * em);
+        em * (1.0 + 2.0 * 0.1 * b) / (1.0 - 0.1 * b)
+    };
+    let from_matrix = (mg(5.05, 50.0) - mg(4.95, 50.0)) / 2.0;
+    let want = from_filler.hypot(from_matrix);
+    let got = f.eps_r.std_error.expect("σ of the predicted εr");
+    assert!((got - want).abs() <= 1e-4 * want, "σ εr {got} vs {want}");
+    assert_eq!(
+        hi.eps_r.std_error.map(|s| s > 0.0),
+        Some(true),
+        "the matrix's σ alone"
+    );
+    // the last series measured tan δ at 0.2: at 0.1, w = 1/2
+    let t = c(2).tan_delta;
+    let want = (0.5f64 * 0.002).hypot(0.5 * 0.004);
+    let got = t.std_error.expect("σ of interpolated tan δ");
+    assert!(
+        (got - want).abs() <= 1e-12 * want,
+        "σ tan δ {got} vs {want}"
+    );
+    assert!((value(&t) - 0.015).abs() < 1e-15);
+}
+
+/// A ± where the tool does not carry an uncertainty (a density, a scene's
+/// geometry) is refused at its place, not dropped silently.
+#[test]
+fn an_uncertainty_that_would_be_dropped_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = format!(
+        "{}{}[[series]]\nmatrix = \"M\"\n",
+        head("voltage = \"400 V\""),
+        matrix("M", 3.0, 100.0, "30 V/um").replace("\"1000 kg/m3\"", "\"1000 ± 10 kg/m3\"")
+    );
+    std::fs::write(dir.path().join("nh_stack.toml"), SCENE).unwrap();
+    std::fs::write(dir.path().join("design.toml"), &m).unwrap();
+    let err = manifest::read(&dir.path().join("design.toml"))
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        err.contains("design.toml:11:11") && err.contains("does not take"),
+        "{err}"
+    );
+    std::fs::write(
+        dir.path().join("nh_stack.toml"),
+        SCENE.replace("\"5 mm\"", "\"5 ± 0.1 mm\""),
+    )
+    .unwrap();
+    let err = manifest::read(&dir.path().join("design.toml"))
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        err.contains("nh_stack.toml:4") && err.contains("does not take"),
+        "{err}"
+    );
+}

@@ -57,7 +57,7 @@ pub fn run(a: Args) -> Result<i32> {
     let density = a
         .density
         .as_deref()
-        .map(|s| parse_quantity(s, Dimension::Density).map(|q| q.value))
+        .map(|s| parse_quantity(s, Dimension::Density))
         .transpose()
         .map_err(|e| Error::settings(format!("--density: {e}")))?;
     let material = export::read(&a.files)?;

@@ -65,13 +65,13 @@ fn load(a: &Args) -> Result<Dataset> {
     let area = a
         .area
         .as_deref()
-        .map(|s| parse_quantity(s, Dimension::Area).map(|q| q.value))
+        .map(|s| parse_quantity(s, Dimension::Area))
         .transpose()
         .map_err(|e| Error::settings(format!("--area: {e}")))?;
     let gauge_length = a
         .gauge_length
         .as_deref()
-        .map(|s| parse_quantity(s, Dimension::Length).map(|q| q.value))
+        .map(|s| parse_quantity(s, Dimension::Length))
         .transpose()
         .map_err(|e| Error::settings(format!("--gauge-length: {e}")))?;
     for (name, v) in [("--area", area), ("--gauge-length", gauge_length)] {

@@ -132,7 +132,7 @@ fn parse_sigma(text: &str) -> Result<(ChannelKind, Sigma)> {
         return Ok((kind, Sigma::Relative(f / 100.0)));
     }
     let v = match kind.dimension() {
-        Some(d) => parse_quantity(value, d).map_err(bad)?.value,
+        Some(d) => parse_quantity(value, d).map_err(bad)?,
         None => value
             .parse()
             .map_err(|_| bad(format!("'{value}' is not a number")))?,

@@ -10,7 +10,7 @@ use dea_fit::io::manifest::sidecar;
 use dea_fit::material::dielectric::Pair;
 use dea_fit::report::format::{si, si_pm};
 use dea_fit::report::permittivity::{sample_table, write_samples};
-use dea_fit::units::{parse_quantity, Dimension, Quantity};
+use dea_fit::units::{parse_quantity, parse_uncertain, Dimension, Quantity};
 use dea_fit::{Error, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
@@ -68,7 +68,7 @@ pub struct Args {
 
 fn quantity(flag: &str, v: &Option<String>, dim: Dimension) -> Result<Option<Quantity>> {
     v.as_deref()
-        .map(|s| parse_quantity(s, dim))
+        .map(|s| parse_uncertain(s, dim))
         .transpose()
         .map_err(|e| Error::settings(format!("{flag}: {e}")))
 }
@@ -94,7 +94,7 @@ pub fn lcr_settings(
         .as_deref()
         .map(|s| {
             s.split(',')
-                .map(|f| parse_quantity(f, Dimension::Frequency).map(|q| q.value))
+                .map(|f| parse_quantity(f, Dimension::Frequency))
                 .collect::<std::result::Result<Vec<f64>, String>>()
         })
         .transpose()

@@ -132,7 +132,7 @@ fn settings(a: &Args) -> Result<Settings> {
 
 fn quantity(flag: &str, text: Option<&str>, dim: Dimension) -> Result<Option<f64>> {
     let v = text
-        .map(|s| parse_quantity(s, dim).map(|q| q.value))
+        .map(|s| parse_quantity(s, dim))
         .transpose()
         .map_err(|e| Error::settings(format!("{flag}: {e}")))?;
     if let Some(v) = v.filter(|v| v.is_nan() || *v <= 0.0) {

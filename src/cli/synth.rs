@@ -9,7 +9,7 @@
 use dea_fit::io::trace::ChannelKind;
 use dea_fit::material::hyperelastic::{Mode, ModelSpec, OgdenForm};
 use dea_fit::sim::{self, scene::Scene, RunStatus};
-use dea_fit::units::{parse_quantity, Dimension};
+use dea_fit::units::{parse_quantity, Dimension, Quantity};
 use dea_fit::{Error, Result};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -218,8 +218,7 @@ fn relaxation(a: Args) -> Result<i32> {
         None => None,
         Some(t) => Some(
             parse_quantity(t, Dimension::Time)
-                .map_err(|e| Error::settings(format!("--ramp-time: {e}")))?
-                .value,
+                .map_err(|e| Error::settings(format!("--ramp-time: {e}")))?,
         ),
     };
     let (t0, t1, count) = range(&a.time, "--time", |x| {
@@ -281,9 +280,8 @@ fn prony_from_params(params: &[String]) -> Result<dea_fit::material::viscoelasti
             Some((_, true)) => Dimension::Time,
             _ => Dimension::Stress,
         };
-        let value = parse_quantity(v, dim)
-            .map_err(|e| Error::settings(format!("--param {k}: {e}")))?
-            .value;
+        let value =
+            parse_quantity(v, dim).map_err(|e| Error::settings(format!("--param {k}: {e}")))?;
         let slot = match term {
             None => &mut e_inf,
             Some((i, is_tau)) => {
@@ -354,7 +352,14 @@ fn lcr(a: Args) -> Result<i32> {
     }
     let q = |flag: &str, v: &Option<String>, dim| -> Result<_> {
         v.as_deref()
-            .map(|t| parse_quantity(t, dim).map_err(|e| Error::settings(format!("{flag}: {e}"))))
+            .map(|t| {
+                parse_quantity(t, dim)
+                    .map(|value| Quantity {
+                        value,
+                        tolerance: None,
+                    })
+                    .map_err(|e| Error::settings(format!("{flag}: {e}")))
+            })
             .transpose()
     };
     let geometry = Geometry::new(
@@ -363,16 +368,13 @@ fn lcr(a: Args) -> Result<i32> {
         q("--thickness", &a.thickness, Dimension::Length)?,
     )?;
     let stray = parse_quantity(&a.stray, Dimension::Capacitance)
-        .map_err(|e| Error::settings(format!("--stray: {e}")))?
-        .value;
+        .map_err(|e| Error::settings(format!("--stray: {e}")))?;
     let (pair, _) = Pair::parse(&a.pair).ok_or_else(|| {
         Error::settings(format!("--pair '{}': unknown pair", a.pair))
             .with_hint("cp-d, cp-rp, cs-d, cs-rs, z-theta, r-x, g-b, …")
     })?;
     let (f0, f1, per_decade) = range(&a.sweep, "--sweep", |x| {
-        parse_quantity(x, Dimension::Frequency)
-            .map(|q| q.value)
-            .map_err(|e| e.to_string())
+        parse_quantity(x, Dimension::Frequency).map_err(|e| e.to_string())
     })?;
     let freqs = log_frequencies(f0, f1, per_decade)?;
     if freqs.len() > MAX_POINTS {
@@ -453,7 +455,6 @@ fn hyperelastic(a: Args) -> Result<i32> {
         p[j] = if info[j].unit == "Pa" {
             parse_quantity(v, Dimension::Stress)
                 .map_err(|e| Error::settings(format!("--param {k}: {e}")))?
-                .value
         } else {
             v.trim().parse().map_err(|_| {
                 Error::settings(format!("--param {k}: expected a number, found '{v}'"))
@@ -491,8 +492,7 @@ fn hyperelastic(a: Args) -> Result<i32> {
         )));
     }
     let noise_abs = parse_quantity(&a.noise_abs, Dimension::Stress)
-        .map_err(|e| Error::settings(format!("--noise-abs: {e}")))?
-        .value;
+        .map_err(|e| Error::settings(format!("--noise-abs: {e}")))?;
     if !(noise.is_finite() && noise >= 0.0 && noise_abs.is_finite() && noise_abs >= 0.0) {
         return Err(Error::settings("noise must be finite and ≥ 0"));
     }
@@ -601,7 +601,7 @@ fn parse_noise(spec: &str, kinds: &[ChannelKind]) -> Result<(String, Noise)> {
         )
     } else {
         Noise::Abs(match dim {
-            Some(d) => parse_quantity(v, d).map_err(|e| bad(&e))?.value,
+            Some(d) => parse_quantity(v, d).map_err(|e| bad(&e))?,
             None => v.parse().map_err(|_| bad("expected a number"))?,
         })
     };

@@ -413,5 +413,5 @@ fn parse_value(v: &str, c: &Constant) -> std::result::Result<f64, String> {
         (_, "Pa s") => Dimension::Viscosity,
         (_, unit) => return Err(format!("expected a number (SI unit {unit})")),
     };
-    parse_quantity(v, dim).map(|q| q.value)
+    parse_quantity(v, dim)
 }

@@ -650,7 +650,6 @@ fn read_e4980a(path: &Path, lines: &[&str], opts: &LcrOptions) -> Result<Sweep> 
             .filter(|s| !s.trim().is_empty())
             .map(|s| {
                 parse_quantity(s, Dimension::Frequency)
-                    .map(|q| q.value)
                     .map_err(|e| Error::input(Location::line(path, line), e))
             })
             .collect::<Result<_>>()?,

@@ -37,7 +37,7 @@ use crate::fit::composite::{Basis, Phase, Synthetic};
 use crate::fit::permittivity::{EdgeCorrection, Geometry, Settings};
 use crate::io::lcr::LcrOptions;
 use crate::material::dielectric::{volume_fraction, Pair};
-use crate::units::{parse_quantity, Dimension, Quantity};
+use crate::units::{parse_quantity, parse_uncertain, Dimension, Quantity};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 use toml::Spanned;
@@ -185,6 +185,7 @@ impl Ctx<'_> {
         Error::input(Location::at(self.path, l, c), msg)
     }
 
+    /// A quantity with an optional ± standard uncertainty (geometry, stray).
     fn quantity(
         &self,
         q: &Option<Spanned<Text>>,
@@ -196,9 +197,20 @@ impl Ctx<'_> {
             Text::Num(v) => v.to_string(),
             Text::Str(s) => s.clone(),
         };
-        parse_quantity(&text, dim)
+        parse_uncertain(&text, dim)
             .map(Some)
             .map_err(|e| self.err(q.span(), format!("{what}: {e}")))
+    }
+
+    /// A quantity whose uncertainty is not carried (a ± is refused).
+    fn value(&self, q: &Option<Spanned<Text>>, dim: Dimension, what: &str) -> Result<Option<f64>> {
+        let Some(q) = q else { return Ok(None) };
+        match q.get_ref() {
+            Text::Num(v) => Ok(Some(*v)),
+            Text::Str(s) => parse_quantity(s, dim)
+                .map(Some)
+                .map_err(|e| self.err(q.span(), format!("{what}: {e}"))),
+        }
     }
 
     fn basis(&self, b: &Spanned<String>, allow_unknown: bool) -> Result<Option<Basis>> {
@@ -238,10 +250,10 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Manifest> {
     })?;
     let dir = path.parent().unwrap_or(Path::new(""));
     let phase = |p: &PhaseSpec| -> Result<Phase> {
-        let density = cx.quantity(&p.density, Dimension::Density, "density")?;
+        let density = cx.value(&p.density, Dimension::Density, "density")?;
         if let (Some(d), Some(s)) = (density, &p.density) {
-            if d.value <= 0.0 {
-                return Err(cx.err(s.span(), format!("density must be > 0, found {}", d.value)));
+            if d <= 0.0 {
+                return Err(cx.err(s.span(), format!("density must be > 0, found {d}")));
             }
         }
         if let Some(e) = &p.eps_r {
@@ -254,7 +266,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Manifest> {
         }
         Ok(Phase {
             name: p.name.clone(),
-            density: density.map(|d| d.value),
+            density,
             eps_r: p.eps_r.as_ref().map(|e| *e.get_ref()),
         })
     };
@@ -297,7 +309,6 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Manifest> {
                 .split(',')
                 .map(|s| {
                     parse_quantity(s, Dimension::Frequency)
-                        .map(|q| q.value)
                         .map_err(|e| cx.err(f.span(), format!("frequencies: {e}")))
                 })
                 .collect::<Result<_>>()?,

@@ -22,14 +22,21 @@
 //!   composite held at the matrix's value — both with a warning.
 //! * **Density**: φρf + (1 − φ)ρm.
 //!
-//! Standard errors ([`Candidate::one_sigma`]) come from the fit files only: εr of a
-//! composite fit's rule from its εm, εf (and n) with their correlation (GUM, first
-//! order) times the correction; Y of a fitted part from the σ of its μ0; a predicted
-//! Y carries the relative σ of the fitted parts it is corrected through,
-//! interpolated in x as the correction is (the matrix's at x = 0, zero when it is
-//! written in the manifest).
+//! Standard errors ([`Candidate::one_sigma`]) come from the fit files and from
+//! values written in the manifest as `value ± σ` (a value written without ± is
+//! taken as exact), to first order (GUM, JCGM 100:2008):
+//! * εr of a composite fit's rule from its εm, εf (and n) with their correlation;
+//!   of a stated rule from the σ of the matrix's and the filler's εr (independent);
+//!   either times the correction, combined in quadrature with the relative σ of
+//!   the measured εr it passes through (interpolated in x as the correction is);
+//! * Y of a fitted part from the σ of its μ0, of a part written in the manifest
+//!   from its parameters' σ (independent); a predicted Y carries the relative σ of
+//!   the parts it is corrected through, interpolated in x as the correction is
+//!   (the matrix's at x = 0);
+//! * tan δ and the breakdown field as their values: measured, interpolated
+//!   (independent knots) or held.
 
-use super::manifest::{Design, MeasuredPoint, PermittivityModel, Series, Stated};
+use super::manifest::{Design, MeasuredPoint, PermittivityModel, Series, Stated, Uncertain};
 use super::short;
 use super::{Figure, Provenance};
 use crate::fit::composite::Basis;
@@ -143,8 +150,9 @@ pub struct Candidate {
 impl Candidate {
     /// The candidate with each property that has a standard error moved up by
     /// 1σ, one at a time, named: `Y` (the hyperelastic and viscous parts scaled
-    /// together, the direction the stiffening rule moves them) and `εr`. The
-    /// figures' first-order standard errors follow from these ([`super::sweep::run`]).
+    /// together, the direction the stiffening rule moves them), `εr`, `Eb` and
+    /// `tan δ`. The figures' first-order standard errors follow from these
+    /// ([`super::sweep::run`]).
     pub fn one_sigma(&self) -> Vec<(&'static str, Candidate)> {
         let up = |f: &Figure| match (f.value, f.std_error) {
             (Some(v), Some(s)) if s > 0.0 && v.is_finite() => Some((v, s)),
@@ -162,10 +170,18 @@ impl Candidate {
             c.youngs_modulus.value = Some(y + s);
             out.push(("Y", c));
         }
-        if let Some((e, s)) = up(&self.eps_r) {
-            let mut c = self.clone();
-            c.eps_r.value = Some(e + s);
-            out.push(("εr", c));
+        type Field = fn(&mut Candidate) -> &mut Figure;
+        let figures: [(&'static str, &Figure, Field); 3] = [
+            ("εr", &self.eps_r, |c| &mut c.eps_r),
+            ("Eb", &self.breakdown, |c| &mut c.breakdown),
+            ("tan δ", &self.tan_delta, |c| &mut c.tan_delta),
+        ];
+        for (name, figure, field) in figures {
+            if let Some((v, s)) = up(figure) {
+                let mut c = self.clone();
+                field(&mut c).value = Some(v + s);
+                out.push((name, c));
+            }
         }
         out
     }
@@ -245,17 +261,36 @@ pub fn build(d: &Design, si: usize, loading: f64) -> Result<Candidate> {
     let model_value = |x: f64| model(x).0;
     let knots: Vec<(f64, f64, &str)> = std::iter::once((0.0, 1.0, ""))
         .chain(s.measured.iter().filter_map(|p| {
+            p.eps_r.map(|e| {
+                (
+                    p.loading,
+                    e.value / model_value(p.loading),
+                    p.source.as_str(),
+                )
+            })
+        }))
+        .collect();
+    // relative σ of the measured εr the correction passes through (0 at x = 0,
+    // where the model is the matrix's value)
+    let eknots: Vec<(f64, f64)> = std::iter::once((0.0, 0.0))
+        .chain(s.measured.iter().filter_map(|p| {
             p.eps_r
-                .map(|e| (p.loading, e / model_value(p.loading), p.source.as_str()))
+                .map(|e| (p.loading, e.std_error.unwrap_or(0.0) / e.value))
         }))
         .collect();
     let eps_r = match measured_at(&s.measured, loading, |p| p.eps_r) {
-        Some((v, src)) => Figure::new(v, "1", Provenance::Measured, src),
+        Some((u, src)) => {
+            Figure::new(u.value, "1", Provenance::Measured, src).with_std_error(u.std_error)
+        }
         None => {
             let (v, prov, src, sigma) = model(loading);
             let (r, how) = correction(&knots, loading);
-            Figure::new(v * r, "1", prov, format!("{src}{how}"))
-                .with_std_error(sigma.map(|s| s * r))
+            let from_measured = v * r * linear(&eknots, loading);
+            let sigma = match (sigma, from_measured > 0.0) {
+                (None, false) => None,
+                (s, _) => Some((s.unwrap_or(0.0) * r).hypot(from_measured)),
+            };
+            Figure::new(v * r, "1", prov, format!("{src}{how}")).with_std_error(sigma)
         }
     };
 
@@ -454,7 +489,16 @@ fn eps_model(d: &Design, s: &Series, phi: f64, x: f64) -> (f64, Provenance, Stri
                 short(f.eps_r.value),
                 f.eps_r.source
             ),
-            None,
+            // σ of εm and εf written in the manifest, independent (GUM eq. 10)
+            match (m.eps_r.std_error, f.eps_r.std_error) {
+                (None, None) => None,
+                (sm, sf) => {
+                    let g = file::gradient(&[m.eps_r.value, f.eps_r.value], |p| {
+                        rule.eval(p[0], p[1], phi, *shape)
+                    });
+                    Some((g[0] * sm.unwrap_or(0.0)).hypot(g[1] * sf.unwrap_or(0.0)))
+                }
+            },
         ),
         PermittivityModel::Composite {
             mixture,
@@ -496,8 +540,8 @@ fn eps_model(d: &Design, s: &Series, phi: f64, x: f64) -> (f64, Provenance, Stri
 fn measured_at(
     points: &[MeasuredPoint],
     x: f64,
-    get: impl Fn(&MeasuredPoint) -> Option<f64>,
-) -> Option<(f64, String)> {
+    get: impl Fn(&MeasuredPoint) -> Option<Uncertain>,
+) -> Option<(Uncertain, String)> {
     points
         .iter()
         .find(|p| same_loading(p.loading, x))
@@ -541,41 +585,58 @@ fn correction(knots: &[(f64, f64, &str)], x: f64) -> (f64, String) {
 }
 
 /// tan δ or the breakdown field at x: measured, interpolated between the measured
-/// loadings (the matrix at 0), or held with a warning.
+/// loadings (the matrix at 0), or held with a warning. A standard uncertainty is
+/// carried as the value is: interpolated with weights 1 − w and w of two
+/// independent measurements, u = √((1 − w)²u₁² + w²u₂²), or held.
 fn interpolated(
     s: &Series,
     matrix: &Stated<f64>,
     x: f64,
     what: &str,
     unit: &str,
-    get: impl Fn(&MeasuredPoint) -> Option<f64>,
+    get: impl Fn(&MeasuredPoint) -> Option<Uncertain>,
     warnings: &mut Vec<String>,
 ) -> Figure {
-    let knots: Vec<(f64, f64, String, Provenance)> =
-        std::iter::once((0.0, matrix.value, matrix.source.clone(), matrix.provenance))
-            .chain(s.measured.iter().filter_map(|p| {
-                get(p).map(|v| (p.loading, v, p.source.clone(), Provenance::Measured))
-            }))
-            .collect();
+    let knots: Vec<(f64, Uncertain, String, Provenance)> = std::iter::once((
+        0.0,
+        Uncertain {
+            value: matrix.value,
+            std_error: matrix.std_error,
+        },
+        matrix.source.clone(),
+        matrix.provenance,
+    ))
+    .chain(
+        s.measured
+            .iter()
+            .filter_map(|p| get(p).map(|v| (p.loading, v, p.source.clone(), Provenance::Measured))),
+    )
+    .collect();
     let xs: Vec<f64> = knots.iter().map(|k| k.0).collect();
     match place(&xs, x) {
-        Place::At(i) => Figure::new(knots[i].1, unit, knots[i].3, knots[i].2.clone()),
+        Place::At(i) => Figure::new(knots[i].1.value, unit, knots[i].3, knots[i].2.clone())
+            .with_std_error(knots[i].1.std_error),
         Place::Between(i, w) => {
             let (a, b) = (&knots[i], &knots[i + 1]);
+            let sigma = match (a.1.std_error, b.1.std_error) {
+                (None, None) => None,
+                (sa, sb) => Some(((1.0 - w) * sa.unwrap_or(0.0)).hypot(w * sb.unwrap_or(0.0))),
+            };
             Figure::new(
-                a.1 + w * (b.1 - a.1),
+                a.1.value + w * (b.1.value - a.1.value),
                 unit,
                 Provenance::Predicted,
                 format!(
                     "linear in loading between {} at {} ({}) and {} at {} ({})",
-                    short(a.1),
+                    short(a.1.value),
                     loading_label(a.0, s.basis),
                     a.2,
-                    short(b.1),
+                    short(b.1.value),
                     loading_label(b.0, s.basis),
                     b.2
                 ),
             )
+            .with_std_error(sigma)
         }
         Place::Beyond => {
             let last = &knots[knots.len() - 1];
@@ -592,11 +653,12 @@ fn interpolated(
             };
             warnings.push(why.clone());
             Figure::new(
-                last.1,
+                last.1.value,
                 unit,
                 Provenance::Predicted,
                 format!("held: {}", last.2),
             )
+            .with_std_error(last.1.std_error)
             .noted(why)
         }
     }

@@ -48,7 +48,7 @@ use crate::material::file::{self, Arm, HyperelasticPart, Spread, Viscous};
 use crate::material::hyperelastic::{ModelSpec, OgdenForm, MODEL_NAMES};
 use crate::sim::scene::Scene;
 use crate::sim::{budget, presets};
-use crate::units::{parse_quantity, Dimension};
+use crate::units::{parse_quantity, parse_uncertain, Dimension};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -119,8 +119,8 @@ struct MatrixSpec {
     name: Spanned<String>,
     source: Option<String>,
     density: Spanned<Text>,
-    eps_r: Spanned<f64>,
-    tan_delta: Spanned<f64>,
+    eps_r: Spanned<Text>,
+    tan_delta: Spanned<Text>,
     breakdown: Spanned<Text>,
     hyperelastic: Spanned<HyperSpec>,
     viscous: Option<Spanned<ViscousSpec>>,
@@ -158,7 +158,7 @@ struct FillerSpec {
     name: Spanned<String>,
     source: Option<String>,
     density: Spanned<Text>,
-    eps_r: Spanned<f64>,
+    eps_r: Spanned<Text>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -196,8 +196,8 @@ struct PermSpec {
 struct MeasuredSpec {
     loading: Spanned<Text>,
     source: Option<String>,
-    eps_r: Option<Spanned<f64>>,
-    tan_delta: Option<Spanned<f64>>,
+    eps_r: Option<Spanned<Text>>,
+    tan_delta: Option<Spanned<Text>>,
     breakdown: Option<Spanned<Text>>,
     hyperelastic: Option<Spanned<HyperSpec>>,
 }
@@ -207,9 +207,9 @@ struct MeasuredSpec {
 pub struct Stated<T> {
     /// The value (SI).
     pub value: T,
-    /// Its standard error where a fit file states one (of μ0 for a hyperelastic
-    /// part, in Pa): None for a value written in the manifest or a preset, which
-    /// the ranking's confidence takes as exact.
+    /// Its standard error (of μ0 for a hyperelastic part, in Pa): from a fit file,
+    /// or written in the manifest as `value ± σ`. None for a preset or a value
+    /// written without ±, which the ranking's confidence takes as exact.
     pub std_error: Option<f64>,
     /// Measured (written in the manifest), fitted (a fit file) or predicted.
     pub provenance: Provenance,
@@ -293,6 +293,16 @@ pub enum PermittivityModel {
     },
 }
 
+/// A value written in the manifest with its standard uncertainty (`value ± σ`;
+/// None when written without ±).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Uncertain {
+    /// The value (SI).
+    pub value: f64,
+    /// One standard uncertainty (SI).
+    pub std_error: Option<f64>,
+}
+
 /// Measured properties of one composite of a series.
 #[derive(Debug, Clone)]
 pub struct MeasuredPoint {
@@ -301,11 +311,11 @@ pub struct MeasuredPoint {
     /// `manifest:line (note)`.
     pub source: String,
     /// εr.
-    pub eps_r: Option<f64>,
+    pub eps_r: Option<Uncertain>,
     /// Loss tangent at the drive frequency.
-    pub tan_delta: Option<f64>,
+    pub tan_delta: Option<Uncertain>,
     /// Breakdown field (V/m).
-    pub breakdown: Option<f64>,
+    pub breakdown: Option<Uncertain>,
     /// Hyperelastic constants (fitted from a file or written in the manifest).
     pub hyperelastic: Option<Stated<HyperelasticPart>>,
 }
@@ -389,9 +399,9 @@ impl Ctx<'_> {
     fn quantity(&self, q: &Spanned<Text>, dim: Dimension, key: &str) -> Result<f64> {
         let v = match q.get_ref() {
             Text::Num(v) => *v,
-            Text::Str(s) => parse_quantity(s, dim)
-                .map(|x| x.value)
-                .map_err(|e| self.err(&q.span(), format!("{key}: {e}")))?,
+            Text::Str(s) => {
+                parse_quantity(s, dim).map_err(|e| self.err(&q.span(), format!("{key}: {e}")))?
+            }
         };
         match v.is_finite() {
             true => Ok(v),
@@ -399,6 +409,49 @@ impl Ctx<'_> {
                 .err(&q.span(), format!("{key} must be a finite number"))
                 .with_hint(format!("e.g. {key} = \"1 {}\"", dim.si()))),
         }
+    }
+    /// A value that may carry a standard uncertainty, `value ± σ`: finite, and
+    /// within `dom` where given.
+    fn uncertain(
+        &self,
+        q: &Spanned<Text>,
+        dim: Dimension,
+        dom: Option<&Domain>,
+        key: &str,
+    ) -> Result<Uncertain> {
+        let hint = || {
+            format!(
+                "e.g. {key} = \"1.5 ± 0.1{}\" (value ± one standard uncertainty)",
+                match dim {
+                    Dimension::Number => String::new(),
+                    d => format!(" {}", d.si()),
+                }
+            )
+        };
+        let u = match q.get_ref() {
+            Text::Num(v) => Uncertain {
+                value: *v,
+                std_error: None,
+            },
+            Text::Str(s) => parse_uncertain(s, dim)
+                .map(|x| Uncertain {
+                    value: x.value,
+                    std_error: x.tolerance,
+                })
+                .map_err(|e| self.err(&q.span(), format!("{key}: {e}")).with_hint(hint()))?,
+        };
+        if !u.value.is_finite() {
+            return Err(self
+                .err(&q.span(), format!("{key} must be a finite number"))
+                .with_hint(hint()));
+        }
+        Ok(match dom {
+            Some(dom) => Uncertain {
+                value: self.checked(&q.span(), dom, key, u.value)?,
+                ..u
+            },
+            None => u,
+        })
     }
     fn checked(&self, span: &Span, dom: &Domain, key: &str, v: f64) -> Result<f64> {
         dom.check(key, v)
@@ -486,6 +539,7 @@ impl Ctx<'_> {
             }
         }
         let mut params = Vec::new();
+        let mut sigmas = Vec::new();
         for info in model.params() {
             let Some(q) = given.and_then(|g| g.get(&info.name)) else {
                 return Err(self
@@ -494,19 +548,30 @@ impl Ctx<'_> {
             };
             let dim = match info.unit {
                 "Pa" => Dimension::Stress,
-                _ => Dimension::Fraction,
+                _ => Dimension::Number,
             };
-            params.push(self.quantity(q, dim, &info.name)?);
+            let u = self.uncertain(q, dim, None, &info.name)?;
+            params.push(u.value);
+            sigmas.push(u.std_error);
         }
         check_hyperelastic(model.as_ref(), &params, &format!("{key}.parameters"))
             .map_err(|v| self.err(&span, v.msg).with_hint(v.hint))?;
+        // σ of μ0 from the parameters' σ, taken as independent (GUM eq. 10)
+        let std_error = sigmas.iter().any(Option::is_some).then(|| {
+            let grad = file::gradient(&params, |p| model.initial_shear_modulus(p));
+            grad.iter()
+                .zip(&sigmas)
+                .map(|(g, s)| (g * s.unwrap_or(0.0)).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        });
         Ok(Stated {
             value: HyperelasticPart {
                 spec,
                 params,
                 ranges: None,
             },
-            std_error: None,
+            std_error,
             provenance: Provenance::Measured,
             source: self.here(&span, note),
         })
@@ -737,27 +802,27 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
             &format!("{key}.density"),
             cx.quantity(&m.density, Dimension::Density, "density")?,
         )?;
-        let eps = cx.checked(
-            &m.eps_r.span(),
-            &PERMITTIVITY,
+        let eps = cx.uncertain(
+            &m.eps_r,
+            Dimension::Number,
+            Some(&PERMITTIVITY),
             &format!("{key}.eps_r"),
-            *m.eps_r.get_ref(),
         )?;
-        let tan = cx.checked(
-            &m.tan_delta.span(),
-            &TAN_DELTA,
+        let tan = cx.uncertain(
+            &m.tan_delta,
+            Dimension::Number,
+            Some(&TAN_DELTA),
             &format!("{key}.tan_delta"),
-            *m.tan_delta.get_ref(),
         )?;
-        let eb = cx.checked(
-            &m.breakdown.span(),
-            &BREAKDOWN,
+        let eb = cx.uncertain(
+            &m.breakdown,
+            Dimension::ElectricField,
+            Some(&BREAKDOWN),
             &format!("{key}.breakdown"),
-            cx.quantity(&m.breakdown, Dimension::ElectricField, "breakdown")?,
         )?;
-        let with = |v: f64, s: &Span| Stated {
-            value: v,
-            std_error: None,
+        let with = |u: Uncertain, s: &Span| Stated {
+            value: u.value,
+            std_error: u.std_error,
             provenance: Provenance::Measured,
             source: cx.here(s, &m.source),
         };
@@ -812,16 +877,19 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
                 &format!("{key}.density"),
                 cx.quantity(&f.density, Dimension::Density, "density")?,
             )?,
-            eps_r: Stated {
-                value: cx.checked(
-                    &f.eps_r.span(),
-                    &PERMITTIVITY,
+            eps_r: {
+                let u = cx.uncertain(
+                    &f.eps_r,
+                    Dimension::Number,
+                    Some(&PERMITTIVITY),
                     &format!("{key}.eps_r"),
-                    *f.eps_r.get_ref(),
-                )?,
-                std_error: None,
-                provenance: Provenance::Measured,
-                source: cx.here(&f.eps_r.span(), &f.source),
+                )?;
+                Stated {
+                    value: u.value,
+                    std_error: u.std_error,
+                    provenance: Provenance::Measured,
+                    source: cx.here(&f.eps_r.span(), &f.source),
+                }
             },
             name,
         });
@@ -883,7 +951,6 @@ fn loading(cx: &Ctx, t: &Text, span: &Span, key: &str) -> Result<f64> {
     let v = match t {
         Text::Num(v) => *v,
         Text::Str(s) => parse_quantity(s, Dimension::Fraction)
-            .map(|q| q.value)
             .map_err(|e| cx.err(span, format!("{key}: {e}")))?,
     };
     match (0.0..1.0).contains(&v) {
@@ -1139,33 +1206,42 @@ fn read_series(
                 .err(&x.loading.span(), format!("{mk}.loading = {at}: the matrix or another measured point already holds it"))
                 .with_hint("measured points are composites (loading > 0), one per loading; the matrix's values are in [[matrix]]"));
         }
-        let eps_r = match &x.eps_r {
-            Some(e) => Some(cx.checked(
-                &e.span(),
-                &PERMITTIVITY,
-                &format!("{mk}.eps_r"),
-                *e.get_ref(),
-            )?),
-            None => None,
-        };
-        let tan_delta = match &x.tan_delta {
-            Some(e) => Some(cx.checked(
-                &e.span(),
-                &TAN_DELTA,
-                &format!("{mk}.tan_delta"),
-                *e.get_ref(),
-            )?),
-            None => None,
-        };
-        let breakdown = match &x.breakdown {
-            Some(q) => Some(cx.checked(
-                &q.span(),
-                &BREAKDOWN,
-                &format!("{mk}.breakdown"),
-                cx.quantity(q, Dimension::ElectricField, "breakdown")?,
-            )?),
-            None => None,
-        };
+        let eps_r = x
+            .eps_r
+            .as_ref()
+            .map(|e| {
+                cx.uncertain(
+                    e,
+                    Dimension::Number,
+                    Some(&PERMITTIVITY),
+                    &format!("{mk}.eps_r"),
+                )
+            })
+            .transpose()?;
+        let tan_delta = x
+            .tan_delta
+            .as_ref()
+            .map(|e| {
+                cx.uncertain(
+                    e,
+                    Dimension::Number,
+                    Some(&TAN_DELTA),
+                    &format!("{mk}.tan_delta"),
+                )
+            })
+            .transpose()?;
+        let breakdown = x
+            .breakdown
+            .as_ref()
+            .map(|e| {
+                cx.uncertain(
+                    e,
+                    Dimension::ElectricField,
+                    Some(&BREAKDOWN),
+                    &format!("{mk}.breakdown"),
+                )
+            })
+            .transpose()?;
         let hyperelastic = match &x.hyperelastic {
             Some(h) => Some(cx.hyperelastic(h, &format!("{mk}.hyperelastic"), &x.source)?),
             None => None,

@@ -28,7 +28,7 @@ pub fn range(text: &str, dim: Dimension) -> std::result::Result<Vec<f64>, String
             "'{text}' is not start:stop:count (e.g. 0:0.4:41 or 1kV:8kV:15)"
         ));
     };
-    let q = |s: &str| parse_quantity(s, dim).map(|q| q.value);
+    let q = |s: &str| parse_quantity(s, dim);
     let (a, b) = (q(a)?, q(b)?);
     let n: usize = n
         .trim()

@@ -304,9 +304,7 @@ impl Ctx<'_> {
             None => return Ok(None),
             Some(toml::Value::Float(x)) => *x,
             Some(toml::Value::Integer(x)) => *x as f64,
-            Some(toml::Value::String(s)) => parse_quantity(s, dim)
-                .map(|q| q.value)
-                .map_err(|e| self.err(&k, e))?,
+            Some(toml::Value::String(s)) => parse_quantity(s, dim).map_err(|e| self.err(&k, e))?,
             Some(v) => {
                 return Err(self.err(
                     &k,
@@ -958,9 +956,9 @@ fn read_sample_times(c: &Ctx, list: &toml::Value, span: f64) -> Result<Vec<f64>>
         let v = match x {
             toml::Value::Float(f) => *f,
             toml::Value::Integer(n) => *n as f64,
-            toml::Value::String(q) => parse_quantity(q, Dimension::Time)
-                .map(|q| q.value)
-                .map_err(|e| c.err(&k, e))?,
+            toml::Value::String(q) => {
+                parse_quantity(q, Dimension::Time).map_err(|e| c.err(&k, e))?
+            }
             o => return Err(c.err(&k, format!("expected a time such as \"0.5 s\", found {o}"))),
         };
         let prev = out.last().copied().unwrap_or(0.0);

@@ -11,7 +11,7 @@ use dea_fit::io::tensile::{self, TensileOptions};
 use dea_fit::io::{manifest, relaxation as relaxation_io};
 use dea_fit::material::hyperelastic::{ModelSpec, OgdenForm};
 use dea_fit::sim::{self, scene::Scene, RunOptions, RunStatus};
-use dea_fit::units::{parse_quantity, Dimension};
+use dea_fit::units::{parse_uncertain, Dimension};
 use rand::seq::SliceRandom;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -546,7 +546,7 @@ fn check_fit(
 }
 
 fn geometry() -> permittivity::Geometry {
-    let q = |s, d| Some(parse_quantity(s, d).unwrap());
+    let q = |s, d| Some(parse_uncertain(s, d).unwrap());
     permittivity::Geometry::new(
         None,
         q("42.8mm", Dimension::Length),

@@ -373,3 +373,66 @@ fn the_progress_bar_counts_the_finished_starts() {
     assert_eq!(ms.at_best, 3);
     assert!(bar.message().contains("cost"), "{}", bar.message());
 }
+
+/// [`TwoMinima`] with a Jacobian ten times too large for p < 0: from there the
+/// search creeps into the local minimum (cost ≈ 0.18) by about a tenth of the way
+/// per iteration, while the global one (p = 1) has cost 0.
+#[derive(Clone)]
+struct Creeping;
+
+impl LeastSquares for Creeping {
+    fn dims(&self) -> (usize, usize) {
+        (2, 1)
+    }
+    fn eval(&mut self, p: &[f64], r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>) -> bool {
+        let scale = if p[0] < 0.0 { 10.0 } else { 1.0 };
+        match jac {
+            Some(j) => {
+                TwoMinima.eval(p, r, Some(&mut *j));
+                *j *= scale;
+                true
+            }
+            None => TwoMinima.eval(p, r, None),
+        }
+    }
+}
+
+/// Racing: starts creeping towards the local minimum are abandoned once they
+/// cannot come within reach of the first start's cost (0, at the global minimum),
+/// with fewer evaluations than they would take alone, and counted; a start that
+/// reaches the global minimum is not abandoned; the result does not depend on the
+/// number of threads.
+#[test]
+fn starts_out_of_reach_of_the_first_are_abandoned() {
+    let bounds = [(-2.0, 2.0)];
+    let starts = vec![vec![1.0], vec![-2.0], vec![-1.5], vec![0.5]];
+    let settings = LmSettings::default();
+    let race = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| {
+                multistart::run(&Creeping, &starts, &bounds, &settings, |_| {
+                    Control::default()
+                })
+            })
+    };
+    let ms = race(2);
+    assert_eq!(ms.abandoned, 2, "{:?}", ms.runs);
+    assert_eq!(ms.at_best, 2);
+    for (x0, res) in &ms.runs {
+        let alone = lm::minimize(&mut Creeping, x0, &bounds, &settings);
+        match &res.termination {
+            Termination::Abandoned(why) => {
+                assert!(x0[0] < 0.0 && res.cost > 0.17, "{x0:?}: {res:?}");
+                assert!(why.contains("above the best start's"), "{why}");
+                assert!(res.evaluations < alone.evaluations, "{res:?} vs {alone:?}");
+            }
+            _ => assert_same(res, &alone),
+        }
+    }
+    for (a, b) in ms.runs.iter().zip(&race(1).runs) {
+        assert_same(&a.1, &b.1);
+    }
+}

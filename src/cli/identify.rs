@@ -457,8 +457,8 @@ fn summary(id: &Identification, validation: &[Validation]) -> String {
     ));
     let v = &id.solver;
     s.push_str(&format!(
-        "solver: {}; {} start(s), {} at best, {} iterations, {} simulator runs ({} with sensitivities), {:.3} s, {}\n",
-        v.method, v.starts, v.starts_at_best, v.iterations, v.simulator_runs, v.sensitivity_runs, v.seconds, v.termination
+        "solver: {}; {} start(s), {} at best, {} abandoned, {} iterations, {} simulator runs ({} with sensitivities), {:.3} s, {}\n",
+        v.method, v.starts, v.starts_at_best, v.starts_abandoned, v.iterations, v.simulator_runs, v.sensitivity_runs, v.seconds, v.termination
     ));
     for p in &id.profiles {
         let side = |v: Option<f64>| {

@@ -8,7 +8,7 @@
 //! bounded Levenberg–Marquardt of [`super::lm`] from several starts.
 
 use super::diagnostics::{information_criteria, uncertainty};
-use super::lm::{self, LeastSquares, LmSettings, Termination};
+use super::lm::{self, LeastSquares, LmSettings};
 use super::permittivity::{self, same_freq, worst, Input, SamplePermittivity};
 use super::{Parameter, Status};
 use crate::error::{Error, Result};
@@ -361,20 +361,9 @@ pub fn fit_rule(rule: MixingRule, phi: &[f64], eps: &[f64]) -> Option<RuleFit> {
         .collect();
     let mut warnings = Vec::new();
     let mut status = Status::Ok;
-    match &best.termination {
-        Termination::Converged(_) => {}
-        Termination::MaxIterations => {
-            status = Status::NotConverged;
-            warnings.push("the search stopped at the iteration limit".into());
-        }
-        Termination::WallTime => {
-            status = Status::NotConverged;
-            warnings.push("the search stopped at its wall-time limit".into());
-        }
-        Termination::Failed(w) => {
-            status = Status::NotConverged;
-            warnings.push(format!("the search failed: {w}"));
-        }
+    if let Some(w) = best.termination.shortfall() {
+        status = Status::NotConverged;
+        warnings.push(w);
     }
     for (j, &(lo, hi)) in bounds.iter().enumerate() {
         if j == 0 {

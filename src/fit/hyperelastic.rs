@@ -751,23 +751,9 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         .collect();
 
     // Convergence.
-    match &est.termination {
-        Termination::Converged(_) => {}
-        Termination::MaxIterations => {
-            escalate(Status::NotConverged);
-            warnings.push(format!(
-                "the search stopped at the iteration limit ({}) without converging",
-                settings.max_iterations
-            ));
-        }
-        Termination::WallTime => {
-            escalate(Status::NotConverged);
-            warnings.push("the search stopped at its wall-time limit".into());
-        }
-        Termination::Failed(why) => {
-            escalate(Status::NotConverged);
-            warnings.push(format!("the search failed: {why}"));
-        }
+    if let Some(w) = est.termination.shortfall() {
+        escalate(Status::NotConverged);
+        warnings.push(w);
     }
     if !finite {
         escalate(Status::NotConverged);

@@ -31,6 +31,16 @@ pub trait LeastSquares {
     fn failure(&self) -> Option<String> {
         None
     }
+    /// Whether the first trial of each iteration should be evaluated with the
+    /// Jacobian, which an accepted step then keeps instead of evaluating again at
+    /// the same point: worth it when the Jacobian costs less than a second
+    /// residual evaluation on top (a simulator with forward sensitivities: a trial
+    /// and a re-run with them cost 1 + 3.5 runs, a trial with them 3.5, and most
+    /// first trials are accepted). Later trials of an iteration, after a
+    /// rejection, are evaluated without.
+    fn jacobian_with_trial(&self) -> bool {
+        false
+    }
 }
 
 /// Relative damping of the Gauss-Newton step of the noise-floor test
@@ -82,9 +92,28 @@ pub enum Termination {
     /// The wall-time limit of [`Control::max_wall`] was reached; with a checkpoint
     /// the search can be resumed from where it stopped.
     WallTime,
+    /// Given up: at its pace the search could not come within reach of the cost
+    /// another start reached ([`Control::reach`]); why, in numbers.
+    Abandoned(String),
     /// The start was outside the domain, the problem produced non-finite values, or
     /// the machinery around the search (trace, checkpoint) failed: why.
     Failed(String),
+}
+
+impl Termination {
+    /// What a search that stopped this way falls short of, in words (None when it
+    /// converged): the warning an estimator prints for it.
+    pub fn shortfall(&self) -> Option<String> {
+        match self {
+            Termination::Converged(_) => None,
+            Termination::MaxIterations => {
+                Some("the search stopped at the iteration limit without converging".into())
+            }
+            Termination::WallTime => Some("the search stopped at its wall-time limit".into()),
+            Termination::Abandoned(w) => Some(format!("the search was abandoned: {w}")),
+            Termination::Failed(w) => Some(format!("the search failed: {w}")),
+        }
+    }
 }
 
 impl std::fmt::Display for Termination {
@@ -93,6 +122,7 @@ impl std::fmt::Display for Termination {
             Termination::Converged(w) => write!(f, "converged ({w})"),
             Termination::MaxIterations => f.write_str("iteration limit"),
             Termination::WallTime => f.write_str("wall-time limit"),
+            Termination::Abandoned(w) => write!(f, "abandoned ({w})"),
             Termination::Failed(w) => write!(f, "failed: {w}"),
         }
     }
@@ -111,6 +141,26 @@ pub struct LmResult {
     pub evaluations: usize,
     /// Why it stopped.
     pub termination: Termination,
+    /// The residuals at `x` (empty when the search never evaluated there).
+    pub residuals: DVector<f64>,
+    /// The Jacobian at `x` (empty as the residuals are; after a failed
+    /// evaluation not to be trusted, as `cost` is not).
+    pub jacobian: DMatrix<f64>,
+}
+
+impl LmResult {
+    /// The result of a search that could not start (why), at `x0`.
+    fn unstarted(x0: &[f64], why: String) -> LmResult {
+        LmResult {
+            x: x0.to_vec(),
+            cost: f64::INFINITY,
+            iterations: 0,
+            evaluations: 0,
+            termination: Termination::Failed(why),
+            residuals: DVector::zeros(0),
+            jacobian: DMatrix::zeros(0, 0),
+        }
+    }
 }
 
 /// `v` moved into `[lo, hi]`. Unlike `f64::clamp` it never panics (NaN or inverted
@@ -158,27 +208,59 @@ pub struct Lm {
     nu: f64,
     iterations: usize,
     evaluations: usize,
+    /// The cost at the start and after each iteration (the pace of [`out_of_reach`]).
+    costs: Vec<f64>,
+    /// The Jacobian at the trial point, for [`LeastSquares::jacobian_with_trial`]
+    /// (empty until first used; not part of a checkpoint).
+    jac_trial: DMatrix<f64>,
+}
+
+/// Iterations over which [`out_of_reach`] measures a search's pace.
+pub const PACE_WINDOW: usize = 5;
+/// Relative margin above the reference cost within which a search is never given
+/// up ([`out_of_reach`]): 1 % of it (for ½χ² of a few thousand residuals, tens of
+/// units: far beyond the difference of two stops in one minimum).
+pub const REACH_MARGIN: f64 = 0.01;
+/// How much faster than its pace over the last [`PACE_WINDOW`] iterations a search
+/// is allowed to close the gap before it is given up ([`out_of_reach`]).
+pub const PACE_ALLOWANCE: f64 = 2.0;
+
+/// Why a search whose costs so far are `costs` (the start's, then one per
+/// iteration) cannot come within reach of `reference` in the `left` iterations it
+/// has: its cost lies above reference·(1 + [`REACH_MARGIN`]) + 2·`floor` (the
+/// noise floor, [`LmSettings::min_decrease`]) by a gap that even
+/// [`PACE_ALLOWANCE`] times its mean decrease over the last [`PACE_WINDOW`]
+/// iterations, kept up for all of them, would not close. None while it can.
+pub fn out_of_reach(costs: &[f64], reference: f64, floor: f64, left: usize) -> Option<String> {
+    let k = costs.len().checked_sub(1)?;
+    if k < PACE_WINDOW || !reference.is_finite() {
+        return None;
+    }
+    let now = costs[k];
+    let gap = now - (reference + REACH_MARGIN * reference.abs() + 2.0 * floor);
+    let pace = (costs[k - PACE_WINDOW] - now) / PACE_WINDOW as f64;
+    (gap > PACE_ALLOWANCE * pace * left as f64).then(|| {
+        format!(
+            "after {k} iterations the cost {now:.6} is {:.4} above the best start's {reference:.6} and falls by {pace:.3e} per iteration, with {left} iterations left",
+            now - reference
+        )
+    })
 }
 
 impl Lm {
-    /// Project `x0` into `bounds` and evaluate there (one evaluation, with Jacobian).
-    /// A start or bounds that cannot be used (see [`invalid_start`]) or a start
+    /// Project `x0` into `bounds` and evaluate there (one evaluation, with Jacobian;
+    /// none when `known` holds them for x0, see [`Control::known_start`]). A start or bounds that cannot be used (see [`invalid_start`]) or a start
     /// where the problem is not finite give the failed result instead.
     fn start<P: LeastSquares + ?Sized>(
         problem: &mut P,
         x0: &[f64],
         bounds: &[(f64, f64)],
         settings: &LmSettings,
-    ) -> Result<Lm, LmResult> {
+        known: Option<(DVector<f64>, DMatrix<f64>)>,
+    ) -> Result<Lm, Box<LmResult>> {
         let (m, n) = problem.dims();
         if let Some(why) = invalid_start(n, x0, bounds) {
-            return Err(LmResult {
-                x: x0.to_vec(),
-                cost: f64::INFINITY,
-                iterations: 0,
-                evaluations: 0,
-                termination: Termination::Failed(why),
-            });
+            return Err(Box::new(LmResult::unstarted(x0, why)));
         }
         let mut lm = Lm {
             settings: *settings,
@@ -195,12 +277,31 @@ impl Lm {
             nu: 2.0,
             iterations: 0,
             evaluations: 1,
+            costs: Vec::new(),
+            jac_trial: DMatrix::zeros(0, 0),
         };
-        if !problem.eval(&lm.x, &mut lm.r, Some(&mut lm.jac)) {
-            let why = problem.failure().unwrap_or_else(|| "not finite".into());
-            return Err(lm.finish(Termination::Failed(format!("at the start: {why}"))));
+        // residuals and Jacobian the caller has at x0 (inside the bounds, finite)
+        let known = known.filter(|(r, j)| {
+            r.len() == m
+                && j.shape() == (m, n)
+                && lm.x.as_slice() == x0
+                && r.iter().chain(j.iter()).all(|v| v.is_finite())
+        });
+        match known {
+            Some((r, j)) => {
+                (lm.r, lm.jac, lm.evaluations) = (r, j, 0);
+            }
+            None => {
+                if !problem.eval(&lm.x, &mut lm.r, Some(&mut lm.jac)) {
+                    let why = problem.failure().unwrap_or_else(|| "not finite".into());
+                    return Err(Box::new(
+                        lm.finish(Termination::Failed(format!("at the start: {why}"))),
+                    ));
+                }
+            }
         }
         lm.cost = 0.5 * lm.r.norm_squared();
+        lm.costs.push(lm.cost);
         Ok(lm)
     }
 
@@ -268,6 +369,10 @@ impl Lm {
         }
         let mut x_new = vec![0.0; n];
         let mut r_new = DVector::zeros(self.r.len());
+        let mut trial_jac = problem.jacobian_with_trial();
+        if trial_jac && self.jac_trial.shape() != self.jac.shape() {
+            self.jac_trial = DMatrix::zeros(self.jac.nrows(), n);
+        }
         loop {
             let Some(step) = normal(self.mu) else {
                 self.mu *= self.nu;
@@ -289,7 +394,10 @@ impl Lm {
             // Predicted decrease of the linear model for the (projected) step.
             let pred = -(g.dot(&dx)) - 0.5 * (&a * &dx).dot(&dx);
             self.evaluations += 1;
-            let ok = problem.eval(&x_new, &mut r_new, None);
+            let ok = match trial_jac {
+                true => problem.eval(&x_new, &mut r_new, Some(&mut self.jac_trial)),
+                false => problem.eval(&x_new, &mut r_new, None),
+            };
             let cost_new = if ok {
                 0.5 * r_new.norm_squared()
             } else {
@@ -303,14 +411,21 @@ impl Lm {
             if ok && cost_new < self.cost && rho > 0.0 {
                 let rel = (self.cost - cost_new) / self.cost.max(f64::MIN_POSITIVE);
                 x.copy_from_slice(&x_new);
-                self.evaluations += 1;
-                problem.eval(x, &mut self.r, Some(&mut self.jac));
+                if trial_jac {
+                    std::mem::swap(&mut self.r, &mut r_new);
+                    std::mem::swap(&mut self.jac, &mut self.jac_trial);
+                } else {
+                    self.evaluations += 1;
+                    problem.eval(x, &mut self.r, Some(&mut self.jac));
+                }
                 self.cost = cost_new;
+                self.costs.push(cost_new);
                 self.mu *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
                 self.nu = 2.0;
                 self.iterations += 1;
                 return (rel <= settings.ftol).then_some(Termination::Converged("cost"));
             }
+            trial_jac = false;
             self.mu *= self.nu;
             self.nu *= 2.0;
             if !self.mu.is_finite() || self.mu > 1e300 {
@@ -320,13 +435,15 @@ impl Lm {
     }
 
     /// The result as it stands, stopped for `termination`.
-    fn finish(&self, termination: Termination) -> LmResult {
+    fn finish(self, termination: Termination) -> LmResult {
         LmResult {
-            x: self.x.clone(),
+            x: self.x,
             cost: self.cost,
             iterations: self.iterations,
             evaluations: self.evaluations,
             termination,
+            residuals: self.r,
+            jacobian: self.jac,
         }
     }
 
@@ -358,6 +475,8 @@ pub type LmState = IterState<Vec<f64>, (), (), (), (), f64>;
 /// The LM as an argmin [`Solver`]: each `next_iter` is one [`Lm::step`].
 struct LmSolver<'s> {
     lm: &'s mut Lm,
+    /// [`Control::reach`].
+    reach: Option<f64>,
     stopped: Option<Termination>,
     /// Whether anyone reads the key-value pairs (they cost a few allocations).
     observed: bool,
@@ -387,7 +506,12 @@ impl<P: LeastSquares + ?Sized> Solver<Held<'_, P>, LmState> for LmSolver<'_> {
         let Some(Held(p)) = problem.problem.as_mut() else {
             return Err(argmin::core::Error::msg("the executor lost the problem"));
         };
-        let stop = self.lm.step(*p);
+        let lm = &mut *self.lm;
+        let stop = lm.step(*p).or_else(|| {
+            let left = lm.settings.max_iterations.saturating_sub(lm.iterations);
+            out_of_reach(&lm.costs, self.reach?, lm.settings.min_decrease, left)
+                .map(Termination::Abandoned)
+        });
         let state = state.param(self.lm.x.clone()).cost(self.lm.cost);
         let state = match &stop {
             None => state,
@@ -439,6 +563,15 @@ pub struct Control {
     pub resume: bool,
     /// Stop with [`Termination::WallTime`] once an iteration ends past this time.
     pub max_wall: Option<Duration>,
+    /// The residuals and Jacobian at the start when the caller has them (a polish
+    /// from another search's optimum after a change of weights): the search then
+    /// does not evaluate there. Ignored when resuming from a checkpoint, and when
+    /// their shapes are not the problem's.
+    pub known_start: Option<(DVector<f64>, DMatrix<f64>)>,
+    /// The cost another start of a multi-start reached: stop with
+    /// [`Termination::Abandoned`] once this search cannot come within reach of it
+    /// ([`out_of_reach`]).
+    pub reach: Option<f64>,
 }
 
 /// Minimise ½‖r(p)‖² from `x0` within `bounds`: [`search`] without observers,
@@ -474,18 +607,10 @@ pub fn search<P: LeastSquares + ?Sized>(
             lm.settings = *settings;
             lm
         }
-        Some(Err(why)) => {
-            return LmResult {
-                x: x0.to_vec(),
-                cost: f64::INFINITY,
-                iterations: 0,
-                evaluations: 0,
-                termination: Termination::Failed(why),
-            }
-        }
-        None => match Lm::start(problem, x0, bounds, settings) {
+        Some(Err(why)) => return LmResult::unstarted(x0, why),
+        None => match Lm::start(problem, x0, bounds, settings, control.known_start.take()) {
             Ok(lm) => lm,
-            Err(failed) => return failed,
+            Err(failed) => return *failed,
         },
     };
     let state = lm.state();
@@ -493,6 +618,7 @@ pub fn search<P: LeastSquares + ?Sized>(
         Held(problem),
         LmSolver {
             lm: &mut lm,
+            reach: control.reach,
             stopped: None,
             observed: !control.observers.is_empty(),
         },
@@ -588,6 +714,10 @@ struct Saved {
     nu: u64,
     iterations: usize,
     evaluations: usize,
+    /// The costs so far (absent in a file written before they were kept: the pace
+    /// of [`out_of_reach`] is then measured from the resume on).
+    #[serde(default)]
+    costs: Vec<u64>,
 }
 
 /// The `format` of a checkpoint file this version reads.
@@ -620,6 +750,7 @@ fn save(file: &Path, lm: &Lm) -> Result<(), String> {
         nu: lm.nu.to_bits(),
         iterations: lm.iterations,
         evaluations: lm.evaluations,
+        costs: bits(&lm.costs),
     };
     let text = serde_json::to_string(&saved).map_err(|e| e.to_string())?;
     let mut tmp = file.as_os_str().to_owned();
@@ -665,6 +796,8 @@ fn load(file: &Path, (m, n): (usize, usize), bounds: &[(f64, f64)]) -> Result<Lm
         nu: f64::from_bits(s.nu),
         iterations: s.iterations,
         evaluations: s.evaluations,
+        costs: unbits(&s.costs),
+        jac_trial: DMatrix::zeros(0, 0),
     })
 }
 
@@ -741,6 +874,80 @@ mod tests {
         }
         let res = minimize(&mut Rosen, &[0.0], &[(-inf, inf)], &LmSettings::default());
         assert!(matches!(res.termination, Termination::Failed(_)), "{res:?}");
+    }
+
+    /// Rosenbrock that evaluates its Jacobian with the first trial of each
+    /// iteration ([`LeastSquares::jacobian_with_trial`]).
+    struct RosenTrial;
+    impl LeastSquares for RosenTrial {
+        fn dims(&self) -> (usize, usize) {
+            (2, 2)
+        }
+        fn eval(
+            &mut self,
+            p: &[f64],
+            r: &mut DVector<f64>,
+            jac: Option<&mut DMatrix<f64>>,
+        ) -> bool {
+            Rosen.eval(p, r, jac)
+        }
+        fn jacobian_with_trial(&self) -> bool {
+            true
+        }
+    }
+
+    /// A Jacobian taken with the trial, and a start whose residuals and Jacobian
+    /// are given, change the evaluations, never the search: bit for bit the same
+    /// iterates and cost (the same numbers enter every step).
+    #[test]
+    fn jacobian_with_the_trial_and_a_known_start_change_only_the_evaluations() {
+        let inf = f64::INFINITY;
+        let b = [(-inf, 0.5), (-inf, inf)];
+        let plain = minimize(&mut Rosen, &[-1.2, 1.0], &b, &LmSettings::default());
+        let trial = minimize(&mut RosenTrial, &[-1.2, 1.0], &b, &LmSettings::default());
+        assert_eq!((trial.x.clone(), trial.cost), (plain.x.clone(), plain.cost));
+        assert_eq!(trial.iterations, plain.iterations);
+        assert!(
+            trial.evaluations < plain.evaluations,
+            "{} vs {}",
+            trial.evaluations,
+            plain.evaluations
+        );
+        // from a point the first search stopped on the way, given its r and J
+        let mid = [0.0, 0.0];
+        let (mut r, mut j) = (DVector::zeros(2), DMatrix::zeros(2, 2));
+        Rosen.eval(&mid, &mut r, Some(&mut j));
+        let fresh = minimize(&mut Rosen, &mid, &b, &LmSettings::default());
+        let mut c = Control {
+            known_start: Some((r, j)),
+            ..Control::default()
+        };
+        let known = search(&mut Rosen, &mid, &b, &LmSettings::default(), &mut c);
+        assert_eq!((known.x.clone(), known.cost), (fresh.x.clone(), fresh.cost));
+        assert_eq!(known.evaluations + 1, fresh.evaluations);
+        // a known start of the wrong shape is not used
+        let mut c = Control {
+            known_start: Some((DVector::zeros(3), DMatrix::zeros(3, 2))),
+            ..Control::default()
+        };
+        let wrong = search(&mut Rosen, &mid, &b, &LmSettings::default(), &mut c);
+        assert_eq!(wrong.evaluations, fresh.evaluations);
+    }
+
+    /// The reach rule by hand: cost 150 against a reference of 100 (margin 1 % +
+    /// 2·floor 0.5 = 2: a gap of 48), falling 1 per iteration over the last 5 with
+    /// 20 left: 2 × 1 × 20 = 40 < 48, given up; with 30 left (60 ≥ 48) not yet;
+    /// within the margin, never; before 5 iterations, never.
+    #[test]
+    fn out_of_reach_follows_its_rule() {
+        let costs = [160.0, 158.0, 155.0, 154.0, 153.0, 152.0, 151.0, 150.0];
+        assert!(out_of_reach(&costs, 100.0, 0.25, 20).is_some());
+        assert!(out_of_reach(&costs, 100.0, 0.25, 30).is_none());
+        assert!(out_of_reach(&[101.0; 8], 100.0, 0.25, 20).is_none());
+        assert!(out_of_reach(&costs[..5], 100.0, 0.25, 1).is_none());
+        assert!(out_of_reach(&costs, f64::NAN, 0.25, 20).is_none());
+        // a search on a plateau far above: given up
+        assert!(out_of_reach(&[1e6; 6], 100.0, 0.0, 95).is_some());
     }
 
     #[test]

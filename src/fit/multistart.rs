@@ -89,6 +89,9 @@ pub struct MultiStart {
     pub best: Option<usize>,
     /// How many searches reached the best cost ([`starts_at_best`]).
     pub at_best: usize,
+    /// How many were given up as out of reach of the first start's cost
+    /// ([`lm::Termination::Abandoned`]; their final cost is where they stopped).
+    pub abandoned: usize,
 }
 
 impl MultiStart {
@@ -109,9 +112,13 @@ impl MultiStart {
     }
 }
 
-/// Search `problem` from every start in `starts`, in parallel (rayon; each start
-/// gets its own clone of the problem and the [`Control`] that `control` makes for
-/// its index: observers, checkpoint, wall time).
+/// Search `problem` from every start in `starts`: the first alone, then the
+/// others in parallel (rayon; each gets its own clone of the problem and the
+/// [`Control`] that `control` makes for its index: observers, checkpoint, wall
+/// time), each given up once it cannot come within reach of the first's cost
+/// ([`lm::out_of_reach`]). The first is the caller's best guess (for
+/// identification the scene's own constants); racing the others against it, not
+/// against each other, keeps the result independent of the thread count.
 pub fn run<P, C>(
     problem: &P,
     starts: &[Vec<f64>],
@@ -123,21 +130,34 @@ where
     P: LeastSquares + Clone + Send + Sync,
     C: Fn(usize) -> Control + Sync,
 {
-    let runs: Vec<(Vec<f64>, LmResult)> = starts
-        .par_iter()
-        .enumerate()
-        .map(|(i, x0)| {
-            let mut p = problem.clone();
-            let res = lm::search(&mut p, x0, bounds, settings, &mut control(i));
-            (x0.clone(), res)
-        })
-        .collect();
+    let search = |i: usize, x0: &Vec<f64>, reach: Option<f64>| {
+        let mut p = problem.clone();
+        let mut c = control(i);
+        c.reach = reach;
+        (x0.clone(), lm::search(&mut p, x0, bounds, settings, &mut c))
+    };
+    let mut runs: Vec<(Vec<f64>, LmResult)> = Vec::with_capacity(starts.len());
+    if let Some(x0) = starts.first() {
+        runs.push(search(0, x0, None));
+    }
+    let reach = runs.first().map(|r| r.1.cost).filter(|c| c.is_finite());
+    runs.par_extend(
+        starts
+            .par_iter()
+            .enumerate()
+            .skip(1)
+            .map(|(i, x0)| search(i, x0, reach)),
+    );
     let costs: Vec<f64> = runs.iter().map(|(_, r)| r.cost).collect();
     let best = (0..costs.len())
         .filter(|&i| costs[i].is_finite())
         .min_by(|&a, &b| costs[a].total_cmp(&costs[b]));
     MultiStart {
         at_best: starts_at_best(&costs, settings.min_decrease),
+        abandoned: runs
+            .iter()
+            .filter(|r| matches!(r.1.termination, lm::Termination::Abandoned(_)))
+            .count(),
         best,
         runs,
     }

@@ -1074,19 +1074,8 @@ fn assess(prep: &Prepared, tf: TermFit) -> Assessed {
 
     let mut problems = Vec::new();
     let mut warnings = Vec::new();
-    match &tf.termination {
-        Termination::Converged(_) => {}
-        Termination::MaxIterations => problems.push((
-            Status::NotConverged,
-            "the search stopped at the iteration limit without converging".to_string(),
-        )),
-        Termination::WallTime => problems.push((
-            Status::NotConverged,
-            "the search stopped at its wall-time limit".to_string(),
-        )),
-        Termination::Failed(w) => {
-            problems.push((Status::NotConverged, format!("the search failed: {w}")))
-        }
+    if let Some(w) = tf.termination.shortfall() {
+        problems.push((Status::NotConverged, w));
     }
     if !finite {
         problems.push((

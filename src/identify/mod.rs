@@ -150,8 +150,11 @@ pub struct SolverSummary {
     pub method: String,
     /// Starts run.
     pub starts: usize,
-    /// Starts that reached the best cost ([`search::AT_BEST_ABS`]).
+    /// Starts that reached the best cost ([`crate::fit::multistart::starts_at_best`]).
     pub starts_at_best: usize,
+    /// Starts given up as out of reach of the first start's cost
+    /// ([`crate::fit::lm::out_of_reach`]).
+    pub starts_abandoned: usize,
     /// Iterations over all starts and the polish.
     pub iterations: usize,
     /// Simulator runs (plain and with sensitivities).
@@ -162,7 +165,8 @@ pub struct SolverSummary {
     pub seconds: f64,
     /// Why the best search stopped.
     pub termination: String,
-    /// Final ½χ² of every start, sorted (the waterfall); ∞ for a start that failed.
+    /// Final ½χ² of every start, sorted (the waterfall); ∞ for a start that failed,
+    /// the cost where it stopped for one abandoned.
     pub final_costs: Vec<f64>,
 }
 
@@ -276,6 +280,7 @@ pub fn identify_with(
                     .into(),
             starts: settings.starts,
             starts_at_best: ms.at_best,
+            starts_abandoned: ms.abandoned,
             iterations,
             simulator_runs: plain + sens,
             sensitivity_runs: sens,
@@ -296,19 +301,19 @@ pub fn identify_with(
     let mut x = best.x.clone();
     let mut termination = best.termination.clone();
     if given.iter().flatten().any(|g| !g) {
-        let r = match residuals(&mut problem, &x) {
-            Ok(r) => r,
-            Err(why) => return failed_at_best(&problem, iterations, why),
-        };
-        reestimate_sigma(&mut problem, &given, &r, k);
+        // the best search's residuals and Jacobian, rescaled to the new σ, start
+        // the polish without another run at x
+        let old = row_sigmas(&problem);
+        reestimate_sigma(&mut problem, &given, &best.residuals, k);
+        let (mut r0, mut j0) = (best.residuals.clone(), best.jacobian.clone());
+        for (row, (o, s)) in old.iter().zip(row_sigmas(&problem)).enumerate() {
+            r0[row] *= o / s;
+            j0.row_mut(row).scale_mut(o / s);
+        }
         let mut p = problem.clone();
-        let polish = crate::fit::lm::search(
-            &mut p,
-            &x,
-            &problem.x_bounds(),
-            &settings.lm,
-            &mut control(settings.starts),
-        );
+        let mut c = control(settings.starts);
+        c.known_start = Some((r0, j0));
+        let polish = crate::fit::lm::search(&mut p, &x, &problem.x_bounds(), &settings.lm, &mut c);
         iterations += polish.iterations;
         if polish.cost.is_finite() {
             x = polish.x;
@@ -328,7 +333,14 @@ pub fn identify_with(
     let assessment = assess(&problem.free, &x, &jac, rss, &ctx);
     let profiles = profiles(&problem, &x, rss, &jac, &profiled, settings);
     let experiments = channel_fits(&problem, &given, &r);
-    let mut warnings = warnings(&problem, &assessment, &runs, ms.at_best, settings.starts);
+    let mut warnings = warnings(
+        &problem,
+        &assessment,
+        &runs,
+        ms.at_best,
+        ms.abandoned,
+        settings.starts,
+    );
     warnings.extend(structured_residuals(&problem, &r));
     let status = if !matches!(termination, Termination::Converged(_)) {
         Status::NotConverged
@@ -440,6 +452,7 @@ fn warnings(
     assessment: &Assessment,
     runs: &[crate::sim::Outcome],
     at_best: usize,
+    abandoned: usize,
     starts: usize,
 ) -> Vec<String> {
     let free = &problem.free;
@@ -469,8 +482,12 @@ fn warnings(
     }
     w.dedup();
     if starts > 1 && at_best == 1 {
+        let given_up = match abandoned {
+            0 => String::new(),
+            n => format!(" ({n} abandoned as out of reach of the first start's cost)"),
+        };
         w.push(format!(
-            "only 1 of {starts} starts reached the best cost: the cost has other minima, and more starts (--starts) may find a better one"
+            "only 1 of {starts} starts reached the best cost{given_up}: the cost has other minima, and more starts (--starts) may find a better one"
         ));
     }
     w
@@ -594,13 +611,14 @@ fn profiles(
         .collect()
 }
 
-/// Scaled residuals at x, or why there are none.
-fn residuals(problem: &mut Problem, x: &[f64]) -> std::result::Result<DVector<f64>, String> {
-    let mut r = DVector::zeros(problem.dims().0);
-    match problem.eval(x, &mut r, None) {
-        true => Ok(r),
-        false => Err(problem.failure().unwrap_or_default()),
+/// The σ of each residual row's channel, in problem order.
+fn row_sigmas(problem: &Problem) -> Vec<f64> {
+    let mut out = Vec::new();
+    for (ei, ci, rows) in channel_rows(problem) {
+        let s = problem.experiments[ei].channels[ci].sigma;
+        out.extend(rows.map(|_| s));
     }
+    out
 }
 
 /// Rows of the residual vector per (experiment, channel), in problem order.

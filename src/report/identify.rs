@@ -161,8 +161,8 @@ pub fn write(
         "waterfall",
         &Chart {
             title: format!(
-                "multi-start: {} of {} starts at the best cost",
-                id.solver.starts_at_best, id.solver.starts
+                "multi-start: {} of {} starts at the best cost, {} abandoned (cost where given up)",
+                id.solver.starts_at_best, id.solver.starts, id.solver.starts_abandoned
             ),
             x_label: "start (sorted by final cost)".into(),
             y_label: "log10(cost − best + 0.001)".into(),

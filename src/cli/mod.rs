@@ -169,6 +169,13 @@ pub fn write_noted(path: &std::path::Path, bytes: &[u8]) -> Result<()> {
     Ok(())
 }
 
+/// Put a streamed single output file in place as [`write_noted`] does.
+pub fn commit_noted(file: dea_fit::io::write::AtomicFile) -> Result<()> {
+    let path = file.path().to_path_buf();
+    note(&path, "file", &file.commit_keeping()?);
+    Ok(())
+}
+
 fn note(path: &std::path::Path, what: &str, r: &dea_fit::io::write::Replaced) {
     if let dea_fit::io::write::Replaced::KeptAs(p) = r {
         eprintln!(

@@ -556,6 +556,9 @@ pub struct Cost {
     pub input_periods: f64,
     /// Steps an explicit method needs for stability alone (0 for an implicit one).
     pub stability_steps: f64,
+    /// For a scene that names no integrator: the one `auto` chose ([`auto_method`])
+    /// and why.
+    pub auto: Option<(Method, String)>,
 }
 
 impl Cost {
@@ -602,19 +605,32 @@ pub fn estimate(s: &Scene) -> Result<Cost> {
     };
     let ring_periods = ring_time * mode.frequency_hz;
     let spp = (STEPS_PER_PERIOD * (1e-6 / rtol).powf(0.2)).max(4.0);
-    // an explicit method (the scene's, or auto's choice for a lightly damped mode
-    // with inertia, as in `sim::simulate`) cannot step past its stability limit
-    // h·ω ≈ 3.3 even after the ringing has died away
-    let method = s
-        .time
-        .method
-        .unwrap_or_else(|| super::auto_method(fid.inertia, mode.damping_ratio).0);
+    let accuracy = spp * (ring_periods + input_periods);
+    // auto's choice from the stiffness of the plant that runs (`sim::simulate`
+    // runs with it)
+    let (method, auto, rho) = match s.time.method {
+        Some(m) => (m, None, 0.0),
+        None => {
+            let plant =
+                Plant::new(s, fid.inertia, &fid.keep).map_err(|why| no_rest_state(s, why))?;
+            let rho = stiffness(&plant);
+            let (m, why) = auto_method(span * rho / EXPLICIT_STABILITY, accuracy, kinks);
+            (m, Some((m, why)), rho)
+        }
+    };
+    // an explicit method cannot step past its stability limit h·|λ| ≈ 3.3 (the
+    // axial mode's ω, or the Jacobian's fastest rate where known) even after the
+    // ringing has died away
     let explicit = matches!(method, Method::Tsit45 | Method::Dp54);
-    let stability = match explicit && fid.inertia && omega.is_finite() {
-        true => span * omega / EXPLICIT_STABILITY,
+    let fastest = match fid.inertia && omega.is_finite() {
+        true => omega.max(rho),
+        false => rho,
+    };
+    let stability = match explicit {
+        true => span * fastest / EXPLICIT_STABILITY,
         false => 0.0,
     };
-    let steps = (spp * (ring_periods + input_periods)).max(stability) + STEPS_PER_RESTART * kinks;
+    let steps = accuracy.max(stability) + STEPS_PER_RESTART * kinks;
     let memory =
         (s.time.samples.len() as f64 + 2.0) * std::mem::size_of::<Sample>() as f64 + 8.0 * kinks;
     Ok(Cost {
@@ -626,7 +642,60 @@ pub fn estimate(s: &Scene) -> Result<Cost> {
         ring_periods,
         input_periods,
         stability_steps: stability,
+        auto,
     })
+}
+
+/// The stiffness of a plant: the spectral radius of its Jacobian ∂f/∂y at the
+/// start state (1/s), the fastest rate of the linearised plant, decaying (a
+/// dashpot-damped mode, a source's RC, a controller) or oscillating (the axial
+/// mode). An explicit method's step is bounded by h·ρ ≲ 3.3 however smooth the
+/// solution (Hairer & Wanner, Solving ODEs II, §IV.2).
+pub fn stiffness(p: &Plant) -> f64 {
+    let y = p.initial_state();
+    let n = y.len();
+    let mut jac = vec![0.0; n * n];
+    p.jacobian(0.0, &y, &mut jac);
+    nalgebra::DMatrix::from_row_slice(n, n, &jac)
+        .complex_eigenvalues()
+        .iter()
+        .map(|l| l.norm())
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max)
+}
+
+/// The steps a BDF run takes whatever the dynamics (its start from first order, the
+/// slow arms), in explicit steps of the same cost: below it an explicit method wins
+/// even where stability bounds its step. Calibrated with `dea-fit bench
+/// integrators` (reports/bench-integrators): on the shipped scenes and the 5 kV
+/// stack at ζ = 10⁻⁴…10 the cheaper method is the explicit one exactly where its
+/// stability steps stay below its accuracy steps plus this floor (hdea_step_10N:
+/// 303 against 411, Tsitouras 1.6× faster; the stack at ζ = 0.1 over 1 s: 1921
+/// against 890, BDF 2.7× faster).
+const IMPLICIT_FLOOR: f64 = 300.0;
+/// The integrator `auto` chooses, with the reason: explicit Tsitouras 5(4) when
+/// the steps its stability needs (`stiff_steps` = span·ρ/3.3, ρ the [`stiffness`])
+/// do not exceed what accuracy needs anyway (`accuracy_steps`: the ringing and the
+/// input's periods, plus the restarts at `kinks`) by more than [`IMPLICIT_FLOOR`],
+/// the variable-order BDF otherwise: a lightly damped oscillation rings through
+/// the span and must be resolved by any method (explicit steps are cheaper there),
+/// a damped or stiff plant (dashpot, controller, source RC) holds an explicit
+/// method at its stability limit long after the motion is smooth.
+pub fn auto_method(stiff_steps: f64, accuracy_steps: f64, kinks: f64) -> (Method, String) {
+    let accuracy = accuracy_steps + STEPS_PER_RESTART * kinks;
+    let explicit = stiff_steps <= accuracy + IMPLICIT_FLOOR;
+    let (m, what) = match explicit {
+        true => (Method::Tsit45, "explicit Tsitouras 5(4)"),
+        false => (Method::Bdf, "variable-order BDF"),
+    };
+    (
+        m,
+        format!(
+            "auto: stability needs ≈ {} explicit steps, accuracy ≈ {}: {what}",
+            fmt_g(stiff_steps.round()),
+            fmt_g(accuracy.round())
+        ),
+    )
 }
 
 /// The guard `sim::simulate` runs first: every quantity in its domain, a stable

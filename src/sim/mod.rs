@@ -419,20 +419,6 @@ pub fn elastic_energy(p: &Plant, a: f64, b: f64) -> f64 {
     p.vol * s * 0.5 * h
 }
 
-/// The integrator `auto` chooses, with the reason: explicit Tsitouras 5(4) for a
-/// lightly damped oscillation (ζ < 0.3 with inertia), variable-order BDF otherwise.
-/// `sim::budget` estimates a run's cost with the same choice.
-pub fn auto_method(inertia: bool, damping_ratio: f64) -> (Method, &'static str) {
-    if inertia && damping_ratio < 0.3 {
-        (
-            Method::Tsit45,
-            "auto: lightly damped oscillation, explicit Tsitouras 5(4)",
-        )
-    } else {
-        (Method::Bdf, "auto: damped/stiff, variable-order BDF")
-    }
-}
-
 /// Simulate a scene: [`prepare`] the run, [`integrate`] it, [`summarise`] it
 /// (energy balance, sampling, range and damping warnings, tracking error). Every
 /// sample is kept in [`Outcome::samples`].
@@ -552,12 +538,10 @@ fn prepare(scene: &Scene, opts: &RunOptions) -> crate::Result<Prepared> {
         .map_err(|why| budget::no_rest_state(scene, why))?;
     let mode = &cost.mode;
     let rtol = opts.rtol.unwrap_or(scene.time.rtol);
-    let (method, reason) = match opts.method.or(scene.time.method) {
-        Some(m) => (m, "requested".to_string()),
-        None => {
-            let (m, why) = auto_method(plant.inertia, mode.damping_ratio);
-            (m, why.to_string())
-        }
+    let (method, reason) = match (opts.method.or(scene.time.method), &cost.auto) {
+        (Some(m), _) => (m, "requested".to_string()),
+        (None, Some((m, why))) => (*m, why.clone()),
+        (None, None) => unreachable!("budget::estimate chooses for a scene without an integrator"),
     };
     let span = scene.time.span;
     let v_max = opts.v_max.unwrap_or_else(|| drive_max(scene));

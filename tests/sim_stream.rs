@@ -168,3 +168,36 @@ fn no_report_writes_nothing_it_was_not_asked_for() {
     let page = std::fs::read_to_string(dir.path().join("r/index.md")).unwrap();
     assert!(page.contains("one sample in 3 of the 8001"), "{page}");
 }
+
+/// The drive's largest |V| (the tolerance scales) of a triangle or a
+/// piecewise-linear input is taken at its corners, not from 20 001 samples (a tenth
+/// of the 100 Hz triangle's run): exact at the peak, whatever lies between the
+/// corners, and the same as dense sampling.
+#[test]
+fn the_largest_drive_of_linear_pieces_is_at_their_corners() {
+    use dea_fit::sim::input::{Term, Waveform};
+    let w = Waveform {
+        terms: vec![
+            Term::Triangle {
+                start: 0.001,
+                amplitude: 5000.0,
+                frequency: 100.0,
+                cycles: 5.0,
+                offset: -200.0,
+            },
+            Term::Pwl {
+                points: vec![(0.0, 0.0), (0.0123, -7000.0), (0.03, 300.0)],
+            },
+        ],
+    };
+    let dense = (0..=200_000)
+        .map(|i| w.eval(0.05 * i as f64 / 200_000.0).0.abs())
+        .chain(w.kinks(0.0, 0.05).iter().map(|&t| w.eval(t).0.abs()))
+        .fold(0.0, f64::max);
+    let got = w.max_abs(0.0, 0.05);
+    assert!((got - dense).abs() <= 1e-9 * dense, "{got} vs {dense}");
+    // not below any corner's value
+    for t in w.kinks(0.0, 0.05) {
+        assert!(got >= w.eval(t).0.abs(), "{got} at {t}");
+    }
+}

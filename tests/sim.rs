@@ -820,6 +820,7 @@ fn auto_weighs_stiffness_against_accuracy() {
         let (m, why) = auto(&shipped(name));
         assert_eq!(m, want, "{name}: {why}");
         assert!(why.starts_with("auto: stability needs"), "{why}");
+        assert!(why.contains("(BDF: "), "{why}");
     }
     let mut s = shipped("stack_step_5kV");
     s.time.span = 1.0;

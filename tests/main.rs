@@ -23,5 +23,6 @@ mod search;
 mod sim;
 mod sim_derivatives;
 mod sim_sensitivities;
+mod sim_stream;
 mod support;
 mod trace;

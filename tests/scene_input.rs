@@ -130,6 +130,7 @@ fn the_step_estimate_is_made_before_the_run_and_does_not_refuse_real_scenes() {
         }
     }
     // the undamped stack for 1e6 s: refused from the estimate, in microseconds
+    // (auto stays explicit: BDF would need even more steps on the undamped mode)
     let mut s = shipped("stack_step_5kV.toml");
     s.time.span = 1e6;
     s.time.samples = vec![1e6];

@@ -31,6 +31,9 @@ enum What {
     /// The simulator: error against run time over tolerances, integrators and
     /// fidelity levels for the seed's scenes.
     Simulate(SimArgs),
+    /// Every integrator and `auto` on every shipped scene and over damping ratios
+    /// 10⁻⁴…10: auto's time as a ratio to the best method's.
+    Integrators(SimArgs),
     /// Identification from a rig-log-sized trace: parameter error against time over
     /// simulator tolerances and start counts.
     Identify(IdentifyArgs),
@@ -96,6 +99,7 @@ pub fn run(a: Args) -> Result<i32> {
         What::Hyperelastic(h) => hyperelastic(h)?,
         What::Relaxation => super::bench_relaxation::run()?,
         What::Simulate(s) => super::bench_simulate::run(&s.scenes)?,
+        What::Integrators(s) => super::bench_integrators::run(&s.scenes)?,
         What::Identify(i) => super::bench_identify::run(&i.scene)?,
         What::Rank(r) => super::bench_rank::run(&r)?,
         What::Scale(s) => super::bench_scale::run(&s)?,

@@ -2,6 +2,7 @@
 
 mod bench;
 mod bench_identify;
+mod bench_integrators;
 mod bench_rank;
 mod bench_relaxation;
 mod bench_scale;
@@ -166,6 +167,13 @@ pub fn write_noted(path: &std::path::Path, bytes: &[u8]) -> Result<()> {
         "file",
         &dea_fit::io::write::write_keeping(path, bytes, |old| old == bytes)?,
     );
+    Ok(())
+}
+
+/// Put a streamed single output file in place as [`write_noted`] does.
+pub fn commit_noted(file: dea_fit::io::write::AtomicFile) -> Result<()> {
+    let path = file.path().to_path_buf();
+    note(&path, "file", &file.commit_keeping()?);
     Ok(())
 }
 

@@ -5,8 +5,14 @@
 //! failure, step budget, non-finite state or output, with the time: no result past
 //! it, exit 1 whatever `--strict` says; the partial trajectory is still written for
 //! diagnosis).
+//!
+//! The trajectory is streamed to its CSV as the run reaches each sample (memory
+//! does not grow with the sample count); the file appears when complete. The
+//! charts are drawn from at most [`CHARTED`] of the samples, each with the min/max of
+//! those it stands for. `--no-report` writes nothing but the `--out` file, if given.
 
-use dea_fit::report::simulation;
+use dea_fit::io::write::AtomicFile;
+use dea_fit::report::simulation::{self, TrajectoryCsv};
 use dea_fit::sim::{self, integrate::Method, scene::Scene, RunOptions, RunStatus};
 use dea_fit::{Error, Result};
 use std::path::PathBuf;
@@ -16,7 +22,8 @@ use std::path::PathBuf;
 pub struct Args {
     /// Scene file.
     scene: PathBuf,
-    /// Trajectory CSV to write (default reports/sim-<scene>/trajectory.csv).
+    /// Trajectory CSV to write (default reports/sim-<scene>/trajectory.csv with the
+    /// report; none with --no-report).
     #[arg(long)]
     out: Option<PathBuf>,
     /// Print the JSON summary on stdout.
@@ -37,13 +44,16 @@ pub struct Args {
     /// Report directory (default reports/sim-<scene>).
     #[arg(long)]
     report: Option<PathBuf>,
-    /// Do not write the report (charts, index.md).
+    /// Do not write the report (charts, index.md) nor, without --out, the trajectory.
     #[arg(long)]
     no_report: bool,
     /// Exit with status 1 at pull-in too (a failed run always exits 1).
     #[arg(long)]
     strict: bool,
 }
+
+/// Most samples the charts draw (the report's memory and SVG size stay bounded).
+const CHARTED: usize = 4000;
 
 fn parse_method(s: &str) -> std::result::Result<Method, String> {
     Method::parse(s).ok_or_else(|| {
@@ -61,8 +71,30 @@ pub fn run(a: Args) -> Result<i32> {
             )));
         }
     }
+    let dir = a
+        .report
+        .unwrap_or_else(|| PathBuf::from(format!("reports/sim-{}", scene.name)));
+    let csv = match (&a.out, a.no_report) {
+        (Some(out), _) => Some(out.clone()),
+        (None, false) => Some(dir.join("trajectory.csv")),
+        (None, true) => None,
+    };
+    // Opened at the first sample, after the scene passed the guard: a refusal (of the
+    // scene, or of the report directory) writes nothing.
+    let mut writer: Option<TrajectoryCsv<AtomicFile>> = None;
+    let mut sink = |row: &sim::Row| -> Result<()> {
+        let Some(path) = &csv else { return Ok(()) };
+        if writer.is_none() {
+            if !a.no_report {
+                super::claim_dir(&dir)?;
+            }
+            writer = Some(TrajectoryCsv::new(AtomicFile::create(path)?));
+        }
+        let w = writer.as_mut().expect("opened");
+        w.row(row).map_err(|e| Error::io(path, e))
+    };
     let t = std::time::Instant::now();
-    let o = sim::simulate(
+    let o = sim::simulate_streaming(
         &scene,
         &RunOptions {
             rtol: a.rtol,
@@ -70,28 +102,17 @@ pub fn run(a: Args) -> Result<i32> {
             sensitivities: a.sensitivities,
             ..Default::default()
         },
+        CHARTED,
+        Some(&mut sink),
     )?;
     let run_time = t.elapsed().as_secs_f64();
-    let dir = a
-        .report
-        .unwrap_or_else(|| PathBuf::from(format!("reports/sim-{}", scene.name)));
-    // Claim the report directory before writing anything, so that a refusal
-    // writes nothing.
-    if !a.no_report || a.out.is_none() {
-        super::claim_dir(&dir)?;
+    if let Some(w) = writer {
+        let file = w.into_inner();
+        match a.out {
+            Some(_) => super::commit_noted(file)?,
+            None => file.commit()?,
+        }
     }
-    let trajectory = simulation::trajectory_csv(&o);
-    let csv = match a.out {
-        Some(out) => {
-            super::write_noted(&out, trajectory.as_bytes())?;
-            out
-        }
-        None => {
-            let csv = dir.join("trajectory.csv");
-            dea_fit::io::write::atomic_write(&csv, trajectory.as_bytes())?;
-            csv
-        }
-    };
     let page = (!a.no_report)
         .then(|| simulation::write(&o, &a.scene.display().to_string(), &dir))
         .transpose()?;
@@ -134,7 +155,10 @@ pub fn run(a: Args) -> Result<i32> {
             x.stretch_max,
             o.events.len(),
             run_time * 1e3,
-            csv.display()
+            csv.as_ref()
+                .map_or("not written (--no-report)".into(), |c| c
+                    .display()
+                    .to_string())
         );
         println!("status: {}", o.integrator.status);
         for w in &o.warnings {

@@ -2,7 +2,7 @@
 //! reader never sees half a file and a crash never leaves one.
 
 use crate::error::{Error, Result};
-use std::io::Write;
+use std::io::{BufRead, Write};
 use std::path::{Path, PathBuf};
 
 /// Whether `path` exists and is not a regular file or a directory: a device or a
@@ -16,33 +16,140 @@ fn is_stream(path: &Path) -> bool {
 /// Write `bytes` to `path` atomically, creating parent directories. A device or a
 /// pipe is written into directly (it has no content to protect).
 pub fn atomic_write(path: &Path, bytes: &[u8]) -> Result<()> {
-    if is_stream(path) {
-        return std::fs::OpenOptions::new()
-            .write(true)
-            .open(path)
-            .and_then(|mut f| f.write_all(bytes))
-            .map_err(|e| Error::io(path, e));
+    let mut f = AtomicFile::create(path)?;
+    f.write_all(bytes).map_err(|e| Error::io(path, e))?;
+    f.commit()
+}
+
+/// A file written as a stream and put in place only when complete: the bytes go
+/// to a temporary file beside the target, renamed onto it by [`AtomicFile::commit`];
+/// dropped without a commit (an error, a panic), the temporary file is removed and
+/// the target never appears half-written. A device or a pipe is written into
+/// directly.
+pub struct AtomicFile {
+    path: PathBuf,
+    /// The temporary file, `None` for a device or a pipe.
+    tmp: Option<PathBuf>,
+    out: std::io::BufWriter<std::fs::File>,
+}
+
+impl AtomicFile {
+    /// Start writing `path`, creating parent directories.
+    pub fn create(path: &Path) -> Result<AtomicFile> {
+        if is_stream(path) {
+            let f = std::fs::OpenOptions::new()
+                .write(true)
+                .open(path)
+                .map_err(|e| Error::io(path, e))?;
+            return Ok(AtomicFile {
+                path: path.to_path_buf(),
+                tmp: None,
+                out: std::io::BufWriter::new(f),
+            });
+        }
+        let dir = path
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "out".into());
+        let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
+        let f = std::fs::File::create(&tmp).map_err(|e| Error::io(path, e))?;
+        Ok(AtomicFile {
+            path: path.to_path_buf(),
+            tmp: Some(tmp),
+            out: std::io::BufWriter::with_capacity(1 << 16, f),
+        })
     }
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-    let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    result.map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        Error::io(path, e)
-    })
+
+    /// The target path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Flush and sync the temporary file (its path, `None` for a stream).
+    fn finish(&mut self) -> Result<Option<PathBuf>> {
+        self.out.flush().map_err(|e| Error::io(&self.path, e))?;
+        if let Some(tmp) = &self.tmp {
+            self.out
+                .get_ref()
+                .sync_all()
+                .map_err(|e| Error::io(&self.path, e))?;
+            return Ok(Some(tmp.clone()));
+        }
+        Ok(None)
+    }
+
+    /// Put the complete file in place (replacing what was there).
+    pub fn commit(mut self) -> Result<()> {
+        if let Some(tmp) = self.finish()? {
+            std::fs::rename(&tmp, &self.path).map_err(|e| Error::io(&self.path, e))?;
+            self.tmp = None;
+        }
+        Ok(())
+    }
+
+    /// Put the complete file in place without losing what was there, as
+    /// [`write_keeping`] does: an existing file with other bytes is first kept
+    /// as `<stem>.previous-<n>.<ext>`. The files are compared in chunks (neither is
+    /// read whole).
+    pub fn commit_keeping(mut self) -> Result<Replaced> {
+        let Some(tmp) = self.finish()? else {
+            return Ok(Replaced::Stream);
+        };
+        let same = |old: &Path| -> std::io::Result<bool> { same_bytes(old, &tmp) };
+        let replaced = keep_aside(&self.path, same)?;
+        std::fs::rename(&tmp, &self.path).map_err(|e| Error::io(&self.path, e))?;
+        self.tmp = None;
+        Ok(replaced)
+    }
+}
+
+impl Write for AtomicFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.out.write(buf)
+    }
+    fn write_all(&mut self, buf: &[u8]) -> std::io::Result<()> {
+        self.out.write_all(buf)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.out.flush()
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if let Some(tmp) = &self.tmp {
+            let _ = std::fs::remove_file(tmp);
+        }
+    }
+}
+
+/// Whether two files hold the same bytes, read in chunks.
+fn same_bytes(a: &Path, b: &Path) -> std::io::Result<bool> {
+    let (fa, fb) = (std::fs::File::open(a)?, std::fs::File::open(b)?);
+    if fa.metadata()?.len() != fb.metadata()?.len() {
+        return Ok(false);
+    }
+    let (mut ra, mut rb) = (
+        std::io::BufReader::with_capacity(1 << 16, fa),
+        std::io::BufReader::with_capacity(1 << 16, fb),
+    );
+    loop {
+        let (ba, bb) = (ra.fill_buf()?, rb.fill_buf()?);
+        let n = ba.len().min(bb.len());
+        if n == 0 {
+            return Ok(ba.len() == bb.len());
+        }
+        if ba[..n] != bb[..n] {
+            return Ok(false);
+        }
+        ra.consume(n);
+        rb.consume(n);
+    }
 }
 
 /// What happened to an existing file when a result was written.
@@ -68,18 +175,25 @@ pub fn write_keeping(path: &Path, bytes: &[u8], same: impl Fn(&[u8]) -> bool) ->
         atomic_write(path, bytes)?;
         return Ok(Replaced::Stream);
     }
-    let replaced = match std::fs::read(path) {
-        Ok(old) if same(&old) => Replaced::Same,
-        Ok(_) => {
-            let keep = previous_name(path);
-            std::fs::rename(path, &keep).map_err(|e| Error::io(path, e))?;
-            Replaced::KeptAs(keep)
-        }
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Replaced::New,
-        Err(e) => return Err(Error::io(path, e)),
-    };
+    let replaced = keep_aside(path, |p| std::fs::read(p).map(|old| same(&old)))?;
     atomic_write(path, bytes)?;
     Ok(replaced)
+}
+
+/// Before `path` is replaced: nothing there ([`Replaced::New`]), the same result
+/// (`same(path)` true), or another file, renamed to `<stem>.previous-<n>.<ext>`. An
+/// existing path that cannot be read is an error, never taken for "no file".
+fn keep_aside(path: &Path, same: impl FnOnce(&Path) -> std::io::Result<bool>) -> Result<Replaced> {
+    match same(path) {
+        Ok(true) => Ok(Replaced::Same),
+        Ok(false) => {
+            let keep = previous_name(path);
+            std::fs::rename(path, &keep).map_err(|e| Error::io(path, e))?;
+            Ok(Replaced::KeptAs(keep))
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Replaced::New),
+        Err(e) => Err(Error::io(path, e)),
+    }
 }
 
 /// A fit file: as [`write_keeping`], `same` comparing the old text with the new fit

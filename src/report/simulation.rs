@@ -6,8 +6,9 @@ use super::page::{code, strong, text, Page};
 use super::plot::{band, nth_line, Chart, Series, Style};
 use super::runs::Run;
 use crate::error::Result;
+use crate::sim::derivatives::OutputSensitivity;
 use crate::sim::sampling::Band;
-use crate::sim::{Outcome, Rows as SensRows, Sensitivities};
+use crate::sim::{Outcome, Row, Sensitivities};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -19,16 +20,16 @@ fn opt(v: f64) -> String {
     }
 }
 
-/// The rows (sample × parameter) of one output in [`Sensitivities`].
-type Rows = fn(&Sensitivities) -> &SensRows;
+/// One output's value in a row of [`OutputSensitivity`].
+type Of = fn(&OutputSensitivity) -> f64;
 
 /// The sensitivity outputs of a trajectory: the column of the quantity, its SI unit
-/// (empty: dimensionless) and its rows.
-const SENSITIVITY_COLUMNS: [(&str, &str, Rows); 4] = [
-    ("stretch", "", |se| &se.stretch),
-    ("length", "m", |se| &se.length),
-    ("capacitance", "F", |se| &se.capacitance),
-    ("current", "A", |se| &se.current),
+/// (empty: dimensionless) and its value.
+const SENSITIVITY_COLUMNS: [(&str, &str, Of); 4] = [
+    ("stretch", "", |d| d.stretch),
+    ("length", "m", |d| d.length),
+    ("capacitance", "F", |d| d.capacitance),
+    ("current", "A", |d| d.current),
 ];
 
 /// The CSV header of ∂`quantity`/∂`param`: `d<quantity>_d_<name>` with the unit
@@ -67,43 +68,59 @@ pub struct ScaledSensitivity {
     pub capacitance_f: f64,
 }
 
-/// Scaled sensitivities of every parameter, largest stretch effect first.
+/// Scaled sensitivities of every parameter (over every sample, kept or not),
+/// largest stretch effect first.
 pub fn scaled_sensitivities(se: &Sensitivities) -> Vec<ScaledSensitivity> {
-    let big = |rows: &SensRows, j: usize| {
-        rows.iter()
-            .map(|r| (se.theta[j] * r[j]).abs())
-            .filter(|v| v.is_finite())
-            .fold(0.0, f64::max)
-    };
     let mut v: Vec<ScaledSensitivity> = (0..se.params.len())
         .map(|j| ScaledSensitivity {
             param: se.params[j].clone(),
             value: se.theta[j],
-            stretch: big(&se.stretch, j),
-            capacitance_f: big(&se.capacitance, j),
+            stretch: se.peak_stretch[j],
+            capacitance_f: se.peak_capacitance[j],
         })
         .collect();
     v.sort_by(|a, b| b.stretch.total_cmp(&a.stretch));
     v
 }
 
-/// The trajectory as CSV text (SI units in the header); with sensitivities, for each
-/// of stretch, length, capacitance and current the derivative of that output to
-/// every parameter (per SI unit of the parameter; headers by [`sensitivity_header`],
-/// e.g. `dcurrent_d_eps_r_A`, `dlength_d_C10_m_per_Pa`), empty at a pull-in sample.
-pub fn trajectory_csv(o: &Outcome) -> String {
-    let mut s = String::from(
-        "time_s,input_V,voltage_V,stretch,length_m,stroke_m,capacitance_F,current_A,power_W,leakage_power_W,alpha_rad,reference,sensed_contraction",
-    );
-    if let Some(se) = &o.sensitivities {
-        for (quantity, unit, _) in SENSITIVITY_COLUMNS {
-            for p in &se.params {
-                let _ = write!(s, ",{}", sensitivity_header(quantity, unit, p));
-            }
+/// The trajectory CSV, written row by row as a run reaches its samples (SI units
+/// in the header, written with the first row); with sensitivities, for each of
+/// stretch, length, capacitance and current the derivative of that output to every
+/// parameter (per SI unit of the parameter; headers by [`sensitivity_header`], e.g.
+/// `dcurrent_d_eps_r_A`, `dlength_d_C10_m_per_Pa`), empty at a pull-in sample.
+pub struct TrajectoryCsv<W: std::io::Write> {
+    out: W,
+    line: String,
+    started: bool,
+}
+
+impl<W: std::io::Write> TrajectoryCsv<W> {
+    /// A CSV into `out`.
+    pub fn new(out: W) -> Self {
+        TrajectoryCsv {
+            out,
+            line: String::new(),
+            started: false,
         }
     }
-    s.push('\n');
-    for (k, x) in o.samples.iter().enumerate() {
+
+    /// Write one sample (the header first).
+    pub fn row(&mut self, r: &Row) -> std::io::Result<()> {
+        let s = &mut self.line;
+        s.clear();
+        if !self.started {
+            self.started = true;
+            s.push_str("time_s,input_V,voltage_V,stretch,length_m,stroke_m,capacitance_F,current_A,power_W,leakage_power_W,alpha_rad,reference,sensed_contraction");
+            if let Some((params, _)) = r.sensitivities {
+                for (quantity, unit, _) in SENSITIVITY_COLUMNS {
+                    for p in params {
+                        let _ = write!(s, ",{}", sensitivity_header(quantity, unit, p));
+                    }
+                }
+            }
+            s.push('\n');
+        }
+        let x = r.sample;
         let _ = write!(
             s,
             "{},{},{},{},{},{},{},{},{},{},{},{},{}",
@@ -112,7 +129,7 @@ pub fn trajectory_csv(o: &Outcome) -> String {
             x.voltage_v,
             x.stretch,
             x.length_m,
-            o.rest_length_m - x.length_m,
+            r.rest_length_m - x.length_m,
             x.capacitance_f,
             x.current_a,
             x.power_w,
@@ -121,16 +138,21 @@ pub fn trajectory_csv(o: &Outcome) -> String {
             opt(x.reference),
             x.sensed_contraction
         );
-        if let Some(se) = &o.sensitivities {
-            for (_, _, rows) in SENSITIVITY_COLUMNS {
-                for v in &rows(se)[k] {
-                    let _ = write!(s, ",{}", opt(*v));
+        if let Some((_, row)) = r.sensitivities {
+            for (_, _, of) in SENSITIVITY_COLUMNS {
+                for d in row {
+                    let _ = write!(s, ",{}", opt(of(d)));
                 }
             }
         }
         s.push('\n');
+        self.out.write_all(s.as_bytes())
     }
-    s
+
+    /// The writer, after the last row.
+    pub fn into_inner(self) -> W {
+        self.out
+    }
 }
 
 /// A sampled quantity as a chart series: the line through the samples, or, when the
@@ -157,7 +179,12 @@ fn trace(
                 })
                 .unzip();
             Series {
-                label: format!("{label}: min/max per output interval (samples alias the ringing)"),
+                label: match o.decimation {
+                    1 => {
+                        format!("{label}: min/max per output interval (samples alias the ringing)")
+                    }
+                    k => format!("{label}: min/max per {k} output intervals"),
+                },
                 points: band(&x, &lo, &hi),
                 color,
                 style: Style::Band,
@@ -295,6 +322,12 @@ pub fn write(o: &Outcome, input: &str, dir: &Path) -> Result<PathBuf> {
         si(en.kinetic_j, "J"), si(en.load_j, "J"), si(en.viscous_j, "J"), si(en.leakage_j, "J"),
         si(en.source_j, "J"), si(en.residual_j, "J")
     ))]);
+    if o.decimation > 1 {
+        facts.push(vec![text(format!(
+            "charts: one sample in {} of the {} (the trajectory CSV holds them all), stroke and power as their min/max over the samples in between",
+            o.decimation, o.sample_count
+        ))]);
+    }
     if let Some(r) = o.tracking_rmse_pct {
         facts.push(vec![text(format!("tracking %RMSE (Eq. 3.28): {r:.2} %"))]);
     }
@@ -345,18 +378,21 @@ pub fn write(o: &Outcome, input: &str, dir: &Path) -> Result<PathBuf> {
         };
         page.chart(dir, "sensitivities.svg", "sensitivities", &chart)?;
     }
+    // The shortest length: over the samples, or, where they were decimated, over
+    // the bands of those skipped.
+    let shortest = match (&o.envelope, o.decimation) {
+        (Some(env), k) if k > 1 => env
+            .iter()
+            .map(|i| i.length_m.lo)
+            .fold(f64::INFINITY, f64::min),
+        _ => o
+            .samples
+            .iter()
+            .map(|s| s.length_m)
+            .fold(f64::INFINITY, f64::min),
+    };
     let run = Run::new("simulate", input, o.fidelity.model.to_string()).headline(vec![
-        format!(
-            "max stroke {}",
-            si(
-                o.rest_length_m
-                    - o.samples
-                        .iter()
-                        .map(|s| s.length_m)
-                        .fold(f64::INFINITY, f64::min),
-                "m"
-            )
-        ),
+        format!("max stroke {}", si(o.rest_length_m - shortest, "m")),
         format!("max power {}", si(x.power_max_w, "W")),
         format!("{} event(s)", o.events.len()),
     ]);

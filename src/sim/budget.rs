@@ -556,6 +556,9 @@ pub struct Cost {
     pub input_periods: f64,
     /// Steps an explicit method needs for stability alone (0 for an implicit one).
     pub stability_steps: f64,
+    /// For a scene that names no integrator: the one `auto` chose ([`auto_method`])
+    /// and why.
+    pub auto: Option<(Method, String)>,
 }
 
 impl Cost {
@@ -602,19 +605,37 @@ pub fn estimate(s: &Scene) -> Result<Cost> {
     };
     let ring_periods = ring_time * mode.frequency_hz;
     let spp = (STEPS_PER_PERIOD * (1e-6 / rtol).powf(0.2)).max(4.0);
-    // an explicit method (the scene's, or auto's choice for a lightly damped mode
-    // with inertia, as in `sim::simulate`) cannot step past its stability limit
-    // h·ω ≈ 3.3 even after the ringing has died away
-    let method = s
-        .time
-        .method
-        .unwrap_or_else(|| super::auto_method(fid.inertia, mode.damping_ratio).0);
+    let accuracy = spp * (ring_periods + input_periods);
+    // auto's choice from the stiffness of the plant that runs (`sim::simulate`
+    // runs with it)
+    let (method, auto, rho) = match s.time.method {
+        Some(m) => (m, None, 0.0),
+        None => {
+            let plant =
+                Plant::new(s, fid.inertia, &fid.keep).map_err(|why| no_rest_state(s, why))?;
+            let k = stiffness(&plant);
+            let (m, why) = auto_method(
+                span * k.radius / EXPLICIT_STABILITY,
+                span * k.light / BDF_LIGHT_STEP,
+                accuracy,
+                kinks,
+            );
+            (m, Some((m, why)), k.radius)
+        }
+    };
+    // an explicit method cannot step past its stability limit h·|λ| ≈ 3.3 (the
+    // axial mode's ω, or the Jacobian's fastest rate where known) even after the
+    // ringing has died away
     let explicit = matches!(method, Method::Tsit45 | Method::Dp54);
-    let stability = match explicit && fid.inertia && omega.is_finite() {
-        true => span * omega / EXPLICIT_STABILITY,
+    let fastest = match fid.inertia && omega.is_finite() {
+        true => omega.max(rho),
+        false => rho,
+    };
+    let stability = match explicit {
+        true => span * fastest / EXPLICIT_STABILITY,
         false => 0.0,
     };
-    let steps = (spp * (ring_periods + input_periods)).max(stability) + STEPS_PER_RESTART * kinks;
+    let steps = accuracy.max(stability) + STEPS_PER_RESTART * kinks;
     let memory =
         (s.time.samples.len() as f64 + 2.0) * std::mem::size_of::<Sample>() as f64 + 8.0 * kinks;
     Ok(Cost {
@@ -626,7 +647,90 @@ pub fn estimate(s: &Scene) -> Result<Cost> {
         ring_periods,
         input_periods,
         stability_steps: stability,
+        auto,
     })
+}
+
+/// The stiffness of a plant (see [`stiffness`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stiffness {
+    /// Spectral radius ρ of the Jacobian (1/s).
+    pub radius: f64,
+    /// Largest |λ| of its lightly damped oscillatory eigenvalues, |Re λ| <
+    /// [`LIGHT`]·|λ| (1/s; 0 without one).
+    pub light: f64,
+}
+
+/// An eigenvalue with |Re λ| below this fraction of |λ| (damping ratio < 0.07,
+/// within 4° of the imaginary axis) lies outside the A(α) sector of BDF orders ≥ 3
+/// (α = 86° for BDF3, 52° for BDF5; Hairer & Wanner II, §V.2): BDF must resolve it.
+pub const LIGHT: f64 = 0.07;
+/// The step BDF holds on a lightly damped eigenvalue, h·|λ| (measured: the
+/// undamped 4 kV stack over 10⁴ s, 4.77 M steps for the first 214 s at 6340 s⁻¹,
+/// long after the ringing had decayed).
+pub const BDF_LIGHT_STEP: f64 = 0.3;
+
+/// The stiffness of a plant from the eigenvalues of its Jacobian ∂f/∂y at the
+/// start state: the spectral radius ρ, the fastest rate of the linearised plant,
+/// decaying (a dashpot-damped mode, a source's RC, a controller) or oscillating
+/// (the axial mode), which bounds an explicit step by h·ρ ≲ 3.3 however smooth the
+/// solution (Hairer & Wanner II, §IV.2); and the fastest lightly damped
+/// oscillation, which bounds a BDF step too.
+pub fn stiffness(p: &Plant) -> Stiffness {
+    let y = p.initial_state();
+    let n = y.len();
+    let mut jac = vec![0.0; n * n];
+    p.jacobian(0.0, &y, &mut jac);
+    let ev = nalgebra::DMatrix::from_row_slice(n, n, &jac).complex_eigenvalues();
+    let finite = ev.iter().filter(|l| l.norm().is_finite());
+    Stiffness {
+        radius: finite.clone().map(|l| l.norm()).fold(0.0, f64::max),
+        light: finite
+            .filter(|l| l.im != 0.0 && l.re.abs() < LIGHT * l.norm())
+            .map(|l| l.norm())
+            .fold(0.0, f64::max),
+    }
+}
+
+/// The steps a BDF run takes whatever the dynamics (its start from first order, the
+/// slow arms), in explicit steps of the same cost: below it an explicit method wins
+/// even where stability bounds its step. Calibrated with `dea-fit bench
+/// integrators` (reports/bench-integrators): on the shipped scenes and the 5 kV
+/// stack at ζ = 10⁻⁴…10 the cheaper method is the explicit one exactly where its
+/// stability steps stay below its accuracy steps plus this floor (hdea_step_10N:
+/// 303 against 411, Tsitouras 1.6× faster; the stack at ζ = 0.1 over 1 s: 1921
+/// against 890, BDF 2.7× faster).
+const IMPLICIT_FLOOR: f64 = 300.0;
+/// The integrator `auto` chooses, with the reason: explicit Tsitouras 5(4) when
+/// the steps its stability needs (`stiff_steps` = span·ρ/3.3, ρ the [`stiffness`])
+/// do not exceed what accuracy needs anyway (`accuracy_steps`: the ringing and the
+/// input's periods, plus the restarts at `kinks`) by more than [`IMPLICIT_FLOOR`],
+/// or those BDF needs to hold a lightly damped oscillation stable (`bdf_steps` =
+/// span·|λ|/0.3); the variable-order BDF otherwise. A lightly damped oscillation
+/// rings through the span and bounds both methods (explicit steps are cheaper); a
+/// damped or stiff plant (dashpot, controller, source RC) holds an explicit method
+/// at its stability limit long after the motion is smooth, and BDF strides on.
+pub fn auto_method(
+    stiff_steps: f64,
+    bdf_steps: f64,
+    accuracy_steps: f64,
+    kinks: f64,
+) -> (Method, String) {
+    let accuracy = accuracy_steps + STEPS_PER_RESTART * kinks;
+    let explicit = stiff_steps <= accuracy + IMPLICIT_FLOOR || stiff_steps <= bdf_steps;
+    let (m, what) = match explicit {
+        true => (Method::Tsit45, "explicit Tsitouras 5(4)"),
+        false => (Method::Bdf, "variable-order BDF"),
+    };
+    (
+        m,
+        format!(
+            "auto: stability needs ≈ {} explicit steps (BDF: {}), accuracy ≈ {}: {what}",
+            fmt_g(stiff_steps.round()),
+            fmt_g(bdf_steps.round()),
+            fmt_g(accuracy.round())
+        ),
+    )
 }
 
 /// The guard `sim::simulate` runs first: every quantity in its domain, a stable

@@ -161,13 +161,21 @@ pub struct Outcome {
     pub tracking_rmse_pct: Option<f64>,
     /// Warnings (extrapolated material model, undetermined damping, ...).
     pub warnings: Vec<String>,
-    /// Samples (not in the JSON summary).
+    /// Samples (not in the JSON summary): every one ([`simulate`]), or every
+    /// `decimation`-th and the last ([`simulate_streaming`]).
     #[serde(skip)]
     pub samples: Vec<Sample>,
-    /// Extremes per output interval, aligned with `samples`, when they do not resolve
-    /// the motion ([`sampling`]).
+    /// Number of samples the run produced (`samples` may hold fewer).
+    pub sample_count: usize,
+    /// Every how many samples one is in `samples` (1: all).
+    pub decimation: usize,
+    /// Extremes over each kept sample's output intervals, aligned with `samples`,
+    /// when the samples do not resolve the motion or were decimated ([`sampling`]).
     #[serde(skip)]
     pub envelope: Option<Vec<sampling::Interval>>,
+    /// Extremes over every sample.
+    #[serde(skip)]
+    extremes: Extremes,
     /// Forward sensitivities at the samples, if asked for ([`RunOptions::sensitivities`]).
     #[serde(skip)]
     pub sensitivities: Option<Sensitivities>,
@@ -194,7 +202,12 @@ pub struct Sensitivities {
     /// ∂I/∂θj (A per unit of θj; `Sample::current_a`, which depends on λ̇, V and
     /// the source state: [`Plant::output_sensitivities`]).
     pub current: Rows,
-    /// Scratch row of [`Plant::output_sensitivities`] (no allocation per sample).
+    /// Over every sample (kept or not), the largest finite |θj·∂λ/∂θj|.
+    pub peak_stretch: Vec<f64>,
+    /// Over every sample, the largest finite |θj·∂C/∂θj| (F).
+    pub peak_capacitance: Vec<f64>,
+    /// Row of [`Plant::output_sensitivities`] at the last sample (no allocation per
+    /// sample).
     #[serde(skip)]
     scratch: Vec<derivatives::OutputSensitivity>,
 }
@@ -273,34 +286,47 @@ impl Sensitivities {
             length: Rows::new(np),
             capacitance: Rows::new(np),
             current: Rows::new(np),
+            peak_stretch: vec![0.0; np],
+            peak_capacitance: vec![0.0; np],
             scratch: vec![zero; np],
         };
-        se.record(p, 0.0, y0, &cols);
+        se.compute(p, 0.0, y0, &cols);
         se
     }
 
     /// The row of a sample at (t, y) from the state sensitivities `s` (column by
-    /// column, `s[j·n + i]` = ∂yi/∂θj).
-    fn record(&mut self, p: &Plant, t: f64, y: &[f64], s: &[f64]) {
-        let d = &mut self.scratch;
-        p.output_sensitivities(t, y, s, d);
+    /// column, `s[j·n + i]` = ∂yi/∂θj), into the scratch row and the peaks.
+    fn compute(&mut self, p: &Plant, t: f64, y: &[f64], s: &[f64]) {
+        p.output_sensitivities(t, y, s, &mut self.scratch);
+        for (j, d) in self.scratch.iter().enumerate() {
+            let peak = |v: f64, m: &mut f64| {
+                let v = (self.theta[j] * v).abs();
+                if v.is_finite() {
+                    *m = m.max(v);
+                }
+            };
+            peak(d.stretch, &mut self.peak_stretch[j]);
+            peak(d.capacitance, &mut self.peak_capacitance[j]);
+        }
+    }
+
+    /// Keep the scratch row (the last computed).
+    fn keep(&mut self) {
+        let d = &self.scratch;
         self.stretch.push(d.iter().map(|d| d.stretch));
         self.length.push(d.iter().map(|d| d.length));
         self.capacitance.push(d.iter().map(|d| d.capacitance));
         self.current.push(d.iter().map(|d| d.current));
     }
 
-    /// The NaN row of a pull-in sample.
-    fn record_unknown(&mut self) {
-        let np = self.theta.len();
-        for ch in [
-            &mut self.stretch,
-            &mut self.length,
-            &mut self.capacitance,
-            &mut self.current,
-        ] {
-            ch.push(std::iter::repeat_n(f64::NAN, np));
-        }
+    /// The NaN row of a pull-in sample (the event time itself moves with θ).
+    fn unknown(&mut self) {
+        self.scratch.fill(derivatives::OutputSensitivity {
+            stretch: f64::NAN,
+            length: f64::NAN,
+            capacitance: f64::NAN,
+            current: f64::NAN,
+        });
     }
 }
 
@@ -393,34 +419,65 @@ pub fn elastic_energy(p: &Plant, a: f64, b: f64) -> f64 {
     p.vol * s * 0.5 * h
 }
 
-/// The integrator `auto` chooses, with the reason: explicit Tsitouras 5(4) for a
-/// lightly damped oscillation (ζ < 0.3 with inertia), variable-order BDF otherwise.
-/// `sim::budget` estimates a run's cost with the same choice.
-pub fn auto_method(inertia: bool, damping_ratio: f64) -> (Method, &'static str) {
-    if inertia && damping_ratio < 0.3 {
-        (
-            Method::Tsit45,
-            "auto: lightly damped oscillation, explicit Tsitouras 5(4)",
-        )
-    } else {
-        (Method::Bdf, "auto: damped/stiff, variable-order BDF")
-    }
+/// Simulate a scene: [`prepare`] the run, [`integrate`] it, [`summarise`] it
+/// (energy balance, sampling, range and damping warnings, tracking error). Every
+/// sample is kept in [`Outcome::samples`].
+pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
+    simulate_with(scene, opts, usize::MAX, None)
 }
 
-/// Simulate a scene: [`prepare`] the run, [`integrate`] it, [`summarise`] it
-/// (energy balance, sampling, range and damping warnings, tracking error).
-pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
+/// [`simulate`], each sample sent to `sink` (if any) as the run reaches it, and only
+/// every k-th kept in [`Outcome::samples`] (k the smallest that keeps at most
+/// `charted` of them; the last is kept too), with the extremes over the samples in
+/// between in [`Outcome::envelope`]: memory does not grow with the sample count.
+/// The summary (extremes, warnings, tracking error, energy) is over every sample.
+/// The first error of `sink` stops the writing and is returned after the run.
+pub fn simulate_streaming(
+    scene: &Scene,
+    opts: &RunOptions,
+    charted: usize,
+    sink: Option<&mut Sink>,
+) -> crate::Result<Outcome> {
+    simulate_with(scene, opts, charted, sink)
+}
+
+fn simulate_with(
+    scene: &Scene,
+    opts: &RunOptions,
+    charted: usize,
+    sink: Option<&mut Sink>,
+) -> crate::Result<Outcome> {
     let run = prepare(scene, opts)?;
+    let every = (scene.time.samples.len() + 1).div_ceil(charted.max(2) - 1);
     let mut env = sampling::Envelope::new(
         run.cost.fidelity.inertia,
         &run.cost.mode,
         &scene.time.samples,
     );
-    let ran = integrate(scene, &run, opts.sensitivities, &mut |t, y| {
-        env.add(&sample(&run.plant, t, y))
-    });
-    Ok(summarise(scene, run, ran, env))
+    if every > 1 {
+        env = env.grouped();
+    }
+    let mut ran = integrate(scene, &run, opts.sensitivities, every, Some(env), sink);
+    if let Some(e) = ran.record.sink_error.take() {
+        return Err(e);
+    }
+    Ok(summarise(scene, run, ran))
 }
+
+/// One sample as the run reaches it, for a [`Sink`].
+#[derive(Debug, Clone, Copy)]
+pub struct Row<'a> {
+    /// The sample.
+    pub sample: &'a Sample,
+    /// Rest length (m): the stroke is the rest length minus the length.
+    pub rest_length_m: f64,
+    /// With sensitivities: the parameter names ([`Sensitivities::params`]) and the
+    /// outputs' derivatives to each (NaN at a pull-in sample).
+    pub sensitivities: Option<(&'a [String], &'a [derivatives::OutputSensitivity])>,
+}
+
+/// Where [`simulate_streaming`] sends each sample.
+pub type Sink<'a> = dyn FnMut(&Row) -> crate::Result<()> + 'a;
 
 /// The trajectory of a scene without the report-only work of [`simulate`]: the
 /// same guard, plant, integrator and samples (bit for bit), the same check that a
@@ -428,7 +485,7 @@ pub fn simulate(scene: &Scene, opts: &RunOptions) -> crate::Result<Outcome> {
 /// identification runs in its inner loop (issue 10).
 pub fn trajectory(scene: &Scene, opts: &RunOptions) -> crate::Result<Trajectory> {
     let run = prepare(scene, opts)?;
-    Ok(integrate(scene, &run, opts.sensitivities, &mut |_, _| {}).trajectory)
+    Ok(integrate(scene, &run, opts.sensitivities, 1, None, None).trajectory)
 }
 
 /// The trajectory of a run (see [`trajectory`]).
@@ -481,12 +538,10 @@ fn prepare(scene: &Scene, opts: &RunOptions) -> crate::Result<Prepared> {
         .map_err(|why| budget::no_rest_state(scene, why))?;
     let mode = &cost.mode;
     let rtol = opts.rtol.unwrap_or(scene.time.rtol);
-    let (method, reason) = match opts.method.or(scene.time.method) {
-        Some(m) => (m, "requested".to_string()),
-        None => {
-            let (m, why) = auto_method(plant.inertia, mode.damping_ratio);
-            (m, why.to_string())
-        }
+    let (method, reason) = match (opts.method.or(scene.time.method), &cost.auto) {
+        (Some(m), _) => (m, "requested".to_string()),
+        (None, Some((m, why))) => (*m, why.clone()),
+        (None, None) => unreachable!("budget::estimate chooses for a scene without an integrator"),
     };
     let span = scene.time.span;
     let v_max = opts.v_max.unwrap_or_else(|| drive_max(scene));
@@ -533,25 +588,175 @@ struct Integrated {
     /// Time and state at the end of the run (pull-in, failure or the span).
     t_end: f64,
     y_end: Vec<f64>,
+    /// What was gathered over every sample.
+    record: Recorded,
+    /// Number of samples recorded.
+    sample_count: usize,
+    /// Every how many samples one was kept.
+    decimation: usize,
+}
+
+/// The sensitivities of a sample handed to [`Recorder::record`].
+enum SensAt<'a> {
+    /// None to compute: the run has none, or the scratch row already holds them
+    /// (sample 0, [`Sensitivities::at_start`]).
+    Ready,
+    /// The state sensitivities, column by column.
+    At(&'a [f64]),
+    /// A pull-in sample: not defined.
+    Unknown,
+}
+
+/// Takes each sample as the run reaches it: keeps every `every`-th (and the last),
+/// sends each to the sink, and gathers what the summary needs over all of them.
+struct Recorder<'s, 'k> {
+    every: usize,
+    count: usize,
+    /// Whether the last sample recorded was kept.
+    last_kept: bool,
+    last: Option<Sample>,
+    kept: Vec<Sample>,
+    sens: Option<Sensitivities>,
+    env: Option<sampling::Envelope>,
+    rest_length_m: f64,
+    sink: Option<&'s mut Sink<'k>>,
+    done: Recorded,
+}
+
+/// What a [`Recorder`] gathered over every sample.
+struct Recorded {
+    extremes: Extremes,
+    /// Σ (contraction − reference)², the reference's range (closed loop).
+    tracking: (f64, f64, f64),
+    first_bad: Option<Sample>,
+    /// The envelope's bands and warning ([`sampling::Envelope::finish`]).
+    envelope: (Option<Vec<sampling::Interval>>, Option<String>),
+    sink_error: Option<crate::Error>,
+}
+
+impl Recorder<'_, '_> {
+    fn record(
+        &mut self,
+        p: &Plant,
+        t: f64,
+        y: &[f64],
+        s: SensAt,
+        steps: sampling::Interval,
+        force: bool,
+    ) {
+        let x = sample(p, t, y);
+        let keep = force || self.count.is_multiple_of(self.every);
+        self.count += 1;
+        if let Some(se) = &mut self.sens {
+            match s {
+                SensAt::Ready => {}
+                SensAt::At(s) => se.compute(p, t, y, s),
+                SensAt::Unknown => se.unknown(),
+            }
+            if keep {
+                se.keep();
+            }
+        }
+        let d = &mut self.done;
+        let e = &mut d.extremes;
+        e.stretch_min = e.stretch_min.min(x.stretch);
+        e.stretch_max = e.stretch_max.max(x.stretch);
+        e.current_max_a = e.current_max_a.max(x.current_a.abs());
+        e.power_max_w = e.power_max_w.max(x.power_w);
+        e.leakage_max_w = e.leakage_max_w.max(x.leakage_w);
+        if p.control.is_some() {
+            let (ss, lo, hi) = &mut d.tracking;
+            *ss += (1.0 - x.length_m / self.rest_length_m - x.reference).powi(2);
+            *lo = lo.min(x.reference);
+            *hi = hi.max(x.reference);
+        }
+        if d.first_bad.is_none() && !sample_finite(&x) {
+            d.first_bad = Some(x);
+        }
+        if let Some(env) = &mut self.env {
+            env.sample(&x, steps, keep);
+        }
+        if let (Some(sink), None) = (&mut self.sink, &d.sink_error) {
+            let row = Row {
+                sample: &x,
+                rest_length_m: self.rest_length_m,
+                sensitivities: self
+                    .sens
+                    .as_ref()
+                    .map(|se| (&se.params[..], &se.scratch[..])),
+            };
+            if let Err(e) = sink(&row) {
+                d.sink_error = Some(e);
+            }
+        }
+        if keep {
+            self.kept.push(x);
+        }
+        self.last_kept = keep;
+        self.last = Some(x);
+    }
+
+    /// Keep the last sample if it was not, and close the envelope.
+    fn finish(mut self) -> (Vec<Sample>, Option<Sensitivities>, usize, Recorded) {
+        let add_last = !self.last_kept;
+        if add_last {
+            self.kept.extend(self.last);
+            if let Some(se) = &mut self.sens {
+                se.keep();
+            }
+        }
+        if let Some(env) = self.env {
+            self.done.envelope = env.finish(add_last);
+        }
+        (self.kept, self.sens, self.count, self.done)
+    }
 }
 
 /// Integrate a prepared run from the rest state: the samples (and their
 /// sensitivities), the pull-in event (the instantaneous stiffness reaching zero),
-/// an ideal source's charging losses at its jumps, the status. `step` sees the
-/// state at every accepted step.
-fn integrate(
+/// an ideal source's charging losses at its jumps, the status. Keeps every
+/// `every`-th sample (and the last), sends each to `sink`; `env` (if any) takes the
+/// samples and, where it wants them, the accepted steps between them.
+fn integrate<'s, 'k>(
     scene: &Scene,
     run: &Prepared,
     sensitivities: bool,
-    step: &mut integrate::StepFn,
+    every: usize,
+    env: Option<sampling::Envelope>,
+    sink: Option<&'s mut Sink<'k>>,
 ) -> Integrated {
     let p = &run.plant;
     let l = p.layout();
     let span = scene.time.span;
     let mut y = p.initial_state();
     let mut stats = Stats::default();
-    let mut samples = Vec::with_capacity(scene.time.samples.len() + 2);
-    samples.push(sample(p, 0.0, &y));
+    let wants_steps = env.as_ref().is_some_and(|e| e.wants_steps());
+    let mut rec = Recorder {
+        every,
+        count: 0,
+        last_kept: false,
+        last: None,
+        kept: Vec::with_capacity((scene.time.samples.len() + 2).div_ceil(every) + 1),
+        sens: sensitivities.then(|| Sensitivities::at_start(p, &y)),
+        env,
+        rest_length_m: p.length(p.lam0),
+        sink,
+        done: Recorded {
+            extremes: Extremes {
+                stretch_min: f64::INFINITY,
+                stretch_max: f64::NEG_INFINITY,
+                current_max_a: 0.0,
+                power_max_w: f64::NEG_INFINITY,
+                leakage_max_w: 0.0,
+            },
+            tracking: (0.0, f64::INFINITY, f64::NEG_INFINITY),
+            first_bad: None,
+            envelope: (None, None),
+            sink_error: None,
+        },
+    };
+    let none = sampling::Interval::EMPTY;
+    rec.record(p, 0.0, &y, SensAt::Ready, none, true);
     let e_scale = p.vol * p.tangent(p.lam0).abs().max(1.0);
     let event = |t: f64, y: &[f64]| {
         let v = p.electrical(t, y, 0.0).voltage;
@@ -565,7 +770,6 @@ fn integrate(
         y[l.quad] += vp * c * (vp - vm);
         y[l.quad + 3] += 0.5 * c * (vp - vm).powi(2);
     };
-    let mut sens = sensitivities.then(|| Sensitivities::at_start(p, &y));
     if ideal {
         jump(&mut y, 0.0, scene.input.eval(0.0).0);
     }
@@ -577,11 +781,23 @@ fn integrate(
         }
     };
     let theta = p.theta();
-    let mut out = |t: f64, y: &[f64], s: &[f64]| {
-        samples.push(sample(p, t, y));
-        if let Some(se) = &mut sens {
-            se.record(p, t, y, s);
+    // The accepted steps since the last sample (when the envelope wants them).
+    let steps = std::cell::Cell::new(none);
+    let last_sample = std::cell::Cell::new(0.0);
+    let mut step = |t: f64, y: &[f64]| {
+        if wants_steps && t > last_sample.get() {
+            let mut i = steps.get();
+            i.add(&sample(p, t, y));
+            steps.set(i);
         }
+    };
+    let mut out = |t: f64, y: &[f64], s: &[f64]| {
+        let s = match sensitivities {
+            true => SensAt::At(s),
+            false => SensAt::Ready,
+        };
+        rec.record(p, t, y, s, steps.replace(none), false);
+        last_sample.set(t);
     };
     let end = integrate::run(
         p,
@@ -596,7 +812,7 @@ fn integrate(
             false => Extra::None,
         },
         &mut out,
-        step,
+        &mut step,
         Some(&event),
         &mut at_kink,
         &mut stats,
@@ -609,10 +825,11 @@ fn integrate(
             Vec::new(),
         ),
         End::Event(te) => {
-            samples.push(sample(p, te, &y));
-            if let Some(se) = &mut sens {
-                se.record_unknown();
-            }
+            let s = match sensitivities {
+                true => SensAt::Unknown,
+                false => SensAt::Ready,
+            };
+            rec.record(p, te, &y, s, steps.replace(none), true);
             (
                 RunStatus::PullIn,
                 format!("pull-in at t = {te:.6} s: the instantaneous stiffness vanished"),
@@ -626,7 +843,7 @@ fn integrate(
             )
         }
         End::Failed(why) => {
-            let t = samples.last().map(|s| s.time_s).unwrap_or(0.0);
+            let t = rec.last.map(|s| s.time_s).unwrap_or(0.0);
             let why = if why.starts_with("step budget exhausted") {
                 format!(
                     "{why}: the run was estimated at {} steps before it started (sim::budget); dynamics that much stiffer than the axial mode (high control gains, a fast source) want the implicit integrator = \"bdf\"",
@@ -638,9 +855,10 @@ fn integrate(
             (RunStatus::Failed, why, t, Vec::new())
         }
     };
+    let (samples, sens, count, record) = rec.finish();
     // A finite state can still give a non-finite output (a stretch outside the
     // model's domain): such a run has no result either.
-    let (status, message) = match samples.iter().find(|s| !sample_finite(s)) {
+    let (status, message) = match &record.first_bad {
         Some(bad) if status != RunStatus::Failed => (
             RunStatus::Failed,
             format!(
@@ -664,22 +882,34 @@ fn integrate(
         events,
         t_end,
         y_end: y,
+        record,
+        sample_count: count,
+        decimation: every,
     }
 }
 
 /// The report of an integrated run: energy balance, the sampling envelope and
 /// warnings, the tracking error.
-fn summarise(scene: &Scene, run: Prepared, ran: Integrated, env: sampling::Envelope) -> Outcome {
+fn summarise(scene: &Scene, run: Prepared, ran: Integrated) -> Outcome {
     let p = &run.plant;
     let tr = ran.trajectory;
+    let rec = ran.record;
     let energy = energy_balance(p, ran.t_end, &ran.y_end);
-    let (envelope, undersampled) = env.finish(&tr.samples);
+    let (envelope, undersampled) = rec.envelope;
     let mut warnings: Vec<String> = undersampled.into_iter().collect();
-    warnings.extend(model_warnings(scene, p, &run.cost.mode, &tr.samples));
-    let tracking_rmse_pct = scene
-        .control
-        .as_ref()
-        .map(|_| tracking_rmse_pct(p, &tr.samples));
+    let x = rec.extremes;
+    warnings.extend(model_warnings(
+        scene,
+        p,
+        &run.cost.mode,
+        (x.stretch_min, x.stretch_max),
+    ));
+    // Closed loop: %RMSE of the true contraction 1 − Z/Z_rest against the
+    // reference, normalised by the reference's range (seed Eq. 3.28).
+    let tracking_rmse_pct = scene.control.as_ref().map(|_| {
+        let (ss, lo, hi) = rec.tracking;
+        100.0 * (ss / ran.sample_count as f64).sqrt() / (hi - lo)
+    });
     Outcome {
         tracking_rmse_pct,
         scene: scene.name.clone(),
@@ -699,7 +929,10 @@ fn summarise(scene: &Scene, run: Prepared, ran: Integrated, env: sampling::Envel
         rest_length_m: tr.rest_length_m,
         warnings,
         samples: tr.samples,
+        sample_count: ran.sample_count,
+        decimation: ran.decimation,
         envelope,
+        extremes: x,
         sensitivities: tr.sensitivities,
     }
 }
@@ -750,15 +983,10 @@ fn energy_balance(p: &Plant, t_end: f64, y: &[f64]) -> Energy {
 
 /// Warnings about the model rather than the run: a fit used outside its data's
 /// stretch range, damping that relaxation tests do not determine, an ideal step.
-fn model_warnings(scene: &Scene, p: &Plant, mode: &AxialMode, samples: &[Sample]) -> Vec<String> {
+fn model_warnings(scene: &Scene, p: &Plant, mode: &AxialMode, stretch: (f64, f64)) -> Vec<String> {
     let mut warnings = Vec::new();
     if let Some(fit) = &scene.material.fit {
-        let (lo, hi) = samples
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| {
-                (a.min(s.stretch), b.max(s.stretch))
-            });
-        for lam in [lo, hi] {
+        for lam in [stretch.0, stretch.1] {
             if let Some(wr) = fit.range_warning(p.mode, lam) {
                 warnings.push(wr);
             }
@@ -777,20 +1005,6 @@ fn model_warnings(scene: &Scene, p: &Plant, mode: &AxialMode, samples: &[Sample]
     warnings
 }
 
-/// Closed loop: %RMSE of the true contraction 1 − Z/Z_rest against the reference,
-/// normalised by the reference's range (seed Eq. 3.28).
-fn tracking_rmse_pct(p: &Plant, samples: &[Sample]) -> f64 {
-    let rest = p.length(p.lam0);
-    let (mut ss, mut lo, mut hi) = (0.0, f64::INFINITY, f64::NEG_INFINITY);
-    for s in samples {
-        let y = 1.0 - s.length_m / rest;
-        ss += (y - s.reference).powi(2);
-        lo = lo.min(s.reference);
-        hi = hi.max(s.reference);
-    }
-    100.0 * (ss / samples.len() as f64).sqrt() / (hi - lo)
-}
-
 /// The plant a scene runs with (full model, all arms, with inertia), or the error
 /// of a scene without a stable rest state.
 pub fn full_plant(scene: &Scene) -> crate::Result<Plant> {
@@ -799,23 +1013,10 @@ pub fn full_plant(scene: &Scene) -> crate::Result<Plant> {
 }
 
 impl Outcome {
-    /// Largest and smallest sampled values: (stretch min, stretch max, |current| max, power max).
+    /// Largest and smallest values over every sample: (stretch min, stretch max,
+    /// |current| max, power max, leakage max).
     pub fn extremes(&self) -> Extremes {
-        let mut x = Extremes {
-            stretch_min: f64::INFINITY,
-            stretch_max: f64::NEG_INFINITY,
-            current_max_a: 0.0,
-            power_max_w: f64::NEG_INFINITY,
-            leakage_max_w: 0.0,
-        };
-        for s in &self.samples {
-            x.stretch_min = x.stretch_min.min(s.stretch);
-            x.stretch_max = x.stretch_max.max(s.stretch);
-            x.current_max_a = x.current_max_a.max(s.current_a.abs());
-            x.power_max_w = x.power_max_w.max(s.power_w);
-            x.leakage_max_w = x.leakage_max_w.max(s.leakage_w);
-        }
-        x
+        self.extremes
     }
 }
 

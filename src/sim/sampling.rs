@@ -54,21 +54,39 @@ pub struct Interval {
 }
 
 impl Interval {
-    const EMPTY: Interval = Interval {
+    /// No values yet.
+    pub const EMPTY: Interval = Interval {
         length_m: Band::EMPTY,
         current_a: Band::EMPTY,
         power_w: Band::EMPTY,
     };
 
-    fn add(&mut self, s: &Sample) {
+    /// Widen by a sample's values.
+    pub fn add(&mut self, s: &Sample) {
         self.length_m.add(s.length_m);
         self.current_a.add(s.current_a);
         self.power_w.add(s.power_w);
     }
+
+    fn union(&mut self, o: &Interval) {
+        for (b, o) in [
+            (&mut self.length_m, &o.length_m),
+            (&mut self.current_a, &o.current_a),
+            (&mut self.power_w, &o.power_w),
+        ] {
+            b.lo = b.lo.min(o.lo);
+            b.hi = b.hi.max(o.hi);
+        }
+    }
 }
 
 /// The sampling check of a run and, when the samples do not resolve the motion, the
-/// per-interval extremes of the trajectory at the integrator's accepted steps.
+/// per-interval extremes of the trajectory at the integrator's accepted steps, built
+/// as the run goes (nothing is held per sample but the bands of the kept ones).
+///
+/// A run that keeps only every k-th sample for its charts ([`Envelope::grouped`])
+/// gets one band per kept sample: the extremes over the k output intervals it stands
+/// for, so a decimated chart still shows every excursion of the full trajectory.
 #[derive(Debug, Clone)]
 pub struct Envelope {
     /// Damped mode frequency f_d (Hz); 0 without ringing (no inertia, ζ ≥ 1).
@@ -77,12 +95,18 @@ pub struct Envelope {
     interval_s: f64,
     /// e^(−ζ·ω_n·Δt): what is left of the ringing one interval after it starts.
     decay: f64,
-    /// Output sample times after t = 0 (s).
-    times: Vec<f64>,
-    /// Interval being filled: index into `times`.
-    k: usize,
-    /// Extremes of the accepted steps in each interval; empty when resolved.
-    acc: Vec<Interval>,
+    /// Time of the last output sample (s).
+    span_s: f64,
+    /// Bands are built (the samples do not resolve the motion, or are decimated).
+    banded: bool,
+    /// Union of the bands since the last kept sample.
+    group: Interval,
+    /// The previous sample, if any.
+    prev: Option<Sample>,
+    /// Largest motion within an output interval that its end samples do not show (m).
+    hidden: f64,
+    /// Bands of the kept samples.
+    bands: Vec<Interval>,
 }
 
 impl Envelope {
@@ -108,14 +132,22 @@ impl Envelope {
             damped_hz,
             interval_s,
             decay,
-            times: times.to_vec(),
-            k: 0,
-            acc: Vec::new(),
+            span_s: times.last().copied().unwrap_or(0.0),
+            banded: false,
+            group: Interval::EMPTY,
+            prev: None,
+            hidden: 0.0,
+            bands: Vec::new(),
         };
-        if !e.resolved() {
-            e.acc = vec![Interval::EMPTY; times.len()];
-        }
+        e.banded = !e.resolved();
         e
+    }
+
+    /// Bands even where the samples resolve the motion: the run keeps only some of
+    /// its samples for the charts, and each kept one stands for those it skipped.
+    pub fn grouped(mut self) -> Envelope {
+        self.banded = true;
+        self
     }
 
     /// Whether the samples resolve the motion: no ringing, Nyquist satisfied, or
@@ -126,56 +158,75 @@ impl Envelope {
             || self.decay <= DIED_OUT
     }
 
-    /// The state at the end of an accepted step (as a sample): widens its interval.
-    pub fn add(&mut self, s: &Sample) {
-        if self.acc.is_empty() {
-            return;
-        }
-        while self.k < self.times.len() && s.time_s > self.times[self.k] {
-            self.k += 1;
-        }
-        if let Some(i) = self.acc.get_mut(self.k) {
-            i.add(s);
-        }
+    /// Whether the integrator's accepted steps between samples are wanted
+    /// ([`Envelope::sample`]): only where the samples do not resolve the motion.
+    pub fn wants_steps(&self) -> bool {
+        !self.resolved()
     }
 
-    /// The run's envelope aligned with its `samples` (sample k: the extremes over
-    /// (t_{k−1}, t_k], the samples at both ends included; sample 0: itself), or `None`
-    /// when the samples resolve the motion; and the warning to give then.
-    pub fn finish(self, samples: &[Sample]) -> (Option<Vec<Interval>>, Option<String>) {
-        if self.acc.is_empty() {
+    /// The next output sample, with the extremes of the accepted steps since the
+    /// previous one (`steps`; empty when not wanted), and whether the run keeps it.
+    /// Its band is the interval's steps and both end samples (sample 0: itself).
+    pub fn sample(&mut self, s: &Sample, steps: Interval, kept: bool) {
+        if !self.banded {
+            return;
+        }
+        let mut band = steps;
+        band.add(s);
+        if let Some(prev) = &self.prev {
+            band.add(prev);
+            self.hidden = self.hidden.max(hidden_in(&band, prev, s));
+        }
+        self.group.union(&band);
+        if kept {
+            self.bands
+                .push(std::mem::replace(&mut self.group, Interval::EMPTY));
+        }
+        self.prev = Some(*s);
+    }
+
+    /// The bands aligned with the kept samples (sample k: the extremes over its
+    /// output intervals, the samples at both ends included; sample 0: itself), or
+    /// `None` when the samples resolve the motion and are all kept; and the warning to
+    /// give when they do not resolve it. `last`: the run's last sample was not kept,
+    /// and the caller keeps it now.
+    pub fn finish(mut self, last: bool) -> (Option<Vec<Interval>>, Option<String>) {
+        if !self.banded {
             return (None, None);
         }
-        let bands: Vec<Interval> = (0..samples.len())
-            .map(|k| {
-                let mut i = match k {
-                    0 => Interval::EMPTY,
-                    _ => self.acc.get(k - 1).copied().unwrap_or(Interval::EMPTY),
-                };
-                i.add(&samples[k]);
-                if k > 0 {
-                    i.add(&samples[k - 1]);
-                }
-                i
-            })
-            .collect();
-        let hidden = hidden_motion(&bands, samples);
+        if last {
+            self.bands.push(self.group);
+        }
+        if self.resolved() {
+            return (Some(self.bands), None);
+        }
         let fs = 1.0 / self.interval_s;
         // The alias: f_d folded into [0, fs/2].
         let folded = self.damped_hz % fs;
         let alias = folded.min(fs - folded);
-        let span = self.times.last().copied().unwrap_or(0.0);
         let warning = format!(
             "the output samples ({}) do not resolve the axial mode ({} damped, {:.0} % of its ringing left after one output interval): sampled, it appears as a {} oscillation that does not exist; within output intervals the stroke moves by up to {} more than the samples show, so the charts draw the min/max per output interval from the integrator's steps; give more than {:.0} samples over the {} span (Nyquist) to resolve it",
             si(fs, "Hz"),
             si(self.damped_hz, "Hz"),
             100.0 * self.decay,
             si(alias, "Hz"),
-            si(hidden, "m"),
-            (2.0 * self.damped_hz * span).ceil(),
-            si(span, "s")
+            si(self.hidden, "m"),
+            (2.0 * self.damped_hz * self.span_s).ceil(),
+            si(self.span_s, "s")
         );
-        (Some(bands), Some(warning))
+        (Some(self.bands), Some(warning))
+    }
+}
+
+/// The length change within an output interval (band `b`, end samples `a`, `s`)
+/// that the end samples do not show: band width minus the change between them (m);
+/// 0 when not finite.
+fn hidden_in(b: &Interval, a: &Sample, s: &Sample) -> f64 {
+    let w = (b.length_m.hi - b.length_m.lo) - (s.length_m - a.length_m).abs();
+    if w.is_finite() {
+        w
+    } else {
+        0.0
     }
 }
 
@@ -184,10 +235,6 @@ impl Envelope {
 /// gives ≈ 2A; a monotone move between samples gives ≈ 0.
 pub fn hidden_motion(bands: &[Interval], samples: &[Sample]) -> f64 {
     (1..bands.len().min(samples.len()))
-        .map(|k| {
-            let b = bands[k].length_m;
-            (b.hi - b.lo) - (samples[k].length_m - samples[k - 1].length_m).abs()
-        })
-        .filter(|w| w.is_finite())
+        .map(|k| hidden_in(&bands[k], &samples[k - 1], &samples[k]))
         .fold(0.0, f64::max)
 }

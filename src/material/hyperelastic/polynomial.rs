@@ -67,9 +67,11 @@ impl Polynomial {
         )
     }
 
-    /// Energy derivatives at (I1, I2); NaN for a parameter vector of the wrong length.
+    /// Energy derivatives at (I1, I2), the second ones only if `SECOND` (the stress
+    /// needs W1 and W2 alone: the simulator's right-hand side skips three sums); NaN
+    /// for a parameter vector of the wrong length.
     #[inline]
-    fn derivs(&self, p: &[f64], i1: f64, i2: f64) -> InvariantDerivs {
+    fn derivs<const SECOND: bool>(&self, p: &[f64], i1: f64, i2: f64) -> InvariantDerivs {
         if p.len() != self.terms.len() {
             return InvariantDerivs::NAN;
         }
@@ -80,6 +82,9 @@ impl Polynomial {
             let (fi, fj) = (f64::from(i), f64::from(j));
             d.w1 += c * fi * pw(x, i - 1) * pw(y, j);
             d.w2 += c * fj * pw(x, i) * pw(y, j - 1);
+            if !SECOND {
+                continue;
+            }
             d.w11 += c * fi * (fi - 1.0) * pw(x, i - 2) * pw(y, j);
             d.w12 += c * fi * fj * pw(x, i - 1) * pw(y, j - 1);
             d.w22 += c * fj * (fj - 1.0) * pw(x, i) * pw(y, j - 2);
@@ -148,13 +153,13 @@ impl StrainEnergy for Polynomial {
     fn nominal_stress(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
         let k = mode.kinematics(lam);
         let (i1, i2) = k.invariants();
-        let d = self.derivs(p, i1, i2);
+        let d = self.derivs::<false>(p, i1, i2);
         k.invariant_stress(d.w1, d.w2)
     }
     fn tangent(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
         let k = mode.kinematics(lam);
         let (i1, i2) = k.invariants();
-        k.invariant_tangent(&self.derivs(p, i1, i2))
+        k.invariant_tangent(&self.derivs::<true>(p, i1, i2))
     }
     fn tangent_powers(&self, p: &[f64], mode: Mode) -> Option<TangentPowers> {
         if p.len() != self.terms.len() {
@@ -187,7 +192,7 @@ impl StrainEnergy for Polynomial {
     }
     fn initial_shear_modulus(&self, p: &[f64]) -> f64 {
         // μ0 = 2(W1 + W2) at I1 = I2 = 3.
-        let d = self.derivs(p, 3.0, 3.0);
+        let d = self.derivs::<false>(p, 3.0, 3.0);
         2.0 * (d.w1 + d.w2)
     }
 }

@@ -37,7 +37,8 @@ pub trait LeastSquares {
     /// residual evaluation on top (a simulator with forward sensitivities: a trial
     /// and a re-run with them cost 1 + 3.5 runs, a trial with them 3.5, and most
     /// first trials are accepted). Later trials of an iteration, after a
-    /// rejection, are evaluated without.
+    /// rejection, are evaluated without, and so is the first trial after an
+    /// iteration whose step the linear model predicted poorly ([`TRUSTED_RHO`]).
     fn jacobian_with_trial(&self) -> bool {
         false
     }
@@ -213,7 +214,17 @@ pub struct Lm {
     /// The Jacobian at the trial point, for [`LeastSquares::jacobian_with_trial`]
     /// (empty until first used; not part of a checkpoint).
     jac_trial: DMatrix<f64>,
+    /// Whether the last iteration's first trial was accepted with ρ ≥
+    /// [`TRUSTED_RHO`]: only then is the next first trial evaluated with the
+    /// Jacobian ([`LeastSquares::jacobian_with_trial`]).
+    trusted: bool,
 }
+
+/// The agreement ρ of actual and predicted decrease above which a step's linear
+/// model is trusted enough to evaluate the next trial with the Jacobian: where the
+/// model is poor, trials land at far points, are rejected more often, and there
+/// (a simulator at stiff corners of the constants) the Jacobian costs most.
+pub const TRUSTED_RHO: f64 = 0.5;
 
 /// Iterations over which [`out_of_reach`] measures a search's pace.
 pub const PACE_WINDOW: usize = 5;
@@ -279,6 +290,7 @@ impl Lm {
             evaluations: 1,
             costs: Vec::new(),
             jac_trial: DMatrix::zeros(0, 0),
+            trusted: true,
         };
         // residuals and Jacobian the caller has at x0 (inside the bounds, finite)
         let known = known.filter(|(r, j)| {
@@ -369,7 +381,8 @@ impl Lm {
         }
         let mut x_new = vec![0.0; n];
         let mut r_new = DVector::zeros(self.r.len());
-        let mut trial_jac = problem.jacobian_with_trial();
+        let mut trial_jac = self.trusted && problem.jacobian_with_trial();
+        let mut first = true;
         if trial_jac && self.jac_trial.shape() != self.jac.shape() {
             self.jac_trial = DMatrix::zeros(self.jac.nrows(), n);
         }
@@ -420,12 +433,14 @@ impl Lm {
                 }
                 self.cost = cost_new;
                 self.costs.push(cost_new);
+                self.trusted = first && rho >= TRUSTED_RHO;
                 self.mu *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
                 self.nu = 2.0;
                 self.iterations += 1;
                 return (rel <= settings.ftol).then_some(Termination::Converged("cost"));
             }
             trial_jac = false;
+            first = false;
             self.mu *= self.nu;
             self.nu *= 2.0;
             if !self.mu.is_finite() || self.mu > 1e300 {
@@ -718,6 +733,13 @@ struct Saved {
     /// of [`out_of_reach`] is then measured from the resume on).
     #[serde(default)]
     costs: Vec<u64>,
+    /// [`Lm::trusted`] (absent in older files: trusted).
+    #[serde(default = "yes")]
+    trusted: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 /// The `format` of a checkpoint file this version reads.
@@ -751,6 +773,7 @@ fn save(file: &Path, lm: &Lm) -> Result<(), String> {
         iterations: lm.iterations,
         evaluations: lm.evaluations,
         costs: bits(&lm.costs),
+        trusted: lm.trusted,
     };
     let text = serde_json::to_string(&saved).map_err(|e| e.to_string())?;
     let mut tmp = file.as_os_str().to_owned();
@@ -798,6 +821,7 @@ fn load(file: &Path, (m, n): (usize, usize), bounds: &[(f64, f64)]) -> Result<Lm
         evaluations: s.evaluations,
         costs: unbits(&s.costs),
         jac_trial: DMatrix::zeros(0, 0),
+        trusted: s.trusted,
     })
 }
 

@@ -126,6 +126,18 @@ impl Counts {
 /// instead of costing seconds; the constants it probed were far from the trace.
 pub const WORK_FACTOR: usize = 10;
 
+/// A run that takes more than this many times the integrator steps of its run at
+/// the starting constants is heavy: the next trial is evaluated without
+/// sensitivities ([`LeastSquares::jacobian_with_trial`]).
+pub const HEAVY: usize = 2;
+
+/// A point whose ½χ² exceeds this many times the number of residuals (an RMS
+/// residual above √20 ≈ 4.5 σ, where a fit has about 1 σ) is far from the trace:
+/// its runs are heavy too. There trials are rejected often and a run with
+/// sensitivities costs up to 6× a plain one near the trace (measured on the rig
+/// trace: 24 ms against 7 ms a run).
+pub const FAR: f64 = 10.0;
+
 /// The smallest step budget (a short trace at its constants may take only a few
 /// dozen steps).
 const MIN_BUDGET: usize = 2000;
@@ -147,6 +159,12 @@ pub struct Problem {
     /// Each experiment's largest |V| ([`crate::sim::drive_max`]): the drive does not
     /// change with θ.
     v_max: Vec<f64>,
+    /// Integrator steps of each experiment's run at the starting constants.
+    base_steps: Vec<Option<usize>>,
+    /// Whether the last run took more than [`HEAVY`] × its base steps in some
+    /// experiment, or its point was [`FAR`] from the trace
+    /// ([`LeastSquares::jacobian_with_trial`]).
+    heavy: bool,
     /// Work done so far (shared by clones).
     pub counts: Arc<Counts>,
     /// Why this copy's last evaluation failed ([`LeastSquares::failure`]); each
@@ -175,7 +193,7 @@ impl Problem {
             }
         }
         let v_max: Vec<f64> = experiments.iter().map(|e| drive_max(&e.scene)).collect();
-        let budgets = experiments
+        let base_steps: Vec<Option<usize>> = experiments
             .iter_mut()
             .zip(&v_max)
             .map(|(e, &v_max)| {
@@ -185,9 +203,12 @@ impl Problem {
                     ..run
                 };
                 let o = trajectory(&e.scene, &run).ok()?;
-                (o.status == RunStatus::Completed)
-                    .then(|| (WORK_FACTOR * o.stats.steps).max(MIN_BUDGET))
+                (o.status == RunStatus::Completed).then_some(o.stats.steps)
             })
+            .collect();
+        let budgets = base_steps
+            .iter()
+            .map(|s| s.map(|s| (WORK_FACTOR * s).max(MIN_BUDGET)))
             .collect();
         Ok(Problem {
             experiments,
@@ -196,6 +217,8 @@ impl Problem {
             run,
             budgets,
             v_max,
+            base_steps,
+            heavy: false,
             counts: Arc::default(),
             failure: None,
         })
@@ -251,11 +274,13 @@ impl Problem {
             ..self.run
         };
         let mut out = Vec::with_capacity(self.experiments.len());
-        for ((e, &budget), &v_max) in self
+        let mut heavy = false;
+        for (((e, &budget), &v_max), &base) in self
             .experiments
             .iter_mut()
             .zip(&self.budgets)
             .zip(&self.v_max)
+            .zip(&self.base_steps)
         {
             let opts = RunOptions {
                 max_steps: budget,
@@ -269,11 +294,13 @@ impl Problem {
             }
             .fetch_add(1, Ordering::Relaxed);
             let o = trajectory(&e.scene, &opts).map_err(|err| format!("{}: {err}", e.name))?;
+            heavy |= base.is_some_and(|b| o.stats.steps > HEAVY * b);
             if let Some(why) = unusable(e, &RunView::from(&o), theta.len()) {
                 return Err(why);
             }
             out.push(o);
         }
+        self.heavy = heavy;
         Ok(out)
     }
 
@@ -416,6 +443,7 @@ impl LeastSquares for Problem {
             Ok(runs) => {
                 let runs: Vec<RunView> = runs.iter().map(RunView::from).collect();
                 let ok = self.fill(x, &runs, r, jac);
+                self.heavy |= r.norm_squared() > 2.0 * FAR * r.len() as f64;
                 if !ok {
                     self.failure = Some("a non-finite residual or sensitivity".into());
                 }
@@ -433,9 +461,11 @@ impl LeastSquares for Problem {
     }
 
     /// A run with sensitivities costs ≈ 3.5 plain ones (docs/identify.md), so a
-    /// first trial with them beats a trial and a re-run.
+    /// first trial with them beats a trial and a re-run, unless the last run was
+    /// heavy: far from the trace (a far start, constants at stiff corners) runs
+    /// cost several times their usual work and trials are rejected more often.
     fn jacobian_with_trial(&self) -> bool {
-        true
+        !self.heavy
     }
 }
 

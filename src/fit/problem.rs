@@ -2,7 +2,7 @@
 //! and their Jacobian, plus the variable-projection form that solves the linear
 //! coefficients exactly inside the search over the nonlinear ones.
 
-use super::linear;
+use super::linear::{self, RowQr};
 use super::lm::LeastSquares;
 use crate::data::Dataset;
 use crate::material::hyperelastic::{Mode, StrainEnergy};
@@ -46,12 +46,15 @@ impl<'a> HyperProblem<'a> {
     /// Build from a dataset.
     pub fn new(model: &'a dyn StrainEnergy, data: &Dataset, residual: Residual) -> Self {
         let s = &data.samples;
-        let max_abs = |m: Mode| {
-            s.iter()
-                .filter(|x| x.mode == m)
-                .map(|x| x.stress.abs())
-                .fold(0.0, f64::max)
-        };
+        // Each mode's largest |stress| (the floor of relative residuals), in one pass.
+        let mut max_abs = [0.0f64; 3];
+        let slot = |m: Mode| Mode::ALL.iter().position(|&x| x == m).unwrap_or(0);
+        if residual == Residual::Rel {
+            for x in s {
+                let a = &mut max_abs[slot(x.mode)];
+                *a = a.max(x.stress.abs());
+            }
+        }
         // Weights are relative: divided by the largest, every multiplier is ≤ 1 and
         // no weight (1e300, say) can overflow the cost.
         let w_max = s.iter().map(|x| x.weight).fold(0.0, f64::max);
@@ -62,7 +65,7 @@ impl<'a> HyperProblem<'a> {
                 match residual {
                     Residual::Abs => w,
                     Residual::Rel => {
-                        let floor = (REL_FLOOR * max_abs(x.mode)).max(f64::MIN_POSITIVE);
+                        let floor = (REL_FLOOR * max_abs[slot(x.mode)]).max(f64::MIN_POSITIVE);
                         w / x.stress.abs().max(floor)
                     }
                 }
@@ -84,18 +87,19 @@ impl<'a> HyperProblem<'a> {
     /// s²-weighted mean, so the minimiser is unchanged and an evaluation costs one row
     /// per distinct point (10⁶ repeats of three stretches: three rows). The constant
     /// is left out: merged problems are for the search, not for residual statistics.
+    /// `None` when no point repeats (the problem is its own merge).
     ///
     /// Repeats are found by sorting the points by (mode, stretch), which costs almost
     /// nothing on the usual monotone loading curves (a hash map per point was 30 % of
     /// fitting 10⁶ points); merged rows keep the order of their first occurrence.
-    pub fn merge_repeats(self) -> Self {
+    pub fn merge_repeats(&self) -> Option<Self> {
         let n = self.len();
         let key = |i: usize| (self.modes[i], self.stretch[i].to_bits());
         let mut order: Vec<usize> = (0..n).collect();
         // Stable: each run of equal keys starts at the point's first occurrence.
         order.sort_by_key(|&i| key(i));
         if order.windows(2).all(|w| key(w[0]) != key(w[1])) {
-            return self;
+            return None;
         }
         // first[i]: the first occurrence of point i's (mode, stretch).
         let mut first = vec![0; n];
@@ -120,7 +124,8 @@ impl<'a> HyperProblem<'a> {
             s2[j] += w;
             s2y[j] += w * self.stress[i];
         }
-        HyperProblem {
+        Some(HyperProblem {
+            model: self.model,
             stress: s2
                 .iter()
                 .zip(&s2y)
@@ -129,8 +134,9 @@ impl<'a> HyperProblem<'a> {
             scale: s2.iter().map(|w| w.sqrt()).collect(),
             modes,
             stretch,
-            ..self
-        }
+            evaluations: 0,
+            row: self.row.clone(),
+        })
     }
 
     /// At most `per_mode` points of each mode, spread evenly over its stretches (the
@@ -200,6 +206,21 @@ impl<'a> HyperProblem<'a> {
                 jac[(i, k)] = self.scale[i] * v;
             }
         }
+    }
+
+    /// The triangular factor of [J | s·y] (J the scaled Jacobian ∂r/∂p at `p`, s·y the
+    /// scaled targets), built row by row without storing J ([`RowQr`]): for a model
+    /// linear in its parameters, the whole least-squares problem.
+    pub fn factor(&mut self, p: &[f64]) -> RowQr {
+        let mut qr = RowQr::new(self.row.len());
+        for i in 0..self.len() {
+            self.model
+                .stress_jacobian(p, self.modes[i], self.stretch[i], &mut self.row);
+            let s = self.scale[i];
+            self.row.iter_mut().for_each(|v| *v *= s);
+            qr.push(&self.row, s * self.stress[i]);
+        }
+        qr
     }
 
     /// Scaled residuals; false if any is not finite.

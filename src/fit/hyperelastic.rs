@@ -563,33 +563,40 @@ fn estimate(
     let chosen = match &sub {
         Some(_) if s.method != Search::Full && !s.stable => {
             // The subsample's best basins (its REFINED best distinct ends), each carried
-            // through subsamples ten times larger, then all the data (each level starts
-            // next to its optimum); the lowest cost on all the data wins.
+            // through subsamples ten times larger (each level starts next to its
+            // optimum); the lowest cost on the largest subsample wins, and only that
+            // point is carried to all the data: the work on all n points is one search.
             let mut ends: Vec<&(f64, Vec<f64>)> = results.iter().collect();
             ends.sort_by(|a, b| a.0.total_cmp(&b.0));
             ends.dedup_by(|b, a| (b.0 - a.0).abs() <= 1e-9 * a.0.abs());
             let mut best: Option<(f64, Vec<f64>)> = None;
-            for (_, end) in ends.into_iter().take(REFINED) {
-                let mut point = end.clone();
+            for (cost, end) in ends.into_iter().take(REFINED) {
+                let (mut point, mut cost) = (end.clone(), *cost);
                 let mut per_mode = 10 * STARTS_PER_MODE;
                 while let Some(mut level) = prob.subsample(per_mode) {
                     let its;
                     (point, its) = refine(&mut level, point, &nonlin, &theta_bounds, &lm_settings);
                     iterations += its;
                     evaluations_sub += level.evaluations;
+                    let mut r = DVector::zeros(level.len());
+                    level.residuals(&point, &mut r);
+                    // Costs compare only on one level: the last one reached, the same
+                    // for every end.
+                    cost = r.norm_squared();
                     per_mode *= 10;
                 }
-                let its;
-                (point, its) = refine(prob, point, &nonlin, &theta_bounds, &lm_settings);
-                iterations += its;
-                let mut r = DVector::zeros(n);
-                prob.residuals(&point, &mut r);
-                let cost = r.norm_squared();
                 if best.as_ref().is_none_or(|b| cost < b.0) {
                     best = Some((cost, point));
                 }
             }
-            best.map_or(chosen, |b| b.1)
+            match best {
+                Some((_, point)) => {
+                    let (point, its) = refine(prob, point, &nonlin, &theta_bounds, &lm_settings);
+                    iterations += its;
+                    point
+                }
+                None => chosen,
+            }
         }
         Some(_) if s.method != Search::Full => {
             // --stable: the chosen stable point, carried to all the data.
@@ -639,9 +646,10 @@ pub const TOO_GOOD: f64 = 1e-9;
 /// fits are searched on all of it.
 pub const STARTS_PER_MODE: usize = 40;
 
-/// Distinct ends of the subsample's search carried to all the data: the landscape of
-/// an Ogden model is flat and several-basined, and the subsample's best basin need
-/// not be the data's.
+/// Distinct ends of the subsample's search carried through the larger subsamples:
+/// the landscape of an Ogden model is flat and several-basined, and the smallest
+/// subsample's best basin need not be the data's. The best of them on the largest
+/// subsample goes on to all the data.
 const REFINED: usize = 3;
 
 /// The variable-projection search on `prob` from the full parameter vector `start`

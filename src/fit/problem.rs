@@ -7,6 +7,7 @@ use super::lm::LeastSquares;
 use crate::data::Dataset;
 use crate::material::hyperelastic::{Mode, StrainEnergy};
 use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// How residuals are measured.
@@ -40,7 +41,16 @@ pub struct HyperProblem<'a> {
     /// Evaluation count.
     pub evaluations: usize,
     row: Vec<f64>,
+    /// Row-major n × k Jacobian rows of a parallel evaluation ([`PARALLEL_ROWS`]).
+    rows: Vec<f64>,
 }
+
+/// Problems with at least this many points evaluate their residuals and Jacobian in
+/// parallel, in blocks of [`BLOCK_ROWS`] points (each point on its own, so the values
+/// are those of the serial loop, bit for bit).
+pub const PARALLEL_ROWS: usize = 16_384;
+/// Points per parallel block.
+const BLOCK_ROWS: usize = 2048;
 
 impl<'a> HyperProblem<'a> {
     /// Build from a dataset.
@@ -79,6 +89,7 @@ impl<'a> HyperProblem<'a> {
             scale,
             evaluations: 0,
             row: vec![0.0; model.params().len()],
+            rows: Vec::new(),
         }
     }
 
@@ -136,6 +147,7 @@ impl<'a> HyperProblem<'a> {
             stretch,
             evaluations: 0,
             row: self.row.clone(),
+            rows: Vec::new(),
         })
     }
 
@@ -175,6 +187,7 @@ impl<'a> HyperProblem<'a> {
             scale: keep.iter().map(|&i| self.scale[i]).collect(),
             evaluations: 0,
             row: self.row.clone(),
+            rows: Vec::new(),
         })
     }
 
@@ -199,11 +212,32 @@ impl<'a> HyperProblem<'a> {
 
     /// Scaled Jacobian ∂r/∂p into `jac` (n × k).
     pub fn jacobian(&mut self, p: &[f64], jac: &mut DMatrix<f64>) {
-        for i in 0..self.len() {
-            self.model
-                .stress_jacobian(p, self.modes[i], self.stretch[i], &mut self.row);
-            for (k, v) in self.row.iter().enumerate() {
-                jac[(i, k)] = self.scale[i] * v;
+        let (n, k) = (self.len(), self.row.len());
+        if n < PARALLEL_ROWS {
+            for i in 0..n {
+                self.model
+                    .stress_jacobian(p, self.modes[i], self.stretch[i], &mut self.row);
+                for (k, v) in self.row.iter().enumerate() {
+                    jac[(i, k)] = self.scale[i] * v;
+                }
+            }
+            return;
+        }
+        self.rows.resize(n * k, 0.0);
+        let (model, modes, stretch, scale) = (self.model, &self.modes, &self.stretch, &self.scale);
+        self.rows
+            .par_chunks_mut(BLOCK_ROWS * k)
+            .enumerate()
+            .for_each(|(b, block)| {
+                for (r, row) in block.chunks_exact_mut(k).enumerate() {
+                    let i = b * BLOCK_ROWS + r;
+                    model.stress_jacobian(p, modes[i], stretch[i], row);
+                    row.iter_mut().for_each(|v| *v *= scale[i]);
+                }
+            });
+        for (i, row) in self.rows.chunks_exact(k).enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                jac[(i, j)] = *v;
             }
         }
     }
@@ -225,14 +259,31 @@ impl<'a> HyperProblem<'a> {
 
     /// Scaled residuals; false if any is not finite.
     pub fn residuals(&self, p: &[f64], r: &mut DVector<f64>) -> bool {
-        let mut ok = true;
-        for i in 0..self.len() {
-            let v = self.scale[i]
-                * (self.model.nominal_stress(p, self.modes[i], self.stretch[i]) - self.stress[i]);
-            ok &= v.is_finite();
-            r[i] = v;
+        let one = |i: usize| {
+            self.scale[i]
+                * (self.model.nominal_stress(p, self.modes[i], self.stretch[i]) - self.stress[i])
+        };
+        if self.len() < PARALLEL_ROWS {
+            let mut ok = true;
+            for i in 0..self.len() {
+                let v = one(i);
+                ok &= v.is_finite();
+                r[i] = v;
+            }
+            return ok;
         }
-        ok
+        r.as_mut_slice()
+            .par_chunks_mut(BLOCK_ROWS)
+            .enumerate()
+            .map(|(b, block)| {
+                let mut ok = true;
+                for (j, v) in block.iter_mut().enumerate() {
+                    *v = one(b * BLOCK_ROWS + j);
+                    ok &= v.is_finite();
+                }
+                ok
+            })
+            .reduce(|| true, |a, b| a && b)
     }
 
     /// Scaled measured stresses s_i·y_i.
@@ -297,6 +348,10 @@ pub struct VarPro<'p, 'a> {
     pub full: Vec<f64>,
     jfull: DMatrix<f64>,
     b: DVector<f64>,
+    /// The projection at the last θ evaluated: (θ, A, c, U_r). The search evaluates
+    /// each accepted point twice (the residuals to accept it, then the Jacobian
+    /// there); the second evaluation reuses the first one's solve.
+    last: Option<(Vec<f64>, DMatrix<f64>, DVector<f64>, DMatrix<f64>)>,
 }
 
 impl<'p, 'a> VarPro<'p, 'a> {
@@ -315,6 +370,7 @@ impl<'p, 'a> VarPro<'p, 'a> {
             full: start.to_vec(),
             jfull,
             b,
+            last: None,
         }
     }
 
@@ -335,17 +391,26 @@ impl LeastSquares for VarPro<'_, '_> {
         jac: Option<&mut DMatrix<f64>>,
     ) -> bool {
         self.inner.evaluations += 1;
+        let (a, c, u) = match self.last.take() {
+            Some((t, a, c, u)) if t == theta => (a, c, u),
+            _ => {
+                for (&k, &t) in self.nonlin.iter().zip(theta) {
+                    self.full[k] = t;
+                }
+                self.inner.jacobian(&self.full, &mut self.jfull);
+                let a = self.jfull.select_columns(&self.lin);
+                if !a.iter().all(|v| v.is_finite()) {
+                    return false;
+                }
+                let Some((c, u)) = svd_solve(&a, &self.b) else {
+                    return false;
+                };
+                (a, c, u)
+            }
+        };
         for (&k, &t) in self.nonlin.iter().zip(theta) {
             self.full[k] = t;
         }
-        self.inner.jacobian(&self.full, &mut self.jfull);
-        let a = self.jfull.select_columns(&self.lin);
-        if !a.iter().all(|v| v.is_finite()) {
-            return false;
-        }
-        let Some((c, u)) = svd_solve(&a, &self.b) else {
-            return false;
-        };
         for (&k, &v) in self.lin.iter().zip(c.iter()) {
             self.full[k] = v;
         }
@@ -363,6 +428,7 @@ impl LeastSquares for VarPro<'_, '_> {
             j.copy_from(&proj);
             return j.iter().all(|v| v.is_finite());
         }
+        self.last = Some((theta.to_vec(), a, c, u));
         true
     }
 }

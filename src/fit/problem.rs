@@ -348,10 +348,21 @@ pub struct VarPro<'p, 'a> {
     pub full: Vec<f64>,
     jfull: DMatrix<f64>,
     b: DVector<f64>,
-    /// The projection at the last θ evaluated: (θ, A, c, U_r). The search evaluates
-    /// each accepted point twice (the residuals to accept it, then the Jacobian
-    /// there); the second evaluation reuses the first one's solve.
-    last: Option<(Vec<f64>, DMatrix<f64>, DVector<f64>, DMatrix<f64>)>,
+    /// The projection at the last θ evaluated. The search evaluates each accepted
+    /// point twice (the residuals to accept it, then the Jacobian there); the second
+    /// evaluation reuses the first one's solve.
+    last: Option<Projection>,
+}
+
+/// The linear solve of variable projection at one θ.
+struct Projection {
+    theta: Vec<f64>,
+    /// The linear columns A(θ).
+    a: DMatrix<f64>,
+    /// The coefficients c.
+    c: DVector<f64>,
+    /// U_r, spanning the range of A.
+    u: DMatrix<f64>,
 }
 
 impl<'p, 'a> VarPro<'p, 'a> {
@@ -392,7 +403,7 @@ impl LeastSquares for VarPro<'_, '_> {
     ) -> bool {
         self.inner.evaluations += 1;
         let (a, c, u) = match self.last.take() {
-            Some((t, a, c, u)) if t == theta => (a, c, u),
+            Some(p) if p.theta == theta => (p.a, p.c, p.u),
             _ => {
                 for (&k, &t) in self.nonlin.iter().zip(theta) {
                     self.full[k] = t;
@@ -428,7 +439,12 @@ impl LeastSquares for VarPro<'_, '_> {
             j.copy_from(&proj);
             return j.iter().all(|v| v.is_finite());
         }
-        self.last = Some((theta.to_vec(), a, c, u));
+        self.last = Some(Projection {
+            theta: theta.to_vec(),
+            a,
+            c,
+            u,
+        });
         true
     }
 }

@@ -1149,6 +1149,9 @@ fn assess(prep: &Prepared, tf: TermFit) -> Assessed {
     }
 }
 
+/// Findings about a fit, each with the status it raises.
+type Findings = Vec<(Status, String)>;
+
 /// What makes a term fit ineligible for `auto` (and raises its status), and softer
 /// warnings: a search that did not converge, a model not finite at the data, terms
 /// that are negligible, at a bound, outside the sampled window or within a factor
@@ -1160,7 +1163,7 @@ fn problems(
     unc: &diagnostics::Uncertainty,
     finite: bool,
     m: usize,
-) -> (Vec<(Status, String)>, Vec<(Status, String)>) {
+) -> (Findings, Findings) {
     let n = tf.n_terms;
     let k = 1 + 2 * n;
     let mut problems = Vec::new();

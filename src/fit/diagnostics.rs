@@ -2,8 +2,33 @@
 //! intervals, correlation and condition number, information criteria, the seed's
 //! %RMSE (Eq. 3.28). Drucker stability is [`super::drucker`].
 
+use super::linear::RowQr;
 use nalgebra::DMatrix;
 use statrs::distribution::{ContinuousCDF, StudentsT};
+use std::collections::HashMap;
+use std::sync::{Mutex, OnceLock};
+
+/// The two-sided 95 % Student-t quantile t₀.₉₇₅(ν) (1.96 if statrs refuses ν).
+/// Inverting the t distribution's CDF takes microseconds, as long as the rest of a
+/// small linear fit; each ν is computed once per process and then looked up.
+pub fn t_quantile_975(dof: usize) -> f64 {
+    static CACHE: OnceLock<Mutex<HashMap<usize, f64>>> = OnceLock::new();
+    let cache = CACHE.get_or_init(Default::default);
+    if let Some(&t) = cache.lock().ok().as_ref().and_then(|c| c.get(&dof)) {
+        return t;
+    }
+    let t = StudentsT::new(0.0, 1.0, dof as f64)
+        .map(|t| t.inverse_cdf(0.975))
+        .unwrap_or(1.96);
+    if let Ok(mut c) = cache.lock() {
+        // Bounded: a long run over many sizes keeps at most a few thousand values.
+        if c.len() >= 4096 {
+            c.clear();
+        }
+        c.insert(dof, t);
+    }
+    t
+}
 
 /// Parameter uncertainty from the linearised model.
 #[derive(Debug, Clone)]
@@ -23,24 +48,28 @@ pub struct Uncertainty {
 /// Covariance of least-squares estimates: cov = s²·(JᵀJ)⁻¹, s² = RSS/(n − k), with
 /// J the Jacobian of the scaled residuals at the optimum (pseudo-inverse by SVD). A
 /// Jacobian that cannot be decomposed (a value not finite) leaves every parameter
-/// unidentified, with condition number ∞.
+/// unidentified, with condition number ∞. See [`factor_uncertainty`].
 pub fn uncertainty(jac: &DMatrix<f64>, rss: f64) -> Uncertainty {
-    let (n, k) = jac.shape();
+    factor_uncertainty(&RowQr::of(jac), rss)
+}
+
+/// [`uncertainty`] from the triangular factor R of the Jacobian (JᵀJ = RᵀR, see
+/// [`RowQr`]): the column-normalised J = Q·R·D⁻¹ has the singular values and right
+/// singular vectors of R·D⁻¹ (D the column norms, those of R), so only a k × k SVD is
+/// needed however many points there are.
+pub fn factor_uncertainty(qr: &RowQr, rss: f64) -> Uncertainty {
+    let mut norm = qr.r();
+    let (n, k) = (qr.rows(), norm.ncols());
     let dof = n.saturating_sub(k);
-    let mut norm = jac.clone();
     let mut col = vec![1.0; k];
     for j in 0..k {
-        let s = jac.column(j).norm();
+        let s = norm.column(j).norm();
         if s > 0.0 {
             col[j] = s;
             norm.column_mut(j).scale_mut(1.0 / s);
         }
     }
-    let t95 = (dof > 0).then(|| {
-        StudentsT::new(0.0, 1.0, dof as f64)
-            .map(|t| t.inverse_cdf(0.975))
-            .unwrap_or(1.96)
-    });
+    let t95 = (dof > 0).then(|| t_quantile_975(dof));
     let Some(svd) = super::linear::svd(norm, false, true) else {
         // A Jacobian holding ∞ or NaN (or an empty one) determines nothing.
         return Uncertainty {

@@ -11,10 +11,10 @@
 
 use super::diagnostics;
 use super::drucker::{self, DruckerCheck, DRUCKER_RANGE};
-use super::linear::constrained_least_squares;
+use super::linear::{constrained_least_squares, RowQr};
 use super::lm::{self, LeastSquares, LmSettings, Termination};
 use super::multistart;
-use super::problem::{svd_solve, HyperProblem, Residual, VarPro};
+use super::problem::{HyperProblem, Residual, VarPro};
 use super::{Parameter, SolverReport, Status};
 use crate::data::{Dataset, Source};
 use crate::error::{Error, Result};
@@ -309,6 +309,9 @@ struct Estimate {
     evaluations: usize,
     termination: Termination,
     notes: Vec<String>,
+    /// The triangular factor of the Jacobian at `params` when the search has it
+    /// (a linear model: its design matrix, the Jacobian at any parameters).
+    factor: Option<RowQr>,
 }
 
 /// One start of the [`Search::Full`] baseline: LM over all parameters from the
@@ -366,17 +369,46 @@ fn too_few(data: &Dataset, model: &dyn StrainEnergy) -> Option<Error> {
     })
 }
 
-fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Estimate> {
+/// The search on `full`, the problem of all the data: a linear model is solved
+/// exactly on it; a nonlinear one searches it with repeated points merged.
+fn estimate(
+    model: &dyn StrainEnergy,
+    full: &mut HyperProblem,
+    data: &Dataset,
+    s: &Settings,
+) -> Result<Estimate> {
     if let Some(e) = too_few(data, model) {
         return Err(e);
     }
-    let mut prob = HyperProblem::new(model, data, s.residual).merge_repeats();
-    let (n, k) = (prob.len(), model.params().len());
+    let k = model.params().len();
+    if model.linear_in_params() && !s.stable {
+        // One pass over the rows: the factor of [A | b] is the whole problem, and A is
+        // the Jacobian the diagnostics need.
+        let factor = full.factor(&vec![0.0; k]);
+        let c = factor.solve().ok_or_else(|| {
+            Error::settings("the data determine none of the model's parameters (all-zero design)")
+        })?;
+        return Ok(Estimate {
+            params: c.iter().copied().collect(),
+            method: "linear least squares (QR, SVD of R)".into(),
+            starts: 1,
+            starts_at_best: 1,
+            iterations: 0,
+            evaluations: 1,
+            termination: Termination::Converged("exact"),
+            notes: Vec::new(),
+            factor: Some(factor),
+        });
+    }
+    let mut merged = full.merge_repeats();
+    let prob = merged.as_mut().unwrap_or(full);
+    let n = prob.len();
     if model.linear_in_params() {
+        // --stable: the least-squares problem under the Drucker constraints.
         let mut a = DMatrix::zeros(n, k);
         prob.jacobian(&vec![0.0; k], &mut a);
         let b = prob.scaled_targets();
-        if s.stable {
+        {
             let grid = drucker::drucker_grid();
             let mut g = DMatrix::zeros(grid.len(), k);
             let mut e = vec![0.0; k];
@@ -406,21 +438,9 @@ fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Es
                 evaluations: 1,
                 termination: Termination::Converged("interior point"),
                 notes,
+                factor: None,
             });
         }
-        let (c, _) = svd_solve(&a, &b).ok_or_else(|| {
-            Error::settings("the data determine none of the model's parameters (all-zero design)")
-        })?;
-        return Ok(Estimate {
-            params: c.iter().copied().collect(),
-            method: "linear least squares (SVD)".into(),
-            starts: 1,
-            starts_at_best: 1,
-            iterations: 0,
-            evaluations: 1,
-            termination: Termination::Converged("exact"),
-            notes: Vec::new(),
-        });
     }
 
     // Nonlinear: variable projection over the nonlinear parameters, multi-start.
@@ -443,7 +463,7 @@ fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Es
     let mut results = Vec::with_capacity(starts.len());
     let mut iterations = 0;
     {
-        let prob = sub.as_mut().unwrap_or(&mut prob);
+        let prob = sub.as_mut().unwrap_or(&mut *prob);
         let n = prob.len();
         for start in &starts {
             if s.method == Search::Full {
@@ -492,6 +512,7 @@ fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Es
             evaluations: prob.evaluations,
             termination: Termination::Failed("no start gave a finite fit".into()),
             notes: Vec::new(),
+            factor: None,
         });
     }
     let mut notes = Vec::new();
@@ -542,42 +563,49 @@ fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Es
     let chosen = match &sub {
         Some(_) if s.method != Search::Full && !s.stable => {
             // The subsample's best basins (its REFINED best distinct ends), each carried
-            // through subsamples ten times larger, then all the data (each level starts
-            // next to its optimum); the lowest cost on all the data wins.
+            // through subsamples ten times larger (each level starts next to its
+            // optimum); the lowest cost on the largest subsample wins, and only that
+            // point is carried to all the data: the work on all n points is one search.
             let mut ends: Vec<&(f64, Vec<f64>)> = results.iter().collect();
             ends.sort_by(|a, b| a.0.total_cmp(&b.0));
             ends.dedup_by(|b, a| (b.0 - a.0).abs() <= 1e-9 * a.0.abs());
             let mut best: Option<(f64, Vec<f64>)> = None;
-            for (_, end) in ends.into_iter().take(REFINED) {
-                let mut point = end.clone();
+            for (cost, end) in ends.into_iter().take(REFINED) {
+                let (mut point, mut cost) = (end.clone(), *cost);
                 let mut per_mode = 10 * STARTS_PER_MODE;
                 while let Some(mut level) = prob.subsample(per_mode) {
                     let its;
                     (point, its) = refine(&mut level, point, &nonlin, &theta_bounds, &lm_settings);
                     iterations += its;
                     evaluations_sub += level.evaluations;
+                    let mut r = DVector::zeros(level.len());
+                    level.residuals(&point, &mut r);
+                    // Costs compare only on one level: the last one reached, the same
+                    // for every end.
+                    cost = r.norm_squared();
                     per_mode *= 10;
                 }
-                let its;
-                (point, its) = refine(&mut prob, point, &nonlin, &theta_bounds, &lm_settings);
-                iterations += its;
-                let mut r = DVector::zeros(n);
-                prob.residuals(&point, &mut r);
-                let cost = r.norm_squared();
                 if best.as_ref().is_none_or(|b| cost < b.0) {
                     best = Some((cost, point));
                 }
             }
-            best.map_or(chosen, |b| b.1)
+            match best {
+                Some((_, point)) => {
+                    let (point, its) = refine(prob, point, &nonlin, &theta_bounds, &lm_settings);
+                    iterations += its;
+                    point
+                }
+                None => chosen,
+            }
         }
         Some(_) if s.method != Search::Full => {
             // --stable: the chosen stable point, carried to all the data.
-            refine(&mut prob, chosen, &nonlin, &theta_bounds, &lm_settings).0
+            refine(prob, chosen, &nonlin, &theta_bounds, &lm_settings).0
         }
         _ => chosen,
     };
     // Polish all parameters together from the chosen point.
-    let polish = lm::minimize(&mut prob, &chosen, &bounds, &lm_settings);
+    let polish = lm::minimize(prob, &chosen, &bounds, &lm_settings);
     let params = if polish.cost.is_finite()
         && polish.cost
             <= 0.5
@@ -601,6 +629,7 @@ fn estimate(model: &dyn StrainEnergy, data: &Dataset, s: &Settings) -> Result<Es
         evaluations: prob.evaluations + evaluations_sub,
         termination: polish.termination,
         notes,
+        factor: None,
     })
 }
 
@@ -617,9 +646,10 @@ pub const TOO_GOOD: f64 = 1e-9;
 /// fits are searched on all of it.
 pub const STARTS_PER_MODE: usize = 40;
 
-/// Distinct ends of the subsample's search carried to all the data: the landscape of
-/// an Ogden model is flat and several-basined, and the subsample's best basin need
-/// not be the data's.
+/// Distinct ends of the subsample's search carried through the larger subsamples:
+/// the landscape of an Ogden model is flat and several-basined, and the smallest
+/// subsample's best basin need not be the data's. The best of them on the largest
+/// subsample goes on to all the data.
 const REFINED: usize = 3;
 
 /// The variable-projection search on `prob` from the full parameter vector `start`
@@ -702,23 +732,23 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
     let model = spec.build()?;
     let model = model.as_ref();
     let t0 = Instant::now();
-    let est = estimate(model, data, settings)?;
+    let mut prob = HyperProblem::new(model, data, settings.residual);
+    let mut est = estimate(model, &mut prob, data, settings)?;
     let seconds = t0.elapsed().as_secs_f64();
     let p = est.params.clone();
-    let mut prob = HyperProblem::new(model, data, settings.residual);
     let (n, k) = (prob.len(), p.len());
-    let mut r = DVector::zeros(n);
-    let finite = prob.residuals(&p, &mut r);
-    let rss = r.norm_squared();
-    let mut jac = DMatrix::zeros(n, k);
-    prob.jacobian(&p, &mut jac);
-    let unc = diagnostics::uncertainty(&jac, rss);
+    // Predictions once: the residuals and every statistic below come from them.
     let pred: Vec<f64> = data
         .samples
         .iter()
         .map(|s| model.nominal_stress(&p, s.mode, s.stretch))
         .collect();
     let y: Vec<f64> = data.samples.iter().map(|s| s.stress).collect();
+    let r = DVector::from_fn(n, |i, _| prob.scale[i] * (pred[i] - y[i]));
+    let finite = r.iter().all(|v| v.is_finite());
+    let rss = r.norm_squared();
+    let factor = est.factor.take().unwrap_or_else(|| prob.factor(&p));
+    let unc = diagnostics::factor_uncertainty(&factor, rss);
     let (rmse, r2) = stats(&pred, &y);
     let (aicc, bic) = diagnostics::information_criteria(rss, n, k);
     let mut warnings = est.notes.clone();

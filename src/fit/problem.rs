@@ -2,11 +2,12 @@
 //! and their Jacobian, plus the variable-projection form that solves the linear
 //! coefficients exactly inside the search over the nonlinear ones.
 
-use super::linear;
+use super::linear::{self, RowQr};
 use super::lm::LeastSquares;
 use crate::data::Dataset;
 use crate::material::hyperelastic::{Mode, StrainEnergy};
 use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// How residuals are measured.
@@ -40,18 +41,30 @@ pub struct HyperProblem<'a> {
     /// Evaluation count.
     pub evaluations: usize,
     row: Vec<f64>,
+    /// Row-major n × k Jacobian rows of a parallel evaluation ([`PARALLEL_ROWS`]).
+    rows: Vec<f64>,
 }
+
+/// Problems with at least this many points evaluate their residuals and Jacobian in
+/// parallel, in blocks of [`BLOCK_ROWS`] points (each point on its own, so the values
+/// are those of the serial loop, bit for bit).
+pub const PARALLEL_ROWS: usize = 16_384;
+/// Points per parallel block.
+const BLOCK_ROWS: usize = 2048;
 
 impl<'a> HyperProblem<'a> {
     /// Build from a dataset.
     pub fn new(model: &'a dyn StrainEnergy, data: &Dataset, residual: Residual) -> Self {
         let s = &data.samples;
-        let max_abs = |m: Mode| {
-            s.iter()
-                .filter(|x| x.mode == m)
-                .map(|x| x.stress.abs())
-                .fold(0.0, f64::max)
-        };
+        // Each mode's largest |stress| (the floor of relative residuals), in one pass.
+        let mut max_abs = [0.0f64; 3];
+        let slot = |m: Mode| Mode::ALL.iter().position(|&x| x == m).unwrap_or(0);
+        if residual == Residual::Rel {
+            for x in s {
+                let a = &mut max_abs[slot(x.mode)];
+                *a = a.max(x.stress.abs());
+            }
+        }
         // Weights are relative: divided by the largest, every multiplier is ≤ 1 and
         // no weight (1e300, say) can overflow the cost.
         let w_max = s.iter().map(|x| x.weight).fold(0.0, f64::max);
@@ -62,7 +75,7 @@ impl<'a> HyperProblem<'a> {
                 match residual {
                     Residual::Abs => w,
                     Residual::Rel => {
-                        let floor = (REL_FLOOR * max_abs(x.mode)).max(f64::MIN_POSITIVE);
+                        let floor = (REL_FLOOR * max_abs[slot(x.mode)]).max(f64::MIN_POSITIVE);
                         w / x.stress.abs().max(floor)
                     }
                 }
@@ -76,6 +89,7 @@ impl<'a> HyperProblem<'a> {
             scale,
             evaluations: 0,
             row: vec![0.0; model.params().len()],
+            rows: Vec::new(),
         }
     }
 
@@ -84,18 +98,19 @@ impl<'a> HyperProblem<'a> {
     /// s²-weighted mean, so the minimiser is unchanged and an evaluation costs one row
     /// per distinct point (10⁶ repeats of three stretches: three rows). The constant
     /// is left out: merged problems are for the search, not for residual statistics.
+    /// `None` when no point repeats (the problem is its own merge).
     ///
     /// Repeats are found by sorting the points by (mode, stretch), which costs almost
     /// nothing on the usual monotone loading curves (a hash map per point was 30 % of
     /// fitting 10⁶ points); merged rows keep the order of their first occurrence.
-    pub fn merge_repeats(self) -> Self {
+    pub fn merge_repeats(&self) -> Option<Self> {
         let n = self.len();
         let key = |i: usize| (self.modes[i], self.stretch[i].to_bits());
         let mut order: Vec<usize> = (0..n).collect();
         // Stable: each run of equal keys starts at the point's first occurrence.
         order.sort_by_key(|&i| key(i));
         if order.windows(2).all(|w| key(w[0]) != key(w[1])) {
-            return self;
+            return None;
         }
         // first[i]: the first occurrence of point i's (mode, stretch).
         let mut first = vec![0; n];
@@ -120,7 +135,8 @@ impl<'a> HyperProblem<'a> {
             s2[j] += w;
             s2y[j] += w * self.stress[i];
         }
-        HyperProblem {
+        Some(HyperProblem {
+            model: self.model,
             stress: s2
                 .iter()
                 .zip(&s2y)
@@ -129,8 +145,10 @@ impl<'a> HyperProblem<'a> {
             scale: s2.iter().map(|w| w.sqrt()).collect(),
             modes,
             stretch,
-            ..self
-        }
+            evaluations: 0,
+            row: self.row.clone(),
+            rows: Vec::new(),
+        })
     }
 
     /// At most `per_mode` points of each mode, spread evenly over its stretches (the
@@ -169,6 +187,7 @@ impl<'a> HyperProblem<'a> {
             scale: keep.iter().map(|&i| self.scale[i]).collect(),
             evaluations: 0,
             row: self.row.clone(),
+            rows: Vec::new(),
         })
     }
 
@@ -193,25 +212,78 @@ impl<'a> HyperProblem<'a> {
 
     /// Scaled Jacobian ∂r/∂p into `jac` (n × k).
     pub fn jacobian(&mut self, p: &[f64], jac: &mut DMatrix<f64>) {
-        for i in 0..self.len() {
-            self.model
-                .stress_jacobian(p, self.modes[i], self.stretch[i], &mut self.row);
-            for (k, v) in self.row.iter().enumerate() {
-                jac[(i, k)] = self.scale[i] * v;
+        let (n, k) = (self.len(), self.row.len());
+        if n < PARALLEL_ROWS {
+            for i in 0..n {
+                self.model
+                    .stress_jacobian(p, self.modes[i], self.stretch[i], &mut self.row);
+                for (k, v) in self.row.iter().enumerate() {
+                    jac[(i, k)] = self.scale[i] * v;
+                }
+            }
+            return;
+        }
+        self.rows.resize(n * k, 0.0);
+        let (model, modes, stretch, scale) = (self.model, &self.modes, &self.stretch, &self.scale);
+        self.rows
+            .par_chunks_mut(BLOCK_ROWS * k)
+            .enumerate()
+            .for_each(|(b, block)| {
+                for (r, row) in block.chunks_exact_mut(k).enumerate() {
+                    let i = b * BLOCK_ROWS + r;
+                    model.stress_jacobian(p, modes[i], stretch[i], row);
+                    row.iter_mut().for_each(|v| *v *= scale[i]);
+                }
+            });
+        for (i, row) in self.rows.chunks_exact(k).enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                jac[(i, j)] = *v;
             }
         }
     }
 
+    /// The triangular factor of [J | s·y] (J the scaled Jacobian ∂r/∂p at `p`, s·y the
+    /// scaled targets), built row by row without storing J ([`RowQr`]): for a model
+    /// linear in its parameters, the whole least-squares problem.
+    pub fn factor(&mut self, p: &[f64]) -> RowQr {
+        let mut qr = RowQr::new(self.row.len());
+        for i in 0..self.len() {
+            self.model
+                .stress_jacobian(p, self.modes[i], self.stretch[i], &mut self.row);
+            let s = self.scale[i];
+            self.row.iter_mut().for_each(|v| *v *= s);
+            qr.push(&self.row, s * self.stress[i]);
+        }
+        qr
+    }
+
     /// Scaled residuals; false if any is not finite.
     pub fn residuals(&self, p: &[f64], r: &mut DVector<f64>) -> bool {
-        let mut ok = true;
-        for i in 0..self.len() {
-            let v = self.scale[i]
-                * (self.model.nominal_stress(p, self.modes[i], self.stretch[i]) - self.stress[i]);
-            ok &= v.is_finite();
-            r[i] = v;
+        let one = |i: usize| {
+            self.scale[i]
+                * (self.model.nominal_stress(p, self.modes[i], self.stretch[i]) - self.stress[i])
+        };
+        if self.len() < PARALLEL_ROWS {
+            let mut ok = true;
+            for i in 0..self.len() {
+                let v = one(i);
+                ok &= v.is_finite();
+                r[i] = v;
+            }
+            return ok;
         }
-        ok
+        r.as_mut_slice()
+            .par_chunks_mut(BLOCK_ROWS)
+            .enumerate()
+            .map(|(b, block)| {
+                let mut ok = true;
+                for (j, v) in block.iter_mut().enumerate() {
+                    *v = one(b * BLOCK_ROWS + j);
+                    ok &= v.is_finite();
+                }
+                ok
+            })
+            .reduce(|| true, |a, b| a && b)
     }
 
     /// Scaled measured stresses s_i·y_i.
@@ -276,6 +348,21 @@ pub struct VarPro<'p, 'a> {
     pub full: Vec<f64>,
     jfull: DMatrix<f64>,
     b: DVector<f64>,
+    /// The projection at the last θ evaluated. The search evaluates each accepted
+    /// point twice (the residuals to accept it, then the Jacobian there); the second
+    /// evaluation reuses the first one's solve.
+    last: Option<Projection>,
+}
+
+/// The linear solve of variable projection at one θ.
+struct Projection {
+    theta: Vec<f64>,
+    /// The linear columns A(θ).
+    a: DMatrix<f64>,
+    /// The coefficients c.
+    c: DVector<f64>,
+    /// U_r, spanning the range of A.
+    u: DMatrix<f64>,
 }
 
 impl<'p, 'a> VarPro<'p, 'a> {
@@ -294,6 +381,7 @@ impl<'p, 'a> VarPro<'p, 'a> {
             full: start.to_vec(),
             jfull,
             b,
+            last: None,
         }
     }
 
@@ -314,17 +402,26 @@ impl LeastSquares for VarPro<'_, '_> {
         jac: Option<&mut DMatrix<f64>>,
     ) -> bool {
         self.inner.evaluations += 1;
+        let (a, c, u) = match self.last.take() {
+            Some(p) if p.theta == theta => (p.a, p.c, p.u),
+            _ => {
+                for (&k, &t) in self.nonlin.iter().zip(theta) {
+                    self.full[k] = t;
+                }
+                self.inner.jacobian(&self.full, &mut self.jfull);
+                let a = self.jfull.select_columns(&self.lin);
+                if !a.iter().all(|v| v.is_finite()) {
+                    return false;
+                }
+                let Some((c, u)) = svd_solve(&a, &self.b) else {
+                    return false;
+                };
+                (a, c, u)
+            }
+        };
         for (&k, &t) in self.nonlin.iter().zip(theta) {
             self.full[k] = t;
         }
-        self.inner.jacobian(&self.full, &mut self.jfull);
-        let a = self.jfull.select_columns(&self.lin);
-        if !a.iter().all(|v| v.is_finite()) {
-            return false;
-        }
-        let Some((c, u)) = svd_solve(&a, &self.b) else {
-            return false;
-        };
         for (&k, &v) in self.lin.iter().zip(c.iter()) {
             self.full[k] = v;
         }
@@ -342,6 +439,12 @@ impl LeastSquares for VarPro<'_, '_> {
             j.copy_from(&proj);
             return j.iter().all(|v| v.is_finite());
         }
+        self.last = Some(Projection {
+            theta: theta.to_vec(),
+            a,
+            c,
+            u,
+        });
         true
     }
 }

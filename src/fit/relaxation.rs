@@ -405,6 +405,9 @@ impl RelaxationFit {
 #[derive(Clone)]
 struct Problem {
     sched: Schedule,
+    /// The loading and the times `sched` merges (kept to build subsamples).
+    history: History,
+    times: Vec<f64>,
     y: Vec<f64>,
     w: Vec<f64>,
     scale: f64,
@@ -417,6 +420,33 @@ struct Problem {
 impl Problem {
     fn len(&self) -> usize {
         self.y.len()
+    }
+
+    /// The same objective on `count` of the points, spread evenly over their order
+    /// (both ends kept; a log-spaced curve stays log-spaced), with their weights and
+    /// the same scale; `None` when there are no more points than that.
+    fn subsample(&self, count: usize) -> Option<Problem> {
+        let (m, count) = (self.len(), count.max(2));
+        if m <= count {
+            return None;
+        }
+        let idx: Vec<usize> = (0..count)
+            .map(|q| (q * (m - 1) + (count - 1) / 2) / (count - 1))
+            .collect();
+        let times: Vec<f64> = idx.iter().map(|&i| self.times[i]).collect();
+        let sched = Schedule::new(&self.history, &times).ok()?;
+        Some(Problem {
+            sched,
+            history: self.history.clone(),
+            times,
+            y: idx.iter().map(|&i| self.y[i]).collect(),
+            w: idx.iter().map(|&i| self.w[i]).collect(),
+            scale: self.scale,
+            n_terms: self.n_terms,
+            h: vec![0.0; count],
+            dh: vec![0.0; count],
+            evaluations: 0,
+        })
     }
 
     /// Model stress at every point, into `m`.
@@ -813,6 +843,8 @@ fn prepare(
     Ok(Prepared {
         prob: Problem {
             sched,
+            history,
+            times: data.time.clone(),
             y,
             w,
             scale: ymax / xmax,
@@ -974,10 +1006,13 @@ fn fit_terms(
         ftol: settings.ftol,
         ..LmSettings::default()
     };
+    // The starts search a subsample of at most START_POINTS points (all the data when
+    // there are no more): their cost does not grow with n.
+    let mut sub = prob.subsample(START_POINTS);
     let mut results = Vec::with_capacity(starts.len());
     let mut iterations = 0;
     for s in &starts {
-        let res = lm::minimize(&mut prob, s, &bounds, &lms);
+        let res = lm::minimize(sub.as_mut().unwrap_or(&mut prob), s, &bounds, &lms);
         iterations += res.iterations;
         results.push(res);
     }
@@ -993,19 +1028,38 @@ fn fit_terms(
         .iter()
         .filter(|r| (r.cost - bc).abs() <= 1e-6 * bc.max(f64::MIN_POSITIVE))
         .count();
-    let r = results.swap_remove(best);
+    let mut r = results.swap_remove(best);
+    let mut evaluations = sub.as_ref().map_or(0, |p| p.evaluations);
+    if sub.is_some() {
+        // Carry the best end through subsamples ten times larger, then all the data:
+        // each search starts next to its optimum.
+        let mut count = 10 * START_POINTS;
+        while let Some(mut level) = prob.subsample(count) {
+            r = lm::minimize(&mut level, &r.x, &bounds, &lms);
+            iterations += r.iterations;
+            evaluations += level.evaluations;
+            count *= 10;
+        }
+        r = lm::minimize(&mut prob, &r.x, &bounds, &lms);
+        iterations += r.iterations;
+    }
     let mut p = r.x;
     sort_terms(&mut p, n);
     Ok(TermFit {
         n_terms: n,
         p,
         iterations,
-        evaluations: prob.evaluations,
+        evaluations: prob.evaluations + evaluations,
         termination: r.termination,
         starts: starts.len(),
         at_best,
     })
 }
+
+/// Points on which the multi-start search of a term count runs: a longer curve is
+/// subsampled evenly ([`Problem::subsample`]) and only the best start is carried to all
+/// the data. Every shipped curve has fewer points, so its fits search all of it.
+const START_POINTS: usize = 400;
 
 /// Diagnostics of one term fit: statistics, uncertainty in SI, problems found.
 struct Assessed {
@@ -1029,6 +1083,8 @@ struct Assessed {
     warnings: Vec<(Status, String)>,
 }
 
+/// Stage 4 for one term count: residual statistics, information criteria and the
+/// uncertainty of the SI parameters, and the [`problems`] found.
 fn assess(prep: &Prepared, tf: TermFit) -> Assessed {
     let mut prob = prep.prob.clone();
     let n = tf.n_terms;
@@ -1072,6 +1128,44 @@ fn assess(prep: &Prepared, tf: TermFit) -> Assessed {
     };
     let (aicc, bic) = diagnostics::information_criteria(rss, m, k);
 
+    let (problems, warnings) = problems(prep, &tf, &si, &unc, finite, m);
+    Assessed {
+        tf,
+        si,
+        unc,
+        rmse: (ss_res / nf).sqrt(),
+        rel_rmse: (rss / nf).sqrt(),
+        explained: 1.0 - rss / null,
+        lag1,
+        r2: if ss_tot > 0.0 {
+            1.0 - ss_res / ss_tot
+        } else {
+            f64::NAN
+        },
+        aicc,
+        bic,
+        problems,
+        warnings,
+    }
+}
+
+/// Findings about a fit, each with the status it raises.
+type Findings = Vec<(Status, String)>;
+
+/// What makes a term fit ineligible for `auto` (and raises its status), and softer
+/// warnings: a search that did not converge, a model not finite at the data, terms
+/// that are negligible, at a bound, outside the sampled window or within a factor
+/// 1.25 of each other, too few points, unidentifiable or ill-determined parameters.
+fn problems(
+    prep: &Prepared,
+    tf: &TermFit,
+    si: &[f64],
+    unc: &diagnostics::Uncertainty,
+    finite: bool,
+    m: usize,
+) -> (Findings, Findings) {
+    let n = tf.n_terms;
+    let k = 1 + 2 * n;
     let mut problems = Vec::new();
     let mut warnings = Vec::new();
     if let Some(w) = tf.termination.shortfall() {
@@ -1185,24 +1279,7 @@ fn assess(prep: &Prepared, tf: TermFit) -> Assessed {
             }
         }
     }
-    Assessed {
-        tf,
-        si,
-        unc,
-        rmse: (ss_res / nf).sqrt(),
-        rel_rmse: (rss / nf).sqrt(),
-        explained: 1.0 - rss / null,
-        lag1,
-        r2: if ss_tot > 0.0 {
-            1.0 - ss_res / ss_tot
-        } else {
-            f64::NAN
-        },
-        aicc,
-        bic,
-        problems,
-        warnings,
-    }
+    (problems, warnings)
 }
 
 fn param_names(n: usize) -> Vec<(String, &'static str)> {
@@ -1234,6 +1311,12 @@ pub fn auto_rule(settings: &Settings) -> String {
 
 /// Fit a relaxation curve. `qlv`: the hyperelastic fit whose uniaxial stress is the
 /// instantaneous response (QLV reading); `None`: the small-strain (parallel) reading.
+///
+/// Four stages, each a function: [`prepare`] (the loading, the hereditary input,
+/// weights and the τ window), [`grid_nnls`] (the non-negative spectrum on a fixed τ
+/// grid), [`fit_terms`] (each term count refined from the grid's peaks, in parallel)
+/// and the assessment: [`assess`] (diagnostics of each count), [`choose`] (the count
+/// reported), [`verdict`] (status and warnings) and [`report`] (the fit record).
 pub fn fit(
     data: &RelaxationData,
     loading: &Loading,
@@ -1243,7 +1326,35 @@ pub fn fit(
     settings.check()?;
     let t0 = Instant::now();
     let mut prep = prepare(data, loading, qlv, settings)?;
-    let m = data.time.len();
+    let counts = term_counts(settings, data.time.len())?;
+    let grid = grid_nnls(&mut prep.prob, prep.window, settings.grid_per_decade)?;
+    let fits: Vec<TermFit> = counts
+        .par_iter()
+        .map(|&nt| fit_terms(&prep, &grid, nt, settings))
+        .collect::<Result<Vec<_>>>()?;
+    let seconds = t0.elapsed().as_secs_f64();
+    let mut assessed: Vec<Assessed> = fits.into_iter().map(|f| assess(&prep, f)).collect();
+    let mut notes = std::mem::take(&mut prep.notes);
+    let choice = choose(&prep, &assessed, settings, &mut notes);
+    let a = assessed.swap_remove(choice.index);
+    let verdict = verdict(data, loading, &prep, &a, notes, choice.unresolved);
+    Ok(report(
+        data,
+        loading,
+        qlv,
+        settings,
+        &prep,
+        &grid,
+        a,
+        verdict,
+        choice.selection,
+        seconds,
+    ))
+}
+
+/// The term counts to fit: the one asked for (refused if the data hold too few
+/// points: N terms need 2N + 3), or 0 to `max_terms` as far as the points allow.
+fn term_counts(settings: &Settings, m: usize) -> Result<Vec<usize>> {
     let max_by_points = (m.saturating_sub(3)) / 2;
     if let Some(nt) = settings.terms {
         if nt > max_by_points {
@@ -1254,24 +1365,40 @@ pub fn fit(
             .with_hint("use fewer terms (--terms auto chooses what the data support)"));
         }
     }
-    let grid = grid_nnls(&mut prep.prob, prep.window, settings.grid_per_decade)?;
-    let counts: Vec<usize> = match settings.terms {
+    Ok(match settings.terms {
         Some(nt) => vec![nt],
         None => (0..=settings.max_terms.min(max_by_points)).collect(),
-    };
-    let fits: Vec<TermFit> = counts
-        .par_iter()
-        .map(|&nt| fit_terms(&prep, &grid, nt, settings))
-        .collect::<Result<Vec<_>>>()?;
-    let seconds = t0.elapsed().as_secs_f64();
-    let mut assessed: Vec<Assessed> = fits.into_iter().map(|f| assess(&prep, f)).collect();
-    let score = |a: &Assessed| match settings.criterion {
+    })
+}
+
+/// The term count reported and, for `--terms auto`, how it was chosen.
+struct Choice {
+    /// Index into the assessed counts.
+    index: usize,
+    selection: Option<Selection>,
+    /// Why no Prony series could be reported although the data relax, if so.
+    unresolved: Option<String>,
+}
+
+/// The score `auto` compares: AICc (BIC where AICc is undefined) or BIC.
+fn score(settings: &Settings, a: &Assessed) -> f64 {
+    match settings.criterion {
         Criterion::Aicc => a.aicc.unwrap_or(a.bic),
         Criterion::Bic => a.bic,
-    };
-    let mut notes = std::mem::take(&mut prep.notes);
+    }
+}
+
+/// Choose among the assessed counts by [`auto_rule`] (the only one when the count was
+/// given); notes on what the choice leaves out go to `notes`.
+fn choose(
+    prep: &Prepared,
+    assessed: &[Assessed],
+    settings: &Settings,
+    notes: &mut Vec<String>,
+) -> Choice {
+    let score = |a: &Assessed| score(settings, a);
     let mut unresolved: Option<String> = None;
-    let (chosen, selection) = if settings.terms.is_some() {
+    let (index, selection) = if settings.terms.is_some() {
         (0, None)
     } else {
         let best = assessed.iter().map(score).fold(f64::INFINITY, f64::min);
@@ -1398,9 +1525,32 @@ pub fn fit(
             }),
         )
     };
-    let a = assessed.swap_remove(chosen);
-    let solver_iterations = a.tf.iterations + grid.2;
-    let n = a.tf.n_terms;
+    Choice {
+        index,
+        selection,
+        unresolved,
+    }
+}
+
+/// Status and warnings of the chosen count, and the QLV reading's instantaneous scale.
+struct Verdict {
+    status: Status,
+    warnings: Vec<String>,
+    qlv: Option<QlvInfo>,
+}
+
+/// The status and warnings of the chosen count `a`: the notes so far, its problems,
+/// a fit that explains nothing, a step assumed on a ramp, a hyperelastic fit that is
+/// not the instantaneous response.
+fn verdict(
+    data: &RelaxationData,
+    loading: &Loading,
+    prep: &Prepared,
+    a: &Assessed,
+    notes: Vec<String>,
+    unresolved: Option<String>,
+) -> Verdict {
+    let (n, m) = (a.tf.n_terms, data.time.len());
     let mut status = Status::Ok;
     let mut escalate = |s: Status| {
         if status == Status::Ok || (status == Status::Warning && s != Status::Warning) {
@@ -1461,6 +1611,31 @@ pub fn fit(
             ));
         }
     }
+    Verdict {
+        status,
+        warnings,
+        qlv: qlv_info,
+    }
+}
+
+/// The fit record of the chosen count `a`.
+#[allow(clippy::too_many_arguments)]
+fn report(
+    data: &RelaxationData,
+    loading: &Loading,
+    qlv: Option<&QlvInput>,
+    settings: &Settings,
+    prep: &Prepared,
+    grid: &(Vec<f64>, Vec<f64>, usize),
+    a: Assessed,
+    verdict: Verdict,
+    selection: Option<Selection>,
+    seconds: f64,
+) -> RelaxationFit {
+    let (n, m) = (a.tf.n_terms, data.time.len());
+    let solver_iterations = a.tf.iterations + grid.2;
+    let si = &a.si;
+    let e0: f64 = si[..=n].iter().sum();
     let names = param_names(n);
     let parameters: Vec<Parameter> = names
         .iter()
@@ -1512,7 +1687,7 @@ pub fn fit(
             settings.grid_per_decade
         ),
     };
-    Ok(RelaxationFit {
+    RelaxationFit {
         schema: SCHEMA.into(),
         tool_version: env!("CARGO_PKG_VERSION").into(),
         formulation: prep.formulation,
@@ -1523,7 +1698,7 @@ pub fn fit(
         instantaneous_modulus_pa: e0,
         g_inf: if e0 > 0.0 { si[0] / e0 } else { 0.0 },
         kelvin_maxwell,
-        qlv: qlv_info,
+        qlv: verdict.qlv,
         parameters,
         rmse_pa: a.rmse,
         rel_rmse: a.rel_rmse,
@@ -1536,8 +1711,8 @@ pub fn fit(
         spectrum,
         correlation: a.unc.correlation.clone(),
         condition_number: a.unc.condition.is_finite().then_some(a.unc.condition),
-        status,
-        warnings,
+        status: verdict.status,
+        warnings: verdict.warnings,
         solver: SolverReport {
             method,
             starts: a.tf.starts,
@@ -1554,7 +1729,7 @@ pub fn fit(
             loading: *loading,
             settings: serde_json::to_value(settings).unwrap_or_default(),
         },
-    })
+    }
 }
 
 /// The model's stress at the data's times for a fit (Pa): what the report plots.

@@ -391,3 +391,42 @@ fn the_trajectory_csv_has_every_sensitivity_with_units() {
         assert!(worst <= 1e-4, "{column}: {worst:e} of {scale:e}");
     }
 }
+
+/// A run without the current's sensitivities (what identification runs when no
+/// current is fitted) gives the stretch, length and capacitance rows of the full
+/// run bit for bit (closed forms of the same expressions the lanes evaluate), the
+/// same samples, and no current rows; on a stack behind a resistance, the rig
+/// scene (rise-time source, sine) and the helix, at bdf (which integrates only
+/// the states before the quadratures) and esdirk34 (every state).
+#[test]
+fn sensitivities_without_the_current_are_those_of_the_full_run() {
+    for s in [
+        rc_stack(),
+        scene(&shipped("stack_rig_7s")),
+        scene(&shipped("hdea_step_10N")),
+    ] {
+        for method in [Method::Bdf, Method::Esdirk34] {
+            let full = RunOptions {
+                method: Some(method),
+                sensitivities: true,
+                ..Default::default()
+            };
+            let lean = RunOptions {
+                no_current_sensitivity: true,
+                ..full
+            };
+            let (f, l) = (
+                trajectory(&s, &full).unwrap(),
+                trajectory(&s, &lean).unwrap(),
+            );
+            let bits = |x: &dyn std::fmt::Debug| format!("{x:?}");
+            assert_eq!(bits(&f.samples), bits(&l.samples), "{}", s.name);
+            let (fs, ls) = (f.sensitivities.unwrap(), l.sensitivities.unwrap());
+            for (name, _, rows) in &CHANNELS[..3] {
+                assert_eq!(bits(rows(&fs)), bits(rows(&ls)), "{} {name}", s.name);
+            }
+            assert_eq!(fs.current.len(), f.samples.len());
+            assert_eq!(ls.current.len(), 0, "{}: no current rows", s.name);
+        }
+    }
+}

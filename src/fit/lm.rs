@@ -42,6 +42,13 @@ pub trait LeastSquares {
     fn jacobian_with_trial(&self) -> bool {
         false
     }
+    /// Told, before each iteration, the cost of the point the search stands on
+    /// (its start, then every accepted step) and the cost another start of a
+    /// multi-start reached ([`Control::reach`]), if any: a problem whose
+    /// evaluations can be made cheaper for a search still far above that (a
+    /// simulator run at a looser tolerance) chooses their accuracy from them. The
+    /// trials of an iteration are evaluated alike.
+    fn stands_at(&mut self, _cost: f64, _reference: Option<f64>) {}
 }
 
 /// Relative damping of the Gauss-Newton step of the noise-floor test
@@ -522,6 +529,7 @@ impl<P: LeastSquares + ?Sized> Solver<Held<'_, P>, LmState> for LmSolver<'_> {
             return Err(argmin::core::Error::msg("the executor lost the problem"));
         };
         let lm = &mut *self.lm;
+        p.stands_at(lm.cost, self.reach);
         let stop = lm.step(*p).or_else(|| {
             let left = lm.settings.max_iterations.saturating_sub(lm.iterations);
             out_of_reach(&lm.costs, self.reach?, lm.settings.min_decrease, left)

@@ -296,7 +296,9 @@ impl<const L: usize> Eval for Seeded<'_, L> {
             std::array::from_fn(|l| match self.seeds[l].state {
                 StateSeed::None => 0.0,
                 StateSeed::Unit(k) => (k == i) as u8 as f64,
-                StateSeed::Along(v) => v[i],
+                // a direction shorter than the state leaves the trailing states
+                // (quadratures no rate reads) unmoved
+                StateSeed::Along(v) => v.get(i).copied().unwrap_or(0.0),
             }),
         )
     }
@@ -560,8 +562,9 @@ impl Plant {
     }
 
     /// The total derivatives d/dθk of the measured outputs at (t, y), for every θk,
-    /// given the state sensitivities `s` (column by column, `s[k·n + i]` =
-    /// ∂yi/∂θk) into `out` (nθ entries): dλ/dθk = s0, dL/dθk = L0·s0, and the
+    /// given the state sensitivities `s` (column by column, `s[k·ns + i]` =
+    /// ∂yi/∂θk for the leading ns = `s.len()`/nθ states, see
+    /// [`super::integrate::System::sensitive_dim`]) into `out` (nθ entries): dλ/dθk = s0, dL/dθk = L0·s0, and the
     /// capacitance and the current (which depends on λ̇, V and the source state) as
     /// ∂out/∂y·s + ∂out/∂θk, by forward evaluation of the same output code that
     /// writes the samples ([`Plant::output`]), lane k seeded along s_k and θk. No
@@ -573,13 +576,34 @@ impl Plant {
         s: &[f64],
         out: &mut [OutputSensitivity],
     ) {
-        let n = y.len();
-        assert_eq!(s.len(), n * out.len(), "output_sensitivities: n×nθ columns");
+        let ns = stride(y, s, out.len());
         let seed = |k: usize| Seed {
-            state: StateSeed::Along(&s[k * n..(k + 1) * n]),
+            state: StateSeed::Along(&s[k * ns..(k + 1) * ns]),
             theta: ThetaSeed::Unit(k),
         };
         self.in_lanes(out.len(), seed, &mut Outputs { t, y, s, out });
+    }
+
+    /// [`Plant::output_sensitivities`] without the current, in closed form from
+    /// the stretch's sensitivities alone: dλ/dθk = s0, dL/dθk = L0·s0 and
+    /// dC/dθk = C'(λ)·s0 + C/εr·[θk = εr] (C depends on θ only through λ and εr),
+    /// the same numbers the lane evaluation gives; the current is NaN. For a
+    /// search that fits no current: the lanes through the output code were most of
+    /// a sample's sensitivity work. No allocation.
+    pub fn state_output_sensitivities(&self, y: &[f64], s: &[f64], out: &mut [OutputSensitivity]) {
+        let ns = stride(y, s, out.len());
+        let (c, c1, _) = self.capacitance(y[0]);
+        let eps = self.theta_index(Theta::EpsR);
+        for (k, o) in out.iter_mut().enumerate() {
+            let s0 = s[k * ns];
+            let de = if k == eps { 1.0 / self.eps_r } else { 0.0 };
+            *o = OutputSensitivity {
+                stretch: s0,
+                length: self.l0 * s0,
+                capacitance: c1 * s0 + c * de,
+                current: f64::NAN,
+            };
+        }
     }
 
     /// ∂f/∂θ at fixed (t, y), row-major n×nθ into `dfdp` (∂f_i/∂θ_k at
@@ -631,6 +655,19 @@ impl Plant {
     }
 }
 
+/// The column length ns of sensitivities `s` of `cols` columns for the state `y`
+/// (every state, or the leading ones with sensitivities: at least the stretch).
+fn stride(y: &[f64], s: &[f64], cols: usize) -> usize {
+    let ns = s.len() / cols.max(1);
+    assert!(
+        ns * cols == s.len() && (1..=y.len()).contains(&ns),
+        "sensitivities: {} values for {cols} columns of at most {} states",
+        s.len(),
+        y.len()
+    );
+    ns
+}
+
 /// What an evaluation of several lanes writes ([`Plant::in_lanes`]).
 trait LanePass {
     /// Lanes `first..first + lanes` evaluated as `e`.
@@ -666,9 +703,9 @@ struct Outputs<'a> {
 impl LanePass for Outputs<'_> {
     fn run<const L: usize>(&mut self, p: &Plant, e: &Seeded<'_, L>, first: usize, lanes: usize) {
         let el = p.output_with(e, self.t, self.y, &p.layout());
-        let n = self.y.len();
+        let ns = self.s.len() / self.out.len();
         for l in 0..lanes {
-            let s0 = self.s[(first + l) * n];
+            let s0 = self.s[(first + l) * ns];
             self.out[first + l] = OutputSensitivity {
                 stretch: s0,
                 length: p.l0 * s0,

@@ -200,12 +200,17 @@ pub struct Sensitivities {
     /// ∂C/∂θj (F per unit of θj; `Sample::capacitance_f`).
     pub capacitance: Rows,
     /// ∂I/∂θj (A per unit of θj; `Sample::current_a`, which depends on λ̇, V and
-    /// the source state: [`Plant::output_sensitivities`]).
+    /// the source state: [`Plant::output_sensitivities`]); no rows in a run
+    /// without them ([`RunOptions::no_current_sensitivity`]).
     pub current: Rows,
     /// Over every sample (kept or not), the largest finite |θj·∂λ/∂θj|.
     pub peak_stretch: Vec<f64>,
     /// Over every sample, the largest finite |θj·∂C/∂θj| (F).
     pub peak_capacitance: Vec<f64>,
+    /// Whether the current's sensitivities are computed
+    /// ([`RunOptions::no_current_sensitivity`]).
+    #[serde(skip)]
+    with_current: bool,
     /// Row of [`Plant::output_sensitivities`] at the last sample (no allocation per
     /// sample).
     #[serde(skip)]
@@ -222,10 +227,11 @@ pub struct Rows {
 }
 
 impl Rows {
-    fn new(width: usize) -> Rows {
+    fn new(width: usize, rows: usize) -> Rows {
         Rows {
             width,
-            ..Rows::default()
+            len: 0,
+            data: Vec::with_capacity(width * rows),
         }
     }
 
@@ -266,13 +272,14 @@ impl Serialize for Rows {
 
 impl Sensitivities {
     /// The sensitivities at the rest state (∂y0/∂θ, `Plant::initial_state_sensitivity`),
-    /// recorded as the row of sample 0.
-    fn at_start(p: &Plant, y0: &[f64]) -> Sensitivities {
+    /// recorded as the row of sample 0; room for `rows` kept rows.
+    fn at_start(p: &Plant, y0: &[f64], rows: usize, with_current: bool) -> Sensitivities {
         let (n, np) = (y0.len(), p.n_theta());
+        let ns = integrate::System::sensitive_dim(p);
         let mut s0 = vec![0.0; n * np];
         p.initial_state_sensitivity(&mut s0);
-        // row-major n × nθ → column per parameter
-        let cols: Vec<f64> = (0..np * n).map(|k| s0[(k % n) * np + k / n]).collect();
+        // row-major n × nθ → column per parameter, the leading ns states
+        let cols: Vec<f64> = (0..np * ns).map(|k| s0[(k % ns) * np + k / ns]).collect();
         let zero = derivatives::OutputSensitivity {
             stretch: 0.0,
             length: 0.0,
@@ -282,12 +289,13 @@ impl Sensitivities {
         let mut se = Sensitivities {
             params: p.sensitivity_params(),
             theta: p.theta(),
-            stretch: Rows::new(np),
-            length: Rows::new(np),
-            capacitance: Rows::new(np),
-            current: Rows::new(np),
+            stretch: Rows::new(np, rows),
+            length: Rows::new(np, rows),
+            capacitance: Rows::new(np, rows),
+            current: Rows::new(np, if with_current { rows } else { 0 }),
             peak_stretch: vec![0.0; np],
             peak_capacitance: vec![0.0; np],
+            with_current,
             scratch: vec![zero; np],
         };
         se.compute(p, 0.0, y0, &cols);
@@ -295,9 +303,12 @@ impl Sensitivities {
     }
 
     /// The row of a sample at (t, y) from the state sensitivities `s` (column by
-    /// column, `s[j·n + i]` = ∂yi/∂θj), into the scratch row and the peaks.
+    /// column, `s[j·ns + i]` = ∂yi/∂θj of the leading ns states), into the scratch row and the peaks.
     fn compute(&mut self, p: &Plant, t: f64, y: &[f64], s: &[f64]) {
-        p.output_sensitivities(t, y, s, &mut self.scratch);
+        match self.with_current {
+            true => p.output_sensitivities(t, y, s, &mut self.scratch),
+            false => p.state_output_sensitivities(y, s, &mut self.scratch),
+        }
         for (j, d) in self.scratch.iter().enumerate() {
             let peak = |v: f64, m: &mut f64| {
                 let v = (self.theta[j] * v).abs();
@@ -316,7 +327,9 @@ impl Sensitivities {
         self.stretch.push(d.iter().map(|d| d.stretch));
         self.length.push(d.iter().map(|d| d.length));
         self.capacitance.push(d.iter().map(|d| d.capacitance));
-        self.current.push(d.iter().map(|d| d.current));
+        if self.with_current {
+            self.current.push(d.iter().map(|d| d.current));
+        }
     }
 
     /// The NaN row of a pull-in sample (the event time itself moves with θ).
@@ -341,6 +354,11 @@ pub struct RunOptions {
     pub fixed_step: Option<f64>,
     /// Integrate the forward sensitivities to the plant's parameters too.
     pub sensitivities: bool,
+    /// With `sensitivities`, leave out the current's ([`Sensitivities::current`]
+    /// gets no rows): stretch, length and capacitance then come in closed form
+    /// from the state's ([`Plant::state_output_sensitivities`]), a search that fits
+    /// no current saving the forward pass through the output code at every sample.
+    pub no_current_sensitivity: bool,
     /// A step budget tighter than the guard's estimate (`budget::Cost::step_budget`);
     /// a run that reaches it fails and says so.
     pub max_steps: Option<usize>,
@@ -457,7 +475,7 @@ fn simulate_with(
     if every > 1 {
         env = env.grouped();
     }
-    let mut ran = integrate(scene, &run, opts.sensitivities, every, Some(env), sink);
+    let mut ran = integrate(scene, &run, opts, every, Some(env), sink);
     if let Some(e) = ran.record.sink_error.take() {
         return Err(e);
     }
@@ -485,7 +503,7 @@ pub type Sink<'a> = dyn FnMut(&Row) -> crate::Result<()> + 'a;
 /// identification runs in its inner loop (issue 10).
 pub fn trajectory(scene: &Scene, opts: &RunOptions) -> crate::Result<Trajectory> {
     let run = prepare(scene, opts)?;
-    Ok(integrate(scene, &run, opts.sensitivities, 1, None, None).trajectory)
+    Ok(integrate(scene, &run, opts, 1, None, None).trajectory)
 }
 
 /// The trajectory of a run (see [`trajectory`]).
@@ -720,7 +738,7 @@ impl Recorder<'_, '_> {
 fn integrate<'s, 'k>(
     scene: &Scene,
     run: &Prepared,
-    sensitivities: bool,
+    opts: &RunOptions,
     every: usize,
     env: Option<sampling::Envelope>,
     sink: Option<&'s mut Sink<'k>>,
@@ -728,16 +746,19 @@ fn integrate<'s, 'k>(
     let p = &run.plant;
     let l = p.layout();
     let span = scene.time.span;
+    let sensitivities = opts.sensitivities;
     let mut y = p.initial_state();
     let mut stats = Stats::default();
     let wants_steps = env.as_ref().is_some_and(|e| e.wants_steps());
+    let kept = (scene.time.samples.len() + 2).div_ceil(every) + 1;
     let mut rec = Recorder {
         every,
         count: 0,
         last_kept: false,
         last: None,
-        kept: Vec::with_capacity((scene.time.samples.len() + 2).div_ceil(every) + 1),
-        sens: sensitivities.then(|| Sensitivities::at_start(p, &y)),
+        kept: Vec::with_capacity(kept),
+        sens: sensitivities
+            .then(|| Sensitivities::at_start(p, &y, kept, !opts.no_current_sensitivity)),
         env,
         rest_length_m: p.length(p.lam0),
         sink,

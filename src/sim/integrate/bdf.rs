@@ -102,7 +102,9 @@ struct Bdf {
     n: usize,
     /// Parameters with sensitivities (0 in a plain run).
     np: usize,
-    /// Length of the propagated vector z = (y, s_1, …, s_np): n·(1 + np).
+    /// States with sensitivities ([`System::sensitive_dim`]).
+    ns: usize,
+    /// Length of the propagated vector z = (y, s_1, …, s_np): n + ns·np.
     m: usize,
     coef: Coefficients,
     /// Backward differences D_0 … D_{MAX_ORDER+2} of z, row k at `k·m`.
@@ -124,12 +126,12 @@ struct Bdf {
     /// The c of the factored matrix.
     lu_c: f64,
     /// The staggered sensitivity corrector: J and ∂f/∂θ at the new state, LU of
-    /// I − c·J there.
+    /// I − c·J there (its leading ns × ns block).
     jac_new: Vec<f64>,
     dfdp: Vec<f64>,
     lu_s: Vec<f64>,
     piv_s: Vec<usize>,
-    /// Predicted S, its Ψ and the corrector's right-hand sides (row-major n × nθ).
+    /// Predicted S, its Ψ and the corrector's right-hand sides (row-major ns × nθ).
     sp: Vec<f64>,
     ps: Vec<f64>,
     rs: Vec<f64>,
@@ -152,12 +154,13 @@ struct Bdf {
 }
 
 impl Bdf {
-    fn new(n: usize, np: usize) -> Self {
-        let m = n * (1 + np);
+    fn new(n: usize, ns: usize, np: usize) -> Self {
+        let m = n + ns * np;
         let v = |len: usize| vec![0.0; len];
         Bdf {
             n,
             np,
+            ns,
             m,
             coef: Coefficients::new(),
             d: v((MAX_ORDER + 3) * m),
@@ -173,11 +176,11 @@ impl Bdf {
             lu_c: 0.0,
             jac_new: v(n * n),
             dfdp: v(n * np),
-            lu_s: v(n * n),
-            piv_s: vec![0; n],
-            sp: v(n * np),
-            ps: v(n * np),
-            rs: v(n * np),
+            lu_s: v(ns * ns),
+            piv_s: vec![0; ns],
+            sp: v(ns * np),
+            ps: v(ns * np),
+            rs: v(ns * np),
             y_pred: v(n),
             y_new: v(n),
             psi: v(n),
@@ -436,24 +439,29 @@ impl Bdf {
 
     /// The staggered direct corrector of every sensitivity column at the accepted
     /// state: (I − c·J)·δS = c·(J·S_pred + ∂f/∂θ) − Ψ_S, S = S_pred + δS, all
-    /// columns at once (S row-major n × nθ in `sp`, `ps`, `rs`).
+    /// columns at once (S row-major ns × nθ in `sp`, `ps`, `rs`; J's leading
+    /// ns × ns block, the states after it feeding back into none of these).
     fn sensitivities<S: System>(&mut self, sys: &Left<S>, t_new: f64, c: f64) -> Result<(), End> {
-        let (n, m, np) = (self.n, self.m, self.np);
+        let (n, ns, m, np) = (self.n, self.ns, self.m, self.np);
         sys.jacobian(t_new, &self.y_new, &mut self.jac_new);
         sys.param_jacobian(t_new, &self.y_new, &mut self.dfdp);
-        identity_minus(&self.jac_new, c, n, &mut self.lu_s);
-        if !lu_factor(&mut self.lu_s, n, &mut self.piv_s) {
+        for i in 0..ns {
+            for j in 0..ns {
+                self.lu_s[i * ns + j] = f64::from(u8::from(i == j)) - c * self.jac_new[i * n + j];
+            }
+        }
+        if !lu_factor(&mut self.lu_s, ns, &mut self.piv_s) {
             return Err(End::Failed(format!(
                 "the sensitivity corrector is singular at t = {t_new:.6e} s"
             )));
         }
         let q = self.order;
         let alpha = self.coef.alpha[q];
-        for i in 0..n {
+        for i in 0..ns {
             for p in 0..np {
                 let (mut pred, mut psi) = (0.0, 0.0);
                 for k in 0..=q {
-                    let dk = self.d[k * m + n + p * n + i];
+                    let dk = self.d[k * m + n + p * ns + i];
                     pred += dk;
                     psi += self.coef.gamma[k] * dk;
                 }
@@ -461,7 +469,7 @@ impl Bdf {
                 self.ps[i * np + p] = psi / alpha;
             }
         }
-        for i in 0..n {
+        for i in 0..ns {
             let row = &mut self.rs[i * np..(i + 1) * np];
             for ((r, g), psi) in row
                 .iter_mut()
@@ -470,7 +478,7 @@ impl Bdf {
             {
                 *r = c * g - psi;
             }
-            for (l, &jl) in self.jac_new[i * n..(i + 1) * n].iter().enumerate() {
+            for (l, &jl) in self.jac_new[i * n..i * n + ns].iter().enumerate() {
                 if jl != 0.0 {
                     let cj = c * jl;
                     for (r, s) in row.iter_mut().zip(&self.sp[l * np..(l + 1) * np]) {
@@ -479,10 +487,10 @@ impl Bdf {
                 }
             }
         }
-        lu_solve(&self.lu_s, n, &self.piv_s, &mut self.rs, np);
-        for i in 0..n {
+        lu_solve(&self.lu_s, ns, &self.piv_s, &mut self.rs, np);
+        for i in 0..ns {
             for p in 0..np {
-                self.corr[n + p * n + i] = self.rs[i * np + p];
+                self.corr[n + p * ns + i] = self.rs[i * np + p];
             }
         }
         Ok(())
@@ -686,16 +694,18 @@ pub(super) fn run<S: System>(
 ) -> End {
     let n = y.len();
     let np = if sensitivities { sys.n_params() } else { 0 };
-    let mut w = Bdf::new(n, np);
+    let ns = sys.sensitive_dim().min(n);
+    let mut w = Bdf::new(n, ns, np);
     let atol: Vec<f64> = scale.iter().map(|s| o.atol * s).collect();
-    // z = (y, s): the sensitivities start at ∂y0/∂θ (row-major dim × np there).
+    // z = (y, s): the sensitivities of the leading ns states start at ∂y0/∂θ
+    // (row-major dim × np there).
     let mut z = vec![0.0; w.m];
     if np > 0 {
         let mut s0 = vec![0.0; n * np];
         sys.initial_sensitivity(&mut s0);
         for p in 0..np {
-            for i in 0..n {
-                z[n + p * n + i] = s0[i * np + p];
+            for i in 0..ns {
+                z[n + p * ns + i] = s0[i * np + p];
             }
         }
     }
@@ -721,9 +731,9 @@ pub(super) fn run<S: System>(
         if np > 0 {
             left.param_jacobian(a, y, &mut w.dfdp);
             for p in 0..np {
-                for i in 0..n {
-                    let js: f64 = (0..n).map(|j| w.jac[i * n + j] * z[n + p * n + j]).sum();
-                    dz[n + p * n + i] = js + w.dfdp[i * np + p];
+                for i in 0..ns {
+                    let js: f64 = (0..ns).map(|j| w.jac[i * n + j] * z[n + p * ns + j]).sum();
+                    dz[n + p * ns + i] = js + w.dfdp[i * np + p];
                 }
             }
         }

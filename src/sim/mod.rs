@@ -866,8 +866,17 @@ fn integrate<'s, 'k>(
         End::Failed(why) => {
             let t = rec.last.map(|s| s.time_s).unwrap_or(0.0);
             let why = if why.starts_with("step budget exhausted") {
+                // an explicit method held at its stability limit wants an implicit
+                // one; an implicit one that many steps past the estimate (rejected
+                // steps, Newton failing) stalls on a right-hand side that is not
+                // smooth, such as a controller chattering on its clamp, which an
+                // explicit method steps through
+                let advice = match run.method {
+                    Method::Tsit45 | Method::Dp54 => "dynamics that much stiffer than the axial mode (high control gains, a fast source) want the implicit integrator = \"bdf\"",
+                    _ => "an implicit method stalls on a right-hand side that is not smooth (a controller switching on its clamp, a source saturating): try the explicit integrator = \"tsit45\"",
+                };
                 format!(
-                    "{why}: the run was estimated at {} steps before it started (sim::budget); dynamics that much stiffer than the axial mode (high control gains, a fast source) want the implicit integrator = \"bdf\"",
+                    "{why}: the run was estimated at {} steps before it started (sim::budget); {advice}",
                     budget::fmt_g(run.cost.steps.round())
                 )
             } else {

@@ -171,6 +171,45 @@ fn bad_input_corpus() {
 // Accepted variants: tests/data/ok/
 // ---------------------------------------------------------------------------------
 
+/// A file large enough to be read in parallel (≥ PARALLEL_ROWS rows) gives the samples
+/// of reading its rows one by one, and of two bad rows reports the first in file order
+/// (the later one falls in an earlier-finishing block as often as not).
+#[test]
+fn big_files_read_in_parallel_as_in_order() {
+    use dea_fit::fit::problem::PARALLEL_ROWS;
+    use dea_fit::io::table::Table;
+    let n = 3 * PARALLEL_ROWS + 7;
+    let mut text = String::from("stretch,nominal_stress_kPa\n");
+    for i in 0..n {
+        text.push_str(&format!("{},{}\n", 1.0 + i as f64 * 1e-5, 0.5 * i as f64));
+    }
+    let opts = TensileOptions::default();
+    let path = Path::new("big.csv");
+    let d = tensile::from_table(&Table::parse(path, text.as_bytes()).unwrap(), &opts).unwrap();
+    assert_eq!(d.samples.len(), n);
+    for (i, s) in d.samples.iter().enumerate() {
+        assert_eq!((s.line, s.mode), (i + 2, Mode::Uniaxial));
+        assert_eq!(
+            s.stretch,
+            format!("{}", 1.0 + i as f64 * 1e-5).parse::<f64>().unwrap()
+        );
+        assert_eq!(
+            s.stress,
+            1e3 * format!("{}", 0.5 * i as f64).parse::<f64>().unwrap()
+        );
+    }
+    // Bad rows in the second block and the last: the error names the earlier line.
+    let mut lines: Vec<&str> = text.lines().collect();
+    let (early, late) = (PARALLEL_ROWS + 11, n - 1);
+    lines[early] = "1.1,x";
+    lines[late] = "-1,0";
+    let bad = lines.join("\n");
+    let e = tensile::from_table(&Table::parse(path, bad.as_bytes()).unwrap(), &opts)
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with(&format!("big.csv:{}:2", early + 1)), "{e}");
+}
+
 fn read_ok(file: &str, opts: &TensileOptions) -> Dataset {
     tensile::read(&data("ok", file), opts).unwrap_or_else(|e| panic!("{file}: {e}"))
 }

@@ -14,9 +14,9 @@ use super::drucker::{self, DruckerCheck, DRUCKER_RANGE};
 use super::linear::{constrained_least_squares, RowQr};
 use super::lm::{self, LeastSquares, LmSettings, Termination};
 use super::multistart;
-use super::problem::{HyperProblem, Residual, VarPro};
+use super::problem::{HyperProblem, Residual, VarPro, PARALLEL_ROWS};
 use super::{Parameter, SolverReport, Status};
-use crate::data::{Dataset, Source};
+use crate::data::{Dataset, Sample, Source};
 use crate::error::{Error, Result};
 use crate::material::file::{FittedRanges, HyperelasticPart, StretchRange};
 use crate::material::hyperelastic::{Mode, ModelSpec, OgdenForm, StrainEnergy, MODEL_NAMES};
@@ -713,13 +713,16 @@ fn split_coincident(x: &[f64], bounds: &[(f64, f64)]) -> Option<Vec<f64>> {
     changed.then_some(y)
 }
 
-/// Unweighted absolute-residual statistics: (rmse, r², None when y does not vary).
-fn stats(pred: &[f64], y: &[f64]) -> (f64, Option<f64>) {
-    let n = y.len() as f64;
-    let mean = y.iter().sum::<f64>() / n;
-    let ss_res: f64 = pred.iter().zip(y).map(|(p, y)| (p - y).powi(2)).sum();
-    let ss_tot: f64 = y.iter().map(|y| (y - mean).powi(2)).sum();
+/// Unweighted absolute-residual statistics of (prediction, measurement) pairs, read
+/// twice in order: (points, rmse, r², None when y does not vary).
+fn stats(pairs: impl Iterator<Item = (f64, f64)> + Clone) -> (usize, f64, Option<f64>) {
+    let count = pairs.clone().count();
+    let n = count as f64;
+    let mean = pairs.clone().map(|(_, y)| y).sum::<f64>() / n;
+    let ss_res: f64 = pairs.clone().map(|(p, y)| (p - y).powi(2)).sum();
+    let ss_tot: f64 = pairs.map(|(_, y)| (y - mean).powi(2)).sum();
     (
+        count,
         (ss_res / n).sqrt(),
         (ss_tot > 0.0).then(|| 1.0 - ss_res / ss_tot),
     )
@@ -738,18 +741,20 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
     let p = est.params.clone();
     let (n, k) = (prob.len(), p.len());
     // Predictions once: the residuals and every statistic below come from them.
-    let pred: Vec<f64> = data
-        .samples
-        .iter()
-        .map(|s| model.nominal_stress(&p, s.mode, s.stretch))
-        .collect();
-    let y: Vec<f64> = data.samples.iter().map(|s| s.stress).collect();
+    let factor = est.factor.take().unwrap_or_else(|| prob.factor(&p));
+    let one = |s: &Sample| model.nominal_stress(&p, s.mode, s.stretch);
+    let pred: Vec<f64> = if n < PARALLEL_ROWS {
+        data.samples.iter().map(one).collect()
+    } else {
+        data.samples.par_iter().map(one).collect()
+    };
+    // The measured stresses, as the problem holds them.
+    let y = &prob.stress;
     let r = DVector::from_fn(n, |i, _| prob.scale[i] * (pred[i] - y[i]));
     let finite = r.iter().all(|v| v.is_finite());
     let rss = r.norm_squared();
-    let factor = est.factor.take().unwrap_or_else(|| prob.factor(&p));
     let unc = diagnostics::factor_uncertainty(&factor, rss);
-    let (rmse, r2) = stats(&pred, &y);
+    let (_, rmse, r2) = stats(pred.iter().copied().zip(y.iter().copied()));
     let (aicc, bic) = diagnostics::information_criteria(rss, n, k);
     let mut warnings = est.notes.clone();
     let mut status = Status::Ok;
@@ -764,14 +769,17 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         .modes()
         .into_iter()
         .map(|m| {
-            let idx: Vec<usize> = (0..n).filter(|&i| data.samples[i].mode == m).collect();
-            let pm: Vec<f64> = idx.iter().map(|&i| pred[i]).collect();
-            let ym: Vec<f64> = idx.iter().map(|&i| y[i]).collect();
-            let (rm, r2m) = stats(&pm, &ym);
+            let (points, rm, r2m) = stats(
+                data.samples
+                    .iter()
+                    .zip(pred.iter().zip(y))
+                    .filter(move |(s, _)| s.mode == m)
+                    .map(|(_, (&p, &y))| (p, y)),
+            );
             let (lo, hi) = data.stretch_range(m).expect("mode present");
             ModeStats {
                 mode: m,
-                points: idx.len(),
+                points,
                 stretch_min: lo,
                 stretch_max: hi,
                 rmse_pa: rm,
@@ -849,7 +857,13 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
             }
         }
     }
-    let bounds = model.bounds(prob.max_i1_minus_3());
+    // The bounds of the nonlinear parameters (a pass over the data: only when any).
+    let nonlinear = params_info.iter().any(|info| !info.linear);
+    let bounds = if nonlinear {
+        model.bounds(prob.max_i1_minus_3())
+    } else {
+        Vec::new()
+    };
     for (j, info) in params_info.iter().enumerate() {
         if info.linear {
             continue;
@@ -868,7 +882,6 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
     // Vanishing terms: a linear coefficient whose contribution is negligible.
     if k > 1 {
         let mut row = vec![0.0; k];
-        let ymax = y.iter().map(|v| v.abs()).fold(0.0, f64::max);
         for (j, info) in params_info.iter().enumerate() {
             if !info.linear || !model.name().starts_with("ogden") {
                 continue;
@@ -881,7 +894,7 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
                     (row[j] * p[j]).abs()
                 })
                 .fold(0.0, f64::max);
-            if contrib < 1e-3 * ymax {
+            if contrib < 1e-3 * y_max {
                 escalate(Status::IllPosed);
                 warnings.push(format!(
                     "{} is negligible (its term contributes < 0.1 % of the largest stress): a term too many for these data",
@@ -1010,7 +1023,7 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         initial_shear_modulus_pa: model.initial_shear_modulus(&p),
         rmse_pa: rmse,
         r2,
-        rmse_pct: diagnostics::rmse_percent(rmse, &y),
+        rmse_pct: diagnostics::rmse_percent(rmse, y),
         aicc,
         bic,
         residual: settings.residual,

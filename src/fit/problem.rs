@@ -47,7 +47,8 @@ pub struct HyperProblem<'a> {
 
 /// Problems with at least this many points evaluate their residuals and Jacobian in
 /// parallel, in blocks of [`BLOCK_ROWS`] points (each point on its own, so the values
-/// are those of the serial loop, bit for bit).
+/// are those of the serial loop, bit for bit); the tensile reader reads the rows of
+/// such a file, and the fit predicts its stresses, in parallel in the same way.
 pub const PARALLEL_ROWS: usize = 16_384;
 /// Points per parallel block.
 const BLOCK_ROWS: usize = 2048;
@@ -68,24 +69,32 @@ impl<'a> HyperProblem<'a> {
         // Weights are relative: divided by the largest, every multiplier is ≤ 1 and
         // no weight (1e300, say) can overflow the cost.
         let w_max = s.iter().map(|x| x.weight).fold(0.0, f64::max);
-        let scale = s
-            .iter()
-            .map(|x| {
-                let w = (x.weight / w_max).sqrt();
-                match residual {
-                    Residual::Abs => w,
-                    Residual::Rel => {
-                        let floor = (REL_FLOOR * max_abs[slot(x.mode)]).max(f64::MIN_POSITIVE);
-                        w / x.stress.abs().max(floor)
-                    }
+        let n = s.len();
+        let (mut modes, mut stretch, mut stress, mut scale) = (
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+        );
+        // One pass over the samples fills every column.
+        for x in s {
+            let w = (x.weight / w_max).sqrt();
+            scale.push(match residual {
+                Residual::Abs => w,
+                Residual::Rel => {
+                    let floor = (REL_FLOOR * max_abs[slot(x.mode)]).max(f64::MIN_POSITIVE);
+                    w / x.stress.abs().max(floor)
                 }
-            })
-            .collect();
+            });
+            modes.push(x.mode);
+            stretch.push(x.stretch);
+            stress.push(x.stress);
+        }
         HyperProblem {
             model,
-            modes: s.iter().map(|x| x.mode).collect(),
-            stretch: s.iter().map(|x| x.stretch).collect(),
-            stress: s.iter().map(|x| x.stress).collect(),
+            modes,
+            stretch,
+            stress,
             scale,
             evaluations: 0,
             row: vec![0.0; model.params().len()],

@@ -10,11 +10,13 @@
 //! [`crate::data::STRETCH_RANGE`], |stress| ≤ [`crate::data::STRESS_MAX`], weight > 0)
 //! and refused with its line, column and a hint.
 
-use super::table::{split_header, Table};
+use super::table::{split_header, Row, Table};
 use crate::data::{Dataset, Field, Sample, Source};
 use crate::error::{Error, Location, Result};
+use crate::fit::problem::PARALLEL_ROWS;
 use crate::material::hyperelastic::{Mode, StrainEnergy};
 use crate::units::Dimension;
+use rayon::prelude::*;
 use std::path::Path;
 
 /// How to read a tensile file.
@@ -258,8 +260,7 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
         format!("'{}'", table.header[kc]),
         format!("'{}'", table.header[sc]),
     );
-    let mut samples = Vec::with_capacity(table.rows.len());
-    for row in &table.rows {
+    let read_row = |row: &Row| -> Result<Sample> {
         let x = table.number(row, kc, &kname)?;
         let lam = match kin {
             Kin::Stretch => x,
@@ -328,8 +329,40 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
             };
             return Err(Error::input(table.loc(row, col), message).with_hint(hint));
         }
-        samples.push(sample);
-    }
+        Ok(sample)
+    };
+    // Rows are read each on its own, so a parallel read (into the samples' final place:
+    // no second copy) gives the serial samples; the error reported is the first in file
+    // order, found by the serial read.
+    let parallel = (table.rows.len() >= PARALLEL_ROWS).then(|| {
+        let blank = Sample {
+            mode: default_mode,
+            stretch: 0.0,
+            stress: 0.0,
+            weight: 0.0,
+            source: 0,
+            line: 0,
+        };
+        let mut samples = vec![blank; table.rows.len()];
+        samples
+            .par_chunks_mut(PARALLEL_ROWS)
+            .zip(table.rows.par_chunks(PARALLEL_ROWS))
+            .try_for_each(|(out, rows)| {
+                for (o, row) in out.iter_mut().zip(rows) {
+                    *o = read_row(row)?;
+                }
+                Ok::<_, Error>(())
+            })
+            .map(|()| samples)
+    });
+    let samples = match parallel {
+        Some(Ok(samples)) => samples,
+        _ => table
+            .rows
+            .iter()
+            .map(&read_row)
+            .collect::<Result<Vec<_>>>()?,
+    };
     let mut modes: Vec<Mode> = samples.iter().map(|s| s.mode).collect();
     modes.sort();
     modes.dedup();

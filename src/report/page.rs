@@ -308,12 +308,7 @@ impl Page {
                     }
                 }
                 Block::Table { header, rows } => {
-                    let h: Vec<&str> = header.iter().map(String::as_str).collect();
-                    let r: Vec<Vec<String>> = rows
-                        .iter()
-                        .map(|r| r.iter().map(|c| c.text.clone()).collect())
-                        .collect();
-                    let _ = write!(s, "```\n{}```\n", table(&h, &r));
+                    let _ = write!(s, "```\n{}```\n", text_table(header, rows));
                 }
                 Block::Figure { file, alt, .. } => {
                     let _ = writeln!(s, "![{}]({})", md_text(alt), href(file));
@@ -346,14 +341,7 @@ impl Page {
                         let _ = writeln!(s, "- {}", plain_spans(i));
                     }
                 }
-                Block::Table { header, rows } => {
-                    let h: Vec<&str> = header.iter().map(String::as_str).collect();
-                    let r: Vec<Vec<String>> = rows
-                        .iter()
-                        .map(|r| r.iter().map(|c| c.text.clone()).collect())
-                        .collect();
-                    s.push_str(&table(&h, &r));
-                }
+                Block::Table { header, rows } => s.push_str(&text_table(header, rows)),
                 Block::Figure { .. } => {}
             }
         }
@@ -537,6 +525,16 @@ fn md_code(s: &str) -> String {
         ""
     };
     format!("{fence}{pad}{s}{pad}{fence}")
+}
+
+/// A table block as aligned text ([`table`]): the cells' text, links dropped.
+fn text_table(header: &[String], rows: &[Vec<Cell>]) -> String {
+    let h: Vec<&str> = header.iter().map(String::as_str).collect();
+    let r: Vec<Vec<String>> = rows
+        .iter()
+        .map(|r| r.iter().map(|c| c.text.clone()).collect())
+        .collect();
+    table(&h, &r)
 }
 
 fn plain_spans(spans: &[Span]) -> String {

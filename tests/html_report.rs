@@ -171,7 +171,7 @@ fn hyperelastic_page_reads_offline() {
 #[test]
 fn every_report_kind_is_self_contained() {
     let dir = tempfile::tempdir().expect("a temporary directory");
-    let cases: [(&str, Vec<String>, &str, &[&str]); 4] = [
+    let cases: [(&str, Vec<String>, &str, &[&str]); 5] = [
         (
             "relaxation",
             vec![
@@ -216,6 +216,15 @@ fn every_report_kind_is_self_contained() {
             "Ranking: Silicone fillers for a thin-layer stack",
             &["#", "candidate", "drive"],
         ),
+        (
+            "static",
+            vec![
+                "static".into(),
+                shipped("datasets/scenes/stack_step_5kV.toml"),
+            ],
+            "Static curve: stack_step_5kV",
+            &["voltage (kV)", "stretch", "capacitance (pF)"],
+        ),
     ];
     for (name, args, title, header) in cases {
         let mut a: Vec<&str> = args.iter().map(String::as_str).collect();
@@ -251,6 +260,16 @@ fn every_report_kind_is_self_contained() {
         }
         assert_charts_inline(&doc, &rep);
         assert_self_contained(&doc, name);
+    }
+    // The fit shows its confidence band, the static curve its pull-in, each named in
+    // the legend.
+    for (chart, legend) in [
+        ("relaxation/fit.svg", "±1σ confidence band of the fit"),
+        ("static/curve.svg", "pull-in: λ 0.6389 at 20.751 kV"),
+    ] {
+        let svg = std::fs::read_to_string(dir.path().join("reports").join(chart)).unwrap();
+        let text: String = Html::parse_fragment(&svg).root_element().text().collect();
+        assert!(text.contains(legend), "{chart}: no \"{legend}\" in {text}");
     }
 }
 

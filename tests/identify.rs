@@ -674,6 +674,30 @@ fn worked_example_runs_end_to_end() {
     );
     let rmse = v["validation"][0]["channels"][0]["rmse"].as_f64().unwrap();
     assert!(rmse.is_finite() && rmse > 0.0);
+    // The multi-start chart's y ticks read apart (they once all read "0.0"): the
+    // numeric labels sharing one x (the y axis') are distinct.
+    let waterfalls: Vec<std::path::PathBuf> = std::fs::read_dir(dir.path().join("reports"))
+        .unwrap()
+        .map(|e| e.unwrap().path().join("waterfall.svg"))
+        .filter(|p| p.exists())
+        .collect();
+    assert_eq!(waterfalls.len(), 1, "{waterfalls:?}");
+    let svg = std::fs::read_to_string(&waterfalls[0]).unwrap();
+    let doc = scraper::Html::parse_fragment(&svg);
+    let mut by_x: std::collections::HashMap<String, Vec<String>> = Default::default();
+    for t in doc.select(&scraper::Selector::parse("text").unwrap()) {
+        let s: String = t.text().collect();
+        if s.trim().parse::<f64>().is_ok() {
+            let x = t.value().attr("x").unwrap_or("").to_string();
+            by_x.entry(x).or_default().push(s.trim().to_string());
+        }
+    }
+    let y_ticks = by_x.into_values().max_by_key(Vec::len).unwrap();
+    let mut distinct = y_ticks.clone();
+    distinct.sort();
+    distinct.dedup();
+    assert!(y_ticks.len() >= 3, "{y_ticks:?}");
+    assert_eq!(distinct.len(), y_ticks.len(), "{y_ticks:?}");
     let fit = dir.path().join(v["fit_file"].as_str().unwrap());
     let scene = std::fs::read_to_string(d.join("stack.toml"))
         .unwrap()

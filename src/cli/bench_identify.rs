@@ -85,6 +85,8 @@ pub fn run(scene: &Path) -> Result<super::bench::Verdict> {
         y_label: "log10 max |Δθ/θ| (identifiable constants)".into(),
         series,
         log_x: true,
+        x_unit: None,
+        y_unit: None,
     };
     let header = [
         "rtol",

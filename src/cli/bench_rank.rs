@@ -116,6 +116,8 @@ pub fn run(a: &RankArgs) -> Result<super::bench::Verdict> {
         y_label: "evaluations per second".into(),
         series,
         log_x: true,
+        x_unit: None,
+        y_unit: None,
     }
     .write_svg(&a.out_dir.join("throughput.svg"))?;
     let path = a.out_dir.join("results.csv");

@@ -117,6 +117,8 @@ pub fn run() -> Result<super::bench::Verdict> {
         y_label: "max relative modulus error [%]".into(),
         series: series(&err_series),
         log_x: false,
+        x_unit: None,
+        y_unit: None,
     };
     let time_chart = Chart {
         title: "fit time (200 points, fastest of 15) vs terms".into(),
@@ -124,6 +126,8 @@ pub fn run() -> Result<super::bench::Verdict> {
         y_label: "time [ms]".into(),
         series: series(&time_series),
         log_x: false,
+        x_unit: None,
+        y_unit: None,
     };
     let header = [
         "method",

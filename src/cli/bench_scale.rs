@@ -327,6 +327,8 @@ fn write(a: &ScaleArgs, rows: &[Row], slopes: &[Slope]) -> Result<()> {
             })
             .collect(),
         log_x: false,
+        x_unit: None,
+        y_unit: None,
     }
     .write_svg(&dir.join("scale.svg"))?;
     let body: Vec<Vec<String>> = rows

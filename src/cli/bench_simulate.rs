@@ -123,6 +123,8 @@ pub fn run(dir: &Path) -> Result<super::bench::Verdict> {
             y_label: "log10 max |Δλ| / stroke".into(),
             series,
             log_x: true,
+            x_unit: None,
+            y_unit: None,
         }
         .write_svg(&out_dir.join(format!("{name}.svg")))?;
     }

@@ -100,7 +100,7 @@ pub fn run(a: Args) -> Result<i32> {
     if a.json {
         println!("{json}");
     } else {
-        print!("{}", summary(&fit));
+        print!("{}", dea_fit::report::format::fit_width(&summary(&fit)));
         if let Some(p) = page {
             println!("report: {}", p.display());
         }

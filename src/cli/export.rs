@@ -75,7 +75,7 @@ pub fn run(a: Args) -> Result<i32> {
         v["out"] = serde_json::Value::from(out.display().to_string());
         println!("{}", serde_json::to_string_pretty(&v).expect("JSON"));
     } else {
-        print!("{}", summary(&card));
+        print!("{}", dea_fit::report::format::fit_width(&summary(&card)));
         println!("card: {}", out.display());
     }
     Ok(card.exit_code(a.strict))

@@ -7,7 +7,6 @@ use dea_fit::fit::hyperelastic::{self, HyperelasticFit, Settings};
 use dea_fit::fit::problem::Residual;
 use dea_fit::io::tensile::{self, TensileOptions};
 use dea_fit::material::hyperelastic::{Mode, ModelSpec, OgdenForm};
-use dea_fit::report::format::{parameter_cells, si, table, PARAMETER_HEADER};
 use dea_fit::units::{parse_quantity, Dimension};
 use dea_fit::{Error, Result};
 use std::path::PathBuf;
@@ -151,7 +150,7 @@ pub fn run(a: Args) -> Result<i32> {
         &fit,
         fit.status,
         |old| same_fit(old, &fit),
-        || summary(&fit),
+        || dea_fit::report::hyperelastic::summary(&fit),
         |dir| dea_fit::report::hyperelastic::write(&fit, &data, dir),
     )
 }
@@ -168,103 +167,4 @@ fn same_fit(old: &str, new: &HyperelasticFit) -> bool {
                 .zip(&new.parameters)
                 .all(|(a, b)| (a.value - b.value).abs() <= 1e-9 * a.value.abs().max(b.value.abs()))
     })
-}
-
-/// The human-readable summary printed by `dea-fit hyperelastic`.
-pub fn summary(fit: &HyperelasticFit) -> String {
-    let mut s = String::new();
-    let files: Vec<String> = fit
-        .provenance
-        .files
-        .iter()
-        .map(|f| {
-            let modes: Vec<String> = f.modes.iter().map(|m| m.to_string()).collect();
-            format!(
-                "{} ({}, {} points, λ {:.3}–{:.3})",
-                f.path,
-                modes.join("+"),
-                f.points,
-                f.stretch_min,
-                f.stretch_max
-            )
-        })
-        .collect();
-    s.push_str(&format!("data: {}\n", files.join("; ")));
-    if let Some(sel) = &fit.selection {
-        let rows: Vec<Vec<String>> = sel
-            .candidates
-            .iter()
-            .map(|c| {
-                vec![
-                    c.model.clone(),
-                    c.k.to_string(),
-                    si(c.rmse_pa, "Pa"),
-                    c.r2.map(|v| format!("{v:.5}")).unwrap_or("n/a".into()),
-                    c.aicc.map(|v| format!("{v:.2}")).unwrap_or("n/a".into()),
-                    c.delta_aicc
-                        .map(|v| format!("{v:.2}"))
-                        .unwrap_or("n/a".into()),
-                    format!("{:.2}", c.bic),
-                    c.status.to_string(),
-                    if c.eligible { "yes" } else { "no" }.to_string(),
-                ]
-            })
-            .collect();
-        s.push_str("\nmodel comparison\n");
-        s.push_str(&table(
-            &[
-                "model", "k", "RMSE", "R²", "AICc", "ΔAICc", "BIC", "status", "eligible",
-            ],
-            &rows,
-        ));
-        s.push_str(&format!("chosen: {}\n", sel.reason));
-    }
-    s.push_str(&format!(
-        "\nmodel: {}{}\n",
-        fit.model,
-        fit.form.map(|f| format!(" ({f} form)")).unwrap_or_default()
-    ));
-    let rows: Vec<Vec<String>> = fit
-        .parameters
-        .iter()
-        .map(|p| {
-            let [v, ci] = parameter_cells(p);
-            vec![p.name.clone(), v, ci]
-        })
-        .collect();
-    let [hv, hci] = PARAMETER_HEADER;
-    s.push_str(&table(&["parameter", hv, hci], &rows));
-    s.push_str(&format!(
-        "μ0 {}  RMSE {}  R² {}  %RMSE {}  AICc {}  BIC {:.2}\n",
-        si(fit.initial_shear_modulus_pa, "Pa"),
-        si(fit.rmse_pa, "Pa"),
-        fit.r2.map(|v| format!("{v:.5}")).unwrap_or("n/a".into()),
-        fit.rmse_pct
-            .map(|v| format!("{v:.3} %"))
-            .unwrap_or("n/a".into()),
-        fit.aicc.map(|v| format!("{v:.2}")).unwrap_or("n/a".into()),
-        fit.bic
-    ));
-    let dr: Vec<String> = fit
-        .drucker
-        .iter()
-        .map(|d| {
-            if d.stable {
-                format!("{} stable", d.mode)
-            } else {
-                format!(
-                    "{} stable only for λ {:.3}–{:.3}",
-                    d.mode, d.stretch_min, d.stretch_max
-                )
-            }
-        })
-        .collect();
-    s.push_str(&format!("Drucker (λ 0.1–10): {}\n", dr.join("; ")));
-    s.push_str(&super::solver_and_status(
-        &fit.solver,
-        fit.status,
-        &fit.warnings,
-        false,
-    ));
-    s
 }

@@ -337,9 +337,15 @@ pub fn run(a: Args) -> Result<i32> {
         );
     } else {
         if let Some(c) = &selection {
-            print!("{}", selection_table(c));
+            print!(
+                "{}",
+                dea_fit::report::format::fit_width(&selection_table(c))
+            );
         }
-        print!("{}", summary(&id, &validation));
+        print!(
+            "{}",
+            dea_fit::report::format::fit_width(&summary(&id, &validation))
+        );
         println!("fit: {}", out.display());
         if let Some(r) = &page {
             println!("report: {}", r.display());
@@ -383,7 +389,7 @@ fn failed(f: &Failure, json: bool) -> i32 {
         "solver: {} start(s), {} simulator runs, {:.3} s\nstatus: {}\nhint: {}\nnothing written (no fit file, no report)\n",
         v.starts, v.simulator_runs, v.seconds, f.status, f.hint
     ));
-    print!("{s}");
+    print!("{}", dea_fit::report::format::fit_width(&s));
     1
 }
 

@@ -112,7 +112,7 @@ impl Output {
         fit: &T,
         status: dea_fit::fit::Status,
         same: impl Fn(&str) -> bool,
-        summary: impl FnOnce() -> String,
+        summary: impl FnOnce() -> Result<String>,
         report: impl FnOnce(&std::path::Path) -> Result<std::path::PathBuf>,
     ) -> Result<i32> {
         use std::path::Path;
@@ -134,7 +134,7 @@ impl Output {
         if self.json {
             println!("{json}");
         } else {
-            print!("{}", summary());
+            print!("{}", summary()?);
             println!("fit: {}", out.display());
             if let Some(r) = &page {
                 println!("report: {}", r.display());
@@ -188,32 +188,3 @@ fn note(path: &std::path::Path, what: &str, r: &dea_fit::io::write::Replaced) {
 }
 
 pub use dea_fit::io::write::claim_dir;
-
-/// The closing lines of every fit summary: the solver report (with its method when
-/// `with_method`), the status, and one line per warning.
-fn solver_and_status(
-    solver: &dea_fit::fit::SolverReport,
-    status: dea_fit::fit::Status,
-    warnings: &[String],
-    with_method: bool,
-) -> String {
-    let method = if with_method {
-        format!("{}; ", solver.method)
-    } else {
-        String::new()
-    };
-    let mut s = format!(
-        "solver: {method}{} start(s), {} at best, {} iterations, {} evaluations, {:.3} ms, {}\n",
-        solver.starts,
-        solver.starts_at_best,
-        solver.iterations,
-        solver.evaluations,
-        solver.seconds * 1e3,
-        solver.termination
-    );
-    s.push_str(&format!("status: {status}\n"));
-    for w in warnings {
-        s.push_str(&format!("warning: {w}\n"));
-    }
-    s
-}

@@ -183,7 +183,7 @@ pub fn run(a: Args) -> Result<i32> {
     if a.json {
         println!("{json}");
     } else {
-        print!("{}", summary(&run));
+        print!("{}", dea_fit::report::format::fit_width(&summary(&run)));
         if let Some(p) = page {
             println!("report: {}", p.display());
         }

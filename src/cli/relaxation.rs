@@ -8,7 +8,7 @@ use dea_fit::fit::relaxation::{
 };
 use dea_fit::io::relaxation::{self as reader, RelaxationOptions};
 use dea_fit::material::viscoelastic::{preset, Preset};
-use dea_fit::report::format::{si, si_pm, table};
+use dea_fit::report::format::{si, table};
 use dea_fit::units::{parse_quantity, Dimension};
 use dea_fit::{Error, Result};
 use std::path::{Path, PathBuf};
@@ -209,7 +209,7 @@ pub fn run(a: Args) -> Result<i32> {
         &fit,
         fit.status,
         |old| same_fit(old, &fit),
-        || summary(&fit),
+        || dea_fit::report::relaxation::summary(&fit),
         |dir| dea_fit::report::relaxation::write(&fit, &data, qlv.as_ref(), dir),
     )
 }
@@ -228,115 +228,6 @@ fn same_fit(old: &str, new: &RelaxationFit) -> bool {
                 .zip(&new.prony)
                 .all(|(a, b)| close(a.tau_s, b.tau_s) && close(a.modulus_pa, b.modulus_pa))
     })
-}
-
-/// The human-readable summary printed by `dea-fit relaxation`.
-pub fn summary(fit: &RelaxationFit) -> String {
-    let mut s = String::new();
-    for f in &fit.provenance.files {
-        s.push_str(&format!(
-            "data: {} ({} points, t {}–{})\n",
-            f.path,
-            f.points,
-            si(f.time_min_s, "s"),
-            si(f.time_max_s, "s")
-        ));
-    }
-    s.push_str(&format!(
-        "loading: {}; formulation: {}; residuals: {}\n",
-        fit.loading,
-        fit.formulation,
-        match fit.residual {
-            Residual::Rel => "relative",
-            Residual::Abs => "absolute",
-        }
-    ));
-    if let Some(sel) = &fit.selection {
-        let rows: Vec<Vec<String>> = sel
-            .candidates
-            .iter()
-            .map(|c| {
-                vec![
-                    c.terms.to_string(),
-                    c.k.to_string(),
-                    si(c.rmse_pa, "Pa"),
-                    format!("{:.3} %", 100.0 * c.rel_rmse),
-                    c.aicc.map(|v| format!("{v:.2}")).unwrap_or("n/a".into()),
-                    format!("{:.2}", c.bic),
-                    format!("{:.2}", c.delta),
-                    c.tau_s
-                        .iter()
-                        .map(|t| si(*t, "s"))
-                        .collect::<Vec<_>>()
-                        .join(", "),
-                    if c.eligible {
-                        "yes".into()
-                    } else {
-                        format!("no: {}", c.note.clone().unwrap_or_default())
-                    },
-                ]
-            })
-            .collect();
-        s.push_str("\nterm-count comparison\n");
-        s.push_str(&table(
-            &[
-                "N",
-                "k",
-                "RMSE",
-                "rel. RMSE",
-                "AICc",
-                "BIC",
-                "Δ",
-                "τ",
-                "eligible",
-            ],
-            &rows,
-        ));
-        s.push_str(&format!("chosen: {}\n", sel.reason));
-    }
-    let rows: Vec<Vec<String>> = fit
-        .prony
-        .iter()
-        .map(|p| {
-            vec![
-                si_pm(p.tau_s, p.tau_std_s, "s"),
-                si_pm(p.modulus_pa, p.modulus_std_pa, "Pa"),
-                format!("{:.4}", p.g),
-                si(p.modulus_pa * p.tau_s, "Pa·s"),
-            ]
-        })
-        .collect();
-    s.push_str(&format!("\nProny series ({} terms)\n", fit.prony.len()));
-    s.push_str(&table(
-        &["τ ± std. error", "E ± std. error", "g", "arm n = E·τ"],
-        &rows,
-    ));
-    s.push_str(&format!(
-        "E∞ {}  E0 {}  g∞ {:.4}  RMSE {}  rel. RMSE {:.3} %  R² {:.5}  AICc {}  BIC {:.2}\n",
-        si(fit.long_term_modulus_pa, "Pa"),
-        si(fit.instantaneous_modulus_pa, "Pa"),
-        fit.g_inf,
-        si(fit.rmse_pa, "Pa"),
-        100.0 * fit.rel_rmse,
-        fit.r2,
-        fit.aicc.map(|v| format!("{v:.2}")).unwrap_or("n/a".into()),
-        fit.bic
-    ));
-    if let Some(q) = &fit.qlv {
-        s.push_str(&format!(
-            "QLV: instantaneous response = {:.4} × {} (3μ0 = {}); moduli are g × E0\n",
-            q.instantaneous_scale,
-            q.hyperelastic_model,
-            si(q.reference_modulus_pa, "Pa")
-        ));
-    }
-    s.push_str(&super::solver_and_status(
-        &fit.solver,
-        fit.status,
-        &fit.warnings,
-        true,
-    ));
-    s
 }
 
 /// A preset's constants and a few predictions.

@@ -145,8 +145,8 @@ pub fn run(a: Args) -> Result<i32> {
         );
     } else {
         let x = o.extremes();
-        println!(
-            "{}: {} ({}), {} steps, stretch {:.5}…{:.5}, {} event(s); {:.3} ms; trajectory {}",
+        let head = format!(
+            "{}: {} ({}), {} steps, stretch {:.5}…{:.5}, {} event(s); {:.3} ms; trajectory {}\n",
             o.scene,
             o.fidelity.model,
             o.integrator.message,
@@ -160,9 +160,13 @@ pub fn run(a: Args) -> Result<i32> {
                     .display()
                     .to_string())
         );
+        print!("{}", dea_fit::report::format::fit_width(&head));
         println!("status: {}", o.integrator.status);
         for w in &o.warnings {
-            println!("warning: {w}");
+            print!(
+                "{}",
+                dea_fit::report::format::fit_width(&format!("warning: {w}\n"))
+            );
         }
         if let Some(p) = &page {
             println!("report: {}", p.display());

@@ -4,7 +4,8 @@
 //! scene's input stays below any pull-in), `pull_in` (the scene's largest input
 //! voltage reaches the pull-in voltage: exit 1 under `--strict`), `failed` (the
 //! search could not look: exit 1). Text output: that line, the curve's shape as a
-//! table, the status; `--out` writes the whole curve as CSV.
+//! table, the status; `--out` writes the whole curve as CSV; the report (unless
+//! `--no-report`) holds the voltage–stretch chart with the pull-in and the table.
 
 use dea_fit::report::static_curve as static_report;
 use dea_fit::sim::static_curve::{self, Search, MIN_POINTS};
@@ -30,6 +31,12 @@ pub struct Args {
     /// Smallest stretch examined.
     #[arg(long, default_value_t = 0.3)]
     stretch_min: f64,
+    /// Report directory (default reports/static-<scene>).
+    #[arg(long)]
+    report: Option<PathBuf>,
+    /// Do not write the report (chart, shape table, index.md, index.html).
+    #[arg(long)]
+    no_report: bool,
     /// Exit with status 1 when the scene's input reaches the pull-in voltage.
     #[arg(long)]
     strict: bool,
@@ -85,22 +92,48 @@ pub fn run(a: Args) -> Result<i32> {
     if let Some(out) = &a.out {
         super::write_noted(out, static_report::curve_csv(&c).as_bytes())?;
     }
+    let page = match a.no_report {
+        true => None,
+        false => {
+            let dir = a
+                .report
+                .clone()
+                .unwrap_or_else(|| PathBuf::from(format!("reports/static-{}", scene.name)));
+            super::claim_dir(&dir)?;
+            let outcome = static_report::Outcome {
+                scene: &scene.name,
+                input: &a.scene.display().to_string(),
+                curve: &c,
+                status,
+                message: &line,
+                input_peak_v: v_in,
+            };
+            Some(static_report::write(&outcome, &dir)?)
+        }
+    };
     if a.json {
         let mut v = serde_json::to_value(&c).expect("serialisable");
         v["status"] = status.into();
         v["message"] = line.clone().into();
         v["curve_file"] = a.out.as_ref().map(|o| o.display().to_string()).into();
+        v["report"] = page.as_ref().map(|p| p.display().to_string()).into();
         println!(
             "{}",
             serde_json::to_string_pretty(&v).expect("serialisable")
         );
     } else {
-        println!("{}: {line}", scene.name);
+        print!(
+            "{}",
+            dea_fit::report::format::fit_width(&format!("{}: {line}\n", scene.name))
+        );
         print!("{}", static_report::shape_table(&c));
         if let Some(out) = &a.out {
             println!("curve: {}", out.display());
         }
         println!("status: {status}");
+        if let Some(p) = &page {
+            println!("report: {}", p.display());
+        }
     }
     Ok(match status {
         "failed" => 1,

@@ -278,6 +278,28 @@ impl HyperelasticFit {
         Ok(model)
     }
 
+    /// The first-order standard deviation of the fitted nominal stress (Pa) in `mode`
+    /// at each stretch, from the parameter covariance
+    /// ([`diagnostics::propagated_std`]): the ±1σ confidence band of the fitted
+    /// curve. None when a parameter has no standard error or correlation.
+    pub fn stress_std(&self, mode: Mode, stretches: &[f64]) -> Option<Vec<f64>> {
+        let model = self.evaluator().ok()?;
+        let se: Vec<Option<f64>> = self.parameters.iter().map(|p| p.std_error).collect();
+        let cov = diagnostics::covariance(&se, &self.correlation)?;
+        diagnostics::propagated_std(
+            |p| {
+                Some(
+                    stretches
+                        .iter()
+                        .map(|&l| model.nominal_stress(p, mode, l))
+                        .collect(),
+                )
+            },
+            &self.values(),
+            &cov,
+        )
+    }
+
     /// The material part of the fit: what a scene reads from its file (model,
     /// parameters in model order, fitted stretch range per mode).
     pub fn material(&self) -> HyperelasticPart {

@@ -377,6 +377,11 @@ pub struct RelaxationFit {
 }
 
 impl RelaxationFit {
+    /// Parameter values in the order of [`Self::parameters`] (E∞, E₁…E_N, τ₁…τ_N).
+    pub fn values(&self) -> Vec<f64> {
+        self.parameters.iter().map(|p| p.value).collect()
+    }
+
     /// The fitted Prony series (Pa).
     pub fn prony_series(&self) -> Result<Prony> {
         let terms: Vec<(f64, f64)> = self.prony.iter().map(|p| (p.tau_s, p.modulus_pa)).collect();
@@ -1732,23 +1737,42 @@ fn report(
     }
 }
 
-/// The model's stress at the data's times for a fit (Pa): what the report plots.
+/// The fitted model's stress at the data's times: the fit's Prony series applied to
+/// the data's loading history (as the fit saw it).
 pub fn predict(
     fit: &RelaxationFit,
     data: &RelaxationData,
     qlv: Option<&QlvInput>,
 ) -> Result<Vec<f64>> {
-    let loading = fit.provenance.loading;
-    let prep = prepare(data, &loading, qlv, &Settings::default())?;
-    let prony = fit.prony_series()?;
+    let prep = prepare(data, &fit.provenance.loading, qlv, &Settings::default())?;
+    response(&prep, &fit.values())
+}
+
+/// The first-order standard deviation of the fitted stress (Pa) at the data's times,
+/// from the parameter covariance ([`diagnostics::propagated_std`]): the ±1σ
+/// confidence band of the fitted curve. None when a parameter has no standard error
+/// or correlation.
+pub fn predict_std(
+    fit: &RelaxationFit,
+    data: &RelaxationData,
+    qlv: Option<&QlvInput>,
+) -> Result<Option<Vec<f64>>> {
+    let prep = prepare(data, &fit.provenance.loading, qlv, &Settings::default())?;
+    let se: Vec<Option<f64>> = fit.parameters.iter().map(|p| p.std_error).collect();
+    Ok(
+        diagnostics::covariance(&se, &fit.correlation).and_then(|cov| {
+            diagnostics::propagated_std(|p| response(&prep, p).ok(), &fit.values(), &cov)
+        }),
+    )
+}
+
+/// The stress for SI parameters θ = (E∞, E₁…E_N, τ₁…τ_N) (the order of
+/// [`RelaxationFit::parameters`]) on the prepared loading history.
+fn response(prep: &Prepared, theta: &[f64]) -> Result<Vec<f64>> {
+    let n = (theta.len() - 1) / 2;
     // In the prepared input, moduli are per unit of x scaled by `unit`.
-    let scaled = Prony::new(
-        prony.e_inf / prep.unit,
-        &prony
-            .terms
-            .iter()
-            .map(|t| (t.tau, t.modulus / prep.unit))
-            .collect::<Vec<_>>(),
-    )?;
-    Ok(scaled.response(&prep.prob.sched))
+    let terms: Vec<(f64, f64)> = (0..n)
+        .map(|i| (theta[1 + n + i], theta[1 + i] / prep.unit))
+        .collect();
+    Ok(Prony::new(theta[0] / prep.unit, &terms)?.response(&prep.prob.sched))
 }

@@ -11,7 +11,7 @@ use super::short;
 use super::Figure;
 use crate::error::Result;
 use crate::fit::composite::Basis;
-use crate::report::format::{si, sig, table as text_table};
+use crate::report::format::{si, si_column, sig, table as text_table};
 use crate::report::page::{code, strong, text, Page};
 use crate::report::plot::{band, Chart, Series, Style};
 use crate::report::runs::Run;
@@ -146,9 +146,28 @@ pub fn table(info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: usize) -> St
     let shown_n = if top == 0 { ranked } else { top.min(ranked) };
     // The objective gets its own column unless one of the fixed ones shows it.
     let extra = matches!(r.by, Objective::Force | Objective::Beta | Objective::Loss);
+    // Columns with a unit: one SI prefix each, in the header ("—" where missing).
+    let column = |f: &dyn Fn(&Evaluation) -> &Figure, unit: &str| {
+        let values: Vec<f64> = r.order[..shown_n]
+            .iter()
+            .map(|&i| f(&evals[i].evaluation).value.unwrap_or(f64::NAN))
+            .collect();
+        let (unit, cells) = si_column(&values, unit, 5);
+        let cells: Vec<String> = values
+            .iter()
+            .zip(cells)
+            .map(|(v, c)| if v.is_finite() { c } else { "—".into() })
+            .collect();
+        (unit, cells)
+    };
+    let (drive_unit, drive) = column(&|e| &e.voltage, "V");
+    let (y_unit, youngs) = column(&|e| &e.youngs_modulus, "Pa");
+    let (t_unit, rise) = column(&|e| &e.response_time, "s");
+    let percent = |f: &Figure| fmt_fig(f, |v| sig(100.0 * v, 4));
     let rows: Vec<Vec<String>> = r.order[..shown_n]
         .iter()
-        .map(|&i| {
+        .enumerate()
+        .map(|(k, &i)| {
             let e = &evals[i].evaluation;
             let close = r.apart[i] == Some(false);
             let mut row = vec![
@@ -157,13 +176,13 @@ pub fn table(info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: usize) -> St
                     false => x.to_string(),
                 }),
                 e.name.clone(),
-                fmt_fig(&e.voltage, |v| si(v, "V")),
+                drive[k].clone(),
                 fmt_fig(&e.eps_r, |v| sig(v, 4)),
-                fmt_fig(&e.youngs_modulus, |v| si(v, "Pa")),
+                youngs[k].clone(),
                 fmt_fig(&e.fm, |v| sig(v, 3)),
-                fmt_fig(&e.static_stroke, pct),
-                format!("{} ({})", fmt_fig(&e.max_stroke, pct), e.max_stroke_limit),
-                fmt_fig(&e.response_time, |v| si(v, "s")),
+                percent(&e.static_stroke),
+                format!("{} ({})", percent(&e.max_stroke), e.max_stroke_limit),
+                rise[k].clone(),
             ];
             if extra {
                 row.push(r.by.value(e).map_or("—".into(), |v| fmt_objective(r.by, v)));
@@ -175,16 +194,21 @@ pub fn table(info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: usize) -> St
             row
         })
         .collect();
+    let (drive_h, y_h, t_h) = (
+        format!("drive ({drive_unit})"),
+        format!("Y ({y_unit})"),
+        format!("t10–90 ({t_unit})"),
+    );
     let mut header = vec![
         "#",
         "candidate",
-        "drive",
+        &drive_h,
         "εr",
-        "Y",
+        &y_h,
         "Fm",
-        "stroke",
-        "max stroke (limit)",
-        "t10–90",
+        "stroke (%)",
+        "max stroke % (limit)",
+        &t_h,
     ];
     if extra {
         header.push(r.by.name());
@@ -446,6 +470,8 @@ pub fn write(
         y_label: label(by),
         series: bars,
         log_x: false,
+        x_unit: None,
+        y_unit: None,
     };
 
     // Objective against filler volume fraction, per series, at the leader's drive.
@@ -468,7 +494,6 @@ pub fn write(
                 .filter(|e| e.series == *name && lead_v.is_none_or(|v| e.voltage.value == Some(v)))
                 .collect();
             let rules = pts.first().map_or(String::new(), |e| e.rules.clone());
-            let (c, style) = crate::report::plot::nth_line(k);
             let valued: Vec<(f64, f64)> = pts
                 .iter()
                 .filter_map(|e| {
@@ -482,10 +507,10 @@ pub fn write(
                 style: if valued.len() < 2 {
                     Style::Points
                 } else {
-                    style
+                    Style::Line
                 },
                 points: valued,
-                color: c,
+                color: k,
             }
         })
         .collect();
@@ -499,6 +524,8 @@ pub fn write(
         y_label: label(by),
         series: lines,
         log_x: false,
+        x_unit: None,
+        y_unit: None,
     };
 
     // Pareto chart.
@@ -541,6 +568,8 @@ pub fn write(
             },
         ],
         log_x: false,
+        x_unit: None,
+        y_unit: None,
     };
 
     // Static stroke–voltage curves of the leaders, each with its drive point.
@@ -579,6 +608,8 @@ pub fn write(
         y_label: "static stroke (%)".into(),
         series: curves,
         log_x: false,
+        x_unit: None,
+        y_unit: None,
     };
 
     // The page.

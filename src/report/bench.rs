@@ -133,6 +133,8 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
                 })
                 .collect(),
             log_x: true,
+            x_unit: None,
+            y_unit: None,
         };
         page.subheading(d.to_string());
         page.chart(dir, &name, d, &chart)?;
@@ -217,6 +219,8 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
             y_label: "objective above the best reached [ppm]".into(),
             series,
             log_x: true,
+            x_unit: None,
+            y_unit: None,
         };
         page.heading(format!("Ogden-3 on {TRELOAR_ALL}: {title}"));
         page.para(vec![
@@ -305,6 +309,8 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
             y_label: "starts ending at the best objective [%]".into(),
             series,
             log_x: true,
+            x_unit: None,
+            y_unit: None,
         };
         page.heading(format!("Variable projection vs full LM on {TRELOAR_ALL}"));
         page.para(vec![

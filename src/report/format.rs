@@ -13,7 +13,7 @@ pub fn si(v: f64, unit: &str) -> String {
 }
 
 /// The SI prefix for a magnitude `a` (≥ 0): the factor to multiply by and the prefix.
-fn prefix(a: f64) -> (f64, &'static str) {
+pub(crate) fn prefix(a: f64) -> (f64, &'static str) {
     if a == 0.0 {
         (1.0, "")
     } else if a >= 1e9 {
@@ -226,7 +226,117 @@ pub fn si_column(values: &[f64], unit: &str, n: usize) -> (String, Vec<String>) 
     (format!("{p}{unit}"), cells)
 }
 
-/// Render rows as a left-aligned text table with a header rule.
+/// The width (characters) every text table and every line printed for people fits.
+pub const WIDTH: usize = 100;
+
+/// Narrowest a table column is made to fit [`WIDTH`].
+const MIN_COLUMN: usize = 8;
+
+/// `text` broken into lines of at most `width` characters, at spaces where it can
+/// (a longer word is cut); no lines for blank text.
+pub fn wrap(text: &str, width: usize) -> Vec<String> {
+    let width = width.max(1);
+    let mut lines: Vec<String> = Vec::new();
+    let mut line = String::new();
+    for word in text.split_whitespace() {
+        let mut word: Vec<char> = word.chars().collect();
+        while !word.is_empty() {
+            let used = line.chars().count();
+            let room = match used {
+                0 => width,
+                _ => width.saturating_sub(used + 1),
+            };
+            if word.len() <= room {
+                if used > 0 {
+                    line.push(' ');
+                }
+                line.extend(word.drain(..));
+            } else if used > 0 {
+                lines.push(std::mem::take(&mut line));
+            } else {
+                line.extend(word.drain(..width));
+                lines.push(std::mem::take(&mut line));
+            }
+        }
+    }
+    if !line.is_empty() {
+        lines.push(line);
+    }
+    lines
+}
+
+/// A table cell broken into lines of at most `width` characters: a list
+/// ("1.2 s, 3.4 s") between its items, so that a value stays with its unit;
+/// anything longer than `width` by [`wrap`].
+fn wrap_list(cell: &str, width: usize) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    let mut line = String::new();
+    let items: Vec<&str> = cell.split(", ").collect();
+    for (k, item) in items.iter().enumerate() {
+        let item = match k + 1 < items.len() {
+            true => format!("{item},"),
+            false => item.to_string(),
+        };
+        let used = line.chars().count();
+        let len = item.chars().count();
+        if used > 0 && used + 1 + len <= width {
+            line.push(' ');
+            line.push_str(&item);
+            continue;
+        }
+        if used > 0 {
+            lines.push(std::mem::take(&mut line));
+        }
+        match len <= width {
+            true => line = item,
+            false => {
+                let mut parts = wrap(&item, width);
+                line = parts.pop().unwrap_or_default();
+                lines.extend(parts);
+            }
+        }
+    }
+    if !line.is_empty() {
+        lines.push(line);
+    }
+    lines
+}
+
+/// `text` with every line longer than [`WIDTH`] wrapped at spaces, its continuation
+/// lines indented by two spaces; shorter lines (tables, which [`table`] fits) as
+/// they are.
+pub fn fit_width(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for line in text.split_inclusive('\n') {
+        let body = line.trim_end_matches('\n');
+        if body.chars().count() <= WIDTH {
+            out.push_str(line);
+            continue;
+        }
+        let indent = body.len() - body.trim_start().len();
+        let lead = &body[..indent];
+        for (k, part) in wrap(body, WIDTH.saturating_sub(indent + 2))
+            .iter()
+            .enumerate()
+        {
+            out.push_str(lead);
+            if k > 0 {
+                out.push_str("  ");
+            }
+            out.push_str(part);
+            out.push('\n');
+        }
+        if !line.ends_with('\n') {
+            out.pop();
+        }
+    }
+    out
+}
+
+/// Render rows as a left-aligned text table with a header rule, at most [`WIDTH`]
+/// characters wide: while wider, the widest column is narrowed (first not below its
+/// longest word, then not below 8 characters) and its cells wrap onto continuation
+/// lines.
 pub fn table(header: &[&str], rows: &[Vec<String>]) -> String {
     let mut w: Vec<usize> = header.iter().map(|h| h.chars().count()).collect();
     for r in rows {
@@ -234,23 +344,58 @@ pub fn table(header: &[&str], rows: &[Vec<String>]) -> String {
             w[i] = w[i].max(c.chars().count());
         }
     }
-    let line = |cells: Vec<&str>| {
-        cells
+    // A column is narrowed first down to its longest word (no word is cut), and
+    // only then, if the table is still too wide, down to MIN_COLUMN.
+    let longest = |c: &str| c.split_whitespace().map(|t| t.chars().count()).max();
+    let mut word: Vec<usize> = header.iter().map(|h| longest(h).unwrap_or(1)).collect();
+    for r in rows {
+        for (i, c) in r.iter().enumerate() {
+            word[i] = word[i].max(longest(c).unwrap_or(0));
+        }
+    }
+    let gaps = 2 * w.len().saturating_sub(1);
+    for floor in [word, vec![MIN_COLUMN; w.len()]] {
+        while w.iter().sum::<usize>() + gaps > WIDTH {
+            let Some(i) = (0..w.len())
+                .filter(|&i| w[i] > floor[i])
+                .max_by_key(|&i| w[i])
+            else {
+                break;
+            };
+            w[i] -= 1;
+        }
+    }
+    let line = |cells: &[&str]| -> String {
+        let wrapped: Vec<Vec<String>> = cells
             .iter()
             .enumerate()
-            .map(|(i, c)| format!("{c}{}", " ".repeat(w[i] - c.chars().count())))
-            .collect::<Vec<_>>()
-            .join("  ")
-            .trim_end()
-            .to_string()
+            .map(|(i, c)| match c.chars().count() <= w[i] {
+                true => vec![c.to_string()],
+                false => wrap_list(c, w[i]),
+            })
+            .collect();
+        let height = wrapped.iter().map(Vec::len).max().unwrap_or(0).max(1);
+        let mut out = String::new();
+        for k in 0..height {
+            let text: Vec<String> = wrapped
+                .iter()
+                .enumerate()
+                .map(|(i, c)| {
+                    let c = c.get(k).map_or("", String::as_str);
+                    format!("{c}{}", " ".repeat(w[i].saturating_sub(c.chars().count())))
+                })
+                .collect();
+            out.push_str(text.join("  ").trim_end());
+            out.push('\n');
+        }
+        out
     };
-    let mut out = line(header.to_vec());
-    out.push('\n');
-    out.push_str(&"-".repeat(w.iter().sum::<usize>() + 2 * (w.len() - 1)));
+    let mut out = line(header);
+    out.push_str(&"-".repeat(w.iter().sum::<usize>() + gaps));
     out.push('\n');
     for r in rows {
-        out.push_str(&line(r.iter().map(String::as_str).collect()));
-        out.push('\n');
+        let cells: Vec<&str> = r.iter().map(String::as_str).collect();
+        out.push_str(&line(&cells));
     }
     out
 }
@@ -306,6 +451,49 @@ mod tests {
             (v.as_str(), ci.as_str()),
             ("20.0 ± 1.3 %", "[17.0, 23.0] %")
         );
+    }
+
+    /// A table wider than 100 characters is narrowed at its widest column, whose
+    /// cells wrap; a narrow one is unchanged; long prose lines wrap with an indent.
+    #[test]
+    fn text_fits_the_width() {
+        let long = "word ".repeat(40);
+        let rows = vec![
+            vec!["1".to_string(), long.trim().to_string(), "x".to_string()],
+            vec!["2".to_string(), "short".to_string(), "y".to_string()],
+        ];
+        let t = table(&["#", "text", "z"], &rows);
+        assert!(t.lines().all(|l| l.chars().count() <= WIDTH), "{t}");
+        // every word kept, in order
+        let words: usize = t.lines().map(|l| l.matches("word").count()).sum();
+        assert_eq!(words, 40);
+        assert_eq!(
+            table(&["a", "b"], &[vec!["1".into(), "2".into()]]),
+            "a  b\n----\n1  2\n"
+        );
+        let prose = format!("warning: {long}\nshort\n");
+        let fitted = fit_width(&prose);
+        assert!(
+            fitted.lines().all(|l| l.chars().count() <= WIDTH),
+            "{fitted}"
+        );
+        assert!(fitted
+            .lines()
+            .skip(1)
+            .take_while(|l| *l != "short")
+            .all(|l| l.starts_with("  ")));
+        assert!(fitted.ends_with("\nshort\n"));
+        assert_eq!(wrap("a bb ccc", 4), ["a bb", "ccc"]);
+        assert_eq!(
+            wrap_list("172.86 ms, 827.35 ms, 69.510 s", 20),
+            ["172.86 ms,", "827.35 ms, 69.510 s"]
+        );
+        assert_eq!(
+            wrap_list("no: the search stopped", 10),
+            ["no: the", "search", "stopped"]
+        );
+        assert_eq!(wrap("abcdefghij", 4), ["abcd", "efgh", "ij"]);
+        assert!(wrap("", 10).is_empty());
     }
 
     #[test]

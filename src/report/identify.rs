@@ -3,9 +3,9 @@
 //! constants, the correlation matrix as a picture, the multi-start waterfall, and a
 //! Markdown page linking them.
 
-use super::format::{constant, constant_pm, si, sig};
+use super::format::{constant, constant_pm, si};
 use super::page::{code, text, Page};
-use super::plot::{nth_line, Chart, Series, Style};
+use super::plot::{Chart, Series, Style};
 use super::runs::Run;
 use crate::error::{Error, Result};
 use crate::identify::material::Validation;
@@ -15,14 +15,14 @@ use crate::identify::Identification;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 
-/// Display unit and factor of a channel's SI values.
-fn display(kind: ChannelKind) -> (&'static str, f64) {
+/// The SI unit of a channel's values.
+fn si_unit(kind: ChannelKind) -> &'static str {
     match kind {
-        ChannelKind::Contraction | ChannelKind::Length => ("µm", 1e6),
-        ChannelKind::Capacitance => ("pF", 1e12),
-        ChannelKind::Current => ("µA", 1e6),
-        ChannelKind::Force => ("N", 1.0),
-        ChannelKind::Stretch => ("1", 1.0),
+        ChannelKind::Contraction | ChannelKind::Length => "m",
+        ChannelKind::Capacitance => "F",
+        ChannelKind::Current => "A",
+        ChannelKind::Force => "N",
+        ChannelKind::Stretch => "1",
     }
 }
 
@@ -66,18 +66,18 @@ pub fn write(
     for (ei, (e, o)) in experiments.iter().zip(&id.runs).enumerate() {
         let s0 = o.samples[0];
         for (ci, c) in e.channels.iter().enumerate() {
-            let (unit, f) = display(c.kind);
+            let unit = si_unit(c.kind);
             let data: Vec<(f64, f64)> = o
                 .samples
                 .iter()
                 .zip(&c.values)
                 .filter(|(_, y)| y.is_finite())
-                .map(|(s, y)| (s.time_s, y * f))
+                .map(|(s, y)| (s.time_s, *y))
                 .collect();
             let model: Vec<(f64, f64)> = o
                 .samples
                 .iter()
-                .map(|s| (s.time_s, simulated(c.kind, &s0, s) * f))
+                .map(|s| (s.time_s, simulated(c.kind, &s0, s)))
                 .collect();
             let name = format!("trace{}-{}.svg", ei + 1, c.kind);
             page.chart(
@@ -87,7 +87,7 @@ pub fn write(
                 &Chart {
                     title: format!("{}: {}", e.name, c.kind),
                     x_label: "time (s)".into(),
-                    y_label: format!("{} ({unit})", c.kind),
+                    y_label: c.kind.to_string(),
                     series: vec![
                         Series {
                             label: "measured".into(),
@@ -103,6 +103,8 @@ pub fn write(
                         },
                     ],
                     log_x: false,
+                    x_unit: None,
+                    y_unit: Some(unit.into()),
                 },
             )?;
             let sigma = id.experiments[ei].channels[ci].sigma;
@@ -129,10 +131,12 @@ pub fn write(
                         style: Style::Points,
                     }],
                     log_x: false,
+                    x_unit: None,
+                    y_unit: None,
                 },
             )?;
             if let Some((sname, chart)) = sensitivity_chart(id, e, ei, c, sigma) {
-                let noise = format!("{} {unit}", sig(sigma * f, 4));
+                let noise = si(sigma, unit);
                 page.text(format!(
                     "Scaled sensitivities of the {kind}: θ·∂y/∂θ / σ for each free constant θ, the first-order change of the simulated {kind} y, in units of its noise σ = {noise}, for a 100 % change of θ, at the identified constants. A constant whose curve is small everywhere is weakly pinned down by this channel; two constants with proportional curves cannot be told apart by it.",
                     kind = c.kind,
@@ -173,19 +177,17 @@ pub fn write(
                 style: Style::Points,
             }],
             log_x: false,
+            x_unit: None,
+            y_unit: None,
         },
     )?;
     for p in &id.profiles {
-        let (unit, f) = match p.unit.as_str() {
-            "Pa" => ("kPa", 1e-3),
-            u => (u, 1.0),
-        };
         let pts: Vec<(f64, f64)> = p
             .values
             .iter()
             .zip(&p.delta_chi2)
             .filter(|(_, d)| d.is_finite())
-            .map(|(v, d)| (v * f, *d))
+            .map(|(v, d)| (*v, *d))
             .collect();
         let (lo, hi) = pts
             .iter()
@@ -199,7 +201,7 @@ pub fn write(
             &name,
             &Chart {
                 title: format!("profile likelihood of {}", p.name),
-                x_label: format!("{} ({unit})", p.name),
+                x_label: p.name.clone(),
                 y_label: "Δχ² (others re-fitted)".into(),
                 series: vec![
                     Series {
@@ -219,6 +221,8 @@ pub fn write(
                     },
                 ],
                 log_x: false,
+                x_unit: Some(p.unit.clone()),
+                y_unit: None,
             },
         )?;
     }
@@ -289,23 +293,20 @@ fn sensitivity_chart(
         .iter()
         .filter_map(|p| constants.iter().find(|k| k.name == p.name))
         .enumerate()
-        .map(|(j, k)| {
-            let (color, style) = nth_line(j);
-            Series {
-                label: k.name.clone(),
-                points: o
-                    .samples
-                    .iter()
-                    .enumerate()
-                    .map(|(i, s)| {
-                        let d = id.theta[k.index] * sensitivity(c.kind, se, i, k.index) / sigma;
-                        (s.time_s, d)
-                    })
-                    .filter(|(_, d)| d.is_finite())
-                    .collect(),
-                color,
-                style,
-            }
+        .map(|(j, k)| Series {
+            label: k.name.clone(),
+            points: o
+                .samples
+                .iter()
+                .enumerate()
+                .map(|(i, s)| {
+                    let d = id.theta[k.index] * sensitivity(c.kind, se, i, k.index) / sigma;
+                    (s.time_s, d)
+                })
+                .filter(|(_, d)| d.is_finite())
+                .collect(),
+            color: j,
+            style: Style::Line,
         })
         .collect();
     let name = format!("sensitivities{}-{}.svg", ei + 1, c.kind);
@@ -315,6 +316,8 @@ fn sensitivity_chart(
         y_label: format!("θ·∂({})/∂θ / σ  (noise units)", c.kind),
         series,
         log_x: false,
+        x_unit: None,
+        y_unit: None,
     };
     Some((name, chart))
 }

@@ -14,7 +14,8 @@ pub mod runs;
 pub mod simulation;
 pub mod static_curve;
 
-/// The closing sections every fit page has: warnings, then the solver report.
+/// The closing sections every fit page has: warnings, then the solver report (the
+/// method and how it ended; the work and its time).
 pub fn warnings_and_solver(
     page: &mut page::Page,
     warnings: &[String],
@@ -22,14 +23,13 @@ pub fn warnings_and_solver(
 ) {
     page.warnings(warnings);
     page.heading("Solver");
+    page.text(format!("{}; {}.", solver.method, solver.termination));
     page.text(format!(
-        "{}; {} start(s), {} at the best objective; {} iterations, {} evaluations, {:.3} ms; {}.",
-        solver.method,
+        "{} start(s), {} at the best objective; {} iterations, {} evaluations, {:.3} ms.",
         solver.starts,
         solver.starts_at_best,
         solver.iterations,
         solver.evaluations,
         solver.seconds * 1e3,
-        solver.termination
     ));
 }

@@ -308,12 +308,7 @@ impl Page {
                     }
                 }
                 Block::Table { header, rows } => {
-                    let h: Vec<&str> = header.iter().map(String::as_str).collect();
-                    let r: Vec<Vec<String>> = rows
-                        .iter()
-                        .map(|r| r.iter().map(|c| c.text.clone()).collect())
-                        .collect();
-                    let _ = write!(s, "```\n{}```\n", table(&h, &r));
+                    let _ = write!(s, "```\n{}```\n", text_table(header, rows));
                 }
                 Block::Figure { file, alt, .. } => {
                     let _ = writeln!(s, "![{}]({})", md_text(alt), href(file));
@@ -321,6 +316,36 @@ impl Page {
             }
         }
         s
+    }
+
+    /// The page as plain text for a terminal, every line fitted to
+    /// [`super::format::WIDTH`] ([`super::format::fit_width`]): the title, then the
+    /// blocks in order — a status as `status: word`, a heading after a blank line,
+    /// paragraphs as plain text, list items after "- ", tables aligned ([`table`]);
+    /// figures are left out (they are files of the report).
+    pub fn terminal(&self) -> String {
+        let mut s = format!("{}\n", self.title);
+        for b in &self.blocks {
+            match b {
+                Block::Status { word, .. } => {
+                    let _ = writeln!(s, "status: {word}");
+                }
+                Block::Heading(h) | Block::Subheading(h) => {
+                    let _ = write!(s, "\n{h}\n");
+                }
+                Block::Paragraph(spans) => {
+                    let _ = writeln!(s, "{}", plain_spans(spans));
+                }
+                Block::List(items) => {
+                    for i in items {
+                        let _ = writeln!(s, "- {}", plain_spans(i));
+                    }
+                }
+                Block::Table { header, rows } => s.push_str(&text_table(header, rows)),
+                Block::Figure { .. } => {}
+            }
+        }
+        super::format::fit_width(&s)
     }
 
     /// The page as one self-contained HTML document: the figures' SVG inline, the
@@ -429,7 +454,7 @@ tbody tr:nth-child(even){background:#fafafa}
 .num{text-align:right;font-variant-numeric:tabular-nums;white-space:nowrap}
 td strong{white-space:nowrap}
 figure{margin:1.2rem 0 1.8rem}
-figure svg{display:block;width:100%;max-width:900px;height:auto;border:1px solid #e3e3e3}
+figure svg{display:block;max-width:100%;height:auto;border:1px solid #e3e3e3}
 footer{margin-top:3rem;padding-top:.5rem;border-top:1px solid #d0d0d0;font-size:.85rem;color:#555}
 @media print{main{max-width:none}figure,table{break-inside:avoid}}
 ";
@@ -500,6 +525,26 @@ fn md_code(s: &str) -> String {
         ""
     };
     format!("{fence}{pad}{s}{pad}{fence}")
+}
+
+/// A table block as aligned text ([`table`]): the cells' text, links dropped.
+fn text_table(header: &[String], rows: &[Vec<Cell>]) -> String {
+    let h: Vec<&str> = header.iter().map(String::as_str).collect();
+    let r: Vec<Vec<String>> = rows
+        .iter()
+        .map(|r| r.iter().map(|c| c.text.clone()).collect())
+        .collect();
+    table(&h, &r)
+}
+
+fn plain_spans(spans: &[Span]) -> String {
+    spans
+        .iter()
+        .map(|sp| match sp {
+            Span::Text(t) | Span::Code(t) | Span::Strong(t) => t.as_str(),
+            Span::Link { text, .. } => text.as_str(),
+        })
+        .collect()
 }
 
 fn md_spans(spans: &[Span]) -> String {

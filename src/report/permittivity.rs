@@ -49,6 +49,8 @@ fn freq_charts(samples: &[SamplePermittivity], page: &mut Page, dir: &Path) -> R
         y_label: "εr′".into(),
         series: eps_series,
         log_x: true,
+        x_unit: None,
+        y_unit: None,
     };
     let tan = Chart {
         title: "Loss tangent".into(),
@@ -56,6 +58,8 @@ fn freq_charts(samples: &[SamplePermittivity], page: &mut Page, dir: &Path) -> R
         y_label: "tan δ".into(),
         series: series(&|p| p.tan_delta),
         log_x: true,
+        x_unit: None,
+        y_unit: None,
     };
     page.chart(dir, "eps_r.svg", "εr", &eps)?;
     page.chart(dir, "tan_delta.svg", "tan δ", &tan)?;
@@ -311,6 +315,8 @@ pub fn write_composite(fit: &CompositeFit, dir: &Path) -> Result<PathBuf> {
             y_label: "εr′".into(),
             series,
             log_x: false,
+            x_unit: None,
+            y_unit: None,
         };
         page.chart(dir, "mixing.svg", "mixing rules", &chart)?;
         page.heading(format!("Mixing rules at {} Hz", sig(rf.freq_hz, 4)));

@@ -33,6 +33,9 @@ pub enum Style {
     ErrorBars,
 }
 
+/// The legend of a fit's confidence band ([`Style::Band`] around a fitted curve).
+pub const BAND_LABEL: &str = "±1σ confidence band of the fit (parameter covariance)";
+
 /// The points of an [`Style::ErrorBars`] series: y ± σ at each x (a σ that is zero
 /// or not finite draws nothing).
 pub fn error_bars(points: impl IntoIterator<Item = (f64, f64, f64)>) -> Vec<(f64, f64)> {
@@ -50,22 +53,33 @@ pub fn band(x: &[f64], lo: &[f64], hi: &[f64]) -> Vec<(f64, f64)> {
     lower.chain(upper).collect()
 }
 
-/// A chart: title, axis labels, series, and whether x is logarithmic.
+/// A chart: title, axis labels, series, whether x is logarithmic, and the SI unit
+/// of each axis.
+///
+/// An axis with a unit (`x_unit`, `y_unit`: values in that SI unit, e.g. `"Pa"`)
+/// gets one SI prefix chosen from its range, the same for every tick, and its label
+/// gains the prefixed unit: values up to 1.4·10⁵ Pa on "nominal stress" read
+/// "nominal stress (kPa)" with ticks 0, 50, 100, … (never "140000.0 kPa").
+/// An axis without one shows the values as they are.
 pub struct Chart {
     /// Title.
     pub title: String,
-    /// X-axis label with unit.
+    /// X-axis label: the quantity, and its unit when `x_unit` is `None`.
     pub x_label: String,
-    /// Y-axis label with unit.
+    /// Y-axis label: the quantity, and its unit when `y_unit` is `None`.
     pub y_label: String,
     /// Series.
     pub series: Vec<Series>,
     /// Logarithmic x axis.
     pub log_x: bool,
+    /// SI unit of the x values (prefix chosen by the chart), if any.
+    pub x_unit: Option<String>,
+    /// SI unit of the y values (prefix chosen by the chart), if any.
+    pub y_unit: Option<String>,
 }
 
-/// The palette (Tableau 10); a colour index beyond it repeats it.
-const PALETTE: [RGBColor; 10] = [
+/// The first colours: Tableau 10.
+const TABLEAU: [RGBColor; 10] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
@@ -78,18 +92,110 @@ const PALETTE: [RGBColor; 10] = [
     RGBColor(188, 189, 34),
 ];
 
-fn color(i: usize) -> RGBColor {
-    PALETTE[i % PALETTE.len()]
+/// OKLab (Ottosson 2020, <https://bottosson.github.io/posts/oklab/>) of an sRGB colour.
+fn oklab(c: RGBColor) -> [f64; 3] {
+    let lin = |v: u8| {
+        let v = v as f64 / 255.0;
+        if v <= 0.04045 {
+            v / 12.92
+        } else {
+            ((v + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let (r, g, b) = (lin(c.0), lin(c.1), lin(c.2));
+    let l = (0.4122214708 * r + 0.5363325363 * g + 0.0514459929 * b).cbrt();
+    let m = (0.2119034982 * r + 0.6806995451 * g + 0.1073969566 * b).cbrt();
+    let s = (0.0883024619 * r + 0.2817188376 * g + 0.6299787005 * b).cbrt();
+    [
+        0.2104542553 * l + 0.7936177850 * m - 0.0040720468 * s,
+        1.9779984951 * l - 2.4285922050 * m + 0.4505937099 * s,
+        0.0259040371 * l + 0.7827717662 * m - 0.8086757660 * s,
+    ]
 }
 
-/// The colour and style of the `i`-th of many model curves on one chart (one per
-/// parameter): a colour each, drawn dashed once the palette repeats, so that twice
-/// as many curves as colours stay apart.
-pub fn nth_line(i: usize) -> (usize, Style) {
-    match i < PALETTE.len() {
-        true => (i, Style::Line),
-        false => (i, Style::Dashed),
+/// The sRGB colour of OKLab (L, a, b), if it lies in the sRGB gamut.
+fn srgb(lab: [f64; 3]) -> Option<RGBColor> {
+    let [ll, a, b] = lab;
+    let l = (ll + 0.3963377774 * a + 0.2158037573 * b).powi(3);
+    let m = (ll - 0.1055613458 * a - 0.0638541728 * b).powi(3);
+    let s = (ll - 0.0894841775 * a - 1.2914855480 * b).powi(3);
+    let rgb = [
+        4.0767416621 * l - 3.3077115913 * m + 0.2309699292 * s,
+        -1.2684380046 * l + 2.6097574011 * m - 0.3413193965 * s,
+        -0.0041960863 * l - 0.7034186147 * m + 1.7076147010 * s,
+    ];
+    if rgb.iter().any(|v| !(0.0..=1.0).contains(v)) {
+        return None;
     }
+    let gamma = |v: f64| {
+        let v = if v <= 0.0031308 {
+            12.92 * v
+        } else {
+            1.055 * v.powf(1.0 / 2.4) - 0.055
+        };
+        (255.0 * v).round() as u8
+    };
+    Some(RGBColor(gamma(rgb[0]), gamma(rgb[1]), gamma(rgb[2])))
+}
+
+/// The palette: Tableau 10, then, one at a time, the colour of a fixed OKLab grid
+/// (lightness 0.4–0.7, so every colour reads on white; chroma 0.06–0.14; hue every
+/// 15°; in the sRGB gamut) farthest from all colours before it (greedy farthest-point
+/// order, ties to the first in the grid). Deterministic; no colour repeats until the
+/// grid is used up (243 colours), and the first 40 are at least 0.07 apart in OKLab
+/// (a just noticeable difference is about 0.02).
+fn palette() -> &'static [RGBColor] {
+    static PALETTE: std::sync::OnceLock<Vec<RGBColor>> = std::sync::OnceLock::new();
+    PALETTE.get_or_init(|| {
+        let mut grid: Vec<(RGBColor, [f64; 3])> = Vec::new();
+        for l in [0.4, 0.5, 0.6, 0.7] {
+            for c in [0.06, 0.1, 0.14] {
+                for k in 0..24 {
+                    let h = std::f64::consts::TAU * k as f64 / 24.0;
+                    if let Some(rgb) = srgb([l, c * h.cos(), c * h.sin()]) {
+                        // the gamut test holds before rounding; the distances use
+                        // the colour drawn
+                        grid.push((rgb, oklab(rgb)));
+                    }
+                }
+            }
+        }
+        let dist = |a: &[f64; 3], b: &[f64; 3]| {
+            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+        };
+        // each grid colour's distance to the nearest colour chosen so far
+        let mut nearest: Vec<f64> = grid
+            .iter()
+            .map(|(_, g)| {
+                TABLEAU
+                    .iter()
+                    .map(|&t| dist(g, &oklab(t)))
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .collect();
+        let mut out = TABLEAU.to_vec();
+        let mut taken = vec![false; grid.len()];
+        while let Some(best) = (0..grid.len()).filter(|&k| !taken[k]).reduce(|a, b| {
+            if nearest[b] > nearest[a] {
+                b
+            } else {
+                a
+            }
+        }) {
+            taken[best] = true;
+            out.push(grid[best].0);
+            for k in 0..grid.len() {
+                nearest[k] = nearest[k].min(dist(&grid[k].1, &grid[best].1));
+            }
+        }
+        out
+    })
+}
+
+/// The `i`-th colour of the palette (see [`palette`]).
+fn color(i: usize) -> RGBColor {
+    let p = palette();
+    p[i % p.len()]
 }
 
 fn range(vals: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
@@ -151,45 +257,33 @@ fn log_tick_label(v: f64) -> String {
     }
 }
 
-impl Chart {
-    /// The plot corner holding the fewest points (upper left on ties), where the
-    /// legend hides the least data.
-    fn emptiest_corner(&self, x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosition {
-        let fx = |v: f64| {
-            if self.log_x {
-                (v.ln() - x.0.ln()) / (x.1.ln() - x.0.ln())
-            } else {
-                (v - x.0) / (x.1 - x.0)
-            }
-        };
-        let fy = |v: f64| (v - y.0) / (y.1 - y.0);
-        // Corner regions: the outer 40 % of each axis.
-        let corners = [
-            (SeriesLabelPosition::UpperLeft, false, true),
-            (SeriesLabelPosition::UpperRight, true, true),
-            (SeriesLabelPosition::LowerLeft, false, false),
-            (SeriesLabelPosition::LowerRight, true, false),
-        ];
-        let count = |right: bool, upper: bool| {
-            self.series
-                .iter()
-                .flat_map(|s| s.points.iter())
-                .filter(|p| {
-                    let (u, v) = (fx(p.0), fy(p.1));
-                    u.is_finite()
-                        && v.is_finite()
-                        && (if right { u > 0.6 } else { u < 0.4 })
-                        && (if upper { v > 0.6 } else { v < 0.4 })
-                })
-                .count()
-        };
-        corners
-            .into_iter()
-            .min_by_key(|&(_, right, upper)| count(right, upper))
-            .map(|(c, ..)| c)
-            .unwrap_or(SeriesLabelPosition::UpperLeft)
-    }
+/// Legend text size (px) and the width of one of its characters, an upper estimate
+/// for sans-serif text (the SVG backend cannot measure text).
+const LEGEND_FONT: u32 = 14;
+const LEGEND_CHAR_PX: u32 = 7;
+/// Legend labels wrap at this many characters.
+const LEGEND_CHARS: usize = 40;
+/// Height of one legend line (px).
+const LEGEND_LINE_PX: u32 = 18;
+/// The plot's own size (px); the legend column is added to the right of it.
+const PLOT_SIZE: (u32, u32) = (900, 560);
 
+/// An axis' SI prefix from its range `(lo, hi)` when it has a unit: the factor to
+/// multiply values by and the label with the prefixed unit ("stress (kPa)").
+fn axis_scale(label: &str, unit: Option<&str>, (lo, hi): (f64, f64)) -> (f64, String) {
+    match unit {
+        Some(u) if !u.is_empty() && u != "1" => {
+            let (f, p) = super::format::prefix(lo.abs().max(hi.abs()));
+            (f, format!("{label} ({p}{u})"))
+        }
+        _ => (1.0, label.to_string()),
+    }
+}
+
+/// A legend entry: the series and its label's lines.
+type LegendEntry<'a> = (&'a Series, Vec<String>);
+
+impl Chart {
     /// Render to an SVG file (written atomically).
     pub fn write_svg(&self, path: &Path) -> Result<()> {
         crate::io::write::atomic_write(path, self.svg(path)?.as_bytes())
@@ -203,14 +297,44 @@ impl Chart {
         Ok(svg)
     }
 
+    /// The legend's entries (series with a label, each label wrapped) and the size of
+    /// the column holding them (zero wide when there are none).
+    fn legend(&self) -> (Vec<LegendEntry<'_>>, (u32, u32)) {
+        let entries: Vec<LegendEntry> = self
+            .series
+            .iter()
+            .filter(|s| !s.label.trim().is_empty())
+            .map(|s| (s, super::format::wrap(&s.label, LEGEND_CHARS)))
+            .collect();
+        let chars = entries
+            .iter()
+            .flat_map(|(_, l)| l.iter().map(|l| l.chars().count()))
+            .max();
+        let Some(chars) = chars else {
+            return (entries, (0, 0));
+        };
+        let lines: usize = entries.iter().map(|(_, l)| l.len()).sum();
+        let width = 50 + LEGEND_CHAR_PX * chars as u32;
+        let height = LEGEND_LINE_PX * lines as u32 + 6 * entries.len() as u32;
+        (entries, (width, height))
+    }
+
     fn draw(&self, out: &mut String) -> std::result::Result<(), Box<dyn std::error::Error + '_>> {
-        let root = SVGBackend::with_string(out, (900, 560)).into_drawing_area();
+        let (entries, (legend_w, legend_h)) = self.legend();
+        // The legend sits in a column right of the plot, from the plot's top (below
+        // the title); the picture grows downwards when the legend is taller.
+        let top = 60;
+        let size = (PLOT_SIZE.0 + legend_w, PLOT_SIZE.1.max(top + legend_h + 20));
+        let root = SVGBackend::with_string(out, size).into_drawing_area();
         root.fill(&WHITE)?;
+        let (plot_area, legend_area) = root.split_horizontally(PLOT_SIZE.0);
+        let plot_area = plot_area.shrink((0, 0), PLOT_SIZE);
         let all = || self.series.iter().flat_map(|s| s.points.iter());
         let (x0, x1) = range(all().map(|p| p.0), self.log_x);
         let (y0, y1) = range(all().map(|p| p.1), false);
-        let legend_corner = self.emptiest_corner((x0, x1), (y0, y1));
-        let mut builder = ChartBuilder::on(&root);
+        let (fx, x_desc) = axis_scale(&self.x_label, self.x_unit.as_deref(), (x0, x1));
+        let (fy, y_desc) = axis_scale(&self.y_label, self.y_unit.as_deref(), (y0, y1));
+        let mut builder = ChartBuilder::on(&plot_area);
         builder
             .caption(&self.title, ("sans-serif", 22))
             .margin(15)
@@ -221,13 +345,13 @@ impl Chart {
                 let mut chart = $chart;
                 chart
                     .configure_mesh()
-                    .x_desc(self.x_label.as_str())
-                    .y_desc(self.y_label.as_str())
-                    .y_label_formatter(&|v| tick_label(*v, y0, y1))
+                    .x_desc(x_desc.as_str())
+                    .y_desc(y_desc.as_str())
+                    .y_label_formatter(&|v| tick_label(*v * fy, y0 * fy, y1 * fy))
                     .x_label_formatter(&|v| match self.log_x {
                         // a log axis' ticks are decades and their multiples
-                        true => log_tick_label(*v),
-                        false => tick_label(*v, x0, x1),
+                        true => log_tick_label(*v * fx),
+                        false => tick_label(*v * fx, x0 * fx, x1 * fx),
                     })
                     .light_line_style(RGBColor(235, 235, 235))
                     .draw()?;
@@ -239,16 +363,12 @@ impl Chart {
                         .copied()
                         .filter(|p| p.0.is_finite() && p.1.is_finite());
                     match s.style {
-                        Style::Points => chart
-                            .draw_series(pts.map(|p| Circle::new(p, 3, c.filled())))?
-                            .label(s.label.as_str())
-                            .legend(move |(x, y)| Circle::new((x + 10, y), 3, c.filled())),
-                        Style::Line => chart
-                            .draw_series(LineSeries::new(pts, c.stroke_width(2)))?
-                            .label(s.label.as_str())
-                            .legend(move |(x, y)| {
-                                PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
-                            }),
+                        Style::Points => {
+                            chart.draw_series(pts.map(|p| Circle::new(p, 3, c.filled())))?;
+                        }
+                        Style::Line => {
+                            chart.draw_series(LineSeries::new(pts, c.stroke_width(2)))?;
+                        }
                         Style::Band => {
                             // The outline keeps a band visible where it is thinner
                             // than a pixel.
@@ -257,60 +377,34 @@ impl Chart {
                                 outline.clone(),
                                 c.stroke_width(1),
                             )))?;
-                            chart
-                                .draw_series(std::iter::once(Polygon::new(
-                                    outline,
-                                    c.mix(0.45).filled(),
-                                )))?
-                                .label(s.label.as_str())
-                                .legend(move |(x, y)| {
-                                    Rectangle::new(
-                                        [(x, y - 4), (x + 20, y + 4)],
-                                        c.mix(0.45).filled(),
-                                    )
-                                })
+                            chart.draw_series(std::iter::once(Polygon::new(
+                                outline,
+                                c.mix(0.3).filled(),
+                            )))?;
                         }
                         Style::ErrorBars => {
                             let pts: Vec<(f64, f64)> = pts.collect();
-                            chart
-                                .draw_series(pts.chunks_exact(2).map(|w| {
-                                    ErrorBar::new_vertical(
-                                        w[0].0,
-                                        w[0].1,
-                                        0.5 * (w[0].1 + w[1].1),
-                                        w[1].1,
-                                        c.stroke_width(1),
-                                        6,
-                                    )
-                                }))?
-                                .label(s.label.as_str())
-                                .legend(move |(x, y)| {
-                                    ErrorBar::new_vertical(
-                                        x + 10,
-                                        y - 5,
-                                        y,
-                                        y + 5,
-                                        c.stroke_width(1),
-                                        6,
-                                    )
-                                })
+                            chart.draw_series(pts.chunks_exact(2).map(|w| {
+                                ErrorBar::new_vertical(
+                                    w[0].0,
+                                    w[0].1,
+                                    0.5 * (w[0].1 + w[1].1),
+                                    w[1].1,
+                                    c.stroke_width(1),
+                                    6,
+                                )
+                            }))?;
                         }
-                        Style::Dashed => chart
-                            .draw_series(DashedLineSeries::new(pts, 6, 4, c.stroke_width(2)))?
-                            .label(s.label.as_str())
-                            .legend(move |(x, y)| {
-                                EmptyElement::at((x, y))
-                                    + PathElement::new(vec![(0, 0), (7, 0)], c.stroke_width(2))
-                                    + PathElement::new(vec![(12, 0), (20, 0)], c.stroke_width(2))
-                            }),
-                    };
+                        Style::Dashed => {
+                            chart.draw_series(DashedLineSeries::new(
+                                pts,
+                                6,
+                                4,
+                                c.stroke_width(2),
+                            ))?;
+                        }
+                    }
                 }
-                chart
-                    .configure_series_labels()
-                    .background_style(WHITE.mix(0.85))
-                    .border_style(BLACK)
-                    .position(legend_corner)
-                    .draw()?;
             }};
         }
         if self.log_x {
@@ -318,14 +412,159 @@ impl Chart {
         } else {
             body!(builder.build_cartesian_2d(x0..x1, y0..y1)?);
         }
+        let mut y = top as i32;
+        for (s, lines) in &entries {
+            let mid = y + LEGEND_LINE_PX as i32 / 2;
+            legend_key(&legend_area, s.style, color(s.color), (8, mid))?;
+            for (k, line) in lines.iter().enumerate() {
+                legend_area.draw(&Text::new(
+                    line.as_str(),
+                    (40, y + 2 + (k as u32 * LEGEND_LINE_PX) as i32),
+                    ("sans-serif", LEGEND_FONT).into_font(),
+                ))?;
+            }
+            y += (LEGEND_LINE_PX * lines.len() as u32 + 6) as i32;
+        }
         root.present()?;
         Ok(())
     }
 }
 
+/// Draw the legend key of a series of `style` in colour `c`, 24 px wide from `(x, y)`
+/// (its vertical middle): a marker, a solid or a visibly dashed line (three dashes),
+/// a filled and outlined box for a band, a capped bar for error bars.
+fn legend_key<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    style: Style,
+    c: RGBColor,
+    (x, y): (i32, i32),
+) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let line = |a: i32, b: i32| PathElement::new(vec![(x + a, y), (x + b, y)], c.stroke_width(2));
+    match style {
+        Style::Points => area.draw(&Circle::new((x + 12, y), 4, c.filled())),
+        Style::Line => area.draw(&line(0, 24)),
+        Style::Dashed => {
+            area.draw(&line(0, 6))?;
+            area.draw(&line(9, 15))?;
+            area.draw(&line(18, 24))
+        }
+        Style::Band => {
+            area.draw(&Rectangle::new(
+                [(x, y - 6), (x + 24, y + 6)],
+                c.mix(0.3).filled(),
+            ))?;
+            area.draw(&Rectangle::new(
+                [(x, y - 6), (x + 24, y + 6)],
+                c.stroke_width(1),
+            ))
+        }
+        Style::ErrorBars => area.draw(&ErrorBar::new_vertical(
+            x + 12,
+            y - 7,
+            y,
+            y + 7,
+            c.stroke_width(1),
+            8,
+        )),
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::tick_label;
+    use super::*;
+
+    /// The first 40 colours are pairwise at least 0.07 apart in OKLab (about three
+    /// just noticeable differences; the greedy order gives 0.0726 at 40), and the
+    /// palette never repeats a colour.
+    #[test]
+    fn palette_does_not_repeat() {
+        let labs: Vec<[f64; 3]> = (0..40).map(|i| oklab(color(i))).collect();
+        for a in 0..labs.len() {
+            for b in 0..a {
+                let d = (0..3)
+                    .map(|k| (labs[a][k] - labs[b][k]).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                assert!(d >= 0.07, "colours {b} and {a} are {d:.4} apart");
+            }
+        }
+        let all = palette();
+        assert!(all.len() > 200, "{} colours", all.len());
+        for a in 0..all.len() {
+            assert!(!all[..a].contains(&all[a]), "colour {a} repeats");
+        }
+        // the conversion round-trips inside the gamut (the grid is made with it; a
+        // colour on the gamut's edge, like Tableau's orange, may fall out by rounding)
+        for c in [TABLEAU[0], TABLEAU[8], RGBColor(120, 60, 90)] {
+            assert_eq!(srgb(oklab(c)), Some(c));
+        }
+    }
+
+    /// An axis in Pa up to 1.4·10⁵ reads in kPa with plain ticks.
+    #[test]
+    fn si_axis_reads_in_prefixed_unit() {
+        let (f, label) = axis_scale("stress", Some("Pa"), (-7e3, 1.4e5));
+        assert_eq!(label, "stress (kPa)");
+        let ticks: Vec<String> = [0.0, 5e4, 1e5, 1.4e5]
+            .iter()
+            .map(|&v| tick_label(v * f, -7e3 * f, 1.4e5 * f))
+            .collect();
+        assert_eq!(ticks, ["0", "50", "100", "140"]);
+        assert_eq!(axis_scale("λ", Some("1"), (0.0, 5.0)), (1.0, "λ".into()));
+        assert_eq!(axis_scale("t (s)", None, (0.0, 5e5)), (1.0, "t (s)".into()));
+    }
+
+    /// A chart whose data fill the plot keeps its legend out of it: every legend
+    /// text starts right of the plot (x ≥ 900 px), one per label line, with 1, 3 and
+    /// 20 series and long labels; a dashed series' key is three dashes.
+    #[test]
+    fn legend_sits_outside_the_data() {
+        for n in [1usize, 3, 20] {
+            let series: Vec<Series> = (0..n)
+                .map(|i| Series {
+                    label: format!(
+                        "series {i} with a rather long label that has to wrap somewhere"
+                    ),
+                    points: (0..50).map(|k| (k as f64, (k * (i + 1)) as f64)).collect(),
+                    color: i,
+                    style: if i % 2 == 0 {
+                        Style::Line
+                    } else {
+                        Style::Dashed
+                    },
+                })
+                .collect();
+            let chart = Chart {
+                title: "t".into(),
+                x_label: "x".into(),
+                y_label: "y".into(),
+                series,
+                log_x: false,
+                x_unit: None,
+                y_unit: None,
+            };
+            let svg = chart.svg(Path::new("t.svg")).unwrap();
+            let doc = scraper::Html::parse_document(&svg);
+            let texts = scraper::Selector::parse("text").unwrap();
+            let legend: Vec<f64> = doc
+                .select(&texts)
+                .filter(|t| {
+                    let s: String = t.text().collect();
+                    s.starts_with("series ") || s.contains("long label") || s.contains("wrap")
+                })
+                .map(|t| t.value().attr("x").unwrap().parse::<f64>().unwrap())
+                .collect();
+            assert_eq!(legend.len(), 2 * n, "{n} series: two lines each");
+            assert!(legend.iter().all(|&x| x >= 900.0), "{n} series: {legend:?}");
+        }
+        let mut svg = String::new();
+        {
+            let root = SVGBackend::with_string(&mut svg, (40, 20)).into_drawing_area();
+            legend_key(&root, Style::Dashed, color(0), (8, 10)).unwrap();
+            root.present().unwrap();
+        }
+        assert_eq!(svg.matches("<polyline").count(), 3, "{svg}");
+    }
 
     /// Neighbouring ticks read differently at every scale (an axis of 10⁻⁷ once
     /// read "0.0" at every tick).

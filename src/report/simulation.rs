@@ -3,7 +3,7 @@
 
 use super::format::si;
 use super::page::{code, strong, text, Page};
-use super::plot::{band, nth_line, Chart, Series, Style};
+use super::plot::{band, Chart, Series, Style};
 use super::runs::Run;
 use crate::error::Result;
 use crate::sim::derivatives::OutputSensitivity;
@@ -212,13 +212,13 @@ pub fn write(o: &Outcome, input: &str, dir: &Path) -> Result<PathBuf> {
         0,
         &|s| s.length_m,
         &|i| i.length_m,
-        &|l| (o.rest_length_m - l) * 1e3,
+        &|l| o.rest_length_m - l,
     )];
     // A closed loop's reference contraction, on the same axis as the stroke.
     if o.samples.iter().any(|s| s.reference.is_finite()) {
         stroke_series.push(Series {
             label: "reference (controller)".into(),
-            points: pts(&|s| s.reference * o.rest_length_m * 1e3),
+            points: pts(&|s| s.reference * o.rest_length_m),
             color: 1,
             style: Style::Dashed,
         });
@@ -226,34 +226,38 @@ pub fn write(o: &Outcome, input: &str, dir: &Path) -> Result<PathBuf> {
     let stroke = Chart {
         title: format!("{}: stroke", o.scene),
         x_label: "time (s)".into(),
-        y_label: "contraction (mm)".into(),
+        y_label: "contraction".into(),
         series: stroke_series,
         log_x: false,
+        x_unit: None,
+        y_unit: Some("m".into()),
     };
     let voltage = Chart {
         title: format!("{}: voltage", o.scene),
         x_label: "time (s)".into(),
-        y_label: "voltage (kV)".into(),
+        y_label: "voltage".into(),
         series: vec![
             Series {
                 label: "terminal".into(),
-                points: pts(&|s| s.voltage_v * 1e-3),
+                points: pts(&|s| s.voltage_v),
                 color: 1,
                 style: Style::Line,
             },
             Series {
                 label: "input".into(),
-                points: pts(&|s| s.input_v * 1e-3),
+                points: pts(&|s| s.input_v),
                 color: 2,
                 style: Style::Dashed,
             },
         ],
         log_x: false,
+        x_unit: None,
+        y_unit: Some("V".into()),
     };
     let power = Chart {
         title: format!("{}: power", o.scene),
         x_label: "time (s)".into(),
-        y_label: "power (W)".into(),
+        y_label: "power".into(),
         series: vec![
             trace(o, "total V·I", 3, &|s| s.power_w, &|i| i.power_w, &|p| p),
             Series {
@@ -264,6 +268,8 @@ pub fn write(o: &Outcome, input: &str, dir: &Path) -> Result<PathBuf> {
             },
         ],
         log_x: false,
+        x_unit: None,
+        y_unit: Some("W".into()),
     };
     let x = o.extremes();
     let mut page = Page::new(format!("Simulation: {}", o.scene));
@@ -358,23 +364,22 @@ pub fn write(o: &Outcome, input: &str, dir: &Path) -> Result<PathBuf> {
             x_label: "time (s)".into(),
             y_label: "θ·∂λ/∂θ".into(),
             series: (0..se.params.len())
-                .map(|j| {
-                    let (color, style) = nth_line(j);
-                    Series {
-                        label: se.params[j].clone(),
-                        points: o
-                            .samples
-                            .iter()
-                            .zip(se.stretch.iter())
-                            .filter(|(_, r)| r[j].is_finite())
-                            .map(|(s, r)| (s.time_s, se.theta[j] * r[j]))
-                            .collect(),
-                        color,
-                        style,
-                    }
+                .map(|j| Series {
+                    label: se.params[j].clone(),
+                    points: o
+                        .samples
+                        .iter()
+                        .zip(se.stretch.iter())
+                        .filter(|(_, r)| r[j].is_finite())
+                        .map(|(s, r)| (s.time_s, se.theta[j] * r[j]))
+                        .collect(),
+                    color: j,
+                    style: Style::Line,
                 })
                 .collect(),
             log_x: false,
+            x_unit: None,
+            y_unit: None,
         };
         page.chart(dir, "sensitivities.svg", "sensitivities", &chart)?;
     }

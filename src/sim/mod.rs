@@ -873,7 +873,7 @@ fn integrate<'s, 'k>(
                 // explicit method steps through
                 let advice = match run.method {
                     Method::Tsit45 | Method::Dp54 => "dynamics that much stiffer than the axial mode (high control gains, a fast source) want the implicit integrator = \"bdf\"",
-                    _ => "an implicit method stalls on a right-hand side that is not smooth (a controller switching on its clamp, a source saturating): try the explicit integrator = \"tsit45\"",
+                    _ => "an implicit method stalls on a right-hand side that is not smooth (a controller switching on its clamp, a source saturating): check the controller's gains and limits, or try the explicit integrator = \"tsit45\"",
                 };
                 format!(
                     "{why}: the run was estimated at {} steps before it started (sim::budget); {advice}",

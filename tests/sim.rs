@@ -841,3 +841,48 @@ fn auto_weighs_stiffness_against_accuracy() {
     assert_eq!(o.integrator.method, Method::Bdf);
     assert_eq!(o.integrator.reason, why);
 }
+
+/// Under a caller's step budget (identification caps each run at 10× the steps at
+/// its starting constants) `auto` does not choose an explicit method whose
+/// stability alone needs more steps than the budget allows: it could not finish,
+/// while BDF may (it damps a ringing it need not resolve). The rig scene with its
+/// dashpot at 10 Pa·s rings lightly (Tsitouras without a budget: 21 185 steps);
+/// half its stability estimate as the budget runs BDF and says why, twice it keeps
+/// Tsitouras.
+#[test]
+fn auto_under_a_step_budget_skips_an_explicit_method_that_cannot_fit_it() {
+    let mut s = Scene::read(Path::new("datasets/scenes/stack_rig_7s.toml")).unwrap();
+    s.material.viscous.nv_pa_s = 10.0;
+    let cost = dea_fit::sim::budget::estimate(&s).unwrap();
+    let (m, why) = cost.auto.clone().unwrap();
+    assert_eq!(m, Method::Tsit45, "{why}");
+    let stability = cost.stability_steps;
+    assert!(stability > 1000.0, "{stability}");
+    for (cap, want) in [
+        (None, Method::Tsit45),
+        (Some((0.5 * stability) as usize), Method::Bdf),
+        (Some((2.0 * stability) as usize), Method::Tsit45),
+    ] {
+        let o = simulate(
+            &s,
+            &RunOptions {
+                max_steps: cap,
+                ..RunOptions::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(
+            o.integrator.method, want,
+            "{cap:?}: {}",
+            o.integrator.reason
+        );
+        if let (Some(cap), Method::Bdf) = (cap, want) {
+            let says = format!("more than the run's budget of {cap} steps");
+            assert!(
+                o.integrator.reason.contains(&says),
+                "{}",
+                o.integrator.reason
+            );
+        }
+    }
+}

@@ -413,38 +413,35 @@ impl Lm {
             }
             // Predicted decrease of the linear model for the (projected) step.
             let pred = -(g.dot(&dx)) - 0.5 * (&a * &dx).dot(&dx);
-            self.evaluations += 1;
-            let ok = match trial_jac {
-                true => problem.eval(&x_new, &mut r_new, Some(&mut self.jac_trial)),
-                false => problem.eval(&x_new, &mut r_new, None),
-            };
-            let cost_new = if ok {
-                0.5 * r_new.norm_squared()
-            } else {
-                f64::INFINITY
-            };
-            let rho = if pred > 0.0 {
-                (self.cost - cost_new) / pred
-            } else {
-                -1.0
-            };
-            if ok && cost_new < self.cost && rho > 0.0 {
-                let rel = (self.cost - cost_new) / self.cost.max(f64::MIN_POSITIVE);
-                x.copy_from_slice(&x_new);
-                if trial_jac {
-                    std::mem::swap(&mut self.r, &mut r_new);
-                    std::mem::swap(&mut self.jac, &mut self.jac_trial);
-                } else {
-                    self.evaluations += 1;
-                    problem.eval(x, &mut self.r, Some(&mut self.jac));
+            // A step the projection onto the bounds turned uphill even in the linear
+            // model (pred ≤ 0) cannot be accepted (that needs ρ > 0): it is rejected
+            // without evaluating the problem there.
+            if pred > 0.0 {
+                self.evaluations += 1;
+                let ok = match trial_jac {
+                    true => problem.eval(&x_new, &mut r_new, Some(&mut self.jac_trial)),
+                    false => problem.eval(&x_new, &mut r_new, None),
+                };
+                let cost_new = 0.5 * r_new.norm_squared();
+                if ok && cost_new < self.cost {
+                    let rho = (self.cost - cost_new) / pred;
+                    let rel = (self.cost - cost_new) / self.cost.max(f64::MIN_POSITIVE);
+                    x.copy_from_slice(&x_new);
+                    if trial_jac {
+                        std::mem::swap(&mut self.r, &mut r_new);
+                        std::mem::swap(&mut self.jac, &mut self.jac_trial);
+                    } else {
+                        self.evaluations += 1;
+                        problem.eval(x, &mut self.r, Some(&mut self.jac));
+                    }
+                    self.cost = cost_new;
+                    self.costs.push(cost_new);
+                    self.trusted = first && rho >= TRUSTED_RHO;
+                    self.mu *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
+                    self.nu = 2.0;
+                    self.iterations += 1;
+                    return (rel <= settings.ftol).then_some(Termination::Converged("cost"));
                 }
-                self.cost = cost_new;
-                self.costs.push(cost_new);
-                self.trusted = first && rho >= TRUSTED_RHO;
-                self.mu *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
-                self.nu = 2.0;
-                self.iterations += 1;
-                return (rel <= settings.ftol).then_some(Termination::Converged("cost"));
             }
             trial_jac = false;
             first = false;
@@ -885,6 +882,49 @@ mod tests {
             (res.x[0] - 0.5).abs() < 1e-12 && (res.x[1] - 0.25).abs() < 1e-6,
             "{res:?}"
         );
+    }
+
+    /// A linear valley: r = (10·(x + y − 1), 0.1·(x − y)), steep across the line
+    /// x + y = 1 and shallow along it.
+    struct Valley;
+    impl LeastSquares for Valley {
+        fn dims(&self) -> (usize, usize) {
+            (2, 2)
+        }
+        fn eval(
+            &mut self,
+            p: &[f64],
+            r: &mut DVector<f64>,
+            jac: Option<&mut DMatrix<f64>>,
+        ) -> bool {
+            r[0] = 10.0 * (p[0] + p[1] - 1.0);
+            r[1] = 0.1 * (p[0] - p[1]);
+            if let Some(j) = jac {
+                j.copy_from_slice(&[10.0, 0.1, 10.0, -0.1]);
+            }
+            true
+        }
+    }
+
+    /// A trial the bounds turn uphill in the linear model is never evaluated: from
+    /// (0, 1) the step along the valley to (0.5, 0.5), clipped at x ≤ 0.1, leaves
+    /// the valley (x + y = 0.6). The problem is linear, so every trial evaluated
+    /// with a predicted decrease > 0 is accepted (ρ = 1): the evaluations are the
+    /// start's and two per iteration (trial, then the Jacobian there), none wasted.
+    #[test]
+    fn a_step_the_bounds_turn_uphill_is_rejected_without_an_evaluation() {
+        let inf = f64::INFINITY;
+        let res = minimize(
+            &mut Valley,
+            &[0.0, 1.0],
+            &[(-inf, 0.1), (-inf, inf)],
+            &LmSettings::default(),
+        );
+        assert_eq!(res.x[0], 0.1, "{res:?}");
+        // y from the 1-D least squares at x = 0.1: 100·(y − 0.9) + 0.01·(y − 0.1) = 0
+        let y = (100.0 * 0.9 + 0.01 * 0.1) / 100.01;
+        assert!((res.x[1] - y).abs() < 1e-9, "{res:?}");
+        assert_eq!(res.evaluations, 1 + 2 * res.iterations, "{res:?}");
     }
 
     /// Bounds that `f64::clamp` panics on (the Gent limit's lower end above its upper

@@ -558,7 +558,18 @@ fn prepare(scene: &Scene, opts: &RunOptions) -> crate::Result<Prepared> {
     let rtol = opts.rtol.unwrap_or(scene.time.rtol);
     let (method, reason) = match (opts.method.or(scene.time.method), &cost.auto) {
         (Some(m), _) => (m, "requested".to_string()),
-        (None, Some((m, why))) => (*m, why.clone()),
+        (None, Some((m, why))) => match opts.max_steps {
+            // an explicit method cannot step past its stability limit: where that
+            // alone needs more steps than the caller's budget, it cannot complete,
+            // while BDF may (it damps a ringing it need not resolve)
+            Some(cap) if cost.stability_steps > cap as f64 => (
+                Method::Bdf,
+                format!(
+                    "{why}; stability alone needs more than the run's budget of {cap} steps: variable-order BDF"
+                ),
+            ),
+            _ => (*m, why.clone()),
+        },
         (None, None) => unreachable!("budget::estimate chooses for a scene without an integrator"),
     };
     let span = scene.time.span;

@@ -5,7 +5,7 @@
 
 use super::format::{constant, constant_pm, si};
 use super::page::{code, text, Page};
-use super::plot::{Chart, Series, Style};
+use super::plot::{band, Chart, Series, Style, BAND_LABEL};
 use super::runs::Run;
 use crate::error::{Error, Result};
 use crate::identify::material::Validation;
@@ -74,11 +74,35 @@ pub fn write(
                 .filter(|(_, y)| y.is_finite())
                 .map(|(s, y)| (s.time_s, *y))
                 .collect();
-            let model: Vec<(f64, f64)> = o
+            let times: Vec<f64> = o.samples.iter().map(|s| s.time_s).collect();
+            let model: Vec<f64> = o
                 .samples
                 .iter()
-                .map(|s| (s.time_s, simulated(c.kind, &s0, s)))
+                .map(|s| simulated(c.kind, &s0, s))
                 .collect();
+            let mut series = vec![Series {
+                label: "measured".into(),
+                points: data,
+                color: 0,
+                style: Style::Points,
+            }];
+            let std = id.model_std(e, ei, c.kind);
+            if let Some(std) = &std {
+                let (down, up): (Vec<f64>, Vec<f64>) =
+                    model.iter().zip(std).map(|(m, d)| (m - d, m + d)).unzip();
+                series.push(Series {
+                    label: BAND_LABEL.into(),
+                    points: band(&times, &down, &up),
+                    color: 1,
+                    style: Style::Band,
+                });
+            }
+            series.push(Series {
+                label: "identified model".into(),
+                points: times.iter().copied().zip(model).collect(),
+                color: 1,
+                style: Style::Line,
+            });
             let name = format!("trace{}-{}.svg", ei + 1, c.kind);
             page.chart(
                 dir,
@@ -86,27 +110,17 @@ pub fn write(
                 &format!("{}: {}, measured and identified model", e.name, c.kind),
                 &Chart {
                     title: format!("{}: {}", e.name, c.kind),
-                    x_label: "time (s)".into(),
+                    x_label: "time".into(),
                     y_label: c.kind.to_string(),
-                    series: vec![
-                        Series {
-                            label: "measured".into(),
-                            points: data,
-                            color: 0,
-                            style: Style::Points,
-                        },
-                        Series {
-                            label: "identified model".into(),
-                            points: model,
-                            color: 1,
-                            style: Style::Line,
-                        },
-                    ],
+                    series,
                     log_x: false,
-                    x_unit: None,
+                    x_unit: Some("s".into()),
                     y_unit: Some(unit.into()),
                 },
             )?;
+            if std.is_none() {
+                page.text("No confidence band: a free constant has no standard error (see the parameters).");
+            }
             let sigma = id.experiments[ei].channels[ci].sigma;
             let res: Vec<(f64, f64)> = o
                 .samples

@@ -214,7 +214,7 @@ fn every_report_kind_is_self_contained() {
                 shipped("datasets/design/silicone_fillers.toml"),
             ],
             "Ranking: Silicone fillers for a thin-layer stack",
-            &["#", "candidate", "drive"],
+            &["#", "candidate", "drive (V)"],
         ),
         (
             "static",

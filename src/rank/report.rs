@@ -660,7 +660,7 @@ fn page(
             "best loading",
             "resolution",
             by.name(),
-            "",
+            "note",
         ],
         rows,
     );

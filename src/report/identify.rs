@@ -262,7 +262,7 @@ fn selection_section(c: &Comparison, page: &mut Page) {
     );
     let (k, from) = (&c.candidates[c.chosen], &c.candidates[c.sigma_from]);
     page.text(format!(
-        "{}: {} with {} arm(s), the fewest free constants within ΔAICc ≤ 2 of the best eligible candidate (a common σ from the {} fit with {} arm(s)). ΔAICc: AICc minus the smallest AICc of the candidates.",
+        "{}: {} with {} arm(s), the fewest free constants within ΔAICc ≤ 2 of the best eligible candidate (a common σ from the {} fit with {} arm(s)). ΔAICc: AICc minus the smallest AICc of the eligible candidates.",
         flags(c.choose),
         k.model,
         k.arms,

@@ -214,7 +214,7 @@ fn every_report_kind_is_self_contained() {
                 shipped("datasets/design/silicone_fillers.toml"),
             ],
             "Ranking: Silicone fillers for a thin-layer stack",
-            &["#", "candidate", "drive"],
+            &["#", "candidate", "drive (V)"],
         ),
         (
             "static",
@@ -484,4 +484,105 @@ fn page_renders_in_chromium() {
         blue > 500,
         "only {blue} pixels of the charts' blue: the SVG did not render"
     );
+}
+
+/// One renderer per result kind: what permittivity, composite, identify and rank
+/// print is the page of their report rendered for the terminal, so every line of
+/// every table in `index.md` (its code blocks) is printed as it stands, every
+/// section heading is printed on a line of its own, and the status is the same.
+#[test]
+fn terminal_summary_is_the_report_page() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let id = repo().join("datasets/identify");
+    let cases: [(&str, Vec<String>); 4] = [
+        (
+            "permittivity",
+            vec![
+                "permittivity".into(),
+                shipped("datasets/composites/sylgard_batio3/s00_cpd.csv"),
+                "--area".into(),
+                "1.439e-3".into(),
+                "--thickness".into(),
+                "2.2mm±0.05mm".into(),
+            ],
+        ),
+        (
+            "composite",
+            vec![
+                "composite".into(),
+                shipped("datasets/composites/sylgard_batio3.toml"),
+            ],
+        ),
+        (
+            "identify",
+            vec![
+                "identify".into(),
+                id.join("step.csv").display().to_string(),
+                "--scene".into(),
+                id.join("stack.toml").display().to_string(),
+                "--free".into(),
+                "C10,nv,eps_r".into(),
+                "--starts".into(),
+                "1".into(),
+                "--out".into(),
+                "id.json".into(),
+            ],
+        ),
+        (
+            "rank",
+            vec![
+                "rank".into(),
+                shipped("datasets/design/silicone_fillers.toml"),
+                "--sweep".into(),
+                "voltage=600V:900V:2".into(),
+            ],
+        ),
+    ];
+    for (name, args) in cases {
+        let mut a: Vec<&str> = args.iter().map(String::as_str).collect();
+        let report = format!("reports/{name}");
+        a.extend_from_slice(&["--report", &report]);
+        let o = run(dir.path(), &a);
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let out = String::from_utf8_lossy(&o.stdout).into_owned();
+        let printed: Vec<&str> = out.lines().collect();
+        let md = std::fs::read_to_string(dir.path().join(&report).join("index.md")).unwrap();
+        let mut in_code = false;
+        let (mut rows, mut headings) = (0, 0);
+        for line in md.lines() {
+            if line == "```" || line.starts_with("```") && !in_code {
+                in_code = !in_code;
+                continue;
+            }
+            if in_code {
+                rows += 1;
+                assert!(
+                    printed.contains(&line.trim_end()),
+                    "{name}: table line {line:?} of index.md is not printed:\n{out}"
+                );
+            } else if let Some(h) = line.strip_prefix("## ") {
+                headings += 1;
+                let h = h.replace('\\', "");
+                assert!(
+                    printed.contains(&h.as_str()),
+                    "{name}: heading {h:?} is not printed:\n{out}"
+                );
+            } else if let Some(s) = line.strip_prefix("Status: **") {
+                let s = s.trim_end_matches("**").replace('\\', "");
+                assert!(
+                    printed.contains(&format!("status: {s}").as_str()),
+                    "{name}: status {s} is not printed:\n{out}"
+                );
+            }
+        }
+        assert!(
+            rows > 0 && headings > 0,
+            "{name}: no table or heading in index.md"
+        );
+    }
 }

@@ -1305,3 +1305,84 @@ fn only_a_start_far_above_the_first_runs_at_the_looser_tolerance() {
     assert!(diff > 0.0, "the far run was made at the tolerance asked");
     assert!(diff < 0.1, "{diff:e} σ");
 }
+
+/// The ±1σ band of the identified model's trace (the report's "trace vs model"
+/// charts): finite and ≥ 0 at every sample, zero only where the model cannot move
+/// (the contraction at t = 0 is zero by definition), positive everywhere else, and
+/// equal to an independent propagation of the same covariance: central differences
+/// of re-simulated traces ([`propagated_std`], runs at rtol 1e-10) instead of the
+/// forward sensitivities. Tolerance 10⁻³ of the channel's largest band value: the
+/// band's gradients are the sensitivities of the optimum's run at the scene's rtol
+/// 1e-6, good to ~10⁻⁵ of the channel's largest effect
+/// (`sensitivities_at_the_scene_tolerance_follow_the_state_accuracy`), the
+/// differences (steps 10⁻³ σ, runs at 1e-10) to ~10⁻⁴; 10⁻³ leaves headroom yet fails
+/// a band built from the search coordinates' covariance (log-space σ are relative:
+/// off by the constant's value) or scaled by the channel's σ.
+#[test]
+fn the_trace_band_is_the_covariance_through_the_sensitivities() {
+    use dea_fit::fit::diagnostics::{covariance, propagated_std};
+    use dea_fit::identify::params::constants;
+    let truth = stack("1 s", 200);
+    let channels = relative_noise(
+        &truth,
+        &[
+            (ChannelKind::Contraction, 0.01),
+            (ChannelKind::Capacitance, 0.002),
+        ],
+    );
+    let exp = trace(&truth, &channels, 11);
+    let free = ["C10", "eps_r", "nv"];
+    let settings = Settings {
+        free: Some(free.iter().map(|s| s.to_string()).collect()),
+        starts: 1,
+        ..Settings::default()
+    };
+    let id = identify(vec![exp.clone()], &settings)
+        .expect("runs")
+        .identified()
+        .expect("identifies");
+    let all = constants(&exp.scene);
+    let index: Vec<usize> = id
+        .parameters
+        .iter()
+        .map(|p| all.iter().find(|c| c.name == p.name).expect("free").index)
+        .collect();
+    let values: Vec<f64> = id.parameters.iter().map(|p| p.value).collect();
+    let std_error: Vec<Option<f64>> = id.parameters.iter().map(|p| p.std_error).collect();
+    let cov = covariance(&std_error, &id.assessment.correlation).expect("every σ");
+    for (kind, _) in &channels {
+        let band = id.model_std(&exp, 0, *kind).expect("a band");
+        let fine = |v: &[f64]| {
+            let mut th = id.theta.clone();
+            for (&k, &x) in index.iter().zip(v) {
+                th[k] = x;
+            }
+            let mut scene = exp.scene.clone();
+            set_theta(&mut scene, &th);
+            let o = simulate(
+                &scene,
+                &RunOptions {
+                    rtol: Some(1e-10),
+                    ..RunOptions::default()
+                },
+            )
+            .ok()?;
+            let s0 = o.samples[0];
+            Some(o.samples.iter().map(|s| simulated(*kind, &s0, s)).collect())
+        };
+        let fd = propagated_std(fine, &values, &cov).expect("differences");
+        assert_eq!(band.len(), fd.len(), "{kind}");
+        let top = fd.iter().copied().fold(0.0, f64::max);
+        for (i, (b, f)) in band.iter().zip(&fd).enumerate() {
+            assert!(b.is_finite() && *b >= 0.0, "{kind} sample {i}: {b}");
+            match (*kind, i) {
+                (ChannelKind::Contraction, 0) => assert_eq!(*b, 0.0, "at rest"),
+                _ => assert!(*b > 0.0, "{kind} sample {i}: band {b}"),
+            }
+            assert!(
+                (b - f).abs() <= 1e-3 * top,
+                "{kind} sample {i}: band {b} vs differences {f} (largest {top})"
+            );
+        }
+    }
+}

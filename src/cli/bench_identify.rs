@@ -81,11 +81,11 @@ pub fn run(scene: &Path) -> Result<super::bench::Verdict> {
     atomic_write(&dir.join("identify.csv"), csv.as_bytes())?;
     let chart = Chart {
         title: "identification of a 7 s, 3500-sample trace, 9 constants: error vs time".into(),
-        x_label: "wall time (s)".into(),
+        x_label: "wall time".into(),
         y_label: "log10 max |Δθ/θ| (identifiable constants)".into(),
         series,
         log_x: true,
-        x_unit: None,
+        x_unit: Some("s".into()),
         y_unit: None,
     };
     let header = [

@@ -93,7 +93,7 @@ pub fn run() -> Result<super::bench::Verdict> {
                 fit.status.to_string(),
             ]);
             err_series[mi].push((terms as f64, 100.0 * err));
-            time_series[mi].push((terms as f64, best * 1e3));
+            time_series[mi].push((terms as f64, best));
         }
     }
     let dir = Path::new("reports").join("bench");
@@ -123,11 +123,11 @@ pub fn run() -> Result<super::bench::Verdict> {
     let time_chart = Chart {
         title: "fit time (200 points, fastest of 15) vs terms".into(),
         x_label: "Prony terms".into(),
-        y_label: "time [ms]".into(),
+        y_label: "time".into(),
         series: series(&time_series),
         log_x: false,
         x_unit: None,
-        y_unit: None,
+        y_unit: Some("s".into()),
     };
     let header = [
         "method",

@@ -119,11 +119,11 @@ pub fn run(dir: &Path) -> Result<super::bench::Verdict> {
         }
         Chart {
             title: format!("{name}: error vs run time (rtol 1e-3 … 1e-8)"),
-            x_label: "run time (s)".into(),
+            x_label: "run time".into(),
             y_label: "log10 max |Δλ| / stroke".into(),
             series,
             log_x: true,
-            x_unit: None,
+            x_unit: Some("s".into()),
             y_unit: None,
         }
         .write_svg(&out_dir.join(format!("{name}.svg")))?;

@@ -4,9 +4,9 @@
 //! describes.
 
 use super::permittivity::progress;
-use dea_fit::fit::composite::{self, check_claim, Basis, CompositeFit};
+use dea_fit::fit::composite::{self, check_claim, Basis};
 use dea_fit::io::manifest;
-use dea_fit::report::permittivity::{ranking_table, reference_fit, write_composite};
+use dea_fit::report::permittivity::{composite_summary, write_composite};
 use dea_fit::{Error, Result};
 use std::path::PathBuf;
 
@@ -100,57 +100,10 @@ pub fn run(a: Args) -> Result<i32> {
     if a.json {
         println!("{json}");
     } else {
-        print!("{}", dea_fit::report::format::fit_width(&summary(&fit)));
+        print!("{}", composite_summary(&fit)?);
         if let Some(p) = page {
             println!("report: {}", p.display());
         }
     }
     Ok(fit.status.exit_code(a.strict))
-}
-
-/// The human-readable output.
-pub fn summary(fit: &CompositeFit) -> String {
-    let mut s = format!(
-        "{}: {} in {}, {} sample(s)\n",
-        fit.name,
-        fit.filler.name,
-        fit.matrix.name,
-        fit.samples.len()
-    );
-    for f in &fit.fractions {
-        s.push_str(&format!(
-            "  {:<12} {} {} → φ = {:.4}\n",
-            f.name, f.fraction, f.basis, f.volume_fraction
-        ));
-    }
-    if let Some(rf) = reference_fit(fit) {
-        s.push_str(&format!("\nmixing rules at {} Hz\n", rf.freq_hz));
-        s.push_str(&ranking_table(rf));
-    }
-    if !fit.summary.is_empty() {
-        s.push_str(&format!("\nover {} frequencies:\n", fit.fits.len()));
-        for r in &fit.summary {
-            s.push_str(&format!(
-                "  {:<18} best at {:>3}, median Δ {:>8.2}, εf effective {:.4}–{:.4}{}\n",
-                r.rule.name(),
-                r.best_at,
-                r.median_delta,
-                r.eps_filler_eff_range[0],
-                r.eps_filler_eff_range[1],
-                if r.unusable_at > 0 {
-                    format!(", unusable at {}", r.unusable_at)
-                } else {
-                    String::new()
-                }
-            ));
-        }
-    }
-    for c in &fit.claims {
-        s.push_str(&format!("\nclaim: {}\n", c.verdict));
-    }
-    s.push_str(&format!("status: {}\n", fit.status));
-    for w in &fit.warnings {
-        s.push_str(&format!("warning: {w}\n"));
-    }
-    s
 }

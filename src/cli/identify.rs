@@ -5,13 +5,12 @@ use dea_fit::fit::lm::{Checkpoint, Control};
 use dea_fit::fit::Status;
 use dea_fit::identify::failure::Failure;
 use dea_fit::identify::material::{material_file, validate, Validation};
-use dea_fit::identify::noise::{Sigma, SigmaSource};
+use dea_fit::identify::noise::Sigma;
 use dea_fit::identify::problem::{ChannelKind, Experiment};
-use dea_fit::identify::selection::{flags, select, Candidate, Choose, Comparison};
+use dea_fit::identify::selection::{select, Candidate, Choose};
 use dea_fit::identify::{identify_with, Identification, Run, Settings};
 use dea_fit::io::trace;
 use dea_fit::observe::{Progress, Trace as TraceFile};
-use dea_fit::report::format::table;
 use dea_fit::sim::scene::Scene;
 use dea_fit::units::parse_quantity;
 use dea_fit::{Error, Result};
@@ -315,7 +314,7 @@ pub fn run(a: Args) -> Result<i32> {
     }
     super::write_fit_noted(&out, json.as_bytes(), |old| old == json)?;
     let page = dir
-        .map(|d| dea_fit::report::identify::write(&id, &kept, &validation, &d))
+        .map(|d| dea_fit::report::identify::write(&id, &kept, &validation, selection.as_ref(), &d))
         .transpose()?;
     if a.output.json {
         let p = Printed {
@@ -336,15 +335,9 @@ pub fn run(a: Args) -> Result<i32> {
             serde_json::to_string_pretty(&p).expect("an identification serialises")
         );
     } else {
-        if let Some(c) = &selection {
-            print!(
-                "{}",
-                dea_fit::report::format::fit_width(&selection_table(c))
-            );
-        }
         print!(
             "{}",
-            dea_fit::report::format::fit_width(&summary(&id, &validation))
+            dea_fit::report::identify::summary(&id, &kept, &validation, selection.as_ref())?
         );
         println!("fit: {}", out.display());
         if let Some(r) = &page {
@@ -358,7 +351,6 @@ pub fn run(a: Args) -> Result<i32> {
 /// report is written. (A failed `--arms auto` is the failure of its largest
 /// candidate, before there is a comparison to print.)
 fn failed(f: &Failure, json: bool) -> i32 {
-    use dea_fit::report::format::si;
     if json {
         let p = PrintedFailure {
             failure: f,
@@ -368,186 +360,8 @@ fn failed(f: &Failure, json: bool) -> i32 {
             "{}",
             serde_json::to_string_pretty(&p).expect("a failure serialises")
         );
-        return 1;
+    } else {
+        print!("{}", dea_fit::report::identify::failure_summary(f));
     }
-    let mut s = format!("{}\n", f.reason);
-    for st in &f.starts {
-        let at: Vec<String> = st
-            .constants
-            .iter()
-            .map(|c| format!("{} = {}", c.name, si(c.value, &c.unit)))
-            .collect();
-        s.push_str(&format!(
-            "  start {} ({}): {}\n",
-            st.start,
-            at.join(", "),
-            st.reason
-        ));
-    }
-    let v = &f.solver;
-    s.push_str(&format!(
-        "solver: {} start(s), {} simulator runs, {:.3} s\nstatus: {}\nhint: {}\nnothing written (no fit file, no report)\n",
-        v.starts, v.simulator_runs, v.seconds, f.status, f.hint
-    ));
-    print!("{}", dea_fit::report::format::fit_width(&s));
     1
-}
-
-/// The printed summary: parameters, channels, solver, status and warnings.
-fn summary(id: &Identification, validation: &[Validation]) -> String {
-    use dea_fit::report::format::{constant_pm, si};
-    let mut rows = Vec::new();
-    let derived = id.derived.iter().map(|p| (p, " (derived)"));
-    for (p, note) in id.parameters.iter().map(|p| (p, "")).chain(derived) {
-        let [v, ci] = constant_pm(&p.name, p.value, p.std_error, p.ci95, &p.unit);
-        rows.push(vec![
-            format!("{}{note}", p.name),
-            v,
-            ci,
-            if p.identifiable { "yes" } else { "no" }.into(),
-        ]);
-    }
-    let mut s = table(
-        &["parameter", "value ± σ", "95 % interval", "identifiable"],
-        &rows,
-    );
-    let mut ch = Vec::new();
-    for e in &id.experiments {
-        for c in &e.channels {
-            ch.push(vec![
-                e.file.clone(),
-                c.channel.to_string(),
-                c.points.to_string(),
-                si(c.sigma, c.unit),
-                match c.sigma_source {
-                    SigmaSource::Given => "given",
-                    SigmaSource::Residuals => "residuals",
-                }
-                .into(),
-                si(c.rmse, c.unit),
-                c.rmse_pct
-                    .map(|p| format!("{p:.3}"))
-                    .unwrap_or_else(|| "—".into()),
-            ]);
-        }
-    }
-    for v in validation {
-        if let Some(why) = &v.failed {
-            ch.push(vec![
-                format!("{} (held out)", v.file),
-                "—".into(),
-                "".into(),
-                "".into(),
-                "".into(),
-                format!("not predicted: {why}"),
-                "—".into(),
-            ]);
-        }
-        for c in &v.channels {
-            ch.push(vec![
-                format!("{} (held out)", v.file),
-                c.channel.to_string(),
-                "".into(),
-                "".into(),
-                "".into(),
-                si(c.rmse, c.unit),
-                c.rmse_pct
-                    .map(|p| format!("{p:.3}"))
-                    .unwrap_or_else(|| "—".into()),
-            ]);
-        }
-    }
-    s.push_str(&table(
-        &["trace", "channel", "points", "σ", "σ from", "RMSE", "%RMSE"],
-        &ch,
-    ));
-    let v = &id.solver;
-    s.push_str(&format!(
-        "solver: {}; {} start(s), {} at best, {} abandoned, {} iterations, {} simulator runs ({} with sensitivities), {:.3} s, {}\n",
-        v.method, v.starts, v.starts_at_best, v.starts_abandoned, v.iterations, v.simulator_runs, v.sensitivity_runs, v.seconds, v.termination
-    ));
-    for p in &id.profiles {
-        let side = |v: Option<f64>| {
-            v.map(|v| si(v, &p.unit))
-                .unwrap_or_else(|| "beyond the grid".into())
-        };
-        s.push_str(&format!(
-            "profile {}: Δχ² ≤ 3.84 from {} to {}\n",
-            p.name,
-            side(p.interval[0]),
-            side(p.interval[1])
-        ));
-    }
-    s.push_str(&format!(
-        "χ²/dof {:.4}, condition {:.3e}\nstatus: {}\n",
-        id.chi2_per_dof, id.assessment.condition, id.status
-    ));
-    for w in &id.warnings {
-        s.push_str(&format!("warning: {w}\n"));
-    }
-    s
-}
-
-/// The comparison of `--arms auto` / `--hyperelastic auto`, with the chosen row
-/// marked (the model column when the model was chosen, the arms column when the
-/// arms were).
-fn selection_table(c: &Comparison) -> String {
-    let opt = |v: Option<f64>| v.map(|a| format!("{a:.2}")).unwrap_or_else(|| "—".into());
-    let rows: Vec<Vec<String>> = c
-        .candidates
-        .iter()
-        .enumerate()
-        .map(|(i, k)| {
-            let mark = if i == c.chosen { " ←" } else { "" };
-            let mut row = Vec::new();
-            if c.choose.hyperelastic {
-                row.push(k.model.clone());
-            }
-            if c.choose.arms {
-                row.push(k.arms.to_string());
-            }
-            row.last_mut().expect("a chosen column").push_str(mark);
-            row.extend([
-                k.free.to_string(),
-                k.chi2_per_dof
-                    .map(|c| format!("{c:.4}"))
-                    .unwrap_or_else(|| "—".into()),
-                opt(k.aicc),
-                opt(k.delta_aicc),
-                opt(k.bic),
-                k.status.to_string(),
-                if k.eligible { "yes" } else { "no" }.into(),
-            ]);
-            row
-        })
-        .collect();
-    let mut header = Vec::new();
-    if c.choose.hyperelastic {
-        header.push("model");
-    }
-    if c.choose.arms {
-        header.push("arms");
-    }
-    header.extend([
-        "free", "χ²/dof", "AICc", "ΔAICc", "BIC", "status", "eligible",
-    ]);
-    let mut s = table(&header, &rows);
-    for k in c.candidates.iter().filter(|k| k.failure.is_some()) {
-        s.push_str(&format!(
-            "{} with {} arm(s) failed: {}\n",
-            k.model,
-            k.arms,
-            k.failure.as_deref().unwrap_or("")
-        ));
-    }
-    let (k, from) = (&c.candidates[c.chosen], &c.candidates[c.sigma_from]);
-    s.push_str(&format!(
-        "{}: {} with {} arm(s), the fewest free constants within ΔAICc ≤ 2 of the best eligible candidate (a common σ from the {} fit with {} arm(s))\n",
-        flags(c.choose),
-        k.model,
-        k.arms,
-        from.model,
-        from.arms
-    ));
-    s
 }

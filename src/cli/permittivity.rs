@@ -2,14 +2,11 @@
 //! exports, one file or a parallel batch with a progress bar.
 
 use clap::ValueEnum;
-use dea_fit::fit::permittivity::{
-    self, EdgeCorrection, Geometry, Input, PermittivityRun, Settings,
-};
+use dea_fit::fit::permittivity::{self, EdgeCorrection, Geometry, Input, Settings};
 use dea_fit::io::lcr::LcrOptions;
 use dea_fit::io::manifest::sidecar;
 use dea_fit::material::dielectric::Pair;
-use dea_fit::report::format::{si, si_pm};
-use dea_fit::report::permittivity::{sample_table, write_samples};
+use dea_fit::report::permittivity::{summary, write_samples};
 use dea_fit::units::{parse_quantity, parse_uncertain, Dimension, Quantity};
 use dea_fit::{Error, Result};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -183,7 +180,7 @@ pub fn run(a: Args) -> Result<i32> {
     if a.json {
         println!("{json}");
     } else {
-        print!("{}", dea_fit::report::format::fit_width(&summary(&run)));
+        print!("{}", summary(&run)?);
         if let Some(p) = page {
             println!("report: {}", p.display());
         }
@@ -202,45 +199,4 @@ pub fn run(a: Args) -> Result<i32> {
     } else {
         run.status.exit_code(a.strict)
     })
-}
-
-/// The human-readable output.
-pub fn summary(run: &PermittivityRun) -> String {
-    let mut s = String::new();
-    let brief = run.samples.len() > 10;
-    for smp in &run.samples {
-        let g = &smp.geometry;
-        s.push_str(&format!(
-            "\n{} ({}, {} {}), A = {}, d = {}\n",
-            smp.name,
-            smp.provenance.path,
-            smp.provenance.format,
-            smp.provenance.pair.name(),
-            // an SI prefix on m² would read as (mm)², so the area takes a power of ten
-            if g.area_std > 0.0 {
-                format!("{} m²", si_pm(g.area, Some(g.area_std), "1"))
-            } else {
-                format!("{:.4e} m² (no tolerance)", g.area)
-            },
-            if g.thickness_std > 0.0 {
-                si_pm(g.thickness, Some(g.thickness_std), "m")
-            } else {
-                format!("{} (no tolerance)", si(g.thickness, "m"))
-            },
-        ));
-        s.push_str(&sample_table(smp, brief));
-        for n in &smp.notes {
-            s.push_str(&format!("note: {n}\n"));
-        }
-    }
-    s.push_str(&format!(
-        "\n{} sample(s), {} failed, status: {}\n",
-        run.samples.len(),
-        run.failed.len(),
-        run.status
-    ));
-    for w in &run.warnings {
-        s.push_str(&format!("warning: {w}\n"));
-    }
-    s
 }

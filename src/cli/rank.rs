@@ -267,10 +267,7 @@ fn present(info: &RunInfo, evals: &[Evaluated], p: &Present) -> Result<i32> {
     if p.json {
         println!("{}", report::json(info, evals, &r));
     } else {
-        print!(
-            "{}",
-            dea_fit::report::format::fit_width(&report::table(info, evals, &r, p.top))
-        );
+        print!("{}", report::summary(info, evals, &r, p.top)?);
         if let Some(pg) = page {
             eprintln!("report: {}", pg.display());
         }

@@ -179,6 +179,14 @@ pub fn propagated_std(
                 .collect(),
         );
     }
+    gradient_std(&grads, cov)
+}
+
+/// The first-order standard deviation σᵢ = √(gᵢᵀ Σ gᵢ) of each output i of a model
+/// with gradients `grads[a][i]` = ∂yᵢ/∂θₐ and parameter covariance Σ (the delta
+/// method); None when any is not finite.
+pub fn gradient_std(grads: &[Vec<f64>], cov: &DMatrix<f64>) -> Option<Vec<f64>> {
+    let k = grads.len();
     let n = grads.first().map_or(0, Vec::len);
     let std = (0..n)
         .map(|i| {

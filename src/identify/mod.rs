@@ -11,9 +11,10 @@
 //! Modules: [`params`] (names, θ in a scene, search coordinates), [`problem`]
 //! (residuals and exact Jacobian with the simulator inside), [`noise`] (σ per
 //! channel), [`search`] (multi-start), [`assessment`] (what the traces pin down),
-//! [`failure`] (a run without a result).
+//! [`band`] (the ±1σ band of the model's traces), [`failure`] (a run without a result).
 
 pub mod assessment;
+pub mod band;
 pub mod failure;
 pub mod material;
 pub mod noise;

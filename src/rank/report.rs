@@ -11,12 +11,11 @@ use super::short;
 use super::Figure;
 use crate::error::Result;
 use crate::fit::composite::Basis;
-use crate::report::format::{si, si_column, sig, table as text_table};
+use crate::report::format::{si, si_column, sig};
 use crate::report::page::{code, strong, text, Page};
 use crate::report::plot::{band, Chart, Series, Style};
 use crate::report::runs::Run;
 use serde::Serialize;
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// Schema tag of the JSON output.
@@ -58,10 +57,6 @@ fn fmt_objective(o: Objective, v: f64) -> String {
 /// A figure as text ("—" without a value).
 fn fmt_fig(f: &Figure, fmt: impl Fn(f64) -> String) -> String {
     f.value.map_or("—".into(), fmt)
-}
-
-fn pct(v: f64) -> String {
-    format!("{} %", sig(100.0 * v, 4))
 }
 
 /// The whole output as JSON: what `--json` prints.
@@ -131,17 +126,9 @@ pub fn json(info: &RunInfo, evals: &[Evaluated], r: &Ranking) -> String {
     serde_json::to_string_pretty(&out).expect("the ranking serialises")
 }
 
-/// The table printed on stdout: the first `top` ranked candidates (all with 0), the
-/// unranked ones counted by state, the Pareto front, the best loadings, warnings
-/// and the status line.
-pub fn table(info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: usize) -> String {
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "{}: {} points ({}); drive {}",
-        info.design, info.points, info.sweep, info.drive
-    );
-    let _ = writeln!(s, "ranked by {} ({})", r.by.name(), r.by.label());
+/// The leaders table: the first `top` ranked candidates (all with 0), columns with
+/// a unit in one SI prefix each, the objective's σ, and what the σ and "≈" mean.
+fn leaders(page: &mut Page, evals: &[Evaluated], r: &Ranking, top: usize) {
     let ranked = r.ranks.iter().filter(|x| x.is_some()).count();
     let shown_n = if top == 0 { ranked } else { top.min(ranked) };
     // The objective gets its own column unless one of the fixed ones shows it.
@@ -215,119 +202,63 @@ pub fn table(info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: usize) -> St
     }
     let sigma = format!("σ {}", r.by.name());
     header.push(&sigma);
-    s.push_str(&text_table(&header, &rows));
+    page.heading("The leaders");
+    page.table(&header, rows);
+    page.text(
+        "εr, Y: predicted by the series' rules or read from fits and the manifest (their \
+         provenance per candidate: --csv, --json); Fm: figure of merit; t10–90: rise time \
+         of the step response.",
+    );
     if r.apart[..].iter().any(|a| a.is_some()) {
-        let _ = writeln!(
-            s,
-            "σ: first-order standard error from the fit files' standard errors (values written in the manifest count as exact); n≈: cannot be told apart from the candidate above (within {} σ of their difference)",
+        page.text(format!(
+            "σ: first-order standard error from the fit files' standard errors (values written in the manifest count as exact); n≈: cannot be told apart from the candidate above (within {} σ of their difference).",
             APART
-        );
+        ));
     }
     if ranked > shown_n {
-        let _ = writeln!(
-            s,
-            "… {} more ranked (--top 0 shows all; --csv, --json)",
+        page.text(format!(
+            "… {} more ranked (--top 0 shows all; --csv, --json).",
             ranked - shown_n
-        );
+        ));
     }
+}
+
+/// The candidates not ranked (each with why, the first `top`), and those that
+/// repeat another (the matrix alone in several series).
+fn unranked(page: &mut Page, evals: &[Evaluated], r: &Ranking, top: usize) {
+    let ranked = r.ranks.iter().filter(|x| x.is_some()).count();
     let (repeats, rest): (Vec<usize>, Vec<usize>) = r.order[ranked..]
         .iter()
         .partition(|&&i| r.same_as[i].is_some());
     let unranked: Vec<&Evaluation> = rest.iter().map(|&i| &evals[i].evaluation).collect();
     if !unranked.is_empty() {
-        let _ = writeln!(
-            s,
-            "not ranked on {}: {} candidate(s)",
-            r.by.name(),
-            unranked.len()
-        );
-        for e in unranked
+        page.heading(format!("Not ranked on {}", r.by.name()));
+        page.text(format!("{} candidate(s):", unranked.len()));
+        let shown = if top == 0 { usize::MAX } else { top };
+        let mut items: Vec<String> = unranked
             .iter()
-            .take(if top == 0 { usize::MAX } else { top })
-        {
-            let _ = writeln!(
-                s,
-                "  {} at {}: {}",
-                e.name,
-                fmt_fig(&e.voltage, |v| si(v, "V")),
-                r.by.why_not(e)
-            );
+            .take(shown)
+            .map(|e| {
+                format!(
+                    "{} at {}: {}",
+                    e.name,
+                    fmt_fig(&e.voltage, |v| si(v, "V")),
+                    r.by.why_not(e)
+                )
+            })
+            .collect();
+        if unranked.len() > shown {
+            items.push(format!("… {} more", unranked.len() - shown));
         }
-        if top != 0 && unranked.len() > top {
-            let _ = writeln!(s, "  … {} more", unranked.len() - top);
-        }
+        page.bullets(items);
     }
-    for &i in &repeats {
+    page.bullets(repeats.iter().map(|&i| {
         let first = r.same_as[i].map_or("", |j| evals[j].evaluation.name.as_str());
-        let _ = writeln!(
-            s,
+        format!(
             "{}: the matrix alone, the same candidate as {first} (listed once)",
             evals[i].evaluation.name
-        );
-    }
-    let [a, b] = r.pareto.objectives;
-    let _ = writeln!(
-        s,
-        "Pareto front ({} against {}): {} candidate(s)",
-        a.name(),
-        b.name(),
-        r.pareto.front.len()
-    );
-    for p in &r.pareto.front {
-        let _ = writeln!(
-            s,
-            "  {} at {}: {} {}, {} {}",
-            p.name,
-            si(p.voltage_v, "V"),
-            a.name(),
-            fmt_objective(a, p.values[0]),
-            b.name(),
-            fmt_objective(b, p.values[1])
-        );
-    }
-    let _ = writeln!(s, "best loading per series ({}):", r.by.name());
-    let rows: Vec<Vec<String>> = r
-        .best
-        .iter()
-        .map(|b| {
-            let unit = match b.basis {
-                Basis::Weight => "wt%",
-                Basis::Volume => "vol%",
-            };
-            vec![
-                b.series.clone(),
-                si(b.voltage_v, "V"),
-                match &b.filler {
-                    None => "—".into(),
-                    Some(_) => format!("{} {unit}", short(100.0 * b.loading)),
-                },
-                b.resolution
-                    .map_or("—".into(), |x| format!("± {} {unit}", short(100.0 * x))),
-                fmt_objective(r.by, b.value),
-                if b.at_edge {
-                    "end of the swept range".into()
-                } else {
-                    String::new()
-                },
-            ]
-        })
-        .collect();
-    s.push_str(&text_table(
-        &[
-            "series",
-            "drive",
-            "best loading",
-            "resolution",
-            r.by.name(),
-            "",
-        ],
-        &rows,
-    ));
-    for w in &r.warnings {
-        let _ = writeln!(s, "warning: {w}");
-    }
-    let _ = writeln!(s, "status: {}", r.status);
-    s
+        )
+    }));
 }
 
 /// Every evaluation as CSV, in run order, with rank and objective.
@@ -427,7 +358,6 @@ pub fn write(
     top: usize,
 ) -> Result<PathBuf> {
     let by = r.by;
-    let unit = shown_unit(by);
     let label = |o: Objective| match shown_unit(o) {
         "" => o.label().to_string(),
         u => format!(
@@ -612,112 +542,22 @@ pub fn write(
         y_unit: None,
     };
 
-    // The page.
-    let mut page = Page::new(format!("Ranking: {}", info.design));
-    page.para(vec![
-        text("Manifest "),
-        code(&info.manifest),
-        text(" (sha256 "),
-        code(&info.sha256),
-        text("), actuator "),
-        code(&info.scene),
-        text(format!(
-            "; drive {}; sweep: {}; {} points. Ranked by ",
-            info.drive, info.sweep, info.points
-        )),
-        strong(by.name()),
-        text(format!(" ({}).", by.label())),
-    ]);
-    page.status_line(r.status, r.status);
-    page.chart(dir, "ranking.svg", "ranking", &ranking_chart)?;
-    page.chart(
-        dir,
-        "objective-vs-loading.svg",
-        "objective against loading",
-        &loading_chart,
-    )?;
-    page.chart(dir, "pareto.svg", "Pareto", &pareto_chart)?;
-    page.chart(
-        dir,
-        "stroke-voltage.svg",
-        "stroke against voltage",
-        &stroke_chart,
-    )?;
-    page.heading("The leaders");
-    let objective = format!("{} ({unit})", by.name());
-    let rows: Vec<Vec<String>> = ranked
-        .iter()
-        .take(if top == 0 { usize::MAX } else { top })
-        .map(|&i| {
-            let e = &evals[i].evaluation;
-            vec![
-                r.ranks[i].unwrap_or(0).to_string(),
-                e.name.clone(),
-                fmt_fig(&e.voltage, |v| si(v, "V")),
-                format!(
-                    "{} ({})",
-                    fmt_fig(&e.eps_r, |v| sig(v, 4)),
-                    e.eps_r.provenance
-                ),
-                format!(
-                    "{} ({})",
-                    fmt_fig(&e.youngs_modulus, |v| si(v, "Pa")),
-                    e.youngs_modulus.provenance
-                ),
-                fmt_fig(&e.fm, |v| sig(v, 3)),
-                by.value(e).map_or("—".into(), |v| sig(shown(by, v), 4)),
-                e.state.to_string(),
-                fmt_fig(&e.max_stroke, pct),
-                e.max_stroke_limit.to_string(),
-                fmt_fig(&e.response_time, |v| si(v, "s")),
-            ]
-        })
-        .collect();
-    page.table(
-        &[
-            "#",
-            "candidate",
-            "drive",
-            "εr",
-            "Y",
-            "Fm",
-            &objective,
-            "state",
-            "max stroke",
-            "limit",
-            "t10–90",
-        ],
-        rows,
-    );
-    page.heading("Best loading per series");
-    page.bullets(r.best.iter().map(|b| {
-        format!(
-            "{} at {}: {} ({} = {}{}{})",
-            b.series,
-            si(b.voltage_v, "V"),
-            b.name,
-            by.name(),
-            fmt_objective(by, b.value),
-            b.resolution
-                .map_or(String::new(), |x| format!(", resolution ± {}", short(x))),
-            if b.at_edge {
-                "; at the end of the swept range"
-            } else {
-                ""
-            }
+    let page = page(info, evals, r, top, |page| {
+        page.chart(dir, "ranking.svg", "ranking", &ranking_chart)?;
+        page.chart(
+            dir,
+            "objective-vs-loading.svg",
+            "objective against loading",
+            &loading_chart,
+        )?;
+        page.chart(dir, "pareto.svg", "Pareto", &pareto_chart)?;
+        page.chart(
+            dir,
+            "stroke-voltage.svg",
+            "stroke against voltage",
+            &stroke_chart,
         )
-    }));
-    page.heading(format!("Pareto front ({} against {})", a.name(), b.name()));
-    page.bullets(r.pareto.front.iter().map(|p| {
-        format!(
-            "{} at {}: {}, {}",
-            p.name,
-            si(p.voltage_v, "V"),
-            fmt_objective(a, p.values[0]),
-            fmt_objective(b, p.values[1])
-        )
-    }));
-    page.warnings(&r.warnings);
+    })?;
     let leader = ranked.first().map(|&i| {
         let e = &evals[i].evaluation;
         format!(
@@ -734,4 +574,97 @@ pub fn write(
             .collect(),
     );
     page.write(dir, "index", run)
+}
+
+/// The summary `dea-fit rank` prints: the report's page without its charts.
+pub fn summary(info: &RunInfo, evals: &[Evaluated], r: &Ranking, top: usize) -> Result<String> {
+    Ok(page(info, evals, r, top, |_| Ok(()))?.terminal())
+}
+
+/// The one rendering of a ranking (the terminal, Markdown and HTML all show this
+/// page): the run (manifest, actuator, drive, sweep, objective), status, `charts`
+/// (added by the report), the leaders, the candidates not ranked, the Pareto front,
+/// the best loading per series and the warnings.
+fn page(
+    info: &RunInfo,
+    evals: &[Evaluated],
+    r: &Ranking,
+    top: usize,
+    charts: impl FnOnce(&mut Page) -> Result<()>,
+) -> Result<Page> {
+    let by = r.by;
+    let mut page = Page::new(format!("Ranking: {}", info.design));
+    page.para(vec![
+        text("Manifest "),
+        code(&info.manifest),
+        text(" (sha256 "),
+        code(&info.sha256),
+        text("), actuator "),
+        code(&info.scene),
+        text(format!(
+            "; drive {}; sweep: {}; {} points. Ranked by ",
+            info.drive, info.sweep, info.points
+        )),
+        strong(by.name()),
+        text(format!(" ({}).", by.label())),
+    ]);
+    page.status_line(r.status, r.status);
+    charts(&mut page)?;
+    leaders(&mut page, evals, r, top);
+    unranked(&mut page, evals, r, top);
+    let [a, b] = r.pareto.objectives;
+    page.heading(format!("Pareto front ({} against {})", a.name(), b.name()));
+    page.text(format!("{} candidate(s):", r.pareto.front.len()));
+    page.bullets(r.pareto.front.iter().map(|p| {
+        format!(
+            "{} at {}: {} {}, {} {}",
+            p.name,
+            si(p.voltage_v, "V"),
+            a.name(),
+            fmt_objective(a, p.values[0]),
+            b.name(),
+            fmt_objective(b, p.values[1])
+        )
+    }));
+    page.heading(format!("Best loading per series ({})", by.name()));
+    let rows: Vec<Vec<String>> = r
+        .best
+        .iter()
+        .map(|b| {
+            let unit = match b.basis {
+                Basis::Weight => "wt%",
+                Basis::Volume => "vol%",
+            };
+            vec![
+                b.series.clone(),
+                si(b.voltage_v, "V"),
+                match &b.filler {
+                    None => "—".into(),
+                    Some(_) => format!("{} {unit}", short(100.0 * b.loading)),
+                },
+                b.resolution
+                    .map_or("—".into(), |x| format!("± {} {unit}", short(100.0 * x))),
+                fmt_objective(by, b.value),
+                if b.at_edge {
+                    "end of the swept range".into()
+                } else {
+                    String::new()
+                },
+            ]
+        })
+        .collect();
+    page.table(
+        &[
+            "series",
+            "drive",
+            "best loading",
+            "resolution",
+            by.name(),
+            "note",
+        ],
+        rows,
+    );
+    page.text("resolution: half the distance to the neighbouring loadings of the sweep.");
+    page.warnings(&r.warnings);
+    Ok(page)
 }

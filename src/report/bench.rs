@@ -73,10 +73,6 @@ pub fn headline(rows: &[HyperRow]) -> Vec<String> {
     out
 }
 
-fn ms(s: f64) -> f64 {
-    s * 1e3
-}
-
 /// Write `hyperelastic.csv`, the `hyperelastic-*.svg` charts and the page
 /// (`hyperelastic.md`, `hyperelastic.html`, `hyperelastic.run.json`) into `dir`;
 /// returns the HTML page. `note` (e.g. the measurement budget and machine)
@@ -120,21 +116,21 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
         let name = format!("hyperelastic-models-{d}.svg");
         let chart = Chart {
             title: format!("{d}: fit time vs RMSE"),
-            x_label: "median time per fit [ms] (log)".into(),
-            y_label: "RMSE [kPa]".into(),
+            x_label: "median time per fit (log)".into(),
+            y_label: "RMSE".into(),
             series: sel
                 .iter()
                 .enumerate()
                 .map(|(i, r)| Series {
                     label: r.model.clone(),
-                    points: vec![(ms(r.fit_median_s), r.rmse_pa / 1e3)],
+                    points: vec![(r.fit_median_s, r.rmse_pa)],
                     color: i,
                     style: Style::Points,
                 })
                 .collect(),
             log_x: true,
-            x_unit: None,
-            y_unit: None,
+            x_unit: Some("s".into()),
+            y_unit: Some("Pa".into()),
         };
         page.subheading(d.to_string());
         page.chart(dir, &name, d, &chart)?;
@@ -199,7 +195,7 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
             .enumerate()
             .map(|(i, r)| Series {
                 label: format!("{} = {}", r.setting, r.value),
-                points: vec![(ms(r.fit_median_s), ppm(r.objective))],
+                points: vec![(r.fit_median_s, ppm(r.objective))],
                 color: i,
                 style: Style::Points,
             })
@@ -208,18 +204,18 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
             label: "in order".into(),
             points: sel
                 .iter()
-                .map(|r| (ms(r.fit_median_s), ppm(r.objective)))
+                .map(|r| (r.fit_median_s, ppm(r.objective)))
                 .collect(),
             color: 7,
             style: Style::Dashed,
         });
         let chart = Chart {
             title: format!("Ogden-3, {TRELOAR_ALL}: {title}, objective vs time"),
-            x_label: "median time per fit [ms] (log)".into(),
+            x_label: "median time per fit (log)".into(),
             y_label: "objective above the best reached [ppm]".into(),
             series,
             log_x: true,
-            x_unit: None,
+            x_unit: Some("s".into()),
             y_unit: None,
         };
         page.heading(format!("Ogden-3 on {TRELOAR_ALL}: {title}"));
@@ -267,7 +263,7 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
         let file = "hyperelastic-method.svg";
         let point = |r: &HyperRow| {
             (
-                ms(r.solver_median_s),
+                r.solver_median_s,
                 100.0 * r.starts_at_best as f64 / r.starts.max(1) as f64,
             )
         };
@@ -305,11 +301,11 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
             .collect();
         let chart = Chart {
             title: format!("{TRELOAR_ALL}: variable projection vs full LM, same starts"),
-            x_label: "median search time [ms] (log)".into(),
+            x_label: "median search time (log)".into(),
             y_label: "starts ending at the best objective [%]".into(),
             series,
             log_x: true,
-            x_unit: None,
+            x_unit: Some("s".into()),
             y_unit: None,
         };
         page.heading(format!("Variable projection vs full LM on {TRELOAR_ALL}"));

@@ -5,12 +5,15 @@
 
 use super::format::{constant, constant_pm, si};
 use super::page::{code, text, Page};
-use super::plot::{Chart, Series, Style};
+use super::plot::{band, Chart, Series, Style, BAND_LABEL};
 use super::runs::Run;
 use crate::error::{Error, Result};
+use crate::identify::failure::Failure;
 use crate::identify::material::Validation;
+use crate::identify::noise::SigmaSource;
 use crate::identify::params;
 use crate::identify::problem::{sensitivity, simulated, Channel, ChannelKind, Experiment};
+use crate::identify::selection::{flags, Comparison};
 use crate::identify::Identification;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -26,14 +29,58 @@ fn si_unit(kind: ChannelKind) -> &'static str {
     }
 }
 
-/// Write the report into `dir` (claimed by the caller); returns the page.
+/// Write the report into `dir` (claimed by the caller); returns the page. `selection`:
+/// the comparison of `--arms auto` / `--hyperelastic auto`, when one chose the model.
 pub fn write(
     id: &Identification,
     experiments: &[Experiment],
     validation: &[Validation],
+    selection: Option<&Comparison>,
     dir: &Path,
 ) -> Result<PathBuf> {
-    let mut page = Page::new("Identification from actuator traces");
+    let page = page(id, experiments, validation, selection, |page| {
+        charts(id, experiments, page, dir)
+    })?;
+    let files: Vec<&str> = experiments.iter().map(|e| e.name.as_str()).collect();
+    let scene = experiments
+        .first()
+        .map_or(String::new(), |e| e.scene.name.clone());
+    let run = Run::new("identify", files.join(", "), scene).headline(
+        id.parameters
+            .iter()
+            .take(4)
+            .map(|p| format!("{} {}", p.name, constant(&p.name, p.value, &p.unit)))
+            .chain(std::iter::once(format!("χ²/dof {:.3}", id.chi2_per_dof)))
+            .collect(),
+    );
+    page.write(dir, "index", run)
+}
+
+/// The summary `dea-fit identify` prints: the report's page without its charts.
+pub fn summary(
+    id: &Identification,
+    experiments: &[Experiment],
+    validation: &[Validation],
+    selection: Option<&Comparison>,
+) -> Result<String> {
+    Ok(page(id, experiments, validation, selection, |_| Ok(()))?.terminal())
+}
+
+/// The title of every identification page.
+const TITLE: &str = "Identification from actuator traces";
+
+/// The one rendering of an identification (the terminal, Markdown and HTML all show
+/// this page): traces, status, the model selection if one was made, the constants,
+/// the channels (held-out traces too), the fit's quality and profiles, `charts`
+/// (added by the report), warnings and solver.
+fn page(
+    id: &Identification,
+    experiments: &[Experiment],
+    validation: &[Validation],
+    selection: Option<&Comparison>,
+    charts: impl FnOnce(&mut Page) -> Result<()>,
+) -> Result<Page> {
+    let mut page = Page::new(TITLE);
     let mut traces = vec![text("Traces: ")];
     for (i, e) in experiments.iter().enumerate() {
         if i > 0 {
@@ -43,6 +90,10 @@ pub fn write(
     }
     page.para(traces);
     page.status_line(id.status, id.status);
+    if let Some(c) = selection {
+        selection_section(c, &mut page);
+    }
+    page.heading("Constants");
     let derived = id.derived.iter().map(|p| (p, " (derived)"));
     let rows: Vec<Vec<String>> = id
         .parameters
@@ -50,10 +101,11 @@ pub fn write(
         .map(|p| (p, ""))
         .chain(derived)
         .map(|(p, note)| {
-            let [v, _] = constant_pm(&p.name, p.value, p.std_error, None, &p.unit);
+            let [v, ci] = constant_pm(&p.name, p.value, p.std_error, p.ci95, &p.unit);
             vec![
                 format!("{}{note}", p.name),
                 v,
+                ci,
                 if p.identifiable {
                     "yes".into()
                 } else {
@@ -62,7 +114,197 @@ pub fn write(
             ]
         })
         .collect();
-    page.table(&["parameter", "value ± σ", "identifiable"], rows);
+    page.table(
+        &["parameter", "value ± σ", "95 % interval", "identifiable"],
+        rows,
+    );
+    page.heading("Channels");
+    page.table(
+        &["trace", "channel", "points", "σ", "σ from", "RMSE", "%RMSE"],
+        channel_rows(id, validation),
+    );
+    page.text(format!(
+        "χ²/dof {:.4}, condition {:.3e} (of the column-normalised Jacobian).",
+        id.chi2_per_dof, id.assessment.condition
+    ));
+    page.bullets(id.profiles.iter().map(|p| {
+        let side = |v: Option<f64>| {
+            v.map(|v| si(v, &p.unit))
+                .unwrap_or_else(|| "beyond the grid".into())
+        };
+        format!(
+            "profile {}: Δχ² ≤ 3.84 from {} to {}",
+            p.name,
+            side(p.interval[0]),
+            side(p.interval[1])
+        )
+    }));
+    charts(&mut page)?;
+    page.warnings(&id.warnings);
+    let v = &id.solver;
+    page.heading("Solver");
+    page.text(format!("{}; {}.", v.method, v.termination));
+    page.text(format!(
+        "{} start(s), {} at the best objective, {} abandoned; {} iterations, {} simulator runs ({} with sensitivities), {:.3} s.",
+        v.starts, v.starts_at_best, v.starts_abandoned, v.iterations, v.simulator_runs, v.sensitivity_runs, v.seconds
+    ));
+    Ok(page)
+}
+
+/// The channels table: each identified channel (points, σ and where it came from,
+/// RMSE), then each held-out trace's (RMSE of the prediction, or why there is none).
+fn channel_rows(id: &Identification, validation: &[Validation]) -> Vec<Vec<String>> {
+    let pct = |p: Option<f64>| p.map(|p| format!("{p:.3}")).unwrap_or_else(|| "—".into());
+    let mut ch = Vec::new();
+    for e in &id.experiments {
+        for c in &e.channels {
+            ch.push(vec![
+                e.file.clone(),
+                c.channel.to_string(),
+                c.points.to_string(),
+                si(c.sigma, c.unit),
+                match c.sigma_source {
+                    SigmaSource::Given => "given",
+                    SigmaSource::Residuals => "residuals",
+                }
+                .into(),
+                si(c.rmse, c.unit),
+                pct(c.rmse_pct),
+            ]);
+        }
+    }
+    for v in validation {
+        let held = format!("{} (held out)", v.file);
+        let blank = || String::new();
+        if let Some(why) = &v.failed {
+            ch.push(vec![
+                held.clone(),
+                "—".into(),
+                blank(),
+                blank(),
+                blank(),
+                format!("not predicted: {why}"),
+                "—".into(),
+            ]);
+        }
+        for c in &v.channels {
+            ch.push(vec![
+                held.clone(),
+                c.channel.to_string(),
+                blank(),
+                blank(),
+                blank(),
+                si(c.rmse, c.unit),
+                pct(c.rmse_pct),
+            ]);
+        }
+    }
+    ch
+}
+
+/// The comparison of `--arms auto` / `--hyperelastic auto`, with the chosen row
+/// marked (the model column when the model was chosen, the arms column when the
+/// arms were), the candidates that failed, and why the chosen one.
+fn selection_section(c: &Comparison, page: &mut Page) {
+    let opt = |v: Option<f64>| v.map(|a| format!("{a:.2}")).unwrap_or_else(|| "—".into());
+    let rows: Vec<Vec<String>> = c
+        .candidates
+        .iter()
+        .enumerate()
+        .map(|(i, k)| {
+            let mark = if i == c.chosen { " ←" } else { "" };
+            let mut row = Vec::new();
+            if c.choose.hyperelastic {
+                row.push(k.model.clone());
+            }
+            if c.choose.arms {
+                row.push(k.arms.to_string());
+            }
+            row.last_mut().expect("a chosen column").push_str(mark);
+            row.extend([
+                k.free.to_string(),
+                k.chi2_per_dof
+                    .map(|c| format!("{c:.4}"))
+                    .unwrap_or_else(|| "—".into()),
+                opt(k.aicc),
+                opt(k.delta_aicc),
+                opt(k.bic),
+                k.status.to_string(),
+                if k.eligible { "yes" } else { "no" }.into(),
+            ]);
+            row
+        })
+        .collect();
+    let mut header = Vec::new();
+    if c.choose.hyperelastic {
+        header.push("model");
+    }
+    if c.choose.arms {
+        header.push("arms");
+    }
+    header.extend([
+        "free", "χ²/dof", "AICc", "ΔAICc", "BIC", "status", "eligible",
+    ]);
+    page.heading("Model selection");
+    page.table(&header, rows);
+    page.bullets(
+        c.candidates
+            .iter()
+            .filter(|k| k.failure.is_some())
+            .map(|k| {
+                format!(
+                    "{} with {} arm(s) failed: {}",
+                    k.model,
+                    k.arms,
+                    k.failure.as_deref().unwrap_or("")
+                )
+            }),
+    );
+    let (k, from) = (&c.candidates[c.chosen], &c.candidates[c.sigma_from]);
+    page.text(format!(
+        "{}: {} with {} arm(s), the fewest free constants within ΔAICc ≤ 2 of the best eligible candidate (a common σ from the {} fit with {} arm(s)). ΔAICc: AICc minus the smallest AICc of the eligible candidates.",
+        flags(c.choose),
+        k.model,
+        k.arms,
+        from.model,
+        from.arms
+    ));
+}
+
+/// The summary `dea-fit identify` prints for a failed run (no fit file, no report):
+/// what failed, each failed start with its constants and reason, the search, and
+/// what to do.
+pub fn failure_summary(f: &Failure) -> String {
+    let mut page = Page::new(TITLE);
+    page.status_line(f.status, f.status);
+    page.text(f.reason.clone());
+    page.bullets(f.starts.iter().map(|st| {
+        let at: Vec<String> = st
+            .constants
+            .iter()
+            .map(|c| format!("{} = {}", c.name, si(c.value, &c.unit)))
+            .collect();
+        format!("start {} ({}): {}", st.start, at.join(", "), st.reason)
+    }));
+    let v = &f.solver;
+    page.text(format!(
+        "Solver: {} start(s), {} simulator runs, {:.3} s.",
+        v.starts, v.simulator_runs, v.seconds
+    ));
+    page.text(format!("Hint: {}", f.hint));
+    page.text("Nothing written (no fit file, no report).");
+    page.terminal()
+}
+
+/// The charts of every trace and channel (measured against the model with its ±1σ
+/// band, residuals, sensitivities), the multi-start waterfall, the profiles and the
+/// correlation matrix, drawn into `dir` and shown on `page`.
+fn charts(
+    id: &Identification,
+    experiments: &[Experiment],
+    page: &mut Page,
+    dir: &Path,
+) -> Result<()> {
     for (ei, (e, o)) in experiments.iter().zip(&id.runs).enumerate() {
         let s0 = o.samples[0];
         for (ci, c) in e.channels.iter().enumerate() {
@@ -74,11 +316,35 @@ pub fn write(
                 .filter(|(_, y)| y.is_finite())
                 .map(|(s, y)| (s.time_s, *y))
                 .collect();
-            let model: Vec<(f64, f64)> = o
+            let times: Vec<f64> = o.samples.iter().map(|s| s.time_s).collect();
+            let model: Vec<f64> = o
                 .samples
                 .iter()
-                .map(|s| (s.time_s, simulated(c.kind, &s0, s)))
+                .map(|s| simulated(c.kind, &s0, s))
                 .collect();
+            let mut series = vec![Series {
+                label: "measured".into(),
+                points: data,
+                color: 0,
+                style: Style::Points,
+            }];
+            let std = id.model_std(e, ei, c.kind);
+            if let Some(std) = &std {
+                let (down, up): (Vec<f64>, Vec<f64>) =
+                    model.iter().zip(std).map(|(m, d)| (m - d, m + d)).unzip();
+                series.push(Series {
+                    label: BAND_LABEL.into(),
+                    points: band(&times, &down, &up),
+                    color: 1,
+                    style: Style::Band,
+                });
+            }
+            series.push(Series {
+                label: "identified model".into(),
+                points: times.iter().copied().zip(model).collect(),
+                color: 1,
+                style: Style::Line,
+            });
             let name = format!("trace{}-{}.svg", ei + 1, c.kind);
             page.chart(
                 dir,
@@ -86,27 +352,17 @@ pub fn write(
                 &format!("{}: {}, measured and identified model", e.name, c.kind),
                 &Chart {
                     title: format!("{}: {}", e.name, c.kind),
-                    x_label: "time (s)".into(),
+                    x_label: "time".into(),
                     y_label: c.kind.to_string(),
-                    series: vec![
-                        Series {
-                            label: "measured".into(),
-                            points: data,
-                            color: 0,
-                            style: Style::Points,
-                        },
-                        Series {
-                            label: "identified model".into(),
-                            points: model,
-                            color: 1,
-                            style: Style::Line,
-                        },
-                    ],
+                    series,
                     log_x: false,
-                    x_unit: None,
+                    x_unit: Some("s".into()),
                     y_unit: Some(unit.into()),
                 },
             )?;
+            if std.is_none() {
+                page.text("No confidence band: a free constant has no standard error (see the parameters).");
+            }
             let sigma = id.experiments[ei].channels[ci].sigma;
             let res: Vec<(f64, f64)> = o
                 .samples
@@ -233,46 +489,7 @@ pub fn write(
         "correlation of the free constants",
         corr,
     )?;
-    for v in validation {
-        let rows: Vec<Vec<String>> = v
-            .channels
-            .iter()
-            .map(|c| {
-                vec![
-                    c.channel.to_string(),
-                    si(c.rmse, c.unit),
-                    c.rmse_pct
-                        .map(|p| format!("{p:.3}"))
-                        .unwrap_or_else(|| "—".into()),
-                ]
-            })
-            .collect();
-        match &v.failed {
-            Some(why) => page.para(vec![
-                text("Held-out trace "),
-                code(&v.file),
-                text(format!(": not predicted: {why}")),
-            ]),
-            None => {
-                page.para(vec![text("Held-out trace "), code(&v.file), text(":")]);
-                page.table(&["channel", "RMSE", "%RMSE"], rows);
-            }
-        }
-    }
-    page.warnings(&id.warnings);
-    let files: Vec<&str> = experiments.iter().map(|e| e.name.as_str()).collect();
-    let scene = experiments
-        .first()
-        .map_or(String::new(), |e| e.scene.name.clone());
-    let run = Run::new("identify", files.join(", "), scene).headline(
-        id.parameters
-            .iter()
-            .take(4)
-            .map(|p| format!("{} {}", p.name, constant(&p.name, p.value, &p.unit)))
-            .chain(std::iter::once(format!("χ²/dof {:.3}", id.chi2_per_dof)))
-            .collect(),
-    );
-    page.write(dir, "index", run)
+    Ok(())
 }
 
 /// The chart of θk·∂y/∂θk / σ against time for channel `c` of experiment `ei` (`e`)

@@ -2,7 +2,7 @@
 //! frequency (log axis) for all samples on one figure each, εr against filler volume
 //! fraction with the fitted mixing rules, and a Markdown page with the tables.
 
-use super::format::{sig, table, tolerance};
+use super::format::{si, si_pm, sig, tolerance};
 use super::page::{code, text, Page};
 use super::plot::{error_bars, Chart, Series, Style};
 use super::runs::Run;
@@ -122,44 +122,68 @@ fn sample_rows(s: &SamplePermittivity, decades: bool) -> Vec<Vec<String>> {
         .collect()
 }
 
-/// Text table of one sample (all points, or the points nearest each decade when
-/// `decades`).
-pub fn sample_table(s: &SamplePermittivity, decades: bool) -> String {
-    table(&SAMPLE_HEADER, &sample_rows(s, decades))
-}
-
-/// One section per sample: its source, status, table (points nearest each decade),
-/// warnings and notes.
-fn samples_section(samples: &[SamplePermittivity], page: &mut Page) {
+/// One section per sample: its source, geometry and status, its table (every point,
+/// or the points nearest each decade when `decades`), and its notes (its warnings are
+/// the run's, prefixed with its name).
+fn samples_section(samples: &[SamplePermittivity], decades: bool, page: &mut Page) {
     for s in samples {
+        let g = &s.geometry;
         page.heading(s.name.clone());
         page.para(vec![
             code(&s.provenance.path),
             text(format!(
-                " ({}, {}), status {}",
+                " ({} {}), A = {}, d = {}; status {}",
                 s.provenance.format,
                 s.provenance.pair.name(),
+                // an SI prefix on m² would read as (mm)², so the area takes a power of ten
+                if g.area_std > 0.0 {
+                    format!("{} m²", si_pm(g.area, Some(g.area_std), "1"))
+                } else {
+                    format!("{:.4e} m² (no tolerance)", g.area)
+                },
+                if g.thickness_std > 0.0 {
+                    si_pm(g.thickness, Some(g.thickness_std), "m")
+                } else {
+                    format!("{} (no tolerance)", si(g.thickness, "m"))
+                },
                 s.status
             )),
         ]);
-        page.table(&SAMPLE_HEADER, sample_rows(s, true));
-        page.bullets(
-            s.warnings
-                .iter()
-                .map(|w| format!("warning: {w}"))
-                .chain(s.notes.iter().cloned()),
-        );
+        page.table(&SAMPLE_HEADER, sample_rows(s, decades));
+        page.bullets(s.notes.iter().map(|n| format!("note: {n}")));
     }
+}
+
+/// The one rendering of a permittivity batch (the terminal, Markdown and HTML all
+/// show this page): status, `charts` (added by the report), the counts, warnings,
+/// then one section per sample (every point up to 10 samples, the points nearest
+/// each decade beyond).
+fn samples_page(
+    run: &PermittivityRun,
+    charts: impl FnOnce(&mut Page) -> Result<()>,
+) -> Result<Page> {
+    let mut page = Page::new("Permittivity");
+    page.status_line(run.status, run.status);
+    charts(&mut page)?;
+    page.text(format!(
+        "{} sample(s); {} file(s) could not be used.",
+        run.samples.len(),
+        run.failed.len()
+    ));
+    page.warnings(&run.warnings);
+    samples_section(&run.samples, run.samples.len() > 10, &mut page);
+    Ok(page)
+}
+
+/// The summary `dea-fit permittivity` prints: the report's page without its charts.
+pub fn summary(run: &PermittivityRun) -> Result<String> {
+    Ok(samples_page(run, |_| Ok(()))?.terminal())
 }
 
 /// Write `eps_r.svg`, `tan_delta.svg` and the page (`index.md`, `index.html`,
 /// `run.json`) for a batch; returns the HTML page.
 pub fn write_samples(run: &PermittivityRun, dir: &Path) -> Result<PathBuf> {
-    let mut page = Page::new("Permittivity");
-    page.status_line(run.status, run.status);
-    freq_charts(&run.samples, &mut page, dir)?;
-    page.bullets(run.warnings.iter().map(|w| format!("warning: {w}")));
-    samples_section(&run.samples, &mut page);
+    let page = samples_page(run, |page| freq_charts(&run.samples, page, dir))?;
     let files: Vec<&str> = run
         .samples
         .iter()
@@ -246,89 +270,90 @@ fn ranking_rows(f: &FrequencyFit) -> Vec<Vec<String>> {
         .collect()
 }
 
-/// Ranking table of one frequency.
-pub fn ranking_table(f: &FrequencyFit) -> String {
-    table(&RANKING_HEADER, &ranking_rows(f))
+/// εr against filler volume fraction at the frequency of `rf`: the data and every
+/// rule's curve (dashed where its fit is not usable).
+fn mixing_chart(rf: &FrequencyFit) -> Chart {
+    let phi_max = rf
+        .data
+        .iter()
+        .map(|d| d.volume_fraction)
+        .fold(0.0, f64::max)
+        .max(0.05)
+        * 1.2;
+    let mut series = vec![Series {
+        label: format!("data at {} Hz", sig(rf.freq_hz, 4)),
+        points: rf
+            .data
+            .iter()
+            .map(|d| (d.volume_fraction, d.eps_r))
+            .collect(),
+        color: 0,
+        style: Style::Points,
+    }];
+    for (i, r) in rf.rules.iter().enumerate() {
+        let p = |n: &str| r.parameters.iter().find(|p| p.name == n).map(|p| p.value);
+        let (em, ef, n) = (
+            p("eps_matrix").unwrap_or(1.0),
+            r.eps_filler_eff,
+            p("shape_n").unwrap_or(3.0),
+        );
+        series.push(Series {
+            label: format!("{} (Δ {:.1})", r.rule.name(), r.delta),
+            points: (0..=100)
+                .map(|k| {
+                    let phi = phi_max * k as f64 / 100.0;
+                    (phi, r.rule.eval(em, ef, phi, n))
+                })
+                .collect(),
+            color: i + 1,
+            style: if r.status.is_blocking() {
+                Style::Dashed
+            } else {
+                Style::Line
+            },
+        });
+    }
+    Chart {
+        title: format!(
+            "εr against filler volume fraction at {} Hz",
+            sig(rf.freq_hz, 4)
+        ),
+        x_label: "filler volume fraction φ".into(),
+        y_label: "εr′".into(),
+        series,
+        log_x: false,
+        x_unit: None,
+        y_unit: None,
+    }
 }
 
-/// Write the composite report (`eps_r.svg`, `tan_delta.svg`, `mixing.svg` and the page:
-/// `index.md`, `index.html`, `run.json`) into `dir`; returns the HTML page.
-pub fn write_composite(fit: &CompositeFit, dir: &Path) -> Result<PathBuf> {
+/// The one rendering of a composite series (the terminal, Markdown and HTML all
+/// show this page): matrix, filler and manifest, status, `charts` (added by the
+/// report), the mixing rules at the reference frequency and over all frequencies,
+/// the fractions, claims, warnings, then one section per sample.
+fn composite_page(
+    fit: &CompositeFit,
+    charts: impl FnOnce(&mut Page) -> Result<()>,
+) -> Result<Page> {
     let mut page = Page::new(fit.name.clone());
     page.para(vec![
         text(format!(
-            "Matrix: {} · filler: {} · manifest ",
-            fit.matrix.name, fit.filler.name
+            "Matrix: {} · filler: {} · {} sample(s) · manifest ",
+            fit.matrix.name,
+            fit.filler.name,
+            fit.samples.len()
         )),
         code(&fit.provenance.manifest),
     ]);
     page.status_line(fit.status, fit.status);
-    freq_charts(&fit.samples, &mut page, dir)?;
-    let mut headline = Vec::new();
+    charts(&mut page)?;
     if let Some(rf) = reference_fit(fit) {
-        let phi_max = rf
-            .data
-            .iter()
-            .map(|d| d.volume_fraction)
-            .fold(0.0, f64::max)
-            .max(0.05)
-            * 1.2;
-        let mut series = vec![Series {
-            label: format!("data at {} Hz", sig(rf.freq_hz, 4)),
-            points: rf
-                .data
-                .iter()
-                .map(|d| (d.volume_fraction, d.eps_r))
-                .collect(),
-            color: 0,
-            style: Style::Points,
-        }];
-        for (i, r) in rf.rules.iter().enumerate() {
-            let p = |n: &str| r.parameters.iter().find(|p| p.name == n).map(|p| p.value);
-            let (em, ef, n) = (
-                p("eps_matrix").unwrap_or(1.0),
-                r.eps_filler_eff,
-                p("shape_n").unwrap_or(3.0),
-            );
-            series.push(Series {
-                label: format!("{} (Δ {:.1})", r.rule.name(), r.delta),
-                points: (0..=100)
-                    .map(|k| {
-                        let phi = phi_max * k as f64 / 100.0;
-                        (phi, r.rule.eval(em, ef, phi, n))
-                    })
-                    .collect(),
-                color: i + 1,
-                style: if r.status.is_blocking() {
-                    Style::Dashed
-                } else {
-                    Style::Line
-                },
-            });
-        }
-        let chart = Chart {
-            title: format!(
-                "εr against filler volume fraction at {} Hz",
-                sig(rf.freq_hz, 4)
-            ),
-            x_label: "filler volume fraction φ".into(),
-            y_label: "εr′".into(),
-            series,
-            log_x: false,
-            x_unit: None,
-            y_unit: None,
-        };
-        page.chart(dir, "mixing.svg", "mixing rules", &chart)?;
         page.heading(format!("Mixing rules at {} Hz", sig(rf.freq_hz, 4)));
         page.table(&RANKING_HEADER, ranking_rows(rf));
-        if let Some(best) = rf.rules.iter().min_by(|a, b| a.delta.total_cmp(&b.delta)) {
-            headline.push(format!(
-                "best rule at {} Hz: {} (RMS {:.3} %)",
-                sig(rf.freq_hz, 4),
-                best.rule.name(),
-                best.rms_rel_pct
-            ));
-        }
+        page.text(
+            "Δ: AICc (BIC where AICc is undefined) minus the best at this frequency; \
+             εf (effective): the filler permittivity the rule needs to fit the series.",
+        );
     }
     if !fit.summary.is_empty() {
         let rows: Vec<Vec<String>> = fit
@@ -353,6 +378,10 @@ pub fn write_composite(fit: &CompositeFit, dir: &Path) -> Result<PathBuf> {
             &["rule", "best at", "median Δ", "εf effective", "unusable at"],
             rows,
         );
+        page.text(
+            "best at / unusable at: the number of frequencies at which the rule ranked first \
+             with a usable fit / had no usable fit.",
+        );
     }
     let frows: Vec<Vec<String>> = fit
         .fractions
@@ -375,7 +404,37 @@ pub fn write_composite(fit: &CompositeFit, dir: &Path) -> Result<PathBuf> {
         page.bullets(fit.claims.iter().map(|c| c.verdict.clone()));
     }
     page.warnings(&fit.warnings);
-    samples_section(&fit.samples, &mut page);
+    samples_section(&fit.samples, true, &mut page);
+    Ok(page)
+}
+
+/// The summary `dea-fit composite` prints: the report's page without its charts.
+pub fn composite_summary(fit: &CompositeFit) -> Result<String> {
+    Ok(composite_page(fit, |_| Ok(()))?.terminal())
+}
+
+/// Write the composite report (`eps_r.svg`, `tan_delta.svg`, `mixing.svg` and the page:
+/// `index.md`, `index.html`, `run.json`) into `dir`; returns the HTML page.
+pub fn write_composite(fit: &CompositeFit, dir: &Path) -> Result<PathBuf> {
+    let page = composite_page(fit, |page| {
+        freq_charts(&fit.samples, page, dir)?;
+        match reference_fit(fit) {
+            Some(rf) => page.chart(dir, "mixing.svg", "mixing rules", &mixing_chart(rf)),
+            None => Ok(()),
+        }
+    })?;
+    let headline = reference_fit(fit)
+        .and_then(|rf| {
+            let best = rf.rules.iter().min_by(|a, b| a.delta.total_cmp(&b.delta))?;
+            Some(format!(
+                "best rule at {} Hz: {} (RMS {:.3} %)",
+                sig(rf.freq_hz, 4),
+                best.rule.name(),
+                best.rms_rel_pct
+            ))
+        })
+        .into_iter()
+        .collect();
     let run = Run::new(
         "composite",
         fit.provenance.manifest.clone(),

@@ -1987,9 +1987,7 @@ fn response(prep: &Prepared, theta: &[f64]) -> Result<Vec<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::relaxation::{from_table, log_times, RelaxationOptions, Synthetic};
-    use crate::io::table::Table;
-    use crate::material::viscoelastic::preset;
+    use crate::io::relaxation::{read, RelaxationOptions};
     use std::path::Path;
 
     /// Variable projection's residuals are the joint problem's at the moduli it
@@ -1999,18 +1997,9 @@ mod tests {
     /// positive and stays so within the step (the active set does not change).
     #[test]
     fn projection_has_the_joint_residuals_and_the_exact_gradient() {
-        let syn = Synthetic {
-            prony: preset("seed-table-3.3").unwrap().prony,
-            strain: 0.5,
-            ramp_time: None,
-            times: log_times(0.01, 1000.0, 200, false),
-            noise: 0.01,
-            seed: 4910,
-            record_strain: false,
-        };
-        let csv = syn.csv(&["unit test"]).unwrap();
-        let table = Table::parse(Path::new("t.csv"), csv.as_bytes()).unwrap();
-        let data = from_table(&table, &RelaxationOptions::default()).unwrap();
+        // The seed's Table 3.3 as a step to strain 0.5, 200 points, 1 % noise.
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/vhb4910/relaxation.csv");
+        let data = read(&path, &RelaxationOptions::default()).unwrap();
         let loading = Loading {
             strain: Some(0.5),
             ramp_time: None,

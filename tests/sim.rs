@@ -886,3 +886,32 @@ fn auto_under_a_step_budget_skips_an_explicit_method_that_cannot_fit_it() {
         }
     }
 }
+
+/// An actuator without moving mass (load.mass 0, effective_mass_fraction 0; found
+/// by the fuzz harness, seed 17, where the guard's eigenvalue search never ended
+/// on the infinite Jacobian) is quasi-static exactly: `auto` runs it so and says
+/// why; dynamic fidelity or a closed loop is refused with the keys to change.
+#[test]
+fn an_actuator_without_moving_mass_runs_quasi_static_or_is_refused() {
+    let mut s = Scene::read(Path::new("datasets/scenes/stack_triangle_10Hz.toml")).unwrap();
+    s.load.mass_kg = 0.0;
+    s.load.fraction = 0.0;
+    let o = simulate(&s, &RunOptions::default()).unwrap();
+    assert_eq!(
+        o.integrator.status,
+        RunStatus::Completed,
+        "{}",
+        o.integrator.message
+    );
+    assert!(
+        o.fidelity.reason.contains("no moving mass"),
+        "{}",
+        o.fidelity.reason
+    );
+    s.time.fidelity = dea_fit::sim::scene::FidelityChoice::Dynamic;
+    let err = simulate(&s, &RunOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("no moving mass"), "{err}");
+    assert!(err.contains("effective_mass_fraction"), "{err}");
+}

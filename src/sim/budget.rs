@@ -670,6 +670,10 @@ pub const LIGHT: f64 = 0.07;
 /// long after the ringing had decayed).
 pub const BDF_LIGHT_STEP: f64 = 0.3;
 
+/// Iterations the Schur decomposition of [`stiffness`] may take (a few per
+/// eigenvalue converge on the plant's Jacobians of at most a dozen states).
+const SCHUR_ITERATIONS: usize = 1000;
+
 /// The stiffness of a plant from the eigenvalues of its Jacobian ∂f/∂y at the
 /// start state: the spectral radius ρ, the fastest rate of the linearised plant,
 /// decaying (a dashpot-damped mode, a source's RC, a controller) or oscillating
@@ -681,7 +685,23 @@ pub fn stiffness(p: &Plant) -> Stiffness {
     let n = y.len();
     let mut jac = vec![0.0; n * n];
     p.jacobian(0.0, &y, &mut jac);
-    let ev = nalgebra::DMatrix::from_row_slice(n, n, &jac).complex_eigenvalues();
+    let m = nalgebra::DMatrix::from_row_slice(n, n, &jac);
+    // The Schur iteration never converges on a non-finite matrix (ρ is then
+    // unbounded) and need not on a finite one: there the row-sum norm, which
+    // bounds every |λ|, stands for ρ.
+    if !m.iter().all(|v| v.is_finite()) {
+        return Stiffness {
+            radius: f64::INFINITY,
+            light: 0.0,
+        };
+    }
+    let Some(schur) = nalgebra::Schur::try_new(m.clone(), f64::EPSILON, SCHUR_ITERATIONS) else {
+        return Stiffness {
+            radius: m.row_iter().map(|r| r.abs().sum()).fold(0.0, f64::max),
+            light: 0.0,
+        };
+    };
+    let ev = schur.complex_eigenvalues();
     let finite = ev.iter().filter(|l| l.norm().is_finite());
     Stiffness {
         radius: finite.clone().map(|l| l.norm()).fold(0.0, f64::max),

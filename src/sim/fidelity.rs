@@ -157,7 +157,28 @@ pub fn choose(scene: &Scene) -> Result<Fidelity> {
     let r = f_in / mode.frequency_hz;
     let z = mode.damping_ratio;
     let qs_err = r * (r * r + 4.0 * z * z).sqrt();
+    // No moving mass (load.mass 0 and effective_mass_fraction 0): the axial mode
+    // is infinitely fast and the motion quasi-static exactly; an equation of motion
+    // with zero mass cannot be integrated.
+    if !(full.mass > 0.0) {
+        if scene.time.fidelity == FidelityChoice::Dynamic || scene.control.is_some() {
+            return Err(Error::settings(
+                "the actuator has no moving mass (load.mass = 0 and load.effective_mass_fraction = 0): its equation of motion cannot be integrated (dynamic fidelity, closed loop)",
+            )
+            .with_hint("give load.effective_mass_fraction > 0 (the seed's ½) or a load.mass"));
+        }
+        if lumped.nv <= 0.0 && t_in == 0.0 {
+            return Err(Error::settings(
+                "the actuator has no moving mass (load.mass = 0 and load.effective_mass_fraction = 0), so it is quasi-static, and without a Kelvin-Voigt dashpot it cannot follow a jump of the terminal voltage (ideal source, step input)",
+            )
+            .with_hint("give load.effective_mass_fraction > 0 (the seed's ½), source.rise_time, or material.viscous.nv > 0"));
+        }
+    }
     let (inertia, reason) = match scene.time.fidelity {
+        _ if !(full.mass > 0.0) => (
+            false,
+            "quasi-static: no moving mass (load.mass = 0, effective_mass_fraction = 0)".to_string(),
+        ),
         FidelityChoice::Dynamic => (true, "dynamic: requested by the scene".to_string()),
         FidelityChoice::QuasiStatic => {
             if lumped.nv <= 0.0 && t_in == 0.0 {

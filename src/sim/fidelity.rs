@@ -160,7 +160,8 @@ pub fn choose(scene: &Scene) -> Result<Fidelity> {
     // No moving mass (load.mass 0 and effective_mass_fraction 0): the axial mode
     // is infinitely fast and the motion quasi-static exactly; an equation of motion
     // with zero mass cannot be integrated.
-    if !(full.mass > 0.0) {
+    let massless = full.mass.is_nan() || full.mass <= 0.0;
+    if massless {
         if scene.time.fidelity == FidelityChoice::Dynamic || scene.control.is_some() {
             return Err(Error::settings(
                 "the actuator has no moving mass (load.mass = 0 and load.effective_mass_fraction = 0): its equation of motion cannot be integrated (dynamic fidelity, closed loop)",
@@ -175,7 +176,7 @@ pub fn choose(scene: &Scene) -> Result<Fidelity> {
         }
     }
     let (inertia, reason) = match scene.time.fidelity {
-        _ if !(full.mass > 0.0) => (
+        _ if massless => (
             false,
             "quasi-static: no moving mass (load.mass = 0, effective_mass_fraction = 0)".to_string(),
         ),

@@ -49,6 +49,18 @@ pub trait LeastSquares {
     /// simulator run at a looser tolerance) chooses their accuracy from them. The
     /// trials of an iteration are evaluated alike.
     fn stands_at(&mut self, _cost: f64, _reference: Option<f64>) {}
+    /// Whether, after an accepted step evaluated without the Jacobian, the search
+    /// may take Broyden's secant update of its Jacobian
+    /// J ← J + (Δr − J·Δx)·Δxᵀ / (Δxᵀ·Δx) (Madsen, Nielsen & Tingleff 2004, §3.4)
+    /// instead of evaluating it: for a problem whose Jacobian is costly at points
+    /// where its accuracy matters little (a far start of a multi-start, see
+    /// [`LeastSquares::stands_at`]). The search evaluates the Jacobian before it
+    /// relies on a secant one for more than the next step: before a stopping rule
+    /// that reads the gradient or the step, and after a rejected trial (where the
+    /// model may be what failed), the damping then unchanged.
+    fn secant_jacobian(&self) -> bool {
+        false
+    }
 }
 
 /// Relative damping of the Gauss-Newton step of the noise-floor test
@@ -152,7 +164,10 @@ pub struct LmResult {
     /// The residuals at `x` (empty when the search never evaluated there).
     pub residuals: DVector<f64>,
     /// The Jacobian at `x` (empty as the residuals are; after a failed
-    /// evaluation not to be trusted, as `cost` is not).
+    /// evaluation not to be trusted, as `cost` is not). A search
+    /// [`Termination::Abandoned`] or stopped by the wall time may leave a secant
+    /// update here ([`LeastSquares::secant_jacobian`]); every other stop evaluates
+    /// it.
     pub jacobian: DMatrix<f64>,
 }
 
@@ -212,7 +227,7 @@ pub struct Lm {
     cost: f64,
     /// Damping relative to diag(JᵀJ) (Marquardt scaling), so dimensionless.
     mu: f64,
-    /// Nielsen's growth factor for `mu` after a rejected step.
+    /// Growth factor for `mu` while the damped system is singular.
     nu: f64,
     iterations: usize,
     evaluations: usize,
@@ -225,6 +240,9 @@ pub struct Lm {
     /// [`TRUSTED_RHO`]: only then is the next first trial evaluated with the
     /// Jacobian ([`LeastSquares::jacobian_with_trial`]).
     trusted: bool,
+    /// Whether `jac` is a secant update ([`LeastSquares::secant_jacobian`]), not
+    /// an evaluation at `x`.
+    secant: bool,
 }
 
 /// The agreement ρ of actual and predicted decrease above which a step's linear
@@ -265,6 +283,69 @@ pub fn out_of_reach(costs: &[f64], reference: f64, floor: f64, left: usize) -> O
     })
 }
 
+/// Smallest and largest factor by which a rejected trial's step is shrunk for the
+/// next one (Moré 1978, §5: the trust radius falls to between 1/10 and 1/2 of the
+/// rejected step).
+const SHRINK_RANGE: (f64, f64) = (0.1, 0.5);
+
+/// The factor by which to shrink a rejected step δ (Moré 1978, §5): the minimiser
+/// t* = −d / (2(f₁ − f₀ − d)) of the parabola through the cost f₀ at t = 0 with
+/// slope d = gᵀδ and the trial's cost f₁ at t = 1, within [`SHRINK_RANGE`]; the
+/// smallest factor when the trial could not be evaluated (`ok` false or f₁ not
+/// finite) or the parabola has no minimum inside.
+fn rejected_shrink(ok: bool, f0: f64, f1: f64, d: f64) -> f64 {
+    let (lo, hi) = SHRINK_RANGE;
+    let curvature = f1 - f0 - d;
+    if !(ok && f1.is_finite() && d < 0.0 && curvature > 0.0) {
+        return lo;
+    }
+    let t = -d / (2.0 * curvature);
+    if t.is_finite() {
+        t.clamp(lo, hi)
+    } else {
+        lo
+    }
+}
+
+/// ‖D·δ‖ with D² = diag(JᵀJ): the step length in the scale the damping μ·diag(JᵀJ)
+/// works in (Marquardt 1963).
+fn scaled_norm(a: &DMatrix<f64>, step: &DVector<f64>) -> f64 {
+    step.iter()
+        .enumerate()
+        .map(|(i, s)| a[(i, i)] * s * s)
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// Broyden's rank-one secant update J ← J + (Δr − J·Δx)·Δxᵀ / (Δxᵀ·Δx) (Broyden
+/// 1965; in LM, Madsen, Nielsen & Tingleff 2004, §3.4): the least change to J that
+/// maps the step `dx` onto the residuals' change `dr`. A zero step leaves J as is.
+fn broyden(jac: &mut DMatrix<f64>, dx: &DVector<f64>, dr: &DVector<f64>) {
+    let dd = dx.norm_squared();
+    if dd <= 0.0 || !dd.is_finite() {
+        return;
+    }
+    let u = (dr - &*jac * dx) / dd;
+    jac.ger(1.0, &u, dx, 1.0);
+}
+
+/// The damping for the next trial after a rejection at `mu`: doubled (at least
+/// once) until the damped step's scaled norm, given by `norm` (None where the
+/// system is singular), is at most `target`. Solving the small normal equations
+/// again costs microseconds; each trial the doubling saves is an evaluation of the
+/// problem (for identification a simulator run). Beyond 10³⁰⁰ there is nothing
+/// left to try: the caller stops.
+fn damping_for(mu: f64, target: f64, norm: impl Fn(f64) -> Option<f64>) -> f64 {
+    let mut mu = 2.0 * mu;
+    while mu.is_finite() && mu <= 1e300 {
+        match norm(mu) {
+            Some(s) if s <= target => return mu,
+            _ => mu *= 2.0,
+        }
+    }
+    mu
+}
+
 impl Lm {
     /// Project `x0` into `bounds` and evaluate there (one evaluation, with Jacobian;
     /// none when `known` holds them for x0, see [`Control::known_start`]). A start or bounds that cannot be used (see [`invalid_start`]) or a start
@@ -298,6 +379,7 @@ impl Lm {
             costs: Vec::new(),
             jac_trial: DMatrix::zeros(0, 0),
             trusted: true,
+            secant: false,
         };
         // residuals and Jacobian the caller has at x0 (inside the bounds, finite)
         let known = known.filter(|(r, j)| {
@@ -328,11 +410,12 @@ impl Lm {
     /// (JᵀJ + μ·diag(JᵀJ)) δ = −Jᵀr over the free variables (Marquardt 1963),
     /// projected onto the bounds, tried until the cost decreases (then μ shrinks by
     /// max(1/3, 1 − (2ρ − 1)³) with ρ the actual over the predicted decrease, Nielsen
-    /// 1999) or a stopping rule holds. Variables at a bound whose gradient pushes
+    /// 1999; after a rejected trial μ grows until the step has shrunk as
+    /// [`rejected_shrink`] says, see [`damping_for`]) or a stopping rule holds. Variables at a bound whose gradient pushes
     /// outward are held (active set). None while the search goes on.
     pub fn step<P: LeastSquares + ?Sized>(&mut self, problem: &mut P) -> Option<Termination> {
         if self.iterations >= self.settings.max_iterations {
-            return Some(Termination::MaxIterations);
+            return self.exact(problem).or(Some(Termination::MaxIterations));
         }
         let n = self.x.len();
         let (x, bounds, settings) = (&mut self.x, &self.bounds, &self.settings);
@@ -355,7 +438,9 @@ impl Lm {
             .map(|i| g[i].abs())
             .fold(0.0, f64::max);
         if gnorm <= settings.gtol * (1.0 + self.cost) {
-            return Some(Termination::Converged("gradient"));
+            return self
+                .exact(problem)
+                .or(Some(Termination::Converged("gradient")));
         }
         // Damped normal equations over the free variables (held ones fixed at 0).
         let normal = |mu: f64| {
@@ -382,7 +467,9 @@ impl Lm {
         if settings.min_decrease > 0.0 {
             if let Some(gn) = normal(GN_DAMPING) {
                 if -0.5 * g.dot(&gn) < settings.min_decrease {
-                    return Some(Termination::Converged("noise floor"));
+                    return self
+                        .exact(problem)
+                        .or(Some(Termination::Converged("noise floor")));
                 }
             }
         }
@@ -409,13 +496,16 @@ impl Lm {
             let dx_norm = dx.iter().map(|d| d * d).sum::<f64>().sqrt();
             let x_norm = x.iter().map(|d| d * d).sum::<f64>().sqrt();
             if dx_norm <= settings.xtol * (x_norm + settings.xtol) {
-                return Some(Termination::Converged("step"));
+                return self.exact(problem).or(Some(Termination::Converged("step")));
             }
             // Predicted decrease of the linear model for the (projected) step.
             let pred = -(g.dot(&dx)) - 0.5 * (&a * &dx).dot(&dx);
             // A step the projection onto the bounds turned uphill even in the linear
             // model (pred ≤ 0) cannot be accepted (that needs ρ > 0): it is rejected
             // without evaluating the problem there.
+            // How far the rejected step is shrunk for the next trial (½ when the
+            // projection made it useless, see below).
+            let mut shrink = 0.5;
             if pred > 0.0 {
                 self.evaluations += 1;
                 let ok = match trial_jac {
@@ -427,9 +517,13 @@ impl Lm {
                     let rho = (self.cost - cost_new) / pred;
                     let rel = (self.cost - cost_new) / self.cost.max(f64::MIN_POSITIVE);
                     x.copy_from_slice(&x_new);
+                    self.secant = !trial_jac && problem.secant_jacobian();
                     if trial_jac {
                         std::mem::swap(&mut self.r, &mut r_new);
                         std::mem::swap(&mut self.jac, &mut self.jac_trial);
+                    } else if self.secant {
+                        broyden(&mut self.jac, &dx, &(&r_new - &self.r));
+                        std::mem::swap(&mut self.r, &mut r_new);
                     } else {
                         self.evaluations += 1;
                         problem.eval(x, &mut self.r, Some(&mut self.jac));
@@ -442,15 +536,40 @@ impl Lm {
                     self.iterations += 1;
                     return (rel <= settings.ftol).then_some(Termination::Converged("cost"));
                 }
+                shrink = rejected_shrink(ok, self.cost, cost_new, g.dot(&dx));
+            }
+            if self.secant {
+                // the model the step came from was a secant one: evaluate it and
+                // try again at the same damping
+                return self.exact(problem);
             }
             trial_jac = false;
             first = false;
-            self.mu *= self.nu;
-            self.nu *= 2.0;
+            let target = shrink * scaled_norm(&a, &step);
+            self.mu = damping_for(self.mu, target, |mu| {
+                normal(mu).map(|s| scaled_norm(&a, &s))
+            });
             if !self.mu.is_finite() || self.mu > 1e300 {
                 return Some(Termination::Converged("no further decrease"));
             }
         }
+    }
+
+    /// Evaluate the Jacobian at `x` where it is a secant update (None: the search
+    /// goes on; the failure where the evaluation fails).
+    fn exact<P: LeastSquares + ?Sized>(&mut self, problem: &mut P) -> Option<Termination> {
+        if !self.secant {
+            return None;
+        }
+        self.secant = false;
+        self.evaluations += 1;
+        if problem.eval(&self.x, &mut self.r, Some(&mut self.jac)) {
+            return None;
+        }
+        let why = problem.failure().unwrap_or_else(|| "not finite".into());
+        Some(Termination::Failed(format!(
+            "the Jacobian at an accepted point: {why}"
+        )))
     }
 
     /// The result as it stands, stopped for `termination`.
@@ -741,6 +860,9 @@ struct Saved {
     /// [`Lm::trusted`] (absent in older files: trusted).
     #[serde(default = "yes")]
     trusted: bool,
+    /// [`Lm::secant`] (absent in older files: evaluated).
+    #[serde(default)]
+    secant: bool,
 }
 
 fn yes() -> bool {
@@ -779,6 +901,7 @@ fn save(file: &Path, lm: &Lm) -> Result<(), String> {
         evaluations: lm.evaluations,
         costs: bits(&lm.costs),
         trusted: lm.trusted,
+        secant: lm.secant,
     };
     let text = serde_json::to_string(&saved).map_err(|e| e.to_string())?;
     let mut tmp = file.as_os_str().to_owned();
@@ -827,6 +950,7 @@ fn load(file: &Path, (m, n): (usize, usize), bounds: &[(f64, f64)]) -> Result<Lm
         costs: unbits(&s.costs),
         jac_trial: DMatrix::zeros(0, 0),
         trusted: s.trusted,
+        secant: s.secant,
     })
 }
 
@@ -929,6 +1053,166 @@ mod tests {
 
     /// Bounds that `f64::clamp` panics on (the Gent limit's lower end above its upper
     /// end, NaN) and a non-finite start end the search as failed, never in a panic.
+    /// r = atan(x), whose Gauss-Newton step −atan(x)(1 + x²) from x = 3 lands at
+    /// −9.5, where |r| is larger: the trial points it was asked to evaluate.
+    struct Arctan(Vec<f64>);
+    impl LeastSquares for Arctan {
+        fn dims(&self) -> (usize, usize) {
+            (1, 1)
+        }
+        fn eval(
+            &mut self,
+            p: &[f64],
+            r: &mut DVector<f64>,
+            jac: Option<&mut DMatrix<f64>>,
+        ) -> bool {
+            self.0.push(p[0]);
+            r[0] = p[0].atan();
+            if let Some(j) = jac {
+                j[(0, 0)] = 1.0 / (1.0 + p[0] * p[0]);
+            }
+            true
+        }
+    }
+
+    #[test]
+    fn a_rejected_step_is_shrunk_by_at_least_half_before_the_next_trial() {
+        // The overshoot is rejected; the damped step is δ_GN/(1 + μ) here, so blind
+        // doubling of μ from 10⁻³ hardly changes it and is rejected again and again
+        // (the test fails on it): every trial after a rejection must lie at most half
+        // as far from the point as the rejected one.
+        let mut w = Arctan(Vec::new());
+        let res = minimize(&mut w, &[3.0], &[(-20.0, 20.0)], &LmSettings::default());
+        assert!(
+            matches!(res.termination, Termination::Converged(_)),
+            "{res:?}"
+        );
+        assert!(res.x[0].abs() < 1e-6, "{res:?}");
+        let cost = |x: f64| 0.5 * x.atan().powi(2);
+        // walk the evaluations: x_k the current point, a trial worse than it rejected
+        let pts = &w.0;
+        let mut x = pts[0];
+        let mut last_rejected: Option<f64> = None;
+        let mut rejections = 0;
+        for &p in &pts[1..] {
+            if p == x {
+                continue; // the Jacobian at an accepted point
+            }
+            if let Some(d) = last_rejected {
+                assert!(
+                    (p - x).abs() <= SHRINK_RANGE.1 * d * (1.0 + 1e-12),
+                    "trial {p} from {x}: rejected step was {d}"
+                );
+            }
+            if cost(p) < cost(x) {
+                x = p;
+                last_rejected = None;
+            } else {
+                last_rejected = Some((p - x).abs());
+                rejections += 1;
+            }
+        }
+        assert!(rejections > 0, "the wall rejects some step: {pts:?}");
+    }
+
+    /// Rosenbrock taking secant Jacobians when allowed, counting the evaluations
+    /// with the Jacobian.
+    struct SecantRosen {
+        allowed: bool,
+        jacobians: usize,
+    }
+    impl LeastSquares for SecantRosen {
+        fn dims(&self) -> (usize, usize) {
+            (2, 2)
+        }
+        fn eval(
+            &mut self,
+            p: &[f64],
+            r: &mut DVector<f64>,
+            jac: Option<&mut DMatrix<f64>>,
+        ) -> bool {
+            self.jacobians += usize::from(jac.is_some());
+            Rosen.eval(p, r, jac)
+        }
+        fn secant_jacobian(&self) -> bool {
+            self.allowed
+        }
+    }
+
+    #[test]
+    fn secant_jacobians_save_evaluations_and_the_search_ends_on_an_exact_one() {
+        let run = |allowed| {
+            let mut p = SecantRosen {
+                allowed,
+                jacobians: 0,
+            };
+            let inf = f64::INFINITY;
+            let res = minimize(
+                &mut p,
+                &[-1.2, 1.0],
+                &[(-inf, inf); 2],
+                &LmSettings::default(),
+            );
+            (res, p.jacobians)
+        };
+        let (exact, exact_jacobians) = run(false);
+        let (secant, secant_jacobians) = run(true);
+        for res in [&exact, &secant] {
+            assert!(
+                matches!(res.termination, Termination::Converged(_)),
+                "{res:?}"
+            );
+            assert!((res.x[0] - 1.0).abs() < 1e-8 && (res.x[1] - 1.0).abs() < 1e-8);
+        }
+        assert!(
+            secant_jacobians < exact_jacobians,
+            "{secant_jacobians} Jacobians with secant updates, {exact_jacobians} without"
+        );
+        // the Jacobian returned is the one at x, not a secant update (Rosen's is exact)
+        let mut want = DMatrix::zeros(2, 2);
+        Rosen.eval(&secant.x, &mut DVector::zeros(2), Some(&mut want));
+        assert_eq!(secant.jacobian, want);
+    }
+
+    #[test]
+    fn broyden_maps_the_step_onto_the_change_and_leaves_the_orthogonal_part() {
+        let mut j = DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 3.0, 4.0]);
+        let dx = DVector::from_vec(vec![1.0, 0.0]);
+        let dr = DVector::from_vec(vec![5.0, -1.0]);
+        broyden(&mut j, &dx, &dr);
+        // the secant condition J·Δx = Δr, and J·v unchanged for v ⊥ Δx
+        assert_eq!(&j * &dx, dr);
+        assert_eq!(j.column(1).as_slice(), &[2.0, 4.0]);
+        let before = j.clone();
+        broyden(&mut j, &DVector::zeros(2), &dr);
+        assert_eq!(j, before, "a zero step changes nothing");
+    }
+
+    #[test]
+    fn the_rejected_shrink_follows_the_parabola_within_its_range() {
+        // f0 = 1, slope −1, f1 = 2: curvature 2, minimiser t* = 1/4
+        assert_eq!(rejected_shrink(true, 1.0, 2.0, -1.0), 0.25);
+        // a trial far worse: the smallest factor; a mild one: at most ½
+        assert_eq!(rejected_shrink(true, 1.0, 1e6, -1.0), SHRINK_RANGE.0);
+        assert_eq!(rejected_shrink(true, 1.0, 0.2, -1.0), SHRINK_RANGE.1);
+        // no usable trial value or slope: the smallest factor
+        assert_eq!(rejected_shrink(false, 1.0, 0.5, -1.0), SHRINK_RANGE.0);
+        assert_eq!(rejected_shrink(true, 1.0, f64::NAN, -1.0), SHRINK_RANGE.0);
+        assert_eq!(rejected_shrink(true, 1.0, 2.0, 0.0), SHRINK_RANGE.0);
+    }
+
+    #[test]
+    fn the_damping_is_the_first_doubling_that_shrinks_the_step_enough() {
+        // |δ(μ)| = 1/(1 + μ): from μ = 1 the doublings 2, 4, 8 give 1/3, 1/5, 1/9;
+        // 1/17 at μ = 16 is the first ≤ 0.1
+        assert_eq!(damping_for(1.0, 0.1, |mu| Some(1.0 / (1.0 + mu))), 16.0);
+        // at least one doubling even when the target already holds
+        assert_eq!(damping_for(1.0, 10.0, |mu| Some(1.0 / (1.0 + mu))), 2.0);
+        // a system singular at every damping: μ runs past 10³⁰⁰ (the caller stops)
+        assert!(damping_for(1.0, 0.1, |_| None) > 1e300);
+        assert!(damping_for(1.0, 0.1, |_| Some(f64::NAN)) > 1e300);
+    }
+
     #[test]
     fn unusable_bounds_or_start_fail_without_panic() {
         let inf = f64::INFINITY;

@@ -384,6 +384,18 @@ impl Problem {
         r: &mut DVector<f64>,
         mut jac: Option<&mut DMatrix<f64>>,
     ) -> bool {
+        // ∂(simulated)/∂θk → ∂r/∂x_col: one factor per column, the same on every row.
+        let scale: Vec<(usize, f64)> = self
+            .free
+            .iter()
+            .zip(x)
+            .map(|(c, &xc)| {
+                (
+                    c.index,
+                    c.dsim_dvalue(c.space.theta(xc)) * c.space.dtheta_dx(xc),
+                )
+            })
+            .collect();
         let mut row = 0;
         for (e, o) in self.experiments.iter().zip(runs) {
             let s0 = &o.samples[0];
@@ -395,10 +407,8 @@ impl Problem {
                     let m = simulated(ch.kind, s0, &o.samples[i]);
                     r[row] = (m - y) / ch.sigma;
                     if let (Some(j), Some(se)) = (jac.as_deref_mut(), o.sensitivities) {
-                        for (col, c) in self.free.iter().enumerate() {
-                            let d = sensitivity(ch.kind, se, i, c.index)
-                                * c.dsim_dvalue(c.space.theta(x[col]));
-                            j[(row, col)] = d * c.space.dtheta_dx(x[col]) / ch.sigma;
+                        for (col, &(k, f)) in scale.iter().enumerate() {
+                            j[(row, col)] = sensitivity(ch.kind, se, i, k) * f / ch.sigma;
                         }
                     }
                     row += 1;
@@ -510,6 +520,14 @@ impl LeastSquares for Problem {
 
     fn stands_at(&mut self, cost: f64, reference: Option<f64>) {
         self.far = reference.is_some_and(|r| cost > FAR_ABOVE * r);
+    }
+
+    /// A search [`FAR_ABOVE`] the first start's cost cannot be the best while it
+    /// stays there: its steps need a direction, not an exact Jacobian, and a
+    /// sensitivity run there costs several plain ones ([`FAR`]), so it takes
+    /// Broyden's secant updates between them.
+    fn secant_jacobian(&self) -> bool {
+        self.far
     }
 }
 

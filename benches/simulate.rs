@@ -28,8 +28,7 @@ fn bench(c: &mut Criterion) {
             b.iter(|| simulate(&few, &RunOptions::default()).expect("runs"))
         });
     }
-    let mut ringing =
-        Scene::read(Path::new("datasets/scenes/stack_step_5kV.toml")).expect("scene");
+    let mut ringing = Scene::read(Path::new("datasets/scenes/stack_step_5kV.toml")).expect("scene");
     ringing.time.fidelity = FidelityChoice::Dynamic;
     ringing.time.span = 1.0;
     ringing.time.samples = (1..=200).map(|i| i as f64 / 200.0).collect();

@@ -560,7 +560,11 @@ fn auto_bdf_stalled_on_a_clamp_hands_over_to_tsitouras() {
     let i = &o.integrator;
     assert_eq!(i.status, RunStatus::Completed, "{}", i.message);
     assert_eq!(i.method, Method::Tsit45, "{}", i.message);
-    assert!(i.message.contains("auto's BDF stalled at t = "), "{}", i.message);
+    assert!(
+        i.message.contains("auto's BDF stalled at t = "),
+        "{}",
+        i.message
+    );
     assert!(i.stats.steps + i.stats.rejected > cost.explicit_steps as usize);
     assert_eq!(o.samples.len(), s.time.samples.len() + 1);
     assert!(o.samples.windows(2).all(|w| w[0].time_s < w[1].time_s));

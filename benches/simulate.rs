@@ -4,7 +4,8 @@
 //! identification calls) of the damped step and of a rig-log-sized scene; and the
 //! undamped 5 kV step (its first second, dynamic fidelity) with Tsitouras 5(4) beside
 //! Dormand–Prince 5(4), the unchanged oracle, as the baseline of the same run
-//! (issue 12: diffsol's Tsitouras took 1.07× dp54's time there, ours 0.5×).
+//! (issue 12, callgrind of the whole `dea-fit simulate` process: diffsol's
+//! Tsitouras 1.04× dp54's instructions, ours 0.79×).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use dea_fit::sim::integrate::Method;

@@ -556,6 +556,12 @@ pub struct Cost {
     pub input_periods: f64,
     /// Steps an explicit method needs for stability alone (0 for an implicit one).
     pub stability_steps: f64,
+    /// Steps the explicit Tsitouras 5(4) would take by estimate, whatever ran: the
+    /// larger of its accuracy and stability steps (the Jacobian's spectral radius
+    /// where `auto` computed it, else the axial mode), plus the restarts. Where
+    /// `auto` chose BDF, a BDF run that takes this many steps stalls
+    /// (`sim::simulate` then goes on with Tsitouras).
+    pub explicit_steps: f64,
     /// For a scene that names no integrator: the one `auto` chose ([`auto_method`])
     /// and why.
     pub auto: Option<(Method, String)>,
@@ -636,6 +642,8 @@ pub fn estimate(s: &Scene) -> Result<Cost> {
         false => 0.0,
     };
     let steps = accuracy.max(stability) + STEPS_PER_RESTART * kinks;
+    let explicit_steps =
+        accuracy.max(span * fastest / EXPLICIT_STABILITY) + STEPS_PER_RESTART * kinks;
     let memory =
         (s.time.samples.len() as f64 + 2.0) * std::mem::size_of::<Sample>() as f64 + 8.0 * kinks;
     Ok(Cost {
@@ -647,6 +655,7 @@ pub fn estimate(s: &Scene) -> Result<Cost> {
         ring_periods,
         input_periods,
         stability_steps: stability,
+        explicit_steps,
         auto,
     })
 }

@@ -545,6 +545,10 @@ struct Prepared {
     bounds: Vec<f64>,
     /// Typical state magnitudes (absolute tolerances).
     scale: Vec<f64>,
+    /// Where `auto` chose BDF for a plain run: the steps after which BDF stalls
+    /// and gives way to Tsitouras ([`budget::Cost::explicit_steps`], see
+    /// [`integrate`]).
+    stall_steps: Option<usize>,
 }
 
 /// The guard ([`budget::check`]: domain, rest state, cost; it chooses the fidelity
@@ -556,7 +560,8 @@ fn prepare(scene: &Scene, opts: &RunOptions) -> crate::Result<Prepared> {
         .map_err(|why| budget::no_rest_state(scene, why))?;
     let mode = &cost.mode;
     let rtol = opts.rtol.unwrap_or(scene.time.rtol);
-    let (method, reason) = match (opts.method.or(scene.time.method), &cost.auto) {
+    let requested = opts.method.or(scene.time.method);
+    let (method, reason) = match (requested, &cost.auto) {
         (Some(m), _) => (m, "requested".to_string()),
         (None, Some((m, why))) => match opts.max_steps {
             // an explicit method cannot step past its stability limit: where that
@@ -595,6 +600,18 @@ fn prepare(scene: &Scene, opts: &RunOptions) -> crate::Result<Prepared> {
         None => scene.input.kinks(0.0, span),
     };
     kinks.dedup();
+    // BDF is auto's choice where it takes fewer steps than the explicit method's
+    // stability limit allows; one that takes more than the explicit run would
+    // (a controller chattering on its clamp collapses its step) has lost that
+    // bet. Not with sensitivities: Tsitouras's start from ∂y/∂θ mid-run is not
+    // supported.
+    let stall_steps = (requested.is_none()
+        && cost.auto.as_ref().is_some_and(|(m, _)| *m == Method::Bdf)
+        && method == Method::Bdf
+        && !opts.sensitivities
+        && opts.fixed_step.is_none())
+    .then_some(cost.explicit_steps.ceil() as usize)
+    .filter(|&cap| cap < options.max_steps);
     let mut bounds = vec![0.0];
     bounds.extend(kinks);
     bounds.push(span);
@@ -607,7 +624,15 @@ fn prepare(scene: &Scene, opts: &RunOptions) -> crate::Result<Prepared> {
         rtol,
         options,
         bounds,
+        stall_steps,
     })
+}
+
+/// Whether auto's BDF, stopped by `why` after the steps in `stats`, stalled: it
+/// reached `cap` steps ([`Prepared::stall_steps`]) or its step size collapsed.
+fn stalled(why: &str, stats: &Stats, cap: usize) -> bool {
+    (why.starts_with("step budget exhausted") && stats.steps + stats.rejected >= cap)
+        || why.starts_with("step size underflow")
 }
 
 /// What [`integrate`] leaves: the trajectory, the events and where the run ended.
@@ -816,7 +841,10 @@ fn integrate<'s, 'k>(
     // The accepted steps since the last sample (when the envelope wants them).
     let steps = std::cell::Cell::new(none);
     let last_sample = std::cell::Cell::new(0.0);
+    // The end of the last accepted step (where auto's BDF hands over).
+    let last_step = std::cell::Cell::new(0.0);
     let mut step = |t: f64, y: &[f64]| {
+        last_step.set(t);
         if wants_steps && t > last_sample.get() {
             let mut i = steps.get();
             i.add(&sample(p, t, y));
@@ -831,10 +859,14 @@ fn integrate<'s, 'k>(
         rec.record(p, t, y, s, steps.replace(none), false);
         last_sample.set(t);
     };
+    let options = Options {
+        max_steps: run.stall_steps.unwrap_or(run.options.max_steps),
+        ..run.options
+    };
     let end = integrate::run(
         p,
         run.method,
-        &run.options,
+        &options,
         &run.scale,
         &run.bounds,
         &mut y,
@@ -849,10 +881,45 @@ fn integrate<'s, 'k>(
         &mut at_kink,
         &mut stats,
     );
+    // auto's BDF stalled: Tsitouras 5(4) goes on from its last accepted step
+    // (the samples up to there are out) with what is left of the budget
+    let mut method = run.method;
+    let mut handover = String::new();
+    let end = match (end, run.stall_steps) {
+        (End::Failed(why), Some(cap)) if stalled(&why, &stats, cap) => {
+            let t0 = last_step.get();
+            let bounds: Vec<f64> = std::iter::once(t0)
+                .chain(run.bounds.iter().copied().filter(|&b| b > t0))
+                .collect();
+            let samples = &scene.time.samples;
+            let samples = &samples[samples.partition_point(|&t| t <= t0)..];
+            method = Method::Tsit45;
+            handover = format!(
+                "; auto's BDF stalled at t = {t0:.6e} s ({} steps, the explicit method's estimate for the whole run): explicit Tsitouras 5(4) from there",
+                stats.steps + stats.rejected
+            );
+            integrate::run(
+                p,
+                method,
+                &run.options,
+                &run.scale,
+                &bounds,
+                &mut y,
+                samples,
+                Extra::None,
+                &mut out,
+                &mut step,
+                Some(&event),
+                &mut at_kink,
+                &mut stats,
+            )
+        }
+        (end, _) => end,
+    };
     let (status, message, t_end, events) = match end {
         End::Done => (
             RunStatus::Completed,
-            "reached the end time".to_string(),
+            format!("reached the end time{handover}"),
             span,
             Vec::new(),
         ),
@@ -882,16 +949,16 @@ fn integrate<'s, 'k>(
                 // steps, Newton failing) stalls on a right-hand side that is not
                 // smooth, such as a controller chattering on its clamp, which an
                 // explicit method steps through
-                let advice = match run.method {
+                let advice = match method {
                     Method::Tsit45 | Method::Dp54 => "dynamics that much stiffer than the axial mode (high control gains, a fast source) want the implicit integrator = \"bdf\"",
                     _ => "an implicit method stalls on a right-hand side that is not smooth (a controller switching on its clamp, a source saturating): check the controller's gains and limits, or try the explicit integrator = \"tsit45\"",
                 };
                 format!(
-                    "{why}: the run was estimated at {} steps before it started (sim::budget); {advice}",
+                    "{why}: the run was estimated at {} steps before it started (sim::budget); {advice}{handover}",
                     budget::fmt_g(run.cost.steps.round())
                 )
             } else {
-                why
+                format!("{why}{handover}")
             };
             (RunStatus::Failed, why, t, Vec::new())
         }
@@ -915,7 +982,7 @@ fn integrate<'s, 'k>(
             sensitivities: sens,
             status,
             message,
-            method: run.method,
+            method,
             stats,
             rest_stretch: p.lam0,
             rest_length_m: p.length(p.lam0),

@@ -1,7 +1,13 @@
-//! Our own explicit Dormand–Prince 5(4) (Dormand & Prince 1980) with Hairer's
-//! 4th-order continuous extension (dense output) and a PI step controller
-//! (Gustafsson 1991). It is the independent test oracle for the implicit methods and
-//! the only method with a fixed-step mode (for convergence-order tests).
+//! Our own explicit Runge–Kutta 5(4) pairs of seven stages, the last at the new
+//! state (FSAL), with a PI step controller (Gustafsson 1991; Hairer, Nørsett &
+//! Wanner I, §II.4: β1 = 0.7/5, β2 = 0.4/5 as in dopri5):
+//! * [`DP54`]: Dormand–Prince 5(4) (Dormand & Prince 1980) with Hairer's 4th-order
+//!   continuous extension. The independent test oracle for the implicit methods and
+//!   the only method with a fixed-step mode (for convergence-order tests).
+//! * [`TSIT45`]: Tsitouras 5(4) (Tsitouras 2011, Comput. Math. Appl. 62(2) 770–775)
+//!   with its 4th-order interpolant: the plain runs of [`super::Method::Tsit45`].
+//!   diffsol's Tsitouras (an I controller, gain 1/5, growth ≤ 2×) rejected 27 % of
+//!   its steps on the ringing stack (73 k of 276 k; issue 12).
 //!
 //! Between restart times it writes the state at requested sample times from the
 //! dense output, locates the first change of the event function from positive to
@@ -15,87 +21,210 @@ use super::{
 
 /// Buffers reused by every step.
 struct Workspace {
+    pair: &'static Pair,
     n: usize,
     k: [Vec<f64>; 7],
     y1: Vec<f64>,
     ytmp: Vec<f64>,
     err: Vec<f64>,
+    /// The dense output of the last step: y at its start in `dense[0]`, and for
+    /// [`Dense::Hairer`] its four other vectors.
     dense: [Vec<f64>; 5],
+    /// The last step's size (for [`Dense::Polynomial`]).
+    h_dense: f64,
     h: f64,
     err_old: f64,
 }
 
 impl Workspace {
-    fn new(n: usize) -> Self {
+    fn new(pair: &'static Pair, n: usize) -> Self {
         let v = || vec![0.0; n];
         Workspace {
+            pair,
             n,
             k: [v(), v(), v(), v(), v(), v(), v()],
             y1: v(),
             ytmp: v(),
             err: v(),
             dense: [v(), v(), v(), v(), v()],
+            h_dense: 0.0,
             h: 0.0,
             err_old: 1e-4,
         }
     }
 }
 
-const A: [[f64; 6]; 6] = [
-    [1.0 / 5.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-    [3.0 / 40.0, 9.0 / 40.0, 0.0, 0.0, 0.0, 0.0],
-    [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0, 0.0, 0.0, 0.0],
-    [
-        19372.0 / 6561.0,
-        -25360.0 / 2187.0,
-        64448.0 / 6561.0,
-        -212.0 / 729.0,
-        0.0,
-        0.0,
+/// An explicit Runge–Kutta 5(4) pair of seven stages, FSAL: stage s + 1 (s = 0…5)
+/// at t + c[s]·h from y + h·Σ_j a[s][j]·k_j, row 6 the 5th-order solution; the
+/// error estimate h·Σ_j e_j·k_j; and its dense output.
+pub(super) struct Pair {
+    a: [[f64; 6]; 6],
+    c: [f64; 6],
+    e: [f64; 7],
+    dense: Dense,
+}
+
+/// A pair's continuous extension.
+enum Dense {
+    /// Hairer's for Dormand–Prince (dopri5's `contd5`), from these coefficients.
+    Hairer([f64; 7]),
+    /// y(t + θh) = y + h·Σ_j b_j(θ)·k_j with b_j(θ) = Σ_{p=1…4} r[p−1][j]·θ^p.
+    Polynomial([[f64; 7]; 4]),
+}
+
+/// Dormand & Prince (1980), Hairer, Nørsett & Wanner I, Table II.5.2.
+pub(super) const DP54: Pair = Pair {
+    a: [
+        [1.0 / 5.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [3.0 / 40.0, 9.0 / 40.0, 0.0, 0.0, 0.0, 0.0],
+        [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0, 0.0, 0.0, 0.0],
+        [
+            19372.0 / 6561.0,
+            -25360.0 / 2187.0,
+            64448.0 / 6561.0,
+            -212.0 / 729.0,
+            0.0,
+            0.0,
+        ],
+        [
+            9017.0 / 3168.0,
+            -355.0 / 33.0,
+            46732.0 / 5247.0,
+            49.0 / 176.0,
+            -5103.0 / 18656.0,
+            0.0,
+        ],
+        [
+            35.0 / 384.0,
+            0.0,
+            500.0 / 1113.0,
+            125.0 / 192.0,
+            -2187.0 / 6784.0,
+            11.0 / 84.0,
+        ],
     ],
-    [
-        9017.0 / 3168.0,
-        -355.0 / 33.0,
-        46732.0 / 5247.0,
-        49.0 / 176.0,
-        -5103.0 / 18656.0,
+    c: [0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0],
+    e: [
+        71.0 / 57600.0,
         0.0,
+        -71.0 / 16695.0,
+        71.0 / 1920.0,
+        -17253.0 / 339200.0,
+        22.0 / 525.0,
+        -1.0 / 40.0,
     ],
-    [
-        35.0 / 384.0,
+    dense: Dense::Hairer([
+        -12715105075.0 / 11282082432.0,
         0.0,
-        500.0 / 1113.0,
-        125.0 / 192.0,
-        -2187.0 / 6784.0,
-        11.0 / 84.0,
+        87487479700.0 / 32700410799.0,
+        -10690763975.0 / 1880347072.0,
+        701980252875.0 / 199316789632.0,
+        -1453857185.0 / 822651844.0,
+        69997945.0 / 29380423.0,
+    ]),
+};
+
+/// Tsitouras's 5th-order weights b (Tsitouras 2011, Table 1; as diffsol 0.18 and
+/// OrdinaryDiffEq.jl's `Tsit5` give them).
+const TSIT_B: [f64; 6] = [
+    0.09646076681806523,
+    0.01,
+    0.4798896504144996,
+    1.379008574103742,
+    -3.290069515436081,
+    2.324710524099774,
+];
+
+/// Tsitouras 5(4) (Tsitouras 2011; coefficients as diffsol 0.18's `tsit45`, the
+/// first column from the row sums a[s][0] = c[s] − Σ_{j≥1} a[s][j]).
+pub(super) const TSIT45: Pair = Pair {
+    a: [
+        [0.161, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [
+            0.327 - 0.335480655492357,
+            0.335480655492357,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+        ],
+        [
+            0.9 - (-6.359448489975075 + 4.362295432869581),
+            -6.359448489975075,
+            4.362295432869581,
+            0.0,
+            0.0,
+            0.0,
+        ],
+        [
+            0.9800255409045097 - (-11.74888356406283 + 7.495539342889836 - 0.09249506636175525),
+            -11.74888356406283,
+            7.495539342889836,
+            -0.09249506636175525,
+            0.0,
+            0.0,
+        ],
+        [
+            1.0 - (-12.92096931784711 + 8.159367898576159
+                - 0.071584973281401
+                - 0.02826905039406838),
+            -12.92096931784711,
+            8.159367898576159,
+            -0.071584973281401,
+            -0.02826905039406838,
+            0.0,
+        ],
+        TSIT_B,
     ],
-];
-const C: [f64; 6] = [0.2, 0.3, 0.8, 8.0 / 9.0, 1.0, 1.0];
-const E: [f64; 7] = [
-    71.0 / 57600.0,
-    0.0,
-    -71.0 / 16695.0,
-    71.0 / 1920.0,
-    -17253.0 / 339200.0,
-    22.0 / 525.0,
-    -1.0 / 40.0,
-];
-const D: [f64; 7] = [
-    -12715105075.0 / 11282082432.0,
-    0.0,
-    87487479700.0 / 32700410799.0,
-    -10690763975.0 / 1880347072.0,
-    701980252875.0 / 199316789632.0,
-    -1453857185.0 / 822651844.0,
-    69997945.0 / 29380423.0,
-];
+    c: [0.161, 0.327, 0.9, 0.9800255409045097, 1.0, 1.0],
+    e: [
+        -0.001780011052225777,
+        -0.0008164344596567469,
+        0.007880878010261995,
+        -0.1447110071732629,
+        0.5823571654525552,
+        -0.45808210592918697,
+        0.015151515151515152,
+    ],
+    // the interpolant's b_j(θ) (OrdinaryDiffEq.jl, `Tsit5Interp`: r11 … r74)
+    dense: Dense::Polynomial([
+        [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [
+            -2.763706197274826,
+            0.13169999999999998,
+            3.9302962368947516,
+            -12.411077166933676,
+            37.50931341651104,
+            -27.896526289197286,
+            1.5,
+        ],
+        [
+            2.9132554618219126,
+            -0.2234,
+            -5.941033872131505,
+            30.33818863028232,
+            -88.1789048947664,
+            65.09189467479366,
+            -4.0,
+        ],
+        [
+            -1.0530884977290216,
+            0.1017,
+            2.490627285651253,
+            -16.548102889244902,
+            47.37952196281928,
+            -34.87065786149661,
+            2.5,
+        ],
+    ]),
+};
 
 /// Weighted RMS norm of the local error (all states, atol scaled per state).
 pub(super) fn wrms(e: &[f64], y0: &[f64], y1: &[f64], scale: &[f64], o: &Options) -> f64 {
     let mut s = 0.0;
-    for i in 0..e.len() {
-        let sc = o.atol * scale[i] + o.rtol * y0[i].abs().max(y1[i].abs());
-        s += (e[i] / sc).powi(2);
+    for (((e, y0), y1), scale) in e.iter().zip(y0).zip(y1).zip(scale) {
+        let sc = o.atol * scale + o.rtol * y0.abs().max(y1.abs());
+        s += (e / sc).powi(2);
     }
     (s / e.len() as f64).sqrt()
 }
@@ -103,15 +232,34 @@ pub(super) fn wrms(e: &[f64], y0: &[f64], y1: &[f64], scale: &[f64], o: &Options
 /// Dense output of the last accepted step into `out` at θ ∈ [0, 1].
 fn dense_eval(w: &Workspace, theta: f64, out: &mut [f64]) {
     let d = &w.dense;
-    let t1 = 1.0 - theta;
-    for i in 0..w.n {
-        out[i] = d[0][i] + theta * (d[1][i] + t1 * (d[2][i] + theta * (d[3][i] + t1 * d[4][i])));
+    match &w.pair.dense {
+        Dense::Hairer(_) => {
+            let t1 = 1.0 - theta;
+            for i in 0..w.n {
+                out[i] =
+                    d[0][i] + theta * (d[1][i] + t1 * (d[2][i] + theta * (d[3][i] + t1 * d[4][i])));
+            }
+        }
+        Dense::Polynomial(r) => {
+            let b: [f64; 7] = std::array::from_fn(|j| {
+                w.h_dense
+                    * theta
+                    * (r[0][j] + theta * (r[1][j] + theta * (r[2][j] + theta * r[3][j])))
+            });
+            out.copy_from_slice(&d[0]);
+            for (b, k) in b.iter().zip(&w.k) {
+                for (o, k) in out.iter_mut().zip(k) {
+                    *o += b * k;
+                }
+            }
+        }
     }
 }
 
 /// Integrate over the restart intervals `bounds` (see [`super::run`]).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn run<S: System>(
+    pair: &'static Pair,
     sys: &S,
     o: &Options,
     scale: &[f64],
@@ -124,7 +272,7 @@ pub(super) fn run<S: System>(
     restart: &mut dyn FnMut(f64, &mut [f64]),
     stats: &mut Stats,
 ) -> End {
-    let mut w = Workspace::new(y.len());
+    let mut w = Workspace::new(pair, y.len());
     let mut si = 0;
     for (k, win) in bounds.windows(2).enumerate() {
         let (a, b) = (win[0], win[1]);
@@ -207,7 +355,7 @@ fn segment<S: System>(
             return non_finite(t + h, &w.y1)
                 .unwrap_or_else(|| End::Failed(format!("step size underflow at t = {t:.6e} s")));
         }
-        let err = dp54_step(&sys, w, t, h, y, scale, o, stats);
+        let err = rk_step(&sys, w, t, h, y, scale, o, stats);
         if o.fixed_step.is_none() {
             if err > 1.0 {
                 stats.rejected += 1;
@@ -275,9 +423,9 @@ fn segment<S: System>(
     End::Done
 }
 
-/// One Dormand–Prince step; returns the error norm (∞ if the step is not finite).
+/// One step of the pair; returns the error norm (∞ if the step is not finite).
 #[allow(clippy::too_many_arguments)]
-fn dp54_step<S: System>(
+fn rk_step<S: System>(
     sys: &Left<S>,
     w: &mut Workspace,
     t: f64,
@@ -288,39 +436,53 @@ fn dp54_step<S: System>(
     stats: &mut Stats,
 ) -> f64 {
     let n = w.n;
+    let p = w.pair;
+    // Each sum runs over j in order for every component at once (the same
+    // arithmetic as one component at a time, vectorised).
     for s in 0..6 {
-        for i in 0..n {
-            let mut acc = 0.0;
-            for j in 0..=s {
-                acc += A[s][j] * w.k[j][i];
+        let acc = &mut w.err;
+        acc.fill(0.0);
+        for (a, k) in p.a[s][..=s].iter().zip(&w.k) {
+            for (acc, k) in acc.iter_mut().zip(k) {
+                *acc += a * k;
             }
-            w.ytmp[i] = y[i] + h * acc;
         }
-        sys.rhs(t + C[s] * h, &w.ytmp, &mut w.k[s + 1]);
+        for ((yt, y), acc) in w.ytmp.iter_mut().zip(y).zip(acc.iter()) {
+            *yt = y + h * acc;
+        }
+        sys.rhs(t + p.c[s] * h, &w.ytmp, &mut w.k[s + 1]);
     }
     stats.rhs_evals += 6;
     // ytmp now holds the 5th-order solution (row 6 of A = b); k[6] = f(t+h, y1)
     w.y1.copy_from_slice(&w.ytmp);
-    for i in 0..n {
-        let mut e = 0.0;
-        for j in 0..7 {
-            e += E[j] * w.k[j][i];
+    w.err.fill(0.0);
+    for (e, k) in p.e.iter().zip(&w.k) {
+        for (acc, k) in w.err.iter_mut().zip(k) {
+            *acc += e * k;
         }
-        w.err[i] = h * e;
+    }
+    for e in w.err.iter_mut() {
+        *e *= h;
     }
     let err = wrms(&w.err, y, &w.y1, scale, o);
-    for i in 0..n {
-        let dy = w.y1[i] - y[i];
-        let bsp = h * w.k[0][i] - dy;
-        w.dense[0][i] = y[i];
-        w.dense[1][i] = dy;
-        w.dense[2][i] = bsp;
-        w.dense[3][i] = dy - h * w.k[6][i] - bsp;
-        let mut acc = 0.0;
-        for j in 0..7 {
-            acc += D[j] * w.k[j][i];
+    w.dense[0].copy_from_slice(y);
+    w.h_dense = h;
+    if let Dense::Hairer(d) = &p.dense {
+        let [_, d1, d2, d3, d4] = &mut w.dense;
+        d4.fill(0.0);
+        for (d, k) in d.iter().zip(&w.k) {
+            for (acc, k) in d4.iter_mut().zip(k) {
+                *acc += d * k;
+            }
         }
-        w.dense[4][i] = h * acc;
+        for i in 0..n {
+            let dy = w.y1[i] - y[i];
+            let bsp = h * w.k[0][i] - dy;
+            d1[i] = dy;
+            d2[i] = bsp;
+            d3[i] = dy - h * w.k[6][i] - bsp;
+            d4[i] *= h;
+        }
     }
     if err.is_finite() {
         err

@@ -4,11 +4,12 @@
 //!   [`Method::Bdf`] (variable-order NDF/BDF after ode15s, for stiff scenes: a
 //!   Kelvin-Voigt dashpot, a fast source, arms from ms to ks), [`Method::Esdirk34`]
 //!   and [`Method::TrBdf2`] (L-stable singly diagonally implicit Runge–Kutta), and
-//!   [`Method::Tsit45`] (Tsitouras 5(4), for lightly damped, oscillatory scenes). The
-//!   implicit ones use the system's exact Jacobian-vector product
-//!   ([`System::jacobian_times`]).
-//! * [`Method::Dp54`]: our own explicit Dormand–Prince 5(4) ([`dopri`]), kept as an
-//!   independent test oracle and for fixed-step convergence tests.
+//!   the forward sensitivities of [`Method::Tsit45`]. The implicit ones use the
+//!   system's exact Jacobian-vector product ([`System::jacobian_times`]).
+//! * Our own explicit 5(4) pairs with a PI step controller ([`dopri`]):
+//!   [`Method::Tsit45`] (Tsitouras 5(4), for lightly damped, oscillatory scenes;
+//!   plain runs) and [`Method::Dp54`] (Dormand–Prince 5(4), kept as an independent
+//!   test oracle and for fixed-step convergence tests).
 //!
 //! Every method integrates between *restart times* (input kinks: triangle corners,
 //! ramp ends, steps), where the caller may change the state (energy bookkeeping of
@@ -74,7 +75,7 @@ pub enum Method {
     Esdirk34,
     /// diffsol's TR-BDF2 (Hosea & Shampine 1996).
     TrBdf2,
-    /// diffsol's explicit Tsitouras 5(4).
+    /// Explicit Tsitouras 5(4): ours ([`dopri`]), diffsol's with sensitivities.
     Tsit45,
     /// Our explicit Dormand–Prince 5(4) (test oracle).
     Dp54,
@@ -301,6 +302,21 @@ pub fn run<S: System>(
     }
     match m {
         Method::Dp54 => dopri::run(
+            &dopri::DP54,
+            sys,
+            o,
+            scale,
+            bounds,
+            y,
+            samples,
+            &mut |t, y| out(t, y, &[]),
+            step,
+            event,
+            restart,
+            stats,
+        ),
+        Method::Tsit45 if extra == Extra::None => dopri::run(
+            &dopri::TSIT45,
             sys,
             o,
             scale,

@@ -246,7 +246,8 @@ fn signs(model: &dyn StrainEnergy, p: &[f64], mode: Mode) -> Runs {
             runs.push(m + 1, hi, b);
         }
     } else {
-        let parts = |i: usize| tp.sum.parts(g[i].0, g[i].1);
+        let split = tp.sum.split();
+        let parts = |i: usize| split.parts(g[i].0, g[i].1);
         // Depth-first over cells, left to right, each carrying the parts at its ends.
         let mut stack = Vec::with_capacity(32);
         stack.push((lo, parts(lo), hi, parts(hi)));

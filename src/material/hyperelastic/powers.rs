@@ -254,6 +254,9 @@ impl PowerSum {
 }
 
 /// A [`PowerSum`] split by the sign of its coefficients ([`PowerSum::split`]).
+// The Integer variant is held inline, as in `PowerSum`: one is built per mode and
+// check, without an allocation, and never stored in bulk.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone)]
 pub enum Split<'a> {
     /// Integer exponents lo, lo + 1, … (`len` of them), each with its coefficients

@@ -19,6 +19,12 @@
 //! * otherwise the cell is halved, down to single grid steps, whose two ends are
 //!   evaluated by [`StrainEnergy::tangent`], as the dense sweep does.
 //!
+//! The bounds are applied to T·e^{−m·(s − sa)}, m the mean exponent of the terms at the
+//! cell's ends (same sign; see `bound`): the parts' curvature, and so the bounds'
+//! slack, is then the spread of the exponents about m, and cells where terms of near
+//! exponents cancel are decided wider (the fitted VHB 4910 Yeoh: 32.9 k → 22.6 k
+//! instructions a check, callgrind).
+//!
 //! Before any of that, Descartes' rule of signs (which holds for sums of real
 //! powers) bounds the zeros of the sum in λ > 0 by the sign changes of its
 //! coefficients in order of exponent. With at most one change T has at most one
@@ -142,9 +148,35 @@ enum Cell {
     Undecided,
 }
 
+/// The parts of e^{−m·t}·S at a point t = s − sa from those of S there (`f` =
+/// e^{−m·t}): each term's exponent e becomes e − m, so P̃ = f·P, P̃′ = f·(P′ − m·P),
+/// and the same for N.
+fn shifted(x: Parts, m: f64, f: f64) -> Parts {
+    Parts {
+        p: f * x.p,
+        dp: f * (x.dp - m * x.p),
+        n: f * x.n,
+        dn: f * (x.dn - m * x.n),
+    }
+}
+
 /// The sign of T = P − N on [sa, sb] from the parts at its ends (module notes).
+///
+/// T is first divided by the positive e^{m·(s − sa)}, which keeps its sign and turns
+/// every exponent e into e − m; m is the mean exponent of the terms at the two ends
+/// (weighted by their size, (P′ + N′)/(P + N)). The bounds' slack grows with the
+/// parts' curvature, Σ|a|·(e − m)²·e^{(e−m)s}: about m it is the spread of the
+/// exponents rather than their distance from 0, so where terms of near exponents
+/// cancel (T ≪ P + N) a cell is decided several times wider. The margin scales with
+/// the same factor, so a decided cell still has T > [`MARGIN`]·(P + N) throughout.
+/// The rounding of P′ − m·P (≈ ε·|e|max·P, times the cell width in the tangent
+/// lines) stays some 10⁴ below the margin.
 fn bound(sa: f64, a: Parts, sb: f64, b: Parts) -> Cell {
     let h = sb - sa;
+    let mean = |x: Parts| (x.dp + x.dn) / (x.p + x.n);
+    let m = 0.5 * (mean(a) + mean(b));
+    let m = if m.is_finite() { m } else { 0.0 };
+    let (a, b) = (shifted(a, m, 1.0), shifted(b, m, (-m * h).exp()));
     let tol = MARGIN * (a.p + a.n).max(b.p + b.n);
     let (ta, tb) = (a.p - a.n, b.p - b.n);
     if !(tol.is_finite() && ta.is_finite() && tb.is_finite()) {
@@ -246,7 +278,8 @@ fn signs(model: &dyn StrainEnergy, p: &[f64], mode: Mode) -> Runs {
             runs.push(m + 1, hi, b);
         }
     } else {
-        let parts = |i: usize| tp.sum.parts(g[i].0, g[i].1);
+        let split = tp.sum.split();
+        let parts = |i: usize| split.parts(g[i].0, g[i].1);
         // Depth-first over cells, left to right, each carrying the parts at its ends.
         let mut stack = Vec::with_capacity(32);
         stack.push((lo, parts(lo), hi, parts(hi)));

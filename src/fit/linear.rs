@@ -43,7 +43,9 @@ pub fn svd(m: DMatrix<f64>, compute_u: bool, compute_v: bool) -> Option<SVD<f64,
 pub struct RowQr {
     k: usize,
     rows: usize,
-    /// The stack, column-major, (k + 1 + BLOCK) × (k + 1): R̃ on top (upper
+    /// Rows reduced together: [`BLOCK`], or fewer when the problem has fewer rows.
+    block: usize,
+    /// The stack, column-major, (k + 1 + block) × (k + 1): R̃ on top (upper
     /// triangular), then `pending` rows not yet reduced.
     stack: Vec<f64>,
     pending: usize,
@@ -55,17 +57,28 @@ pub const BLOCK: usize = 128;
 impl RowQr {
     /// An empty factor of a problem with `k` unknowns.
     pub fn new(k: usize) -> RowQr {
+        RowQr::with_rows(k, BLOCK)
+    }
+
+    /// An empty factor of a problem with `k` unknowns and `n` rows: a problem of
+    /// fewer than [`BLOCK`] rows gets a stack of its own size, reduced once, when
+    /// its last row arrives (the same reflections as a full-size stack reduced at
+    /// the end, so the same factor bit for bit, without zeroing and copying a
+    /// stack ten times the data).
+    pub fn with_rows(k: usize, n: usize) -> RowQr {
+        let block = n.clamp(1, BLOCK);
         RowQr {
             k,
             rows: 0,
-            stack: vec![0.0; (k + 1 + BLOCK) * (k + 1)],
+            block,
+            stack: vec![0.0; (k + 1 + block) * (k + 1)],
             pending: 0,
         }
     }
 
     /// The factor of the matrix `a` (right-hand side zero).
     pub fn of(a: &DMatrix<f64>) -> RowQr {
-        let mut qr = RowQr::new(a.ncols());
+        let mut qr = RowQr::with_rows(a.ncols(), a.nrows());
         let mut row = vec![0.0; a.ncols()];
         for i in 0..a.nrows() {
             row.iter_mut()
@@ -79,7 +92,7 @@ impl RowQr {
     /// Add the row `a` with right-hand side `b` (a value that is not finite makes
     /// the factor not finite, and [`svd`] of it then refuses).
     pub fn push(&mut self, a: &[f64], b: f64) {
-        let (m, h) = (self.k + 1, self.k + 1 + BLOCK);
+        let (m, h) = (self.k + 1, self.k + 1 + self.block);
         let i = m + self.pending;
         for (j, &v) in a.iter().enumerate() {
             self.stack[j * h + i] = v;
@@ -87,19 +100,25 @@ impl RowQr {
         self.stack[self.k * h + i] = b;
         self.pending += 1;
         self.rows += 1;
-        if self.pending == BLOCK {
+        if self.pending == self.block {
             reduce(&mut self.stack, m, h, m + self.pending);
             self.pending = 0;
         }
     }
 
-    /// R̃ (row-major, (k + 1)²) with every row reduced.
+    /// R̃ (row-major, (k + 1)²) with every row reduced (rows still pending are
+    /// reduced in a copy of the stack).
     fn reduced(&self) -> Vec<f64> {
-        let (m, h) = (self.k + 1, self.k + 1 + BLOCK);
-        let mut stack = self.stack.clone();
-        if self.pending > 0 {
-            reduce(&mut stack, m, h, m + self.pending);
-        }
+        let (m, h) = (self.k + 1, self.k + 1 + self.block);
+        let copy;
+        let stack = if self.pending > 0 {
+            let mut s = self.stack.clone();
+            reduce(&mut s, m, h, m + self.pending);
+            copy = s;
+            &copy
+        } else {
+            &self.stack
+        };
         let mut r = vec![0.0; m * m];
         for i in 0..m {
             for j in i..m {
@@ -367,10 +386,15 @@ mod tests {
         for a in cases {
             let b = DVector::from_fn(n, |i, _| (t(i) * 1.3).sin() + 0.1 * t(i));
             let mut qr = RowQr::new(3);
+            // Sized to the rows: reduced once, at the last row, to the same bits.
+            let mut sized = RowQr::with_rows(3, n);
             for i in 0..n {
                 let row: Vec<f64> = a.row(i).iter().copied().collect();
                 qr.push(&row, b[i]);
+                sized.push(&row, b[i]);
             }
+            assert_eq!(sized.r(), qr.r());
+            assert_eq!(sized.solve(), qr.solve());
             let (want, _) = crate::fit::problem::svd_solve(&a, &b).unwrap();
             let got = qr.solve().unwrap();
             let scale = want.norm();

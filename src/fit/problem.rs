@@ -255,7 +255,7 @@ impl<'a> HyperProblem<'a> {
     /// scaled targets), built row by row without storing J ([`RowQr`]): for a model
     /// linear in its parameters, the whole least-squares problem.
     pub fn factor(&mut self, p: &[f64]) -> RowQr {
-        let mut qr = RowQr::new(self.row.len());
+        let mut qr = RowQr::with_rows(self.row.len(), self.len());
         for i in 0..self.len() {
             self.model
                 .stress_jacobian(p, self.modes[i], self.stretch[i], &mut self.row);

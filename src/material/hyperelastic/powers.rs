@@ -224,31 +224,80 @@ impl PowerSum {
         changes
     }
 
+    /// The sum split by the sign of its coefficients, once, for evaluating
+    /// [`Parts`] at many stretches ([`Split::parts`]).
+    pub fn split(&self) -> Split<'_> {
+        match self {
+            PowerSum::Integer(l) => {
+                let mut coef = [[0.0; 4]; SPAN];
+                let mut len = 0;
+                for ((e, a), c) in l.terms().zip(coef.iter_mut()) {
+                    let ae = a * f64::from(e);
+                    // [P, P′, N, N′] coefficients of λ^e: the term in one part, zero
+                    // in the other (−a·e = −(a·e) exactly, as the sum's own sign).
+                    *c = if a > 0.0 {
+                        [a, ae, 0.0, 0.0]
+                    } else {
+                        [0.0, 0.0, -a, -ae]
+                    };
+                    len += 1;
+                }
+                Split::Integer {
+                    lo: l.lo,
+                    len,
+                    coef,
+                }
+            }
+            PowerSum::Real(terms) => Split::Real(terms),
+        }
+    }
+}
+
+/// A [`PowerSum`] split by the sign of its coefficients ([`PowerSum::split`]).
+// The Integer variant is held inline, as in `PowerSum`: one is built per mode and
+// check, without an allocation, and never stored in bulk.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone)]
+pub enum Split<'a> {
+    /// Integer exponents lo, lo + 1, … (`len` of them), each with its coefficients
+    /// in [P, P′, N, N′]: no branch on the sign at each evaluation.
+    Integer {
+        /// Lowest exponent.
+        lo: i32,
+        /// Exponents in use.
+        len: usize,
+        /// Coefficients of λ^(lo + i) in P, P′, N and N′.
+        coef: [[f64; 4]; SPAN],
+    },
+    /// Real exponents: (coefficient, exponent) pairs.
+    Real(&'a [(f64, f64)]),
+}
+
+impl Split<'_> {
     /// (P, P′, N, N′) at s = ln λ (λ = e^s, given too so as not to recompute it).
     pub fn parts(&self, s: f64, lam: f64) -> Parts {
         let mut out = Parts::default();
-        let mut add = |a: f64, e: f64, pw: f64| {
-            if a > 0.0 {
-                out.p += a * pw;
-                out.dp += a * e * pw;
-            } else {
-                out.n -= a * pw;
-                out.dn -= a * e * pw;
-            }
-        };
         match self {
-            PowerSum::Integer(l) => {
-                if l.lo <= l.hi {
-                    let mut pw = lam.powi(l.lo);
-                    for (e, a) in l.terms() {
-                        add(a, f64::from(e), pw);
-                        pw *= lam;
-                    }
+            Split::Integer { lo, len, coef } => {
+                let mut pw = lam.powi(*lo);
+                for c in &coef[..*len] {
+                    out.p += c[0] * pw;
+                    out.dp += c[1] * pw;
+                    out.n += c[2] * pw;
+                    out.dn += c[3] * pw;
+                    pw *= lam;
                 }
             }
-            PowerSum::Real(terms) => {
-                for &(a, e) in terms {
-                    add(a, e, (e * s).exp());
+            Split::Real(terms) => {
+                for &(a, e) in terms.iter() {
+                    let pw = (e * s).exp();
+                    if a > 0.0 {
+                        out.p += a * pw;
+                        out.dp += a * e * pw;
+                    } else {
+                        out.n -= a * pw;
+                        out.dn -= a * e * pw;
+                    }
                 }
             }
         }
@@ -295,7 +344,7 @@ mod tests {
             PowerSum::Integer(l),
             PowerSum::Real(vec![(2.0, 1.0), (-1.0, -2.0)]),
         ] {
-            let q = sum.parts(lam.ln(), lam);
+            let q = sum.split().parts(lam.ln(), lam);
             assert!((q.p - q.n - l.eval(lam)).abs() < 1e-14);
             // d/ds = λ·d/dλ
             let d = lam * l.derivative().unwrap().eval(lam);

@@ -1051,8 +1051,6 @@ mod tests {
         assert_eq!(res.evaluations, 1 + 2 * res.iterations, "{res:?}");
     }
 
-    /// Bounds that `f64::clamp` panics on (the Gent limit's lower end above its upper
-    /// end, NaN) and a non-finite start end the search as failed, never in a panic.
     /// r = atan(x), whose Gauss-Newton step −atan(x)(1 + x²) from x = 3 lands at
     /// −9.5, where |r| is larger: the trial points it was asked to evaluate.
     struct Arctan(Vec<f64>);
@@ -1213,6 +1211,8 @@ mod tests {
         assert!(damping_for(1.0, 0.1, |_| Some(f64::NAN)) > 1e300);
     }
 
+    /// Bounds that `f64::clamp` panics on (the Gent limit's lower end above its upper
+    /// end, NaN) and a non-finite start end the search as failed, never in a panic.
     #[test]
     fn unusable_bounds_or_start_fail_without_panic() {
         let inf = f64::INFINITY;

@@ -301,22 +301,11 @@ pub fn run<S: System>(
         ));
     }
     match m {
-        Method::Dp54 => dopri::run(
-            &dopri::DP54,
-            sys,
-            o,
-            scale,
-            bounds,
-            y,
-            samples,
-            &mut |t, y| out(t, y, &[]),
-            step,
-            event,
-            restart,
-            stats,
-        ),
-        Method::Tsit45 if extra == Extra::None => dopri::run(
-            &dopri::TSIT45,
+        Method::Dp54 | Method::Tsit45 if extra == Extra::None => dopri::run(
+            match m {
+                Method::Dp54 => &dopri::DP54,
+                _ => &dopri::TSIT45,
+            },
             sys,
             o,
             scale,

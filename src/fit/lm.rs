@@ -438,9 +438,7 @@ impl Lm {
             .map(|i| g[i].abs())
             .fold(0.0, f64::max);
         if gnorm <= settings.gtol * (1.0 + self.cost) {
-            return self
-                .exact(problem)
-                .or(Some(Termination::Converged("gradient")));
+            return self.stop_unless_secant(problem, Termination::Converged("gradient"));
         }
         // Damped normal equations over the free variables (held ones fixed at 0).
         let normal = |mu: f64| {
@@ -467,9 +465,7 @@ impl Lm {
         if settings.min_decrease > 0.0 {
             if let Some(gn) = normal(GN_DAMPING) {
                 if -0.5 * g.dot(&gn) < settings.min_decrease {
-                    return self
-                        .exact(problem)
-                        .or(Some(Termination::Converged("noise floor")));
+                    return self.stop_unless_secant(problem, Termination::Converged("noise floor"));
                 }
             }
         }
@@ -496,7 +492,7 @@ impl Lm {
             let dx_norm = dx.iter().map(|d| d * d).sum::<f64>().sqrt();
             let x_norm = x.iter().map(|d| d * d).sum::<f64>().sqrt();
             if dx_norm <= settings.xtol * (x_norm + settings.xtol) {
-                return self.exact(problem).or(Some(Termination::Converged("step")));
+                return self.stop_unless_secant(problem, Termination::Converged("step"));
             }
             // Predicted decrease of the linear model for the (projected) step.
             let pred = -(g.dot(&dx)) - 0.5 * (&a * &dx).dot(&dx);
@@ -552,6 +548,21 @@ impl Lm {
             if !self.mu.is_finite() || self.mu > 1e300 {
                 return Some(Termination::Converged("no further decrease"));
             }
+        }
+    }
+
+    /// A stopping rule that read the Jacobian (gradient, noise floor, step) holds:
+    /// stop with `rule`, unless the Jacobian is a secant update, which is then
+    /// evaluated and the search goes on (the next iteration tests the rule again
+    /// on the exact one).
+    fn stop_unless_secant<P: LeastSquares + ?Sized>(
+        &mut self,
+        problem: &mut P,
+        rule: Termination,
+    ) -> Option<Termination> {
+        match self.secant {
+            true => self.exact(problem),
+            false => Some(rule),
         }
     }
 

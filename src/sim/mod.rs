@@ -816,7 +816,7 @@ fn integrate<'s, 'k>(
     rec.record(p, 0.0, &y, SensAt::Ready, none, true);
     let e_scale = p.vol * p.tangent(p.lam0).abs().max(1.0);
     let event = |t: f64, y: &[f64]| {
-        let v = p.electrical(t, y, 0.0).voltage;
+        let v = p.voltage(t, y);
         p.instant_stiffness(y[0], v) / e_scale
     };
     // An ideal source jumping by ΔV charges C through zero resistance: it delivers
@@ -936,7 +936,7 @@ fn integrate<'s, 'k>(
                 vec![Event {
                     kind: "pull_in".into(),
                     time_s: te,
-                    voltage_v: p.electrical(te, &y, 0.0).voltage,
+                    voltage_v: p.voltage(te, &y),
                     stretch: y[0],
                 }],
             )
@@ -1053,7 +1053,7 @@ fn energy_balance(p: &Plant, t_end: f64, y: &[f64]) -> Energy {
     let l = p.layout();
     let y0 = p.initial_state();
     let (c0, _, _) = p.capacitance(y0[0]);
-    let v_start = p.electrical(0.0, &y0, 0.0).voltage;
+    let v_start = p.voltage(0.0, &y0);
     let e = p.output(t_end, y);
     let kinetic = l.v.map(|i| 0.5 * p.mass * y[i] * y[i]).unwrap_or(0.0);
     let arms_j: f64 = p

@@ -870,12 +870,18 @@ impl Plant {
         out(q + 2, el.leakage);
     }
 
-    /// Terminal voltage, its rate, and the current into the actuator (incl. leakage),
-    /// at a given λ̇.
-    #[inline]
-    pub fn electrical(&self, t: f64, y: &[f64], lam_dot: f64) -> Electrical {
-        let e = Plain(self);
-        self.rates(&self.terminal(&e, t, y, &self.layout()), lam_dot)
+    /// The terminal voltage V at (t, y): the source's state (a rise-time lag's
+    /// voltage, a resistance's charge over C), else the input or the controller's
+    /// output; the `v` of [`Plant::terminal`] without its rates (the pull-in event
+    /// reads it at every step).
+    pub fn voltage(&self, t: f64, y: &[f64]) -> f64 {
+        let l = self.layout();
+        match (self.source, l.src, &self.control) {
+            (Source::RiseTime { .. }, Some(i), _) => y[i],
+            (Source::Resistance { .. }, Some(i), _) => y[i] / self.capacitance(y[0]).0,
+            (Source::Ideal, _, None) => self.input.eval(t).0,
+            _ => self.terminal(&Plain(self), t, y, &l).v,
+        }
     }
 
     /// The drive D (N·m): the generalised force without inertia and dashpot (see

@@ -26,22 +26,34 @@ pub struct Polynomial {
     params: Vec<ParamInfo>,
 }
 
-/// x^n with x^0 = 1 and x^(negative) = 0 (those terms carry a zero coefficient).
-#[inline]
-fn pw(x: f64, n: i32) -> f64 {
-    // the small exponents of these models, without a call to the generic powi
-    match n {
-        ..0 => 0.0,
-        0 => 1.0,
-        1 => x,
-        2 => x * x,
-        3 => x * x * x,
-        _ => x.powi(n),
+/// The largest exponent of x = I1 − 3 or y = I2 − 3 in a term of these models
+/// (Yeoh's (I1 − 3)³).
+const MAX_POWER: i32 = 3;
+
+/// x^n for n = −2…[`MAX_POWER`], with x^0 = 1 and x^(negative) = 0 (those terms
+/// carry a zero coefficient): a table built once per evaluation, so the terms'
+/// powers are lookups (x³ = (x·x)·x as the generic product gives it).
+struct Powers([f64; 6]);
+
+impl Powers {
+    #[inline]
+    fn of(x: f64) -> Self {
+        Powers([0.0, 0.0, 1.0, x, x * x, x * x * x])
+    }
+    #[inline]
+    fn get(&self, n: i32) -> f64 {
+        self.0[(n + 2) as usize]
     }
 }
 
 impl Polynomial {
     fn make(name: &'static str, terms: &[(&str, i32, i32, f64)]) -> Self {
+        assert!(
+            terms
+                .iter()
+                .all(|&(_, i, j, _)| (0..=MAX_POWER).contains(&i) && (0..=MAX_POWER).contains(&j)),
+            "{name}: exponents within 0…{MAX_POWER} (Powers)"
+        );
         Polynomial {
             name,
             terms: terms
@@ -75,19 +87,19 @@ impl Polynomial {
         if p.len() != self.terms.len() {
             return InvariantDerivs::NAN;
         }
-        let (x, y) = (i1 - 3.0, i2 - 3.0);
+        let (x, y) = (Powers::of(i1 - 3.0), Powers::of(i2 - 3.0));
         let mut d = InvariantDerivs::default();
         for (t, &c) in self.terms.iter().zip(p) {
             let (i, j, c) = (t.i, t.j, c * t.scale);
             let (fi, fj) = (f64::from(i), f64::from(j));
-            d.w1 += c * fi * pw(x, i - 1) * pw(y, j);
-            d.w2 += c * fj * pw(x, i) * pw(y, j - 1);
+            d.w1 += c * fi * x.get(i - 1) * y.get(j);
+            d.w2 += c * fj * x.get(i) * y.get(j - 1);
             if !SECOND {
                 continue;
             }
-            d.w11 += c * fi * (fi - 1.0) * pw(x, i - 2) * pw(y, j);
-            d.w12 += c * fi * fj * pw(x, i - 1) * pw(y, j - 1);
-            d.w22 += c * fj * (fj - 1.0) * pw(x, i) * pw(y, j - 2);
+            d.w11 += c * fi * (fi - 1.0) * x.get(i - 2) * y.get(j);
+            d.w12 += c * fi * fj * x.get(i - 1) * y.get(j - 1);
+            d.w22 += c * fj * (fj - 1.0) * x.get(i) * y.get(j - 2);
         }
         d
     }
@@ -182,11 +194,11 @@ impl StrainEnergy for Polynomial {
         }
         let k = mode.kinematics(lam);
         let (i1, i2) = k.invariants();
-        let (x, y) = (i1 - 3.0, i2 - 3.0);
+        let (x, y) = (Powers::of(i1 - 3.0), Powers::of(i2 - 3.0));
         for (t, o) in self.terms.iter().zip(out.iter_mut()) {
             let (fi, fj) = (f64::from(t.i), f64::from(t.j));
-            let w1 = t.scale * fi * pw(x, t.i - 1) * pw(y, t.j);
-            let w2 = t.scale * fj * pw(x, t.i) * pw(y, t.j - 1);
+            let w1 = t.scale * fi * x.get(t.i - 1) * y.get(t.j);
+            let w2 = t.scale * fj * x.get(t.i) * y.get(t.j - 1);
             *o = k.invariant_stress(w1, w2);
         }
     }

@@ -1063,4 +1063,44 @@ span = "1 s"
         }
         assert!(checked >= 40, "{checked} plants checked");
     }
+
+    /// [`Plant::voltage`] is the terminal's V bit for bit, for every source (a
+    /// rise-time lag, a resistance, ideal) and under closed-loop control, at the
+    /// rest state and at a moved one.
+    #[test]
+    fn voltage_is_the_terminals() {
+        let mut sources = std::collections::BTreeSet::new();
+        for name in [
+            "stack_step_5kV",
+            "stack_pid_triangle",
+            "stack_triangle_100Hz",
+        ] {
+            let text = std::fs::read_to_string(format!("datasets/scenes/{name}.toml")).unwrap();
+            let resistance = text.replace("rise_time = \"1 ms\"", "resistance_ohm = 2e6");
+            for t in [&text, &resistance] {
+                let s = Scene::parse(t, Path::new("v.toml")).unwrap();
+                let p = Plant::new(&s, true, &vec![true; s.material.viscous.arms.len()]).unwrap();
+                let l = p.layout();
+                let mut y = p.initial_state();
+                for moved in [false, true] {
+                    if moved {
+                        y[0] *= 0.97;
+                        for (j, v) in y.iter_mut().enumerate().skip(1) {
+                            *v += 1e-3 * (j as f64);
+                        }
+                    }
+                    let t = 0.3 * s.time.span;
+                    let v = p.terminal(&Plain(&p), t, &y, &l).v;
+                    assert_eq!(p.voltage(t, &y).to_bits(), v.to_bits(), "{name}");
+                }
+                let kind = match p.source {
+                    Source::RiseTime { .. } => "rise time",
+                    Source::Resistance { .. } => "resistance",
+                    Source::Ideal => "ideal",
+                };
+                sources.insert((kind, p.control.is_some()));
+            }
+        }
+        assert!(sources.len() >= 4, "{sources:?}");
+    }
 }

@@ -131,7 +131,10 @@ impl StrainEnergy for Ogden {
             return f64::NAN;
         };
         let a = lam.ln();
-        terms.map(|t| t[0] * self.basis(t[1], a, mode).0).sum::<f64>() / lam
+        terms
+            .map(|t| t[0] * self.basis(t[1], a, mode).0)
+            .sum::<f64>()
+            / lam
     }
     fn tangent(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
         // P = (g(λ1) − g(λ3))/λ1 ⇒ dP/dλ = (g'(λ1)λ1' − g'(λ3)λ3')/λ1 − P·λ1'/λ1.

@@ -9,6 +9,11 @@
 //!   linear least-squares solve (row-block QR and the SVD of R, as `fit` runs it; the
 //!   SVD of the whole design matrix it replaced) against the naive baseline of an
 //!   iterative LM.
+//! * `varpro/ogden3-100k/{row-qr,tall-svd}`: the linear solve inside one
+//!   variable-projection evaluation of Ogden-3 at 10⁵ points (Treloar's fitted
+//!   exponents, the stretch ranges of its three modes): the row-by-row QR and the
+//!   SVD of its small R (`range_solve`, what the search runs) against the SVD of the
+//!   tall basis it replaced (`svd_solve`), in the same run.
 //! * `drucker/<model>/{bounded,dense}`: the Drucker check of the fitted Yeoh
 //!   (VHB 4910 uniaxial), of an unstable Yeoh and of the Ogden-3 Treloar fit, by
 //!   bounds on grid cells (what `fit` runs) against the dense 3 × 801 sweep
@@ -26,8 +31,8 @@ use dea_fit::bench::{shipped_datasets, NamedData, TRELOAR_ALL, VHB_UNIAXIAL};
 use dea_fit::fit::drucker::{drucker, drucker_dense};
 use dea_fit::fit::hyperelastic::{fit, Search, Settings};
 use dea_fit::fit::lm::{self, LeastSquares, LmSettings};
-use dea_fit::fit::problem::{svd_solve, HyperProblem};
-use dea_fit::material::hyperelastic::{ModelSpec, MODEL_NAMES};
+use dea_fit::fit::problem::{range_solve, svd_solve, HyperProblem};
+use dea_fit::material::hyperelastic::{Mode, ModelSpec, MODEL_NAMES};
 use nalgebra::{DMatrix, DVector};
 use std::hint::black_box;
 use std::path::Path;
@@ -127,6 +132,42 @@ fn yeoh_search(c: &mut Criterion) {
     g.finish();
 }
 
+fn varpro_projection(c: &mut Criterion) {
+    // Ogden-3's linear columns (the basis of μ1..μ3) at Treloar's fitted exponents,
+    // 10⁵ points over its modes' stretch ranges.
+    let model = ModelSpec::new("ogden3", Default::default())
+        .build()
+        .expect("ogden3");
+    let p = [7.33e3, -2.157, 3.382e5, 1.918, 3.139, 8.619];
+    let ranges = [
+        (Mode::Uniaxial, 7.61),
+        (Mode::Equibiaxial, 4.44),
+        (Mode::Planar, 4.96),
+    ];
+    let (n, per) = (100_002, 33_334);
+    let mut row = [0.0; 6];
+    let mut a = DMatrix::zeros(n, 3);
+    let mut b = DVector::zeros(n);
+    for i in 0..n {
+        let (mode, top) = ranges[i / per];
+        let lam = 1.0 + (top - 1.0) * (i % per) as f64 / (per - 1) as f64;
+        model.stress_jacobian(&p, mode, lam, &mut row);
+        for j in 0..3 {
+            a[(i, j)] = row[2 * j];
+        }
+        b[i] = model.nominal_stress(&p, mode, lam) * (1.0 + 0.01 * (i as f64).sin());
+    }
+    let mut g = c.benchmark_group("varpro/ogden3-100k");
+    g.sampling_mode(SamplingMode::Flat);
+    g.bench_function("row-qr", |bch| {
+        bch.iter(|| range_solve(black_box(&a), &b).expect("solvable"))
+    });
+    g.bench_function("tall-svd", |bch| {
+        bch.iter(|| svd_solve(black_box(&a), &b).expect("solvable"))
+    });
+    g.finish();
+}
+
 fn drucker_checks(c: &mut Criterion) {
     let sets = data();
     let base = Settings::default();
@@ -193,6 +234,6 @@ criterion_group! {
         .sample_size(10)
         .warm_up_time(Duration::from_millis(300))
         .measurement_time(Duration::from_secs(1));
-    targets = fits, yeoh_search, drucker_checks, tiny_search
+    targets = fits, yeoh_search, varpro_projection, drucker_checks, tiny_search
 }
 criterion_main!(benches);

@@ -750,6 +750,20 @@ fn stats(pairs: impl Iterator<Item = (f64, f64)> + Clone) -> (usize, f64, Option
     )
 }
 
+/// The largest |p_j·∂P/∂p_j| of each parameter over the data, in one pass: for a
+/// linear coefficient, the largest stress its term contributes (P = Σ c_j·∂P/∂c_j).
+fn largest_contributions(model: &dyn StrainEnergy, p: &[f64], data: &Dataset) -> Vec<f64> {
+    let mut row = vec![0.0; p.len()];
+    let mut largest = vec![0.0f64; p.len()];
+    for s in &data.samples {
+        model.stress_jacobian(p, s.mode, s.stretch, &mut row);
+        for ((m, d), v) in largest.iter_mut().zip(&row).zip(p) {
+            *m = m.max((d * v).abs());
+        }
+    }
+    largest
+}
+
 /// Fit one model to the data.
 pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<HyperelasticFit> {
     settings.check()?;
@@ -902,21 +916,10 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         }
     }
     // Vanishing terms: a linear coefficient whose contribution is negligible.
-    if k > 1 {
-        let mut row = vec![0.0; k];
-        for (j, info) in params_info.iter().enumerate() {
-            if !info.linear || !model.name().starts_with("ogden") {
-                continue;
-            }
-            let contrib = data
-                .samples
-                .iter()
-                .map(|s| {
-                    model.stress_jacobian(&p, s.mode, s.stretch, &mut row);
-                    (row[j] * p[j]).abs()
-                })
-                .fold(0.0, f64::max);
-            if contrib < 1e-3 * y_max {
+    if k > 1 && model.name().starts_with("ogden") {
+        let largest = largest_contributions(model, &p, data);
+        for (info, contrib) in params_info.iter().zip(&largest) {
+            if info.linear && *contrib < 1e-3 * y_max {
                 escalate(Status::IllPosed);
                 warnings.push(format!(
                     "{} is negligible (its term contributes < 0.1 % of the largest stress): a term too many for these data",

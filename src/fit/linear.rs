@@ -145,6 +145,13 @@ impl RowQr {
     /// (those of A: the same solution as an SVD of A itself); None if every singular
     /// value is zero or the factor is not finite.
     pub fn solve(&self) -> Option<DVector<f64>> {
+        self.solve_with_range().map(|(c, _)| c)
+    }
+
+    /// [`RowQr::solve`]'s c and W = V_r·Σ_r⁻¹ (k × rank) over the same singular values
+    /// of R (R = U_R·Σ·Vᵀ, A = Q·R): A·W = Q·U_R,r is an orthonormal basis of the range
+    /// of A, formed in one pass over A's rows without an SVD of the tall A.
+    pub fn solve_with_range(&self) -> Option<(DVector<f64>, DMatrix<f64>)> {
         let m = self.k + 1;
         let r = self.reduced();
         let svd = svd(
@@ -163,12 +170,17 @@ impl RowQr {
             return None;
         }
         let mut c = DVector::zeros(self.k);
+        let mut kept = Vec::with_capacity(self.k);
         for (i, &s) in svd.singular_values.iter().enumerate() {
             if s > tol {
                 c += vt.row(i).transpose() * (u.column(i).dot(&qtb) / s);
+                kept.push(i);
             }
         }
-        Some(c)
+        let w = DMatrix::from_fn(self.k, kept.len(), |j, q| {
+            vt[(kept[q], j)] / svd.singular_values[kept[q]]
+        });
+        Some((c, w))
     }
 }
 

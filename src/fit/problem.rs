@@ -345,6 +345,28 @@ pub fn svd_solve(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<(DVector<f64>, DM
     Some((c, u.columns(0, rank).into_owned()))
 }
 
+/// [`svd_solve`] by the row-by-row QR of [A | b] ([`RowQr`]) and an SVD of its small
+/// R: the same c (the same rank tolerance) and U_r = A·V_r·Σ_r⁻¹, which spans the
+/// same range, in a pass over the rows and without an SVD of the tall A (on 10⁵
+/// rows the tall SVD was a quarter of `hyperelastic --model auto`). None as
+/// [`svd_solve`].
+pub fn range_solve(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<(DVector<f64>, DMatrix<f64>)> {
+    if !b.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let k = a.ncols();
+    let mut qr = RowQr::with_rows(k, a.nrows());
+    let mut row = vec![0.0; k];
+    for (i, &bi) in b.iter().enumerate() {
+        for (j, d) in row.iter_mut().enumerate() {
+            *d = a[(i, j)];
+        }
+        qr.push(&row, bi);
+    }
+    let (c, w) = qr.solve_with_range()?;
+    Some((c, a * w))
+}
+
 /// Variable projection (Golub-Pereyra with Kaufman's Jacobian): the search runs over
 /// the nonlinear parameters θ only; for each θ the linear coefficients c are the exact
 /// least-squares solution, r(θ) = A(θ)c(θ) − b, and ∂r/∂θ ≈ P⊥·(∂A/∂θ)c.
@@ -370,7 +392,7 @@ struct Projection {
     a: DMatrix<f64>,
     /// The coefficients c.
     c: DVector<f64>,
-    /// U_r, spanning the range of A.
+    /// U_r, spanning the range of A ([`range_solve`]).
     u: DMatrix<f64>,
 }
 
@@ -422,7 +444,7 @@ impl LeastSquares for VarPro<'_, '_> {
                 if !a.iter().all(|v| v.is_finite()) {
                     return false;
                 }
-                let Some((c, u)) = svd_solve(&a, &self.b) else {
+                let Some((c, u)) = range_solve(&a, &self.b) else {
                     return false;
                 };
                 (a, c, u)
@@ -455,5 +477,59 @@ impl LeastSquares for VarPro<'_, '_> {
             u,
         });
         true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The row-QR projection ([`range_solve`]) gives the tall SVD's ([`svd_solve`])
+    /// objective, coefficients, projector and rank on a well-conditioned, a graded
+    /// (columns 10⁰…10¹⁰, condition ≈ 10¹²) and a rank-deficient Ogden-like basis.
+    /// The residual norm is never larger than the SVD's by more than 1e-12 relative
+    /// (on one of these bases it is 2.5e-9 smaller: the tall SVD loses digits); c
+    /// and U·Uᵀ agree to
+    /// 1e-9 where the basis is well conditioned, and to 1e-3 and 1e-4 on the graded
+    /// one, whose c and projector are determined only to about ε times its
+    /// condition (10⁻⁴) by either method.
+    #[test]
+    fn range_solve_projects_as_the_tall_svd() {
+        let n = 200;
+        let t = |i: usize| 1.0 + 6.0 * i as f64 / (n - 1) as f64;
+        let b = DVector::from_fn(n, |i, _| (t(i) * 1.3).sin() + 0.1 * t(i));
+        let cases = [
+            (
+                DMatrix::from_fn(n, 3, |i, j| t(i).powf([-2.0, 1.5, 4.0][j])),
+                1e-9,
+            ),
+            (
+                DMatrix::from_fn(n, 3, |i, j| {
+                    t(i).powi(j as i32 + 1) * 10f64.powi(5 * j as i32)
+                }),
+                1e-3,
+            ),
+            (
+                DMatrix::from_fn(n, 3, |i, j| t(i).powf([2.0, 2.0, 0.5][j])),
+                1e-9,
+            ),
+        ];
+        for (a, tol) in cases {
+            let (want_c, want_u) = svd_solve(&a, &b).unwrap();
+            let (got_c, got_u) = range_solve(&a, &b).unwrap();
+            assert_eq!(got_u.ncols(), want_u.ncols(), "rank");
+            let (rw, rg) = ((&a * &want_c - &b).norm(), (&a * &got_c - &b).norm());
+            assert!(rg <= rw * (1.0 + 1e-12), "residual {rg} vs {rw}");
+            assert!(
+                (&got_c - &want_c).norm() <= tol * want_c.norm(),
+                "{got_c} vs {want_c}"
+            );
+            let (pw, pg) = (&want_u * want_u.transpose(), &got_u * got_u.transpose());
+            let off = (&pg - &pw).amax();
+            assert!(off <= tol.min(1e-4), "projector off by {off}");
+        }
+        let mut bad = b.clone();
+        bad[3] = f64::NAN;
+        assert!(range_solve(&DMatrix::from_element(n, 2, 1.0), &bad).is_none());
     }
 }

@@ -68,10 +68,18 @@ impl Ogden {
     }
 
     /// Per-term basis B(α) = k(α)·(e^{αa} − e^{αb}) and its α-derivative, where
-    /// k = 2/α (seed) or 1 (original).
+    /// k = 2/α (seed) or 1 (original), a = ln λ1 and b = ln λ3 = −q·a
+    /// ([`lateral_power`]): e^{αb} = (e^{αa})^(−q) comes from e^{αa} by a square root
+    /// or a division, one exponential a term instead of two.
     #[inline]
-    fn basis(&self, alpha: f64, a: f64, b: f64) -> (f64, f64) {
-        let (ea, eb) = ((alpha * a).exp(), (alpha * b).exp());
+    fn basis(&self, alpha: f64, a: f64, mode: Mode) -> (f64, f64) {
+        let b = -lateral_power(mode) * a;
+        let ea = (alpha * a).exp();
+        let eb = match mode {
+            Mode::Uniaxial => 1.0 / ea.sqrt(),
+            Mode::Equibiaxial => 1.0 / (ea * ea),
+            Mode::Planar => 1.0 / ea,
+        };
         match self.form {
             OgdenForm::Original => (ea - eb, a * ea - b * eb),
             OgdenForm::Seed => {
@@ -101,6 +109,16 @@ impl Ogden {
     }
 }
 
+/// The power q of a mode's traction-free stretch λ3 = λ1^(−q): uniaxial ½,
+/// equibiaxial 2, planar 1 (incompressibility, [`Mode::kinematics`]).
+fn lateral_power(mode: Mode) -> f64 {
+    match mode {
+        Mode::Uniaxial => 0.5,
+        Mode::Equibiaxial => 2.0,
+        Mode::Planar => 1.0,
+    }
+}
+
 impl StrainEnergy for Ogden {
     fn name(&self) -> String {
         format!("ogden{}", self.n)
@@ -112,9 +130,11 @@ impl StrainEnergy for Ogden {
         let Some(terms) = self.terms(p) else {
             return f64::NAN;
         };
-        let k = mode.kinematics(lam);
-        let (a, b) = (k.l[0].ln(), k.l[2].ln());
-        terms.map(|t| t[0] * self.basis(t[1], a, b).0).sum::<f64>() / k.l[0]
+        let a = lam.ln();
+        terms
+            .map(|t| t[0] * self.basis(t[1], a, mode).0)
+            .sum::<f64>()
+            / lam
     }
     fn tangent(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
         // P = (g(λ1) − g(λ3))/λ1 ⇒ dP/dλ = (g'(λ1)λ1' − g'(λ3)λ3')/λ1 − P·λ1'/λ1.
@@ -133,11 +153,7 @@ impl StrainEnergy for Ogden {
         // (original), so T = Σ μi·ki·[(αi − 1)·λ^(αi−2) + (q·αi + 1)·λ^(−q·αi−2)]. The
         // seed form's ki has no power-sum limit as αi → 0 (the pair tends to a
         // logarithm): none then.
-        let q = match mode {
-            Mode::Uniaxial => 0.5,
-            Mode::Equibiaxial => 2.0,
-            Mode::Planar => 1.0,
-        };
+        let q = lateral_power(mode);
         let mut terms = Vec::with_capacity(p.len());
         for t in self.terms(p)? {
             let (mu, alpha) = (t[0], t[1]);
@@ -159,12 +175,11 @@ impl StrainEnergy for Ogden {
             out.fill(f64::NAN);
             return;
         };
-        let k = mode.kinematics(lam);
-        let (a, b) = (k.l[0].ln(), k.l[2].ln());
+        let a = lam.ln();
         for (t, o) in terms.zip(out.chunks_exact_mut(2)) {
-            let (v, dv) = self.basis(t[1], a, b);
-            o[0] = v / k.l[0];
-            o[1] = t[0] * dv / k.l[0];
+            let (v, dv) = self.basis(t[1], a, mode);
+            o[0] = v / lam;
+            o[1] = t[0] * dv / lam;
         }
     }
     fn initial_shear_modulus(&self, p: &[f64]) -> f64 {

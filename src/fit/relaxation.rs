@@ -638,19 +638,23 @@ impl LeastSquares for Projected<'_> {
     ) -> bool {
         let p = &mut *self.prob;
         p.evaluations += 1;
-        let s = p.scale;
-        for (i, &lt) in theta.iter().enumerate() {
-            let tau = lt.exp();
-            p.sched
-                .kernel(tau, &mut p.h, jac.is_some().then_some(&mut p.dh[..]));
+        let (s, m) = (p.scale, p.len());
+        let taus: Vec<f64> = theta.iter().map(|lt| lt.exp()).collect();
+        // Every term's kernel in one pass, into its column, then weighted and scaled.
+        p.sched.kernels(
+            &taus,
+            &mut self.a.as_mut_slice()[m..],
+            jac.is_some().then_some(self.da.as_mut_slice()),
+        );
+        for (i, &tau) in taus.iter().enumerate() {
             let mut col = self.a.column_mut(1 + i);
-            for ((a, h), w) in col.as_mut_slice().iter_mut().zip(&p.h).zip(&p.w) {
-                *a = w * s * h;
+            for (a, w) in col.as_mut_slice().iter_mut().zip(&p.w) {
+                *a = w * s * *a;
             }
             if jac.is_some() {
                 let mut col = self.da.column_mut(i);
-                for ((a, d), w) in col.as_mut_slice().iter_mut().zip(&p.dh).zip(&p.w) {
-                    *a = w * s * tau * d;
+                for (a, w) in col.as_mut_slice().iter_mut().zip(&p.w) {
+                    *a = w * s * tau * *a;
                 }
             }
         }

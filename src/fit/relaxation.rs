@@ -649,12 +649,12 @@ impl LeastSquares for Projected<'_> {
         for (i, &tau) in taus.iter().enumerate() {
             let mut col = self.a.column_mut(1 + i);
             for (a, w) in col.as_mut_slice().iter_mut().zip(&p.w) {
-                *a = w * s * *a;
+                *a *= w * s;
             }
             if jac.is_some() {
                 let mut col = self.da.column_mut(i);
                 for (a, w) in col.as_mut_slice().iter_mut().zip(&p.w) {
-                    *a = w * s * tau * *a;
+                    *a *= w * s * tau;
                 }
             }
         }

@@ -437,7 +437,7 @@ struct Interval {
 }
 
 /// A history merged with sorted evaluation times: evaluates the hereditary state of an
-/// exponential kernel exactly, in one pass (O(knots + times) per τ, no allocation).
+/// exponential kernel exactly, in one pass (O(knots + times) per τ).
 #[derive(Debug, Clone)]
 pub struct Schedule {
     intervals: Vec<Interval>,
@@ -514,17 +514,9 @@ impl Schedule {
     /// ∂h/∂τ into `dh` if given (exact recursion, see the module docs).
     pub fn kernel(&self, tau: f64, h: &mut [f64], mut dh: Option<&mut [f64]>) {
         let (mut s, mut d) = (0.0, 0.0);
-        let inv = 1.0 / tau;
+        let (inv, want) = (1.0 / tau, dh.is_some());
         for iv in &self.intervals {
-            if iv.dt > 0.0 {
-                let a = (-iv.dt * inv).exp();
-                let rt = iv.rate * tau;
-                if dh.is_some() {
-                    d = a * (d + (s - rt) * iv.dt * inv * inv) + iv.rate * (1.0 - a);
-                }
-                s = a * s + rt * (1.0 - a);
-            }
-            s += iv.jump;
+            iv.advance(tau, inv, &mut s, want.then_some(&mut d));
             if let Some(o) = iv.out {
                 h[o] = s;
                 if let Some(dh) = dh.as_deref_mut() {
@@ -532,6 +524,53 @@ impl Schedule {
                 }
             }
         }
+    }
+
+    /// [`Schedule::kernel`] for several τ in one pass over the intervals: `h` (and
+    /// `dh`) hold one block of [`Schedule::len`] values per τ, end to end (the columns
+    /// of a column-major matrix). The τ's recursions are independent chains of
+    /// dependent operations that the processor overlaps, where one τ at a time waits
+    /// on each; every value is the same arithmetic as [`Schedule::kernel`]'s, bit for
+    /// bit.
+    pub fn kernels(&self, taus: &[f64], h: &mut [f64], mut dh: Option<&mut [f64]>) {
+        let (m, k) = (self.len(), taus.len());
+        let inv: Vec<f64> = taus.iter().map(|t| 1.0 / t).collect();
+        let (mut s, mut d) = (vec![0.0; k], vec![0.0; k]);
+        let want = dh.is_some();
+        for iv in &self.intervals {
+            for i in 0..k {
+                iv.advance(taus[i], inv[i], &mut s[i], want.then_some(&mut d[i]));
+            }
+            if let Some(o) = iv.out {
+                for i in 0..k {
+                    h[i * m + o] = s[i];
+                }
+                if let Some(dh) = dh.as_deref_mut() {
+                    for i in 0..k {
+                        dh[i * m + o] = d[i];
+                    }
+                }
+            }
+        }
+    }
+}
+
+impl Interval {
+    /// The state `s` of the τ kernel (`inv` = 1/τ) carried across this interval,
+    /// and its τ-derivative `d` when given: over dt at input rate ṙ,
+    /// s ← a·s + ṙτ(1 − a), d ← a·(d + (s − ṙτ)·dt/τ²) + ṙ(1 − a), a = e^(−dt/τ);
+    /// then the input's jump.
+    #[inline(always)]
+    fn advance(&self, tau: f64, inv: f64, s: &mut f64, d: Option<&mut f64>) {
+        if self.dt > 0.0 {
+            let a = (-self.dt * inv).exp();
+            let rt = self.rate * tau;
+            if let Some(d) = d {
+                *d = a * (*d + (*s - rt) * self.dt * inv * inv) + self.rate * (1.0 - a);
+            }
+            *s = a * *s + rt * (1.0 - a);
+        }
+        *s += self.jump;
     }
 }
 
@@ -631,6 +670,31 @@ pub fn preset(name: &str) -> Result<Preset> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The one-pass kernels of several τ are each τ's own kernel and derivative, bit
+    /// for bit, on a history with a ramp, a hold and an unloading (rates and jumps).
+    #[test]
+    fn kernels_are_each_taus_kernel_exactly() {
+        let times: Vec<f64> = (0..60)
+            .map(|i| 0.05 * i as f64 * (1.0 + 0.1 * i as f64))
+            .collect();
+        let history =
+            History::from_knots(vec![(0.0, 0.0), (0.4, 1.5), (3.0, 1.5), (3.5, 0.2)]).unwrap();
+        let sched = Schedule::new(&history, &times).unwrap();
+        let taus = [0.03, 0.7, 2.0, 45.0, 1e4];
+        let m = times.len();
+        let (mut h, mut dh) = (vec![0.0; m * taus.len()], vec![0.0; m * taus.len()]);
+        sched.kernels(&taus, &mut h, Some(&mut dh));
+        let mut h_only = vec![0.0; m * taus.len()];
+        sched.kernels(&taus, &mut h_only, None);
+        for (i, &tau) in taus.iter().enumerate() {
+            let (mut h1, mut d1) = (vec![0.0; m], vec![0.0; m]);
+            sched.kernel(tau, &mut h1, Some(&mut d1));
+            assert_eq!(h[i * m..(i + 1) * m], h1[..], "τ = {tau}");
+            assert_eq!(dh[i * m..(i + 1) * m], d1[..], "τ = {tau}");
+            assert_eq!(h_only[i * m..(i + 1) * m], h1[..], "τ = {tau}");
+        }
+    }
 
     #[test]
     fn step_and_ramp_kernels_match_closed_forms() {

@@ -19,7 +19,7 @@ use std::path::Path;
 pub fn run(scene: &Path) -> Result<super::bench::Verdict> {
     let s = Scene::read(scene)?;
     let rtols = [1e-4, 1e-6];
-    let starts = [1, 4];
+    let starts = [1, 8];
     let bar = super::bench::progress_bar(rtols.len() * starts.len());
     let rows = identify_rows(&s, &rtols, &starts, 1, &mut |r| {
         bar.set_message(format!(

@@ -158,6 +158,16 @@ pub const FAR_RTOL_FACTOR: f64 = 100.0;
 /// The loosest tolerance of a far run ([`FAR_RTOL_FACTOR`]).
 pub const FAR_RTOL_MAX: f64 = 1e-4;
 
+/// The tolerance factor of the runs that check the integration error at the
+/// optimum ([`Problem::residuals_more_accurate`]): their error is about 1/100 of the
+/// search's (2.5× the steps of a 5th-order method), so their difference from the
+/// search's residuals is the search's integration error to within about 1 %.
+pub const CHECK_RTOL_FACTOR: f64 = 0.01;
+
+/// The tightest tolerance of a check run ([`CHECK_RTOL_FACTOR`]): a little above
+/// the round-off of a double-precision integration.
+pub const CHECK_RTOL_MIN: f64 = 1e-13;
+
 /// The smallest step budget (a short trace at its constants may take only a few
 /// dozen steps).
 const MIN_BUDGET: usize = 2000;
@@ -364,6 +374,39 @@ impl Problem {
         match self.fill(x, &runs, r, Some(jac)) {
             true => Ok(out),
             false => Err("a non-finite residual or sensitivity at the optimum".into()),
+        }
+    }
+
+    /// The residuals at x from plain runs at [`CHECK_RTOL_FACTOR`] × each
+    /// experiment's tolerance (at least [`CHECK_RTOL_MIN`]): the same model,
+    /// integrated more accurately, for [`super::integration_shift`]. Err: why x
+    /// gives no usable run there.
+    pub fn residuals_more_accurate(
+        &mut self,
+        x: &[f64],
+        r: &mut DVector<f64>,
+    ) -> std::result::Result<(), String> {
+        let theta = self.theta_at(x);
+        let mut out = Vec::with_capacity(self.experiments.len());
+        for (e, &v_max) in self.experiments.iter_mut().zip(&self.v_max) {
+            let rtol = self.run.rtol.unwrap_or(e.scene.time.rtol);
+            let opts = RunOptions {
+                rtol: Some((CHECK_RTOL_FACTOR * rtol).max(CHECK_RTOL_MIN)),
+                v_max: Some(v_max),
+                ..self.run
+            };
+            set_theta(&mut e.scene, &theta);
+            self.counts.runs.fetch_add(1, Ordering::Relaxed);
+            let o = trajectory(&e.scene, &opts).map_err(|err| format!("{}: {err}", e.name))?;
+            if let Some(why) = unusable(e, &RunView::from(&o), theta.len()) {
+                return Err(why);
+            }
+            out.push(o);
+        }
+        let runs: Vec<RunView> = out.iter().map(RunView::from).collect();
+        match self.fill(x, &runs, r, None) {
+            true => Ok(()),
+            false => Err("a non-finite residual".into()),
         }
     }
 

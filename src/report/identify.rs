@@ -148,6 +148,11 @@ fn page(
         "{} start(s), {} at the best objective, {} abandoned; {} iterations, {} simulator runs ({} with sensitivities), {:.3} s.",
         v.starts, v.starts_at_best, v.starts_abandoned, v.iterations, v.simulator_runs, v.sensitivity_runs, v.seconds
     ));
+    if let Some(z) = v.integration_shift {
+        page.text(format!(
+            "Integration check: at 1/100 of the simulator's tolerance the optimum moves by {z:.3} standard errors at most."
+        ));
+    }
     Ok(page)
 }
 

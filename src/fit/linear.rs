@@ -145,15 +145,7 @@ impl RowQr {
 
     /// R column-major (k²), without a matrix type: what [`SmallSvd::of`] takes.
     pub fn r_columns(&self) -> Vec<f64> {
-        let m = self.k + 1;
-        let r = self.reduced();
-        let mut out = vec![0.0; self.k * self.k];
-        for j in 0..self.k {
-            for i in 0..=j {
-                out[j * self.k + i] = r[i * m + j];
-            }
-        }
-        out
+        r_columns_of(&self.reduced(), self.k)
     }
 
     /// min ‖A·c − b‖ with the minimum norm: c = Σ v_i (u_iᵀ Qᵀb) / σ_i over the
@@ -174,7 +166,7 @@ impl RowQr {
         if !qtb.iter().all(|v| v.is_finite()) {
             return None;
         }
-        let svd = SmallSvd::of(&self.r_columns(), k)?;
+        let svd = SmallSvd::of(&r_columns_of(&r, k), k)?;
         let smax = svd.sigma[0];
         if smax <= 0.0 {
             return None;
@@ -191,6 +183,18 @@ impl RowQr {
         let w = DMatrix::from_fn(k, rank, |j, q| svd.v(j, q) / svd.sigma[q]);
         Some((c, w))
     }
+}
+
+/// The leading k × k block of the row-major (k + 1)² R̃, column-major.
+fn r_columns_of(r: &[f64], k: usize) -> Vec<f64> {
+    let m = k + 1;
+    let mut out = vec![0.0; k * k];
+    for j in 0..k {
+        for i in 0..=j {
+            out[j * k + i] = r[i * m + j];
+        }
+    }
+    out
 }
 
 /// The SVD A = U·Σ·Vᵀ of a small square matrix (a [`RowQr`] factor R, k × k) by
@@ -295,27 +299,35 @@ impl SmallSvd {
     }
 }
 
-/// One Jacobi rotation of columns p and q of `us` (and of `v`) that makes them
+/// One Jacobi rotation of columns p < q of `us` (and of `v`) that makes them
 /// orthogonal: with α = ‖a_p‖², β = ‖a_q‖², γ = a_pᵀa_q, ζ = (β − α)/(2γ),
-/// t = sign(ζ)/(|ζ| + √(1 + ζ²)), c = 1/√(1 + t²), s = c·t (Golub & Van Loan,
-/// 4th ed., §8.6.3). False when the pair is orthogonal already.
+/// t = sign(ζ)/(|ζ| + √(1 + ζ²)) (t = 1/(2ζ) where ζ² would overflow),
+/// c = 1/√(1 + t²), s = c·t (Golub & Van Loan, 4th ed., §8.6.3). False when the
+/// pair is orthogonal already.
 fn rotate(us: &mut [f64], v: &mut [f64], k: usize, p: usize, q: usize) -> bool {
-    let (ap, aq) = (&us[p * k..(p + 1) * k], &us[q * k..(q + 1) * k]);
-    let alpha: f64 = ap.iter().map(|x| x * x).sum();
-    let beta: f64 = aq.iter().map(|x| x * x).sum();
-    let gamma: f64 = ap.iter().zip(aq).map(|(x, y)| x * y).sum();
+    let (alpha, beta, gamma) = us[p * k..(p + 1) * k]
+        .iter()
+        .zip(&us[q * k..(q + 1) * k])
+        .fold((0.0, 0.0, 0.0), |(a, b, g), (x, y)| {
+            (a + x * x, b + y * y, g + x * y)
+        });
     if gamma.abs() <= f64::EPSILON * (alpha.sqrt() * beta.sqrt()) {
         return false;
     }
     let zeta = (beta - alpha) / (2.0 * gamma);
-    let t = zeta.signum() / (zeta.abs() + 1f64.hypot(zeta));
+    let t = if zeta.abs() < 1e150 {
+        zeta.signum() / (zeta.abs() + (1.0 + zeta * zeta).sqrt())
+    } else {
+        0.5 / zeta
+    };
     let c = 1.0 / (1.0 + t * t).sqrt();
     let s = c * t;
     for m in [us, v] {
-        for i in 0..k {
-            let (x, y) = (m[p * k + i], m[q * k + i]);
-            m[p * k + i] = c * x - s * y;
-            m[q * k + i] = s * x + c * y;
+        let (head, tail) = m.split_at_mut(q * k);
+        for (x, y) in head[p * k..(p + 1) * k].iter_mut().zip(&mut tail[..k]) {
+            let (a, b) = (*x, *y);
+            *x = c * a - s * b;
+            *y = s * a + c * b;
         }
     }
     true

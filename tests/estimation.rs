@@ -388,13 +388,39 @@ fn recovers_known_constants_from_noisy_data_in_every_mode() {
             if f.status == Status::IllPosed {
                 continue;
             }
-            let est: Vec<(f64, f64)> = f
+            let mut est: Vec<(f64, f64)> = f
                 .parameters
                 .iter()
                 .map(|p| (p.value, p.std_error.unwrap()))
                 .collect();
+            let mut want = truth.to_vec();
+            if modes.len() == 1 && modes[0].0 == Mode::Planar && name.starts_with("ogden") {
+                // Planar alone (λ1 = λ, λ2 = 1, λ3 = 1/λ): each Ogden term's
+                // λ^α + λ^−α is even in α, so (μ, α) and (μ, −α) give the same
+                // stress and either is an optimum: compare |α|.
+                let mirrored: Vec<f64> = want
+                    .iter()
+                    .enumerate()
+                    .map(|(j, &v)| if j % 2 == 1 { -v } else { v })
+                    .collect();
+                for l in [1.2, 2.5, 4.0] {
+                    let (a, b) = (
+                        model.nominal_stress(&want, Mode::Planar, l),
+                        model.nominal_stress(&mirrored, Mode::Planar, l),
+                    );
+                    assert!((a - b).abs() <= 1e-12 * a.abs(), "{name}: {a} vs {b}");
+                }
+                est.iter_mut()
+                    .skip(1)
+                    .step_by(2)
+                    .for_each(|a| a.0 = a.0.abs());
+                want.iter_mut()
+                    .skip(1)
+                    .step_by(2)
+                    .for_each(|a| *a = a.abs());
+            }
             let est = canonical(name, &est, |a| a.0);
-            let want = canonical(name, truth, |a| *a);
+            let want = canonical(name, &want, |a| *a);
             for ((v, se), t) in est.iter().zip(&want) {
                 assert!(
                     (v - t).abs() <= 4.0 * se,

@@ -2,7 +2,7 @@
 //! intervals, correlation and condition number, information criteria, the seed's
 //! %RMSE (Eq. 3.28). Drucker stability is [`super::drucker`].
 
-use super::linear::RowQr;
+use super::linear::{RowQr, SmallSvd};
 use nalgebra::DMatrix;
 use statrs::distribution::{ContinuousCDF, StudentsT};
 use std::collections::HashMap;
@@ -55,22 +55,22 @@ pub fn uncertainty(jac: &DMatrix<f64>, rss: f64) -> Uncertainty {
 
 /// [`uncertainty`] from the triangular factor R of the Jacobian (JᵀJ = RᵀR, see
 /// [`RowQr`]): the column-normalised J = Q·R·D⁻¹ has the singular values and right
-/// singular vectors of R·D⁻¹ (D the column norms, those of R), so only a k × k SVD is
-/// needed however many points there are.
+/// singular vectors of R·D⁻¹ (D the column norms, those of R), so only a k × k SVD
+/// ([`SmallSvd`]) is needed however many points there are.
 pub fn factor_uncertainty(qr: &RowQr, rss: f64) -> Uncertainty {
-    let mut norm = qr.r();
-    let (n, k) = (qr.rows(), norm.ncols());
+    let (n, k) = (qr.rows(), qr.unknowns());
+    let mut norm = qr.r_columns();
     let dof = n.saturating_sub(k);
     let mut col = vec![1.0; k];
-    for j in 0..k {
-        let s = norm.column(j).norm();
+    for (j, c) in norm.chunks_exact_mut(k.max(1)).enumerate() {
+        let s = c.iter().map(|v| v * v).sum::<f64>().sqrt();
         if s > 0.0 {
             col[j] = s;
-            norm.column_mut(j).scale_mut(1.0 / s);
+            c.iter_mut().for_each(|v| *v *= 1.0 / s);
         }
     }
     let t95 = (dof > 0).then(|| t_quantile_975(dof));
-    let Some(svd) = super::linear::svd(norm, false, true) else {
+    let Some(svd) = SmallSvd::of(&norm, k) else {
         // A Jacobian holding ∞ or NaN (or an empty one) determines nothing.
         return Uncertainty {
             covariance: DMatrix::from_element(k, k, f64::NAN),
@@ -80,9 +80,8 @@ pub fn factor_uncertainty(qr: &RowQr, rss: f64) -> Uncertainty {
             t95,
         };
     };
-    let sv = &svd.singular_values;
-    let smax = sv.max();
-    let smin = sv.min();
+    let sv = &svd.sigma;
+    let (smax, smin) = (sv[0], sv[k - 1]);
     let condition = if smin > 0.0 {
         smax / smin
     } else {
@@ -92,12 +91,11 @@ pub fn factor_uncertainty(qr: &RowQr, rss: f64) -> Uncertainty {
     let s2 = if dof > 0 { rss / dof as f64 } else { f64::NAN };
     let mut cov = DMatrix::from_element(k, k, f64::NAN);
     if identifiable {
-        let vt = svd.v_t.expect("requested");
         for a in 0..k {
             for b in 0..k {
                 let mut acc = 0.0;
-                for i in 0..sv.len() {
-                    acc += vt[(i, a)] * vt[(i, b)] / (sv[i] * sv[i]);
+                for i in 0..k {
+                    acc += svd.v(a, i) * svd.v(b, i) / (sv[i] * sv[i]);
                 }
                 cov[(a, b)] = s2 * acc / (col[a] * col[b]);
             }

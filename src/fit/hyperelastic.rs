@@ -736,12 +736,15 @@ fn split_coincident(x: &[f64], bounds: &[(f64, f64)]) -> Option<Vec<f64>> {
 }
 
 /// Unweighted absolute-residual statistics of (prediction, measurement) pairs, read
-/// twice in order: (points, rmse, r², None when y does not vary).
+/// twice in order (the count, Σy and Σ(p − y)² in the first pass, each summed in
+/// the order of the pairs; Σ(y − ȳ)² in the second): (points, rmse, r², None when
+/// y does not vary).
 fn stats(pairs: impl Iterator<Item = (f64, f64)> + Clone) -> (usize, f64, Option<f64>) {
-    let count = pairs.clone().count();
+    let (count, sum_y, ss_res) = pairs.clone().fold((0usize, 0.0, 0.0), |(c, s, r), (p, y)| {
+        (c + 1, s + y, r + (p - y).powi(2))
+    });
     let n = count as f64;
-    let mean = pairs.clone().map(|(_, y)| y).sum::<f64>() / n;
-    let ss_res: f64 = pairs.clone().map(|(p, y)| (p - y).powi(2)).sum();
+    let mean = sum_y / n;
     let ss_tot: f64 = pairs.map(|(_, y)| (y - mean).powi(2)).sum();
     (
         count,

@@ -133,11 +133,19 @@ impl RowQr {
         self.rows
     }
 
+    /// Unknowns k.
+    pub fn unknowns(&self) -> usize {
+        self.k
+    }
+
     /// The k × k factor R (AᵀA = RᵀR).
     pub fn r(&self) -> DMatrix<f64> {
-        let m = self.k + 1;
-        let r = self.reduced();
-        DMatrix::from_fn(self.k, self.k, |i, j| r[i * m + j])
+        DMatrix::from_column_slice(self.k, self.k, &self.r_columns())
+    }
+
+    /// R column-major (k²), without a matrix type: what [`SmallSvd::of`] takes.
+    pub fn r_columns(&self) -> Vec<f64> {
+        r_columns_of(&self.reduced(), self.k)
     }
 
     /// min ‖A·c − b‖ with the minimum norm: c = Σ v_i (u_iᵀ Qᵀb) / σ_i over the
@@ -152,36 +160,177 @@ impl RowQr {
     /// of R (R = U_R·Σ·Vᵀ, A = Q·R): A·W = Q·U_R,r is an orthonormal basis of the range
     /// of A, formed in one pass over A's rows without an SVD of the tall A.
     pub fn solve_with_range(&self) -> Option<(DVector<f64>, DMatrix<f64>)> {
-        let m = self.k + 1;
+        let (k, m) = (self.k, self.k + 1);
         let r = self.reduced();
-        let svd = svd(
-            DMatrix::from_fn(self.k, self.k, |i, j| r[i * m + j]),
-            true,
-            true,
-        )?;
-        let smax = svd.singular_values.max();
-        if smax <= 0.0 {
-            return None;
-        }
-        let tol = smax * 1e-13 * (self.rows.max(self.k) as f64);
-        let (u, vt) = (svd.u.as_ref()?, svd.v_t.as_ref()?);
-        let qtb = DVector::from_fn(self.k, |i, _| r[i * m + self.k]);
+        let qtb: Vec<f64> = (0..k).map(|i| r[i * m + k]).collect();
         if !qtb.iter().all(|v| v.is_finite()) {
             return None;
         }
-        let mut c = DVector::zeros(self.k);
-        let mut kept = Vec::with_capacity(self.k);
-        for (i, &s) in svd.singular_values.iter().enumerate() {
-            if s > tol {
-                c += vt.row(i).transpose() * (u.column(i).dot(&qtb) / s);
-                kept.push(i);
+        let svd = SmallSvd::of(&r_columns_of(&r, k), k)?;
+        let smax = svd.sigma[0];
+        if smax <= 0.0 {
+            return None;
+        }
+        let tol = smax * 1e-13 * (self.rows.max(k) as f64);
+        let rank = svd.sigma.iter().take_while(|&&s| s > tol).count();
+        let mut c = DVector::zeros(k);
+        for q in 0..rank {
+            let coef = (0..k).map(|i| svd.u(i, q) * qtb[i]).sum::<f64>() / svd.sigma[q];
+            for j in 0..k {
+                c[j] += svd.v(j, q) * coef;
             }
         }
-        let w = DMatrix::from_fn(self.k, kept.len(), |j, q| {
-            vt[(kept[q], j)] / svd.singular_values[kept[q]]
-        });
+        let w = DMatrix::from_fn(k, rank, |j, q| svd.v(j, q) / svd.sigma[q]);
         Some((c, w))
     }
+}
+
+/// The leading k × k block of the row-major (k + 1)² R̃, column-major.
+fn r_columns_of(r: &[f64], k: usize) -> Vec<f64> {
+    let m = k + 1;
+    let mut out = vec![0.0; k * k];
+    for j in 0..k {
+        for i in 0..=j {
+            out[j * k + i] = r[i * m + j];
+        }
+    }
+    out
+}
+
+/// The SVD A = U·Σ·Vᵀ of a small square matrix (a [`RowQr`] factor R, k × k) by
+/// one-sided Jacobi rotations (Hestenes 1958; Demmel & Veselić, SIAM J. Matrix Anal.
+/// Appl. 13, 1992, Alg. 4.1): plane rotations V_pq applied to the columns of A until
+/// every pair is orthogonal to the working precision, |a_pᵀa_q| ≤ ε·‖a_p‖·‖a_q‖;
+/// then A·V = U·Σ with σ_j = ‖(A·V)_j‖. Each small singular value is found to a
+/// relative accuracy (the QR iteration of a bidiagonal form only to ε·σ_max), in
+/// one buffer of 2k² + k numbers: no allocation per step, unlike a general SVD of a
+/// dynamic matrix (two of those were ~15 % of a whole Yeoh fit call).
+#[derive(Debug, Clone)]
+pub struct SmallSvd {
+    k: usize,
+    /// Singular values in descending order.
+    pub sigma: Vec<f64>,
+    /// A·V = U·Σ, column-major.
+    us: Vec<f64>,
+    /// V, column-major.
+    v: Vec<f64>,
+}
+
+/// Sweeps of [`SmallSvd::of`] before it gives up (LAPACK's `dgesvj` stops at 30;
+/// a k ≤ 10 matrix converges in ≲ 10).
+const JACOBI_SWEEPS: usize = 30;
+
+impl SmallSvd {
+    /// The SVD of the column-major k × k matrix `a`, or None if `a` is empty, holds a
+    /// value that is not finite, or the rotations do not converge in
+    /// [`JACOBI_SWEEPS`] sweeps. The matrix is scaled by its largest entry first, so
+    /// that no column norm over- or underflows for entries up to 10³⁰⁸.
+    pub fn of(a: &[f64], k: usize) -> Option<SmallSvd> {
+        if k == 0 || a.len() != k * k || !a.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let mut us: Vec<f64> = if scale > 0.0 {
+            a.iter().map(|v| v / scale).collect()
+        } else {
+            a.to_vec()
+        };
+        let mut v = vec![0.0; k * k];
+        (0..k).for_each(|j| v[j * k + j] = 1.0);
+        let mut converged = false;
+        for _ in 0..JACOBI_SWEEPS {
+            let mut rotated = false;
+            for p in 0..k {
+                for q in p + 1..k {
+                    rotated |= rotate(&mut us, &mut v, k, p, q);
+                }
+            }
+            if !rotated {
+                converged = true;
+                break;
+            }
+        }
+        if !converged {
+            return None;
+        }
+        let mut sigma: Vec<f64> = (0..k)
+            .map(|j| {
+                us[j * k..(j + 1) * k]
+                    .iter()
+                    .map(|x| x * x)
+                    .sum::<f64>()
+                    .sqrt()
+            })
+            .collect();
+        // Descending order (selection sort: k is small).
+        for j in 0..k {
+            let top = (j..k).fold(j, |b, i| if sigma[i] > sigma[b] { i } else { b });
+            if top != j {
+                sigma.swap(j, top);
+                for i in 0..k {
+                    us.swap(j * k + i, top * k + i);
+                    v.swap(j * k + i, top * k + i);
+                }
+            }
+        }
+        if scale > 0.0 {
+            us.iter_mut().for_each(|x| *x *= scale);
+            sigma.iter_mut().for_each(|s| *s *= scale);
+        }
+        sigma
+            .iter()
+            .all(|s| s.is_finite())
+            .then_some(SmallSvd { k, sigma, us, v })
+    }
+
+    /// U_iq (zero in a column whose σ_q is zero).
+    pub fn u(&self, i: usize, q: usize) -> f64 {
+        let s = self.sigma[q];
+        if s > 0.0 {
+            self.us[q * self.k + i] / s
+        } else {
+            0.0
+        }
+    }
+
+    /// V_jq.
+    pub fn v(&self, j: usize, q: usize) -> f64 {
+        self.v[q * self.k + j]
+    }
+}
+
+/// One Jacobi rotation of columns p < q of `us` (and of `v`) that makes them
+/// orthogonal: with α = ‖a_p‖², β = ‖a_q‖², γ = a_pᵀa_q, ζ = (β − α)/(2γ),
+/// t = sign(ζ)/(|ζ| + √(1 + ζ²)) (t = 1/(2ζ) where ζ² would overflow),
+/// c = 1/√(1 + t²), s = c·t (Golub & Van Loan, 4th ed., §8.6.3). False when the
+/// pair is orthogonal already.
+fn rotate(us: &mut [f64], v: &mut [f64], k: usize, p: usize, q: usize) -> bool {
+    let (alpha, beta, gamma) = us[p * k..(p + 1) * k]
+        .iter()
+        .zip(&us[q * k..(q + 1) * k])
+        .fold((0.0, 0.0, 0.0), |(a, b, g), (x, y)| {
+            (a + x * x, b + y * y, g + x * y)
+        });
+    if gamma.abs() <= f64::EPSILON * (alpha.sqrt() * beta.sqrt()) {
+        return false;
+    }
+    let zeta = (beta - alpha) / (2.0 * gamma);
+    let t = if zeta.abs() < 1e150 {
+        zeta.signum() / (zeta.abs() + (1.0 + zeta * zeta).sqrt())
+    } else {
+        0.5 / zeta
+    };
+    let c = 1.0 / (1.0 + t * t).sqrt();
+    let s = c * t;
+    for m in [us, v] {
+        let (head, tail) = m.split_at_mut(q * k);
+        for (x, y) in head[p * k..(p + 1) * k].iter_mut().zip(&mut tail[..k]) {
+            let (a, b) = (*x, *y);
+            *x = c * a - s * b;
+            *y = s * a + c * b;
+        }
+    }
+    true
 }
 
 /// Householder QR in place of the first `rows` rows of the column-major `stack`
@@ -423,6 +572,63 @@ mod tests {
         let mut qr = RowQr::new(2);
         qr.push(&[0.0, 0.0], 1.0);
         assert!(qr.solve().is_none());
+    }
+
+    /// The Jacobi SVD of small square matrices agrees with nalgebra's: singular
+    /// values to 1e-13 of σ_max, U·Σ·Vᵀ = A to 1e-14 of ‖A‖, VᵀV = I to 1e-14, on
+    /// random, graded (rows and columns 10⁰…10¹²), rank-deficient and huge (10³⁰⁰)
+    /// matrices of order 1–6 (round-off of either method is ~k·ε·σ_max); a value
+    /// that is not finite gives None.
+    #[test]
+    fn small_svd_agrees_with_the_general_svd() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut uniform = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for k in 1..=6 {
+            for case in 0..4 {
+                let a = DMatrix::from_fn(k, k, |i, j| {
+                    let v = uniform();
+                    match case {
+                        1 => v * 10f64.powi((3 * (i + j)) as i32 % 13),
+                        2 if j == k - 1 && k > 1 => 0.0,
+                        3 => v * 1e300,
+                        _ => v,
+                    }
+                });
+                let a = if case == 2 && k > 1 {
+                    // The last column a combination of the first: rank k − 1.
+                    let mut a = a;
+                    let c0 = a.column(0).clone_owned();
+                    a.column_mut(k - 1).copy_from(&(c0 * 2.0));
+                    a
+                } else {
+                    a
+                };
+                let s = SmallSvd::of(a.as_slice(), k).expect("finite");
+                let want = svd(a.clone(), false, false).unwrap().singular_values;
+                let smax = want[0];
+                for q in 0..k {
+                    assert!(
+                        (s.sigma[q] - want[q]).abs() <= 1e-13 * smax,
+                        "k {k} case {case}"
+                    );
+                }
+                let v = DMatrix::from_fn(k, k, |i, j| s.v(i, j));
+                let us = DMatrix::from_fn(k, k, |i, j| s.u(i, j) * s.sigma[j]);
+                let anorm = a.norm();
+                assert!((&us * v.transpose() - &a).norm() <= 1e-14 * anorm * k as f64);
+                assert!((v.transpose() * &v - DMatrix::identity(k, k)).norm() <= 1e-14 * k as f64);
+            }
+        }
+        assert!(SmallSvd::of(&[1.0, f64::NAN, 0.0, 1.0], 2).is_none());
+        assert!(SmallSvd::of(&[1.0, f64::INFINITY, 0.0, 1.0], 2).is_none());
+        assert!(SmallSvd::of(&[], 0).is_none());
+        let zero = SmallSvd::of(&[0.0; 4], 2).expect("zero matrix");
+        assert_eq!(zero.sigma, vec![0.0, 0.0]);
     }
 
     /// A matrix holding ∞ or NaN (nalgebra's `svd` never returns on it) or too

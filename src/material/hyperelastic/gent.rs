@@ -102,6 +102,10 @@ impl StrainEnergy for Gent {
         out[0] = f * 0.5 * jm / gap;
         out[1] = -f * 0.5 * mu * x / (gap * gap);
     }
+    /// Jm (index 1) enters μ's term alone: ∂P/∂Jm = μ·∂A/∂Jm.
+    fn coefficient_of(&self, j: usize) -> Option<usize> {
+        (j == 1).then_some(0)
+    }
     fn initial_shear_modulus(&self, p: &[f64]) -> f64 {
         match p {
             &[mu, _] => mu,

@@ -82,6 +82,15 @@ pub trait StrainEnergy: Send + Sync {
     fn bounds(&self, _max_i1_minus_3: f64) -> Vec<(f64, f64)> {
         self.params().iter().map(|p| (p.lower, p.upper)).collect()
     }
+    /// The linear parameter whose value multiplies every ∂P/∂p_j of the nonlinear
+    /// parameter j, if one does: P = Σ_l p_l·A_l(θ) with θ_j inside one A_l alone
+    /// (Ogden's αᵢ in μᵢ's term, Gent's Jm in μ's), so ∂P/∂θ_j = p_l·∂A_l/∂θ_j.
+    /// Variable projection then takes ∂P/∂θ at the solved coefficients from the one
+    /// evaluation at unit ones that also gives A(θ). None (the default) where no
+    /// single coefficient does, or for a linear parameter.
+    fn coefficient_of(&self, _j: usize) -> Option<usize> {
+        None
+    }
     /// True if the stress is linear in every parameter (exact linear least squares).
     fn linear_in_params(&self) -> bool {
         self.params().iter().all(|p| p.linear)

@@ -182,6 +182,10 @@ impl StrainEnergy for Ogden {
             o[1] = t[0] * dv / lam;
         }
     }
+    /// αᵢ (index 2i + 1) enters μᵢ's term (index 2i) alone: ∂P/∂αᵢ = μᵢ·∂Aᵢ/∂αᵢ.
+    fn coefficient_of(&self, j: usize) -> Option<usize> {
+        (j % 2 == 1 && j < 2 * self.n).then(|| j - 1)
+    }
     fn initial_shear_modulus(&self, p: &[f64]) -> f64 {
         let Some(terms) = self.terms(p) else {
             return f64::NAN;

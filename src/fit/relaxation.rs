@@ -481,14 +481,28 @@ impl Problem {
         DVector::from_iterator(self.len(), self.y.iter().zip(&self.w).map(|(y, w)| y * w))
     }
 
-    /// Column k of the design for a fixed τ (NNLS stage), weighted and scaled.
-    fn column(&mut self, tau: Option<f64>, out: &mut [f64]) {
-        match tau {
-            None => out.copy_from_slice(self.sched.input()),
-            Some(t) => self.sched.kernel(t, out, None),
+    /// The design's first column, w·S·x (the E∞ term), into `out`.
+    fn input_column(&self, out: &mut [f64]) {
+        for ((o, x), w) in out.iter_mut().zip(self.sched.input()).zip(&self.w) {
+            *o = x * (w * self.scale);
         }
-        for (o, w) in out.iter_mut().zip(&self.w) {
-            *o *= w * self.scale;
+    }
+
+    /// The design's columns of the terms at `taus`, w·S·h(τᵢ), end to end into `out`
+    /// (one pass over the data, [`Schedule::kernels`]), and their derivatives
+    /// w·S·τᵢ·∂h/∂τ(τᵢ) = ∂aᵢ/∂ln τᵢ into `dout` if given.
+    fn kernel_columns(&self, taus: &[f64], out: &mut [f64], mut dout: Option<&mut [f64]>) {
+        let m = self.len();
+        self.sched.kernels(taus, out, dout.as_deref_mut());
+        for (i, &tau) in taus.iter().enumerate() {
+            for (a, w) in out[i * m..(i + 1) * m].iter_mut().zip(&self.w) {
+                *a *= w * self.scale;
+            }
+            if let Some(d) = dout.as_deref_mut() {
+                for (a, w) in d[i * m..(i + 1) * m].iter_mut().zip(&self.w) {
+                    *a *= w * self.scale * tau;
+                }
+            }
         }
     }
 }
@@ -556,13 +570,15 @@ struct Projected<'p> {
     c: DVector<f64>,
     /// Which of them are positive: the next solve's start.
     positive: Vec<bool>,
+    /// τᵢ = e^θᵢ of the last evaluation.
+    taus: Vec<f64>,
 }
 
 impl<'p> Projected<'p> {
     fn new(prob: &'p mut Problem) -> Projected<'p> {
         let (m, n) = (prob.len(), prob.n_terms);
         let mut a = DMatrix::zeros(m, 1 + n);
-        prob.column(None, a.column_mut(0).as_mut_slice());
+        prob.input_column(a.column_mut(0).as_mut_slice());
         let b = prob.targets();
         Projected {
             prob,
@@ -572,6 +588,7 @@ impl<'p> Projected<'p> {
             b,
             c: DVector::zeros(1 + n),
             positive: vec![false; 1 + n],
+            taus: Vec::with_capacity(n),
         }
     }
 
@@ -638,26 +655,14 @@ impl LeastSquares for Projected<'_> {
     ) -> bool {
         let p = &mut *self.prob;
         p.evaluations += 1;
-        let (s, m) = (p.scale, p.len());
-        let taus: Vec<f64> = theta.iter().map(|lt| lt.exp()).collect();
-        // Every term's kernel in one pass, into its column, then weighted and scaled.
-        p.sched.kernels(
-            &taus,
+        let m = p.len();
+        self.taus.clear();
+        self.taus.extend(theta.iter().map(|lt| lt.exp()));
+        p.kernel_columns(
+            &self.taus,
             &mut self.a.as_mut_slice()[m..],
             jac.is_some().then_some(self.da.as_mut_slice()),
         );
-        for (i, &tau) in taus.iter().enumerate() {
-            let mut col = self.a.column_mut(1 + i);
-            for (a, w) in col.as_mut_slice().iter_mut().zip(&p.w) {
-                *a *= w * s;
-            }
-            if jac.is_some() {
-                let mut col = self.da.column_mut(i);
-                for (a, w) in col.as_mut_slice().iter_mut().zip(&p.w) {
-                    *a *= w * s * tau;
-                }
-            }
-        }
         let Ok(sol) = nnls(&self.a, &self.b, Some(&self.positive)) else {
             return false;
         };
@@ -1064,10 +1069,9 @@ fn grid_nnls(
 fn nnls_at(prob: &mut Problem, taus: &[f64]) -> Result<(Vec<f64>, usize)> {
     let n = prob.len();
     let mut a = DMatrix::zeros(n, taus.len() + 1);
-    for j in 0..=taus.len() {
-        let tau = if j == 0 { None } else { Some(taus[j - 1]) };
-        prob.column(tau, a.column_mut(j).as_mut_slice());
-    }
+    let (input, terms) = a.as_mut_slice().split_at_mut(n);
+    prob.input_column(input);
+    prob.kernel_columns(taus, terms, None);
     let sol = nnls(&a, &prob.targets(), None).map_err(|e| {
         Error::settings(format!("the non-negative least-squares stage failed: {e}"))
     })?;

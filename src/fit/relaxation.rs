@@ -422,8 +422,11 @@ struct Problem {
     w: Vec<f64>,
     scale: f64,
     n_terms: usize,
+    /// The terms' kernels and their τ-derivatives of the last evaluation, one block
+    /// of [`Problem::len`] values a term ([`Schedule::kernels`]), and their τᵢ.
     h: Vec<f64>,
     dh: Vec<f64>,
+    taus: Vec<f64>,
     evaluations: usize,
 }
 
@@ -453,27 +456,45 @@ impl Problem {
             w: idx.iter().map(|&i| self.w[i]).collect(),
             scale: self.scale,
             n_terms: self.n_terms,
-            h: vec![0.0; count],
-            dh: vec![0.0; count],
+            h: Vec::new(),
+            dh: Vec::new(),
+            taus: Vec::new(),
             evaluations: 0,
         })
     }
 
     /// Model stress at every point, into `m`.
     fn model(&mut self, p: &[f64], m: &mut [f64]) {
-        let n = self.n_terms;
+        self.kernels_at(p, false);
+        let (n, len) = (self.n_terms, self.len());
         for (mk, x) in m.iter_mut().zip(self.sched.input()) {
             *mk = p[0] * x;
         }
         for i in 0..n {
-            self.sched.kernel(p[1 + n + i].exp(), &mut self.h, None);
-            for (mk, h) in m.iter_mut().zip(&self.h) {
+            for (mk, h) in m.iter_mut().zip(&self.h[i * len..(i + 1) * len]) {
                 *mk += p[1 + i] * h;
             }
         }
         for mk in m.iter_mut() {
             *mk *= self.scale;
         }
+    }
+
+    /// Every term's kernel at the τᵢ = e^(ln τᵢ) of `p` into `h` (and their
+    /// τ-derivatives into `dh` when `derivatives`), in one pass over the data.
+    fn kernels_at(&mut self, p: &[f64], derivatives: bool) {
+        let (n, m) = (self.n_terms, self.len());
+        self.taus.clear();
+        self.taus.extend(p[1 + n..1 + 2 * n].iter().map(|lt| lt.exp()));
+        self.h.resize(n * m, 0.0);
+        if derivatives {
+            self.dh.resize(n * m, 0.0);
+        }
+        self.sched.kernels(
+            &self.taus,
+            &mut self.h,
+            derivatives.then_some(&mut self.dh[..]),
+        );
     }
 
     /// The weighted data w·y: the right-hand side of the moduli's least squares.
@@ -524,19 +545,19 @@ impl LeastSquares for Problem {
                 j[(k, 0)] = self.w[k] * s * self.sched.input()[k];
             }
         }
+        self.kernels_at(p, jac.is_some());
+        let m = self.len();
         for i in 0..n {
-            let tau = p[1 + n + i].exp();
-            let want = jac.is_some();
-            self.sched
-                .kernel(tau, &mut self.h, want.then_some(&mut self.dh[..]));
-            for k in 0..self.len() {
-                r[k] += p[1 + i] * self.h[k];
+            let (tau, h) = (self.taus[i], &self.h[i * m..(i + 1) * m]);
+            for k in 0..m {
+                r[k] += p[1 + i] * h[k];
             }
             if let Some(j) = jac.as_deref_mut() {
-                for k in 0..self.len() {
+                let dh = &self.dh[i * m..(i + 1) * m];
+                for k in 0..m {
                     let ws = self.w[k] * s;
-                    j[(k, 1 + i)] = ws * self.h[k];
-                    j[(k, 1 + n + i)] = ws * p[1 + i] * tau * self.dh[k];
+                    j[(k, 1 + i)] = ws * h[k];
+                    j[(k, 1 + n + i)] = ws * p[1 + i] * tau * dh[k];
                 }
             }
         }
@@ -1019,8 +1040,9 @@ fn prepare(
             w,
             scale: ymax / xmax,
             n_terms: 0,
-            h: vec![0.0; n],
-            dh: vec![0.0; n],
+            h: Vec::new(),
+            dh: Vec::new(),
+            taus: Vec::new(),
             evaluations: 0,
         },
         window,

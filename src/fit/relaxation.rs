@@ -485,7 +485,8 @@ impl Problem {
     fn kernels_at(&mut self, p: &[f64], derivatives: bool) {
         let (n, m) = (self.n_terms, self.len());
         self.taus.clear();
-        self.taus.extend(p[1 + n..1 + 2 * n].iter().map(|lt| lt.exp()));
+        self.taus
+            .extend(p[1 + n..1 + 2 * n].iter().map(|lt| lt.exp()));
         self.h.resize(n * m, 0.0);
         if derivatives {
             self.dh.resize(n * m, 0.0);

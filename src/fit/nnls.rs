@@ -39,9 +39,11 @@ pub fn nnls(
     }
     let col = |j: usize| &a.as_slice()[j * a.nrows()..(j + 1) * a.nrows()];
     // Unit-norm columns (a zero column stays zero and its coefficient at 0).
-    let d: Vec<f64> = (0..k)
-        .map(|j| {
-            let s = dot(col(j), col(j)).sqrt();
+    let squares: Vec<f64> = (0..k).map(|j| dot(col(j), col(j))).collect();
+    let d: Vec<f64> = squares
+        .iter()
+        .map(|q| {
+            let s = q.sqrt();
             if s > 0.0 {
                 1.0 / s
             } else {
@@ -49,11 +51,17 @@ pub fn nnls(
             }
         })
         .collect();
-    // G = D·AᵀA·D from the upper triangle (contiguous column dot products).
+    // G = D·AᵀA·D from the upper triangle (contiguous column dot products; the
+    // diagonal's are the squared norms above).
     let mut g = DMatrix::zeros(k, k);
     for j in 0..k {
         for i in 0..=j {
-            let v = dot(col(i), col(j)) * d[i] * d[j];
+            let aa = if i == j {
+                squares[j]
+            } else {
+                dot(col(i), col(j))
+            };
+            let v = aa * d[i] * d[j];
             g[(i, j)] = v;
             g[(j, i)] = v;
         }

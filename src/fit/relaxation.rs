@@ -422,8 +422,11 @@ struct Problem {
     w: Vec<f64>,
     scale: f64,
     n_terms: usize,
+    /// The terms' kernels and their τ-derivatives of the last evaluation, one block
+    /// of [`Problem::len`] values a term ([`Schedule::kernels`]), and their τᵢ.
     h: Vec<f64>,
     dh: Vec<f64>,
+    taus: Vec<f64>,
     evaluations: usize,
 }
 
@@ -453,21 +456,22 @@ impl Problem {
             w: idx.iter().map(|&i| self.w[i]).collect(),
             scale: self.scale,
             n_terms: self.n_terms,
-            h: vec![0.0; count],
-            dh: vec![0.0; count],
+            h: Vec::new(),
+            dh: Vec::new(),
+            taus: Vec::new(),
             evaluations: 0,
         })
     }
 
     /// Model stress at every point, into `m`.
     fn model(&mut self, p: &[f64], m: &mut [f64]) {
-        let n = self.n_terms;
+        self.kernels_at(p, false);
+        let (n, len) = (self.n_terms, self.len());
         for (mk, x) in m.iter_mut().zip(self.sched.input()) {
             *mk = p[0] * x;
         }
         for i in 0..n {
-            self.sched.kernel(p[1 + n + i].exp(), &mut self.h, None);
-            for (mk, h) in m.iter_mut().zip(&self.h) {
+            for (mk, h) in m.iter_mut().zip(&self.h[i * len..(i + 1) * len]) {
                 *mk += p[1 + i] * h;
             }
         }
@@ -476,19 +480,51 @@ impl Problem {
         }
     }
 
+    /// Every term's kernel at the τᵢ = e^(ln τᵢ) of `p` into `h` (and their
+    /// τ-derivatives into `dh` when `derivatives`), in one pass over the data.
+    fn kernels_at(&mut self, p: &[f64], derivatives: bool) {
+        let (n, m) = (self.n_terms, self.len());
+        self.taus.clear();
+        self.taus
+            .extend(p[1 + n..1 + 2 * n].iter().map(|lt| lt.exp()));
+        self.h.resize(n * m, 0.0);
+        if derivatives {
+            self.dh.resize(n * m, 0.0);
+        }
+        self.sched.kernels(
+            &self.taus,
+            &mut self.h,
+            derivatives.then_some(&mut self.dh[..]),
+        );
+    }
+
     /// The weighted data w·y: the right-hand side of the moduli's least squares.
     fn targets(&self) -> DVector<f64> {
         DVector::from_iterator(self.len(), self.y.iter().zip(&self.w).map(|(y, w)| y * w))
     }
 
-    /// Column k of the design for a fixed τ (NNLS stage), weighted and scaled.
-    fn column(&mut self, tau: Option<f64>, out: &mut [f64]) {
-        match tau {
-            None => out.copy_from_slice(self.sched.input()),
-            Some(t) => self.sched.kernel(t, out, None),
+    /// The design's first column, w·S·x (the E∞ term), into `out`.
+    fn input_column(&self, out: &mut [f64]) {
+        for ((o, x), w) in out.iter_mut().zip(self.sched.input()).zip(&self.w) {
+            *o = x * (w * self.scale);
         }
-        for (o, w) in out.iter_mut().zip(&self.w) {
-            *o *= w * self.scale;
+    }
+
+    /// The design's columns of the terms at `taus`, w·S·h(τᵢ), end to end into `out`
+    /// (one pass over the data, [`Schedule::kernels`]), and their derivatives
+    /// w·S·τᵢ·∂h/∂τ(τᵢ) = ∂aᵢ/∂ln τᵢ into `dout` if given.
+    fn kernel_columns(&self, taus: &[f64], out: &mut [f64], mut dout: Option<&mut [f64]>) {
+        let m = self.len();
+        self.sched.kernels(taus, out, dout.as_deref_mut());
+        for (i, &tau) in taus.iter().enumerate() {
+            for (a, w) in out[i * m..(i + 1) * m].iter_mut().zip(&self.w) {
+                *a *= w * self.scale;
+            }
+            if let Some(d) = dout.as_deref_mut() {
+                for (a, w) in d[i * m..(i + 1) * m].iter_mut().zip(&self.w) {
+                    *a *= w * self.scale * tau;
+                }
+            }
         }
     }
 }
@@ -510,19 +546,19 @@ impl LeastSquares for Problem {
                 j[(k, 0)] = self.w[k] * s * self.sched.input()[k];
             }
         }
+        self.kernels_at(p, jac.is_some());
+        let m = self.len();
         for i in 0..n {
-            let tau = p[1 + n + i].exp();
-            let want = jac.is_some();
-            self.sched
-                .kernel(tau, &mut self.h, want.then_some(&mut self.dh[..]));
-            for k in 0..self.len() {
-                r[k] += p[1 + i] * self.h[k];
+            let (tau, h) = (self.taus[i], &self.h[i * m..(i + 1) * m]);
+            for k in 0..m {
+                r[k] += p[1 + i] * h[k];
             }
             if let Some(j) = jac.as_deref_mut() {
-                for k in 0..self.len() {
+                let dh = &self.dh[i * m..(i + 1) * m];
+                for k in 0..m {
                     let ws = self.w[k] * s;
-                    j[(k, 1 + i)] = ws * self.h[k];
-                    j[(k, 1 + n + i)] = ws * p[1 + i] * tau * self.dh[k];
+                    j[(k, 1 + i)] = ws * h[k];
+                    j[(k, 1 + n + i)] = ws * p[1 + i] * tau * dh[k];
                 }
             }
         }
@@ -556,13 +592,15 @@ struct Projected<'p> {
     c: DVector<f64>,
     /// Which of them are positive: the next solve's start.
     positive: Vec<bool>,
+    /// τᵢ = e^θᵢ of the last evaluation.
+    taus: Vec<f64>,
 }
 
 impl<'p> Projected<'p> {
     fn new(prob: &'p mut Problem) -> Projected<'p> {
         let (m, n) = (prob.len(), prob.n_terms);
         let mut a = DMatrix::zeros(m, 1 + n);
-        prob.column(None, a.column_mut(0).as_mut_slice());
+        prob.input_column(a.column_mut(0).as_mut_slice());
         let b = prob.targets();
         Projected {
             prob,
@@ -572,6 +610,7 @@ impl<'p> Projected<'p> {
             b,
             c: DVector::zeros(1 + n),
             positive: vec![false; 1 + n],
+            taus: Vec::with_capacity(n),
         }
     }
 
@@ -638,26 +677,14 @@ impl LeastSquares for Projected<'_> {
     ) -> bool {
         let p = &mut *self.prob;
         p.evaluations += 1;
-        let (s, m) = (p.scale, p.len());
-        let taus: Vec<f64> = theta.iter().map(|lt| lt.exp()).collect();
-        // Every term's kernel in one pass, into its column, then weighted and scaled.
-        p.sched.kernels(
-            &taus,
+        let m = p.len();
+        self.taus.clear();
+        self.taus.extend(theta.iter().map(|lt| lt.exp()));
+        p.kernel_columns(
+            &self.taus,
             &mut self.a.as_mut_slice()[m..],
             jac.is_some().then_some(self.da.as_mut_slice()),
         );
-        for (i, &tau) in taus.iter().enumerate() {
-            let mut col = self.a.column_mut(1 + i);
-            for (a, w) in col.as_mut_slice().iter_mut().zip(&p.w) {
-                *a *= w * s;
-            }
-            if jac.is_some() {
-                let mut col = self.da.column_mut(i);
-                for (a, w) in col.as_mut_slice().iter_mut().zip(&p.w) {
-                    *a *= w * s * tau;
-                }
-            }
-        }
         let Ok(sol) = nnls(&self.a, &self.b, Some(&self.positive)) else {
             return false;
         };
@@ -1014,8 +1041,9 @@ fn prepare(
             w,
             scale: ymax / xmax,
             n_terms: 0,
-            h: vec![0.0; n],
-            dh: vec![0.0; n],
+            h: Vec::new(),
+            dh: Vec::new(),
+            taus: Vec::new(),
             evaluations: 0,
         },
         window,
@@ -1064,10 +1092,9 @@ fn grid_nnls(
 fn nnls_at(prob: &mut Problem, taus: &[f64]) -> Result<(Vec<f64>, usize)> {
     let n = prob.len();
     let mut a = DMatrix::zeros(n, taus.len() + 1);
-    for j in 0..=taus.len() {
-        let tau = if j == 0 { None } else { Some(taus[j - 1]) };
-        prob.column(tau, a.column_mut(j).as_mut_slice());
-    }
+    let (input, terms) = a.as_mut_slice().split_at_mut(n);
+    prob.input_column(input);
+    prob.kernel_columns(taus, terms, None);
     let sol = nnls(&a, &prob.targets(), None).map_err(|e| {
         Error::settings(format!("the non-negative least-squares stage failed: {e}"))
     })?;

@@ -511,31 +511,40 @@ impl Schedule {
     }
 
     /// State h(tₖ; τ) = ∫ e^(−(tₖ−s)/τ) dx(s) at every evaluation time into `h`, and
-    /// ∂h/∂τ into `dh` if given (exact recursion, see the module docs).
-    pub fn kernel(&self, tau: f64, h: &mut [f64], mut dh: Option<&mut [f64]>) {
-        let (mut s, mut d) = (0.0, 0.0);
-        let (inv, want) = (1.0 / tau, dh.is_some());
-        for iv in &self.intervals {
-            iv.advance(tau, inv, &mut s, want.then_some(&mut d));
-            if let Some(o) = iv.out {
-                h[o] = s;
-                if let Some(dh) = dh.as_deref_mut() {
-                    dh[o] = d;
-                }
-            }
-        }
+    /// ∂h/∂τ into `dh` if given (exact recursion, see the module docs): [`Schedule::kernels`]
+    /// of one τ.
+    pub fn kernel(&self, tau: f64, h: &mut [f64], dh: Option<&mut [f64]>) {
+        self.kernels(&[tau], h, dh);
     }
 
     /// [`Schedule::kernel`] for several τ in one pass over the intervals: `h` (and
     /// `dh`) hold one block of [`Schedule::len`] values per τ, end to end (the columns
     /// of a column-major matrix). The τ's recursions are independent chains of
     /// dependent operations that the processor overlaps, where one τ at a time waits
-    /// on each; every value is the same arithmetic as [`Schedule::kernel`]'s, bit for
-    /// bit.
+    /// on each; every value is the same arithmetic for any number of τ, bit for bit.
+    /// Up to [`KERNEL_CHUNK`] τ share a pass, their states on the stack (no
+    /// allocation); more take one pass a chunk.
     pub fn kernels(&self, taus: &[f64], h: &mut [f64], mut dh: Option<&mut [f64]>) {
+        let m = self.len();
+        for (c, chunk) in taus.chunks(KERNEL_CHUNK).enumerate() {
+            let at = c * KERNEL_CHUNK * m;
+            let end = at + chunk.len() * m;
+            self.kernel_chunk(
+                chunk,
+                &mut h[at..end],
+                dh.as_deref_mut().map(|d| &mut d[at..end]),
+            );
+        }
+    }
+
+    /// One pass of [`Schedule::kernels`] over at most [`KERNEL_CHUNK`] τ.
+    fn kernel_chunk(&self, taus: &[f64], h: &mut [f64], mut dh: Option<&mut [f64]>) {
         let (m, k) = (self.len(), taus.len());
-        let inv: Vec<f64> = taus.iter().map(|t| 1.0 / t).collect();
-        let (mut s, mut d) = (vec![0.0; k], vec![0.0; k]);
+        let mut inv = [0.0; KERNEL_CHUNK];
+        for (v, t) in inv.iter_mut().zip(taus) {
+            *v = 1.0 / t;
+        }
+        let (mut s, mut d) = ([0.0; KERNEL_CHUNK], [0.0; KERNEL_CHUNK]);
         let want = dh.is_some();
         for iv in &self.intervals {
             for i in 0..k {
@@ -554,6 +563,10 @@ impl Schedule {
         }
     }
 }
+
+/// The most τ one pass of [`Schedule::kernels`] carries (a relaxation fit has at most
+/// a few terms; the grid stage's dozens take a pass each eight).
+const KERNEL_CHUNK: usize = 8;
 
 impl Interval {
     /// The state `s` of the τ kernel (`inv` = 1/τ) carried across this interval,
@@ -671,8 +684,9 @@ pub fn preset(name: &str) -> Result<Preset> {
 mod tests {
     use super::*;
 
-    /// The one-pass kernels of several τ are each τ's own kernel and derivative, bit
-    /// for bit, on a history with a ramp, a hold and an unloading (rates and jumps).
+    /// The one-pass kernels of several τ (more than one chunk of them) are each τ's
+    /// own kernel and derivative, bit for bit, on a history with a ramp, a hold and
+    /// an unloading (rates and jumps).
     #[test]
     fn kernels_are_each_taus_kernel_exactly() {
         let times: Vec<f64> = (0..60)
@@ -681,7 +695,8 @@ mod tests {
         let history =
             History::from_knots(vec![(0.0, 0.0), (0.4, 1.5), (3.0, 1.5), (3.5, 0.2)]).unwrap();
         let sched = Schedule::new(&history, &times).unwrap();
-        let taus = [0.03, 0.7, 2.0, 45.0, 1e4];
+        let taus = [0.03, 0.7, 2.0, 45.0, 1e4, 0.2, 0.9, 3.3, 11.0, 0.05, 600.0];
+        assert!(taus.len() > KERNEL_CHUNK, "the τ cross a chunk boundary");
         let m = times.len();
         let (mut h, mut dh) = (vec![0.0; m * taus.len()], vec![0.0; m * taus.len()]);
         sched.kernels(&taus, &mut h, Some(&mut dh));

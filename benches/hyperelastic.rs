@@ -37,7 +37,9 @@ use dea_fit::fit::drucker::{drucker, drucker_dense};
 use dea_fit::fit::hyperelastic::{fit, Search, Settings};
 use dea_fit::fit::lm::{self, LeastSquares, LmSettings};
 use dea_fit::fit::problem::{range_solve, svd_solve, HyperProblem, Residual, VarPro};
-use dea_fit::material::hyperelastic::{Mode, ModelSpec, ParamInfo, StrainEnergy, MODEL_NAMES};
+use dea_fit::material::hyperelastic::{
+    Mode, ModelSpec, StrainEnergy, WithoutCoefficients, MODEL_NAMES,
+};
 use nalgebra::{DMatrix, DVector};
 use std::hint::black_box;
 use std::path::Path;
@@ -173,31 +175,6 @@ fn varpro_projection(c: &mut Criterion) {
     g.finish();
 }
 
-/// A model with [`StrainEnergy::coefficient_of`] hidden: variable projection then
-/// evaluates it a second time at every accepted point (the method before).
-struct TwoEvaluations(Box<dyn StrainEnergy>);
-
-impl StrainEnergy for TwoEvaluations {
-    fn name(&self) -> String {
-        self.0.name()
-    }
-    fn params(&self) -> &[ParamInfo] {
-        self.0.params()
-    }
-    fn nominal_stress(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
-        self.0.nominal_stress(p, mode, lam)
-    }
-    fn tangent(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
-        self.0.tangent(p, mode, lam)
-    }
-    fn stress_jacobian(&self, p: &[f64], mode: Mode, lam: f64, out: &mut [f64]) {
-        self.0.stress_jacobian(p, mode, lam, out)
-    }
-    fn initial_shear_modulus(&self, p: &[f64]) -> f64 {
-        self.0.initial_shear_modulus(p)
-    }
-}
-
 fn varpro_search(c: &mut Criterion) {
     let sets = data();
     let treloar = &get(&sets, TRELOAR_ALL).data;
@@ -207,7 +184,7 @@ fn varpro_search(c: &mut Criterion) {
             .expect("ogden3")
     };
     let one = build();
-    let two = TwoEvaluations(build());
+    let two = WithoutCoefficients(build());
     let start = [1.0, 1.5, 1.0, 5.0, 1.0, -2.0];
     let settings = LmSettings::default();
     let search = |model: &dyn StrainEnergy| {

@@ -1468,28 +1468,14 @@ fn interchangeable_arms_are_reported_in_the_order_of_their_relaxation_times() {
 #[test]
 fn an_optimum_moved_by_the_integration_error_is_not_reported_converged() {
     let scene = rig();
-    let o = simulate(&scene, &RunOptions::default()).expect("runs");
-    let s0 = o.samples[0];
-    let peak = |k: ChannelKind| {
-        o.samples
-            .iter()
-            .map(|s| simulated(k, &s0, s).abs())
-            .fold(0.0, f64::max)
-    };
-    let exp = trace(
+    let noise = relative_noise(
         &scene,
         &[
-            (
-                ChannelKind::Contraction,
-                1e-3 * peak(ChannelKind::Contraction),
-            ),
-            (
-                ChannelKind::Capacitance,
-                1e-4 * peak(ChannelKind::Capacitance),
-            ),
+            (ChannelKind::Contraction, 1e-3),
+            (ChannelKind::Capacitance, 1e-4),
         ],
-        10,
     );
+    let exp = trace(&scene, &noise, 10);
     let run = |rtol: f64| {
         let settings = Settings {
             free: Some(vec![

@@ -150,7 +150,7 @@ fn page(
     ));
     if let Some(z) = v.integration_shift {
         page.text(format!(
-            "Integration check: at 1/100 of the simulator's tolerance the optimum moves by {z:.3} standard errors at most."
+            "Integration check: at 1/100 of the simulator's tolerance the optimum moves by {z:.2e} standard errors at most."
         ));
     }
     Ok(page)

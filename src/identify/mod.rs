@@ -304,29 +304,8 @@ pub fn identify_with(
         let s = solver(problem, iterations, best.termination.to_string());
         Ok(Run::Failed(Box::new(Failure::at_best(problem, why, s))))
     };
-    // σ from the residuals for the channels not given, then a polish from the best.
-    let mut x = best.x.clone();
-    let mut termination = best.termination.clone();
-    if given.iter().flatten().any(|g| !g) {
-        // the best search's residuals and Jacobian, rescaled to the new σ, start
-        // the polish without another run at x
-        let old = row_sigmas(&problem);
-        reestimate_sigma(&mut problem, &given, &best.residuals, k);
-        let (mut r0, mut j0) = (best.residuals.clone(), best.jacobian.clone());
-        for (row, (o, s)) in old.iter().zip(row_sigmas(&problem)).enumerate() {
-            r0[row] *= o / s;
-            j0.row_mut(row).scale_mut(o / s);
-        }
-        let mut p = problem.clone();
-        let mut c = control(settings.starts);
-        c.known_start = Some((r0, j0));
-        let polish = crate::fit::lm::search(&mut p, &x, &problem.x_bounds(), &settings.lm, &mut c);
-        iterations += polish.iterations;
-        if polish.cost.is_finite() {
-            x = polish.x;
-            termination = polish.termination;
-        }
-    }
+    let (mut x, termination, polished) = polish(&mut problem, &given, &best, settings, control);
+    iterations += polished;
     // Interchangeable arms in the order of their relaxation times.
     params::order_arms(&problem.free, &mut x);
     // The optimum: residuals, Jacobian, assessment.
@@ -354,19 +333,7 @@ pub fn identify_with(
     let shift = integration_shift(&mut problem, &x, &r, &jac, &assessment.estimates);
     warnings.extend(shift_warning(&shift));
     let shift = shift.ok().flatten();
-    let status = if !matches!(termination, Termination::Converged(_))
-        || shift
-            .as_ref()
-            .is_some_and(|s| s.sigmas > MAX_INTEGRATION_SHIFT)
-    {
-        Status::NotConverged
-    } else if assessment.estimates.iter().any(|e| !e.identifiable) {
-        Status::IllPosed
-    } else if warnings.is_empty() {
-        Status::Ok
-    } else {
-        Status::Warning
-    };
+    let status = status(&termination, shift.as_ref(), &assessment, &warnings);
     let (aicc, bic) = information_criteria(rss, n, k);
     Ok(Run::Identified(Box::new(Identification {
         status,
@@ -390,14 +357,74 @@ pub fn identify_with(
         assessment,
         profiles,
         theta,
-        stretch_range: runs
-            .iter()
-            .flat_map(|o| &o.samples)
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| {
-                (a.min(s.stretch), b.max(s.stretch))
-            }),
+        stretch_range: stretch_range(&runs),
         runs,
     })))
+}
+
+/// The status of an identification: `not_converged` when the search did not
+/// converge or the integration error moved the optimum by more than
+/// [`MAX_INTEGRATION_SHIFT`] standard errors, `ill_posed` when a constant is not
+/// identified, else `warning` with any warning and `ok` without.
+fn status(
+    termination: &Termination,
+    shift: Option<&Shift>,
+    assessment: &Assessment,
+    warnings: &[String],
+) -> Status {
+    if !matches!(termination, Termination::Converged(_))
+        || shift.is_some_and(|s| s.sigmas > MAX_INTEGRATION_SHIFT)
+    {
+        Status::NotConverged
+    } else if assessment.estimates.iter().any(|e| !e.identifiable) {
+        Status::IllPosed
+    } else if warnings.is_empty() {
+        Status::Ok
+    } else {
+        Status::Warning
+    }
+}
+
+/// Smallest and largest stretch over every sample of the runs.
+fn stretch_range(runs: &[crate::sim::Outcome]) -> (f64, f64) {
+    runs.iter()
+        .flat_map(|o| &o.samples)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| {
+            (a.min(s.stretch), b.max(s.stretch))
+        })
+}
+
+/// σ from the residuals for the channels whose σ was not given, then a polish from
+/// the best search (its residuals and Jacobian, rescaled to the new σ, start the
+/// polish without another run at its point): the point, its termination and the
+/// polish's iterations; the best search's own when every σ was given or the polish
+/// failed.
+fn polish(
+    problem: &mut Problem,
+    given: &[Vec<bool>],
+    best: &crate::fit::lm::LmResult,
+    settings: &Settings,
+    control: &(dyn Fn(usize) -> Control + Sync),
+) -> (Vec<f64>, Termination, usize) {
+    let own = (best.x.clone(), best.termination.clone(), 0);
+    if given.iter().flatten().all(|&g| g) {
+        return own;
+    }
+    let old = row_sigmas(problem);
+    reestimate_sigma(problem, given, &best.residuals, problem.dims().1);
+    let (mut r0, mut j0) = (best.residuals.clone(), best.jacobian.clone());
+    for (row, (o, s)) in old.iter().zip(row_sigmas(problem)).enumerate() {
+        r0[row] *= o / s;
+        j0.row_mut(row).scale_mut(o / s);
+    }
+    let mut p = problem.clone();
+    let mut c = control(settings.starts);
+    c.known_start = Some((r0, j0));
+    let polish = crate::fit::lm::search(&mut p, &best.x, &problem.x_bounds(), &settings.lm, &mut c);
+    match polish.cost.is_finite() {
+        true => (polish.x, polish.termination, polish.iterations),
+        false => (own.0, own.1, polish.iterations),
+    }
 }
 
 /// The problem: constants chosen, fixed values set, σ of every channel (given, or

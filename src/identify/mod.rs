@@ -26,6 +26,7 @@ pub mod selection;
 
 use crate::error::{Error, Result};
 use crate::fit::diagnostics::{information_criteria, rmse_percent};
+use crate::fit::linear::RowQr;
 use crate::fit::lm::{Control, LeastSquares, LmSettings, Termination};
 use crate::fit::Status;
 use crate::sim::RunOptions;
@@ -588,12 +589,17 @@ pub fn integration_shift(
     problem.residuals_more_accurate(x, &mut accurate)?;
     let d = accurate - r;
     let rms = d.norm() / (d.len() as f64).sqrt();
-    let j = jac.select_columns(&cols);
-    let svd = j.svd(true, true);
-    let eps = 1e-12 * svd.singular_values.max();
-    let step = svd
-        .solve(&(-&d), eps)
-        .map_err(|why| format!("no Gauss-Newton step: {why}"))?;
+    let mut qr = RowQr::with_rows(cols.len(), d.len());
+    let mut row = vec![0.0; cols.len()];
+    for (i, &di) in d.iter().enumerate() {
+        for (v, &c) in row.iter_mut().zip(&cols) {
+            *v = jac[(i, c)];
+        }
+        qr.push(&row, -di);
+    }
+    let step = qr
+        .solve()
+        .ok_or("no Gauss-Newton step (a rank-0 or non-finite Jacobian)")?;
     let mut worst = Shift {
         sigmas: 0.0,
         name: String::new(),

@@ -304,6 +304,20 @@ impl Problem {
         theta: &[f64],
         sensitivities: bool,
     ) -> std::result::Result<Vec<Trajectory>, String> {
+        let accuracy = match self.far {
+            true => Accuracy::Far,
+            false => Accuracy::Asked,
+        };
+        self.runs_at(theta, sensitivities, accuracy)
+    }
+
+    /// [`Problem::simulate_at`] at the tolerance `accuracy` says.
+    fn runs_at(
+        &mut self,
+        theta: &[f64],
+        sensitivities: bool,
+        accuracy: Accuracy,
+    ) -> std::result::Result<Vec<Trajectory>, String> {
         let opts = RunOptions {
             sensitivities,
             no_current_sensitivity: !self.fits_current(),
@@ -322,10 +336,7 @@ impl Problem {
             let opts = RunOptions {
                 max_steps: budget,
                 v_max: Some(v_max),
-                rtol: Some(match self.far {
-                    true => (FAR_RTOL_FACTOR * rtol).min(FAR_RTOL_MAX).max(rtol),
-                    false => rtol,
-                }),
+                rtol: Some(accuracy.rtol(rtol)),
                 ..opts
             };
             set_theta(&mut e.scene, theta);
@@ -386,23 +397,7 @@ impl Problem {
         x: &[f64],
         r: &mut DVector<f64>,
     ) -> std::result::Result<(), String> {
-        let theta = self.theta_at(x);
-        let mut out = Vec::with_capacity(self.experiments.len());
-        for (e, &v_max) in self.experiments.iter_mut().zip(&self.v_max) {
-            let rtol = self.run.rtol.unwrap_or(e.scene.time.rtol);
-            let opts = RunOptions {
-                rtol: Some((CHECK_RTOL_FACTOR * rtol).max(CHECK_RTOL_MIN)),
-                v_max: Some(v_max),
-                ..self.run
-            };
-            set_theta(&mut e.scene, &theta);
-            self.counts.runs.fetch_add(1, Ordering::Relaxed);
-            let o = trajectory(&e.scene, &opts).map_err(|err| format!("{}: {err}", e.name))?;
-            if let Some(why) = unusable(e, &RunView::from(&o), theta.len()) {
-                return Err(why);
-            }
-            out.push(o);
-        }
+        let out = self.runs_at(&self.theta_at(x), false, Accuracy::Check)?;
         let runs: Vec<RunView> = out.iter().map(RunView::from).collect();
         match self.fill(x, &runs, r, None) {
             true => Ok(()),
@@ -459,6 +454,28 @@ impl Problem {
             }
         }
         r.iter().all(|v| v.is_finite()) && jac.is_none_or(|j| j.iter().all(|v| v.is_finite()))
+    }
+}
+
+/// The tolerance of a run of the problem.
+#[derive(Debug, Clone, Copy)]
+enum Accuracy {
+    /// The tolerance asked (`--rtol`, else the scene's).
+    Asked,
+    /// A far start's ([`FAR_RTOL_FACTOR`], at most [`FAR_RTOL_MAX`]).
+    Far,
+    /// The integration check's ([`CHECK_RTOL_FACTOR`], at least [`CHECK_RTOL_MIN`]).
+    Check,
+}
+
+impl Accuracy {
+    /// The relative tolerance of a run whose asked tolerance is `rtol`.
+    fn rtol(self, rtol: f64) -> f64 {
+        match self {
+            Accuracy::Asked => rtol,
+            Accuracy::Far => (FAR_RTOL_FACTOR * rtol).min(FAR_RTOL_MAX).max(rtol),
+            Accuracy::Check => (CHECK_RTOL_FACTOR * rtol).max(CHECK_RTOL_MIN),
+        }
     }
 }
 

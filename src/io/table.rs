@@ -8,6 +8,7 @@
 
 use crate::error::{Error, Location, Result};
 use crate::units::Dimension;
+use rayon::prelude::*;
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
@@ -17,15 +18,18 @@ use std::path::{Path, PathBuf};
 pub struct Row {
     /// 1-based line number in the file.
     pub line: usize,
-    /// Index of the row's first field in [`Table`]'s `ends`.
-    first: usize,
+    /// The part of the file holding the row ([`Table`]'s `parts`).
+    part: u32,
+    /// Index of the row's first field in its part's `ends`.
+    first: u32,
 }
 
 /// A parsed table: header, rows, `# key: value` directives and provenance.
 ///
-/// The data fields are held back to back in one string (`cells`, with the end of each
-/// field in `ends`), not as a string per field: a 10⁶-row file then costs three
-/// allocations instead of three million.
+/// The data fields are held back to back in one string per part of the file (`cells`,
+/// with the end of each field in `ends`), not as a string per field: a 10⁶-row file
+/// then costs a few allocations instead of three million. A large file is split in
+/// parts at line ends and the parts are read in parallel ([`PART_BYTES`]).
 #[derive(Debug, Clone)]
 pub struct Table {
     /// The file.
@@ -41,11 +45,28 @@ pub struct Table {
     /// `# key: value` comment lines: (line, lower-case key, value).
     pub directives: Vec<(usize, String, String)>,
     delimiter: u8,
-    /// Every data field, trimmed, back to back.
+    parts: Vec<Cells>,
+}
+
+/// The fields of one part of a file: every field, trimmed, back to back, and the end
+/// of each.
+#[derive(Debug, Clone, Default)]
+struct Cells {
     cells: String,
-    /// The end of each field in `cells`.
     ends: Vec<usize>,
 }
+
+/// The rows, fields and directives read from one part of a file.
+struct Part {
+    rows: Vec<Row>,
+    cells: Cells,
+    directives: Vec<(usize, String, String)>,
+}
+
+/// Bytes of the data below the header from which a file is read in parts, and about
+/// the size of each part: large enough that a part's start-up costs nothing, small
+/// enough that two threads share a 20 MB file evenly.
+const PART_BYTES: usize = 1 << 20;
 
 impl Table {
     /// Read and split a file.
@@ -54,9 +75,14 @@ impl Table {
         Self::parse(path, &bytes)
     }
 
-    /// Split bytes that came from `path`, in one pass over the lines.
+    /// Split bytes that came from `path` (and hash them, alongside).
     pub fn parse(path: &Path, bytes: &[u8]) -> Result<Table> {
-        let sha256 = super::sha256_hex(bytes);
+        let (sha256, table) = rayon::join(|| super::sha256_hex(bytes), || Self::split(path, bytes));
+        table.map(|t| Table { sha256, ..t })
+    }
+
+    /// The header, then the data below it (in parts read in parallel when large).
+    fn split(path: &Path, bytes: &[u8]) -> Result<Table> {
         let text = decode(path, bytes)?;
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         // Lines end in LF or CRLF; a file without any LF may use classic-Mac CR ends.
@@ -65,79 +91,85 @@ impl Table {
         } else {
             b'\r'
         };
-        let lines = split_bytes(text, end)
-            .map(|l| l.strip_suffix('\r').unwrap_or(l))
-            .enumerate();
-
-        let mut directives = Vec::new();
-        let mut splitter: Option<Splitter> = None;
-        let mut header: Option<(usize, Vec<String>)> = None;
-        // At most one row a line: reserved once, the row and field lists of a 10⁶-row
-        // file are never copied to grow.
-        let line_count = 1 + memchr::memchr_iter(end, text.as_bytes()).count();
-        let mut rows = Vec::with_capacity(line_count);
-        // The fields are a subset of the text: one allocation holds them all.
-        let mut cells = String::with_capacity(text.len());
-        let mut ends = Vec::new();
-        for (i, line) in lines {
-            let (line, t) = (i + 1, line.trim());
-            if let Some(c) = t.strip_prefix('#') {
-                if let Some((k, v)) = c.split_once(':') {
-                    directives.push((line, k.trim().to_ascii_lowercase(), v.trim().to_string()));
-                }
-                continue;
-            } else if t.is_empty() {
-                continue;
-            }
-            // The first content line sets the separator.
-            let splitter = splitter.get_or_insert_with(|| Splitter::new(t));
-            let (first, from) = (ends.len(), cells.len());
-            let n = splitter.split(t, &mut cells, &mut ends);
-            if cells.len() == from {
-                // Every field is empty: a blank line.
-                ends.truncate(first);
-                continue;
-            }
-            let Some((header_line, header)) = &header else {
-                let mut start = from;
-                let names = ends[first..]
-                    .iter()
-                    .map(|&e| {
-                        let name = cells[start..e].to_string();
-                        start = e;
-                        name
-                    })
-                    .collect();
-                ends.truncate(first);
-                cells.truncate(from);
-                ends.reserve(line_count * n);
-                header = Some((line, names));
-                continue;
-            };
-            if n != header.len() {
-                return Err(Error::input(
-                    Location::at(path, line, n.min(header.len()) + 1),
-                    format!(
-                        "expected {} fields (as in the header on line {header_line}), found {n}",
-                        header.len(),
-                    ),
-                )
-                .with_hint(field_count_hint(
-                    t,
-                    splitter.delimiter,
-                    n > header.len(),
-                )));
-            }
-            rows.push(Row { line, first });
-        }
         let no_header = || {
             Error::input(Location::file(path), "the file holds no header and no data").with_hint(
                 "the first non-comment line must name the columns, e.g. stretch,nominal_stress_kPa",
             )
         };
-        let (Some(splitter), Some((header_line, header))) = (splitter, header) else {
-            return Err(no_header());
+        let mut directives = Vec::new();
+        let mut offset = 0;
+        let mut line = 0;
+        // The first content line sets the separator.
+        let mut splitter: Option<Splitter> = None;
+        // The header: the first line with a non-empty field, after comments and blanks.
+        let (delimiter, header) = loop {
+            if offset > text.len() {
+                return Err(no_header());
+            }
+            let stop =
+                memchr::memchr(end, &text.as_bytes()[offset..]).map_or(text.len(), |i| offset + i);
+            let raw = &text[offset..stop];
+            offset = stop + 1;
+            line += 1;
+            let t = raw.strip_suffix('\r').unwrap_or(raw).trim();
+            if let Some(c) = t.strip_prefix('#') {
+                directives.extend(directive(line, c));
+                continue;
+            } else if t.is_empty() {
+                continue;
+            }
+            let splitter = splitter.get_or_insert_with(|| Splitter::new(delimiter_of(t)));
+            let mut cells = Cells::default();
+            splitter.split(t, &mut cells.cells, &mut cells.ends);
+            if cells.cells.is_empty() {
+                continue;
+            }
+            let mut start = 0;
+            let names: Vec<String> = cells
+                .ends
+                .iter()
+                .map(|&e| {
+                    let name = cells.cells[start..e].to_string();
+                    start = e;
+                    name
+                })
+                .collect();
+            break (splitter.delimiter, (line, names));
         };
+        let body = text.get(offset..).unwrap_or("");
+        let header_line = header.0;
+        let parts = part_ranges(body, end);
+        // The line of each part's first line: one vectorised count of line ends per part.
+        let mut first_lines: Vec<usize> = parts
+            .iter()
+            .map(|r| memchr::memchr_iter(end, &body.as_bytes()[r.clone()]).count() + 1)
+            .collect();
+        let mut next = line + 1;
+        for n in &mut first_lines {
+            (*n, next) = (next, next + *n);
+        }
+        let read = |(p, r): (usize, &std::ops::Range<usize>)| {
+            let at = (first_lines[p], p as u32);
+            read_part(path, &body[r.clone()], end, at, delimiter, &header)
+        };
+        let read: Vec<Result<Part>> = if parts.len() > 1 {
+            parts.par_iter().enumerate().map(read).collect()
+        } else {
+            parts.iter().enumerate().map(read).collect()
+        };
+        let mut rows = Vec::with_capacity(
+            read.iter()
+                .map(|p| p.as_ref().map_or(0, |p| p.rows.len()))
+                .sum(),
+        );
+        let mut cells = Vec::with_capacity(read.len());
+        for part in read {
+            // The first error in file order: parts stop at their own first.
+            let part = part?;
+            rows.extend(part.rows);
+            directives.extend(part.directives);
+            cells.push(part.cells);
+        }
         if rows.is_empty() {
             return Err(Error::input(
                 Location::line(path, header_line),
@@ -147,22 +179,22 @@ impl Table {
         }
         Ok(Table {
             path: path.to_path_buf(),
-            sha256,
-            header,
+            sha256: String::new(),
+            header: header.1,
             header_line,
             rows,
             directives,
-            delimiter: splitter.delimiter,
-            cells,
-            ends,
+            delimiter,
+            parts: cells,
         })
     }
 
     /// The trimmed text of `row`'s field in column `col` (0-based).
     pub fn field(&self, row: &Row, col: usize) -> &str {
-        let i = row.first + col;
-        let start = if i == 0 { 0 } else { self.ends[i - 1] };
-        &self.cells[start..self.ends[i]]
+        let part = &self.parts[row.part as usize];
+        let i = row.first as usize + col;
+        let start = if i == 0 { 0 } else { part.ends[i - 1] };
+        &part.cells[start..part.ends[i]]
     }
 
     /// The error for a header field that names no accepted column: empty, a number
@@ -226,6 +258,104 @@ impl Table {
     }
 }
 
+/// The separator of the first content line: tab, else `;`, else `,`.
+fn delimiter_of(first: &str) -> u8 {
+    if first.contains('\t') {
+        b'\t'
+    } else if first.contains(';') {
+        b';'
+    } else {
+        b','
+    }
+}
+
+/// The directive of a comment line's text after `#`, if it is `key: value`.
+fn directive(line: usize, comment: &str) -> Option<(usize, String, String)> {
+    let (k, v) = comment.split_once(':')?;
+    Some((line, k.trim().to_ascii_lowercase(), v.trim().to_string()))
+}
+
+/// `body` split at line ends (`end`) into ranges of about [`PART_BYTES`], each
+/// whole lines without the line end that follows it; one range for a small body.
+fn part_ranges(body: &str, end: u8) -> Vec<std::ops::Range<usize>> {
+    let bytes = body.as_bytes();
+    let mut ranges = Vec::with_capacity(bytes.len() / PART_BYTES + 1);
+    let mut start = 0;
+    while bytes.len() - start > 2 * PART_BYTES {
+        match memchr::memchr(end, &bytes[start + PART_BYTES..]) {
+            Some(i) => {
+                let stop = start + PART_BYTES + i;
+                ranges.push(start..stop);
+                start = stop + 1;
+            }
+            None => break,
+        }
+    }
+    ranges.push(start..bytes.len());
+    ranges
+}
+
+/// The rows of `text`, whole lines of a file below its header ending in `end`, the
+/// first at line `at.0`, read as part `at.1` of the table: comments kept as
+/// directives, blank lines skipped, every row checked to have the header's field
+/// count (the first that has not is the error).
+fn read_part(
+    path: &Path,
+    text: &str,
+    end: u8,
+    (first_line, part): (usize, u32),
+    delimiter: u8,
+    (header_line, header): &(usize, Vec<String>),
+) -> Result<Part> {
+    let mut splitter = Splitter::new(delimiter);
+    let lines = 1 + memchr::memchr_iter(end, text.as_bytes()).count();
+    let mut rows = Vec::with_capacity(lines);
+    let mut directives = Vec::new();
+    // The fields are a subset of the text: one allocation holds them all.
+    let mut cells = Cells {
+        cells: String::with_capacity(text.len()),
+        ends: Vec::with_capacity(lines * header.len()),
+    };
+    for (i, raw) in split_bytes(text, end).enumerate() {
+        let (line, t) = (first_line + i, raw.strip_suffix('\r').unwrap_or(raw).trim());
+        if let Some(c) = t.strip_prefix('#') {
+            directives.extend(directive(line, c));
+            continue;
+        } else if t.is_empty() {
+            continue;
+        }
+        let (first, from) = (cells.ends.len(), cells.cells.len());
+        let n = splitter.split(t, &mut cells.cells, &mut cells.ends);
+        if cells.cells.len() == from {
+            // Every field is empty: a blank line.
+            cells.ends.truncate(first);
+            continue;
+        }
+        if n != header.len() {
+            return Err(Error::input(
+                Location::at(path, line, n.min(header.len()) + 1),
+                format!(
+                    "expected {} fields (as in the header on line {header_line}), found {n}",
+                    header.len(),
+                ),
+            )
+            .with_hint(field_count_hint(t, delimiter, n > header.len())));
+        }
+        let first = u32::try_from(first).map_err(|_| {
+            Error::input(
+                Location::line(path, line),
+                "more than 4·10⁹ fields in one part of the file",
+            )
+        })?;
+        rows.push(Row { line, part, first });
+    }
+    Ok(Part {
+        rows,
+        cells,
+        directives,
+    })
+}
+
 /// The text of a file, or an error saying what kind of file it is instead.
 fn decode<'a>(path: &Path, bytes: &'a [u8]) -> Result<&'a str> {
     let hint = "save it as CSV (UTF-8) and try again";
@@ -270,15 +400,8 @@ struct Splitter {
 }
 
 impl Splitter {
-    /// The separator of the first content line: tab, else `;`, else `,`.
-    fn new(first: &str) -> Splitter {
-        let delimiter = if first.contains('\t') {
-            b'\t'
-        } else if first.contains(';') {
-            b';'
-        } else {
-            b','
-        };
+    /// A splitter at `delimiter`.
+    fn new(delimiter: u8) -> Splitter {
         Splitter {
             delimiter,
             quoted: csv_core::ReaderBuilder::new()
@@ -291,18 +414,43 @@ impl Splitter {
         }
     }
 
+    /// The fields of a line without quotes, split in one pass over its bytes (a
+    /// vectorised search per field costs more than it saves on fields of a few
+    /// bytes) and trimmed of ASCII whitespace; `None`, with nothing appended, at the
+    /// first quote.
+    fn split_unquoted(
+        &self,
+        line: &str,
+        cells: &mut String,
+        ends: &mut Vec<usize>,
+    ) -> Option<usize> {
+        let (from, first) = (cells.len(), ends.len());
+        let mut push = |field: &str| {
+            cells.push_str(field.trim_ascii());
+            ends.push(cells.len());
+        };
+        let mut start = 0;
+        for (i, &b) in line.as_bytes().iter().enumerate() {
+            if b == self.delimiter {
+                // `delimiter` is ASCII: both ends are character boundaries.
+                push(&line[start..i]);
+                start = i + 1;
+            } else if b == b'"' {
+                cells.truncate(from);
+                ends.truncate(first);
+                return None;
+            }
+        }
+        push(&line[start..]);
+        Some(ends.len() - first)
+    }
+
     /// Append the fields of `line` to `cells` (their ends to `ends`); the number of
     /// fields. A line without quotes (nearly every line) is split directly, trimming
     /// ASCII whitespace; a quoted one goes through the CSV parser and its fields are
     /// trimmed as `csv::Trim::All` trims them.
     fn split(&mut self, line: &str, cells: &mut String, ends: &mut Vec<usize>) -> usize {
-        if memchr::memchr(b'"', line.as_bytes()).is_none() {
-            let mut n = 0;
-            for f in split_bytes(line, self.delimiter) {
-                cells.push_str(f.trim_matches(|c: char| c.is_ascii_whitespace()));
-                ends.push(cells.len());
-                n += 1;
-            }
+        if let Some(n) = self.split_unquoted(line, cells, ends) {
             return n;
         }
         use csv_core::ReadRecordResult as R;
@@ -457,7 +605,7 @@ mod tests {
             let line = line.trim();
             proptest::prop_assume!(!line.is_empty());
             let first = ["a,b", "a;b", "a\tb"][sep];
-            let mut splitter = Splitter::new(first);
+            let mut splitter = Splitter::new(delimiter_of(first));
             let (mut cells, mut ends) = (String::new(), Vec::new());
             // A line before it, so that the store holds more than this line.
             splitter.split("x\"y\",z", &mut cells, &mut ends);
@@ -527,6 +675,61 @@ mod tests {
             let want = field.parse::<f64>().ok();
             proptest::prop_assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits), "{}", field);
         }
+    }
+
+    /// A file of several parts: every row, field, line number and directive is where
+    /// a line-by-line reading puts it, across the part boundaries, with CRLF ends,
+    /// comments, blank and quoted lines among the rows.
+    #[test]
+    fn a_file_read_in_parts_is_the_file_read_line_by_line() {
+        let mut text = String::from("# mode: planar\r\nstretch,stress_kPa\r\n");
+        let mut want = Vec::new();
+        let mut line = 2;
+        while text.len() < 5 * PART_BYTES / 2 {
+            line += 1;
+            let i = want.len();
+            match i % 97 {
+                13 => text.push_str("\r\n"),
+                29 => text.push_str(&format!("# note {i}: kept\r\n")),
+                41 => {
+                    text.push_str(&format!("\"{i}.5\", \" {i} \"\r\n"));
+                    want.push((line, format!("{i}.5"), i.to_string()));
+                }
+                _ => {
+                    text.push_str(&format!(" {i}.25 ,{}\r\n", 2 * i));
+                    want.push((line, format!("{i}.25"), (2 * i).to_string()));
+                }
+            }
+        }
+        assert!(part_ranges(&text, b'\n').len() > 1);
+        let t = Table::parse(Path::new("t.csv"), text.as_bytes()).unwrap();
+        assert_eq!(t.parts.len(), 2, "the body is read in parts");
+        let got: Vec<(usize, String, String)> = t
+            .rows
+            .iter()
+            .map(|r| (r.line, t.field(r, 0).to_string(), t.field(r, 1).to_string()))
+            .collect();
+        assert_eq!(got, want);
+        let notes: Vec<usize> = t.directives.iter().map(|d| d.0).collect();
+        let want_notes: Vec<usize> = text
+            .split('\n')
+            .enumerate()
+            .filter(|(_, l)| l.starts_with('#'))
+            .map(|(i, _)| i + 1)
+            .collect();
+        assert_eq!(notes, want_notes);
+
+        // A short row in the second part and one in the third: the first is reported.
+        let mut lines: Vec<&str> = text.split('\n').collect();
+        let (a, b) = (lines.len() * 2 / 3, lines.len() * 9 / 10);
+        lines[b] = "7\r";
+        lines[a] = "8\r";
+        let bad = lines.join("\n");
+        let e = Table::parse(Path::new("t.csv"), bad.as_bytes()).unwrap_err();
+        assert!(
+            e.to_string().contains(&format!("t.csv:{}:2", a + 1)),
+            "{e}"
+        );
     }
 
     #[test]

@@ -2,7 +2,9 @@
 //! every tensile point must lie in ([`Sample::check`], [`Dataset::check`]).
 
 use crate::error::{Error, Location, Result};
+use crate::fit::problem::PARALLEL_ROWS;
 use crate::material::hyperelastic::Mode;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Plausible stretches of a tensile test, (smallest, largest).
@@ -231,14 +233,19 @@ impl Dataset {
                 "give at least one tensile-test file with data rows",
             ));
         }
-        for s in &self.samples {
-            if let Err(f) = s.check() {
-                let loc = match self.sources.get(s.source) {
-                    Some(src) => Location::line(&src.path, s.line),
-                    None => Location::line("<data>", s.line),
-                };
-                return Err(Error::input(loc, f.message).with_hint(f.hint));
-            }
+        // The first sample in order that fails (a large dataset searched in parallel).
+        let bad = |s: &Sample| s.check().is_err();
+        let first = if self.samples.len() < PARALLEL_ROWS {
+            self.samples.iter().position(bad)
+        } else {
+            self.samples.par_iter().position_first(bad)
+        };
+        if let Some((s, Err(f))) = first.map(|i| (&self.samples[i], self.samples[i].check())) {
+            let loc = match self.sources.get(s.source) {
+                Some(src) => Location::line(&src.path, s.line),
+                None => Location::line("<data>", s.line),
+            };
+            return Err(Error::input(loc, f.message).with_hint(f.hint));
         }
         if self.samples.iter().all(|s| s.stress == 0.0) {
             return Err(whole(
@@ -270,5 +277,38 @@ impl Dataset {
                 None => Some((s.stretch, s.stretch)),
                 Some((a, b)) => Some((a.min(s.stretch), b.max(s.stretch))),
             })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The check names the first failing sample in order, also when a large dataset is
+    /// searched in parallel (two bad samples, the later one in an earlier-finishing
+    /// block would be found first by an unordered search).
+    #[test]
+    fn the_first_bad_sample_is_reported() {
+        for n in [100, 4 * PARALLEL_ROWS] {
+            let mut samples: Vec<Sample> = (0..n)
+                .map(|i| Sample {
+                    mode: Mode::Uniaxial,
+                    stretch: 1.0 + i as f64 / n as f64,
+                    stress: 1e3 * i as f64,
+                    weight: 1.0,
+                    source: 0,
+                    line: i + 2,
+                })
+                .collect();
+            samples[n - 3].stretch = -1.0;
+            samples[n / 2].weight = 0.0;
+            let data = Dataset {
+                samples,
+                sources: Vec::new(),
+            };
+            let e = data.check().unwrap_err().to_string();
+            assert!(e.contains(&format!("<data>:{}", n / 2 + 2)), "{e}");
+            assert!(e.contains("weight"), "{e}");
+        }
     }
 }

@@ -106,6 +106,20 @@ impl RowQr {
         }
     }
 
+    /// Add the rows of `other` (a factor of the same k): the rows of its R̃ pushed
+    /// as rows. [A₁; A₂] and [R̃₁; R̃₂] have the same normal equations and residual
+    /// norm, so the result is a factor of the stacked problem (the tall-skinny QR of
+    /// Demmel, Grigori, Hoemmen & Langou, SIAM J. Sci. Comput. 34 (2012) A206–A239);
+    /// the row count is the two problems' rows.
+    pub fn append(&mut self, other: &RowQr) {
+        let (k, m, rows) = (self.k, self.k + 1, self.rows);
+        let r = other.reduced();
+        for row in r.chunks_exact(m) {
+            self.push(&row[..k], row[k]);
+        }
+        self.rows = rows + other.rows;
+    }
+
     /// R̃ (row-major, (k + 1)²) with every row reduced (rows still pending are
     /// reduced in a copy of the stack).
     fn reduced(&self) -> Vec<f64> {
@@ -564,6 +578,22 @@ mod tests {
             let rtr = qr.r().transpose() * qr.r();
             assert!((&rtr - &ata).norm() <= 1e-12 * ata.norm());
             assert_eq!(qr.rows(), n);
+            // Blocks factored apart and appended: a factor of the whole problem (the
+            // same normal equations to round-off, the same solution as the SVD).
+            let mut appended = RowQr::new(3);
+            for rows in [0..17, 17..37, 37..n] {
+                let mut block = RowQr::with_rows(3, rows.len());
+                for i in rows {
+                    let row: Vec<f64> = a.row(i).iter().copied().collect();
+                    block.push(&row, b[i]);
+                }
+                appended.append(&block);
+            }
+            assert_eq!(appended.rows(), n);
+            let rtr = appended.r().transpose() * appended.r();
+            assert!((&rtr - &ata).norm() <= 1e-12 * ata.norm());
+            let got = appended.solve().unwrap();
+            assert!((&got - &want).norm() <= 1e-9 * scale, "{got} vs {want}");
         }
         // Not finite: no solution; empty of rank: none either.
         let mut qr = RowQr::new(2);

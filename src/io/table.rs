@@ -726,10 +726,7 @@ mod tests {
         lines[a] = "8\r";
         let bad = lines.join("\n");
         let e = Table::parse(Path::new("t.csv"), bad.as_bytes()).unwrap_err();
-        assert!(
-            e.to_string().contains(&format!("t.csv:{}:2", a + 1)),
-            "{e}"
-        );
+        assert!(e.to_string().contains(&format!("t.csv:{}:2", a + 1)), "{e}");
     }
 
     #[test]

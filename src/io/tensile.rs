@@ -363,14 +363,18 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
             .map(&read_row)
             .collect::<Result<Vec<_>>>()?,
     };
-    let mut modes: Vec<Mode> = samples.iter().map(|s| s.mode).collect();
-    modes.sort();
-    modes.dedup();
+    // The modes present and the stretch range, in one pass.
+    let mut present = [false; 3];
     let (lo, hi) = samples
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| {
+            present[s.mode as usize] = true;
             (a.min(s.stretch), b.max(s.stretch))
         });
+    let modes: Vec<Mode> = Mode::ALL
+        .into_iter()
+        .filter(|&m| present[m as usize])
+        .collect();
     Ok(Dataset {
         samples,
         sources: vec![Source {

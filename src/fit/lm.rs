@@ -61,6 +61,22 @@ pub trait LeastSquares {
     fn secant_jacobian(&self) -> bool {
         false
     }
+    /// Whether the problem forms the Gauss-Newton normal equations JᵀJ and Jᵀr
+    /// itself ([`LeastSquares::normal_equations`]) instead of the m × n Jacobian
+    /// (whose products are all the search uses of it): from small Gram products of
+    /// its own columns, without the passes over the data the tall Jacobian and
+    /// its products take. The search then hands [`LeastSquares::eval`] an empty
+    /// (0 × n) Jacobian as the request to form them, takes no secant updates, and
+    /// returns an empty [`LmResult::jacobian`]; such a search cannot be
+    /// checkpointed.
+    fn forms_normal_equations(&self) -> bool {
+        false
+    }
+    /// JᵀJ and Jᵀr of the last evaluation asked for a Jacobian, if it was at `p`
+    /// (see [`LeastSquares::forms_normal_equations`]).
+    fn normal_equations(&self, _p: &[f64]) -> Option<(DMatrix<f64>, DVector<f64>)> {
+        None
+    }
 }
 
 /// Relative damping of the Gauss-Newton step of the noise-floor test
@@ -167,7 +183,8 @@ pub struct LmResult {
     /// evaluation not to be trusted, as `cost` is not). A search
     /// [`Termination::Abandoned`] or stopped by the wall time may leave a secant
     /// update here ([`LeastSquares::secant_jacobian`]); every other stop evaluates
-    /// it.
+    /// it. Empty (0 × n) for a problem that forms its normal equations itself
+    /// ([`LeastSquares::forms_normal_equations`]).
     pub jacobian: DMatrix<f64>,
 }
 
@@ -370,7 +387,14 @@ impl Lm {
                 .map(|(&v, &b)| project(v, b))
                 .collect(),
             r: DVector::zeros(m),
-            jac: DMatrix::zeros(m, n),
+            jac: DMatrix::zeros(
+                if problem.forms_normal_equations() {
+                    0
+                } else {
+                    m
+                },
+                n,
+            ),
             cost: f64::INFINITY,
             mu: 1e-3,
             nu: 2.0,
@@ -418,9 +442,11 @@ impl Lm {
             return self.exact(problem).or(Some(Termination::MaxIterations));
         }
         let n = self.x.len();
+        let (a, g) = match self.normal_equations(problem) {
+            Ok(ag) => ag,
+            Err(stop) => return Some(stop),
+        };
         let (x, bounds, settings) = (&mut self.x, &self.bounds, &self.settings);
-        let a = self.jac.tr_mul(&self.jac);
-        let g = self.jac.tr_mul(&self.r);
         if !(a.iter().all(|v| v.is_finite()) && g.iter().all(|v| v.is_finite())) {
             return Some(Termination::Failed(
                 "the normal equations overflowed".into(),
@@ -513,7 +539,9 @@ impl Lm {
                     let rho = (self.cost - cost_new) / pred;
                     let rel = (self.cost - cost_new) / self.cost.max(f64::MIN_POSITIVE);
                     x.copy_from_slice(&x_new);
-                    self.secant = !trial_jac && problem.secant_jacobian();
+                    self.secant = !trial_jac
+                        && problem.secant_jacobian()
+                        && !problem.forms_normal_equations();
                     if trial_jac {
                         std::mem::swap(&mut self.r, &mut r_new);
                         std::mem::swap(&mut self.jac, &mut self.jac_trial);
@@ -549,6 +577,32 @@ impl Lm {
                 return Some(Termination::Converged("no further decrease"));
             }
         }
+    }
+
+    /// JᵀJ and Jᵀr at `x`: from the Jacobian, or the problem's own
+    /// ([`LeastSquares::forms_normal_equations`]; evaluated again at `x` with them
+    /// should its last such evaluation have been elsewhere). Err: the search stops
+    /// there, that evaluation failed.
+    fn normal_equations<P: LeastSquares + ?Sized>(
+        &mut self,
+        problem: &mut P,
+    ) -> Result<(DMatrix<f64>, DVector<f64>), Termination> {
+        if !problem.forms_normal_equations() {
+            return Ok((self.jac.tr_mul(&self.jac), self.jac.tr_mul(&self.r)));
+        }
+        if let Some(ag) = problem.normal_equations(&self.x) {
+            return Ok(ag);
+        }
+        self.evaluations += 1;
+        if problem.eval(&self.x, &mut self.r, Some(&mut self.jac)) {
+            if let Some(ag) = problem.normal_equations(&self.x) {
+                return Ok(ag);
+            }
+        }
+        let why = problem.failure().unwrap_or_else(|| "not finite".into());
+        Err(Termination::Failed(format!(
+            "the normal equations at an accepted point: {why}"
+        )))
     }
 
     /// A stopping rule that read the Jacobian (gradient, noise floor, step) holds:

@@ -442,7 +442,7 @@ impl Lm {
             return self.exact(problem).or(Some(Termination::MaxIterations));
         }
         let n = self.x.len();
-        let (a, g) = match self.normal_equations(problem) {
+        let (a, g) = match self.normal_equations(&*problem) {
             Ok(ag) => ag,
             Err(stop) => return Some(stop),
         };
@@ -580,29 +580,20 @@ impl Lm {
     }
 
     /// JᵀJ and Jᵀr at `x`: from the Jacobian, or the problem's own
-    /// ([`LeastSquares::forms_normal_equations`]; evaluated again at `x` with them
-    /// should its last such evaluation have been elsewhere). Err: the search stops
-    /// there, that evaluation failed.
+    /// ([`LeastSquares::forms_normal_equations`]: every point the search stands on
+    /// was evaluated with them last). Err: the problem has none for `x`.
     fn normal_equations<P: LeastSquares + ?Sized>(
-        &mut self,
-        problem: &mut P,
+        &self,
+        problem: &P,
     ) -> Result<(DMatrix<f64>, DVector<f64>), Termination> {
         if !problem.forms_normal_equations() {
             return Ok((self.jac.tr_mul(&self.jac), self.jac.tr_mul(&self.r)));
         }
-        if let Some(ag) = problem.normal_equations(&self.x) {
-            return Ok(ag);
-        }
-        self.evaluations += 1;
-        if problem.eval(&self.x, &mut self.r, Some(&mut self.jac)) {
-            if let Some(ag) = problem.normal_equations(&self.x) {
-                return Ok(ag);
-            }
-        }
-        let why = problem.failure().unwrap_or_else(|| "not finite".into());
-        Err(Termination::Failed(format!(
-            "the normal equations at an accepted point: {why}"
-        )))
+        problem.normal_equations(&self.x).ok_or_else(|| {
+            Termination::Failed(
+                "the problem formed no normal equations at the current point".into(),
+            )
+        })
     }
 
     /// A stopping rule that read the Jacobian (gradient, noise floor, step) holds:
@@ -1353,6 +1344,68 @@ mod tests {
         };
         let wrong = search(&mut Rosen, &mid, &b, &LmSettings::default(), &mut c);
         assert_eq!(wrong.evaluations, fresh.evaluations);
+    }
+
+    /// Rosenbrock forming its own normal equations (JᵀJ and Jᵀr of the point of
+    /// its last Jacobian evaluation, remembered with that point), the trial
+    /// evaluated with them.
+    #[derive(Default)]
+    struct RosenNormal {
+        at: Vec<f64>,
+        normal: Option<(DMatrix<f64>, DVector<f64>)>,
+    }
+    impl LeastSquares for RosenNormal {
+        fn dims(&self) -> (usize, usize) {
+            (2, 2)
+        }
+        fn eval(
+            &mut self,
+            p: &[f64],
+            r: &mut DVector<f64>,
+            jac: Option<&mut DMatrix<f64>>,
+        ) -> bool {
+            assert!(jac.as_ref().is_none_or(|j| j.is_empty()), "a tall Jacobian");
+            let mut j = DMatrix::zeros(2, 2);
+            Rosen.eval(p, r, Some(&mut j));
+            if jac.is_some() {
+                self.at = p.to_vec();
+                self.normal = Some((j.tr_mul(&j), j.tr_mul(r)));
+            }
+            true
+        }
+        fn jacobian_with_trial(&self) -> bool {
+            true
+        }
+        fn forms_normal_equations(&self) -> bool {
+            true
+        }
+        fn normal_equations(&self, p: &[f64]) -> Option<(DMatrix<f64>, DVector<f64>)> {
+            (self.at == p).then(|| self.normal.clone()).flatten()
+        }
+    }
+
+    /// A problem that forms its normal equations itself is searched exactly as the
+    /// one that hands over its Jacobian (the same products enter every step: bit for
+    /// bit the same iterates, cost and iterations), with no tall Jacobian asked for
+    /// or returned.
+    #[test]
+    fn normal_equations_formed_by_the_problem_give_the_same_search() {
+        let inf = f64::INFINITY;
+        let b = [(-inf, 0.5), (-inf, inf)];
+        let plain = minimize(&mut RosenTrial, &[-1.2, 1.0], &b, &LmSettings::default());
+        let normal = minimize(
+            &mut RosenNormal::default(),
+            &[-1.2, 1.0],
+            &b,
+            &LmSettings::default(),
+        );
+        assert_eq!(
+            (normal.x.clone(), normal.cost),
+            (plain.x.clone(), plain.cost)
+        );
+        assert_eq!(normal.iterations, plain.iterations);
+        assert_eq!(normal.termination, plain.termination);
+        assert!(normal.jacobian.is_empty());
     }
 
     /// The reach rule by hand: cost 150 against a reference of 100 (margin 1 % +

@@ -61,6 +61,22 @@ pub trait LeastSquares {
     fn secant_jacobian(&self) -> bool {
         false
     }
+    /// Whether the problem forms the Gauss-Newton normal equations JᵀJ and Jᵀr
+    /// itself ([`LeastSquares::normal_equations`]) instead of the m × n Jacobian
+    /// (whose products are all the search uses of it): from small Gram products of
+    /// its own columns, without the passes over the data the tall Jacobian and
+    /// its products take. The search then hands [`LeastSquares::eval`] an empty
+    /// (0 × n) Jacobian as the request to form them, takes no secant updates, and
+    /// returns an empty [`LmResult::jacobian`]; such a search cannot be
+    /// checkpointed.
+    fn forms_normal_equations(&self) -> bool {
+        false
+    }
+    /// JᵀJ and Jᵀr of the last evaluation asked for a Jacobian, if it was at `p`
+    /// (see [`LeastSquares::forms_normal_equations`]).
+    fn normal_equations(&self, _p: &[f64]) -> Option<(DMatrix<f64>, DVector<f64>)> {
+        None
+    }
 }
 
 /// Relative damping of the Gauss-Newton step of the noise-floor test
@@ -167,7 +183,8 @@ pub struct LmResult {
     /// evaluation not to be trusted, as `cost` is not). A search
     /// [`Termination::Abandoned`] or stopped by the wall time may leave a secant
     /// update here ([`LeastSquares::secant_jacobian`]); every other stop evaluates
-    /// it.
+    /// it. Empty (0 × n) for a problem that forms its normal equations itself
+    /// ([`LeastSquares::forms_normal_equations`]).
     pub jacobian: DMatrix<f64>,
 }
 
@@ -370,7 +387,14 @@ impl Lm {
                 .map(|(&v, &b)| project(v, b))
                 .collect(),
             r: DVector::zeros(m),
-            jac: DMatrix::zeros(m, n),
+            jac: DMatrix::zeros(
+                if problem.forms_normal_equations() {
+                    0
+                } else {
+                    m
+                },
+                n,
+            ),
             cost: f64::INFINITY,
             mu: 1e-3,
             nu: 2.0,
@@ -418,9 +442,11 @@ impl Lm {
             return self.exact(problem).or(Some(Termination::MaxIterations));
         }
         let n = self.x.len();
+        let (a, g) = match self.normal_equations(&*problem) {
+            Ok(ag) => ag,
+            Err(stop) => return Some(stop),
+        };
         let (x, bounds, settings) = (&mut self.x, &self.bounds, &self.settings);
-        let a = self.jac.tr_mul(&self.jac);
-        let g = self.jac.tr_mul(&self.r);
         if !(a.iter().all(|v| v.is_finite()) && g.iter().all(|v| v.is_finite())) {
             return Some(Termination::Failed(
                 "the normal equations overflowed".into(),
@@ -513,7 +539,9 @@ impl Lm {
                     let rho = (self.cost - cost_new) / pred;
                     let rel = (self.cost - cost_new) / self.cost.max(f64::MIN_POSITIVE);
                     x.copy_from_slice(&x_new);
-                    self.secant = !trial_jac && problem.secant_jacobian();
+                    self.secant = !trial_jac
+                        && problem.secant_jacobian()
+                        && !problem.forms_normal_equations();
                     if trial_jac {
                         std::mem::swap(&mut self.r, &mut r_new);
                         std::mem::swap(&mut self.jac, &mut self.jac_trial);
@@ -549,6 +577,23 @@ impl Lm {
                 return Some(Termination::Converged("no further decrease"));
             }
         }
+    }
+
+    /// JᵀJ and Jᵀr at `x`: from the Jacobian, or the problem's own
+    /// ([`LeastSquares::forms_normal_equations`]: every point the search stands on
+    /// was evaluated with them last). Err: the problem has none for `x`.
+    fn normal_equations<P: LeastSquares + ?Sized>(
+        &self,
+        problem: &P,
+    ) -> Result<(DMatrix<f64>, DVector<f64>), Termination> {
+        if !problem.forms_normal_equations() {
+            return Ok((self.jac.tr_mul(&self.jac), self.jac.tr_mul(&self.r)));
+        }
+        problem.normal_equations(&self.x).ok_or_else(|| {
+            Termination::Failed(
+                "the problem formed no normal equations at the current point".into(),
+            )
+        })
     }
 
     /// A stopping rule that read the Jacobian (gradient, noise floor, step) holds:
@@ -1299,6 +1344,68 @@ mod tests {
         };
         let wrong = search(&mut Rosen, &mid, &b, &LmSettings::default(), &mut c);
         assert_eq!(wrong.evaluations, fresh.evaluations);
+    }
+
+    /// Rosenbrock forming its own normal equations (JᵀJ and Jᵀr of the point of
+    /// its last Jacobian evaluation, remembered with that point), the trial
+    /// evaluated with them.
+    #[derive(Default)]
+    struct RosenNormal {
+        at: Vec<f64>,
+        normal: Option<(DMatrix<f64>, DVector<f64>)>,
+    }
+    impl LeastSquares for RosenNormal {
+        fn dims(&self) -> (usize, usize) {
+            (2, 2)
+        }
+        fn eval(
+            &mut self,
+            p: &[f64],
+            r: &mut DVector<f64>,
+            jac: Option<&mut DMatrix<f64>>,
+        ) -> bool {
+            assert!(jac.as_ref().is_none_or(|j| j.is_empty()), "a tall Jacobian");
+            let mut j = DMatrix::zeros(2, 2);
+            Rosen.eval(p, r, Some(&mut j));
+            if jac.is_some() {
+                self.at = p.to_vec();
+                self.normal = Some((j.tr_mul(&j), j.tr_mul(r)));
+            }
+            true
+        }
+        fn jacobian_with_trial(&self) -> bool {
+            true
+        }
+        fn forms_normal_equations(&self) -> bool {
+            true
+        }
+        fn normal_equations(&self, p: &[f64]) -> Option<(DMatrix<f64>, DVector<f64>)> {
+            (self.at == p).then(|| self.normal.clone()).flatten()
+        }
+    }
+
+    /// A problem that forms its normal equations itself is searched exactly as the
+    /// one that hands over its Jacobian (the same products enter every step: bit for
+    /// bit the same iterates, cost and iterations), with no tall Jacobian asked for
+    /// or returned.
+    #[test]
+    fn normal_equations_formed_by_the_problem_give_the_same_search() {
+        let inf = f64::INFINITY;
+        let b = [(-inf, 0.5), (-inf, inf)];
+        let plain = minimize(&mut RosenTrial, &[-1.2, 1.0], &b, &LmSettings::default());
+        let normal = minimize(
+            &mut RosenNormal::default(),
+            &[-1.2, 1.0],
+            &b,
+            &LmSettings::default(),
+        );
+        assert_eq!(
+            (normal.x.clone(), normal.cost),
+            (plain.x.clone(), plain.cost)
+        );
+        assert_eq!(normal.iterations, plain.iterations);
+        assert_eq!(normal.termination, plain.termination);
+        assert!(normal.jacobian.is_empty());
     }
 
     /// The reach rule by hand: cost 150 against a reference of 100 (margin 1 % +

@@ -38,40 +38,51 @@ pub fn nnls(
         return Err("the problem holds a value that is not finite".into());
     }
     let col = |j: usize| &a.as_slice()[j * a.nrows()..(j + 1) * a.nrows()];
-    // Unit-norm columns (a zero column stays zero and its coefficient at 0).
-    let squares: Vec<f64> = (0..k).map(|j| dot(col(j), col(j))).collect();
-    let d: Vec<f64> = squares
-        .iter()
-        .map(|q| {
-            let s = q.sqrt();
-            if s > 0.0 {
-                1.0 / s
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    // G = D·AᵀA·D from the upper triangle (contiguous column dot products; the
-    // diagonal's are the squared norms above).
+    // AᵀA from the upper triangle (contiguous column dot products), Aᵀb.
     let mut g = DMatrix::zeros(k, k);
     for j in 0..k {
         for i in 0..=j {
-            let aa = if i == j {
-                squares[j]
-            } else {
-                dot(col(i), col(j))
-            };
-            let v = aa * d[i] * d[j];
+            let v = dot(col(i), col(j));
             g[(i, j)] = v;
             g[(j, i)] = v;
         }
     }
-    let h = DVector::from_fn(k, |i, _| dot(col(i), b.as_slice()) * d[i]);
-    let x = solve_normal(&g, &h, start.unwrap_or(&vec![false; k]), &d)?;
+    let h = DVector::from_fn(k, |i, _| dot(col(i), b.as_slice()));
+    nnls_normal(&g, &h, start)
+}
+
+/// [`nnls`] from the normal equations G = AᵀA and h = Aᵀb (formed by the caller,
+/// e.g. in one pass over the rows with other products it needs): the same solution
+/// as [`nnls`] of the A and b they came from, bit for bit when they hold the same
+/// dot products. The columns are scaled to unit norm through G's diagonal
+/// (G_ij/(√G_ii·√G_jj)); a zero diagonal leaves that coefficient at 0.
+pub fn nnls_normal(
+    g: &DMatrix<f64>,
+    h: &DVector<f64>,
+    start: Option<&[bool]>,
+) -> Result<NnlsSolution, String> {
+    let k = h.len();
+    if !(g.iter().all(|v| v.is_finite()) && h.iter().all(|v| v.is_finite())) {
+        return Err("the problem holds a value that is not finite".into());
+    }
+    let d: Vec<f64> = (0..k).map(|j| unit_scale(g[(j, j)])).collect();
+    let gs = DMatrix::from_fn(k, k, |i, j| g[(i, j)] * d[i] * d[j]);
+    let hs = DVector::from_fn(k, |i, _| h[i] * d[i]);
+    let x = solve_normal(&gs, &hs, start.unwrap_or(&vec![false; k]), &d)?;
     Ok(NnlsSolution {
         x: DVector::from_iterator(k, x.0.iter().zip(&d).map(|(v, s)| v * s)),
         iterations: x.1,
     })
+}
+
+/// 1/‖a‖ of a column whose squared norm is `square` (0 for a zero column).
+fn unit_scale(square: f64) -> f64 {
+    let s = square.sqrt();
+    if s > 0.0 {
+        1.0 / s
+    } else {
+        0.0
+    }
 }
 
 /// Σ aₖ·bₖ in [`LANES`] interleaved partial sums (k mod [`LANES`]) added at the end:

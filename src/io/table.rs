@@ -229,17 +229,17 @@ impl Table {
         } else {
             Cow::Borrowed(raw)
         };
-        match fast_float2::parse::<f64, _>(text.as_bytes()) {
-            Ok(v) if v.is_finite() => Ok(v),
-            Ok(_) => Err(Error::input(
+        match parse_f64(text.as_bytes()) {
+            Some(v) if v.is_finite() => Ok(v),
+            Some(_) => Err(Error::input(
                 self.loc(row, col),
                 format!("{what} must be a finite number, found '{raw}'"),
             )),
-            Err(_) if raw.is_empty() => Err(Error::input(
+            None if raw.is_empty() => Err(Error::input(
                 self.loc(row, col),
                 format!("{what} is empty; expected a number"),
             )),
-            Err(_) => {
+            None => {
                 let e = Error::input(
                     self.loc(row, col),
                     format!("expected a number for {what}, found '{raw}'"),
@@ -254,6 +254,49 @@ impl Table {
             }
         }
     }
+}
+
+/// The number `bytes` spell, as `str::parse::<f64>` reads it (correctly rounded), or
+/// None where it refuses them. A plain decimal `[+-]digits[.digits]` of at most 15
+/// digits (nearly every field of a test export) is m / 10ᵏ with m < 2⁵³ and k ≤ 22:
+/// both exact in binary, so the one division is the correctly rounded value (Clinger,
+/// "How to read floating point numbers accurately", PLDI 1990); anything else goes to
+/// `fast_float2`, which reads it exactly as `str::parse` does.
+fn parse_f64(bytes: &[u8]) -> Option<f64> {
+    plain_decimal(bytes).or_else(|| fast_float2::parse::<f64, _>(bytes).ok())
+}
+
+/// [`parse_f64`]'s fast path: the value of a plain decimal of at most 15 digits.
+fn plain_decimal(bytes: &[u8]) -> Option<f64> {
+    const POW10: [f64; 16] = [
+        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+    ];
+    let (negative, digits) = match bytes.split_first() {
+        Some((b'-', rest)) => (true, rest),
+        Some((b'+', rest)) => (false, rest),
+        _ => (false, bytes),
+    };
+    // 15 digits and a point: m < 10¹⁵ < 2⁵³, k ≤ 15.
+    if digits.is_empty() || digits.len() > 16 {
+        return None;
+    }
+    let (mut m, mut count, mut point) = (0u64, 0usize, None);
+    for (i, &b) in digits.iter().enumerate() {
+        match b {
+            b'0'..=b'9' => {
+                m = 10 * m + u64::from(b - b'0');
+                count += 1;
+            }
+            b'.' if point.is_none() => point = Some(i),
+            _ => return None,
+        }
+    }
+    if count == 0 || count > 15 {
+        return None;
+    }
+    let k = point.map_or(0, |i| digits.len() - 1 - i);
+    let v = m as f64 / POW10[k];
+    Some(if negative { -v } else { v })
 }
 
 /// The separator of the first content line: tab, else `;`, else `,`.
@@ -669,7 +712,7 @@ mod tests {
         ) {
             let mut field: String = picks.iter().map(|&i| NUMBER_PIECES[i]).collect();
             field.extend(digits.iter().map(|&d| char::from_digit(d, 10).unwrap()));
-            let got = fast_float2::parse::<f64, _>(field.as_bytes()).ok();
+            let got = parse_f64(field.as_bytes());
             let want = field.parse::<f64>().ok();
             proptest::prop_assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits), "{}", field);
         }
@@ -678,6 +721,28 @@ mod tests {
     /// A file of several parts: every row, field, line number and directive is where
     /// a line-by-line reading puts it, across the part boundaries, with CRLF ends,
     /// comments, blank and quoted lines among the rows.
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(20000))]
+        /// Plain decimals of up to 16 digits with a point anywhere and any sign (the
+        /// fast path and the edge where it hands over) read bit for bit as
+        /// `str::parse::<f64>` reads them.
+        #[test]
+        fn plain_decimals_read_as_str_parse_reads_them(
+            m in 0u64..10_000_000_000_000_000,
+            point in 0usize..18,
+            sign in 0usize..3,
+            zeros in 0usize..3,
+        ) {
+            let digits = format!("{}{m}", "0".repeat(zeros));
+            let at = point.min(digits.len());
+            let field = format!("{}{}.{}", ["", "-", "+"][sign], &digits[..at], &digits[at..]);
+            for f in [field.as_str(), field.trim_end_matches('.'), &digits] {
+                let want = f.parse::<f64>().ok();
+                proptest::prop_assert_eq!(parse_f64(f.as_bytes()).map(f64::to_bits), want.map(f64::to_bits), "{}", f);
+            }
+        }
+    }
+
     #[test]
     fn a_file_read_in_parts_is_the_file_read_line_by_line() {
         let mut text = String::from("# mode: planar\r\nstretch,stress_kPa\r\n");

@@ -5,7 +5,7 @@
 //! * Mooney-Rivlin (seed Eq. 2.7): W = C10(I1 − 3) + C01(I2 − 3), μ0 = 2(C10 + C01).
 //! * Yeoh (seed Eq. 2.8): W = Σ_{i=1..3} Ci0(I1 − 3)^i, μ0 = 2·C10.
 
-use super::loadcase::{InvariantDerivs, Mode};
+use super::loadcase::{InvariantDerivs, Kinematics, Mode};
 use super::powers::{Laurent, LaurentKinematics, PowerSum, TangentPowers};
 use super::{ParamInfo, StrainEnergy};
 use std::sync::OnceLock;
@@ -40,7 +40,7 @@ impl Powers {
     fn of(x: f64) -> Self {
         Powers([0.0, 0.0, 1.0, x, x * x, x * x * x])
     }
-    #[inline]
+    #[inline(always)]
     fn get(&self, n: i32) -> f64 {
         self.0[(n + 2) as usize]
     }
@@ -53,6 +53,10 @@ impl Polynomial {
                 .iter()
                 .all(|&(_, i, j, _)| (0..=MAX_POWER).contains(&i) && (0..=MAX_POWER).contains(&j)),
             "{name}: exponents within 0…{MAX_POWER} (Powers)"
+        );
+        assert!(
+            terms.len() <= MAX_TERMS,
+            "{name}: at most {MAX_TERMS} terms"
         );
         Polynomial {
             name,
@@ -79,29 +83,126 @@ impl Polynomial {
         )
     }
 
-    /// Energy derivatives at (I1, I2), the second ones only if `SECOND` (the stress
-    /// needs W1 and W2 alone: the simulator's right-hand side skips three sums); NaN
-    /// for a parameter vector of the wrong length.
+    /// Energy derivatives at (I1, I2), the second ones only if `SECOND`; NaN for a
+    /// parameter vector of the wrong length.
     #[inline]
     fn derivs<const SECOND: bool>(&self, p: &[f64], i1: f64, i2: f64) -> InvariantDerivs {
-        if p.len() != self.terms.len() {
-            return InvariantDerivs::NAN;
+        // the derivatives do not depend on the mode
+        match self.prepare(p, Mode::Uniaxial) {
+            Some(s) => s.derivs::<SECOND>(i1, i2),
+            None => InvariantDerivs::NAN,
         }
-        let (x, y) = (Powers::of(i1 - 3.0), Powers::of(i2 - 3.0));
-        let mut d = InvariantDerivs::default();
-        for (t, &c) in self.terms.iter().zip(p) {
+    }
+
+    /// The model at parameters `p` in `mode`, prepared for many stretches; None for
+    /// a parameter vector of the wrong length.
+    #[inline]
+    pub fn prepare(&self, p: &[f64], mode: Mode) -> Option<Prepared> {
+        if p.len() != self.terms.len() {
+            return None;
+        }
+        let mut terms = [Coefficients::default(); MAX_TERMS];
+        for ((t, &c), o) in self.terms.iter().zip(p).zip(&mut terms) {
             let (i, j, c) = (t.i, t.j, c * t.scale);
             let (fi, fj) = (f64::from(i), f64::from(j));
-            d.w1 += c * fi * x.get(i - 1) * y.get(j);
-            d.w2 += c * fj * x.get(i) * y.get(j - 1);
+            *o = Coefficients {
+                i,
+                j,
+                w1: c * fi,
+                w2: c * fj,
+                w11: c * fi * (fi - 1.0),
+                w12: c * fi * fj,
+                w22: c * fj * (fj - 1.0),
+            };
+        }
+        Some(Prepared {
+            mode,
+            len: self.terms.len(),
+            terms,
+            uses_i2: self.terms.iter().any(|t| t.j > 0),
+        })
+    }
+}
+
+/// The most terms a model of the family has (Yeoh's three).
+const MAX_TERMS: usize = 3;
+
+/// One term's factors of W1 = Σ c·i·x^(i−1)·y^j, W2 = Σ c·j·x^i·y^(j−1) and the
+/// second derivatives (c = s·p the term's coefficient).
+#[derive(Debug, Clone, Copy, Default)]
+struct Coefficients {
+    i: i32,
+    j: i32,
+    /// c·i.
+    w1: f64,
+    /// c·j.
+    w2: f64,
+    /// c·i·(i − 1).
+    w11: f64,
+    /// c·i·j.
+    w12: f64,
+    /// c·j·(j − 1).
+    w22: f64,
+}
+
+/// A polynomial model at fixed parameters in one mode, prepared once for many
+/// stretches (the simulator's right-hand side): each term's factors, and whether
+/// any term has a power of y = I2 − 3 (without one, y enters only as y⁰ = 1 and
+/// y⁻¹ = y⁻² = 0, so I2 is not computed). The one evaluation of the family's
+/// stress and tangent.
+#[derive(Debug, Clone, Copy)]
+pub struct Prepared {
+    mode: Mode,
+    len: usize,
+    terms: [Coefficients; MAX_TERMS],
+    uses_i2: bool,
+}
+
+impl Prepared {
+    /// Energy derivatives at (I1, I2), the second ones only if `SECOND` (the stress
+    /// needs W1 and W2 alone: the simulator's right-hand side skips three sums).
+    #[inline(always)]
+    fn derivs<const SECOND: bool>(&self, i1: f64, i2: f64) -> InvariantDerivs {
+        let (x, y) = (Powers::of(i1 - 3.0), Powers::of(i2 - 3.0));
+        let mut d = InvariantDerivs::default();
+        for t in &self.terms[..self.len] {
+            let (i, j) = (t.i, t.j);
+            d.w1 += t.w1 * x.get(i - 1) * y.get(j);
+            d.w2 += t.w2 * x.get(i) * y.get(j - 1);
             if !SECOND {
                 continue;
             }
-            d.w11 += c * fi * (fi - 1.0) * x.get(i - 2) * y.get(j);
-            d.w12 += c * fi * fj * x.get(i - 1) * y.get(j - 1);
-            d.w22 += c * fj * (fj - 1.0) * x.get(i) * y.get(j - 2);
+            d.w11 += t.w11 * x.get(i - 2) * y.get(j);
+            d.w12 += t.w12 * x.get(i - 1) * y.get(j - 1);
+            d.w22 += t.w22 * x.get(i) * y.get(j - 2);
         }
         d
+    }
+
+    /// (I1, I2) of a state, I2 as 3 (y = 0) where no term reads it.
+    #[inline(always)]
+    fn invariants(&self, k: &Kinematics) -> (f64, f64) {
+        match self.uses_i2 {
+            true => k.invariants(),
+            false => (k.first_invariant(), 3.0),
+        }
+    }
+
+    /// Nominal stress P(λ) (Pa).
+    #[inline(always)]
+    pub fn stress(&self, lam: f64) -> f64 {
+        let k = self.mode.kinematics(lam);
+        let (i1, i2) = self.invariants(&k);
+        let d = self.derivs::<false>(i1, i2);
+        k.invariant_stress(d.w1, d.w2)
+    }
+
+    /// Tangent dP/dλ (Pa).
+    #[inline(always)]
+    pub fn tangent(&self, lam: f64) -> f64 {
+        let k = self.mode.kinematics(lam);
+        let (i1, i2) = self.invariants(&k);
+        k.invariant_tangent(&self.derivs::<true>(i1, i2))
     }
 }
 
@@ -163,15 +264,13 @@ impl StrainEnergy for Polynomial {
         &self.params
     }
     fn nominal_stress(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
-        let k = mode.kinematics(lam);
-        let (i1, i2) = k.invariants();
-        let d = self.derivs::<false>(p, i1, i2);
-        k.invariant_stress(d.w1, d.w2)
+        self.prepare(p, mode).map_or(f64::NAN, |s| s.stress(lam))
     }
     fn tangent(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
-        let k = mode.kinematics(lam);
-        let (i1, i2) = k.invariants();
-        k.invariant_tangent(&self.derivs::<true>(p, i1, i2))
+        self.prepare(p, mode).map_or(f64::NAN, |s| s.tangent(lam))
+    }
+    fn prepared(&self, p: &[f64], mode: Mode) -> Option<Prepared> {
+        self.prepare(p, mode)
     }
     fn tangent_powers(&self, p: &[f64], mode: Mode) -> Option<TangentPowers> {
         if p.len() != self.terms.len() {

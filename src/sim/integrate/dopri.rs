@@ -299,11 +299,15 @@ fn dense_eval(w: &Workspace, theta: f64, out: &mut [f64]) {
                     * theta
                     * (r[0][j] + theta * (r[1][j] + theta * (r[2][j] + theta * r[3][j])))
             });
-            out.copy_from_slice(&d[0]);
-            for (b, k) in b.iter().zip(&w.k) {
-                for (o, k) in out.iter_mut().zip(k) {
-                    *o += b * k;
+            let n = out.len();
+            let k: [&[f64]; 7] = std::array::from_fn(|j| &w.k[j][..n]);
+            let y0 = &d[0][..n];
+            for i in 0..n {
+                let mut o = y0[i];
+                for j in 0..7 {
+                    o += b[j] * k[j][i];
                 }
+                out[i] = o;
             }
         }
     }

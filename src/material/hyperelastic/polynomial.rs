@@ -32,17 +32,18 @@ const MAX_POWER: i32 = 3;
 
 /// x^n for n = −2…[`MAX_POWER`], with x^0 = 1 and x^(negative) = 0 (those terms
 /// carry a zero coefficient): a table built once per evaluation, so the terms'
-/// powers are lookups (x³ = (x·x)·x as the generic product gives it).
-struct Powers([f64; 6]);
+/// powers are lookups (x³ = (x·x)·x as the generic product gives it). Eight
+/// entries, the index masked to them: a lookup without a bounds check.
+struct Powers([f64; 8]);
 
 impl Powers {
-    #[inline]
+    #[inline(always)]
     fn of(x: f64) -> Self {
-        Powers([0.0, 0.0, 1.0, x, x * x, x * x * x])
+        Powers([0.0, 0.0, 1.0, x, x * x, x * x * x, 0.0, 0.0])
     }
     #[inline(always)]
     fn get(&self, n: i32) -> f64 {
-        self.0[(n + 2) as usize]
+        self.0[(n + 2) as usize & 7]
     }
 }
 
@@ -117,7 +118,6 @@ impl Polynomial {
         }
         Some(Prepared {
             mode,
-            len: self.terms.len(),
             terms,
             uses_i2: self.terms.iter().any(|t| t.j > 0),
         })
@@ -153,7 +153,7 @@ struct Coefficients {
 #[derive(Debug, Clone, Copy)]
 pub struct Prepared {
     mode: Mode,
-    len: usize,
+    /// The terms, then zero slots (i = j = 0, no factor) up to [`MAX_TERMS`].
     terms: [Coefficients; MAX_TERMS],
     uses_i2: bool,
 }
@@ -165,7 +165,10 @@ impl Prepared {
     fn derivs<const SECOND: bool>(&self, i1: f64, i2: f64) -> InvariantDerivs {
         let (x, y) = (Powers::of(i1 - 3.0), Powers::of(i2 - 3.0));
         let mut d = InvariantDerivs::default();
-        for t in &self.terms[..self.len] {
+        // every slot, the unused ones too: their zero factors meet only the table's
+        // constant 0 and 1, and each sum, started at +0, is never −0, so adding
+        // their +0 changes nothing (a fixed count the compiler unrolls)
+        for t in &self.terms {
             let (i, j) = (t.i, t.j);
             d.w1 += t.w1 * x.get(i - 1) * y.get(j);
             d.w2 += t.w2 * x.get(i) * y.get(j - 1);

@@ -473,9 +473,8 @@ fn segment<S: System>(
         y.copy_from_slice(&w.y1);
         t = t_new;
         step(t, y);
-        // FSAL: k[0] ← f(t_new, y)
-        let (a, b) = w.k.split_at_mut(6);
-        a[0].copy_from_slice(&b[0]);
+        // FSAL: k[0] ← f(t_new, y) (k[6] is written again before it is read)
+        w.k.swap(0, 6);
     }
     End::Done
 }

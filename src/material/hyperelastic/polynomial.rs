@@ -310,3 +310,71 @@ impl StrainEnergy for Polynomial {
         2.0 * (d.w1 + d.w2)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The prepared evaluation's two shortcuts change no bit: I2 left out where no
+    /// term reads it (the same stress and tangent as with I2 computed), and the
+    /// zero slots after a model's terms (the same as the terms alone, by the
+    /// generic loop of the family, `reference`). Every model of the family, every
+    /// mode, stretches from deep compression to tension, with mixed-sign
+    /// coefficients so that sums cancel.
+    #[test]
+    fn prepared_shortcuts_change_no_bit() {
+        /// W1, W2 (and the second derivatives) over the model's own terms only,
+        /// with I2 always computed: the family's sums as written.
+        fn reference(m: &Polynomial, p: &[f64], mode: Mode, lam: f64) -> (f64, f64) {
+            let k = mode.kinematics(lam);
+            let (i1, i2) = k.invariants();
+            let (x, y) = (Powers::of(i1 - 3.0), Powers::of(i2 - 3.0));
+            let mut d = InvariantDerivs::default();
+            for (t, &c) in m.terms.iter().zip(p) {
+                let (i, j, c) = (t.i, t.j, c * t.scale);
+                let (fi, fj) = (f64::from(i), f64::from(j));
+                d.w1 += c * fi * x.get(i - 1) * y.get(j);
+                d.w2 += c * fj * x.get(i) * y.get(j - 1);
+                d.w11 += c * fi * (fi - 1.0) * x.get(i - 2) * y.get(j);
+                d.w12 += c * fi * fj * x.get(i - 1) * y.get(j - 1);
+                d.w22 += c * fj * (fj - 1.0) * x.get(i) * y.get(j - 2);
+            }
+            (k.invariant_stress(d.w1, d.w2), k.invariant_tangent(&d))
+        }
+        let mut checked = 0;
+        for m in [
+            Polynomial::neo_hookean(),
+            Polynomial::mooney_rivlin(),
+            Polynomial::yeoh(),
+        ] {
+            let p: Vec<f64> = [1.3e5, -2.1e3, 47.0][..m.terms.len()].to_vec();
+            for mode in Mode::ALL {
+                let s = m.prepare(&p, mode).expect("right length");
+                assert_eq!(s.uses_i2, m.name == "mooney-rivlin", "{}", m.name);
+                for i in 0..200 {
+                    let lam = 0.2 + 0.02 * i as f64;
+                    let (stress, tangent) = reference(&m, &p, mode, lam);
+                    assert_eq!(
+                        s.stress(lam).to_bits(),
+                        stress.to_bits(),
+                        "{} {mode} {lam}",
+                        m.name
+                    );
+                    assert_eq!(
+                        s.tangent(lam).to_bits(),
+                        tangent.to_bits(),
+                        "{} {mode} {lam}",
+                        m.name
+                    );
+                    checked += 1;
+                }
+            }
+        }
+        assert_eq!(checked, 3 * 3 * 200);
+        // a parameter vector of the wrong length has no prepared form (NaN stress)
+        assert!(Polynomial::yeoh().prepare(&[1.0], Mode::Uniaxial).is_none());
+        assert!(Polynomial::yeoh()
+            .nominal_stress(&[1.0], Mode::Uniaxial, 0.9)
+            .is_nan());
+    }
+}

@@ -28,6 +28,8 @@ struct Workspace {
     ytmp: Vec<f64>,
     /// The absolute tolerance of each state, `atol`·scale.
     atol: Vec<f64>,
+    /// The local error estimate of the last step.
+    err: Vec<f64>,
     /// The dense output of the last step: y at its start in `dense[0]`, and for
     /// [`Dense::Hairer`] its four other vectors.
     dense: [Vec<f64>; 5],
@@ -48,6 +50,7 @@ impl Workspace {
             y1: v(),
             ytmp: v(),
             atol: scale.iter().map(|s| atol * s).collect(),
+            err: v(),
             dense: [v(), v(), v(), v(), v()],
             h_dense: 0.0,
             h: 0.0,
@@ -256,7 +259,9 @@ fn stage(a: &[f64; 6], s: usize, k: &[Vec<f64>], y: &[f64], h: f64, out: &mut [f
 }
 
 /// Weighted RMS norm of the local error h·Σ_j e_j·k_j (all states, `atol[i]` the
-/// absolute tolerance of state i), without storing the error vector.
+/// absolute tolerance of state i), the error into `err` first (a loop over the
+/// components the compiler vectorises), then the norm's sum in order.
+#[allow(clippy::too_many_arguments)]
 fn error_norm(
     e: &[f64; 7],
     k: &[Vec<f64>],
@@ -265,19 +270,22 @@ fn error_norm(
     y1: &[f64],
     atol: &[f64],
     rtol: f64,
+    err: &mut [f64],
 ) -> f64 {
     let n = y0.len();
     let k: [&[f64]; 7] = std::array::from_fn(|j| &k[j][..n]);
-    let (y1, atol) = (&y1[..n], &atol[..n]);
-    let mut s = 0.0;
+    let (y1, atol, err) = (&y1[..n], &atol[..n], &mut err[..n]);
     for i in 0..n {
         let mut acc = 0.0;
         for j in 0..7 {
             acc += e[j] * k[j][i];
         }
-        let err = acc * h;
+        err[i] = acc * h;
+    }
+    let mut s = 0.0;
+    for i in 0..n {
         let sc = atol[i] + rtol * y0[i].abs().max(y1[i].abs());
-        s += (err / sc).powi(2);
+        s += (err[i] / sc).powi(2);
     }
     (s / n as f64).sqrt()
 }
@@ -500,7 +508,7 @@ fn rk_step<S: System>(
         sys.rhs(t + p.c[s] * h, arg, &mut next[0]);
     }
     stats.rhs_evals += 6;
-    let err = error_norm(&p.e, &w.k, h, y, &w.y1, &w.atol, rtol);
+    let err = error_norm(&p.e, &w.k, h, y, &w.y1, &w.atol, rtol, &mut w.err);
     w.dense[0].copy_from_slice(y);
     w.h_dense = h;
     if let Dense::Hairer(d) = &p.dense {

@@ -846,8 +846,10 @@ fn integrate<'s, 'k>(
     let mut step = |t: f64, y: &[f64]| {
         last_step.set(t);
         if wants_steps && t > last_sample.get() {
+            // a sample's length, current and power (see `sample`)
+            let e = p.output(t, y);
             let mut i = steps.get();
-            i.add(&sample(p, t, y));
+            i.widen(p.length(y[0]), e.current, e.voltage * e.current);
             steps.set(i);
         }
     };

@@ -28,6 +28,7 @@
 
 use super::input::Waveform;
 use super::scene::{Actuator, Pid, Scene, Source};
+use crate::material::hyperelastic::polynomial::Prepared;
 use crate::material::hyperelastic::{Mode, StrainEnergy};
 use std::ops::{Add, Div, Mul, Neg, Sub};
 use std::sync::Arc;
@@ -111,6 +112,9 @@ pub struct Plant {
     pub c_rest: f64,
     /// (dλ0/dθk, dC_rest/dθk) per entry of θ (`derivatives`), derived with λ0.
     pub(crate) rest_derivatives: Vec<(f64, f64)>,
+    /// The model's stress and tangent prepared at `params` in `mode`, where it has
+    /// a prepared form ([`StrainEnergy::prepared`]).
+    prepared: Option<Prepared>,
 }
 
 /// Indices into the state vector.
@@ -391,6 +395,7 @@ impl Plant {
             lam_f: 1.0,
             c_rest: 0.0,
             rest_derivatives: Vec::new(),
+            prepared: None,
         };
         p.derive()?;
         let t_in = super::fidelity::input_time_scale(scene, p.c_rest);
@@ -447,9 +452,10 @@ impl Plant {
     }
 
     /// The quantities derived from the parameters θ (the one place computing them):
-    /// ε = ε0·εr, G/C = 1/(ρε), λ0 = static equilibrium at V = 0 (from λ = 1),
-    /// λf = λ0, C_rest = C(λ0); or why there is no rest state.
+    /// the prepared stress, ε = ε0·εr, G/C = 1/(ρε), λ0 = static equilibrium at
+    /// V = 0 (from λ = 1), λf = λ0, C_rest = C(λ0); or why there is no rest state.
     pub(super) fn derive(&mut self) -> Result<(), NoEquilibrium> {
+        self.prepared = self.model.prepared(&self.params, self.mode);
         self.eps = EPS0 * self.eps_r;
         self.g_per_c = self
             .resistivity
@@ -475,17 +481,23 @@ impl Plant {
     }
 
     /// Nominal stress P(λ) of the layer (Pa).
-    #[inline]
+    #[inline(always)]
     pub fn stress(&self, lam: f64) -> f64 {
-        self.model.nominal_stress(&self.params, self.mode, lam)
+        match &self.prepared {
+            Some(s) => s.stress(lam),
+            None => self.model.nominal_stress(&self.params, self.mode, lam),
+        }
     }
     /// Tangent dP/dλ (Pa).
-    #[inline]
+    #[inline(always)]
     pub fn tangent(&self, lam: f64) -> f64 {
-        self.model.tangent(&self.params, self.mode, lam)
+        match &self.prepared {
+            Some(s) => s.tangent(lam),
+            None => self.model.tangent(&self.params, self.mode, lam),
+        }
     }
     /// Capacitance and its λ-derivatives.
-    #[inline]
+    #[inline(always)]
     pub fn capacitance(&self, lam: f64) -> (f64, f64, f64) {
         match self.actuator {
             Actuator::Stack(s) => s.capacitance(self.eps, lam),
@@ -511,18 +523,18 @@ impl Plant {
     }
 
     /// Fully relaxed generalised force −Vol·P(λ) + F_load·L0 + ½V²·C'(λ) (N·m).
-    #[inline]
+    #[inline(always)]
     fn relaxed_force<E: Eval>(&self, e: &E, lam: E::T, v: E::T, dc: E::T) -> E::T {
         e.stress(lam) * -self.vol + v * v * dc * 0.5 + self.f_load * self.l0
     }
     /// Stiffness Vol·(P'(λ) + springs) − ½V²·C''(λ) (N·m): the static one with
     /// springs = 0, the instantaneous one with springs = Σkj + kf.
-    #[inline]
+    #[inline(always)]
     fn stiffness<E: Eval>(&self, e: &E, lam: E::T, v: E::T, d2c: E::T, springs: E::T) -> E::T {
         (e.tangent(lam) + springs) * self.vol - v * v * d2c * 0.5
     }
     /// Σkj + kf (Pa).
-    #[inline]
+    #[inline(always)]
     fn springs<E: Eval>(&self, e: &E) -> E::T {
         (0..self.arms.len()).fold(E::T::cst(self.frozen_k), |s, j| s + e.arm(j).0)
     }
@@ -688,7 +700,7 @@ impl Plant {
     /// * rise time τ: V the state, V̇ = (u − V)/τ;
     /// * resistance R: charge q the state, V = q/C, q̇ = (u − V)/R − G·V, so
     ///   V̇ = q̇/C − V·C'·λ̇/C: a = q̇/C, b = −V·C'/C.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn terminal<E: Eval>(&self, e: &E, t: f64, y: &[f64], l: &Layout) -> Terminal<E::T> {
         let zero = E::T::cst(0.0);
         let [c, dc, d2c] = e.capacitance(e.y(y, 0));
@@ -734,7 +746,7 @@ impl Plant {
 
     /// Electrical quantities at λ̇: V̇ = a + b·λ̇; current I = (u − V)/R behind a
     /// resistance, else d(CV)/dt + G·V = C'·λ̇·V + C·V̇ + G·V.
-    #[inline]
+    #[inline(always)]
     fn rates<T: Num>(&self, s: &Terminal<T>, lam_dot: T) -> Electrical<T> {
         let v_dot = s.a + s.b * lam_dot;
         let current = match self.source {
@@ -754,7 +766,7 @@ impl Plant {
 
     /// The drive D = −Vol·[P(λ) + Σσj + kf·(λ − λf)] + F_load·L0 + ½V²·C'(λ) (N·m):
     /// the generalised force without inertia and dashpot.
-    #[inline]
+    #[inline(always)]
     fn drive_with<E: Eval>(&self, e: &E, y: &[f64], l: &Layout, s: &Terminal<E::T>) -> E::T {
         let lam = e.y(y, 0);
         let sig = (0..self.arms.len()).fold(E::T::cst(0.0), |a, j| a + e.y(y, l.sig + j));
@@ -797,7 +809,7 @@ impl Plant {
 
     /// λ̇, the generalised acceleration force and the electrical state (with the
     /// current evaluated at λ̇) at a state.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn kinematics<E: Eval>(
         &self,
         e: &E,
@@ -825,7 +837,7 @@ impl Plant {
 
     /// The right-hand side, written once for every number type: `out(i, dy_i)` for
     /// every state i.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn rhs_with<E: Eval>(
         &self,
         e: &E,

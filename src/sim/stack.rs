@@ -24,7 +24,7 @@ impl StackGeometry {
         self.area0() * self.length0()
     }
     /// Capacitance and its first two λ-derivatives for permittivity `eps` (F/m).
-    #[inline]
+    #[inline(always)]
     pub fn capacitance(&self, eps: f64, lam: f64) -> (f64, f64, f64) {
         let c = self.layers as f64 * eps * self.area0() / (self.layer_m * lam * lam);
         (c, -2.0 * c / lam, 6.0 * c / (lam * lam))

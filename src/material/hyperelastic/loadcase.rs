@@ -135,9 +135,16 @@ impl Kinematics {
     pub fn invariants(&self) -> (f64, f64) {
         let [a, b, c] = self.l;
         (
-            a * a + b * b + c * c,
+            self.first_invariant(),
             1.0 / (a * a) + 1.0 / (b * b) + 1.0 / (c * c),
         )
+    }
+
+    /// I1 = Σλi².
+    #[inline]
+    pub fn first_invariant(&self) -> f64 {
+        let [a, b, c] = self.l;
+        a * a + b * b + c * c
     }
 
     /// (dI1/dλ, dI2/dλ).

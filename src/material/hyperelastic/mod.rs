@@ -68,6 +68,13 @@ pub trait StrainEnergy: Send + Sync {
     fn tangent_powers(&self, _p: &[f64], _mode: Mode) -> Option<powers::TangentPowers> {
         None
     }
+    /// The stress and tangent of `mode` at parameters `p` prepared for many
+    /// stretches, the same numbers as [`StrainEnergy::nominal_stress`] and
+    /// [`StrainEnergy::tangent`] without a dynamic call each (the simulator's
+    /// right-hand side); None (the default) where the model has no prepared form.
+    fn prepared(&self, _p: &[f64], _mode: Mode) -> Option<polynomial::Prepared> {
+        None
+    }
     /// ∂P/∂p written into `out` (length = number of parameters). No allocation.
     fn stress_jacobian(&self, p: &[f64], mode: Mode, lam: f64, out: &mut [f64]);
     /// Small-strain shear modulus μ0 (Pa); Young's modulus is 3μ0.
@@ -139,6 +146,9 @@ impl StrainEnergy for WithoutCoefficients {
     }
     fn tangent_powers(&self, p: &[f64], mode: Mode) -> Option<powers::TangentPowers> {
         self.0.tangent_powers(p, mode)
+    }
+    fn prepared(&self, p: &[f64], mode: Mode) -> Option<polynomial::Prepared> {
+        self.0.prepared(p, mode)
     }
     fn stress_jacobian(&self, p: &[f64], mode: Mode, lam: f64, out: &mut [f64]) {
         self.0.stress_jacobian(p, mode, lam, out)

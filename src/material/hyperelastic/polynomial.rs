@@ -5,7 +5,7 @@
 //! * Mooney-Rivlin (seed Eq. 2.7): W = C10(I1 − 3) + C01(I2 − 3), μ0 = 2(C10 + C01).
 //! * Yeoh (seed Eq. 2.8): W = Σ_{i=1..3} Ci0(I1 − 3)^i, μ0 = 2·C10.
 
-use super::loadcase::{InvariantDerivs, Mode};
+use super::loadcase::{InvariantDerivs, Kinematics, Mode};
 use super::powers::{Laurent, LaurentKinematics, PowerSum, TangentPowers};
 use super::{ParamInfo, StrainEnergy};
 use std::sync::OnceLock;
@@ -32,17 +32,18 @@ const MAX_POWER: i32 = 3;
 
 /// x^n for n = −2…[`MAX_POWER`], with x^0 = 1 and x^(negative) = 0 (those terms
 /// carry a zero coefficient): a table built once per evaluation, so the terms'
-/// powers are lookups (x³ = (x·x)·x as the generic product gives it).
-struct Powers([f64; 6]);
+/// powers are lookups (x³ = (x·x)·x as the generic product gives it). Eight
+/// entries, the index masked to them: a lookup without a bounds check.
+struct Powers([f64; 8]);
 
 impl Powers {
-    #[inline]
+    #[inline(always)]
     fn of(x: f64) -> Self {
-        Powers([0.0, 0.0, 1.0, x, x * x, x * x * x])
+        Powers([0.0, 0.0, 1.0, x, x * x, x * x * x, 0.0, 0.0])
     }
-    #[inline]
+    #[inline(always)]
     fn get(&self, n: i32) -> f64 {
-        self.0[(n + 2) as usize]
+        self.0[(n + 2) as usize & 7]
     }
 }
 
@@ -53,6 +54,10 @@ impl Polynomial {
                 .iter()
                 .all(|&(_, i, j, _)| (0..=MAX_POWER).contains(&i) && (0..=MAX_POWER).contains(&j)),
             "{name}: exponents within 0…{MAX_POWER} (Powers)"
+        );
+        assert!(
+            terms.len() <= MAX_TERMS,
+            "{name}: at most {MAX_TERMS} terms"
         );
         Polynomial {
             name,
@@ -79,29 +84,156 @@ impl Polynomial {
         )
     }
 
-    /// Energy derivatives at (I1, I2), the second ones only if `SECOND` (the stress
-    /// needs W1 and W2 alone: the simulator's right-hand side skips three sums); NaN
-    /// for a parameter vector of the wrong length.
+    /// Energy derivatives at (I1, I2), the second ones only if `SECOND`; NaN for a
+    /// parameter vector of the wrong length.
     #[inline]
     fn derivs<const SECOND: bool>(&self, p: &[f64], i1: f64, i2: f64) -> InvariantDerivs {
-        if p.len() != self.terms.len() {
-            return InvariantDerivs::NAN;
+        // the derivatives do not depend on the mode
+        match self.prepare(p, Mode::Uniaxial) {
+            Some(s) => s.derivs::<SECOND>(i1, i2),
+            None => InvariantDerivs::NAN,
         }
-        let (x, y) = (Powers::of(i1 - 3.0), Powers::of(i2 - 3.0));
-        let mut d = InvariantDerivs::default();
-        for (t, &c) in self.terms.iter().zip(p) {
+    }
+
+    /// The model at parameters `p` in `mode`, prepared for many stretches; None for
+    /// a parameter vector of the wrong length.
+    #[inline]
+    pub fn prepare(&self, p: &[f64], mode: Mode) -> Option<Prepared> {
+        if p.len() != self.terms.len() {
+            return None;
+        }
+        let mut terms = [Coefficients::default(); MAX_TERMS];
+        let mut exponents = [(0, 0); MAX_TERMS];
+        for (((t, &c), o), e) in self.terms.iter().zip(p).zip(&mut terms).zip(&mut exponents) {
             let (i, j, c) = (t.i, t.j, c * t.scale);
             let (fi, fj) = (f64::from(i), f64::from(j));
-            d.w1 += c * fi * x.get(i - 1) * y.get(j);
-            d.w2 += c * fj * x.get(i) * y.get(j - 1);
+            *o = Coefficients {
+                w1: c * fi,
+                w2: c * fj,
+                w11: c * fi * (fi - 1.0),
+                w12: c * fi * fj,
+                w22: c * fj * (fj - 1.0),
+            };
+            *e = (i, j);
+        }
+        Some(Prepared {
+            mode,
+            terms,
+            exponents,
+            model: FAMILY.iter().position(|e| *e == exponents),
+            uses_i2: self.terms.iter().any(|t| t.j > 0),
+        })
+    }
+}
+
+/// The most terms a model of the family has (Yeoh's three).
+const MAX_TERMS: usize = 3;
+
+/// One term's factors of W1 = Σ c·i·x^(i−1)·y^j, W2 = Σ c·j·x^i·y^(j−1) and the
+/// second derivatives (c = s·p the term's coefficient).
+#[derive(Debug, Clone, Copy, Default)]
+struct Coefficients {
+    /// c·i.
+    w1: f64,
+    /// c·j.
+    w2: f64,
+    /// c·i·(i − 1).
+    w11: f64,
+    /// c·i·j.
+    w12: f64,
+    /// c·j·(j − 1).
+    w22: f64,
+}
+
+/// A polynomial model at fixed parameters in one mode, prepared once for many
+/// stretches (the simulator's right-hand side): each term's factors, and whether
+/// any term has a power of y = I2 − 3 (without one, y enters only as y⁰ = 1 and
+/// y⁻¹ = y⁻² = 0, so I2 is not computed). The one evaluation of the family's
+/// stress and tangent.
+#[derive(Debug, Clone, Copy)]
+pub struct Prepared {
+    mode: Mode,
+    /// The terms, then zero slots (no factor) up to [`MAX_TERMS`].
+    terms: [Coefficients; MAX_TERMS],
+    /// Each slot's (i, j), (0, 0) for a zero slot.
+    exponents: [(i32, i32); MAX_TERMS],
+    /// Which of [`FAMILY`] the exponents are, if any.
+    model: Option<usize>,
+    uses_i2: bool,
+}
+
+/// The exponents of the family's models, slot by slot (zero slots (0, 0)).
+const FAMILY: [[(i32, i32); MAX_TERMS]; 3] = [
+    [(1, 0), (2, 0), (3, 0)], // Yeoh
+    [(1, 0), (0, 0), (0, 0)], // neo-Hookean
+    [(1, 0), (0, 1), (0, 0)], // Mooney-Rivlin
+];
+
+impl Prepared {
+    /// Energy derivatives at (I1, I2), the second ones only if `SECOND` (the stress
+    /// needs W1 and W2 alone: the simulator's right-hand side skips three sums).
+    /// A model of the family runs with its exponents as constants, so every power
+    /// is resolved when the code is built (the same arithmetic, no table lookups).
+    #[inline(always)]
+    fn derivs<const SECOND: bool>(&self, i1: f64, i2: f64) -> InvariantDerivs {
+        match self.model {
+            Some(0) => self.sums::<SECOND>(FAMILY[0], i1, i2),
+            Some(1) => self.sums::<SECOND>(FAMILY[1], i1, i2),
+            Some(2) => self.sums::<SECOND>(FAMILY[2], i1, i2),
+            _ => self.sums::<SECOND>(self.exponents, i1, i2),
+        }
+    }
+
+    /// The sums of [`Prepared::derivs`] with the slots' exponents `e`.
+    #[inline(always)]
+    fn sums<const SECOND: bool>(
+        &self,
+        e: [(i32, i32); MAX_TERMS],
+        i1: f64,
+        i2: f64,
+    ) -> InvariantDerivs {
+        let (x, y) = (Powers::of(i1 - 3.0), Powers::of(i2 - 3.0));
+        let mut d = InvariantDerivs::default();
+        // every slot, the unused ones too: their zero factors meet only the table's
+        // constant 0 and 1, and each sum, started at +0, is never −0, so adding
+        // their +0 changes nothing (a fixed count the compiler unrolls)
+        for (t, (i, j)) in self.terms.iter().zip(e) {
+            d.w1 += t.w1 * x.get(i - 1) * y.get(j);
+            d.w2 += t.w2 * x.get(i) * y.get(j - 1);
             if !SECOND {
                 continue;
             }
-            d.w11 += c * fi * (fi - 1.0) * x.get(i - 2) * y.get(j);
-            d.w12 += c * fi * fj * x.get(i - 1) * y.get(j - 1);
-            d.w22 += c * fj * (fj - 1.0) * x.get(i) * y.get(j - 2);
+            d.w11 += t.w11 * x.get(i - 2) * y.get(j);
+            d.w12 += t.w12 * x.get(i - 1) * y.get(j - 1);
+            d.w22 += t.w22 * x.get(i) * y.get(j - 2);
         }
         d
+    }
+
+    /// (I1, I2) of a state, I2 as 3 (y = 0) where no term reads it.
+    #[inline(always)]
+    fn invariants(&self, k: &Kinematics) -> (f64, f64) {
+        match self.uses_i2 {
+            true => k.invariants(),
+            false => (k.first_invariant(), 3.0),
+        }
+    }
+
+    /// Nominal stress P(λ) (Pa).
+    #[inline(always)]
+    pub fn stress(&self, lam: f64) -> f64 {
+        let k = self.mode.kinematics(lam);
+        let (i1, i2) = self.invariants(&k);
+        let d = self.derivs::<false>(i1, i2);
+        k.invariant_stress(d.w1, d.w2)
+    }
+
+    /// Tangent dP/dλ (Pa).
+    #[inline(always)]
+    pub fn tangent(&self, lam: f64) -> f64 {
+        let k = self.mode.kinematics(lam);
+        let (i1, i2) = self.invariants(&k);
+        k.invariant_tangent(&self.derivs::<true>(i1, i2))
     }
 }
 
@@ -163,15 +295,13 @@ impl StrainEnergy for Polynomial {
         &self.params
     }
     fn nominal_stress(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
-        let k = mode.kinematics(lam);
-        let (i1, i2) = k.invariants();
-        let d = self.derivs::<false>(p, i1, i2);
-        k.invariant_stress(d.w1, d.w2)
+        self.prepare(p, mode).map_or(f64::NAN, |s| s.stress(lam))
     }
     fn tangent(&self, p: &[f64], mode: Mode, lam: f64) -> f64 {
-        let k = mode.kinematics(lam);
-        let (i1, i2) = k.invariants();
-        k.invariant_tangent(&self.derivs::<true>(p, i1, i2))
+        self.prepare(p, mode).map_or(f64::NAN, |s| s.tangent(lam))
+    }
+    fn prepared(&self, p: &[f64], mode: Mode) -> Option<Prepared> {
+        self.prepare(p, mode)
     }
     fn tangent_powers(&self, p: &[f64], mode: Mode) -> Option<TangentPowers> {
         if p.len() != self.terms.len() {
@@ -206,5 +336,79 @@ impl StrainEnergy for Polynomial {
         // μ0 = 2(W1 + W2) at I1 = I2 = 3.
         let d = self.derivs::<false>(p, 3.0, 3.0);
         2.0 * (d.w1 + d.w2)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The prepared evaluation's shortcuts change no bit: I2 left out where no
+    /// term reads it (the same stress and tangent as with I2 computed), the zero
+    /// slots after a model's terms (the same as the terms alone, by the generic
+    /// loop of the family, `reference`), and the exponents as constants (the same
+    /// as read at run time). Every model of the family, every
+    /// mode, stretches from deep compression to tension, with mixed-sign
+    /// coefficients so that sums cancel.
+    #[test]
+    fn prepared_shortcuts_change_no_bit() {
+        /// W1, W2 (and the second derivatives) over the model's own terms only,
+        /// with I2 always computed: the family's sums as written.
+        fn reference(m: &Polynomial, p: &[f64], mode: Mode, lam: f64) -> (f64, f64) {
+            let k = mode.kinematics(lam);
+            let (i1, i2) = k.invariants();
+            let (x, y) = (Powers::of(i1 - 3.0), Powers::of(i2 - 3.0));
+            let mut d = InvariantDerivs::default();
+            for (t, &c) in m.terms.iter().zip(p) {
+                let (i, j, c) = (t.i, t.j, c * t.scale);
+                let (fi, fj) = (f64::from(i), f64::from(j));
+                d.w1 += c * fi * x.get(i - 1) * y.get(j);
+                d.w2 += c * fj * x.get(i) * y.get(j - 1);
+                d.w11 += c * fi * (fi - 1.0) * x.get(i - 2) * y.get(j);
+                d.w12 += c * fi * fj * x.get(i - 1) * y.get(j - 1);
+                d.w22 += c * fj * (fj - 1.0) * x.get(i) * y.get(j - 2);
+            }
+            (k.invariant_stress(d.w1, d.w2), k.invariant_tangent(&d))
+        }
+        let mut checked = 0;
+        for m in [
+            Polynomial::neo_hookean(),
+            Polynomial::mooney_rivlin(),
+            Polynomial::yeoh(),
+        ] {
+            let p: Vec<f64> = [1.3e5, -2.1e3, 47.0][..m.terms.len()].to_vec();
+            for mode in Mode::ALL {
+                let s = m.prepare(&p, mode).expect("right length");
+                assert_eq!(s.uses_i2, m.name == "mooney-rivlin", "{}", m.name);
+                assert!(s.model.is_some(), "{}: constant exponents", m.name);
+                // the same slots with their exponents read at run time
+                let generic = Prepared { model: None, ..s };
+                for i in 0..200 {
+                    let lam = 0.2 + 0.02 * i as f64;
+                    let (stress, tangent) = reference(&m, &p, mode, lam);
+                    assert_eq!(
+                        s.stress(lam).to_bits(),
+                        stress.to_bits(),
+                        "{} {mode} {lam}",
+                        m.name
+                    );
+                    assert_eq!(
+                        s.tangent(lam).to_bits(),
+                        tangent.to_bits(),
+                        "{} {mode} {lam}",
+                        m.name
+                    );
+                    assert_eq!(generic.stress(lam).to_bits(), stress.to_bits());
+                    assert_eq!(generic.tangent(lam).to_bits(), tangent.to_bits());
+                    checked += 1;
+                }
+            }
+        }
+        assert_eq!(checked, 3 * 3 * 200);
+        // a parameter vector of the wrong length has no prepared form (NaN stress)
+        assert!(Polynomial::yeoh().prepare(&[1.0], Mode::Uniaxial).is_none());
+        assert!(Polynomial::yeoh()
+            .nominal_stress(&[1.0], Mode::Uniaxial, 0.9)
+            .is_nan());
     }
 }

@@ -26,6 +26,9 @@ struct Workspace {
     k: [Vec<f64>; 7],
     y1: Vec<f64>,
     ytmp: Vec<f64>,
+    /// The absolute tolerance of each state, `atol`·scale.
+    atol: Vec<f64>,
+    /// The local error estimate of the last step.
     err: Vec<f64>,
     /// The dense output of the last step: y at its start in `dense[0]`, and for
     /// [`Dense::Hairer`] its four other vectors.
@@ -37,7 +40,8 @@ struct Workspace {
 }
 
 impl Workspace {
-    fn new(pair: &'static Pair, n: usize) -> Self {
+    fn new(pair: &'static Pair, scale: &[f64], atol: f64) -> Self {
+        let n = scale.len();
         let v = || vec![0.0; n];
         Workspace {
             pair,
@@ -45,6 +49,7 @@ impl Workspace {
             k: [v(), v(), v(), v(), v(), v(), v()],
             y1: v(),
             ytmp: v(),
+            atol: scale.iter().map(|s| atol * s).collect(),
             err: v(),
             dense: [v(), v(), v(), v(), v()],
             h_dense: 0.0,
@@ -219,14 +224,70 @@ pub(super) const TSIT45: Pair = Pair {
     ]),
 };
 
-/// Weighted RMS norm of the local error (all states, atol scaled per state).
-pub(super) fn wrms(e: &[f64], y0: &[f64], y1: &[f64], scale: &[f64], o: &Options) -> f64 {
-    let mut s = 0.0;
-    for (((e, y0), y1), scale) in e.iter().zip(y0).zip(y1).zip(scale) {
-        let sc = o.atol * scale + o.rtol * y0.abs().max(y1.abs());
-        s += (e / sc).powi(2);
+/// y + h·Σ_{j<S} c_j·k_j into `out`, component by component, the sum over j in
+/// order from 0 (the arithmetic of accumulating one k_j at a time into a zeroed
+/// vector, in one pass: no scratch vector, no bounds checks in the loop).
+#[inline(always)]
+fn stage_sum<const S: usize>(c: &[f64; S], k: &[Vec<f64>], y: &[f64], h: f64, out: &mut [f64]) {
+    let n = out.len();
+    let k: [&[f64]; S] = std::array::from_fn(|j| &k[j][..n]);
+    let y = &y[..n];
+    for i in 0..n {
+        let mut acc = 0.0;
+        for j in 0..S {
+            acc += c[j] * k[j][i];
+        }
+        out[i] = y[i] + h * acc;
     }
-    (s / e.len() as f64).sqrt()
+}
+
+/// Stage `s` + 1's argument y + h·Σ_{j≤s} a[s][j]·k_j (row 5: the 5th-order
+/// solution) into `out`.
+fn stage(a: &[f64; 6], s: usize, k: &[Vec<f64>], y: &[f64], h: f64, out: &mut [f64]) {
+    /// The first `S` coefficients of a row.
+    fn first<const S: usize>(a: &[f64; 6]) -> [f64; S] {
+        std::array::from_fn(|j| a[j])
+    }
+    match s {
+        0 => stage_sum(&first::<1>(a), k, y, h, out),
+        1 => stage_sum(&first::<2>(a), k, y, h, out),
+        2 => stage_sum(&first::<3>(a), k, y, h, out),
+        3 => stage_sum(&first::<4>(a), k, y, h, out),
+        4 => stage_sum(&first::<5>(a), k, y, h, out),
+        _ => stage_sum(a, k, y, h, out),
+    }
+}
+
+/// Weighted RMS norm of the local error h·Σ_j e_j·k_j (all states, `atol[i]` the
+/// absolute tolerance of state i), the error into `err` first (a loop over the
+/// components the compiler vectorises), then the norm's sum in order.
+#[allow(clippy::too_many_arguments)]
+fn error_norm(
+    e: &[f64; 7],
+    k: &[Vec<f64>],
+    h: f64,
+    y0: &[f64],
+    y1: &[f64],
+    atol: &[f64],
+    rtol: f64,
+    err: &mut [f64],
+) -> f64 {
+    let n = y0.len();
+    let k: [&[f64]; 7] = std::array::from_fn(|j| &k[j][..n]);
+    let (y1, atol, err) = (&y1[..n], &atol[..n], &mut err[..n]);
+    for i in 0..n {
+        let mut acc = 0.0;
+        for j in 0..7 {
+            acc += e[j] * k[j][i];
+        }
+        err[i] = acc * h;
+    }
+    let mut s = 0.0;
+    for i in 0..n {
+        let sc = atol[i] + rtol * y0[i].abs().max(y1[i].abs());
+        s += (err[i] / sc).powi(2);
+    }
+    (s / n as f64).sqrt()
 }
 
 /// Dense output of the last accepted step into `out` at θ ∈ [0, 1].
@@ -246,11 +307,15 @@ fn dense_eval(w: &Workspace, theta: f64, out: &mut [f64]) {
                     * theta
                     * (r[0][j] + theta * (r[1][j] + theta * (r[2][j] + theta * r[3][j])))
             });
-            out.copy_from_slice(&d[0]);
-            for (b, k) in b.iter().zip(&w.k) {
-                for (o, k) in out.iter_mut().zip(k) {
-                    *o += b * k;
+            let n = out.len();
+            let k: [&[f64]; 7] = std::array::from_fn(|j| &w.k[j][..n]);
+            let y0 = &d[0][..n];
+            for i in 0..n {
+                let mut o = y0[i];
+                for j in 0..7 {
+                    o += b[j] * k[j][i];
                 }
+                out[i] = o;
             }
         }
     }
@@ -272,7 +337,7 @@ pub(super) fn run<S: System>(
     restart: &mut dyn FnMut(f64, &mut [f64]),
     stats: &mut Stats,
 ) -> End {
-    let mut w = Workspace::new(pair, y.len());
+    let mut w = Workspace::new(pair, &scale[..y.len()], o.atol);
     let mut si = 0;
     for (k, win) in bounds.windows(2).enumerate() {
         let (a, b) = (win[0], win[1]);
@@ -355,7 +420,7 @@ fn segment<S: System>(
             return non_finite(t + h, &w.y1)
                 .unwrap_or_else(|| End::Failed(format!("step size underflow at t = {t:.6e} s")));
         }
-        let err = rk_step(&sys, w, t, h, y, scale, o, stats);
+        let err = rk_step(&sys, w, t, h, y, o.rtol, stats);
         if o.fixed_step.is_none() {
             if err > 1.0 {
                 stats.rejected += 1;
@@ -416,55 +481,34 @@ fn segment<S: System>(
         y.copy_from_slice(&w.y1);
         t = t_new;
         step(t, y);
-        // FSAL: k[0] ← f(t_new, y)
-        let (a, b) = w.k.split_at_mut(6);
-        a[0].copy_from_slice(&b[0]);
+        // FSAL: k[0] ← f(t_new, y) (k[6] is written again before it is read)
+        w.k.swap(0, 6);
     }
     End::Done
 }
 
 /// One step of the pair; returns the error norm (∞ if the step is not finite).
-#[allow(clippy::too_many_arguments)]
 fn rk_step<S: System>(
     sys: &Left<S>,
     w: &mut Workspace,
     t: f64,
     h: f64,
     y: &[f64],
-    scale: &[f64],
-    o: &Options,
+    rtol: f64,
     stats: &mut Stats,
 ) -> f64 {
     let n = w.n;
     let p = w.pair;
-    // Each sum runs over j in order for every component at once (the same
-    // arithmetic as one component at a time, vectorised).
+    // stages 1…5 from y + h·Σ a·k into `ytmp`; row 6 (b) into `y1`, the 5th-order
+    // solution, and k[6] = f(t + h, y1)
     for s in 0..6 {
-        let acc = &mut w.err;
-        acc.fill(0.0);
-        for (a, k) in p.a[s][..=s].iter().zip(&w.k) {
-            for (acc, k) in acc.iter_mut().zip(k) {
-                *acc += a * k;
-            }
-        }
-        for ((yt, y), acc) in w.ytmp.iter_mut().zip(y).zip(acc.iter()) {
-            *yt = y + h * acc;
-        }
-        sys.rhs(t + p.c[s] * h, &w.ytmp, &mut w.k[s + 1]);
+        let (done, next) = w.k.split_at_mut(s + 1);
+        let arg = if s < 5 { &mut w.ytmp } else { &mut w.y1 };
+        stage(&p.a[s], s, done, y, h, arg);
+        sys.rhs(t + p.c[s] * h, arg, &mut next[0]);
     }
     stats.rhs_evals += 6;
-    // ytmp now holds the 5th-order solution (row 6 of A = b); k[6] = f(t+h, y1)
-    w.y1.copy_from_slice(&w.ytmp);
-    w.err.fill(0.0);
-    for (e, k) in p.e.iter().zip(&w.k) {
-        for (acc, k) in w.err.iter_mut().zip(k) {
-            *acc += e * k;
-        }
-    }
-    for e in w.err.iter_mut() {
-        *e *= h;
-    }
-    let err = wrms(&w.err, y, &w.y1, scale, o);
+    let err = error_norm(&p.e, &w.k, h, y, &w.y1, &w.atol, rtol, &mut w.err);
     w.dense[0].copy_from_slice(y);
     w.h_dense = h;
     if let Dense::Hairer(d) = &p.dense {

@@ -7,6 +7,15 @@ mod cli;
 
 use clap::Parser;
 
+/// The allocator: mimalloc (Leijen, Zorn & de Moura, "Mimalloc: free list sharding
+/// in action", APLAS 2019) keeps and reuses freed memory in large OS-backed segments
+/// where the system allocator returns big buffers to the kernel and faults every page
+/// in again. Measured on a 10⁶-row Yeoh fit (issue 12): 43 k page faults → 0.3 k,
+/// system time 0.14 s → 0.04 s, wall time 0.43 s → 0.28 s (fastest of six); peak
+/// resident memory 103 MB → 158 MB.
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn main() {
     quiet_on_closed_pipe();
     let args = cli::Cli::parse();

@@ -4,7 +4,7 @@
 
 use super::linear::{self, RowQr};
 use super::lm::LeastSquares;
-use crate::data::Dataset;
+use crate::data::{Dataset, Sample};
 use crate::material::hyperelastic::{Mode, StrainEnergy};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
@@ -69,27 +69,32 @@ impl<'a> HyperProblem<'a> {
         // Weights are relative: divided by the largest, every multiplier is ≤ 1 and
         // no weight (1e300, say) can overflow the cost.
         let w_max = s.iter().map(|x| x.weight).fold(0.0, f64::max);
-        let n = s.len();
-        let (mut modes, mut stretch, mut stress, mut scale) = (
-            Vec::with_capacity(n),
-            Vec::with_capacity(n),
-            Vec::with_capacity(n),
-            Vec::with_capacity(n),
-        );
-        // One pass over the samples fills every column.
-        for x in s {
+        let scale_of = |x: &Sample| {
             let w = (x.weight / w_max).sqrt();
-            scale.push(match residual {
+            match residual {
                 Residual::Abs => w,
                 Residual::Rel => {
                     let floor = (REL_FLOOR * max_abs[slot(x.mode)]).max(f64::MIN_POSITIVE);
                     w / x.stress.abs().max(floor)
                 }
-            });
-            modes.push(x.mode);
-            stretch.push(x.stretch);
-            stress.push(x.stress);
-        }
+            }
+        };
+        // Each column in a pass over the samples (a large dataset's in parallel).
+        let (modes, stretch, stress, scale) = if s.len() < PARALLEL_ROWS {
+            (
+                s.iter().map(|x| x.mode).collect(),
+                s.iter().map(|x| x.stretch).collect(),
+                s.iter().map(|x| x.stress).collect(),
+                s.iter().map(scale_of).collect(),
+            )
+        } else {
+            (
+                s.par_iter().map(|x| x.mode).collect(),
+                s.par_iter().map(|x| x.stretch).collect(),
+                s.par_iter().map(|x| x.stress).collect(),
+                s.par_iter().map(scale_of).collect(),
+            )
+        };
         HyperProblem {
             model,
             modes,

@@ -140,7 +140,9 @@ impl Table {
         let header_line = header.0;
         let parts = part_ranges(body, end);
         // The line of each part's first line: one vectorised count of line ends per part.
-        let lines_of = |r: &std::ops::Range<usize>| 1 + memchr::memchr_iter(end, &body.as_bytes()[r.clone()]).count();
+        let lines_of = |r: &std::ops::Range<usize>| {
+            1 + memchr::memchr_iter(end, &body.as_bytes()[r.clone()]).count()
+        };
         let mut first_lines: Vec<usize> = parts.par_iter().map(lines_of).collect();
         let mut next = line + 1;
         for n in &mut first_lines {

@@ -18,6 +18,7 @@ use crate::material::hyperelastic::{Mode, StrainEnergy};
 use crate::units::Dimension;
 use rayon::prelude::*;
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// How to read a tensile file.
 #[derive(Debug, Clone, Copy, Default)]
@@ -331,32 +332,32 @@ pub fn from_table(table: &Table, opts: &TensileOptions) -> Result<Dataset> {
         }
         Ok(sample)
     };
-    // Rows are read each on its own, so a parallel read (into the samples' final place:
-    // no second copy) gives the serial samples; the error reported is the first in file
-    // order, found by the serial read.
+    // Rows are read each on its own, so a parallel read (each sample written once, in
+    // its final place) gives the serial samples; on any error the serial read finds the
+    // first in file order, the one reported.
     let parallel = (table.rows.len() >= PARALLEL_ROWS).then(|| {
-        let blank = Sample {
-            mode: default_mode,
-            stretch: 0.0,
-            stress: 0.0,
-            weight: 0.0,
-            source: 0,
-            line: 0,
-        };
-        let mut samples = vec![blank; table.rows.len()];
-        samples
-            .par_chunks_mut(PARALLEL_ROWS)
-            .zip(table.rows.par_chunks(PARALLEL_ROWS))
-            .try_for_each(|(out, rows)| {
-                for (o, row) in out.iter_mut().zip(rows) {
-                    *o = read_row(row)?;
-                }
-                Ok::<_, Error>(())
+        let failed = AtomicBool::new(false);
+        let samples: Vec<Sample> = table
+            .rows
+            .par_iter()
+            .map(|row| {
+                read_row(row).unwrap_or_else(|_| {
+                    failed.store(true, Ordering::Relaxed);
+                    Sample {
+                        mode: default_mode,
+                        stretch: f64::NAN,
+                        stress: f64::NAN,
+                        weight: f64::NAN,
+                        source: 0,
+                        line: row.line,
+                    }
+                })
             })
-            .map(|()| samples)
+            .collect();
+        (!failed.into_inner()).then_some(samples)
     });
     let samples = match parallel {
-        Some(Ok(samples)) => samples,
+        Some(Some(samples)) => samples,
         _ => table
             .rows
             .iter()

@@ -100,7 +100,7 @@ fn yeoh_search(c: &mut Criterion) {
     // the whole design matrix (what it did), in the same run.
     g.bench_function("yeoh-qr", |b| {
         b.iter(|| {
-            let mut prob = HyperProblem::new(model.as_ref(), black_box(vhb), base.residual);
+            let prob = HyperProblem::new(model.as_ref(), black_box(vhb), base.residual);
             let k = prob.dims().1;
             prob.factor(&vec![0.0; k]).solve().expect("solvable")
         })

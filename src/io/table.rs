@@ -720,9 +720,6 @@ mod tests {
         }
     }
 
-    /// A file of several parts: every row, field, line number and directive is where
-    /// a line-by-line reading puts it, across the part boundaries, with CRLF ends,
-    /// comments, blank and quoted lines among the rows.
     proptest::proptest! {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(20000))]
         /// Plain decimals of up to 16 digits with a point anywhere and any sign (the
@@ -745,6 +742,9 @@ mod tests {
         }
     }
 
+    /// A file of several parts: every row, field, line number and directive is where
+    /// a line-by-line reading puts it, across the part boundaries, with CRLF ends,
+    /// comments, blank and quoted lines among the rows.
     #[test]
     fn a_file_read_in_parts_is_the_file_read_line_by_line() {
         let mut text = String::from("# mode: planar\r\nstretch,stress_kPa\r\n");

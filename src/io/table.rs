@@ -260,7 +260,7 @@ impl Table {
 
 /// The number `bytes` spell, as `str::parse::<f64>` reads it (correctly rounded), or
 /// None where it refuses them. A plain decimal `[+-]digits[.digits]` of at most 15
-/// digits (nearly every field of a test export) is m / 10ᵏ with m < 2⁵³ and k ≤ 22:
+/// digits (nearly every field of a test export) is m / 10ᵏ with m < 2⁵³ and k ≤ 15:
 /// both exact in binary, so the one division is the correctly rounded value (Clinger,
 /// "How to read floating point numbers accurately", PLDI 1990); anything else goes to
 /// `fast_float2`, which reads it exactly as `str::parse` does.

@@ -1384,6 +1384,42 @@ mod tests {
         }
     }
 
+    /// A problem that forms its normal equations but has none for the point the
+    /// search stands on stops the search as failed, with the reason (never a step
+    /// from a made-up gradient, never converged).
+    #[test]
+    fn missing_normal_equations_fail_the_search() {
+        struct Forgetful(RosenNormal);
+        impl LeastSquares for Forgetful {
+            fn dims(&self) -> (usize, usize) {
+                self.0.dims()
+            }
+            fn eval(
+                &mut self,
+                p: &[f64],
+                r: &mut DVector<f64>,
+                jac: Option<&mut DMatrix<f64>>,
+            ) -> bool {
+                self.0.eval(p, r, jac)
+            }
+            fn forms_normal_equations(&self) -> bool {
+                true
+            }
+        }
+        let inf = f64::INFINITY;
+        let b = [(-inf, inf), (-inf, inf)];
+        let res = minimize(
+            &mut Forgetful(RosenNormal::default()),
+            &[-1.2, 1.0],
+            &b,
+            &LmSettings::default(),
+        );
+        match res.termination {
+            Termination::Failed(why) => assert!(why.contains("normal equations"), "{why}"),
+            other => panic!("expected a failed search, got {other:?}"),
+        }
+    }
+
     /// A problem that forms its normal equations itself is searched exactly as the
     /// one that hands over its Jacobian (the same products enter every step: bit for
     /// bit the same iterates, cost and iterations), with no tall Jacobian asked for

@@ -40,6 +40,7 @@
 //! (Gent: finite only up to its extensibility limit) first has the ends of its
 //! finite interval found by bisection on the grid.
 
+use crate::material::hyperelastic::polynomial::Prepared;
 use crate::material::hyperelastic::powers::Parts;
 use crate::material::hyperelastic::{Mode, StrainEnergy};
 use serde::{Deserialize, Serialize};
@@ -99,7 +100,7 @@ pub fn drucker_dense(model: &dyn StrainEnergy, p: &[f64]) -> Vec<DruckerCheck> {
         .iter()
         .map(|&mode| {
             let mut runs = Runs::default();
-            dense(model, p, mode, 0, GRID - 1, &mut runs);
+            dense(&Tangent::new(model, p, mode), 0, GRID - 1, &mut runs);
             summarize(mode, &runs)
         })
         .collect()
@@ -126,17 +127,48 @@ impl Runs {
     }
 }
 
-/// Whether dP/dλ at grid stretch `i` is finite and positive.
-#[inline]
-fn positive(model: &dyn StrainEnergy, p: &[f64], mode: Mode, i: usize) -> bool {
-    let t = model.tangent(p, mode, grid()[i].1);
-    t.is_finite() && t > 0.0
+/// dP/dλ of one mode at fixed parameters: [`StrainEnergy::tangent`], by the model's
+/// prepared form where it has one (the same numbers without preparing the
+/// parameters at each stretch).
+struct Tangent<'a> {
+    model: &'a dyn StrainEnergy,
+    p: &'a [f64],
+    mode: Mode,
+    prepared: Option<Prepared>,
+}
+
+impl<'a> Tangent<'a> {
+    fn new(model: &'a dyn StrainEnergy, p: &'a [f64], mode: Mode) -> Self {
+        Tangent {
+            model,
+            p,
+            mode,
+            prepared: model.prepared(p, mode),
+        }
+    }
+
+    /// dP/dλ at grid stretch `i`.
+    #[inline]
+    fn at(&self, i: usize) -> f64 {
+        let lam = grid()[i].1;
+        match &self.prepared {
+            Some(q) => q.tangent(lam),
+            None => self.model.tangent(self.p, self.mode, lam),
+        }
+    }
+
+    /// Whether dP/dλ at grid stretch `i` is finite and positive.
+    #[inline]
+    fn positive(&self, i: usize) -> bool {
+        let t = self.at(i);
+        t.is_finite() && t > 0.0
+    }
 }
 
 /// The sign at every grid stretch from `lo` to `hi` by direct evaluation.
-fn dense(model: &dyn StrainEnergy, p: &[f64], mode: Mode, lo: usize, hi: usize, runs: &mut Runs) {
+fn dense(t: &Tangent, lo: usize, hi: usize, runs: &mut Runs) {
     for i in lo..=hi {
-        runs.push(i, i, positive(model, p, mode, i));
+        runs.push(i, i, t.positive(i));
     }
 }
 
@@ -209,18 +241,11 @@ fn bound(sa: f64, a: Parts, sb: f64, b: Parts) -> Cell {
 
 /// The last index of `lo..=hi` whose sign is that of `lo`, given that the sign
 /// changes once (bisection on direct evaluations).
-fn last_like_first(
-    model: &dyn StrainEnergy,
-    p: &[f64],
-    mode: Mode,
-    lo: usize,
-    hi: usize,
-    first: bool,
-) -> usize {
+fn last_like_first(t: &Tangent, lo: usize, hi: usize, first: bool) -> usize {
     let (mut a, mut b) = (lo, hi);
     while b - a > 1 {
         let m = (a + b) / 2;
-        if positive(model, p, mode, m) == first {
+        if t.positive(m) == first {
             a = m
         } else {
             b = m
@@ -232,8 +257,9 @@ fn last_like_first(
 /// The sign of dP/dλ at every grid stretch of `mode`.
 fn signs(model: &dyn StrainEnergy, p: &[f64], mode: Mode) -> Runs {
     let mut runs = Runs::default();
+    let t = Tangent::new(model, p, mode);
     let Some(tp) = model.tangent_powers(p, mode) else {
-        dense(model, p, mode, 0, GRID - 1, &mut runs);
+        dense(&t, 0, GRID - 1, &mut runs);
         return runs;
     };
     let g = grid();
@@ -241,9 +267,9 @@ fn signs(model: &dyn StrainEnergy, p: &[f64], mode: Mode) -> Runs {
     if tp.bounded {
         // Finite on an interval of grid stretches around λ = 1: find its ends.
         let one = grid_one();
-        let finite = |i: usize| model.tangent(p, mode, g[i].1).is_finite();
+        let finite = |i: usize| t.at(i).is_finite();
         if !finite(one) {
-            dense(model, p, mode, 0, GRID - 1, &mut runs);
+            dense(&t, 0, GRID - 1, &mut runs);
             return runs;
         }
         let find = |from: usize, to: usize| {
@@ -269,11 +295,11 @@ fn signs(model: &dyn StrainEnergy, p: &[f64], mode: Mode) -> Runs {
     }
     if tp.sum.sign_changes() <= 1 {
         // At most one simple zero in λ > 0 (Descartes): one sign on either side of it.
-        let (a, b) = (positive(model, p, mode, lo), positive(model, p, mode, hi));
+        let (a, b) = (t.positive(lo), t.positive(hi));
         if a == b {
             runs.push(lo, hi, a);
         } else {
-            let m = last_like_first(model, p, mode, lo, hi, a);
+            let m = last_like_first(&t, lo, hi, a);
             runs.push(lo, m, a);
             runs.push(m + 1, hi, b);
         }
@@ -288,8 +314,8 @@ fn signs(model: &dyn StrainEnergy, p: &[f64], mode: Mode) -> Runs {
                 Cell::Positive => runs.push(i, j, true),
                 Cell::Negative => runs.push(i, j, false),
                 Cell::Undecided if j - i <= 1 => {
-                    runs.push(i, i, positive(model, p, mode, i));
-                    runs.push(j, j, positive(model, p, mode, j));
+                    runs.push(i, i, t.positive(i));
+                    runs.push(j, j, t.positive(j));
                 }
                 Cell::Undecided => {
                     let m = (i + j) / 2;

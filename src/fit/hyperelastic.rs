@@ -767,6 +767,22 @@ fn largest_contributions(model: &dyn StrainEnergy, p: &[f64], data: &Dataset) ->
     largest
 }
 
+/// The model's nominal stress at every sample: [`StrainEnergy::nominal_stress`], by
+/// the model's form prepared once per mode where it has one (the same numbers,
+/// without preparing the parameters at every sample).
+fn predictions(model: &dyn StrainEnergy, p: &[f64], samples: &[Sample]) -> Vec<f64> {
+    let prepared = Mode::ALL.map(|m| model.prepared(p, m));
+    let one = |s: &Sample| match &prepared[s.mode.index()] {
+        Some(q) => q.stress(s.stretch),
+        None => model.nominal_stress(p, s.mode, s.stretch),
+    };
+    if samples.len() < PARALLEL_ROWS {
+        samples.iter().map(one).collect()
+    } else {
+        samples.par_iter().map(one).collect()
+    }
+}
+
 /// Fit one model to the data.
 pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<HyperelasticFit> {
     settings.check()?;
@@ -781,12 +797,7 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
     let (n, k) = (prob.len(), p.len());
     // Predictions once: the residuals and every statistic below come from them.
     let factor = est.factor.take().unwrap_or_else(|| prob.factor(&p));
-    let one = |s: &Sample| model.nominal_stress(&p, s.mode, s.stretch);
-    let pred: Vec<f64> = if n < PARALLEL_ROWS {
-        data.samples.iter().map(one).collect()
-    } else {
-        data.samples.par_iter().map(one).collect()
-    };
+    let pred = predictions(model, &p, &data.samples);
     // The measured stresses, as the problem holds them.
     let y = &prob.stress;
     let r = DVector::from_fn(n, |i, _| prob.scale[i] * (pred[i] - y[i]));

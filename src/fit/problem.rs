@@ -59,7 +59,7 @@ impl<'a> HyperProblem<'a> {
         let s = &data.samples;
         // Each mode's largest |stress| (the floor of relative residuals), in one pass.
         let mut max_abs = [0.0f64; 3];
-        let slot = |m: Mode| Mode::ALL.iter().position(|&x| x == m).unwrap_or(0);
+        let slot = Mode::index;
         if residual == Residual::Rel {
             for x in s {
                 let a = &mut max_abs[slot(x.mode)];

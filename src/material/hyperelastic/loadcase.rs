@@ -36,6 +36,16 @@ impl Mode {
     /// All modes, in display order.
     pub const ALL: [Mode; 3] = [Mode::Uniaxial, Mode::Equibiaxial, Mode::Planar];
 
+    /// The position of this mode in [`Mode::ALL`].
+    #[inline]
+    pub fn index(self) -> usize {
+        match self {
+            Mode::Uniaxial => 0,
+            Mode::Equibiaxial => 1,
+            Mode::Planar => 2,
+        }
+    }
+
     /// Parse a mode name as written in data files (`uniaxial`, `tension`,
     /// `compression`, `equibiaxial`, `biaxial`, `planar`, `pure_shear`, `shear`).
     pub fn parse(s: &str) -> Option<Mode> {
@@ -190,6 +200,13 @@ impl Kinematics {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_mode_indexes_its_place_in_all() {
+        for (i, m) in Mode::ALL.iter().enumerate() {
+            assert_eq!(m.index(), i, "{m}");
+        }
+    }
 
     #[test]
     fn kinematics_are_incompressible_and_rates_match_differences() {

@@ -24,6 +24,13 @@ pub struct Polynomial {
     name: &'static str,
     terms: Vec<Term>,
     params: Vec<ParamInfo>,
+    /// Each slot's (i, j), (0, 0) after the terms: what [`Prepared`] carries, fixed
+    /// by the model (not by its parameters), so found once here.
+    exponents: [(i32, i32); MAX_TERMS],
+    /// Which of [`FAMILY`] the exponents are, if any.
+    model: Option<usize>,
+    /// Whether any term has a power of y = I2 − 3.
+    uses_i2: bool,
 }
 
 /// The largest exponent of x = I1 − 3 or y = I2 − 3 in a term of these models
@@ -59,6 +66,10 @@ impl Polynomial {
             terms.len() <= MAX_TERMS,
             "{name}: at most {MAX_TERMS} terms"
         );
+        let mut exponents = [(0, 0); MAX_TERMS];
+        for (e, &(_, i, j, _)) in exponents.iter_mut().zip(terms) {
+            *e = (i, j);
+        }
         Polynomial {
             name,
             terms: terms
@@ -66,6 +77,9 @@ impl Polynomial {
                 .map(|&(_, i, j, scale)| Term { i, j, scale })
                 .collect(),
             params: terms.iter().map(|&(n, ..)| ParamInfo::modulus(n)).collect(),
+            exponents,
+            model: FAMILY.iter().position(|e| *e == exponents),
+            uses_i2: terms.iter().any(|&(_, _, j, _)| j > 0),
         }
     }
     /// Neo-Hookean, parameter `mu`.
@@ -103,8 +117,7 @@ impl Polynomial {
             return None;
         }
         let mut terms = [Coefficients::default(); MAX_TERMS];
-        let mut exponents = [(0, 0); MAX_TERMS];
-        for (((t, &c), o), e) in self.terms.iter().zip(p).zip(&mut terms).zip(&mut exponents) {
+        for ((t, &c), o) in self.terms.iter().zip(p).zip(&mut terms) {
             let (i, j, c) = (t.i, t.j, c * t.scale);
             let (fi, fj) = (f64::from(i), f64::from(j));
             *o = Coefficients {
@@ -114,14 +127,13 @@ impl Polynomial {
                 w12: c * fi * fj,
                 w22: c * fj * (fj - 1.0),
             };
-            *e = (i, j);
         }
         Some(Prepared {
             mode,
             terms,
-            exponents,
-            model: FAMILY.iter().position(|e| *e == exponents),
-            uses_i2: self.terms.iter().any(|t| t.j > 0),
+            exponents: self.exponents,
+            model: self.model,
+            uses_i2: self.uses_i2,
         })
     }
 }
@@ -219,6 +231,32 @@ impl Prepared {
         }
     }
 
+    /// Each term's nominal stress at λ (Pa), in parameter order: the terms of
+    /// [`Prepared::stress`] before they are summed (at unit parameters, the
+    /// Jacobian ∂P/∂p).
+    #[inline(always)]
+    fn term_stresses(&self, lam: f64, out: &mut [f64]) {
+        match self.model {
+            Some(0) => self.terms_with(FAMILY[0], lam, out),
+            Some(1) => self.terms_with(FAMILY[1], lam, out),
+            Some(2) => self.terms_with(FAMILY[2], lam, out),
+            _ => self.terms_with(self.exponents, lam, out),
+        }
+    }
+
+    /// [`Prepared::term_stresses`] with the slots' exponents `e`.
+    #[inline(always)]
+    fn terms_with(&self, e: [(i32, i32); MAX_TERMS], lam: f64, out: &mut [f64]) {
+        let k = self.mode.kinematics(lam);
+        let (i1, i2) = self.invariants(&k);
+        let (x, y) = (Powers::of(i1 - 3.0), Powers::of(i2 - 3.0));
+        for ((t, (i, j)), o) in self.terms.iter().zip(e).zip(out) {
+            let w1 = t.w1 * x.get(i - 1) * y.get(j);
+            let w2 = t.w2 * x.get(i) * y.get(j - 1);
+            *o = k.invariant_stress(w1, w2);
+        }
+    }
+
     /// Nominal stress P(λ) (Pa).
     #[inline(always)]
     pub fn stress(&self, lam: f64) -> f64 {
@@ -307,7 +345,7 @@ impl StrainEnergy for Polynomial {
         if p.len() != self.terms.len() {
             return None;
         }
-        let basis = &self.tangent_bases()?[Mode::ALL.iter().position(|&m| m == mode)?];
+        let basis = &self.tangent_bases()?[mode.index()];
         let mut sum = Laurent::ZERO;
         for (b, &c) in basis.iter().zip(p) {
             sum.add_assign_scaled(c, b);
@@ -318,18 +356,11 @@ impl StrainEnergy for Polynomial {
         })
     }
     fn stress_jacobian(&self, p: &[f64], mode: Mode, lam: f64, out: &mut [f64]) {
-        if p.len() != self.terms.len() || out.len() != self.terms.len() {
-            out.fill(f64::NAN);
-            return;
-        }
-        let k = mode.kinematics(lam);
-        let (i1, i2) = k.invariants();
-        let (x, y) = (Powers::of(i1 - 3.0), Powers::of(i2 - 3.0));
-        for (t, o) in self.terms.iter().zip(out.iter_mut()) {
-            let (fi, fj) = (f64::from(t.i), f64::from(t.j));
-            let w1 = t.scale * fi * x.get(t.i - 1) * y.get(t.j);
-            let w2 = t.scale * fj * x.get(t.i) * y.get(t.j - 1);
-            *o = k.invariant_stress(w1, w2);
+        // ∂P/∂p_k is term k's stress at p_k = 1 (the model is linear in p).
+        let n = self.terms.len();
+        match self.prepare(&[1.0; MAX_TERMS][..n], mode) {
+            Some(unit) if p.len() == n && out.len() == n => unit.term_stresses(lam, out),
+            _ => out.fill(f64::NAN),
         }
     }
     fn initial_shear_modulus(&self, p: &[f64]) -> f64 {
@@ -344,10 +375,11 @@ mod tests {
     use super::*;
 
     /// The prepared evaluation's shortcuts change no bit: I2 left out where no
-    /// term reads it (the same stress and tangent as with I2 computed), the zero
-    /// slots after a model's terms (the same as the terms alone, by the generic
-    /// loop of the family, `reference`), and the exponents as constants (the same
-    /// as read at run time). Every model of the family, every
+    /// term reads it (the same stress, tangent and Jacobian as with I2 computed),
+    /// the zero slots after a model's terms (the same as the terms alone, by the
+    /// generic loop of the family, `reference` and `reference_jacobian`), and the
+    /// exponents as constants (the same as read at run time). Every model of the
+    /// family, every
     /// mode, stretches from deep compression to tension, with mixed-sign
     /// coefficients so that sums cancel.
     #[test]
@@ -369,6 +401,21 @@ mod tests {
                 d.w22 += c * fj * (fj - 1.0) * x.get(i) * y.get(j - 2);
             }
             (k.invariant_stress(d.w1, d.w2), k.invariant_tangent(&d))
+        }
+        /// ∂P/∂p_k as each term's stress at unit coefficient, I2 always computed.
+        fn reference_jacobian(m: &Polynomial, mode: Mode, lam: f64) -> Vec<f64> {
+            let k = mode.kinematics(lam);
+            let (i1, i2) = k.invariants();
+            let (x, y) = (Powers::of(i1 - 3.0), Powers::of(i2 - 3.0));
+            m.terms
+                .iter()
+                .map(|t| {
+                    let (fi, fj) = (f64::from(t.i), f64::from(t.j));
+                    let w1 = t.scale * fi * x.get(t.i - 1) * y.get(t.j);
+                    let w2 = t.scale * fj * x.get(t.i) * y.get(t.j - 1);
+                    k.invariant_stress(w1, w2)
+                })
+                .collect()
         }
         let mut checked = 0;
         for m in [
@@ -400,6 +447,12 @@ mod tests {
                     );
                     assert_eq!(generic.stress(lam).to_bits(), stress.to_bits());
                     assert_eq!(generic.tangent(lam).to_bits(), tangent.to_bits());
+                    let mut jac = vec![0.0; p.len()];
+                    m.stress_jacobian(&p, mode, lam, &mut jac);
+                    let want = reference_jacobian(&m, mode, lam);
+                    for (a, b) in jac.iter().zip(&want) {
+                        assert_eq!(a.to_bits(), b.to_bits(), "{} {mode} {lam}", m.name);
+                    }
                     checked += 1;
                 }
             }
@@ -410,5 +463,11 @@ mod tests {
         assert!(Polynomial::yeoh()
             .nominal_stress(&[1.0], Mode::Uniaxial, 0.9)
             .is_nan());
+        // and no Jacobian, however long the vector
+        for p in [&[1.0][..], &[1.0; 4][..]] {
+            let mut jac = [0.0; 3];
+            Polynomial::yeoh().stress_jacobian(p, Mode::Uniaxial, 0.9, &mut jac);
+            assert!(jac.iter().all(|v| v.is_nan()), "{p:?}");
+        }
     }
 }

@@ -66,9 +66,15 @@ impl Laurent {
 
     /// self += k·other.
     pub fn add_assign_scaled(&mut self, k: f64, other: &Laurent) {
-        for (e, c) in other.terms() {
-            self.add_term(k * c, e).expect("both are in range");
+        if other.lo > other.hi {
+            return;
         }
+        let used = (other.lo - LO) as usize..=(other.hi - LO) as usize;
+        for (a, b) in self.c[used.clone()].iter_mut().zip(&other.c[used]) {
+            *a += k * b;
+        }
+        self.lo = self.lo.min(other.lo);
+        self.hi = self.hi.max(other.hi);
     }
 
     /// self·other (None when an exponent of the product is out of range).
@@ -133,7 +139,7 @@ impl LaurentKinematics {
     pub fn of(mode: Mode) -> &'static LaurentKinematics {
         static ALL: OnceLock<[LaurentKinematics; 3]> = OnceLock::new();
         let all = ALL.get_or_init(|| Mode::ALL.map(Self::build));
-        &all[Mode::ALL.iter().position(|&m| m == mode).expect("a mode")]
+        &all[mode.index()]
     }
 
     /// The quantities of `mode` (λ1 = λ; λ2², λ3² powers of λ as in [`super::loadcase`]).

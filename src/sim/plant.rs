@@ -1185,4 +1185,61 @@ span = "1 s"
         }
         assert!(sources.len() >= 4, "{sources:?}");
     }
+
+    /// `System::rhs` (a copy fixed per layout up to `FIXED_ARMS` arms) is the
+    /// right-hand side over the run-time layout bit for bit, on every layout: the
+    /// shipped scenes (ideal, rise-time and resistance sources, PID) with and without
+    /// inertia and with 0…4 arms integrated, and a layer of six arms (the run-time
+    /// path), at the rest state and at a moved one.
+    #[test]
+    fn rhs_fixed_per_layout_is_the_run_time_layouts() {
+        use crate::sim::integrate::System;
+        let mut layouts = std::collections::BTreeSet::new();
+        let mut check = |p: &Plant, t: f64| {
+            let l = p.layout();
+            let mut y = p.initial_state();
+            let (mut fixed, mut run_time) = (vec![0.0; l.n], vec![0.0; l.n]);
+            for moved in [false, true] {
+                if moved {
+                    y[0] *= 0.97;
+                    for (j, v) in y.iter_mut().enumerate().skip(1) {
+                        *v += 1e-3 * (j as f64);
+                    }
+                }
+                p.rhs(t, &y, &mut fixed);
+                p.rhs_with(&Plain(p), t, &y, &l, |i, v| run_time[i] = v);
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&fixed), bits(&run_time), "{l:?}");
+            }
+            layouts.insert((l.v.is_some(), l.arms, l.src.is_some(), l.ctl.is_some()));
+        };
+        for name in [
+            "stack_step_5kV",
+            "stack_pid_triangle",
+            "stack_triangle_100Hz",
+            "hdea_step_10N",
+        ] {
+            let text = std::fs::read_to_string(format!("datasets/scenes/{name}.toml")).unwrap();
+            let resistance = text.replace("rise_time = \"1 ms\"", "resistance_ohm = 2e6");
+            for text in [&text, &resistance] {
+                let s = Scene::parse(text, Path::new("r.toml")).unwrap();
+                let arms = s.material.viscous.arms.len();
+                for (inertia, kept) in [false, true]
+                    .into_iter()
+                    .flat_map(|i| (0..=arms).map(move |m| (i, m)))
+                {
+                    let keep: Vec<bool> = (0..arms).map(|j| j < kept).collect();
+                    check(&Plant::new(&s, inertia, &keep).unwrap(), 0.3 * s.time.span);
+                }
+            }
+        }
+        let arm = r#"{ k = "100 kPa", tau = "10 ms" }"#;
+        let six = layer(&[arm; 6].join(", "));
+        assert!(six.arms.len() > FIXED_ARMS);
+        check(&six, 0.3);
+        // every fixed copy's arm count and all four other choices, and the run-time path
+        assert!(layouts.len() >= 20, "{layouts:?}");
+        assert!((0..=FIXED_ARMS).all(|m| layouts.iter().any(|l| l.1 == m)));
+        assert!(layouts.iter().any(|l| l.1 > FIXED_ARMS));
+    }
 }

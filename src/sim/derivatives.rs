@@ -558,7 +558,7 @@ impl Plant {
     /// The right-hand side's derivative along one seed into `out`.
     fn one_lane(&self, t: f64, y: &[f64], state: StateSeed, theta: ThetaSeed, out: &mut [f64]) {
         let e = Seeded::<1>::new(self, 1, |_| Seed { state, theta });
-        self.rhs_with(&e, t, y, |i, d| out[i] = d.d[0]);
+        self.rhs_with(&e, t, y, &self.layout(), |i, d| out[i] = d.d[0]);
     }
 
     /// The total derivatives d/dθk of the measured outputs at (t, y), for every θk,
@@ -686,7 +686,7 @@ struct Columns<'a> {
 impl LanePass for Columns<'_> {
     fn run<const L: usize>(&mut self, p: &Plant, e: &Seeded<'_, L>, first: usize, lanes: usize) {
         let (out, cols) = (&mut *self.out, self.cols);
-        p.rhs_with(e, self.t, self.y, |i, v| {
+        p.rhs_with(e, self.t, self.y, &p.layout(), |i, v| {
             out[i * cols + first..i * cols + first + lanes].copy_from_slice(&v.d[..lanes])
         });
     }

@@ -132,6 +132,32 @@ pub struct Layout {
     pub quad: usize,
     /// Total.
     pub n: usize,
+    /// Number of arms (their stresses at `sig`…`sig + arms − 1`).
+    pub arms: usize,
+}
+
+impl Layout {
+    /// The state vector [λ, (λ̇), σ1…σm, (source), (I, D), E_in, D_visc, D_leak,
+    /// D_src] of a plant with or without inertia, m = `arms` arms, a source state
+    /// (any source but an ideal one) and a controller.
+    #[inline(always)]
+    pub const fn of(inertia: bool, arms: usize, source: bool, control: bool) -> Layout {
+        let sig = if inertia { 2 } else { 1 };
+        let after = sig + arms;
+        let src = if source { Some(after) } else { None };
+        let after = after + source as usize;
+        let ctl = if control { Some(after) } else { None };
+        let quad = after + 2 * control as usize;
+        Layout {
+            v: if inertia { Some(1) } else { None },
+            sig,
+            src,
+            ctl,
+            quad,
+            n: quad + 4,
+            arms,
+        }
+    }
 }
 
 /// The numbers the right-hand side is written in: `f64` for the ODE, a dual number
@@ -575,21 +601,12 @@ impl Plant {
 
     /// State layout.
     pub fn layout(&self) -> Layout {
-        let v = self.inertia.then_some(1);
-        let sig = if self.inertia { 2 } else { 1 };
-        let after = sig + self.arms.len();
-        let src = (!matches!(self.source, Source::Ideal)).then_some(after);
-        let after = after + src.is_some() as usize;
-        let ctl = self.control.is_some().then_some(after);
-        let quad = after + 2 * ctl.is_some() as usize;
-        Layout {
-            v,
-            sig,
-            src,
-            ctl,
-            quad,
-            n: quad + 4,
-        }
+        Layout::of(
+            self.inertia,
+            self.arms.len(),
+            !matches!(self.source, Source::Ideal),
+            self.control.is_some(),
+        )
     }
 
     /// Initial state: loaded equilibrium, arms relaxed, source at the input's value.
@@ -769,7 +786,7 @@ impl Plant {
     #[inline(always)]
     fn drive_with<E: Eval>(&self, e: &E, y: &[f64], l: &Layout, s: &Terminal<E::T>) -> E::T {
         let lam = e.y(y, 0);
-        let sig = (0..self.arms.len()).fold(E::T::cst(0.0), |a, j| a + e.y(y, l.sig + j));
+        let sig = (0..l.arms).fold(E::T::cst(0.0), |a, j| a + e.y(y, l.sig + j));
         self.relaxed_force(e, lam, s.v, s.dc) - (sig + (lam - e.lam_f()) * self.frozen_k) * self.vol
     }
 
@@ -796,7 +813,7 @@ impl Plant {
         drive: E::T,
     ) -> E::T {
         let lam = e.y(y, 0);
-        let relax = (0..self.arms.len()).fold(E::T::cst(0.0), |acc, j| {
+        let relax = (0..l.arms).fold(E::T::cst(0.0), |acc, j| {
             acc + e.y(y, l.sig + j) / e.arm(j).1
         });
         let k = self.stiffness(e, lam, s.v, s.d2c, self.springs(e));
@@ -843,17 +860,17 @@ impl Plant {
         e: &E,
         t: f64,
         y: &[f64],
+        l: &Layout,
         mut out: impl FnMut(usize, E::T),
     ) {
-        let l = self.layout();
-        let k = self.kinematics(e, t, y, &l);
+        let k = self.kinematics(e, t, y, l);
         let (ld, el) = (k.lam_dot, k.elec);
         out(0, ld);
         if let Some(i) = l.v {
             out(i, k.force / self.mass);
         }
         let mut d_visc = e.nv() * ld * ld;
-        for j in 0..self.arms.len() {
+        for j in 0..l.arms {
             let (kj, tau) = e.arm(j);
             let s = e.y(y, l.sig + j);
             out(l.sig + j, kj * ld - s / tau);
@@ -927,6 +944,48 @@ impl Plant {
     }
 }
 
+/// The most arms a right-hand side fixed per layout has (the seed's tables have four).
+const FIXED_ARMS: usize = 4;
+
+impl Plant {
+    /// [`System::rhs`](super::integrate::System::rhs) with `ARMS` arms: the rest of
+    /// the layout (inertia, source state, controller) chosen here.
+    #[inline(always)]
+    fn rhs_arms<const ARMS: usize>(&self, t: f64, y: &[f64], dy: &mut [f64]) {
+        let source = !matches!(self.source, Source::Ideal);
+        match (self.inertia, source, self.control.is_some()) {
+            (false, false, false) => self.rhs_fixed::<false, ARMS, false, false>(t, y, dy),
+            (false, false, true) => self.rhs_fixed::<false, ARMS, false, true>(t, y, dy),
+            (false, true, false) => self.rhs_fixed::<false, ARMS, true, false>(t, y, dy),
+            (false, true, true) => self.rhs_fixed::<false, ARMS, true, true>(t, y, dy),
+            (true, false, false) => self.rhs_fixed::<true, ARMS, false, false>(t, y, dy),
+            (true, false, true) => self.rhs_fixed::<true, ARMS, false, true>(t, y, dy),
+            (true, true, false) => self.rhs_fixed::<true, ARMS, true, false>(t, y, dy),
+            (true, true, true) => self.rhs_fixed::<true, ARMS, true, true>(t, y, dy),
+        }
+    }
+
+    /// The right-hand side over the layout [`Layout::of`]`(INERTIA, ARMS, SOURCE,
+    /// CONTROL)`, which must be the plant's: its state vectors cut to that length,
+    /// so that every index is a constant the compiler checks once.
+    #[inline(never)]
+    fn rhs_fixed<
+        const INERTIA: bool,
+        const ARMS: usize,
+        const SOURCE: bool,
+        const CONTROL: bool,
+    >(
+        &self,
+        t: f64,
+        y: &[f64],
+        dy: &mut [f64],
+    ) {
+        let l = const { Layout::of(INERTIA, ARMS, SOURCE, CONTROL) };
+        let (y, dy) = (&y[..l.n], &mut dy[..l.n]);
+        self.rhs_with(&Plain(self), t, y, &l, |i, v| dy[i] = v);
+    }
+}
+
 /// Sensed contraction ŷ = 1 − sqrt(C_rest/C) (Eq. 3.22).
 #[inline]
 fn sensed<T: Num>(c_rest: T, c: T) -> T {
@@ -956,8 +1015,19 @@ impl super::integrate::System for Plant {
     fn dim(&self) -> usize {
         self.layout().n
     }
+    /// The right-hand side of the plant's layout: a copy fixed when the code is
+    /// built for every layout with up to [`FIXED_ARMS`] arms (every index a constant:
+    /// no bounds check, no match on the layout, the arms' loops unrolled), else at
+    /// run time; the same arithmetic either way.
     fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64]) {
-        self.rhs_with(&Plain(self), t, y, |i, v| dy[i] = v);
+        match self.arms.len() {
+            0 => self.rhs_arms::<0>(t, y, dy),
+            1 => self.rhs_arms::<1>(t, y, dy),
+            2 => self.rhs_arms::<2>(t, y, dy),
+            3 => self.rhs_arms::<3>(t, y, dy),
+            FIXED_ARMS => self.rhs_arms::<FIXED_ARMS>(t, y, dy),
+            _ => self.rhs_with(&Plain(self), t, y, &self.layout(), |i, v| dy[i] = v),
+        }
     }
     fn jacobian_times(&self, t: f64, y: &[f64], v: &[f64], out: &mut [f64]) {
         Plant::jacobian_times(self, t, y, v, out)
@@ -1114,5 +1184,62 @@ span = "1 s"
             }
         }
         assert!(sources.len() >= 4, "{sources:?}");
+    }
+
+    /// `System::rhs` (a copy fixed per layout up to `FIXED_ARMS` arms) is the
+    /// right-hand side over the run-time layout bit for bit, on every layout: the
+    /// shipped scenes (ideal, rise-time and resistance sources, PID) with and without
+    /// inertia and with 0…4 arms integrated, and a layer of six arms (the run-time
+    /// path), at the rest state and at a moved one.
+    #[test]
+    fn rhs_fixed_per_layout_is_the_run_time_layouts() {
+        use crate::sim::integrate::System;
+        let mut layouts = std::collections::BTreeSet::new();
+        let mut check = |p: &Plant, t: f64| {
+            let l = p.layout();
+            let mut y = p.initial_state();
+            let (mut fixed, mut run_time) = (vec![0.0; l.n], vec![0.0; l.n]);
+            for moved in [false, true] {
+                if moved {
+                    y[0] *= 0.97;
+                    for (j, v) in y.iter_mut().enumerate().skip(1) {
+                        *v += 1e-3 * (j as f64);
+                    }
+                }
+                p.rhs(t, &y, &mut fixed);
+                p.rhs_with(&Plain(p), t, &y, &l, |i, v| run_time[i] = v);
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&fixed), bits(&run_time), "{l:?}");
+            }
+            layouts.insert((l.v.is_some(), l.arms, l.src.is_some(), l.ctl.is_some()));
+        };
+        for name in [
+            "stack_step_5kV",
+            "stack_pid_triangle",
+            "stack_triangle_100Hz",
+            "hdea_step_10N",
+        ] {
+            let text = std::fs::read_to_string(format!("datasets/scenes/{name}.toml")).unwrap();
+            let resistance = text.replace("rise_time = \"1 ms\"", "resistance_ohm = 2e6");
+            for text in [&text, &resistance] {
+                let s = Scene::parse(text, Path::new("r.toml")).unwrap();
+                let arms = s.material.viscous.arms.len();
+                for (inertia, kept) in [false, true]
+                    .into_iter()
+                    .flat_map(|i| (0..=arms).map(move |m| (i, m)))
+                {
+                    let keep: Vec<bool> = (0..arms).map(|j| j < kept).collect();
+                    check(&Plant::new(&s, inertia, &keep).unwrap(), 0.3 * s.time.span);
+                }
+            }
+        }
+        let arm = r#"{ k = "100 kPa", tau = "10 ms" }"#;
+        let six = layer(&[arm; 6].join(", "));
+        assert!(six.arms.len() > FIXED_ARMS);
+        check(&six, 0.3);
+        // every fixed copy's arm count and all four other choices, and the run-time path
+        assert!(layouts.len() >= 20, "{layouts:?}");
+        assert!((0..=FIXED_ARMS).all(|m| layouts.iter().any(|l| l.1 == m)));
+        assert!(layouts.iter().any(|l| l.1 > FIXED_ARMS));
     }
 }

@@ -28,7 +28,8 @@ struct Workspace {
     ytmp: Vec<f64>,
     /// The absolute tolerance of each state, `atol`·scale.
     atol: Vec<f64>,
-    /// The local error estimate of the last step.
+    /// The last step's scaled squared local errors (err_i / sc_i)², summed in order
+    /// by [`error_norm`].
     err: Vec<f64>,
     /// The dense output of the last step: y at its start in `dense[0]`, and for
     /// [`Dense::Hairer`] its four other vectors.
@@ -259,8 +260,9 @@ fn stage(a: &[f64; 6], s: usize, k: &[Vec<f64>], y: &[f64], h: f64, out: &mut [f
 }
 
 /// Weighted RMS norm of the local error h·Σ_j e_j·k_j (all states, `atol[i]` the
-/// absolute tolerance of state i), the error into `err` first (a loop over the
-/// components the compiler vectorises), then the norm's sum in order.
+/// absolute tolerance of state i): each component's (err_i / sc_i)² into `err` first
+/// (a loop over the components the compiler vectorises, the division too), then the
+/// norm's sum in order.
 #[allow(clippy::too_many_arguments)]
 fn error_norm(
     e: &[f64; 7],
@@ -280,14 +282,10 @@ fn error_norm(
         for j in 0..7 {
             acc += e[j] * k[j][i];
         }
-        err[i] = acc * h;
-    }
-    let mut s = 0.0;
-    for i in 0..n {
         let sc = atol[i] + rtol * y0[i].abs().max(y1[i].abs());
-        s += (err[i] / sc).powi(2);
+        err[i] = (acc * h / sc).powi(2);
     }
-    (s / n as f64).sqrt()
+    (err.iter().fold(0.0, |s, e| s + e) / n as f64).sqrt()
 }
 
 /// Dense output of the last accepted step into `out` at θ ∈ [0, 1].

@@ -313,6 +313,23 @@ mod tests {
         }
     }
 
+    /// [`dot`] compiled for AVX2 and for the baseline gives the same bits at every
+    /// length around the lane count, where the processor has AVX2 to compare.
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn vector_and_baseline_dot_agree_bit_for_bit() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        for n in 0..600 {
+            let a: Vec<f64> = (0..n).map(|i| (i as f64 * 0.7).sin() * 1e3).collect();
+            let b: Vec<f64> = (0..n).map(|i| 1.0 + (i as f64 * 1.3).cos() / 7.0).collect();
+            // SAFETY: AVX2 detected above.
+            let v = unsafe { dot_avx2(&a, &b) };
+            assert_eq!(v.to_bits(), dot_lanes(&a, &b).to_bits(), "n = {n}");
+        }
+    }
+
     #[test]
     fn refuses_what_is_not_finite() {
         let a = DMatrix::from_element(3, 2, f64::NAN);

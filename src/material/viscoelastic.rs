@@ -817,6 +817,72 @@ mod tests {
         }
     }
 
+    /// [`exp_neg`] is e^x to its proven bound, 3·2⁻⁵³ relative, plus the libm
+    /// exponential's own error (≤ 1 ulp ≤ 2·2⁻⁵³): 5·2⁻⁵³ against `f64::exp` over
+    /// −708…0 (10⁶ even steps, and 10⁴ magnitudes from 10⁻³⁰⁰ to 1 where k = 0);
+    /// exactly 1 at 0 (a kernel over dt = 0 keeps its state) and 0 below −708.
+    #[test]
+    fn exp_neg_is_exp_to_rounding() {
+        let tol = 5.0 * f64::EPSILON / 2.0;
+        let even = (0..=1_000_000).map(|i| -708.0 * i as f64 / 1e6);
+        let small = (0..=10_000).map(|i| -(10f64.powf(-300.0 + 300.0 * i as f64 / 1e4)));
+        let mut worst: f64 = 0.0;
+        for x in even.chain(small) {
+            let want = x.exp();
+            let err = (exp_neg(x) - want).abs() / want;
+            worst = worst.max(err);
+            assert!(err <= tol, "e^{x}: {} vs {want}", exp_neg(x));
+        }
+        assert!(worst > 0.0, "compared with a different rounding somewhere");
+        assert_eq!(exp_neg(0.0), 1.0);
+        assert_eq!(exp_neg(-0.0), 1.0);
+        assert_eq!(exp_neg(-708.5), 0.0);
+        assert_eq!(exp_neg(-1e6), 0.0);
+    }
+
+    /// The kernels' pass compiled for AVX2 and for the baseline give the same bits
+    /// (both chunk widths, with derivatives and without), where the processor has
+    /// AVX2 to compare.
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn vector_and_baseline_kernels_agree_bit_for_bit() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let times: Vec<f64> = (0..300).map(|i| 1e-3 * 1.05f64.powi(i)).collect();
+        let history =
+            History::from_knots(vec![(0.0, 0.0), (0.4, 1.5), (3.0, 1.5), (3.5, 0.2)]).unwrap();
+        let sched = Schedule::new(&history, &times).unwrap();
+        let m = times.len();
+        for taus in [
+            &[0.02, 0.7, 30.0][..],
+            &[0.01, 0.1, 1.0, 3.0, 10.0, 100.0, 1e3],
+        ] {
+            let n = taus.len() * m;
+            let (mut h, mut d, mut hv, mut dv) =
+                (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+            let (mut h1, mut h1v) = (vec![0.0; n], vec![0.0; n]);
+            // SAFETY: AVX2 detected above.
+            unsafe {
+                sched.lanes_avx2::<8, true>(taus, &mut hv, &mut dv);
+                sched.lanes_avx2::<8, false>(taus, &mut h1v, &mut []);
+            }
+            sched.lanes_portable::<8, true>(taus, &mut h, &mut d);
+            sched.lanes_portable::<8, false>(taus, &mut h1, &mut []);
+            assert_eq!(h, hv);
+            assert_eq!(d, dv);
+            assert_eq!(h1, h1v);
+            assert_eq!(h1, h);
+            if taus.len() <= 4 {
+                let (mut h4, mut d4) = (vec![0.0; n], vec![0.0; n]);
+                // SAFETY: AVX2 detected above.
+                unsafe { sched.lanes_avx2::<4, true>(taus, &mut h4, &mut d4) };
+                assert_eq!(h4, h);
+                assert_eq!(d4, d);
+            }
+        }
+    }
+
     #[test]
     fn step_and_ramp_kernels_match_closed_forms() {
         let times: Vec<f64> = (0..50).map(|i| 0.1 * i as f64).collect();

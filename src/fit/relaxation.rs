@@ -1644,7 +1644,7 @@ pub fn fit(
         .map(|&nt| fit_terms(&prep, &grid, nt, settings))
         .collect::<Result<Vec<_>>>()?;
     let seconds = t0.elapsed().as_secs_f64();
-    let mut assessed: Vec<Assessed> = fits.into_iter().map(|f| assess(&prep, f)).collect();
+    let mut assessed: Vec<Assessed> = fits.into_par_iter().map(|f| assess(&prep, f)).collect();
     let mut notes = std::mem::take(&mut prep.notes);
     let choice = choose(&prep, &assessed, settings, &mut notes);
     let a = assessed.swap_remove(choice.index);

@@ -653,8 +653,9 @@ impl Interval {
 #[inline(always)]
 fn exp_neg(x: f64) -> f64 {
     const SHIFTER: f64 = 6755399441055744.0; // 1.5·2⁵²
-    const LN2_HI: f64 = 6.93147180369123816490e-01;
-    const LN2_LO: f64 = 1.90821492927058770002e-10;
+                                             // fdlibm's ln2_hi (32 significant bits) and ln2_lo = ln 2 − ln2_hi.
+    const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000);
+    const LN2_LO: f64 = f64::from_bits(0x3dea_39ef_3579_3c76);
     // 1/j! for j = 13 down to 0.
     const TAYLOR: [f64; 14] = [
         1.0 / 6227020800.0,

@@ -647,13 +647,14 @@ impl Interval {
 /// |k| < 2²⁰); e^r by Horner on its Taylor polynomial of degree 13; e^x = 2ᵏ·e^r
 /// with 2ᵏ built in the exponent bits (exact: 2ᵏ·e^r ≥ 2⁻¹⁰²¹·0.7 is normal).
 /// Error: the Taylor remainder |r|¹⁴/14!·e^|r| ≤ 6·10⁻¹⁸ (0.08·2⁻⁵³ of e^r ≥ 0.7),
-/// the reduction's rounding ≤ |r|·2⁻⁵³ ≤ 0.35·2⁻⁵³, Horner's ≤ 2.5·2⁻⁵³ (the last
-/// addition's 2⁻⁵³ plus the inner sums' ≤ 1.1·2⁻⁵³ absolute, scaled by |r| ≤ 0.35
-/// and divided by e^r ≥ 0.7). Test `exp_neg_is_exp_to_rounding`.
+/// the reduction's rounding ≤ |r|·2⁻⁵³ ≤ 0.35·2⁻⁵³, Horner's ≤ 2.4·2⁻⁵³ (the last
+/// step's two roundings, 2⁻⁵³·(e^r + |e^r − 1|), plus the inner sum's error
+/// ≤ 1.9·2⁻⁵³ scaled by |r| ≤ 0.35, over e^r ≥ 0.7). Test `exp_neg_is_exp_to_rounding`.
 #[inline(always)]
 fn exp_neg(x: f64) -> f64 {
-    const SHIFTER: f64 = 6755399441055744.0; // 1.5·2⁵²
-                                             // fdlibm's ln2_hi (32 significant bits) and ln2_lo = ln 2 − ln2_hi.
+    // 1.5·2⁵²: adding it rounds to an integer, kept in the low mantissa bits.
+    const SHIFTER: f64 = 6755399441055744.0;
+    // fdlibm's ln2_hi (32 significant bits) and ln2_lo = ln 2 − ln2_hi.
     const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000);
     const LN2_LO: f64 = f64::from_bits(0x3dea_39ef_3579_3c76);
     // 1/j! for j = 13 down to 0.

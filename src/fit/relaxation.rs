@@ -637,7 +637,8 @@ impl<'p> Projected<'p> {
     }
 
     /// The Gram products kᵢ·kⱼ of the columns k = [A | b | ∂A] (∂A when
-    /// `derivatives`) into the leading block of `gram`, in one pass over the rows:
+    /// `derivatives`; b·b and b·∂A, which nothing uses, left at 0) into the leading
+    /// block of `gram`, in one pass over the rows:
     /// blocks of [`GRAM_ROWS`] rows, every product of a block while its columns are
     /// in the cache (column by column, each product of a 10⁵-point curve would read
     /// two 0.8 MB columns from memory).
@@ -654,7 +655,8 @@ impl<'p> Projected<'p> {
         for lo in (0..m).step_by(GRAM_ROWS) {
             let hi = (lo + GRAM_ROWS).min(m);
             for j in 0..k {
-                for i in 0..=j {
+                // b·b and b·∂A are not used (Jᵀr is taken from the residuals).
+                for i in (0..=j).filter(|&i| i != n + 1) {
                     self.gram[(i, j)] += dot(&col(i)[lo..hi], &col(j)[lo..hi]);
                 }
             }
@@ -1642,7 +1644,7 @@ pub fn fit(
         .map(|&nt| fit_terms(&prep, &grid, nt, settings))
         .collect::<Result<Vec<_>>>()?;
     let seconds = t0.elapsed().as_secs_f64();
-    let mut assessed: Vec<Assessed> = fits.into_iter().map(|f| assess(&prep, f)).collect();
+    let mut assessed: Vec<Assessed> = fits.into_par_iter().map(|f| assess(&prep, f)).collect();
     let mut notes = std::mem::take(&mut prep.notes);
     let choice = choose(&prep, &assessed, settings, &mut notes);
     let a = assessed.swap_remove(choice.index);

@@ -40,9 +40,8 @@
 //! (Gent: finite only up to its extensibility limit) first has the ends of its
 //! finite interval found by bisection on the grid.
 
-use crate::material::hyperelastic::polynomial::Prepared;
 use crate::material::hyperelastic::powers::Parts;
-use crate::material::hyperelastic::{Mode, StrainEnergy};
+use crate::material::hyperelastic::{AtParams, Mode, StrainEnergy};
 use serde::{Deserialize, Serialize};
 use std::sync::OnceLock;
 
@@ -127,14 +126,11 @@ impl Runs {
     }
 }
 
-/// dP/dλ of one mode at fixed parameters: [`StrainEnergy::tangent`], by the model's
-/// prepared form where it has one (the same numbers without preparing the
-/// parameters at each stretch).
+/// dP/dλ of one mode at fixed parameters on the grid ([`AtParams::tangent`]).
 struct Tangent<'a> {
     model: &'a dyn StrainEnergy,
     p: &'a [f64],
-    mode: Mode,
-    prepared: Option<Prepared>,
+    at: AtParams,
 }
 
 impl<'a> Tangent<'a> {
@@ -142,19 +138,14 @@ impl<'a> Tangent<'a> {
         Tangent {
             model,
             p,
-            mode,
-            prepared: model.prepared(p, mode),
+            at: AtParams::new(model, p, mode),
         }
     }
 
     /// dP/dλ at grid stretch `i`.
     #[inline]
     fn at(&self, i: usize) -> f64 {
-        let lam = grid()[i].1;
-        match &self.prepared {
-            Some(q) => q.tangent(lam),
-            None => self.model.tangent(self.p, self.mode, lam),
-        }
+        self.at.tangent(self.model, self.p, grid()[i].1)
     }
 
     /// Whether dP/dλ at grid stretch `i` is finite and positive.

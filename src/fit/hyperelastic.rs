@@ -19,7 +19,9 @@ use super::{Parameter, SolverReport, Status};
 use crate::data::{Dataset, Sample, Source};
 use crate::error::{Error, Result};
 use crate::material::file::{FittedRanges, HyperelasticPart, StretchRange};
-use crate::material::hyperelastic::{Mode, ModelSpec, OgdenForm, StrainEnergy, MODEL_NAMES};
+use crate::material::hyperelastic::{
+    AtParams, Mode, ModelSpec, OgdenForm, StrainEnergy, MODEL_NAMES,
+};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -767,15 +769,11 @@ fn largest_contributions(model: &dyn StrainEnergy, p: &[f64], data: &Dataset) ->
     largest
 }
 
-/// The model's nominal stress at every sample: [`StrainEnergy::nominal_stress`], by
-/// the model's form prepared once per mode where it has one (the same numbers,
-/// without preparing the parameters at every sample).
+/// The model's nominal stress at every sample ([`AtParams::stress`], made once per
+/// mode).
 fn predictions(model: &dyn StrainEnergy, p: &[f64], samples: &[Sample]) -> Vec<f64> {
-    let prepared = Mode::ALL.map(|m| model.prepared(p, m));
-    let one = |s: &Sample| match &prepared[s.mode.index()] {
-        Some(q) => q.stress(s.stretch),
-        None => model.nominal_stress(p, s.mode, s.stretch),
-    };
+    let at = Mode::ALL.map(|m| AtParams::new(model, p, m));
+    let one = |s: &Sample| at[s.mode.index()].stress(model, p, s.stretch);
     if samples.len() < PARALLEL_ROWS {
         samples.iter().map(one).collect()
     } else {

@@ -28,8 +28,7 @@
 
 use super::input::Waveform;
 use super::scene::{Actuator, Pid, Scene, Source};
-use crate::material::hyperelastic::polynomial::Prepared;
-use crate::material::hyperelastic::{Mode, StrainEnergy};
+use crate::material::hyperelastic::{AtParams, Mode, StrainEnergy};
 use std::ops::{Add, Div, Mul, Neg, Sub};
 use std::sync::Arc;
 
@@ -112,9 +111,8 @@ pub struct Plant {
     pub c_rest: f64,
     /// (dλ0/dθk, dC_rest/dθk) per entry of θ (`derivatives`), derived with λ0.
     pub(crate) rest_derivatives: Vec<(f64, f64)>,
-    /// The model's stress and tangent prepared at `params` in `mode`, where it has
-    /// a prepared form ([`StrainEnergy::prepared`]).
-    prepared: Option<Prepared>,
+    /// The model's stress and tangent at `params` in `mode` ([`AtParams`]).
+    at: AtParams,
 }
 
 /// Indices into the state vector.
@@ -421,7 +419,7 @@ impl Plant {
             lam_f: 1.0,
             c_rest: 0.0,
             rest_derivatives: Vec::new(),
-            prepared: None,
+            at: AtParams::new(m.model.as_ref(), &m.params, mode),
         };
         p.derive()?;
         let t_in = super::fidelity::input_time_scale(scene, p.c_rest);
@@ -481,7 +479,7 @@ impl Plant {
     /// the prepared stress, ε = ε0·εr, G/C = 1/(ρε), λ0 = static equilibrium at
     /// V = 0 (from λ = 1), λf = λ0, C_rest = C(λ0); or why there is no rest state.
     pub(super) fn derive(&mut self) -> Result<(), NoEquilibrium> {
-        self.prepared = self.model.prepared(&self.params, self.mode);
+        self.at = AtParams::new(self.model.as_ref(), &self.params, self.mode);
         self.eps = EPS0 * self.eps_r;
         self.g_per_c = self
             .resistivity
@@ -509,18 +507,12 @@ impl Plant {
     /// Nominal stress P(λ) of the layer (Pa).
     #[inline(always)]
     pub fn stress(&self, lam: f64) -> f64 {
-        match &self.prepared {
-            Some(s) => s.stress(lam),
-            None => self.model.nominal_stress(&self.params, self.mode, lam),
-        }
+        self.at.stress(self.model.as_ref(), &self.params, lam)
     }
     /// Tangent dP/dλ (Pa).
     #[inline(always)]
     pub fn tangent(&self, lam: f64) -> f64 {
-        match &self.prepared {
-            Some(s) => s.tangent(lam),
-            None => self.model.tangent(&self.params, self.mode, lam),
-        }
+        self.at.tangent(self.model.as_ref(), &self.params, lam)
     }
     /// Capacitance and its λ-derivatives.
     #[inline(always)]

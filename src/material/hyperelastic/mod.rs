@@ -125,6 +125,46 @@ pub trait StrainEnergy: Send + Sync {
     }
 }
 
+/// A model's stress and tangent at fixed parameters in one mode: by its prepared
+/// form ([`StrainEnergy::prepared`]) where it has one, else by the dynamic calls,
+/// the same numbers either way. The one place choosing between the two, for the
+/// fit's predictions, the Drucker check and the simulator's plant. The model and
+/// parameters are passed at each call (the plant owns both beside this), and must
+/// be those it was made from.
+#[derive(Debug, Clone)]
+pub struct AtParams {
+    mode: Mode,
+    prepared: Option<polynomial::Prepared>,
+}
+
+impl AtParams {
+    /// `model` at parameters `p` in `mode`, prepared where it can be.
+    pub fn new(model: &dyn StrainEnergy, p: &[f64], mode: Mode) -> Self {
+        AtParams {
+            mode,
+            prepared: model.prepared(p, mode),
+        }
+    }
+
+    /// Nominal stress P(λ) (Pa): [`StrainEnergy::nominal_stress`].
+    #[inline(always)]
+    pub fn stress(&self, model: &dyn StrainEnergy, p: &[f64], lam: f64) -> f64 {
+        match &self.prepared {
+            Some(q) => q.stress(lam),
+            None => model.nominal_stress(p, self.mode, lam),
+        }
+    }
+
+    /// Tangent dP/dλ (Pa): [`StrainEnergy::tangent`].
+    #[inline(always)]
+    pub fn tangent(&self, model: &dyn StrainEnergy, p: &[f64], lam: f64) -> f64 {
+        match &self.prepared {
+            Some(q) => q.tangent(lam),
+            None => model.tangent(p, self.mode, lam),
+        }
+    }
+}
+
 /// A model with [`StrainEnergy::coefficient_of`] hidden, everything else the
 /// model's own: variable projection then evaluates it a second time at the solved
 /// coefficients for ∂A/∂θ (the method for models without that information, and

@@ -32,7 +32,7 @@ pub struct Args {
     /// Override the scene's relative tolerance.
     #[arg(long)]
     rtol: Option<f64>,
-    /// Override the scene's integrator: bdf, esdirk34, tr-bdf2, tsit45 or dp54.
+    /// Override the scene's integrator: bdf, esdirk34, tr-bdf2, tsit45, dp54 or dop853.
     #[arg(long, value_parser = parse_method)]
     method: Option<Method>,
     /// Also integrate the forward sensitivities to the material parameters: adds
@@ -57,7 +57,8 @@ const CHARTED: usize = 4000;
 
 fn parse_method(s: &str) -> std::result::Result<Method, String> {
     Method::parse(s).ok_or_else(|| {
-        format!("unknown integrator '{s}': use bdf, esdirk34, tr-bdf2, tsit45 or dp54")
+        let names: Vec<&str> = Method::ALL.map(Method::name).to_vec();
+        format!("unknown integrator '{s}': use {}", names.join(", "))
     })
 }
 

@@ -474,6 +474,7 @@ fn prepare(
         theta0,
         RunOptions {
             rtol: settings.rtol,
+            auto_as_with_sensitivities: true,
             ..RunOptions::default()
         },
     )?;

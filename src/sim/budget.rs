@@ -290,6 +290,22 @@ pub const STEPS_PER_PERIOD: f64 = 20.0;
 pub const EXPLICIT_STABILITY: f64 = 3.3;
 /// Steps for each restart at a kink (a method starts again from first order).
 pub const STEPS_PER_RESTART: f64 = 10.0;
+/// Dormand–Prince 8(5,3)'s accepted steps per Tsitouras 5(4) step on a run resolved
+/// by accuracy, at rtol 10⁻⁶; each method's step scales as rtol^(1/order), so the
+/// ratio as rtol^(1/5 − 1/8). Measured at rtol 10⁻⁴ / 10⁻⁶ / 10⁻⁸: the undamped
+/// 5 kV stack 0.45 / 0.30 / 0.21, the 100 Hz triangle 0.44 / 0.29 / 0.19 (the rule:
+/// 0.42 / 0.30 / 0.21).
+pub const DOP853_STEP_RATIO: f64 = 0.3;
+/// Dormand–Prince 8(5,3)'s stability limit h·|λ| on the negative real axis (its
+/// stability function: 6.4; on the imaginary axis 5.97).
+pub const DOP853_STABILITY: f64 = 6.4;
+/// The work of a Dormand–Prince 8(5,3) step in Tsitouras steps (twelve right-hand
+/// sides and 58 stage terms against six and 21; callgrind on the undamped 5 kV
+/// stack: 9.5 k against 4.6 k instructions a step attempt), and what its continuous
+/// extension adds in a step with a sample in it (three more stages: 4.0 k).
+pub const DOP853_STEP_WORK: f64 = 2.07;
+/// See [`DOP853_STEP_WORK`].
+pub const DOP853_DENSE_WORK: f64 = 0.87;
 /// A run may take this many times its estimated steps before it is stopped: the
 /// estimate is measured to within 3× on the ringing scenes and up to 30× low on
 /// damped and closed-loop ones (tests/scene_input.rs), so 100× leaves room for
@@ -625,6 +641,9 @@ pub fn estimate(s: &Scene) -> Result<Cost> {
                 span * k.light / BDF_LIGHT_STEP,
                 accuracy,
                 kinks,
+                rtol,
+                s.time.samples.len() as f64,
+                mode.damping_ratio,
             );
             (m, Some((m, why)), k.radius)
         }
@@ -632,16 +651,21 @@ pub fn estimate(s: &Scene) -> Result<Cost> {
     // an explicit method cannot step past its stability limit h·|λ| ≈ 3.3 (the
     // axial mode's ω, or the Jacobian's fastest rate where known) even after the
     // ringing has died away
-    let explicit = matches!(method, Method::Tsit45 | Method::Dp54);
     let fastest = match fid.inertia && omega.is_finite() {
         true => omega.max(rho),
         false => rho,
     };
-    let stability = match explicit {
-        true => span * fastest / EXPLICIT_STABILITY,
-        false => 0.0,
+    // Dormand–Prince 8(5,3) takes a share of Tsitouras's accuracy steps, and its
+    // stability limit is 6.4
+    let (method_accuracy, stability) = match method {
+        Method::Dop853 => (
+            accuracy * dop853_step_ratio(rtol),
+            span * fastest / DOP853_STABILITY,
+        ),
+        m if !m.implicit() => (accuracy, span * fastest / EXPLICIT_STABILITY),
+        _ => (accuracy, 0.0),
     };
-    let steps = accuracy.max(stability) + STEPS_PER_RESTART * kinks;
+    let steps = method_accuracy.max(stability) + STEPS_PER_RESTART * kinks;
     let explicit_steps =
         accuracy.max(span * fastest / EXPLICIT_STABILITY) + STEPS_PER_RESTART * kinks;
     let memory =
@@ -730,26 +754,48 @@ pub fn stiffness(p: &Plant) -> Stiffness {
 /// 303 against 411, Tsitouras 1.6× faster; the stack at ζ = 0.1 over 1 s: 1921
 /// against 890, BDF 2.7× faster).
 const IMPLICIT_FLOOR: f64 = 300.0;
-/// The integrator `auto` chooses, with the reason: explicit Tsitouras 5(4) when
-/// the steps its stability needs (`stiff_steps` = span·ρ/3.3, ρ the [`stiffness`])
-/// do not exceed what accuracy needs anyway (`accuracy_steps`: the ringing and the
+/// The integrator `auto` chooses, with the reason: an explicit method when the
+/// steps its stability needs (`stiff_steps` = span·ρ/3.3, ρ the [`stiffness`]) do
+/// not exceed what accuracy needs anyway (`accuracy_steps`: the ringing and the
 /// input's periods, plus the restarts at `kinks`) by more than [`IMPLICIT_FLOOR`],
 /// or those BDF needs to hold a lightly damped oscillation stable (`bdf_steps` =
 /// span·|λ|/0.3); the variable-order BDF otherwise. A lightly damped oscillation
 /// rings through the span and bounds both methods (explicit steps are cheaper); a
 /// damped or stiff plant (dashpot, controller, source RC) holds an explicit method
-/// at its stability limit long after the motion is smooth, and BDF strides on.
+/// at its stability limit long after the motion is smooth, and BDF strides on. The
+/// explicit method is Tsitouras 5(4), or Dormand–Prince 8(5,3) where the axial
+/// mode is lightly damped (ζ < [`LIGHT`]: it rings for many periods, which its
+/// 8th order resolves in a third of the steps) and [`explicit_work`] at the run's
+/// `rtol` and `samples` finds it cheaper. On more strongly damped ringing its steps
+/// fall less than the estimate (the HDEA ramps at ζ = 0.10–0.17: 0.53–0.60 of
+/// Tsitouras's, for twice the work a step; `dea-fit bench integrators`).
+#[allow(clippy::too_many_arguments)]
 pub fn auto_method(
     stiff_steps: f64,
     bdf_steps: f64,
     accuracy_steps: f64,
     kinks: f64,
+    rtol: f64,
+    samples: f64,
+    damping_ratio: f64,
 ) -> (Method, String) {
     let accuracy = accuracy_steps + STEPS_PER_RESTART * kinks;
     let explicit = stiff_steps <= accuracy + IMPLICIT_FLOOR || stiff_steps <= bdf_steps;
     let (m, what) = match explicit {
-        true => (Method::Tsit45, "explicit Tsitouras 5(4)"),
-        false => (Method::Bdf, "variable-order BDF"),
+        false => (Method::Bdf, "variable-order BDF".to_string()),
+        true => {
+            let (tsit, dop) = explicit_work(stiff_steps, accuracy, rtol, samples);
+            match damping_ratio < LIGHT && dop < tsit {
+                true => (
+                    Method::Dop853,
+                    format!(
+                        "explicit Dormand–Prince 8(5,3) (the work of ≈ {} Tsitouras steps)",
+                        fmt_g(dop.round())
+                    ),
+                ),
+                false => (Method::Tsit45, "explicit Tsitouras 5(4)".to_string()),
+            }
+        }
     };
     (
         m,
@@ -760,6 +806,31 @@ pub fn auto_method(
             fmt_g(accuracy.round())
         ),
     )
+}
+
+/// Dormand–Prince 8(5,3)'s accuracy steps per Tsitouras 5(4) step at `rtol`:
+/// [`DOP853_STEP_RATIO`]·(rtol/10⁻⁶)^(1/5 − 1/8).
+pub fn dop853_step_ratio(rtol: f64) -> f64 {
+    DOP853_STEP_RATIO * (rtol / 1e-6).powf(1.0 / 5.0 - 1.0 / 8.0)
+}
+
+/// The work of the two explicit methods in Tsitouras steps, (Tsitouras 5(4),
+/// Dormand–Prince 8(5,3)), from the steps Tsitouras needs for stability and for
+/// accuracy at `rtol`, with `samples` output times: Dormand–Prince takes
+/// [`DOP853_STEP_RATIO`]·(rtol/10⁻⁶)^(1/5 − 1/8) of the accuracy steps, or its
+/// stability limit's (3.3/6.4 of Tsitouras's), each of [`DOP853_STEP_WORK`], plus
+/// [`DOP853_DENSE_WORK`] in every step with a sample. It wins on long runs resolved
+/// by accuracy at tight tolerances (a lightly damped mode ringing for thousands of
+/// periods); Tsitouras on runs held at the stability limit and at loose tolerances.
+pub fn explicit_work(stiff_steps: f64, accuracy: f64, rtol: f64, samples: f64) -> (f64, f64) {
+    let tsit = accuracy.max(stiff_steps);
+    let steps = (accuracy * dop853_step_ratio(rtol))
+        .max(stiff_steps * EXPLICIT_STABILITY / DOP853_STABILITY);
+    let dense = match steps > 0.0 {
+        true => (samples / steps).min(1.0),
+        false => 0.0,
+    };
+    (tsit, steps * (DOP853_STEP_WORK + DOP853_DENSE_WORK * dense))
 }
 
 /// The guard `sim::simulate` runs first: every quantity in its domain, a stable

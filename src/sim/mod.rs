@@ -366,6 +366,10 @@ pub struct RunOptions {
     /// already has it: a search that runs one input thousands of times computes it
     /// once (sampling a sine drive costs a quarter of a plain run).
     pub v_max: Option<f64>,
+    /// Let `auto` choose as for a run with sensitivities, whether or not this one
+    /// has them: a search that compares plain runs with sensitivity runs
+    /// (identification) needs one integrator for both.
+    pub auto_as_with_sensitivities: bool,
 }
 
 /// The largest |V| the scene drives over its span: the PID's ceiling, or the
@@ -563,18 +567,32 @@ fn prepare(scene: &Scene, opts: &RunOptions) -> crate::Result<Prepared> {
     let requested = opts.method.or(scene.time.method);
     let (method, reason) = match (requested, &cost.auto) {
         (Some(m), _) => (m, "requested".to_string()),
-        (None, Some((m, why))) => match opts.max_steps {
-            // an explicit method cannot step past its stability limit: where that
-            // alone needs more steps than the caller's budget, it cannot complete,
-            // while BDF may (it damps a ringing it need not resolve)
-            Some(cap) if cost.stability_steps > cap as f64 => (
-                Method::Bdf,
-                format!(
-                    "{why}; stability alone needs more than the run's budget of {cap} steps: variable-order BDF"
+        (None, Some((m, why))) => {
+            // Dormand–Prince 8(5,3) has no sensitivities: Tsitouras 5(4) has, at
+            // its own stability limit
+            let (m, why, stability) = match *m == Method::Dop853
+                && (opts.sensitivities || opts.auto_as_with_sensitivities)
+            {
+                true => (
+                    Method::Tsit45,
+                    format!("{why}; with sensitivities, which it has not: explicit Tsitouras 5(4)"),
+                    cost.stability_steps * budget::DOP853_STABILITY / budget::EXPLICIT_STABILITY,
                 ),
-            ),
-            _ => (*m, why.clone()),
-        },
+                false => (*m, why.clone(), cost.stability_steps),
+            };
+            match opts.max_steps {
+                // an explicit method cannot step past its stability limit: where
+                // that alone needs more steps than the caller's budget, it cannot
+                // complete, while BDF may (it damps a ringing it need not resolve)
+                Some(cap) if stability > cap as f64 => (
+                    Method::Bdf,
+                    format!(
+                        "{why}; stability alone needs more than the run's budget of {cap} steps: variable-order BDF"
+                    ),
+                ),
+                _ => (m, why),
+            }
+        }
         (None, None) => unreachable!("budget::estimate chooses for a scene without an integrator"),
     };
     let span = scene.time.span;
@@ -952,7 +970,7 @@ fn integrate<'s, 'k>(
                 // smooth, such as a controller chattering on its clamp, which an
                 // explicit method steps through
                 let advice = match method {
-                    Method::Tsit45 | Method::Dp54 => "dynamics that much stiffer than the axial mode (high control gains, a fast source) want the implicit integrator = \"bdf\"",
+                    Method::Tsit45 | Method::Dp54 | Method::Dop853 => "dynamics that much stiffer than the axial mode (high control gains, a fast source) want the implicit integrator = \"bdf\"",
                     _ => "an implicit method stalls on a right-hand side that is not smooth (a controller switching on its clamp, a source saturating): check the controller's gains and limits, or try the explicit integrator = \"tsit45\"",
                 };
                 format!(

@@ -913,11 +913,10 @@ fn read_time(c: &Ctx, t: &toml::Table) -> Result<TimeSpec> {
         Some(o) => match Method::parse(o) {
             Some(m) => Some(m),
             None => {
-                return Err(c.unknown_name(
-                    "time.integrator",
-                    o,
-                    &["auto", "bdf", "esdirk34", "tr-bdf2", "tsit45", "dp54"],
-                ))
+                let names: Vec<&str> = std::iter::once("auto")
+                    .chain(Method::ALL.map(Method::name))
+                    .collect();
+                return Err(c.unknown_name("time.integrator", o, &names));
             }
         },
     };

@@ -242,7 +242,9 @@ pub(super) fn run<S: System>(
         (Method::TrBdf2, true) => problem.tr_bdf2_sens::<LS>().map(|s| drv.drive(s, y)),
         (Method::Tsit45, false) => problem.tsit45().map(|s| drv.drive(s, y)),
         (Method::Tsit45, true) => problem.tsit45_sens().map(|s| drv.drive(s, y)),
-        (Method::Bdf | Method::Dp54, _) => unreachable!("{m} is not a diffsol method"),
+        (Method::Bdf | Method::Dp54 | Method::Dop853, _) => {
+            unreachable!("{m} is not a diffsol method")
+        }
     };
     let end = end.unwrap_or_else(|e| End::Failed(format!("diffsol solver setup: {e}")));
     stats.rhs_evals += ad.counts.rhs.get();

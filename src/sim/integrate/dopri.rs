@@ -15,44 +15,88 @@
 //! all buffers live in a [`Workspace`] created once per run.
 
 use super::{
-    budget_exhausted, initial_step, left_limit, non_finite, End, EventFn, Left, Options, Stats,
-    StepFn, System,
+    budget_exhausted, dop853, initial_step, left_limit, non_finite, End, EventFn, Left, Options,
+    Stats, StepFn, System,
 };
 
+/// The explicit method a run steps with.
+#[derive(Clone, Copy)]
+pub(super) enum Scheme {
+    /// A 5(4) pair of seven stages, FSAL ([`DP54`], [`TSIT45`]).
+    Pair(&'static Pair),
+    /// Dormand–Prince 8(5,3) ([`super::dop853`]).
+    Dop853,
+}
+
+impl Scheme {
+    /// Stage vectors a step holds.
+    fn stages(self) -> usize {
+        match self {
+            Scheme::Pair(_) => 7,
+            Scheme::Dop853 => dop853::STAGES,
+        }
+    }
+    /// The stage holding f(t + h, y1), the next step's first (FSAL).
+    fn last(self) -> usize {
+        match self {
+            Scheme::Pair(_) => 6,
+            Scheme::Dop853 => dop853::LAST,
+        }
+    }
+    /// Vectors of the dense output.
+    fn dense(self) -> usize {
+        match self {
+            Scheme::Pair(_) => 5,
+            Scheme::Dop853 => dop853::DENSE,
+        }
+    }
+    /// q in the step-size control's exponents 1/q (the error estimate is
+    /// O(h^q)): 5 for the 5(4) pairs, 8 for Dormand–Prince 8(5,3).
+    fn exponent(self) -> f64 {
+        match self {
+            Scheme::Pair(_) => 5.0,
+            Scheme::Dop853 => 8.0,
+        }
+    }
+}
+
 /// Buffers reused by every step.
-struct Workspace {
-    pair: &'static Pair,
-    n: usize,
-    k: [Vec<f64>; 7],
-    y1: Vec<f64>,
-    ytmp: Vec<f64>,
+pub(super) struct Workspace {
+    scheme: Scheme,
+    pub(super) n: usize,
+    pub(super) k: Vec<Vec<f64>>,
+    pub(super) y1: Vec<f64>,
+    pub(super) ytmp: Vec<f64>,
     /// The absolute tolerance of each state, `atol`·scale.
-    atol: Vec<f64>,
+    pub(super) atol: Vec<f64>,
     /// The last step's scaled squared local errors (err_i / sc_i)², summed in order
     /// by [`error_norm`].
     err: Vec<f64>,
     /// The dense output of the last step: y at its start in `dense[0]`, and for
-    /// [`Dense::Hairer`] its four other vectors.
-    dense: [Vec<f64>; 5],
-    /// The last step's size (for [`Dense::Polynomial`]).
-    h_dense: f64,
+    /// [`Dense::Hairer`] its four other vectors (dop853: its seven).
+    pub(super) dense: Vec<Vec<f64>>,
+    /// Whether `dense` holds the last step's output (dop853 computes it on demand).
+    pub(super) dense_ready: bool,
+    /// The last step's size (for [`Dense::Polynomial`] and dop853).
+    pub(super) h_dense: f64,
     h: f64,
     err_old: f64,
 }
 
 impl Workspace {
-    fn new(pair: &'static Pair, scale: &[f64], atol: f64) -> Self {
+    fn new(scheme: Scheme, scale: &[f64], atol: f64) -> Self {
         let n = scale.len();
         let v = || vec![0.0; n];
         Workspace {
-            pair,
+            scheme,
             n,
-            k: [v(), v(), v(), v(), v(), v(), v()],
+            k: (0..scheme.stages()).map(|_| v()).collect(),
             y1: v(),
             ytmp: v(),
             atol: scale.iter().map(|s| atol * s).collect(),
             err: v(),
-            dense: [v(), v(), v(), v(), v()],
+            dense: (0..scheme.dense()).map(|_| v()).collect(),
+            dense_ready: false,
             h_dense: 0.0,
             h: 0.0,
             err_old: 1e-4,
@@ -288,10 +332,15 @@ fn error_norm(
     (err.iter().fold(0.0, |s, e| s + e) / n as f64).sqrt()
 }
 
-/// Dense output of the last accepted step into `out` at θ ∈ [0, 1].
+/// Dense output of the last accepted step into `out` at θ ∈ [0, 1] (after
+/// [`prepare_dense`]).
 fn dense_eval(w: &Workspace, theta: f64, out: &mut [f64]) {
     let d = &w.dense;
-    match &w.pair.dense {
+    let pair = match w.scheme {
+        Scheme::Pair(p) => p,
+        Scheme::Dop853 => return dop853::dense_eval(w, theta, out),
+    };
+    match &pair.dense {
         Dense::Hairer(_) => {
             let t1 = 1.0 - theta;
             for i in 0..w.n {
@@ -322,7 +371,7 @@ fn dense_eval(w: &Workspace, theta: f64, out: &mut [f64]) {
 /// Integrate over the restart intervals `bounds` (see [`super::run`]).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn run<S: System>(
-    pair: &'static Pair,
+    scheme: Scheme,
     sys: &S,
     o: &Options,
     scale: &[f64],
@@ -335,7 +384,7 @@ pub(super) fn run<S: System>(
     restart: &mut dyn FnMut(f64, &mut [f64]),
     stats: &mut Stats,
 ) -> End {
-    let mut w = Workspace::new(pair, &scale[..y.len()], o.atol);
+    let mut w = Workspace::new(scheme, &scale[..y.len()], o.atol);
     let mut si = 0;
     for (k, win) in bounds.windows(2).enumerate() {
         let (a, b) = (win[0], win[1]);
@@ -420,14 +469,15 @@ fn segment<S: System>(
         }
         let err = rk_step(&sys, w, t, h, y, o.rtol, stats);
         if o.fixed_step.is_none() {
+            let q = w.scheme.exponent();
             if err > 1.0 {
                 stats.rejected += 1;
-                w.h = h * (0.9 * err.powf(-0.2)).clamp(0.2, 1.0);
+                w.h = h * (0.9 * err.powf(-1.0 / q)).clamp(0.2, 1.0);
                 continue;
             }
             // PI controller (Gustafsson) on accepted steps
             let e = err.max(1e-10);
-            let fac = 0.9 * e.powf(-0.7 / 5.0) * w.err_old.powf(0.4 / 5.0);
+            let fac = 0.9 * e.powf(-0.7 / q) * w.err_old.powf(0.4 / q);
             w.err_old = e;
             if !last {
                 w.h = h * fac.clamp(0.2, 5.0);
@@ -443,6 +493,7 @@ fn segment<S: System>(
         if let (Some(g), Some(g0)) = (event, g_old) {
             let g1 = g(t_new, &w.y1);
             if g0 > 0.0 && g1 <= 0.0 {
+                prepare_dense(&sys, w, t, y, stats);
                 let (mut a, mut b) = (0.0, 1.0);
                 for _ in 0..60 {
                     let mid = 0.5 * (a + b);
@@ -468,6 +519,9 @@ fn segment<S: System>(
             }
             g_old = Some(g1);
         }
+        if next_sample < samples.len() && samples[next_sample] <= t_new {
+            prepare_dense(&sys, w, t, y, stats);
+        }
         while next_sample < samples.len() && samples[next_sample] <= t_new {
             let ts = samples[next_sample];
             let mut tmp = std::mem::take(&mut w.ytmp);
@@ -479,13 +533,28 @@ fn segment<S: System>(
         y.copy_from_slice(&w.y1);
         t = t_new;
         step(t, y);
-        // FSAL: k[0] ← f(t_new, y) (k[6] is written again before it is read)
-        w.k.swap(0, 6);
+        // FSAL: k[0] ← f(t_new, y) (the last stage is written again before it is
+        // read)
+        w.k.swap(0, w.scheme.last());
     }
     End::Done
 }
 
-/// One step of the pair; returns the error norm (∞ if the step is not finite).
+/// The dense output of the last step made ready from (t, y), its start: a
+/// 5(4) pair's is written by every step, dop853's on demand ([`dop853::prepare_dense`]).
+fn prepare_dense<S: System>(
+    sys: &Left<S>,
+    w: &mut Workspace,
+    t: f64,
+    y: &[f64],
+    stats: &mut Stats,
+) {
+    if let Scheme::Dop853 = w.scheme {
+        dop853::prepare_dense(sys, w, t, y, stats);
+    }
+}
+
+/// One step of the scheme; returns the error norm (∞ if the step is not finite).
 fn rk_step<S: System>(
     sys: &Left<S>,
     w: &mut Workspace,
@@ -495,8 +564,25 @@ fn rk_step<S: System>(
     rtol: f64,
     stats: &mut Stats,
 ) -> f64 {
+    match w.scheme {
+        Scheme::Pair(p) => pair_step(p, sys, w, t, h, y, rtol, stats),
+        Scheme::Dop853 => dop853::step(sys, w, t, h, y, rtol, stats),
+    }
+}
+
+/// One step of a 5(4) pair; returns the error norm (∞ if the step is not finite).
+#[allow(clippy::too_many_arguments)]
+fn pair_step<S: System>(
+    p: &'static Pair,
+    sys: &Left<S>,
+    w: &mut Workspace,
+    t: f64,
+    h: f64,
+    y: &[f64],
+    rtol: f64,
+    stats: &mut Stats,
+) -> f64 {
     let n = w.n;
-    let p = w.pair;
     // stages 1…5 from y + h·Σ a·k into `ytmp`; row 6 (b) into `y1`, the 5th-order
     // solution, and k[6] = f(t + h, y1)
     for s in 0..6 {
@@ -510,7 +596,9 @@ fn rk_step<S: System>(
     w.dense[0].copy_from_slice(y);
     w.h_dense = h;
     if let Dense::Hairer(d) = &p.dense {
-        let [_, d1, d2, d3, d4] = &mut w.dense;
+        let [_, d1, d2, d3, d4] = &mut w.dense[..] else {
+            unreachable!("the workspace holds five dense vectors for a 5(4) pair")
+        };
         d4.fill(0.0);
         for (d, k) in d.iter().zip(&w.k) {
             for (acc, k) in d4.iter_mut().zip(k) {

@@ -20,6 +20,7 @@
 
 mod bdf;
 mod diffsol;
+mod dop853;
 mod dopri;
 
 /// Newton's convergence test, as a fraction of the error tolerance (diffsol's
@@ -79,16 +80,20 @@ pub enum Method {
     Tsit45,
     /// Our explicit Dormand–Prince 5(4) (test oracle).
     Dp54,
+    /// Our explicit Dormand–Prince 8(5,3) ([`dop853`]: long, lightly damped
+    /// ringing at tight tolerances).
+    Dop853,
 }
 
 impl Method {
     /// Every method, in the order benches chart them.
-    pub const ALL: [Method; 5] = [
+    pub const ALL: [Method; 6] = [
         Method::Bdf,
         Method::Esdirk34,
         Method::TrBdf2,
         Method::Tsit45,
         Method::Dp54,
+        Method::Dop853,
     ];
 
     /// Name as written in scene files and reports (also its `Display`).
@@ -99,6 +104,7 @@ impl Method {
             Method::TrBdf2 => "tr-bdf2",
             Method::Tsit45 => "tsit45",
             Method::Dp54 => "dp54",
+            Method::Dop853 => "dop853",
         }
     }
 
@@ -116,6 +122,7 @@ impl Method {
             Method::Esdirk34 => 3,
             Method::TrBdf2 => 2,
             Method::Tsit45 | Method::Dp54 => 5,
+            Method::Dop853 => 8,
         }
     }
 
@@ -145,7 +152,8 @@ pub struct Options {
     pub h_init: f64,
     /// Step budget over the whole run.
     pub max_steps: usize,
-    /// Fixed step without error control (Dormand–Prince only; convergence-order tests).
+    /// Fixed step without error control (dp54 and dop853 only; convergence-order
+    /// tests).
     pub fixed_step: Option<f64>,
 }
 
@@ -289,22 +297,23 @@ pub fn run<S: System>(
     restart: &mut dyn FnMut(f64, &mut [f64]),
     stats: &mut Stats,
 ) -> End {
-    if m == Method::Dp54 && extra != Extra::None {
-        return End::Failed(
-            "forward sensitivities need bdf, esdirk34, tr-bdf2 or tsit45, not dp54".into(),
-        );
-    }
-    if o.fixed_step.is_some() && m != Method::Dp54 {
+    if matches!(m, Method::Dp54 | Method::Dop853) && extra != Extra::None {
         return End::Failed(format!(
-            "a fixed step is available with dp54 only, not {}",
+            "forward sensitivities need bdf, esdirk34, tr-bdf2 or tsit45, not {m}"
+        ));
+    }
+    if o.fixed_step.is_some() && !matches!(m, Method::Dp54 | Method::Dop853) {
+        return End::Failed(format!(
+            "a fixed step is available with dp54 and dop853 only, not {}",
             m.name()
         ));
     }
     match m {
-        Method::Dp54 | Method::Tsit45 if extra == Extra::None => dopri::run(
+        Method::Dp54 | Method::Tsit45 | Method::Dop853 if extra == Extra::None => dopri::run(
             match m {
-                Method::Dp54 => &dopri::DP54,
-                _ => &dopri::TSIT45,
+                Method::Dp54 => dopri::Scheme::Pair(&dopri::DP54),
+                Method::Dop853 => dopri::Scheme::Dop853,
+                _ => dopri::Scheme::Pair(&dopri::TSIT45),
             },
             sys,
             o,

@@ -13,6 +13,10 @@
 //! `dop853_coefficients.py` transcribes them; the 3rd-order error weights are b
 //! minus `bhh1…3`, computed here as there.
 
+// The coefficients are written as `dop853.f` publishes them (30 digits), so they
+// can be checked against it line by line; the compiler rounds each to nearest.
+#![allow(clippy::excessive_precision)]
+
 use super::dopri::Workspace;
 use super::{Left, Stats, System};
 

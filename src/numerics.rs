@@ -90,7 +90,8 @@ mod tests {
     /// past it, NaN for NaN.
     #[test]
     fn exp_is_exp_to_rounding() {
-        let even = (0..=2_000_000).map(|i| -708.0 + (708.0 + LN_MAX) * i as f64 / 2e6);
+        let even =
+            (0..=2_000_000).map(|i| (-708.0 + (708.0 + LN_MAX) * i as f64 / 2e6).min(LN_MAX));
         let small = (0..=10_000).map(|i| 10f64.powf(-300.0 + 300.0 * i as f64 / 1e4));
         let mut worst: f64 = 0.0;
         for x in even.chain(small.clone()).chain(small.map(|x| -x)) {

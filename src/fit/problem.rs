@@ -257,28 +257,31 @@ impl<'a> HyperProblem<'a> {
         }
     }
 
-    /// Scaled Jacobian ∂r/∂p into `jac` (n × k): blocks of [`BLOCK_ROWS`] points
-    /// ([`HyperProblem::scaled_rows`]), in parallel from [`PARALLEL_ROWS`] points on.
+    /// Scaled Jacobian ∂r/∂p into `jac` (n × k): the model's rows in blocks of
+    /// [`BLOCK_ROWS`] points ([`StrainEnergy::stress_jacobians`]), in parallel from
+    /// [`PARALLEL_ROWS`] points on, then scaled column by column into `jac`.
     pub fn jacobian(&mut self, p: &[f64], jac: &mut DMatrix<f64>) {
         let (n, k) = (self.len(), self.k);
+        if n == 0 || k == 0 {
+            return;
+        }
         let mut rows = std::mem::take(&mut self.rows);
         rows.resize(n * k, 0.0);
         let fill = |(b, block): (usize, &mut [f64])| {
             let at = b * BLOCK_ROWS;
-            self.scaled_rows(p, at..at + block.len() / k.max(1), block);
+            let pts = self.points(at..at + block.len() / k);
+            self.model.stress_jacobians(p, pts, block);
         };
         if n < PARALLEL_ROWS {
-            rows.chunks_mut(BLOCK_ROWS * k.max(1))
-                .enumerate()
-                .for_each(fill);
+            rows.chunks_mut(BLOCK_ROWS * k).enumerate().for_each(fill);
         } else {
-            rows.par_chunks_mut(BLOCK_ROWS * k.max(1))
+            rows.par_chunks_mut(BLOCK_ROWS * k)
                 .enumerate()
                 .for_each(fill);
         }
-        for (i, row) in rows.chunks_exact(k.max(1)).enumerate() {
-            for (j, v) in row.iter().enumerate() {
-                jac[(i, j)] = *v;
+        for (j, col) in jac.as_mut_slice().chunks_exact_mut(n).enumerate() {
+            for ((c, s), row) in col.iter_mut().zip(&self.scale).zip(rows.chunks_exact(k)) {
+                *c = s * row[j];
             }
         }
         self.rows = rows;
@@ -686,6 +689,61 @@ mod tests {
             (&got - &want).norm() <= 1e-13 * want.norm(),
             "{got} vs {want}"
         );
+    }
+
+    /// The problem's residuals, Jacobian and factor are the model's per-point values
+    /// scaled, bit for bit, with the model's block evaluators
+    /// ([`StrainEnergy::nominal_stresses`]) and the logarithms taken once: serial
+    /// (37 points, and a problem's subsample and merge of repeats, which carry
+    /// their points' logarithms) and in parallel blocks ([`PARALLEL_ROWS`] + 13),
+    /// Ogden-3 (its own block evaluator) and Yeoh (the per-point default).
+    #[test]
+    fn evaluations_are_the_models_points_bit_for_bit() {
+        use crate::material::hyperelastic::ModelSpec;
+        let check = |prob: &mut HyperProblem, p: &[f64]| {
+            let (n, k) = (prob.len(), p.len());
+            let (mut r, mut jac) = (DVector::zeros(n), DMatrix::zeros(n, k));
+            assert!(prob.residuals(p, &mut r));
+            prob.jacobian(p, &mut jac);
+            let mut row = vec![0.0; k];
+            for i in 0..n {
+                let (mode, lam, s) = (prob.modes[i], prob.stretch[i], prob.scale[i]);
+                let want = s * (prob.model.nominal_stress(p, mode, lam) - prob.stress[i]);
+                assert_eq!(r[i].to_bits(), want.to_bits(), "point {i} of {n}");
+                prob.model.stress_jacobian(p, mode, lam, &mut row);
+                for j in 0..k {
+                    assert_eq!(jac[(i, j)].to_bits(), (s * row[j]).to_bits(), "({i}, {j})");
+                }
+            }
+            let mut qr = RowQr::with_rows(k, n);
+            for i in 0..n {
+                let r = jac.row(i).iter().copied().collect::<Vec<_>>();
+                qr.push(&r, prob.scale[i] * prob.stress[i]);
+            }
+            if n < PARALLEL_ROWS {
+                assert_eq!(prob.factor(p).r(), qr.r());
+            }
+        };
+        for (name, p) in [
+            ("ogden3", vec![3.4e5, 1.92, 3.1, 8.62, 7.3e3, -2.16]),
+            ("yeoh", vec![6.9e4, -888.0, 16.7]),
+        ] {
+            let model = ModelSpec::new(name, Default::default()).build().unwrap();
+            for n in [37, PARALLEL_ROWS + 13] {
+                // Every stretch twice: the merge of repeats has rows to merge.
+                let data = three_modes(
+                    n,
+                    |i| 0.6 + 4.0 * (i / 6) as f64 / n as f64,
+                    |i| 1.0 + (i % 5) as f64,
+                );
+                let mut prob = HyperProblem::new(model.as_ref(), &data, Residual::Abs);
+                check(&mut prob, &p);
+                if n < PARALLEL_ROWS {
+                    check(&mut prob.subsample(4).unwrap(), &p);
+                    check(&mut prob.merge_repeats().unwrap(), &p);
+                }
+            }
+        }
     }
 
     #[test]

@@ -387,3 +387,150 @@ impl StrainEnergy for Ogden {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `n` points cycling through the three modes over stretches 0.3…7.6 (a
+    /// compression branch, λ = 1 exactly, Treloar's largest uniaxial stretch), with
+    /// their logarithms as the fit problem takes them.
+    fn points(n: usize) -> (Vec<Mode>, Vec<f64>, Vec<f64>) {
+        let modes = (0..n).map(|i| Mode::ALL[i % 3]).collect();
+        let stretch: Vec<f64> = (0..n)
+            .map(|i| match i {
+                4 => 1.0,
+                _ => 0.3 + 7.3 * i as f64 / n.max(2) as f64,
+            })
+            .collect();
+        let ln = stretch.iter().map(|l| l.ln()).collect();
+        (modes, stretch, ln)
+    }
+
+    /// Models and parameters that take every branch: both forms, an exponent in
+    /// the seed form's series (|α| < 10⁻⁶), exponents at the bounds ±20.
+    fn cases() -> Vec<(Ogden, Vec<f64>)> {
+        vec![
+            (
+                Ogden::new(3, OgdenForm::Seed),
+                vec![3.4e5, 1.92, 3.1, 8.62, 7.3e3, -2.16],
+            ),
+            (
+                Ogden::new(4, OgdenForm::Seed),
+                vec![3e5, 1.3, 1e3, 4e-7, 5e3, -20.0, 1e-3, 20.0],
+            ),
+            (
+                Ogden::new(2, OgdenForm::Original),
+                vec![6.18e5, 1.3, -9.81e3, -2.0],
+            ),
+        ]
+    }
+
+    /// The block evaluators give the per-point methods' values bit for bit (the
+    /// same lane arithmetic at one lane and at [`LANES`]), at lengths that leave a
+    /// partial last block; a parameter vector of the wrong length gives NaN.
+    #[test]
+    fn blocks_are_the_points_bit_for_bit() {
+        for n in [1, 7, 8, 9, 3 * LANES + 5] {
+            let (modes, stretch, ln) = points(n);
+            let pts = Points::new(&modes, &stretch, &ln).unwrap();
+            for (m, p) in cases() {
+                let k = p.len();
+                let (mut s, mut jac) = (vec![0.0; n], vec![0.0; n * k]);
+                m.nominal_stresses(&p, pts, &mut s);
+                m.stress_jacobians(&p, pts, &mut jac);
+                let mut row = vec![0.0; k];
+                for i in 0..n {
+                    let want = m.nominal_stress(&p, modes[i], stretch[i]);
+                    assert_eq!(
+                        s[i].to_bits(),
+                        want.to_bits(),
+                        "{} n = {n}, i = {i}",
+                        m.name()
+                    );
+                    m.stress_jacobian(&p, modes[i], stretch[i], &mut row);
+                    let got = jac[i * k..(i + 1) * k].iter().map(|v| v.to_bits());
+                    let want = row.iter().map(|v| v.to_bits());
+                    assert!(got.eq(want), "{} n = {n}, i = {i}", m.name());
+                }
+                m.nominal_stresses(&p[1..], pts, &mut s);
+                assert!(s.iter().all(|v| v.is_nan()));
+                m.stress_jacobians(&p, pts, &mut jac[1..]);
+                assert!(jac[1..].iter().all(|v| v.is_nan()));
+            }
+        }
+    }
+
+    /// The stress is the model's equation evaluated with the library's `powf`,
+    /// P = Σ kᵢ·(λ^αᵢ − λ3^αᵢ)/λ (kᵢ = 2μᵢ/αᵢ seed, μᵢ original), to rounding: the
+    /// tolerance is (2·|α·ln λ| + 8)·2⁻⁵² of Σ|kᵢ|·(λ^αᵢ + λ3^αᵢ)/λ per term, since
+    /// ln λ and α·ln λ are each rounded (a relative error of ε·|α·ln λ| in
+    /// e^{α·ln λ} each), the exponential is within 3·2⁻⁵³ ([`numerics::exp`]),
+    /// λ3^α follows by a square root or a division and the sum and quotients
+    /// round a few times more. Terms in the seed form's series are left out
+    /// (the series is its own approximation, tested against differences of the
+    /// stress in tests/models.rs).
+    #[test]
+    fn stress_is_the_power_law_to_rounding() {
+        let (modes, stretch, _) = points(301);
+        for (m, p) in cases() {
+            for (&mode, &lam) in modes.iter().zip(&stretch) {
+                let l3 = lam.powf(-lateral_power(mode));
+                let (mut want, mut scale, mut tol) = (0.0, 0.0, 0.0);
+                for t in p.chunks_exact(2).filter(|t| t[1].abs() >= 1e-6) {
+                    let k = match m.form {
+                        OgdenForm::Seed => 2.0 * t[0] / t[1],
+                        OgdenForm::Original => t[0],
+                    };
+                    let (x, y) = (lam.powf(t[1]), l3.powf(t[1]));
+                    want += k * (x - y) / lam;
+                    let size = (k * (x + y) / lam).abs();
+                    scale += size;
+                    tol += (2.0 * (t[1] * lam.ln()).abs() + 8.0) * f64::EPSILON * size;
+                }
+                let kept: Vec<f64> = p
+                    .chunks_exact(2)
+                    .flat_map(|t| match t[1].abs() >= 1e-6 {
+                        true => [t[0], t[1]],
+                        false => [0.0, t[1]],
+                    })
+                    .collect();
+                let got = m.nominal_stress(&kept, mode, lam);
+                assert!(
+                    (got - want).abs() <= tol,
+                    "{} {mode} λ = {lam}: {got} vs {want} (tolerance {tol}, scale {scale})",
+                    m.name()
+                );
+            }
+        }
+    }
+
+    /// The block evaluators compiled for AVX2 and for the baseline give the same
+    /// bits (every case, a partial last block), where the processor has AVX2 to
+    /// compare.
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn vector_and_baseline_blocks_agree_bit_for_bit() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let n = 5 * LANES + 3;
+        let (modes, stretch, ln) = points(n);
+        let pts = Points::new(&modes, &stretch, &ln).unwrap();
+        for (m, p) in cases() {
+            let k = p.len();
+            let (mut s, mut sv) = (vec![0.0; n], vec![0.0; n]);
+            let (mut j, mut jv) = (vec![0.0; n * k], vec![0.0; n * k]);
+            m.stresses_portable(&p, pts, &mut s);
+            m.jacobians_portable(&p, pts, &mut j);
+            // SAFETY: AVX2 detected above.
+            unsafe {
+                m.stresses_avx2(&p, pts, &mut sv);
+                m.jacobians_avx2(&p, pts, &mut jv);
+            }
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&s), bits(&sv), "{}", m.name());
+            assert_eq!(bits(&j), bits(&jv), "{}", m.name());
+        }
+    }
+}

@@ -343,11 +343,12 @@ impl<'a> HyperProblem<'a> {
         };
         let r = &mut r.as_mut_slice()[..self.len()];
         if self.len() < PARALLEL_ROWS {
-            return r
-                .chunks_mut(BLOCK_ROWS)
-                .enumerate()
-                .map(block)
-                .fold(true, |a, b| a && b);
+            // Every block evaluated (no short circuit: all of r is written).
+            let mut ok = true;
+            for b in r.chunks_mut(BLOCK_ROWS).enumerate() {
+                ok &= block(b);
+            }
+            return ok;
         }
         r.par_chunks_mut(BLOCK_ROWS)
             .enumerate()

@@ -32,7 +32,8 @@ pub struct HyperProblem<'a> {
     pub model: &'a dyn StrainEnergy,
     /// Mode of each point.
     pub modes: Vec<Mode>,
-    /// Stretch of each point.
+    /// Stretch of each point (read-only after construction: `ln_stretch` is taken
+    /// from it once).
     pub stretch: Vec<f64>,
     /// ln λ of each point, fixed data taken once ([`Points`]).
     ln_stretch: Vec<f64>,

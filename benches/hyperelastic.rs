@@ -14,6 +14,10 @@
 //!   exponents, the stretch ranges of its three modes): the row-by-row QR and the
 //!   SVD of its small R (`range_solve`, what the search runs) against the SVD of the
 //!   tall basis it replaced (`svd_solve`), in the same run.
+//! * `ogden3-100k/jacobian/{block,per-point}`: Ogden-3's Jacobian on 10⁵ points (as
+//!   above) by the block evaluator (`StrainEnergy::stress_jacobians`: vector lanes,
+//!   the logarithms given, what the fit problem runs) against the per-point method
+//!   at every point, the same bits (asserted), in the same run.
 //! * `varpro/treloar-ogden3/{one-evaluation,two-evaluations}`: one variable-projection
 //!   search of Ogden-3 on Treloar's three modes from one start, with ∂A/∂θ taken
 //!   from the model evaluation that gives A(θ) (`StrainEnergy::coefficient_of`, what
@@ -38,7 +42,7 @@ use dea_fit::fit::hyperelastic::{fit, Search, Settings};
 use dea_fit::fit::lm::{self, LeastSquares, LmSettings};
 use dea_fit::fit::problem::{range_solve, svd_solve, HyperProblem, Residual, VarPro};
 use dea_fit::material::hyperelastic::{
-    Mode, ModelSpec, StrainEnergy, WithoutCoefficients, MODEL_NAMES,
+    Mode, ModelSpec, Points, StrainEnergy, WithoutCoefficients, MODEL_NAMES,
 };
 use nalgebra::{DMatrix, DVector};
 use std::hint::black_box;
@@ -175,6 +179,48 @@ fn varpro_projection(c: &mut Criterion) {
     g.finish();
 }
 
+fn ogden_blocks(c: &mut Criterion) {
+    // Ogden-3's Jacobian at Treloar's fitted parameters on 10⁵ points over its
+    // modes' stretch ranges: the block evaluator (vector lanes, ln λ given) against
+    // the per-point method (ln λ and the lane arithmetic one point at a time), the
+    // same bits (asserted), in the same run.
+    let model = ModelSpec::new("ogden3", Default::default())
+        .build()
+        .expect("ogden3");
+    let p = [7.33e3, -2.157, 3.382e5, 1.918, 3.139, 8.619];
+    let ranges = [
+        (Mode::Uniaxial, 7.61),
+        (Mode::Equibiaxial, 4.44),
+        (Mode::Planar, 4.96),
+    ];
+    let (n, per) = (100_002, 33_334);
+    let modes: Vec<Mode> = (0..n).map(|i| ranges[i / per].0).collect();
+    let stretch: Vec<f64> = (0..n)
+        .map(|i| 1.0 + (ranges[i / per].1 - 1.0) * (i % per) as f64 / (per - 1) as f64)
+        .collect();
+    let ln: Vec<f64> = stretch.iter().map(|l| l.ln()).collect();
+    let pts = Points::new(&modes, &stretch, &ln).expect("one length");
+    let (mut block, mut single) = (vec![0.0; 6 * n], vec![0.0; 6 * n]);
+    let per_point = |out: &mut [f64]| {
+        for (i, row) in out.chunks_exact_mut(6).enumerate() {
+            model.stress_jacobian(&p, modes[i], stretch[i], row);
+        }
+    };
+    model.stress_jacobians(&p, pts, &mut block);
+    per_point(&mut single);
+    assert!(block
+        .iter()
+        .zip(&single)
+        .all(|(a, b)| a.to_bits() == b.to_bits()));
+    let mut g = c.benchmark_group("ogden3-100k/jacobian");
+    g.sampling_mode(SamplingMode::Flat);
+    g.bench_function("block", |bch| {
+        bch.iter(|| model.stress_jacobians(black_box(&p), pts, &mut block))
+    });
+    g.bench_function("per-point", |bch| bch.iter(|| per_point(&mut single)));
+    g.finish();
+}
+
 fn varpro_search(c: &mut Criterion) {
     let sets = data();
     let treloar = &get(&sets, TRELOAR_ALL).data;
@@ -280,6 +326,6 @@ criterion_group! {
         .sample_size(10)
         .warm_up_time(Duration::from_millis(300))
         .measurement_time(Duration::from_secs(1));
-    targets = fits, yeoh_search, varpro_projection, varpro_search, drucker_checks, tiny_search
+    targets = fits, yeoh_search, varpro_projection, ogden_blocks, varpro_search, drucker_checks, tiny_search
 }
 criterion_main!(benches);

@@ -22,6 +22,7 @@ pub mod fit;
 pub mod identify;
 pub mod io;
 pub mod material;
+pub mod numerics;
 pub mod observe;
 pub mod rank;
 pub mod report;

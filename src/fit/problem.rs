@@ -5,7 +5,7 @@
 use super::linear::{self, RowQr};
 use super::lm::LeastSquares;
 use crate::data::{Dataset, Sample};
-use crate::material::hyperelastic::{Mode, StrainEnergy};
+use crate::material::hyperelastic::{Mode, Points, StrainEnergy};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -32,21 +32,26 @@ pub struct HyperProblem<'a> {
     pub model: &'a dyn StrainEnergy,
     /// Mode of each point.
     pub modes: Vec<Mode>,
-    /// Stretch of each point.
+    /// Stretch of each point (read-only after construction: `ln_stretch` is taken
+    /// from it once).
     pub stretch: Vec<f64>,
+    /// ln λ of each point, fixed data taken once ([`Points`]).
+    ln_stretch: Vec<f64>,
     /// Measured nominal stress (Pa).
     pub stress: Vec<f64>,
     /// Residual multiplier s_i (√(weight / largest weight) / scale).
     pub scale: Vec<f64>,
     /// Evaluation count.
     pub evaluations: usize,
-    row: Vec<f64>,
-    /// Row-major n × k Jacobian rows of a parallel evaluation ([`PARALLEL_ROWS`]).
+    /// Number of the model's parameters.
+    k: usize,
+    /// Row-major n × k Jacobian rows of an evaluation, reused.
     rows: Vec<f64>,
 }
 
 /// Problems with at least this many points evaluate their residuals and Jacobian in
-/// parallel, in blocks of [`BLOCK_ROWS`] points (each point on its own, so the values
+/// parallel, in blocks of [`BLOCK_ROWS`] points (the model evaluates a block at a
+/// time, [`StrainEnergy::nominal_stresses`], each point on its own, so the values
 /// are those of the serial loop, bit for bit); the tensile reader reads the rows of
 /// such a file, and the fit predicts its stresses, in parallel in the same way.
 pub const PARALLEL_ROWS: usize = 16_384;
@@ -80,10 +85,11 @@ impl<'a> HyperProblem<'a> {
             }
         };
         // Each column in a pass over the samples (a large dataset's in parallel).
-        let (modes, stretch, stress, scale) = if s.len() < PARALLEL_ROWS {
+        let (modes, stretch, ln_stretch, stress, scale) = if s.len() < PARALLEL_ROWS {
             (
                 s.iter().map(|x| x.mode).collect(),
                 s.iter().map(|x| x.stretch).collect(),
+                s.iter().map(|x| x.stretch.ln()).collect(),
                 s.iter().map(|x| x.stress).collect(),
                 s.iter().map(scale_of).collect(),
             )
@@ -91,6 +97,7 @@ impl<'a> HyperProblem<'a> {
             (
                 s.par_iter().map(|x| x.mode).collect(),
                 s.par_iter().map(|x| x.stretch).collect(),
+                s.par_iter().map(|x| x.stretch.ln()).collect(),
                 s.par_iter().map(|x| x.stress).collect(),
                 s.par_iter().map(scale_of).collect(),
             )
@@ -99,10 +106,11 @@ impl<'a> HyperProblem<'a> {
             model,
             modes,
             stretch,
+            ln_stretch,
             stress,
             scale,
             evaluations: 0,
-            row: vec![0.0; model.params().len()],
+            k: model.params().len(),
             rows: Vec::new(),
         }
     }
@@ -134,13 +142,15 @@ impl<'a> HyperProblem<'a> {
             }
         }
         let mut row = vec![usize::MAX; n];
-        let (mut modes, mut stretch, mut s2, mut s2y) = (vec![], vec![], vec![], vec![]);
+        let (mut modes, mut stretch, mut ln_stretch) = (vec![], vec![], vec![]);
+        let (mut s2, mut s2y) = (vec![], vec![]);
         for i in 0..n {
             let f = first[i];
             if row[f] == usize::MAX {
                 row[f] = modes.len();
                 modes.push(self.modes[i]);
                 stretch.push(self.stretch[i]);
+                ln_stretch.push(self.ln_stretch[i]);
                 s2.push(0.0);
                 s2y.push(0.0);
             }
@@ -159,8 +169,9 @@ impl<'a> HyperProblem<'a> {
             scale: s2.iter().map(|w| w.sqrt()).collect(),
             modes,
             stretch,
+            ln_stretch,
             evaluations: 0,
-            row: self.row.clone(),
+            k: self.k,
             rows: Vec::new(),
         })
     }
@@ -197,10 +208,11 @@ impl<'a> HyperProblem<'a> {
             model: self.model,
             modes: keep.iter().map(|&i| self.modes[i]).collect(),
             stretch: keep.iter().map(|&i| self.stretch[i]).collect(),
+            ln_stretch: keep.iter().map(|&i| self.ln_stretch[i]).collect(),
             stress: keep.iter().map(|&i| self.stress[i]).collect(),
             scale: keep.iter().map(|&i| self.scale[i]).collect(),
             evaluations: 0,
-            row: self.row.clone(),
+            k: self.k,
             rows: Vec::new(),
         })
     }
@@ -224,36 +236,56 @@ impl<'a> HyperProblem<'a> {
             .fold(0.0, f64::max)
     }
 
-    /// Scaled Jacobian ∂r/∂p into `jac` (n × k).
+    /// The points `rows` for the model's block evaluators.
+    fn points(&self, rows: std::ops::Range<usize>) -> Points<'_> {
+        Points::new(
+            &self.modes[rows.clone()],
+            &self.stretch[rows.clone()],
+            &self.ln_stretch[rows],
+        )
+        .expect("the problem's columns have one length")
+    }
+
+    /// The scaled Jacobian rows s_i·∂P/∂p of the points `rows` into `out` (row-major,
+    /// k values a point), by the model's block evaluator.
+    fn scaled_rows(&self, p: &[f64], rows: std::ops::Range<usize>, out: &mut [f64]) {
+        let k = self.k.max(1);
+        let at = rows.start;
+        self.model.stress_jacobians(p, self.points(rows), out);
+        for (i, row) in out.chunks_exact_mut(k).enumerate() {
+            let s = self.scale[at + i];
+            row.iter_mut().for_each(|v| *v *= s);
+        }
+    }
+
+    /// Scaled Jacobian ∂r/∂p into `jac` (n × k): the model's rows in blocks of
+    /// [`BLOCK_ROWS`] points ([`StrainEnergy::stress_jacobians`]), in parallel from
+    /// [`PARALLEL_ROWS`] points on, then scaled column by column into `jac`.
     pub fn jacobian(&mut self, p: &[f64], jac: &mut DMatrix<f64>) {
-        let (n, k) = (self.len(), self.row.len());
-        if n < PARALLEL_ROWS {
-            for i in 0..n {
-                self.model
-                    .stress_jacobian(p, self.modes[i], self.stretch[i], &mut self.row);
-                for (k, v) in self.row.iter().enumerate() {
-                    jac[(i, k)] = self.scale[i] * v;
-                }
-            }
+        let (n, k) = (self.len(), self.k);
+        if n == 0 || k == 0 {
             return;
         }
-        self.rows.resize(n * k, 0.0);
-        let (model, modes, stretch, scale) = (self.model, &self.modes, &self.stretch, &self.scale);
-        self.rows
-            .par_chunks_mut(BLOCK_ROWS * k)
-            .enumerate()
-            .for_each(|(b, block)| {
-                for (r, row) in block.chunks_exact_mut(k).enumerate() {
-                    let i = b * BLOCK_ROWS + r;
-                    model.stress_jacobian(p, modes[i], stretch[i], row);
-                    row.iter_mut().for_each(|v| *v *= scale[i]);
-                }
-            });
-        for (i, row) in self.rows.chunks_exact(k).enumerate() {
-            for (j, v) in row.iter().enumerate() {
-                jac[(i, j)] = *v;
+        let mut rows = std::mem::take(&mut self.rows);
+        rows.resize(n * k, 0.0);
+        let fill = |(b, block): (usize, &mut [f64])| {
+            let at = b * BLOCK_ROWS;
+            let pts = self.points(at..at + block.len() / k);
+            self.model.stress_jacobians(p, pts, block);
+        };
+        if n < PARALLEL_ROWS {
+            rows.chunks_mut(BLOCK_ROWS * k).enumerate().for_each(fill);
+        } else {
+            rows.par_chunks_mut(BLOCK_ROWS * k)
+                .enumerate()
+                .for_each(fill);
+        }
+        for (j, col) in jac.as_mut_slice().chunks_exact_mut(n).enumerate() {
+            for ((c, s), row) in col.iter_mut().zip(&self.scale).zip(rows.chunks_exact(k)) {
+                *c = s * row[j];
             }
         }
+        self.rows = rows;
     }
 
     /// The triangular factor of [J | s·y] (J the scaled Jacobian ∂r/∂p at `p`, s·y the
@@ -263,7 +295,7 @@ impl<'a> HyperProblem<'a> {
     /// parallel and the blocks' factors appended in order ([`RowQr::append`]): the
     /// same blocks on any number of threads, so the same factor bit for bit.
     pub fn factor(&self, p: &[f64]) -> RowQr {
-        let (n, k) = (self.len(), self.row.len());
+        let (n, k) = (self.len(), self.k);
         if n < PARALLEL_ROWS {
             return self.factor_rows(p, 0..n, RowQr::with_rows(k, n));
         }
@@ -279,45 +311,49 @@ impl<'a> HyperProblem<'a> {
         qr
     }
 
-    /// `qr` with the scaled rows [J | s·y] of the points `rows` pushed.
+    /// `qr` with the scaled rows [J | s·y] of the points `rows` pushed, evaluated
+    /// [`BLOCK_ROWS`] at a time ([`HyperProblem::scaled_rows`]).
     fn factor_rows(&self, p: &[f64], rows: std::ops::Range<usize>, mut qr: RowQr) -> RowQr {
-        let mut row = vec![0.0; self.row.len()];
-        for i in rows {
-            self.model
-                .stress_jacobian(p, self.modes[i], self.stretch[i], &mut row);
-            let s = self.scale[i];
-            row.iter_mut().for_each(|v| *v *= s);
-            qr.push(&row, s * self.stress[i]);
+        let k = self.k.max(1);
+        let mut block = vec![0.0; rows.len().min(BLOCK_ROWS) * k];
+        for at in rows.clone().step_by(BLOCK_ROWS) {
+            let end = rows.end.min(at + BLOCK_ROWS);
+            let out = &mut block[..(end - at) * k];
+            self.scaled_rows(p, at..end, out);
+            for (i, row) in (at..end).zip(out.chunks_exact(k)) {
+                qr.push(row, self.scale[i] * self.stress[i]);
+            }
         }
         qr
     }
 
-    /// Scaled residuals; false if any is not finite.
+    /// Scaled residuals s_i·(P_i − y_i), the stresses P_i by the model's block
+    /// evaluator ([`StrainEnergy::nominal_stresses`]) [`BLOCK_ROWS`] points at a time,
+    /// in parallel from [`PARALLEL_ROWS`] points on; false if any is not finite.
     pub fn residuals(&self, p: &[f64], r: &mut DVector<f64>) -> bool {
-        let one = |i: usize| {
-            self.scale[i]
-                * (self.model.nominal_stress(p, self.modes[i], self.stretch[i]) - self.stress[i])
-        };
-        if self.len() < PARALLEL_ROWS {
+        let block = |(b, out): (usize, &mut [f64])| {
+            let at = b * BLOCK_ROWS;
+            self.model
+                .nominal_stresses(p, self.points(at..at + out.len()), out);
             let mut ok = true;
-            for i in 0..self.len() {
-                let v = one(i);
+            for (i, v) in (at..).zip(out.iter_mut()) {
+                *v = self.scale[i] * (*v - self.stress[i]);
                 ok &= v.is_finite();
-                r[i] = v;
+            }
+            ok
+        };
+        let r = &mut r.as_mut_slice()[..self.len()];
+        if self.len() < PARALLEL_ROWS {
+            // Every block evaluated (no short circuit: all of r is written).
+            let mut ok = true;
+            for b in r.chunks_mut(BLOCK_ROWS).enumerate() {
+                ok &= block(b);
             }
             return ok;
         }
-        r.as_mut_slice()
-            .par_chunks_mut(BLOCK_ROWS)
+        r.par_chunks_mut(BLOCK_ROWS)
             .enumerate()
-            .map(|(b, block)| {
-                let mut ok = true;
-                for (j, v) in block.iter_mut().enumerate() {
-                    *v = one(b * BLOCK_ROWS + j);
-                    ok &= v.is_finite();
-                }
-                ok
-            })
+            .map(block)
             .reduce(|| true, |a, b| a && b)
     }
 
@@ -655,6 +691,61 @@ mod tests {
             (&got - &want).norm() <= 1e-13 * want.norm(),
             "{got} vs {want}"
         );
+    }
+
+    /// The problem's residuals, Jacobian and factor are the model's per-point values
+    /// scaled, bit for bit, with the model's block evaluators
+    /// ([`StrainEnergy::nominal_stresses`]) and the logarithms taken once: serial
+    /// (37 points, and a problem's subsample and merge of repeats, which carry
+    /// their points' logarithms) and in parallel blocks ([`PARALLEL_ROWS`] + 13),
+    /// Ogden-3 (its own block evaluator) and Yeoh (the per-point default).
+    #[test]
+    fn evaluations_are_the_models_points_bit_for_bit() {
+        use crate::material::hyperelastic::ModelSpec;
+        let check = |prob: &mut HyperProblem, p: &[f64]| {
+            let (n, k) = (prob.len(), p.len());
+            let (mut r, mut jac) = (DVector::zeros(n), DMatrix::zeros(n, k));
+            assert!(prob.residuals(p, &mut r));
+            prob.jacobian(p, &mut jac);
+            let mut row = vec![0.0; k];
+            for i in 0..n {
+                let (mode, lam, s) = (prob.modes[i], prob.stretch[i], prob.scale[i]);
+                let want = s * (prob.model.nominal_stress(p, mode, lam) - prob.stress[i]);
+                assert_eq!(r[i].to_bits(), want.to_bits(), "point {i} of {n}");
+                prob.model.stress_jacobian(p, mode, lam, &mut row);
+                for j in 0..k {
+                    assert_eq!(jac[(i, j)].to_bits(), (s * row[j]).to_bits(), "({i}, {j})");
+                }
+            }
+            let mut qr = RowQr::with_rows(k, n);
+            for i in 0..n {
+                let r = jac.row(i).iter().copied().collect::<Vec<_>>();
+                qr.push(&r, prob.scale[i] * prob.stress[i]);
+            }
+            if n < PARALLEL_ROWS {
+                assert_eq!(prob.factor(p).r(), qr.r());
+            }
+        };
+        for (name, p) in [
+            ("ogden3", vec![3.4e5, 1.92, 3.1, 8.62, 7.3e3, -2.16]),
+            ("yeoh", vec![6.9e4, -888.0, 16.7]),
+        ] {
+            let model = ModelSpec::new(name, Default::default()).build().unwrap();
+            for n in [37, PARALLEL_ROWS + 13] {
+                // Every stretch twice: the merge of repeats has rows to merge.
+                let data = three_modes(
+                    n,
+                    |i| 0.6 + 4.0 * (i / 6) as f64 / n as f64,
+                    |i| 1.0 + (i % 5) as f64,
+                );
+                let mut prob = HyperProblem::new(model.as_ref(), &data, Residual::Abs);
+                check(&mut prob, &p);
+                if n < PARALLEL_ROWS {
+                    check(&mut prob.subsample(4).unwrap(), &p);
+                    check(&mut prob.merge_repeats().unwrap(), &p);
+                }
+            }
+        }
     }
 
     #[test]

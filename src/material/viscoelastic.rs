@@ -28,6 +28,7 @@
 //!   interconversion by collocation; this is its exact form for a Prony series).
 
 use crate::error::{Error, Result};
+use crate::numerics;
 use serde::{Deserialize, Serialize};
 
 /// Which constitutive reading the constants belong to (`docs/model.md`): conversion
@@ -539,7 +540,7 @@ impl Schedule {
 
     /// One pass of [`Schedule::kernels`] over at most [`KERNEL_CHUNK`] τ, in a
     /// fixed number of lanes (4 or 8, the τ padded with copies of the first) so that
-    /// the lanes' arithmetic, [`exp_neg`] included, compiles to vector instructions.
+    /// the lanes' arithmetic, [`numerics::exp`] included, compiles to vector instructions.
     fn kernel_chunk(&self, taus: &[f64], h: &mut [f64], dh: Option<&mut [f64]>) {
         match (taus.len() <= 4, dh) {
             (true, Some(d)) => self.lanes::<4, true>(taus, h, d),
@@ -611,7 +612,7 @@ impl Interval {
     /// The states `s` of the lanes' τ kernels (`inv` = 1/τ) carried across this
     /// interval, and their τ-derivatives `d` when `D`: over dt at input rate ṙ,
     /// s ← a·s + ṙτ(1 − a), d ← a·(d + (s − ṙτ)·dt/τ²) + ṙ(1 − a), a = e^(−dt/τ)
-    /// ([`exp_neg`]); then the input's jump.
+    /// ([`numerics::exp`]); then the input's jump.
     #[inline(always)]
     fn advance<const L: usize, const D: bool>(
         &self,
@@ -622,7 +623,7 @@ impl Interval {
     ) {
         if self.dt > 0.0 {
             for i in 0..L {
-                let a = exp_neg(-self.dt * inv[i]);
+                let a = numerics::exp(-self.dt * inv[i]);
                 let rt = self.rate * tau[i];
                 if D {
                     d[i] = a * (d[i] + (s[i] - rt) * self.dt * inv[i] * inv[i])
@@ -634,64 +635,6 @@ impl Interval {
         for v in s.iter_mut() {
             *v += self.jump;
         }
-    }
-}
-
-/// e^x for x ≤ 0 in straight-line arithmetic (no call, no branch), so that the
-/// kernels' lanes compute it in vector registers; relative error ≤ 3·2⁻⁵³ against
-/// the exact value for −708 ≤ x ≤ 0 (0 below −708, where e^x < 3.4·10⁻³⁰⁸).
-///
-/// Cody & Waite's reduction (Muller, *Elementary Functions*, 2016, §11.2):
-/// x = k·ln 2 + r with k = round(x/ln 2) (by the 1.5·2⁵² shifter) and |r| ≤ ln 2/2,
-/// r = (x − k·ln2_hi) − k·ln2_lo with fdlibm's split of ln 2 (k·ln2_hi exact for
-/// |k| < 2²⁰); e^r by Horner on its Taylor polynomial of degree 13; e^x = 2ᵏ·e^r
-/// with 2ᵏ built in the exponent bits (exact: 2ᵏ·e^r ≥ 2⁻¹⁰²¹·0.7 is normal).
-/// Error: the Taylor remainder |r|¹⁴/14!·e^|r| ≤ 6·10⁻¹⁸ (0.08·2⁻⁵³ of e^r ≥ 0.7),
-/// the reduction's rounding ≤ |r|·2⁻⁵³ ≤ 0.35·2⁻⁵³, Horner's ≤ 2.4·2⁻⁵³ (the last
-/// step's two roundings, 2⁻⁵³·(e^r + |e^r − 1|), plus the inner sum's error
-/// ≤ 1.9·2⁻⁵³ scaled by |r| ≤ 0.35, over e^r ≥ 0.7). Test `exp_neg_is_exp_to_rounding`.
-#[inline(always)]
-fn exp_neg(x: f64) -> f64 {
-    // 1.5·2⁵²: adding it rounds to an integer, kept in the low mantissa bits.
-    const SHIFTER: f64 = 6755399441055744.0;
-    // fdlibm's ln2_hi (32 significant bits) and ln2_lo = ln 2 − ln2_hi.
-    const LN2_HI: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000);
-    const LN2_LO: f64 = f64::from_bits(0x3dea_39ef_3579_3c76);
-    // 1/j! for j = 13 down to 0.
-    const TAYLOR: [f64; 14] = [
-        1.0 / 6227020800.0,
-        1.0 / 479001600.0,
-        1.0 / 39916800.0,
-        1.0 / 3628800.0,
-        1.0 / 362880.0,
-        1.0 / 40320.0,
-        1.0 / 5040.0,
-        1.0 / 720.0,
-        1.0 / 120.0,
-        1.0 / 24.0,
-        1.0 / 6.0,
-        0.5,
-        1.0,
-        1.0,
-    ];
-    let z = x * std::f64::consts::LOG2_E + SHIFTER;
-    let k = z - SHIFTER;
-    let r = (x - k * LN2_HI) - k * LN2_LO;
-    let mut p = TAYLOR[0];
-    for c in &TAYLOR[1..] {
-        p = p * r + c;
-    }
-    // The shifter's low mantissa bits hold k + 2⁵¹; 2ᵏ has exponent field k + 1023.
-    let bits = z
-        .to_bits()
-        .wrapping_sub(SHIFTER.to_bits())
-        .wrapping_add(1023)
-        << 52;
-    let e = p * f64::from_bits(bits);
-    if x < -708.0 {
-        0.0
-    } else {
-        e
     }
 }
 
@@ -817,29 +760,6 @@ mod tests {
             assert_eq!(dh[i * m..(i + 1) * m], d1[..], "τ = {tau}");
             assert_eq!(h_only[i * m..(i + 1) * m], h1[..], "τ = {tau}");
         }
-    }
-
-    /// [`exp_neg`] is e^x to its proven bound, 3·2⁻⁵³ relative, plus the libm
-    /// exponential's own error (≤ 1 ulp ≤ 2·2⁻⁵³): 5·2⁻⁵³ against `f64::exp` over
-    /// −708…0 (10⁶ even steps, and 10⁴ magnitudes from 10⁻³⁰⁰ to 1 where k = 0);
-    /// exactly 1 at 0 (a kernel over dt = 0 keeps its state) and 0 below −708.
-    #[test]
-    fn exp_neg_is_exp_to_rounding() {
-        let tol = 5.0 * f64::EPSILON / 2.0;
-        let even = (0..=1_000_000).map(|i| -708.0 * i as f64 / 1e6);
-        let small = (0..=10_000).map(|i| -(10f64.powf(-300.0 + 300.0 * i as f64 / 1e4)));
-        let mut worst: f64 = 0.0;
-        for x in even.chain(small) {
-            let want = x.exp();
-            let err = (exp_neg(x) - want).abs() / want;
-            worst = worst.max(err);
-            assert!(err <= tol, "e^{x}: {} vs {want}", exp_neg(x));
-        }
-        assert!(worst > 0.0, "compared with a different rounding somewhere");
-        assert_eq!(exp_neg(0.0), 1.0);
-        assert_eq!(exp_neg(-0.0), 1.0);
-        assert_eq!(exp_neg(-708.5), 0.0);
-        assert_eq!(exp_neg(-1e6), 0.0);
     }
 
     /// The kernels' pass compiled for AVX2 and for the baseline give the same bits

@@ -46,6 +46,68 @@ impl ParamInfo {
     }
 }
 
+/// Points evaluated together ([`StrainEnergy::nominal_stresses`],
+/// [`StrainEnergy::stress_jacobians`]): each one's mode, stretch λ and ln λ (the
+/// logarithm taken once per point by the fit problem, not at every evaluation).
+#[derive(Debug, Clone, Copy)]
+pub struct Points<'a> {
+    modes: &'a [Mode],
+    stretch: &'a [f64],
+    ln_stretch: &'a [f64],
+}
+
+impl<'a> Points<'a> {
+    /// The points of three columns of one length, `ln_stretch` holding ln λ of
+    /// `stretch` (as [`f64::ln`] gives it); None where the lengths differ.
+    pub fn new(modes: &'a [Mode], stretch: &'a [f64], ln_stretch: &'a [f64]) -> Option<Self> {
+        (modes.len() == stretch.len() && stretch.len() == ln_stretch.len()).then_some(Points {
+            modes,
+            stretch,
+            ln_stretch,
+        })
+    }
+
+    /// Number of points.
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.stretch.len()
+    }
+
+    /// True if there are no points.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.stretch.is_empty()
+    }
+
+    /// The points `rows` (a range within `0..len()`).
+    #[inline]
+    pub fn rows(&self, rows: std::ops::Range<usize>) -> Points<'a> {
+        Points {
+            modes: &self.modes[rows.clone()],
+            stretch: &self.stretch[rows.clone()],
+            ln_stretch: &self.ln_stretch[rows],
+        }
+    }
+
+    /// Mode of point `i`.
+    #[inline(always)]
+    pub fn mode(&self, i: usize) -> Mode {
+        self.modes[i]
+    }
+
+    /// Stretch λ of point `i`.
+    #[inline(always)]
+    pub fn stretch(&self, i: usize) -> f64 {
+        self.stretch[i]
+    }
+
+    /// ln λ of point `i`.
+    #[inline(always)]
+    pub fn ln_stretch(&self, i: usize) -> f64 {
+        self.ln_stretch[i]
+    }
+}
+
 /// An incompressible strain-energy function evaluated for homogeneous test modes.
 ///
 /// All stresses are nominal (first Piola-Kirchhoff, force per reference area) in Pa.
@@ -77,6 +139,25 @@ pub trait StrainEnergy: Send + Sync {
     }
     /// ∂P/∂p written into `out` (length = number of parameters). No allocation.
     fn stress_jacobian(&self, p: &[f64], mode: Mode, lam: f64, out: &mut [f64]);
+    /// Nominal stress at each of `pts` into `out` (one value a point): by default
+    /// [`StrainEnergy::nominal_stress`] at every point; a model may override it to
+    /// evaluate the points in vector lanes, giving the same bits as its own
+    /// per-point method. No allocation.
+    fn nominal_stresses(&self, p: &[f64], pts: Points<'_>, out: &mut [f64]) {
+        for (i, o) in out.iter_mut().enumerate().take(pts.len()) {
+            *o = self.nominal_stress(p, pts.mode(i), pts.stretch(i));
+        }
+    }
+    /// ∂P/∂p at each of `pts`, row after row into `out` (`p.len()` values a point,
+    /// point i's at `out[i·k..(i + 1)·k]`): by default
+    /// [`StrainEnergy::stress_jacobian`] at every point; a model may override it
+    /// as [`StrainEnergy::nominal_stresses`]. No allocation.
+    fn stress_jacobians(&self, p: &[f64], pts: Points<'_>, out: &mut [f64]) {
+        let k = p.len().max(1);
+        for (i, row) in out.chunks_exact_mut(k).enumerate().take(pts.len()) {
+            self.stress_jacobian(p, pts.mode(i), pts.stretch(i), row);
+        }
+    }
     /// Small-strain shear modulus μ0 (Pa); Young's modulus is 3μ0.
     fn initial_shear_modulus(&self, p: &[f64]) -> f64;
     /// Deterministic, physically informed starting values of the nonlinear
@@ -192,6 +273,12 @@ impl StrainEnergy for WithoutCoefficients {
     }
     fn stress_jacobian(&self, p: &[f64], mode: Mode, lam: f64, out: &mut [f64]) {
         self.0.stress_jacobian(p, mode, lam, out)
+    }
+    fn nominal_stresses(&self, p: &[f64], pts: Points<'_>, out: &mut [f64]) {
+        self.0.nominal_stresses(p, pts, out)
+    }
+    fn stress_jacobians(&self, p: &[f64], pts: Points<'_>, out: &mut [f64]) {
+        self.0.stress_jacobians(p, pts, out)
     }
     fn initial_shear_modulus(&self, p: &[f64]) -> f64 {
         self.0.initial_shear_modulus(p)

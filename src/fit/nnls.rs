@@ -34,7 +34,10 @@ pub fn nnls(
     start: Option<&[bool]>,
 ) -> Result<NnlsSolution, String> {
     let k = a.ncols();
-    if !(a.iter().all(|v| v.is_finite()) && b.iter().all(|v| v.is_finite())) {
+    // A value of A that is not finite makes its column's squared norm G_jj infinite
+    // or NaN, which [`nnls_normal`] refuses: only b is checked here (an infinite bᵢ
+    // could meet zeros only, and 0·∞ is NaN, but with no column there is no G).
+    if !b.iter().all(|v| v.is_finite()) {
         return Err("the problem holds a value that is not finite".into());
     }
     let col = |j: usize| &a.as_slice()[j * a.nrows()..(j + 1) * a.nrows()];
@@ -129,7 +132,9 @@ fn dot_lanes(a: &[f64], b: &[f64]) -> f64 {
 const LANES: usize = 8;
 
 /// Lawson–Hanson on the scaled normal equations (module notes). Returns the scaled
-/// solution and the outer iterations.
+/// solution and the outer iterations. The work space is allocated once here: the
+/// factor of G_PP is kept across the steps ([`PassiveFactor`]), and w = h − G·x
+/// takes only P's columns of G (x is zero off P).
 fn solve_normal(
     g: &DMatrix<f64>,
     h: &DVector<f64>,
@@ -137,80 +142,221 @@ fn solve_normal(
     d: &[f64],
 ) -> Result<(Vec<f64>, usize), String> {
     let k = h.len();
+    let (g, h) = (g.as_slice(), h.as_slice());
     // Gradient tolerance: rounding of the normal equations, relative to ‖h‖∞.
-    let tol = 1e-10 * h.amax().max(f64::MIN_POSITIVE);
+    let tol = 1e-10
+        * h.iter()
+            .fold(0.0, |m: f64, v| m.max(v.abs()))
+            .max(f64::MIN_POSITIVE);
     let usable = |j: usize| d[j] > 0.0;
-    let mut passive: Vec<bool> = (0..k)
-        .map(|j| start.get(j) == Some(&true) && usable(j))
-        .collect();
-    let mut x = DVector::zeros(k);
+    let mut f = PassiveFactor::new(k);
+    let mut x = vec![0.0; k];
     let mut z = vec![0.0; k];
-    let mut w = DVector::zeros(k);
+    let mut w = vec![0.0; k];
+    let mut leaving = vec![false; k];
+    warm_start(&mut f, g, h, start, &usable, &mut z, &mut leaving);
+    for &j in &f.order {
+        x[j] = z[j];
+    }
     let mut iterations = 0;
-    // A warm start is made feasible by the inner loop before the first addition.
-    let mut add_next = !passive.iter().any(|&p| p);
     loop {
-        if add_next {
-            // w = h − G·x, over the coefficients outside P.
-            w.copy_from(h);
-            w.gemv(-1.0, g, &x, 1.0);
-            let best = (0..k)
-                .filter(|&j| !passive[j] && usable(j))
-                .map(|j| (j, w[j]))
-                .filter(|&(_, w)| w > tol)
-                .max_by(|a, b| a.1.total_cmp(&b.1));
-            let Some((t, _)) = best else {
-                return Ok((x.iter().copied().collect(), iterations));
-            };
-            iterations += 1;
-            if iterations > 3 * k.max(1) {
-                return Err(format!("no convergence in {} iterations", 3 * k));
+        // w = h − G·x: the columns of P only.
+        w.copy_from_slice(h);
+        for &j in &f.order {
+            for (wi, gi) in w.iter_mut().zip(&g[j * k..(j + 1) * k]) {
+                *wi -= gi * x[j];
             }
-            passive[t] = true;
         }
-        add_next = true;
+        let best = (0..k)
+            .filter(|&j| !f.passive[j] && usable(j))
+            .map(|j| (j, w[j]))
+            .filter(|&(_, w)| w > tol)
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        let Some((t, _)) = best else {
+            return Ok((x, iterations));
+        };
+        iterations += 1;
+        if iterations > 3 * k.max(1) {
+            return Err(format!("no convergence in {} iterations", 3 * k));
+        }
+        if !f.push(g, h, t) {
+            return Err("the normal equations on the free set are singular".into());
+        }
         // Inner loop: keep the solution on P feasible.
         loop {
-            if !solve_passive(g, h, &passive, &mut z) {
+            if !f.solve(&mut z) {
                 return Err("the normal equations on the free set are singular".into());
             }
-            if (0..k).all(|j| !passive[j] || z[j] > 0.0) {
-                x.copy_from_slice(&z);
+            if f.order.iter().all(|&j| z[j] > 0.0) {
+                for &j in &f.order {
+                    x[j] = z[j];
+                }
                 break;
             }
-            let alpha = (0..k)
-                .filter(|&j| passive[j] && z[j] <= 0.0)
-                .map(|j| x[j] / (x[j] - z[j]))
+            let alpha = f
+                .order
+                .iter()
+                .filter(|&&j| z[j] <= 0.0)
+                .map(|&j| x[j] / (x[j] - z[j]))
                 .fold(1.0, f64::min);
-            for j in 0..k {
+            for &j in &f.order {
                 x[j] += alpha * (z[j] - x[j]);
-                if passive[j] && (x[j] <= 0.0 || (z[j] <= 0.0 && x[j] <= 1e-15)) {
-                    passive[j] = false;
+                if x[j] <= 0.0 || (z[j] <= 0.0 && x[j] <= 1e-15) {
+                    leaving[j] = true;
                     x[j] = 0.0;
                 }
             }
-            if !passive.iter().any(|&p| p) {
+            if !f.remove(g, h, &mut leaving) {
+                return Err("the normal equations on the free set are singular".into());
+            }
+            if f.order.is_empty() {
                 break;
             }
         }
     }
 }
 
-/// z_P = G_PP⁻¹·h_P (Cholesky), z = 0 off P. False if G_PP is not positive definite.
-fn solve_passive(g: &DMatrix<f64>, h: &DVector<f64>, passive: &[bool], z: &mut [f64]) -> bool {
-    let idx: Vec<usize> = (0..passive.len()).filter(|&j| passive[j]).collect();
-    let m = idx.len();
-    let gp = DMatrix::from_fn(m, m, |r, c| g[(idx[r], idx[c])]);
-    let hp = DVector::from_fn(m, |r, _| h[idx[r]]);
-    let Some(ch) = gp.cholesky() else {
-        return false;
-    };
-    let sol = ch.solve(&hp);
-    z.fill(0.0);
-    for (r, &j) in idx.iter().enumerate() {
-        z[j] = sol[r];
+/// Seed P with the start's usable coefficients (a coefficient that would make G_PP
+/// singular is left out: the start is only a hint), then drop every coefficient
+/// whose solution on P is not positive and solve again, until it is: a feasible
+/// point (the least-squares solution on P, in `z`) from which the steps go on as
+/// from the cold start x = 0. Leaves P empty if nothing of the start survives.
+fn warm_start(
+    f: &mut PassiveFactor,
+    g: &[f64],
+    h: &[f64],
+    start: &[bool],
+    usable: &dyn Fn(usize) -> bool,
+    z: &mut [f64],
+    leaving: &mut [bool],
+) {
+    for j in (0..start.len().min(h.len())).filter(|&j| start[j] && usable(j)) {
+        f.push(g, h, j);
     }
-    sol.iter().all(|v| v.is_finite())
+    while !f.order.is_empty() {
+        if !f.solve(z) {
+            f.clear();
+            return;
+        }
+        let mut any = false;
+        for &j in &f.order {
+            if z[j] <= 0.0 {
+                leaving[j] = true;
+                any = true;
+            }
+        }
+        if !any {
+            return;
+        }
+        if !f.remove(g, h, leaving) {
+            // Rounding made a smaller set singular: start cold.
+            f.clear();
+        }
+    }
+}
+
+/// The Cholesky factor L·Lᵀ = G_PP of the passive set P, kept across the active
+/// set's steps (Lawson & Hanson's updated factorisation, ch. 24, in the Cholesky
+/// form on the normal equations). A coefficient entering P appends a row to L
+/// (forward substitution against the rows before it, O(|P|²) instead of a fresh
+/// O(|P|³) factorisation); coefficients leaving P truncate L at the first of them
+/// and append the rest again, since a row depends only on the coefficients that
+/// entered before it. So L is always the factor of G_PP with P in entry order, bit
+/// for bit as [`PassiveFactor::push`] builds it from nothing, with no allocation
+/// after [`PassiveFactor::new`]. y = L⁻¹·h_P is kept alongside (its r-th entry
+/// depends on rows ≤ r alike), so a solve is one back substitution.
+struct PassiveFactor {
+    k: usize,
+    /// P in entry order: row r of L belongs to `order[r]`.
+    order: Vec<usize>,
+    passive: Vec<bool>,
+    /// L by rows: row r in `l[r·k .. r·k + r + 1]`.
+    l: Vec<f64>,
+    y: Vec<f64>,
+    /// Work: the coefficients to append again after a removal, the solution on P.
+    again: Vec<usize>,
+    s: Vec<f64>,
+}
+
+impl PassiveFactor {
+    fn new(k: usize) -> PassiveFactor {
+        PassiveFactor {
+            k,
+            order: Vec::with_capacity(k),
+            passive: vec![false; k],
+            l: vec![0.0; k * k],
+            y: Vec::with_capacity(k),
+            again: Vec::with_capacity(k),
+            s: vec![0.0; k],
+        }
+    }
+
+    fn clear(&mut self) {
+        for &j in &self.order {
+            self.passive[j] = false;
+        }
+        self.order.clear();
+        self.y.clear();
+    }
+
+    /// Append coefficient t to P (G column-major k × k): the new row
+    /// ℓ = L⁻¹·G_P,t, pivot √(G_tt − ℓ·ℓ), and y_t = (h_t − ℓ·y)/pivot. False (and P
+    /// unchanged) when the pivot is not positive: G_PP with t is not positive
+    /// definite in rounding (t's column depends on P's).
+    fn push(&mut self, g: &[f64], h: &[f64], t: usize) -> bool {
+        let (k, r) = (self.k, self.order.len());
+        let (rows, row) = self.l.split_at_mut(r * k);
+        let row = &mut row[..=r];
+        for c in 0..r {
+            let lc = &rows[c * k..c * k + c + 1];
+            row[c] = (g[t * k + self.order[c]] - dot(&row[..c], &lc[..c])) / lc[c];
+        }
+        let pivot = g[t * k + t] - dot(&row[..r], &row[..r]);
+        if !(pivot > 0.0 && pivot.is_finite()) {
+            return false;
+        }
+        row[r] = pivot.sqrt();
+        self.y.push((h[t] - dot(&row[..r], &self.y)) / row[r]);
+        self.order.push(t);
+        self.passive[t] = true;
+        true
+    }
+
+    /// Take the coefficients marked in `leaving` out of P (and clear the marks):
+    /// truncate at the first, append the others after it again. False if an
+    /// append failed (rounding; P then holds the coefficients before it).
+    fn remove(&mut self, g: &[f64], h: &[f64], leaving: &mut [bool]) -> bool {
+        let Some(first) = self.order.iter().position(|&j| leaving[j]) else {
+            return true;
+        };
+        let mut again = std::mem::take(&mut self.again);
+        again.clear();
+        again.extend(self.order[first..].iter().filter(|&&j| !leaving[j]));
+        for &j in &self.order[first..] {
+            self.passive[j] = false;
+            leaving[j] = false;
+        }
+        self.order.truncate(first);
+        self.y.truncate(first);
+        let ok = again.iter().all(|&j| self.push(g, h, j));
+        self.again = again;
+        ok
+    }
+
+    /// z_P = L⁻ᵀ·y (back substitution), z = 0 off P. False if z is not finite.
+    fn solve(&mut self, z: &mut [f64]) -> bool {
+        let (k, m) = (self.k, self.order.len());
+        let s = &mut self.s[..m];
+        for r in (0..m).rev() {
+            let below: f64 = (r + 1..m).map(|q| self.l[q * k + r] * s[q]).sum();
+            s[r] = (self.y[r] - below) / self.l[r * k + r];
+        }
+        z.fill(0.0);
+        for (&j, &v) in self.order.iter().zip(s.iter()) {
+            z[j] = v;
+        }
+        s.iter().all(|v| v.is_finite())
+    }
 }
 
 #[cfg(test)]
@@ -334,5 +480,159 @@ mod tests {
     fn refuses_what_is_not_finite() {
         let a = DMatrix::from_element(3, 2, f64::NAN);
         assert!(nnls(&a, &DVector::zeros(3), None).is_err());
+        // One infinite or NaN entry anywhere, in A or in b.
+        let (a, b) = prony(20, 5);
+        for (i, j, v) in [
+            (3, 2, f64::INFINITY),
+            (0, 0, f64::NEG_INFINITY),
+            (7, 4, f64::NAN),
+        ] {
+            let mut bad = a.clone();
+            bad[(i, j)] = v;
+            assert!(nnls(&bad, &b, None).is_err(), "A[{i},{j}] = {v}");
+            let mut bad = b.clone();
+            bad[i] = v;
+            assert!(nnls(&a, &bad, None).is_err(), "b[{i}] = {v}");
+        }
+    }
+
+    /// A random problem of n rows and k columns, scaled normal equations.
+    fn random_normal(
+        rng: &mut rand_chacha::ChaCha8Rng,
+        n: usize,
+        k: usize,
+    ) -> (DMatrix<f64>, DVector<f64>, DMatrix<f64>, DVector<f64>) {
+        use rand::Rng;
+        let a = DMatrix::from_fn(n, k, |_, _| rng.gen_range(-1.0..1.0));
+        let b = DVector::from_fn(n, |_, _| rng.gen_range(-1.0..1.0));
+        let (g, h) = (a.tr_mul(&a), a.tr_mul(&b));
+        (a, b, g, h)
+    }
+
+    /// The kept factor after appends and removals in any order is the fresh one:
+    /// bit for bit the factor built from nothing in the same entry order (what the
+    /// type promises), and nalgebra's Cholesky factor of G_PP in that order to
+    /// 10⁻¹² (well-conditioned random G, entries O(1): rounding of a 12 × 12
+    /// factorisation), with its solution of G_PP·z = h_P to 10⁻¹⁰.
+    #[test]
+    fn kept_factor_is_the_fresh_factor() {
+        use rand::seq::SliceRandom;
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        for case in 0..100 {
+            let k = rng.gen_range(1..13);
+            let (_, _, g, h) = random_normal(&mut rng, 30, k);
+            let (gs, hs) = (g.as_slice(), h.as_slice());
+            let mut kept = PassiveFactor::new(k);
+            let mut leaving = vec![false; k];
+            let mut entry: Vec<usize> = (0..k).collect();
+            for _ in 0..4 {
+                entry.shuffle(&mut rng);
+                for &j in &entry {
+                    if !kept.passive[j] && rng.gen_bool(0.7) {
+                        assert!(kept.push(gs, hs, j), "case {case}");
+                    }
+                }
+                for &j in &kept.order {
+                    leaving[j] = rng.gen_bool(0.3);
+                }
+                assert!(kept.remove(gs, hs, &mut leaving), "case {case}");
+                assert!(leaving.iter().all(|&l| !l));
+                let mut fresh = PassiveFactor::new(k);
+                for &j in &kept.order {
+                    assert!(fresh.push(gs, hs, j));
+                }
+                let m = kept.order.len();
+                for r in 0..m {
+                    for c in 0..=r {
+                        assert_eq!(kept.l[r * k + c].to_bits(), fresh.l[r * k + c].to_bits());
+                    }
+                }
+                let p = kept.order.clone();
+                let gp = DMatrix::from_fn(m, m, |r, c| g[(p[r], p[c])]);
+                let Some(ch) = gp.clone().cholesky() else {
+                    panic!("case {case}: random G_PP not positive definite");
+                };
+                for r in 0..m {
+                    for c in 0..=r {
+                        let e = (kept.l[r * k + c] - ch.l()[(r, c)]).abs();
+                        assert!(e <= 1e-12 * gp.amax(), "case {case}: L[{r},{c}] off by {e}");
+                    }
+                }
+                let mut z = vec![0.0; k];
+                assert!(kept.solve(&mut z));
+                let want = ch.solve(&DVector::from_fn(m, |r, _| h[p[r]]));
+                for (r, &j) in p.iter().enumerate() {
+                    assert!((z[j] - want[r]).abs() <= 1e-10 * want.amax().max(1.0));
+                }
+                assert!((0..k).all(|j| kept.passive[j] || z[j] == 0.0));
+            }
+        }
+    }
+
+    /// Degenerate columns: a repeated column, a zero column and a column that is the
+    /// sum of two others. The factor refuses a column that depends on P's (pivot not
+    /// positive) and leaves P as it was; the solve ends at a point that meets KKT to
+    /// 10⁻⁸, the zero column's coefficient at 0, and as low as Clarabel's cost.
+    #[test]
+    fn degenerate_columns() {
+        let (a0, b) = prony(60, 5);
+        let mut a = DMatrix::zeros(60, 8);
+        for j in 0..5 {
+            a.set_column(j, &a0.column(j));
+        }
+        a.set_column(5, &a0.column(2)); // a repeat of column 2
+        a.set_column(7, &(a0.column(1) + a0.column(3))); // column 6 stays zero
+        let x = nnls(&a, &b, None).unwrap().x;
+        assert!(kkt(&a, &b, &x) < 1e-8, "KKT {}", kkt(&a, &b, &x));
+        assert_eq!(x[6], 0.0);
+        let qp = constrained_least_squares(&a, &b, &DMatrix::identity(8, 8)).unwrap();
+        let cost = |x: &DVector<f64>| (&a * x - &b).norm_squared();
+        assert!(cost(&x) <= cost(&qp.x.map(|v| v.max(0.0))) * (1.0 + 1e-9));
+        // The factor: 2 then its repeat 5, and 1, 3 then their sum 7.
+        let g = a.tr_mul(&a);
+        let h = a.tr_mul(&b);
+        let mut f = PassiveFactor::new(8);
+        assert!(f.push(g.as_slice(), h.as_slice(), 2));
+        assert!(!f.push(g.as_slice(), h.as_slice(), 5));
+        assert_eq!((f.order.clone(), f.passive[5]), (vec![2], false));
+        // An exact dependence up to rounding: the pivot is 0 or a rounding residue
+        // of the column's squared norm, never a number the solve can use.
+        let mut f = PassiveFactor::new(8);
+        for j in [1, 3] {
+            assert!(f.push(g.as_slice(), h.as_slice(), j));
+        }
+        if f.push(g.as_slice(), h.as_slice(), 7) {
+            let pivot = f.l[2 * 8 + 2].powi(2);
+            assert!(pivot <= 1e-12 * g[(7, 7)], "pivot {pivot}");
+        }
+    }
+
+    /// A warm start from any subset, right or wrong, ends at the cold start's
+    /// solution (the problem is strictly convex: one minimiser) to 10⁻⁹ of its
+    /// largest entry, with the same positive set, and a start from the answer takes
+    /// no step.
+    #[test]
+    fn warm_start_is_cold_start() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        for case in 0..300 {
+            let (n, k) = (rng.gen_range(15..40), rng.gen_range(1..14));
+            let (a, b, _, _) = random_normal(&mut rng, n, k);
+            let cold = nnls(&a, &b, None).unwrap();
+            let start: Vec<bool> = (0..k).map(|_| rng.gen_bool(0.5)).collect();
+            let warm = nnls(&a, &b, Some(&start)).unwrap();
+            let scale = cold.x.amax().max(f64::MIN_POSITIVE);
+            assert!(
+                (&warm.x - &cold.x).amax() <= 1e-9 * scale,
+                "case {case}: {} vs {}",
+                warm.x,
+                cold.x
+            );
+            let positive = |x: &DVector<f64>| x.iter().map(|&v| v > 0.0).collect::<Vec<_>>();
+            assert_eq!(positive(&warm.x), positive(&cold.x), "case {case}");
+            let exact = nnls(&a, &b, Some(&positive(&cold.x))).unwrap();
+            assert_eq!(exact.iterations, 0, "case {case}");
+        }
     }
 }

@@ -4,11 +4,13 @@
 //!
 //! The passive set P holds the free coefficients. Each outer step moves into P the
 //! coefficient with the largest gradient w = h − G·x (the most negative
-//! multiplier), then solves G_PP·z = h_P (Cholesky); while some z ≤ 0 it steps from
-//! x towards z until the first coefficient reaches zero and drops it. It ends when
-//! every coefficient outside P has w ≤ tol: the KKT conditions x ≥ 0, w ≤ 0 off P,
-//! w = 0 on P hold. A start (warm start) seeds P with the coefficients a previous,
-//! similar problem left positive.
+//! multiplier), then solves G_PP·z = h_P (a Cholesky factor of G_PP kept across the
+//! steps: a row appended when a coefficient enters, Givens rotations when one
+//! leaves); while some z ≤ 0 it steps from x towards z until the first coefficient
+//! reaches zero and drops it. It ends when every coefficient outside P has
+//! w ≤ tol: the KKT conditions x ≥ 0, w ≤ 0 off P, w = 0 on P hold. A start (warm
+//! start) seeds P with the coefficients a previous, similar problem left positive,
+//! less those whose solution on it is not positive.
 //!
 //! No crate of the Rust ecosystem offers a maintained NNLS (the search found only
 //! R, Python and JavaScript packages); Clarabel solves the same problem as a QP and

@@ -37,8 +37,8 @@ pub fn nnls(
 ) -> Result<NnlsSolution, String> {
     let k = a.ncols();
     // A value of A that is not finite makes its column's squared norm G_jj infinite
-    // or NaN, which [`nnls_normal`] refuses: only b is checked here (an infinite bᵢ
-    // could meet zeros only, and 0·∞ is NaN, but with no column there is no G).
+    // or NaN (squares cannot cancel), which [`nnls_normal`] refuses: only b is
+    // checked here.
     if !b.iter().all(|v| v.is_finite()) {
         return Err("the problem holds a value that is not finite".into());
     }

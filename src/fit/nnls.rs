@@ -4,11 +4,13 @@
 //!
 //! The passive set P holds the free coefficients. Each outer step moves into P the
 //! coefficient with the largest gradient w = h − G·x (the most negative
-//! multiplier), then solves G_PP·z = h_P (Cholesky); while some z ≤ 0 it steps from
-//! x towards z until the first coefficient reaches zero and drops it. It ends when
-//! every coefficient outside P has w ≤ tol: the KKT conditions x ≥ 0, w ≤ 0 off P,
-//! w = 0 on P hold. A start (warm start) seeds P with the coefficients a previous,
-//! similar problem left positive.
+//! multiplier), then solves G_PP·z = h_P (a Cholesky factor of G_PP kept across the
+//! steps: a row appended when a coefficient enters, Givens rotations when one
+//! leaves); while some z ≤ 0 it steps from x towards z until the first coefficient
+//! reaches zero and drops it. It ends when every coefficient outside P has
+//! w ≤ tol: the KKT conditions x ≥ 0, w ≤ 0 off P, w = 0 on P hold. A start (warm
+//! start) seeds P with the coefficients a previous, similar problem left positive,
+//! less those whose solution on it is not positive.
 //!
 //! No crate of the Rust ecosystem offers a maintained NNLS (the search found only
 //! R, Python and JavaScript packages); Clarabel solves the same problem as a QP and
@@ -34,19 +36,14 @@ pub fn nnls(
     start: Option<&[bool]>,
 ) -> Result<NnlsSolution, String> {
     let k = a.ncols();
-    if !(a.iter().all(|v| v.is_finite()) && b.iter().all(|v| v.is_finite())) {
+    // A value of A that is not finite makes its column's squared norm G_jj infinite
+    // or NaN (squares cannot cancel), which [`nnls_normal`] refuses: only b is
+    // checked here.
+    if !b.iter().all(|v| v.is_finite()) {
         return Err("the problem holds a value that is not finite".into());
     }
     let col = |j: usize| &a.as_slice()[j * a.nrows()..(j + 1) * a.nrows()];
-    // AᵀA from the upper triangle (contiguous column dot products), Aᵀb.
-    let mut g = DMatrix::zeros(k, k);
-    for j in 0..k {
-        for i in 0..=j {
-            let v = dot(col(i), col(j));
-            g[(i, j)] = v;
-            g[(j, i)] = v;
-        }
-    }
+    let g = gram(a);
     let h = DVector::from_fn(k, |i, _| dot(col(i), b.as_slice()));
     nnls_normal(&g, &h, start)
 }
@@ -62,11 +59,17 @@ pub fn nnls_normal(
     start: Option<&[bool]>,
 ) -> Result<NnlsSolution, String> {
     let k = h.len();
-    if !(g.iter().all(|v| v.is_finite()) && h.iter().all(|v| v.is_finite())) {
+    let finite = |v: &[f64]| v.iter().all(|v| v.is_finite());
+    if !(finite(g.as_slice()) && finite(h.as_slice())) {
         return Err("the problem holds a value that is not finite".into());
     }
     let d: Vec<f64> = (0..k).map(|j| unit_scale(g[(j, j)])).collect();
-    let gs = DMatrix::from_fn(k, k, |i, j| g[(i, j)] * d[i] * d[j]);
+    let mut gs = g.clone_owned();
+    for (gj, dj) in gs.as_mut_slice().chunks_exact_mut(k.max(1)).zip(&d) {
+        for (v, di) in gj.iter_mut().zip(&d) {
+            *v = *v * di * dj;
+        }
+    }
     let hs = DVector::from_fn(k, |i, _| h[i] * d[i]);
     let x = solve_normal(&gs, &hs, start.unwrap_or(&vec![false; k]), &d)?;
     Ok(NnlsSolution {
@@ -128,8 +131,89 @@ fn dot_lanes(a: &[f64], b: &[f64]) -> f64 {
 /// Partial sums of [`dot`]: two AVX registers of four.
 const LANES: usize = 8;
 
+/// AᵀA, each entry [`dot`] of its two columns bit for bit, taken a 2 × 2 block of
+/// columns at a time ([`dot_2x2`]: four products from one read of four columns,
+/// where four [`dot`]s read eight); the last column of an odd count by [`dot`].
+/// Compiled for AVX2 where the processor has it, as [`dot`] is.
+fn gram(a: &DMatrix<f64>) -> DMatrix<f64> {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor has AVX2 (detected on the line above).
+        return unsafe { gram_avx2(a) };
+    }
+    gram_lanes(a)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn gram_avx2(a: &DMatrix<f64>) -> DMatrix<f64> {
+    gram_lanes(a)
+}
+
+/// The arithmetic of [`gram`].
+#[inline(always)]
+fn gram_lanes(a: &DMatrix<f64>) -> DMatrix<f64> {
+    let (m, k) = a.shape();
+    let col = |j: usize| &a.as_slice()[j * m..(j + 1) * m];
+    let mut g = DMatrix::zeros(k, k);
+    let mut set = |i: usize, j: usize, v: f64| {
+        g[(i, j)] = v;
+        g[(j, i)] = v;
+    };
+    for j in (0..k - k % 2).step_by(2) {
+        for i in (0..=j).step_by(2) {
+            let v = dot_2x2([col(i), col(i + 1)], [col(j), col(j + 1)]);
+            set(i, j, v[0]);
+            set(i, j + 1, v[1]);
+            set(i + 1, j, v[2]);
+            set(i + 1, j + 1, v[3]);
+        }
+    }
+    if k % 2 == 1 {
+        for i in 0..k {
+            set(i, k - 1, dot_lanes(col(i), col(k - 1)));
+        }
+    }
+    g
+}
+
+/// [a₀·b₀, a₀·b₁, a₁·b₀, a₁·b₁], each by [`dot`]'s arithmetic (the same partial
+/// sums in the same order, so the same bits) in one pass over the four columns.
+#[inline(always)]
+fn dot_2x2(a: [&[f64]; 2], b: [&[f64]; 2]) -> [f64; 4] {
+    fn chunks(c: &[f64]) -> std::slice::ChunksExact<'_, f64> {
+        c.chunks_exact(LANES)
+    }
+    let pairs = [(a[0], b[0]), (a[0], b[1]), (a[1], b[0]), (a[1], b[1])];
+    let mut acc = [[0.0; LANES]; 4];
+    for (((x0, x1), y0), y1) in chunks(a[0])
+        .zip(chunks(a[1]))
+        .zip(chunks(b[0]))
+        .zip(chunks(b[1]))
+    {
+        for l in 0..LANES {
+            acc[0][l] += x0[l] * y0[l];
+            acc[1][l] += x0[l] * y1[l];
+            acc[2][l] += x1[l] * y0[l];
+            acc[3][l] += x1[l] * y1[l];
+        }
+    }
+    std::array::from_fn(|p| {
+        let (x, y) = pairs[p];
+        let tail: f64 = chunks(x)
+            .remainder()
+            .iter()
+            .zip(chunks(y).remainder())
+            .map(|(x, y)| x * y)
+            .sum();
+        acc[p].iter().sum::<f64>() + tail
+    })
+}
+
 /// Lawson–Hanson on the scaled normal equations (module notes). Returns the scaled
-/// solution and the outer iterations.
+/// solution and the outer iterations. The work space is allocated once here: the
+/// factor of G_PP is kept across the steps ([`PassiveFactor`]), and w = h − G·x
+/// takes only P's columns of G (x is zero off P).
 fn solve_normal(
     g: &DMatrix<f64>,
     h: &DVector<f64>,
@@ -137,80 +221,260 @@ fn solve_normal(
     d: &[f64],
 ) -> Result<(Vec<f64>, usize), String> {
     let k = h.len();
+    let (g, h) = (g.as_slice(), h.as_slice());
     // Gradient tolerance: rounding of the normal equations, relative to ‖h‖∞.
-    let tol = 1e-10 * h.amax().max(f64::MIN_POSITIVE);
+    let tol = 1e-10
+        * h.iter()
+            .fold(0.0, |m: f64, v| m.max(v.abs()))
+            .max(f64::MIN_POSITIVE);
     let usable = |j: usize| d[j] > 0.0;
-    let mut passive: Vec<bool> = (0..k)
-        .map(|j| start.get(j) == Some(&true) && usable(j))
-        .collect();
-    let mut x = DVector::zeros(k);
+    let mut f = PassiveFactor::new(k);
+    let mut x = vec![0.0; k];
     let mut z = vec![0.0; k];
-    let mut w = DVector::zeros(k);
+    let mut w = vec![0.0; k];
+    let mut leaving = vec![false; k];
+    warm_start(&mut f, g, h, start, &usable, &mut z, &mut leaving);
+    for &j in &f.order {
+        x[j] = z[j];
+    }
     let mut iterations = 0;
-    // A warm start is made feasible by the inner loop before the first addition.
-    let mut add_next = !passive.iter().any(|&p| p);
     loop {
-        if add_next {
-            // w = h − G·x, over the coefficients outside P.
-            w.copy_from(h);
-            w.gemv(-1.0, g, &x, 1.0);
-            let best = (0..k)
-                .filter(|&j| !passive[j] && usable(j))
-                .map(|j| (j, w[j]))
-                .filter(|&(_, w)| w > tol)
-                .max_by(|a, b| a.1.total_cmp(&b.1));
-            let Some((t, _)) = best else {
-                return Ok((x.iter().copied().collect(), iterations));
-            };
-            iterations += 1;
-            if iterations > 3 * k.max(1) {
-                return Err(format!("no convergence in {} iterations", 3 * k));
+        // w = h − G·x: the columns of P only.
+        w.copy_from_slice(h);
+        for &j in &f.order {
+            for (wi, gi) in w.iter_mut().zip(&g[j * k..(j + 1) * k]) {
+                *wi -= gi * x[j];
             }
-            passive[t] = true;
         }
-        add_next = true;
+        let best = (0..k)
+            .filter(|&j| !f.passive[j] && usable(j))
+            .map(|j| (j, w[j]))
+            .filter(|&(_, w)| w > tol)
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        let Some((t, _)) = best else {
+            return Ok((x, iterations));
+        };
+        iterations += 1;
+        if iterations > 3 * k.max(1) {
+            return Err(format!("no convergence in {} iterations", 3 * k));
+        }
+        if !f.push(g, h, t) {
+            return Err("the normal equations on the free set are singular".into());
+        }
         // Inner loop: keep the solution on P feasible.
         loop {
-            if !solve_passive(g, h, &passive, &mut z) {
+            if !f.solve(&mut z) {
                 return Err("the normal equations on the free set are singular".into());
             }
-            if (0..k).all(|j| !passive[j] || z[j] > 0.0) {
-                x.copy_from_slice(&z);
+            if f.order.iter().all(|&j| z[j] > 0.0) {
+                for &j in &f.order {
+                    x[j] = z[j];
+                }
                 break;
             }
-            let alpha = (0..k)
-                .filter(|&j| passive[j] && z[j] <= 0.0)
-                .map(|j| x[j] / (x[j] - z[j]))
+            let alpha = f
+                .order
+                .iter()
+                .filter(|&&j| z[j] <= 0.0)
+                .map(|&j| x[j] / (x[j] - z[j]))
                 .fold(1.0, f64::min);
-            for j in 0..k {
+            for &j in &f.order {
                 x[j] += alpha * (z[j] - x[j]);
-                if passive[j] && (x[j] <= 0.0 || (z[j] <= 0.0 && x[j] <= 1e-15)) {
-                    passive[j] = false;
+                if x[j] <= 0.0 || (z[j] <= 0.0 && x[j] <= 1e-15) {
+                    leaving[j] = true;
                     x[j] = 0.0;
                 }
             }
-            if !passive.iter().any(|&p| p) {
+            f.remove(&mut leaving);
+            if f.order.is_empty() {
                 break;
             }
         }
     }
 }
 
-/// z_P = G_PP⁻¹·h_P (Cholesky), z = 0 off P. False if G_PP is not positive definite.
-fn solve_passive(g: &DMatrix<f64>, h: &DVector<f64>, passive: &[bool], z: &mut [f64]) -> bool {
-    let idx: Vec<usize> = (0..passive.len()).filter(|&j| passive[j]).collect();
-    let m = idx.len();
-    let gp = DMatrix::from_fn(m, m, |r, c| g[(idx[r], idx[c])]);
-    let hp = DVector::from_fn(m, |r, _| h[idx[r]]);
-    let Some(ch) = gp.cholesky() else {
-        return false;
-    };
-    let sol = ch.solve(&hp);
-    z.fill(0.0);
-    for (r, &j) in idx.iter().enumerate() {
-        z[j] = sol[r];
+/// Seed P with the start's usable coefficients (a coefficient that would make G_PP
+/// singular is left out: the start is only a hint), then drop every coefficient
+/// whose solution on P is not positive and solve again, until it is: a feasible
+/// point (the least-squares solution on P, in `z`) from which the steps go on as
+/// from the cold start x = 0. Leaves P empty if nothing of the start survives.
+fn warm_start(
+    f: &mut PassiveFactor,
+    g: &[f64],
+    h: &[f64],
+    start: &[bool],
+    usable: &dyn Fn(usize) -> bool,
+    z: &mut [f64],
+    leaving: &mut [bool],
+) {
+    for j in (0..start.len().min(h.len())).filter(|&j| start[j] && usable(j)) {
+        f.push(g, h, j);
     }
-    sol.iter().all(|v| v.is_finite())
+    while !f.order.is_empty() {
+        if !f.solve(z) {
+            f.clear();
+            return;
+        }
+        let mut any = false;
+        for &j in &f.order {
+            if z[j] <= 0.0 {
+                leaving[j] = true;
+                any = true;
+            }
+        }
+        if !any {
+            return;
+        }
+        f.remove(leaving);
+    }
+}
+
+/// The Cholesky factor L·Lᵀ = G_PP of the passive set P, kept across the active
+/// set's steps (Lawson & Hanson update their QR factors the same way; here the
+/// factor of the normal equations). A coefficient entering P appends a row to L
+/// (forward substitution against the rows before it, O(|P|²) instead of a fresh
+/// O(|P|³) factorisation: the row is the one a fresh factorisation with P in entry
+/// order would compute, bit for bit); a coefficient leaving P deletes its row and
+/// rotates the factor back to triangular form ([`PassiveFactor::delete`]). No
+/// allocation after [`PassiveFactor::new`]. y = L⁻¹·h_P is kept alongside, so a
+/// solve is one back substitution.
+struct PassiveFactor {
+    k: usize,
+    /// P in entry order: row r of L belongs to `order[r]`.
+    order: Vec<usize>,
+    passive: Vec<bool>,
+    /// L by rows, packed: row r in `l[r(r+1)/2 ..][..r + 1]`.
+    l: Vec<f64>,
+    y: Vec<f64>,
+    /// Work: the solution on P.
+    s: Vec<f64>,
+}
+
+/// Start of row r of a packed lower triangle.
+fn row_start(r: usize) -> usize {
+    r * (r + 1) / 2
+}
+
+/// Σ aᵢ·bᵢ in order, for the factor's short rows (at most |P| entries; [`dot`]'s
+/// lanes and dispatch cost more than they save there).
+fn short_dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+impl PassiveFactor {
+    fn new(k: usize) -> PassiveFactor {
+        PassiveFactor {
+            k,
+            order: Vec::with_capacity(k),
+            passive: vec![false; k],
+            l: Vec::with_capacity(row_start(k)),
+            y: Vec::with_capacity(k),
+            s: vec![0.0; k],
+        }
+    }
+
+    fn clear(&mut self) {
+        for &j in &self.order {
+            self.passive[j] = false;
+        }
+        self.order.clear();
+        self.y.clear();
+        self.l.clear();
+    }
+
+    /// Append coefficient t to P (G column-major k × k): the new row
+    /// ℓ = L⁻¹·G_P,t, pivot √(G_tt − ℓ·ℓ), and y_t = (h_t − ℓ·y)/pivot. False (and P
+    /// unchanged) when the pivot is not positive: G_PP with t is not positive
+    /// definite in rounding (t's column depends on P's).
+    fn push(&mut self, g: &[f64], h: &[f64], t: usize) -> bool {
+        let (k, r) = (self.k, self.order.len());
+        let gt = &g[t * k..(t + 1) * k];
+        for c in 0..r {
+            let (rows, row) = self.l.split_at(row_start(r));
+            let lc = &rows[row_start(c)..row_start(c + 1)];
+            let v = (gt[self.order[c]] - short_dot(&row[..c], &lc[..c])) / lc[c];
+            self.l.push(v);
+        }
+        let row = &self.l[row_start(r)..];
+        let pivot = gt[t] - short_dot(row, row);
+        if !(pivot > 0.0 && pivot.is_finite()) {
+            self.l.truncate(row_start(r));
+            return false;
+        }
+        let d = pivot.sqrt();
+        self.y.push((h[t] - short_dot(row, &self.y)) / d);
+        self.l.push(d);
+        self.order.push(t);
+        self.passive[t] = true;
+        true
+    }
+
+    /// Take the coefficients marked in `leaving` out of P (and clear the marks),
+    /// each by [`PassiveFactor::delete`].
+    fn remove(&mut self, leaving: &mut [bool]) {
+        let mut r = 0;
+        while r < self.order.len() {
+            let j = self.order[r];
+            if leaving[j] {
+                leaving[j] = false;
+                self.delete(r);
+            } else {
+                r += 1;
+            }
+        }
+    }
+
+    /// Take row and column r out of G_PP's factor: L without row r is lower
+    /// triangular but for one entry right of the diagonal in each later row; Givens
+    /// rotations of the column pairs (c, c + 1), c = r … |P| − 2, fold each into its
+    /// diagonal (the rotation that zeroes row c + 1's entry in column c + 1), which
+    /// leaves the last column zero (Golub & Van Loan, *Matrix Computations*, 4th
+    /// ed., §6.5, deleting a column of a QR factorisation: Lᵀ is that R). The
+    /// product L·Lᵀ keeps its value since the rotations are orthogonal; L·y = h_P
+    /// keeps holding with y rotated alike. O((|P| − r)²) instead of a factorisation.
+    fn delete(&mut self, r: usize) {
+        let m = self.order.len();
+        for c in r..m - 1 {
+            let d = row_start(c + 1);
+            let (a, b) = (self.l[d + c], self.l[d + c + 1]);
+            let rho = a.hypot(b);
+            let (cs, sn) = (a / rho, b / rho);
+            self.l[d + c] = rho;
+            self.l[d + c + 1] = 0.0;
+            for q in c + 2..m {
+                let e = row_start(q) + c;
+                let (u, v) = (self.l[e], self.l[e + 1]);
+                self.l[e] = cs * u + sn * v;
+                self.l[e + 1] = cs * v - sn * u;
+            }
+            let (u, v) = (self.y[c], self.y[c + 1]);
+            self.y[c] = cs * u + sn * v;
+            self.y[c + 1] = cs * v - sn * u;
+        }
+        // Row q > r moves up to q − 1, without its last (now zero) entry.
+        for q in r + 1..m {
+            let from = row_start(q);
+            self.l.copy_within(from..from + q, row_start(q - 1));
+        }
+        self.l.truncate(row_start(m - 1));
+        self.y.truncate(m - 1);
+        self.passive[self.order.remove(r)] = false;
+    }
+
+    /// z_P = L⁻ᵀ·y (back substitution) into z's entries on P (the others are not
+    /// written). False if z_P is not finite.
+    fn solve(&mut self, z: &mut [f64]) -> bool {
+        let m = self.order.len();
+        let s = &mut self.s[..m];
+        for r in (0..m).rev() {
+            let below: f64 = (r + 1..m).map(|q| self.l[row_start(q) + r] * s[q]).sum();
+            s[r] = (self.y[r] - below) / self.l[row_start(r) + r];
+        }
+        for (&j, &v) in self.order.iter().zip(s.iter()) {
+            z[j] = v;
+        }
+        s.iter().all(|v| v.is_finite())
+    }
 }
 
 #[cfg(test)]
@@ -330,9 +594,181 @@ mod tests {
         }
     }
 
+    /// [`gram`]'s 2 × 2 blocks give every entry [`dot`]'s bits, at lengths around
+    /// the lane count, even and odd column counts; its AVX2 and baseline builds
+    /// agree bit for bit.
+    #[test]
+    fn gram_is_dot_bit_for_bit() {
+        for m in (0..20).chain(198..203) {
+            for k in 0..6 {
+                let a = DMatrix::from_fn(m, k, |i, j| ((i * 7 + j * 3) as f64 * 0.37).sin());
+                let g = gram(&a);
+                for i in 0..k {
+                    for j in 0..k {
+                        let want = dot(a.column(i).as_slice(), a.column(j).as_slice());
+                        assert_eq!(g[(i, j)].to_bits(), want.to_bits(), "m {m} k {k} ({i},{j})");
+                    }
+                }
+                #[cfg(target_arch = "x86_64")]
+                if std::arch::is_x86_feature_detected!("avx2") {
+                    // SAFETY: AVX2 detected above.
+                    let v = unsafe { gram_avx2(&a) };
+                    assert_eq!(v, gram_lanes(&a), "m {m} k {k}");
+                }
+            }
+        }
+    }
+
     #[test]
     fn refuses_what_is_not_finite() {
         let a = DMatrix::from_element(3, 2, f64::NAN);
         assert!(nnls(&a, &DVector::zeros(3), None).is_err());
+        // One infinite or NaN entry anywhere, in A or in b.
+        let (a, b) = prony(20, 5);
+        for (i, j, v) in [
+            (3, 2, f64::INFINITY),
+            (0, 0, f64::NEG_INFINITY),
+            (7, 4, f64::NAN),
+        ] {
+            let mut bad = a.clone();
+            bad[(i, j)] = v;
+            assert!(nnls(&bad, &b, None).is_err(), "A[{i},{j}] = {v}");
+            let mut bad = b.clone();
+            bad[i] = v;
+            assert!(nnls(&a, &bad, None).is_err(), "b[{i}] = {v}");
+        }
+    }
+
+    /// A random problem of n rows and k columns, scaled normal equations.
+    fn random_normal(
+        rng: &mut rand_chacha::ChaCha8Rng,
+        n: usize,
+        k: usize,
+    ) -> (DMatrix<f64>, DVector<f64>, DMatrix<f64>, DVector<f64>) {
+        use rand::Rng;
+        let a = DMatrix::from_fn(n, k, |_, _| rng.gen_range(-1.0..1.0));
+        let b = DVector::from_fn(n, |_, _| rng.gen_range(-1.0..1.0));
+        let (g, h) = (a.tr_mul(&a), a.tr_mul(&b));
+        (a, b, g, h)
+    }
+
+    /// The kept factor after appends and removals (one or several at a time, at
+    /// any position) is the fresh one: nalgebra's Cholesky factor of G_PP with P in
+    /// entry order to 10⁻¹² of G_PP's largest entry, and its solution of
+    /// G_PP·z = h_P to 10⁻¹⁰ (random G of 30 rows and at most 12 columns, condition
+    /// numbers ≲ 10²: the rounding of a 12 × 12 factorisation and of up to 12 × 4
+    /// deletions' rotations is ≲ 10⁻¹⁴).
+    #[test]
+    fn kept_factor_is_the_fresh_factor() {
+        use rand::seq::SliceRandom;
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        for case in 0..100 {
+            let k = rng.gen_range(1..13);
+            let (_, _, g, h) = random_normal(&mut rng, 30, k);
+            let (gs, hs) = (g.as_slice(), h.as_slice());
+            let mut kept = PassiveFactor::new(k);
+            let mut leaving = vec![false; k];
+            let mut entry: Vec<usize> = (0..k).collect();
+            for _ in 0..4 {
+                entry.shuffle(&mut rng);
+                for &j in &entry {
+                    if !kept.passive[j] && rng.gen_bool(0.7) {
+                        assert!(kept.push(gs, hs, j), "case {case}");
+                    }
+                }
+                for &j in &kept.order {
+                    leaving[j] = rng.gen_bool(0.3);
+                }
+                kept.remove(&mut leaving);
+                assert!(leaving.iter().all(|&l| !l));
+                let m = kept.order.len();
+                assert_eq!((kept.l.len(), kept.y.len()), (row_start(m), m));
+                assert_eq!(kept.passive.iter().filter(|&&p| p).count(), m);
+                let p = kept.order.clone();
+                let gp = DMatrix::from_fn(m, m, |r, c| g[(p[r], p[c])]);
+                let Some(ch) = gp.clone().cholesky() else {
+                    panic!("case {case}: random G_PP not positive definite");
+                };
+                for r in 0..m {
+                    for c in 0..=r {
+                        let e = (kept.l[row_start(r) + c] - ch.l()[(r, c)]).abs();
+                        assert!(e <= 1e-12 * gp.amax(), "case {case}: L[{r},{c}] off by {e}");
+                    }
+                }
+                let mut z = vec![0.0; k];
+                assert!(kept.solve(&mut z));
+                let want = ch.solve(&DVector::from_fn(m, |r, _| h[p[r]]));
+                for (r, &j) in p.iter().enumerate() {
+                    assert!((z[j] - want[r]).abs() <= 1e-10 * want.amax().max(1.0));
+                }
+            }
+        }
+    }
+
+    /// Degenerate columns: a repeated column, a zero column and a column that is the
+    /// sum of two others. The factor refuses a column that depends on P's (pivot not
+    /// positive) and leaves P as it was; the solve ends at a point that meets KKT to
+    /// 10⁻⁸, the zero column's coefficient at 0, and as low as Clarabel's cost.
+    #[test]
+    fn degenerate_columns() {
+        let (a0, b) = prony(60, 5);
+        let mut a = DMatrix::zeros(60, 8);
+        for j in 0..5 {
+            a.set_column(j, &a0.column(j));
+        }
+        a.set_column(5, &a0.column(2)); // a repeat of column 2
+        a.set_column(7, &(a0.column(1) + a0.column(3))); // column 6 stays zero
+        let x = nnls(&a, &b, None).unwrap().x;
+        assert!(kkt(&a, &b, &x) < 1e-8, "KKT {}", kkt(&a, &b, &x));
+        assert_eq!(x[6], 0.0);
+        let qp = constrained_least_squares(&a, &b, &DMatrix::identity(8, 8)).unwrap();
+        let cost = |x: &DVector<f64>| (&a * x - &b).norm_squared();
+        assert!(cost(&x) <= cost(&qp.x.map(|v| v.max(0.0))) * (1.0 + 1e-9));
+        // The factor: 2 then its repeat 5, and 1, 3 then their sum 7.
+        let g = a.tr_mul(&a);
+        let h = a.tr_mul(&b);
+        let mut f = PassiveFactor::new(8);
+        assert!(f.push(g.as_slice(), h.as_slice(), 2));
+        assert!(!f.push(g.as_slice(), h.as_slice(), 5));
+        assert_eq!((f.order.clone(), f.passive[5]), (vec![2], false));
+        // An exact dependence up to rounding: the pivot is 0 or a rounding residue
+        // of the column's squared norm, never a number the solve can use.
+        let mut f = PassiveFactor::new(8);
+        for j in [1, 3] {
+            assert!(f.push(g.as_slice(), h.as_slice(), j));
+        }
+        if f.push(g.as_slice(), h.as_slice(), 7) {
+            let pivot = f.l[row_start(2) + 2].powi(2);
+            assert!(pivot <= 1e-12 * g[(7, 7)], "pivot {pivot}");
+        }
+    }
+
+    /// A warm start from any subset, right or wrong, ends at the cold start's
+    /// solution (the problem is strictly convex: one minimiser) to 10⁻⁹ of its
+    /// largest entry, with the same positive set, and a start from the answer takes
+    /// no step.
+    #[test]
+    fn warm_start_is_cold_start() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        for case in 0..300 {
+            let (n, k) = (rng.gen_range(15..40), rng.gen_range(1..14));
+            let (a, b, _, _) = random_normal(&mut rng, n, k);
+            let cold = nnls(&a, &b, None).unwrap();
+            let start: Vec<bool> = (0..k).map(|_| rng.gen_bool(0.5)).collect();
+            let warm = nnls(&a, &b, Some(&start)).unwrap();
+            let scale = cold.x.amax().max(f64::MIN_POSITIVE);
+            assert!(
+                (&warm.x - &cold.x).amax() <= 1e-9 * scale,
+                "case {case}: {} vs {}",
+                warm.x,
+                cold.x
+            );
+            let positive = |x: &DVector<f64>| x.iter().map(|&v| v > 0.0).collect::<Vec<_>>();
+            assert_eq!(positive(&warm.x), positive(&cold.x), "case {case}");
+            let exact = nnls(&a, &b, Some(&positive(&cold.x))).unwrap();
+            assert_eq!(exact.iterations, 0, "case {case}");
+        }
     }
 }

@@ -143,9 +143,9 @@ fn yeoh_search(c: &mut Criterion) {
     g.finish();
 }
 
-fn varpro_projection(c: &mut Criterion) {
-    // Ogden-3's linear columns (the basis of μ1..μ3) at Treloar's fitted exponents,
-    // 10⁵ points over its modes' stretch ranges.
+/// Ogden-3 at Treloar's fitted parameters (seed form) and 10⁵ points spread over
+/// its three modes' stretch ranges: the model, p, and each point's mode and λ.
+fn ogden3_100k() -> (Box<dyn StrainEnergy>, [f64; 6], Vec<Mode>, Vec<f64>) {
     let model = ModelSpec::new("ogden3", Default::default())
         .build()
         .expect("ogden3");
@@ -156,12 +156,23 @@ fn varpro_projection(c: &mut Criterion) {
         (Mode::Planar, 4.96),
     ];
     let (n, per) = (100_002, 33_334);
+    let modes = (0..n).map(|i| ranges[i / per].0).collect();
+    let stretch = (0..n)
+        .map(|i| 1.0 + (ranges[i / per].1 - 1.0) * (i % per) as f64 / (per - 1) as f64)
+        .collect();
+    (model, p, modes, stretch)
+}
+
+fn varpro_projection(c: &mut Criterion) {
+    // Ogden-3's linear columns (the basis of μ1..μ3) at Treloar's fitted exponents,
+    // 10⁵ points over its modes' stretch ranges.
+    let (model, p, modes, stretch) = ogden3_100k();
+    let n = modes.len();
     let mut row = [0.0; 6];
     let mut a = DMatrix::zeros(n, 3);
     let mut b = DVector::zeros(n);
     for i in 0..n {
-        let (mode, top) = ranges[i / per];
-        let lam = 1.0 + (top - 1.0) * (i % per) as f64 / (per - 1) as f64;
+        let (mode, lam) = (modes[i], stretch[i]);
         model.stress_jacobian(&p, mode, lam, &mut row);
         for j in 0..3 {
             a[(i, j)] = row[2 * j];
@@ -184,20 +195,8 @@ fn ogden_blocks(c: &mut Criterion) {
     // modes' stretch ranges: the block evaluator (vector lanes, ln λ given) against
     // the per-point method (ln λ and the lane arithmetic one point at a time), the
     // same bits (asserted), in the same run.
-    let model = ModelSpec::new("ogden3", Default::default())
-        .build()
-        .expect("ogden3");
-    let p = [7.33e3, -2.157, 3.382e5, 1.918, 3.139, 8.619];
-    let ranges = [
-        (Mode::Uniaxial, 7.61),
-        (Mode::Equibiaxial, 4.44),
-        (Mode::Planar, 4.96),
-    ];
-    let (n, per) = (100_002, 33_334);
-    let modes: Vec<Mode> = (0..n).map(|i| ranges[i / per].0).collect();
-    let stretch: Vec<f64> = (0..n)
-        .map(|i| 1.0 + (ranges[i / per].1 - 1.0) * (i % per) as f64 / (per - 1) as f64)
-        .collect();
+    let (model, p, modes, stretch) = ogden3_100k();
+    let n = modes.len();
     let ln: Vec<f64> = stretch.iter().map(|l| l.ln()).collect();
     let pts = Points::new(&modes, &stretch, &ln).expect("one length");
     let (mut block, mut single) = (vec![0.0; 6 * n], vec![0.0; 6 * n]);

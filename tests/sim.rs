@@ -506,13 +506,16 @@ fn scene_errors_name_the_place_and_the_fix() {
     assert_eq!(o.integrator.status, RunStatus::Completed);
 }
 
-/// Tsitouras 5(4) runs on our explicit driver with the PI step controller: on the
-/// 100 Hz triangle (the seed stack ringing at 1 kHz, ten corners) it rejects
-/// almost no steps (measured 1 in 1262; diffsol's I controller 244 in 1100) and
-/// its samples are within 1e-5 of the stroke of an rtol 1e-11 Dormand–Prince
-/// reference (measured 3.3e-6; diffsol's 1.2e-5).
+/// Our explicit driver's methods on the 100 Hz triangle (the seed stack ringing
+/// at 1 kHz, ten corners) at rtol 1e-6 reject almost no steps, and their samples
+/// (from each one's continuous extension) are within 1e-5 of the stroke of an rtol
+/// 1e-11 Dormand–Prince reference. Tsitouras 5(4) with the PI controller: 1
+/// rejection in 1262 steps (diffsol's I controller 244 in 1100), 3.3e-6 of the
+/// stroke (diffsol's 1.2e-5). Dormand–Prince 8(5,3): 3 in 366, 1.4e-6, under a
+/// third of Tsitouras's steps and fewer right-hand sides (5530 against 7588, the
+/// three of its continuous extension in every step that holds a sample included).
 #[test]
-fn tsitouras_with_pi_control_rejects_few_steps_and_keeps_its_accuracy() {
+fn explicit_methods_reject_few_steps_and_keep_their_accuracy() {
     let s = Scene::read(Path::new("datasets/scenes/stack_triangle_100Hz.toml")).unwrap();
     let run = |m: Method, rtol: f64| {
         let o = RunOptions {
@@ -523,63 +526,29 @@ fn tsitouras_with_pi_control_rejects_few_steps_and_keeps_its_accuracy() {
         simulate(&s, &o).unwrap()
     };
     let reference = run(Method::Dp54, 1e-11);
-    let o = run(Method::Tsit45, 1e-6);
-    let st = o.integrator.stats;
-    assert!(st.rejected * 50 <= st.steps, "{st:?}");
     let lam0 = reference.samples[0].stretch;
     let stroke = reference
         .samples
         .iter()
         .map(|x| (x.stretch - lam0).abs())
         .fold(0.0, f64::max);
-    let err = o
-        .samples
-        .iter()
-        .zip(&reference.samples)
-        .map(|(a, b)| (a.stretch - b.stretch).abs())
-        .fold(0.0, f64::max);
-    assert_eq!(o.samples.len(), reference.samples.len());
-    assert!(err < 1e-5 * stroke, "{err:e} of a stroke {stroke:e}");
-}
-
-/// Dormand–Prince 8(5,3) on the same triangle at the same rtol 1e-6: its samples
-/// come from its 7th-order continuous extension and are within 1e-5 of the stroke
-/// of the rtol 1e-11 reference (measured 1.4e-6 of the stroke, Tsitouras 3.1e-6),
-/// it rejects almost no steps (3 in 366) and takes under a third of Tsitouras's
-/// steps (366 against 1262) and fewer right-hand sides (5530 against 7588, the
-/// three of the continuous extension in every step that holds a sample included).
-#[test]
-fn dop853_takes_a_third_of_the_steps_at_the_same_accuracy() {
-    let s = Scene::read(Path::new("datasets/scenes/stack_triangle_100Hz.toml")).unwrap();
-    let run = |m: Method, rtol: f64| {
-        let o = RunOptions {
-            method: Some(m),
-            rtol: Some(rtol),
-            ..RunOptions::default()
-        };
-        simulate(&s, &o).unwrap()
-    };
-    let reference = run(Method::Dp54, 1e-11);
-    let (o, tsit) = (run(Method::Dop853, 1e-6), run(Method::Tsit45, 1e-6));
-    assert_eq!(o.integrator.method, Method::Dop853);
-    let (st, ts) = (o.integrator.stats, tsit.integrator.stats);
-    assert!(st.rejected * 50 <= st.steps, "{st:?}");
+    let (tsit, dop) = (run(Method::Tsit45, 1e-6), run(Method::Dop853, 1e-6));
+    for o in [&tsit, &dop] {
+        let st = o.integrator.stats;
+        assert!(st.rejected * 50 <= st.steps, "{st:?}");
+        let err = o
+            .samples
+            .iter()
+            .zip(&reference.samples)
+            .map(|(a, b)| (a.stretch - b.stretch).abs())
+            .fold(0.0, f64::max);
+        assert_eq!(o.samples.len(), reference.samples.len());
+        assert!(err < 1e-5 * stroke, "{err:e} of a stroke {stroke:e}");
+    }
+    assert_eq!(dop.integrator.method, Method::Dop853);
+    let (st, ts) = (dop.integrator.stats, tsit.integrator.stats);
     assert!(3 * st.steps < ts.steps, "{st:?} against {ts:?}");
     assert!(st.rhs_evals < ts.rhs_evals, "{st:?} against {ts:?}");
-    let lam0 = reference.samples[0].stretch;
-    let stroke = reference
-        .samples
-        .iter()
-        .map(|x| (x.stretch - lam0).abs())
-        .fold(0.0, f64::max);
-    let err = o
-        .samples
-        .iter()
-        .zip(&reference.samples)
-        .map(|(a, b)| (a.stretch - b.stretch).abs())
-        .fold(0.0, f64::max);
-    assert_eq!(o.samples.len(), reference.samples.len());
-    assert!(err < 1e-5 * stroke, "{err:e} of a stroke {stroke:e}");
 }
 
 /// The PID scene with its gains ×1000 (kp 5e8, ki 1e10: fuzz seed 15) chatters on

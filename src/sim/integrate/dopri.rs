@@ -9,6 +9,8 @@
 //!   diffsol's Tsitouras (an I controller, gain 1/5, growth ≤ 2×) rejected 27 % of
 //!   its steps on the ringing stack (73 k of 276 k; issue 12).
 //!
+//! The same driver steps Dormand–Prince 8(5,3) ([`super::dop853`], [`Scheme`]).
+//!
 //! Between restart times it writes the state at requested sample times from the
 //! dense output, locates the first change of the event function from positive to
 //! non-positive by bisection on the dense output, and allocates nothing per step:

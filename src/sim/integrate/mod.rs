@@ -9,7 +9,9 @@
 //! * Our own explicit 5(4) pairs with a PI step controller ([`dopri`]):
 //!   [`Method::Tsit45`] (Tsitouras 5(4), for lightly damped, oscillatory scenes;
 //!   plain runs) and [`Method::Dp54`] (Dormand–Prince 5(4), kept as an independent
-//!   test oracle and for fixed-step convergence tests).
+//!   test oracle and for fixed-step convergence tests), and on the same driver
+//!   [`Method::Dop853`] (Dormand–Prince 8(5,3), [`dop853`]: long, lightly damped
+//!   ringing at tight tolerances).
 //!
 //! Every method integrates between *restart times* (input kinks: triangle corners,
 //! ramp ends, steps), where the caller may change the state (energy bookkeeping of

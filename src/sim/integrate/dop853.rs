@@ -17,7 +17,7 @@
 // can be checked against it line by line; the compiler rounds each to nearest.
 #![allow(clippy::excessive_precision)]
 
-use super::dopri::Workspace;
+use super::dopri::{stages, Workspace};
 use super::{Left, Stats, System};
 
 /// The stage times c_s (s = 0…15; 12 is the new state, 13…15 the dense output's).
@@ -309,13 +309,7 @@ pub(super) fn step<S: System>(
     stats: &mut Stats,
 ) -> f64 {
     let n = w.n;
-    for s in 1..=LAST {
-        let (done, next) = w.k.split_at_mut(s);
-        let arg = if s < LAST { &mut w.ytmp } else { &mut w.y1 };
-        stage(s, done, y, h, arg);
-        sys.rhs(t + C[s] * h, arg, &mut next[0]);
-    }
-    stats.rhs_evals += LAST;
+    stages(sys, w, t, h, y, |s| C[s], stage, stats);
     w.h_dense = h;
     w.dense_ready = false;
     let (k5, k3) = (stages_of(&E5, &w.k, n), stages_of(&E3, &w.k, n));

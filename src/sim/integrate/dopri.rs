@@ -542,6 +542,31 @@ fn segment<S: System>(
     End::Done
 }
 
+/// Stages 1…last of a step from (t, y) with k[0] = f(t, y): stage s's argument
+/// y + h·Σ_{j<s} a_sj·k_j by `stage(s, k, y, h, out)` into `ytmp`, the last one's
+/// (the new state) into `y1`, and k[s] = f(t + c(s)·h, argument).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(super) fn stages<S: System>(
+    sys: &Left<S>,
+    w: &mut Workspace,
+    t: f64,
+    h: f64,
+    y: &[f64],
+    c: impl Fn(usize) -> f64,
+    stage: impl Fn(usize, &[Vec<f64>], &[f64], f64, &mut [f64]),
+    stats: &mut Stats,
+) {
+    let last = w.scheme.last();
+    for s in 1..=last {
+        let (done, next) = w.k.split_at_mut(s);
+        let arg = if s < last { &mut w.ytmp } else { &mut w.y1 };
+        stage(s, done, y, h, arg);
+        sys.rhs(t + c(s) * h, arg, &mut next[0]);
+    }
+    stats.rhs_evals += last;
+}
+
 /// The dense output of the last step made ready from (t, y), its start: a
 /// 5(4) pair's is written by every step, dop853's on demand ([`dop853::prepare_dense`]).
 fn prepare_dense<S: System>(
@@ -587,13 +612,16 @@ fn pair_step<S: System>(
     let n = w.n;
     // stages 1…5 from y + h·Σ a·k into `ytmp`; row 6 (b) into `y1`, the 5th-order
     // solution, and k[6] = f(t + h, y1)
-    for s in 0..6 {
-        let (done, next) = w.k.split_at_mut(s + 1);
-        let arg = if s < 5 { &mut w.ytmp } else { &mut w.y1 };
-        stage(&p.a[s], s, done, y, h, arg);
-        sys.rhs(t + p.c[s] * h, arg, &mut next[0]);
-    }
-    stats.rhs_evals += 6;
+    stages(
+        sys,
+        w,
+        t,
+        h,
+        y,
+        |s| p.c[s - 1],
+        |s, k, y, h, out| stage(&p.a[s - 1], s - 1, k, y, h, out),
+        stats,
+    );
     let err = error_norm(&p.e, &w.k, h, y, &w.y1, &w.atol, rtol, &mut w.err);
     w.dense[0].copy_from_slice(y);
     w.h_dense = h;

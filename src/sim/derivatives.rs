@@ -564,7 +564,7 @@ impl Plant {
     /// The total derivatives d/dθk of the measured outputs at (t, y), for every θk,
     /// given the state sensitivities `s` (column by column, `s[k·ns + i]` =
     /// ∂yi/∂θk for the leading ns = `s.len()`/nθ states, see
-    /// [`super::integrate::System::sensitive_dim`]) into `out` (nθ entries): dλ/dθk = s0, dL/dθk = L0·s0, and the
+    /// [`super::integrate::System::dynamic_dim`]) into `out` (nθ entries): dλ/dθk = s0, dL/dθk = L0·s0, and the
     /// capacitance and the current (which depends on λ̇, V and the source state) as
     /// ∂out/∂y·s + ∂out/∂θk, by forward evaluation of the same output code that
     /// writes the samples ([`Plant::output`]), lane k seeded along s_k and θk. No

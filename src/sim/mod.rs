@@ -275,7 +275,7 @@ impl Sensitivities {
     /// recorded as the row of sample 0; room for `rows` kept rows.
     fn at_start(p: &Plant, y0: &[f64], rows: usize, with_current: bool) -> Sensitivities {
         let (n, np) = (y0.len(), p.n_theta());
-        let ns = integrate::System::sensitive_dim(p);
+        let ns = integrate::System::dynamic_dim(p);
         let mut s0 = vec![0.0; n * np];
         p.initial_state_sensitivity(&mut s0);
         // row-major n × nθ → column per parameter, the leading ns states

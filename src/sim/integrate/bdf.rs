@@ -102,7 +102,7 @@ struct Bdf {
     n: usize,
     /// Parameters with sensitivities (0 in a plain run).
     np: usize,
-    /// States with sensitivities ([`System::sensitive_dim`]).
+    /// States with sensitivities ([`System::dynamic_dim`]).
     ns: usize,
     /// Length of the propagated vector z = (y, s_1, …, s_np): n + ns·np.
     m: usize,
@@ -694,7 +694,7 @@ pub(super) fn run<S: System>(
 ) -> End {
     let n = y.len();
     let np = if sensitivities { sys.n_params() } else { 0 };
-    let ns = sys.sensitive_dim().min(n);
+    let ns = sys.dynamic_dim().min(n);
     let mut w = Bdf::new(n, ns, np);
     let atol: Vec<f64> = scale.iter().map(|s| o.atol * s).collect();
     // z = (y, s): the sensitivities of the leading ns states start at ∂y0/∂θ

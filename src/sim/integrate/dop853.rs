@@ -347,7 +347,7 @@ pub(super) fn prepare_dense<S: System>(
     let (n, h) = (w.n, w.h_dense);
     for s in LAST + 1..STAGES {
         let (done, next) = w.k.split_at_mut(s);
-        stage(s, done, y, h, &mut w.ytmp);
+        stage(s, done, y, h, &mut w.ytmp[..w.m]);
         sys.rhs(t + C[s] * h, &w.ytmp, &mut next[0]);
     }
     stats.rhs_evals += STAGES - LAST - 1;

@@ -66,6 +66,9 @@ impl Scheme {
 pub(super) struct Workspace {
     scheme: Scheme,
     pub(super) n: usize,
+    /// The leading states a stage's argument needs ([`System::dynamic_dim`]): the
+    /// stages before the last form only these, the new state all `n`.
+    pub(super) m: usize,
     pub(super) k: Vec<Vec<f64>>,
     pub(super) y1: Vec<f64>,
     pub(super) ytmp: Vec<f64>,
@@ -86,12 +89,13 @@ pub(super) struct Workspace {
 }
 
 impl Workspace {
-    fn new(scheme: Scheme, scale: &[f64], atol: f64) -> Self {
+    fn new(scheme: Scheme, scale: &[f64], atol: f64, m: usize) -> Self {
         let n = scale.len();
         let v = || vec![0.0; n];
         Workspace {
             scheme,
             n,
+            m: m.min(n),
             k: (0..scheme.stages()).map(|_| v()).collect(),
             y1: v(),
             ytmp: v(),
@@ -386,7 +390,7 @@ pub(super) fn run<S: System>(
     restart: &mut dyn FnMut(f64, &mut [f64]),
     stats: &mut Stats,
 ) -> End {
-    let mut w = Workspace::new(scheme, &scale[..y.len()], o.atol);
+    let mut w = Workspace::new(scheme, &scale[..y.len()], o.atol, sys.dynamic_dim());
     let mut si = 0;
     for (k, win) in bounds.windows(2).enumerate() {
         let (a, b) = (win[0], win[1]);
@@ -543,8 +547,9 @@ fn segment<S: System>(
 }
 
 /// Stages 1…last of a step from (t, y) with k[0] = f(t, y): stage s's argument
-/// y + h·Σ_{j<s} a_sj·k_j by `stage(s, k, y, h, out)` into `ytmp`, the last one's
-/// (the new state) into `y1`, and k[s] = f(t + c(s)·h, argument).
+/// y + h·Σ_{j<s} a_sj·k_j by `stage(s, k, y, h, out)` into `ytmp` (its leading
+/// `w.m` states: no rate reads the rest), the last one's (the new state, every
+/// state) into `y1`, and k[s] = f(t + c(s)·h, argument).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) fn stages<S: System>(
@@ -560,8 +565,12 @@ pub(super) fn stages<S: System>(
     let last = w.scheme.last();
     for s in 1..=last {
         let (done, next) = w.k.split_at_mut(s);
-        let arg = if s < last { &mut w.ytmp } else { &mut w.y1 };
-        stage(s, done, y, h, arg);
+        let (arg, len) = if s < last {
+            (&mut w.ytmp, w.m)
+        } else {
+            (&mut w.y1, w.n)
+        };
+        stage(s, done, y, h, &mut arg[..len]);
         sys.rhs(t + c(s) * h, arg, &mut next[0]);
     }
     stats.rhs_evals += last;

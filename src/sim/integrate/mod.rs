@@ -50,12 +50,14 @@ pub trait System {
     fn jacobian(&self, t: f64, y: &[f64], jac: &mut [f64]);
     /// Number of parameters θ for forward sensitivities.
     fn n_params(&self) -> usize;
-    /// The leading states whose sensitivities a run needs (the default: all). The
-    /// states after them must feed back into none of these (∂f_i/∂y_j = 0 for
-    /// i < this ≤ j: quadratures of the energy balance), so the sensitivities of
-    /// the leading block are exact without the rest, which an integrator may then
-    /// leave out.
-    fn sensitive_dim(&self) -> usize {
+    /// The leading states the rates read (the default: all). The states after them
+    /// are quadratures (of the energy balance): no rate reads them (∂f_i/∂y_j = 0
+    /// for every i and j ≥ this, and f does not look at them at all). So the
+    /// sensitivities of the leading block are exact without the rest, which an
+    /// integrator may then leave out, and an explicit method forms only the leading
+    /// block of a stage's argument (the rest of the vector it passes to
+    /// [`System::rhs`] holds values that must not matter).
+    fn dynamic_dim(&self) -> usize {
         self.dim()
     }
     /// The dense parameter Jacobian ∂f/∂θ at fixed y, row-major `dim × n_params`;
@@ -277,7 +279,7 @@ pub enum Extra<'a> {
 /// `samples` are output times in (t0, t_end] (sorted); `out(t, y, s)` is called for
 /// each one reached, `step(t, y)` at the end of every accepted step, `s` the sensitivities ∂y/∂θ column by column, of the leading
 /// ns states (`s[j·ns + i]` = ∂yi/∂θj, ns = `s.len()`/nθ: bdf integrates those of
-/// [`System::sensitive_dim`] only, the diffsol methods every state's; empty without
+/// [`System::dynamic_dim`] only, the diffsol methods every state's; empty without
 /// them). At a restart the sensitivities carry on unchanged
 /// (the caller's `restart` may only change states that do not feed back, such as
 /// quadratures, whose sensitivities are then not meaningful). At each interior bound `restart(t, y)` may change the state before the

@@ -375,9 +375,9 @@ pub(super) fn prepare_dense<S: System>(
 /// The continuous extension at θ ∈ [0, 1] into `out` (after [`prepare_dense`]):
 /// y0 + θ(F0 + (1−θ)(F1 + θ(F2 + (1−θ)(F3 + θ(F4 + (1−θ)(F5 + θ·F6)))))).
 pub(super) fn dense_eval(w: &Workspace, theta: f64, out: &mut [f64]) {
-    let t1 = 1.0 - theta;
-    let d = &w.dense;
-    for (i, o) in out.iter_mut().enumerate().take(w.n) {
+    let (t1, n) = (1.0 - theta, w.n);
+    let d: [&[f64]; DENSE] = std::array::from_fn(|r| &w.dense[r][..n]);
+    for (i, o) in out[..n].iter_mut().enumerate() {
         let mut v = d[7][i] * theta;
         v = (v + d[6][i]) * t1;
         v = (v + d[5][i]) * theta;

@@ -348,9 +348,10 @@ fn dense_eval(w: &Workspace, theta: f64, out: &mut [f64]) {
     };
     match &pair.dense {
         Dense::Hairer(_) => {
-            let t1 = 1.0 - theta;
-            for i in 0..w.n {
-                out[i] =
+            let (t1, n) = (1.0 - theta, w.n);
+            let d: [&[f64]; 5] = std::array::from_fn(|r| &d[r][..n]);
+            for (i, o) in out[..n].iter_mut().enumerate() {
+                *o =
                     d[0][i] + theta * (d[1][i] + t1 * (d[2][i] + theta * (d[3][i] + t1 * d[4][i])));
             }
         }

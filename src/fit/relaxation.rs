@@ -2171,6 +2171,56 @@ mod tests {
         assert!((&rj - &r).amax() <= 1e-12 * r.amax().max(1.0));
     }
 
+    /// The joint problem's residuals are the same bits with and without its Jacobian
+    /// (an accepted trial's Jacobian is kept: [`LeastSquares::jacobian_with_trial`]),
+    /// its model stress is the residuals' (wₖ·(model − yₖ) to rounding, 10⁻¹² of the
+    /// peak stress), and its analytic Jacobian is the residuals' derivative: central
+    /// differences (step 10⁻⁶ relative in a modulus, 10⁻⁶ in ln τ; truncation and
+    /// rounding ~10⁻⁹ of the largest entry) at the seed's Table 3.3 constants, 4 terms.
+    #[test]
+    fn joint_problem_has_its_residuals_derivative() {
+        let mut prob = long_curve(200).prob;
+        prob.n_terms = 4;
+        let s = prob.scale;
+        let p: Vec<f64> = [43.3e3, 106.1e3, 45.5e3, 16.1e3, 10.9e3]
+            .iter()
+            .map(|e| e / s)
+            .chain([0.153f64, 0.464, 32.0, 216.0].iter().map(|t| t.ln()))
+            .collect();
+        let m = prob.len();
+        let (mut r, mut r_only, mut j) = (
+            DVector::zeros(m),
+            DVector::zeros(m),
+            DMatrix::zeros(m, p.len()),
+        );
+        assert!(prob.eval(&p, &mut r_only, None));
+        assert!(prob.eval(&p, &mut r, Some(&mut j)));
+        assert_eq!(r, r_only);
+        let mut model = vec![0.0; m];
+        prob.model(&p, &mut model);
+        let peak = prob.y.iter().fold(0.0f64, |a, y| a.max(y.abs()));
+        for k in 0..m {
+            let want = r[k] / prob.w[k] + prob.y[k];
+            assert!((model[k] - want).abs() <= 1e-12 * peak, "point {k}");
+        }
+        for c in 0..p.len() {
+            let h = if c <= 4 { 1e-6 * p[c] } else { 1e-6 };
+            let (mut a, mut b) = (p.clone(), p.clone());
+            a[c] += h;
+            b[c] -= h;
+            let (mut ra, mut rb) = (DVector::zeros(m), DVector::zeros(m));
+            assert!(prob.eval(&a, &mut ra, None) && prob.eval(&b, &mut rb, None));
+            let fd = (ra - rb) / (2.0 * h);
+            let col = j.column(c);
+            assert!(
+                (&col - &fd).amax() <= 1e-7 * col.amax(),
+                "column {c}: {} vs {}",
+                (&col - &fd).amax(),
+                col.amax()
+            );
+        }
+    }
+
     /// The seed's Table 3.3 as a step to strain 0.5, `points` log-spaced over
     /// 0.01–1000 s, 1 % noise, prepared.
     fn long_curve(points: usize) -> Prepared {

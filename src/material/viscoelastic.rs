@@ -757,9 +757,9 @@ pub fn preset(name: &str) -> Result<Preset> {
 mod tests {
     use super::*;
 
-    /// The one-pass kernels of several τ (more than one chunk of them) are each τ's
-    /// own kernel and derivative, bit for bit, on a history with a ramp, a hold and
-    /// an unloading (rates and jumps).
+    /// The one-pass kernels of several τ (every count a pass records, and more than
+    /// one chunk of them) are each τ's own kernel and derivative, bit for bit, on a
+    /// history with a ramp, a hold and an unloading (rates and jumps).
     #[test]
     fn kernels_are_each_taus_kernel_exactly() {
         let times: Vec<f64> = (0..60)
@@ -768,19 +768,23 @@ mod tests {
         let history =
             History::from_knots(vec![(0.0, 0.0), (0.4, 1.5), (3.0, 1.5), (3.5, 0.2)]).unwrap();
         let sched = Schedule::new(&history, &times).unwrap();
-        let taus = [0.03, 0.7, 2.0, 45.0, 1e4, 0.2, 0.9, 3.3, 11.0, 0.05, 600.0];
-        assert!(taus.len() > KERNEL_CHUNK, "the τ cross a chunk boundary");
+        let all = [0.03, 0.7, 2.0, 45.0, 1e4, 0.2, 0.9, 3.3, 11.0, 0.05, 600.0];
+        assert!(all.len() > KERNEL_CHUNK, "the τ cross a chunk boundary");
         let m = times.len();
-        let (mut h, mut dh) = (vec![0.0; m * taus.len()], vec![0.0; m * taus.len()]);
-        sched.kernels(&taus, &mut h, Some(&mut dh));
-        let mut h_only = vec![0.0; m * taus.len()];
-        sched.kernels(&taus, &mut h_only, None);
-        for (i, &tau) in taus.iter().enumerate() {
-            let (mut h1, mut d1) = (vec![0.0; m], vec![0.0; m]);
-            sched.kernel(tau, &mut h1, Some(&mut d1));
-            assert_eq!(h[i * m..(i + 1) * m], h1[..], "τ = {tau}");
-            assert_eq!(dh[i * m..(i + 1) * m], d1[..], "τ = {tau}");
-            assert_eq!(h_only[i * m..(i + 1) * m], h1[..], "τ = {tau}");
+        // Every count of τ a pass records (1 to 8) and past a chunk boundary.
+        for count in 1..=all.len() {
+            let taus = &all[..count];
+            let (mut h, mut dh) = (vec![0.0; m * count], vec![0.0; m * count]);
+            sched.kernels(taus, &mut h, Some(&mut dh));
+            let mut h_only = vec![0.0; m * count];
+            sched.kernels(taus, &mut h_only, None);
+            for (i, &tau) in taus.iter().enumerate() {
+                let (mut h1, mut d1) = (vec![0.0; m], vec![0.0; m]);
+                sched.kernel(tau, &mut h1, Some(&mut d1));
+                assert_eq!(h[i * m..(i + 1) * m], h1[..], "τ = {tau} of {count}");
+                assert_eq!(dh[i * m..(i + 1) * m], d1[..], "τ = {tau} of {count}");
+                assert_eq!(h_only[i * m..(i + 1) * m], h1[..], "τ = {tau} of {count}");
+            }
         }
     }
 

@@ -528,6 +528,7 @@ impl Schedule {
     pub fn kernels(&self, taus: &[f64], h: &mut [f64], mut dh: Option<&mut [f64]>) {
         let m = self.len();
         if m == 0 {
+            // No evaluation time: nothing to record (and no column to split).
             return;
         }
         for (c, chunk) in taus.chunks(KERNEL_CHUNK).enumerate() {

@@ -113,18 +113,25 @@ fn dot_avx2(a: &[f64], b: &[f64]) -> f64 {
 #[inline(always)]
 fn dot_lanes(a: &[f64], b: &[f64]) -> f64 {
     let (ca, cb) = (a.chunks_exact(LANES), b.chunks_exact(LANES));
-    let tail: f64 = ca
-        .remainder()
-        .iter()
-        .zip(cb.remainder())
-        .map(|(x, y)| x * y)
-        .sum();
+    let (ta, tb) = (ca.remainder(), cb.remainder());
     let mut acc = [0.0; LANES];
     for (x, y) in ca.zip(cb) {
         for l in 0..LANES {
             acc[l] += x[l] * y[l];
         }
     }
+    total(&acc, ta, tb)
+}
+
+/// The end of [`dot`]: the partial sums `acc` added in order, plus the products of
+/// the remainders `a`, `b` (the elements past the last whole chunk of [`LANES`]).
+/// Never inlined: the partial sums of [`dot_2x2`]'s four products then stay in
+/// registers of their own, lane by lane (inlined, the compiler packed the four
+/// products' partial sums into shared registers, for this ordered sum, with a
+/// shuffle for every operand of the loop).
+#[inline(never)]
+fn total(acc: &[f64; LANES], a: &[f64], b: &[f64]) -> f64 {
+    let tail: f64 = a.iter().zip(b).map(|(x, y)| x * y).sum();
     acc.iter().sum::<f64>() + tail
 }
 
@@ -200,13 +207,7 @@ fn dot_2x2(a: [&[f64]; 2], b: [&[f64]; 2]) -> [f64; 4] {
     }
     std::array::from_fn(|p| {
         let (x, y) = pairs[p];
-        let tail: f64 = chunks(x)
-            .remainder()
-            .iter()
-            .zip(chunks(y).remainder())
-            .map(|(x, y)| x * y)
-            .sum();
-        acc[p].iter().sum::<f64>() + tail
+        total(&acc[p], chunks(x).remainder(), chunks(y).remainder())
     })
 }
 

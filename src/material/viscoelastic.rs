@@ -527,76 +527,99 @@ impl Schedule {
     /// allocation); more take one pass a chunk.
     pub fn kernels(&self, taus: &[f64], h: &mut [f64], mut dh: Option<&mut [f64]>) {
         let m = self.len();
+        if m == 0 {
+            // No evaluation time: nothing to record (and no column to split).
+            return;
+        }
         for (c, chunk) in taus.chunks(KERNEL_CHUNK).enumerate() {
             let at = c * KERNEL_CHUNK * m;
             let end = at + chunk.len() * m;
-            self.kernel_chunk(
-                chunk,
-                &mut h[at..end],
-                dh.as_deref_mut().map(|d| &mut d[at..end]),
-            );
+            let h = &mut h[at..end];
+            match dh.as_deref_mut() {
+                Some(d) => self.kernel_chunk::<true>(chunk, h, &mut d[at..end]),
+                None => self.kernel_chunk::<false>(chunk, h, &mut []),
+            }
         }
     }
 
-    /// One pass of [`Schedule::kernels`] over at most [`KERNEL_CHUNK`] τ, in a
-    /// fixed number of lanes (4 or 8, the τ padded with copies of the first) so that
-    /// the lanes' arithmetic, [`numerics::exp`] included, compiles to vector instructions.
-    fn kernel_chunk(&self, taus: &[f64], h: &mut [f64], dh: Option<&mut [f64]>) {
-        match (taus.len() <= 4, dh) {
-            (true, Some(d)) => self.lanes::<4, true>(taus, h, d),
-            (true, None) => self.lanes::<4, false>(taus, h, &mut []),
-            (false, Some(d)) => self.lanes::<8, true>(taus, h, d),
-            (false, None) => self.lanes::<8, false>(taus, h, &mut []),
+    /// One pass of [`Schedule::kernels`] over 1 to [`KERNEL_CHUNK`] τ, in a fixed
+    /// number of lanes (4 or 8, the τ padded with copies of the first) so that the
+    /// lanes' arithmetic, [`numerics::exp`] included, compiles to vector
+    /// instructions, recording exactly as many columns as there are τ (a constant
+    /// of the pass, so that each output's stores are a fixed sequence).
+    fn kernel_chunk<const D: bool>(&self, taus: &[f64], h: &mut [f64], dh: &mut [f64]) {
+        match taus.len() {
+            1 => self.lanes::<4, 1, D>(taus, h, dh),
+            2 => self.lanes::<4, 2, D>(taus, h, dh),
+            3 => self.lanes::<4, 3, D>(taus, h, dh),
+            4 => self.lanes::<4, 4, D>(taus, h, dh),
+            5 => self.lanes::<8, 5, D>(taus, h, dh),
+            6 => self.lanes::<8, 6, D>(taus, h, dh),
+            7 => self.lanes::<8, 7, D>(taus, h, dh),
+            _ => self.lanes::<8, 8, D>(taus, h, dh),
         }
     }
 
     /// [`Schedule::lanes_portable`] compiled for AVX2 (four f64 a vector register)
     /// where the processor has it, else for the baseline (two): the same arithmetic
     /// (Rust never fuses a multiply and an add), so the same bits either way.
-    fn lanes<const L: usize, const D: bool>(&self, taus: &[f64], h: &mut [f64], dh: &mut [f64]) {
+    fn lanes<const L: usize, const K: usize, const D: bool>(
+        &self,
+        taus: &[f64],
+        h: &mut [f64],
+        dh: &mut [f64],
+    ) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the processor has AVX2 (detected on the line above).
-            return unsafe { self.lanes_avx2::<L, D>(taus, h, dh) };
+            return unsafe { self.lanes_avx2::<L, K, D>(taus, h, dh) };
         }
-        self.lanes_portable::<L, D>(taus, h, dh)
+        self.lanes_portable::<L, K, D>(taus, h, dh)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn lanes_avx2<const L: usize, const D: bool>(
+    fn lanes_avx2<const L: usize, const K: usize, const D: bool>(
         &self,
         taus: &[f64],
         h: &mut [f64],
         dh: &mut [f64],
     ) {
-        self.lanes_portable::<L, D>(taus, h, dh)
+        self.lanes_portable::<L, K, D>(taus, h, dh)
     }
 
     /// The pass itself: every interval advances all `L` lanes' states
-    /// ([`Interval::advance`]); the first `taus.len()` are recorded at the outputs,
-    /// with their τ-derivatives when `D`.
+    /// ([`Interval::advance`]); the first `K` (= `taus.len()`) are recorded at the
+    /// outputs, into their columns of `h` (of [`Schedule::len`] values each), with
+    /// their τ-derivatives into `dh` when `D`.
     #[inline(always)]
-    fn lanes_portable<const L: usize, const D: bool>(
+    fn lanes_portable<const L: usize, const K: usize, const D: bool>(
         &self,
         taus: &[f64],
         h: &mut [f64],
         dh: &mut [f64],
     ) {
-        let (m, k) = (self.len(), taus.len());
+        let m = self.len();
         let mut tau = [taus[0]; L];
-        tau[..k].copy_from_slice(taus);
+        tau[..K].copy_from_slice(taus);
         let inv = tau.map(|t| 1.0 / t);
+        // Columns of exactly m values (one bounds check an output for all of them).
+        let (mut hc, mut dc) = (h.chunks_exact_mut(m), dh.chunks_exact_mut(m));
+        let mut hc: [&mut [f64]; K] = std::array::from_fn(|_| hc.next().expect("a column a τ"));
+        let mut dc: [&mut [f64]; K] = std::array::from_fn(|_| match D {
+            true => dc.next().expect("a derivative column a τ"),
+            false => &mut [],
+        });
         let (mut s, mut d) = ([0.0; L], [0.0; L]);
         for iv in &self.intervals {
             iv.advance::<L, D>(&tau, &inv, &mut s, &mut d);
             if let Some(o) = iv.out {
-                for i in 0..k {
-                    h[i * m + o] = s[i];
+                for (c, v) in hc.iter_mut().zip(&s) {
+                    c[o] = *v;
                 }
                 if D {
-                    for i in 0..k {
-                        dh[i * m + o] = d[i];
+                    for (c, v) in dc.iter_mut().zip(&d) {
+                        c[o] = *v;
                     }
                 }
             }
@@ -735,9 +758,9 @@ pub fn preset(name: &str) -> Result<Preset> {
 mod tests {
     use super::*;
 
-    /// The one-pass kernels of several τ (more than one chunk of them) are each τ's
-    /// own kernel and derivative, bit for bit, on a history with a ramp, a hold and
-    /// an unloading (rates and jumps).
+    /// The one-pass kernels of several τ (every count a pass records, and more than
+    /// one chunk of them) are each τ's own kernel and derivative, bit for bit, on a
+    /// history with a ramp, a hold and an unloading (rates and jumps).
     #[test]
     fn kernels_are_each_taus_kernel_exactly() {
         let times: Vec<f64> = (0..60)
@@ -746,19 +769,23 @@ mod tests {
         let history =
             History::from_knots(vec![(0.0, 0.0), (0.4, 1.5), (3.0, 1.5), (3.5, 0.2)]).unwrap();
         let sched = Schedule::new(&history, &times).unwrap();
-        let taus = [0.03, 0.7, 2.0, 45.0, 1e4, 0.2, 0.9, 3.3, 11.0, 0.05, 600.0];
-        assert!(taus.len() > KERNEL_CHUNK, "the τ cross a chunk boundary");
+        let all = [0.03, 0.7, 2.0, 45.0, 1e4, 0.2, 0.9, 3.3, 11.0, 0.05, 600.0];
+        assert!(all.len() > KERNEL_CHUNK, "the τ cross a chunk boundary");
         let m = times.len();
-        let (mut h, mut dh) = (vec![0.0; m * taus.len()], vec![0.0; m * taus.len()]);
-        sched.kernels(&taus, &mut h, Some(&mut dh));
-        let mut h_only = vec![0.0; m * taus.len()];
-        sched.kernels(&taus, &mut h_only, None);
-        for (i, &tau) in taus.iter().enumerate() {
-            let (mut h1, mut d1) = (vec![0.0; m], vec![0.0; m]);
-            sched.kernel(tau, &mut h1, Some(&mut d1));
-            assert_eq!(h[i * m..(i + 1) * m], h1[..], "τ = {tau}");
-            assert_eq!(dh[i * m..(i + 1) * m], d1[..], "τ = {tau}");
-            assert_eq!(h_only[i * m..(i + 1) * m], h1[..], "τ = {tau}");
+        // Every count of τ a pass records (1 to 8) and past a chunk boundary.
+        for count in 1..=all.len() {
+            let taus = &all[..count];
+            let (mut h, mut dh) = (vec![0.0; m * count], vec![0.0; m * count]);
+            sched.kernels(taus, &mut h, Some(&mut dh));
+            let mut h_only = vec![0.0; m * count];
+            sched.kernels(taus, &mut h_only, None);
+            for (i, &tau) in taus.iter().enumerate() {
+                let (mut h1, mut d1) = (vec![0.0; m], vec![0.0; m]);
+                sched.kernel(tau, &mut h1, Some(&mut d1));
+                assert_eq!(h[i * m..(i + 1) * m], h1[..], "τ = {tau} of {count}");
+                assert_eq!(dh[i * m..(i + 1) * m], d1[..], "τ = {tau} of {count}");
+                assert_eq!(h_only[i * m..(i + 1) * m], h1[..], "τ = {tau} of {count}");
+            }
         }
     }
 
@@ -775,33 +802,35 @@ mod tests {
         let history =
             History::from_knots(vec![(0.0, 0.0), (0.4, 1.5), (3.0, 1.5), (3.5, 0.2)]).unwrap();
         let sched = Schedule::new(&history, &times).unwrap();
-        let m = times.len();
-        for taus in [
-            &[0.02, 0.7, 30.0][..],
-            &[0.01, 0.1, 1.0, 3.0, 10.0, 100.0, 1e3],
-        ] {
-            let n = taus.len() * m;
-            let (mut h, mut d, mut hv, mut dv) =
-                (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-            let (mut h1, mut h1v) = (vec![0.0; n], vec![0.0; n]);
-            // SAFETY: AVX2 detected above.
-            unsafe {
-                sched.lanes_avx2::<8, true>(taus, &mut hv, &mut dv);
-                sched.lanes_avx2::<8, false>(taus, &mut h1v, &mut []);
-            }
-            sched.lanes_portable::<8, true>(taus, &mut h, &mut d);
-            sched.lanes_portable::<8, false>(taus, &mut h1, &mut []);
-            assert_eq!(h, hv);
-            assert_eq!(d, dv);
-            assert_eq!(h1, h1v);
-            assert_eq!(h1, h);
-            if taus.len() <= 4 {
-                let (mut h4, mut d4) = (vec![0.0; n], vec![0.0; n]);
-                // SAFETY: AVX2 detected above.
-                unsafe { sched.lanes_avx2::<4, true>(taus, &mut h4, &mut d4) };
-                assert_eq!(h4, h);
-                assert_eq!(d4, d);
-            }
+        agree::<3>(&sched, &[0.02, 0.7, 30.0]);
+        agree::<7>(&sched, &[0.01, 0.1, 1.0, 3.0, 10.0, 100.0, 1e3]);
+    }
+
+    /// [`vector_and_baseline_kernels_agree_bit_for_bit`] for `K` τ: 8 lanes with
+    /// and without derivatives, 4 lanes too where they hold the τ.
+    #[cfg(target_arch = "x86_64")]
+    fn agree<const K: usize>(sched: &Schedule, taus: &[f64; K]) {
+        let n = K * sched.len();
+        let (mut h, mut d, mut hv, mut dv) =
+            (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        let (mut h1, mut h1v) = (vec![0.0; n], vec![0.0; n]);
+        // SAFETY: the caller detected AVX2.
+        unsafe {
+            sched.lanes_avx2::<8, K, true>(taus, &mut hv, &mut dv);
+            sched.lanes_avx2::<8, K, false>(taus, &mut h1v, &mut []);
+        }
+        sched.lanes_portable::<8, K, true>(taus, &mut h, &mut d);
+        sched.lanes_portable::<8, K, false>(taus, &mut h1, &mut []);
+        assert_eq!(h, hv);
+        assert_eq!(d, dv);
+        assert_eq!(h1, h1v);
+        assert_eq!(h1, h);
+        if K <= 4 {
+            let (mut h4, mut d4) = (vec![0.0; n], vec![0.0; n]);
+            // SAFETY: the caller detected AVX2.
+            unsafe { sched.lanes_avx2::<4, K, true>(taus, &mut h4, &mut d4) };
+            assert_eq!(h4, h);
+            assert_eq!(d4, d);
         }
     }
 

@@ -35,7 +35,8 @@ pub struct HyperProblem<'a> {
     /// Stretch of each point (read-only after construction: `ln_stretch` is taken
     /// from it once).
     pub stretch: Vec<f64>,
-    /// ln λ of each point, fixed data taken once ([`Points`]).
+    /// ln λ of each point, fixed data taken once ([`Points`]); NaN where the model
+    /// reads no logarithm ([`StrainEnergy::reads_ln_stretch`]).
     ln_stretch: Vec<f64>,
     /// Measured nominal stress (Pa).
     pub stress: Vec<f64>,
@@ -84,12 +85,18 @@ impl<'a> HyperProblem<'a> {
                 }
             }
         };
-        // Each column in a pass over the samples (a large dataset's in parallel).
+        // Each column in a pass over the samples (a large dataset's in parallel); the
+        // logarithms only for a model that reads them (NaN otherwise: never read).
+        let logs = model.reads_ln_stretch();
         let (modes, stretch, ln_stretch, stress, scale) = if s.len() < PARALLEL_ROWS {
             (
                 s.iter().map(|x| x.mode).collect(),
                 s.iter().map(|x| x.stretch).collect(),
-                s.iter().map(|x| x.stretch.ln()).collect(),
+                if logs {
+                    s.iter().map(|x| x.stretch.ln()).collect()
+                } else {
+                    vec![f64::NAN; s.len()]
+                },
                 s.iter().map(|x| x.stress).collect(),
                 s.iter().map(scale_of).collect(),
             )
@@ -97,7 +104,11 @@ impl<'a> HyperProblem<'a> {
             (
                 s.par_iter().map(|x| x.mode).collect(),
                 s.par_iter().map(|x| x.stretch).collect(),
-                s.par_iter().map(|x| x.stretch.ln()).collect(),
+                if logs {
+                    s.par_iter().map(|x| x.stretch.ln()).collect()
+                } else {
+                    vec![f64::NAN; s.len()]
+                },
                 s.par_iter().map(|x| x.stress).collect(),
                 s.par_iter().map(scale_of).collect(),
             )
@@ -579,6 +590,40 @@ impl LeastSquares for VarPro<'_, '_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A model that says it reads no logarithm gives the same stresses and Jacobian
+    /// rows, bit for bit, with the ln λ column NaN (what the problem then holds) as
+    /// with the logarithms; Ogden reads them (it is wrong without them), so its
+    /// problem takes them. Every model, the three modes, compression to tension.
+    #[test]
+    fn models_that_read_no_logarithm_do_without() {
+        use crate::material::hyperelastic::{ModelSpec, OgdenForm, MODEL_NAMES};
+        let modes: Vec<Mode> = (0..12).map(|i| Mode::ALL[i % 3]).collect();
+        let stretch: Vec<f64> = (0..12).map(|i| 0.4 + 0.3 * i as f64).collect();
+        let logs: Vec<f64> = stretch.iter().map(|l| l.ln()).collect();
+        let nan = vec![f64::NAN; 12];
+        for name in MODEL_NAMES {
+            let m = ModelSpec::new(name, OgdenForm::Seed).build().unwrap();
+            let k = m.params().len();
+            // Linear coefficients of mixed sign; exponents and Gent limits of 40.
+            let p: Vec<f64> = (0..k)
+                .map(|j| match (m.params()[j].linear, j % 2) {
+                    (true, 0) => 1e5,
+                    (true, _) => -2e3,
+                    (false, _) => 40.0,
+                })
+                .collect();
+            let eval = |ln: &[f64]| {
+                let pts = Points::new(&modes, &stretch, ln).unwrap();
+                let (mut s, mut j) = (vec![0.0; 12], vec![0.0; 12 * k]);
+                m.nominal_stresses(&p, pts, &mut s);
+                m.stress_jacobians(&p, pts, &mut j);
+                let bits = |v: Vec<f64>| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                (bits(s), bits(j))
+            };
+            assert_eq!(eval(&logs) == eval(&nan), !m.reads_ln_stretch(), "{name}");
+        }
+    }
 
     /// The row-QR projection ([`range_solve`]) gives the tall SVD's ([`svd_solve`])
     /// objective, coefficients, projector and rank on a well-conditioned, a graded

@@ -70,6 +70,9 @@ impl StrainEnergy for Gent {
         let k = mode.kinematics(lam);
         k.invariant_tangent(&Self::derivs(p, k.invariants().0))
     }
+    fn reads_ln_stretch(&self) -> bool {
+        false
+    }
     fn tangent_powers(&self, p: &[f64], mode: Mode) -> Option<TangentPowers> {
         // P = f·W1 with W1 = μ·Jm/(2·gap), gap = Jm − x: T = μ·Jm/(2·gap²)·Q with
         // Q = f′·gap + f·x′, finite only where gap > 0 (an interval around λ = 1,

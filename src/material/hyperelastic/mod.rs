@@ -130,6 +130,13 @@ pub trait StrainEnergy: Send + Sync {
     fn tangent_powers(&self, _p: &[f64], _mode: Mode) -> Option<powers::TangentPowers> {
         None
     }
+    /// True if the block evaluators ([`StrainEnergy::nominal_stresses`],
+    /// [`StrainEnergy::stress_jacobians`]) read the points' ln λ
+    /// ([`Points::ln_stretch`]): a fit problem takes the logarithms only then. The
+    /// default, true, is always safe.
+    fn reads_ln_stretch(&self) -> bool {
+        true
+    }
     /// The stress and tangent of `mode` at parameters `p` prepared for many
     /// stretches, the same numbers as [`StrainEnergy::nominal_stress`] and
     /// [`StrainEnergy::tangent`] without a dynamic call each (the simulator's
@@ -267,6 +274,9 @@ impl StrainEnergy for WithoutCoefficients {
     }
     fn tangent_powers(&self, p: &[f64], mode: Mode) -> Option<powers::TangentPowers> {
         self.0.tangent_powers(p, mode)
+    }
+    fn reads_ln_stretch(&self) -> bool {
+        self.0.reads_ln_stretch()
     }
     fn prepared(&self, p: &[f64], mode: Mode) -> Option<polynomial::Prepared> {
         self.0.prepared(p, mode)

@@ -7,7 +7,7 @@
 
 use super::loadcase::{InvariantDerivs, Kinematics, Mode};
 use super::powers::{Laurent, LaurentKinematics, PowerSum, TangentPowers};
-use super::{ParamInfo, StrainEnergy};
+use super::{ParamInfo, Points, StrainEnergy};
 use std::sync::OnceLock;
 
 /// One term s·p·x^i·y^j with x = I1 − 3, y = I2 − 3.
@@ -341,6 +341,9 @@ impl StrainEnergy for Polynomial {
     fn prepared(&self, p: &[f64], mode: Mode) -> Option<Prepared> {
         self.prepare(p, mode)
     }
+    fn reads_ln_stretch(&self) -> bool {
+        false
+    }
     fn tangent_powers(&self, p: &[f64], mode: Mode) -> Option<TangentPowers> {
         if p.len() != self.terms.len() {
             return None;
@@ -363,6 +366,22 @@ impl StrainEnergy for Polynomial {
             _ => out.fill(f64::NAN),
         }
     }
+    fn stress_jacobians(&self, p: &[f64], pts: Points<'_>, out: &mut [f64]) {
+        // Each point's row as `stress_jacobian` gives it, the terms at unit parameters
+        // prepared once per mode instead of at every point.
+        let n = self.terms.len();
+        let unit = Mode::ALL.map(|m| self.prepare(&[1.0; MAX_TERMS][..n], m));
+        for (i, row) in out
+            .chunks_exact_mut(p.len().max(1))
+            .enumerate()
+            .take(pts.len())
+        {
+            match &unit[pts.mode(i).index()] {
+                Some(u) if p.len() == n && row.len() == n => u.term_stresses(pts.stretch(i), row),
+                _ => row.fill(f64::NAN),
+            }
+        }
+    }
     fn initial_shear_modulus(&self, p: &[f64]) -> f64 {
         // μ0 = 2(W1 + W2) at I1 = I2 = 3.
         let d = self.derivs::<false>(p, 3.0, 3.0);
@@ -382,6 +401,36 @@ mod tests {
     /// family, every
     /// mode, stretches from deep compression to tension, with mixed-sign
     /// coefficients so that sums cancel.
+    /// The block Jacobian (the terms prepared once per mode) is the per-point one
+    /// bit for bit: every model of the family, the three modes interleaved,
+    /// compression to tension; a parameter vector of the wrong length gives NaN
+    /// rows, as the per-point method does.
+    #[test]
+    fn block_jacobian_is_the_per_point_one() {
+        let modes: Vec<Mode> = (0..15).map(|i| Mode::ALL[(i * 7) % 3]).collect();
+        let stretch: Vec<f64> = (0..15).map(|i| 0.3 + 0.37 * i as f64).collect();
+        let logs = vec![f64::NAN; 15];
+        let pts = Points::new(&modes, &stretch, &logs).unwrap();
+        for m in [
+            Polynomial::neo_hookean(),
+            Polynomial::mooney_rivlin(),
+            Polynomial::yeoh(),
+        ] {
+            let k = m.terms.len();
+            for p in [vec![1e5, -2e3, 30.0][..k].to_vec(), vec![1.0; k + 1]] {
+                let w = p.len();
+                let mut block = vec![0.0; 15 * w];
+                m.stress_jacobians(&p, pts, &mut block);
+                for (i, row) in block.chunks_exact(w).enumerate() {
+                    let mut one = vec![0.0; w];
+                    m.stress_jacobian(&p, modes[i], stretch[i], &mut one);
+                    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(bits(row), bits(&one), "{} {p:?} point {i}", m.name);
+                }
+            }
+        }
+    }
+
     #[test]
     fn prepared_shortcuts_change_no_bit() {
         /// W1, W2 (and the second derivatives) over the model's own terms only,

@@ -309,7 +309,7 @@ pub(super) fn step<S: System>(
     stats: &mut Stats,
 ) -> f64 {
     let n = w.n;
-    stages(sys, w, t, h, y, |s| C[s], stage, stats);
+    stages(sys, w, t, h, y, 1..=LAST, |s| C[s], stage, stats);
     w.h_dense = h;
     w.dense_ready = false;
     // E3 reads the stages E5 reads (`the_tableau_meets_its_conditions`)
@@ -346,12 +346,17 @@ pub(super) fn prepare_dense<S: System>(
         return;
     }
     let (n, h) = (w.n, w.h_dense);
-    for s in LAST + 1..STAGES {
-        let (done, next) = w.k.split_at_mut(s);
-        stage(s, done, y, h, &mut w.ytmp[..w.m]);
-        sys.rhs(t + C[s] * h, &w.ytmp, &mut next[0]);
-    }
-    stats.rhs_evals += STAGES - LAST - 1;
+    stages(
+        sys,
+        w,
+        t,
+        h,
+        y,
+        LAST + 1..=STAGES - 1,
+        |s| C[s],
+        stage,
+        stats,
+    );
     // the four rows read the same stages (`the_tableau_meets_its_conditions`)
     let kd = stages_of(&D[0], &w.k, n);
     let (k0, k12, y1) = (&w.k[0][..n], &w.k[LAST][..n], &w.y1[..n]);

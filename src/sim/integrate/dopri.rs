@@ -547,7 +547,8 @@ fn segment<S: System>(
     End::Done
 }
 
-/// Stages 1…last of a step from (t, y) with k[0] = f(t, y): stage s's argument
+/// Stages `from`…`to` of a step from (t, y) with k[0] = f(t, y) (1…last: the
+/// step; after the last: dop853's dense output): stage s's argument
 /// y + h·Σ_{j<s} a_sj·k_j by `stage(s, k, y, h, out)` into `ytmp` (its leading
 /// `w.m` states: no rate reads the rest), the last one's (the new state, every
 /// state) into `y1`, and k[s] = f(t + c(s)·h, argument).
@@ -559,22 +560,23 @@ pub(super) fn stages<S: System>(
     t: f64,
     h: f64,
     y: &[f64],
+    range: std::ops::RangeInclusive<usize>,
     c: impl Fn(usize) -> f64,
     stage: impl Fn(usize, &[Vec<f64>], &[f64], f64, &mut [f64]),
     stats: &mut Stats,
 ) {
     let last = w.scheme.last();
-    for s in 1..=last {
+    stats.rhs_evals += range.clone().count();
+    for s in range {
         let (done, next) = w.k.split_at_mut(s);
-        let (arg, len) = if s < last {
-            (&mut w.ytmp, w.m)
-        } else {
+        let (arg, len) = if s == last {
             (&mut w.y1, w.n)
+        } else {
+            (&mut w.ytmp, w.m)
         };
         stage(s, done, y, h, &mut arg[..len]);
         sys.rhs(t + c(s) * h, arg, &mut next[0]);
     }
-    stats.rhs_evals += last;
 }
 
 /// The dense output of the last step made ready from (t, y), its start: a
@@ -628,6 +630,7 @@ fn pair_step<S: System>(
         t,
         h,
         y,
+        1..=w.scheme.last(),
         |s| p.c[s - 1],
         |s, k, y, h, out| stage(&p.a[s - 1], s - 1, k, y, h, out),
         stats,

@@ -1,6 +1,6 @@
 //! Our own explicit Runge–Kutta 5(4) pairs of seven stages, the last at the new
-//! state (FSAL), with a PI step controller (Gustafsson 1991; Hairer, Nørsett &
-//! Wanner I, §II.4: β1 = 0.7/5, β2 = 0.4/5 as in dopri5):
+//! state (FSAL), with a PI step controller ([`Scheme::gains`]: Gustafsson's
+//! PI.3.4 for the pairs, Söderlind's PI.4.2 for Dormand–Prince 8(5,3)):
 //! * [`DP54`]: Dormand–Prince 5(4) (Dormand & Prince 1980) with Hairer's 4th-order
 //!   continuous extension. The independent test oracle for the implicit methods and
 //!   the only method with a fixed-step mode (for convergence-order tests).
@@ -58,6 +58,26 @@ impl Scheme {
         match self {
             Scheme::Pair(_) => 5.0,
             Scheme::Dop853 => 8.0,
+        }
+    }
+    /// The PI controller's gains (k_I + k_P, k_P): an accepted step's successor is
+    /// h·0.9·err_n^(−(k_I + k_P)/q)·err_(n−1)^(k_P/q) (Söderlind, "Automatic
+    /// control and adaptive time-stepping", Numer. Algorithms 31, 2002).
+    /// * The 5(4) pairs: PI.3.4, k_I = 0.3, k_P = 0.4 (Gustafsson 1991; Hairer,
+    ///   Nørsett & Wanner I, §II.4, dopri5's β1 = 0.7/5, β2 = 0.4/5).
+    /// * Dormand–Prince 8(5,3): PI.4.2, k_I = 0.4, k_P = 0.2. On the seed stack
+    ///   ringing at 1 kHz, where the error estimate swings 45-fold within each
+    ///   half period (the velocity's weight follows its own zero crossings),
+    ///   PI.3.4's smaller integral gain chases the swing and rejects 5 % of its
+    ///   steps (3360 of 69 786 on the undamped 10 s step); PI.4.2 settles into the
+    ///   swing's cycle and rejects 1, for 13 % fewer right-hand sides (730 081
+    ///   against 843 433). Hairer's own choice for dop853.f, the I controller,
+    ///   rejects 40 % there. The pairs keep PI.3.4: with PI.4.2 they reject 13 %
+    ///   on the same run.
+    fn gains(self) -> (f64, f64) {
+        match self {
+            Scheme::Pair(_) => (0.7, 0.4),
+            Scheme::Dop853 => (0.6, 0.2),
         }
     }
 }
@@ -482,9 +502,10 @@ fn segment<S: System>(
                 w.h = h * (0.9 * err.powf(-1.0 / q)).clamp(0.2, 1.0);
                 continue;
             }
-            // PI controller (Gustafsson) on accepted steps
+            // PI controller on accepted steps
+            let (kip, kp) = w.scheme.gains();
             let e = err.max(1e-10);
-            let fac = 0.9 * e.powf(-0.7 / q) * w.err_old.powf(0.4 / q);
+            let fac = 0.9 * e.powf(-kip / q) * w.err_old.powf(kp / q);
             w.err_old = e;
             if !last {
                 w.h = h * fac.clamp(0.2, 5.0);

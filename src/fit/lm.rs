@@ -253,6 +253,10 @@ pub struct Lm {
     /// The Jacobian at the trial point, for [`LeastSquares::jacobian_with_trial`]
     /// (empty until first used; not part of a checkpoint).
     jac_trial: DMatrix<f64>,
+    /// The residuals at the trial point (kept across iterations so that a step
+    /// allocates nothing of the data's size; zeroed at each step as a fresh vector
+    /// would be; not part of a checkpoint).
+    r_trial: DVector<f64>,
     /// Whether the last iteration's first trial was accepted with ρ ≥
     /// [`TRUSTED_RHO`]: only then is the next first trial evaluated with the
     /// Jacobian ([`LeastSquares::jacobian_with_trial`]).
@@ -402,6 +406,7 @@ impl Lm {
             evaluations: 1,
             costs: Vec::new(),
             jac_trial: DMatrix::zeros(0, 0),
+            r_trial: DVector::zeros(0),
             trusted: true,
             secant: false,
         };
@@ -496,7 +501,12 @@ impl Lm {
             }
         }
         let mut x_new = vec![0.0; n];
-        let mut r_new = DVector::zeros(self.r.len());
+        if self.r_trial.len() == self.r.len() {
+            self.r_trial.fill(0.0);
+        } else {
+            self.r_trial = DVector::zeros(self.r.len());
+        }
+        let r_new = &mut self.r_trial;
         let mut trial_jac = self.trusted && problem.jacobian_with_trial();
         let mut first = true;
         if trial_jac && self.jac_trial.shape() != self.jac.shape() {
@@ -531,8 +541,8 @@ impl Lm {
             if pred > 0.0 {
                 self.evaluations += 1;
                 let ok = match trial_jac {
-                    true => problem.eval(&x_new, &mut r_new, Some(&mut self.jac_trial)),
-                    false => problem.eval(&x_new, &mut r_new, None),
+                    true => problem.eval(&x_new, r_new, Some(&mut self.jac_trial)),
+                    false => problem.eval(&x_new, r_new, None),
                 };
                 let cost_new = 0.5 * r_new.norm_squared();
                 if ok && cost_new < self.cost {
@@ -543,11 +553,11 @@ impl Lm {
                         && problem.secant_jacobian()
                         && !problem.forms_normal_equations();
                     if trial_jac {
-                        std::mem::swap(&mut self.r, &mut r_new);
+                        std::mem::swap(&mut self.r, r_new);
                         std::mem::swap(&mut self.jac, &mut self.jac_trial);
                     } else if self.secant {
-                        broyden(&mut self.jac, &dx, &(&r_new - &self.r));
-                        std::mem::swap(&mut self.r, &mut r_new);
+                        broyden(&mut self.jac, &dx, &(&*r_new - &self.r));
+                        std::mem::swap(&mut self.r, r_new);
                     } else {
                         self.evaluations += 1;
                         problem.eval(x, &mut self.r, Some(&mut self.jac));
@@ -1005,6 +1015,7 @@ fn load(file: &Path, (m, n): (usize, usize), bounds: &[(f64, f64)]) -> Result<Lm
         evaluations: s.evaluations,
         costs: unbits(&s.costs),
         jac_trial: DMatrix::zeros(0, 0),
+        r_trial: DVector::zeros(0),
         trusted: s.trusted,
         secant: s.secant,
     })

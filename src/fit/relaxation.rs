@@ -30,7 +30,7 @@
 //! identifiable and inside the sampled window.
 
 use super::diagnostics;
-use super::lm::{self, LeastSquares, LmSettings, Termination};
+use super::lm::{self, LeastSquares, LmResult, LmSettings, Termination};
 use super::nnls::{dot, nnls, NnlsWork};
 use super::problem::{Residual, REL_FLOOR};
 use super::{Parameter, SolverReport, Status};
@@ -681,6 +681,8 @@ struct Projected<'p> {
     /// x·x and b·x of the fixed first column x = w·S·x and b = w·y, summed over
     /// the blocks of [`Projected::gram`] as it sums them: the same at every θ.
     fixed: [f64; 2],
+    /// θ of the last evaluation, whose Gram products of [A | b] `gram` holds.
+    theta: Vec<f64>,
     /// θ, JᵀJ and Jᵀr of the last evaluation asked for a Jacobian.
     normal: Option<(Vec<f64>, DMatrix<f64>, DVector<f64>)>,
 }
@@ -719,8 +721,55 @@ impl<'p> Projected<'p> {
             positive: vec![false; 1 + n],
             work: NnlsWork::new(1 + n),
             fixed,
+            theta: Vec::with_capacity(n),
             normal: None,
         }
+    }
+
+    /// The moduli at θ into `c` (a failed solve leaves them as they were), as
+    /// [`LeastSquares::eval`] without a Jacobian would set them, counted as an
+    /// evaluation: from the Gram products of the last evaluation when it was at θ
+    /// (the same products, so the same bits), else from the kernels at θ with their
+    /// derivatives, which the joint problem's first evaluation at the same τ then
+    /// takes ([`Problem::kernels_at_log_taus`]).
+    fn moduli_at(&mut self, theta: &[f64]) {
+        self.prob.evaluations += 1;
+        if self.theta != theta {
+            let m = self.prob.len();
+            self.prob.kernels_at_log_taus(theta, true);
+            self.prob
+                .design_columns(&mut self.a.as_mut_slice()[m..], None);
+            self.gram(false);
+            self.theta.clear();
+            self.theta.extend_from_slice(theta);
+        }
+        self.solve_moduli();
+    }
+
+    /// The moduli's NNLS on the Gram products of the last evaluation, started from
+    /// the positive set of the one before, into `c` and `positive`; false (both
+    /// unchanged) when it fails.
+    fn solve_moduli(&mut self) -> bool {
+        let n = self.a.ncols() - 1;
+        for j in 0..=n {
+            for i in 0..=n {
+                self.ata[(i, j)] = self.gram[(i, j)];
+            }
+            self.atb[j] = self.gram[(j, 1 + n)];
+        }
+        let solved = self.work.solve(
+            self.ata.as_slice(),
+            self.atb.as_slice(),
+            Some(&self.positive),
+        );
+        if solved.is_err() {
+            return false;
+        }
+        self.c.copy_from_slice(self.work.x());
+        for (f, &v) in self.positive.iter_mut().zip(self.c.iter()) {
+            *f = v > 0.0;
+        }
+        true
     }
 
     /// The parameters of [`Problem`] at θ: [e∞, eᵢ…, ln τᵢ…], the moduli those of the
@@ -811,7 +860,7 @@ impl LeastSquares for Projected<'_> {
     ) -> bool {
         let p = &mut *self.prob;
         p.evaluations += 1;
-        let (m, n) = (p.len(), p.n_terms);
+        let m = p.len();
         let derivatives = jac.is_some();
         p.kernels_at_log_taus(theta, derivatives);
         p.design_columns(
@@ -819,23 +868,10 @@ impl LeastSquares for Projected<'_> {
             derivatives.then_some(self.da.as_mut_slice()),
         );
         self.gram(derivatives);
-        for j in 0..=n {
-            for i in 0..=n {
-                self.ata[(i, j)] = self.gram[(i, j)];
-            }
-            self.atb[j] = self.gram[(j, 1 + n)];
-        }
-        let solved = self.work.solve(
-            self.ata.as_slice(),
-            self.atb.as_slice(),
-            Some(&self.positive),
-        );
-        if solved.is_err() {
+        self.theta.clear();
+        self.theta.extend_from_slice(theta);
+        if !self.solve_moduli() {
             return false;
-        }
-        self.c.copy_from_slice(self.work.x());
-        for (f, &v) in self.positive.iter_mut().zip(self.c.iter()) {
-            *f = v > 0.0;
         }
         r.as_mut_slice().copy_from_slice(self.b.as_slice());
         r.gemv(1.0, &self.a, &self.c, -1.0);
@@ -1379,60 +1415,51 @@ fn refine(
         ..LmSettings::default()
     };
     let bounds = vec![ln_tau; n];
-    let mut sub = prob.subsample(START_POINTS);
     let mut iterations = 0;
-    let mut results = Vec::with_capacity(starts.len());
-    {
-        let mut vp = Projected::new(sub.as_mut().unwrap_or(&mut prob));
-        for s in starts {
-            let res = lm::minimize(&mut vp, s, &bounds, &lms);
-            iterations += res.iterations;
-            results.push(res);
-        }
-    }
-    let best = results
-        .iter()
-        .enumerate()
-        .filter(|(_, r)| r.cost.is_finite())
-        .min_by(|a, b| a.1.cost.total_cmp(&b.1.cost))
-        .map(|(i, _)| i)
-        .unwrap_or(0);
-    let bc = results[best].cost;
-    let at_best = results
-        .iter()
-        .filter(|r| (r.cost - bc).abs() <= 1e-6 * bc.max(f64::MIN_POSITIVE))
-        .count();
-    let mut r = results.swap_remove(best);
-    let mut evaluations = sub.as_ref().map_or(0, |p| p.evaluations);
+    let mut evaluations = 0;
     let mut tail = lms;
-    if let Some(s) = &sub {
-        // Past the starts, the searches stop at the noise floor of the level before.
-        let floor = |cost: f64, m: usize| match cost.is_finite() {
-            true => NOISE_FLOOR * 2.0 * cost / (m - (2 * n + 1)) as f64,
-            false => 0.0,
-        };
-        tail.min_decrease = floor(r.cost, s.len());
-        let mut count = 10 * START_POINTS;
-        while let Some(mut level) = prob.subsample(count) {
-            r = lm::minimize(&mut Projected::new(&mut level), &r.x, &bounds, &tail);
-            iterations += r.iterations;
-            evaluations += level.evaluations;
-            tail.min_decrease = floor(r.cost, level.len());
-            count *= 10;
+    let (r, joint, at_best) = match prob.subsample(START_POINTS) {
+        // Every point: the starts' projection is the last one; the moduli at the end
+        // come from a cold start, as a fresh projection's would.
+        None => {
+            let mut vp = Projected::new(&mut prob);
+            let (r, at_best) = best_start(&mut vp, starts, &bounds, &lms, &mut iterations);
+            vp.positive.fill(false);
+            vp.c.fill(0.0);
+            vp.moduli_at(&r.x);
+            let joint = vp.joint(&r.x);
+            (r, joint, at_best)
         }
-    }
-    let mut vp = Projected::new(&mut prob);
-    if sub.is_some() {
-        r = lm::minimize(&mut vp, &r.x, &bounds, &tail);
-        iterations += r.iterations;
-    }
-    // The moduli at the end (the search's last evaluation may have been a rejected
-    // trial), from kernels with their derivatives, which the polish's first
-    // evaluation at the same τ then takes ([`Problem::kernels_at_log_taus`]).
-    let mut scratch = DVector::zeros(vp.dims().0);
-    vp.prob.kernels_at_log_taus(&r.x, true);
-    vp.eval(&r.x, &mut scratch, None);
-    let joint = vp.joint(&r.x);
+        Some(mut sub) => {
+            let (mut r, at_best) = {
+                let mut vp = Projected::new(&mut sub);
+                best_start(&mut vp, starts, &bounds, &lms, &mut iterations)
+            };
+            evaluations = sub.evaluations;
+            // Past the starts, the searches stop at the noise floor of the level before.
+            let floor = |cost: f64, m: usize| match cost.is_finite() {
+                true => NOISE_FLOOR * 2.0 * cost / (m - (2 * n + 1)) as f64,
+                false => 0.0,
+            };
+            tail.min_decrease = floor(r.cost, sub.len());
+            let mut count = 10 * START_POINTS;
+            while let Some(mut level) = prob.subsample(count) {
+                r = lm::minimize(&mut Projected::new(&mut level), &r.x, &bounds, &tail);
+                iterations += r.iterations;
+                evaluations += level.evaluations;
+                tail.min_decrease = floor(r.cost, level.len());
+                count *= 10;
+            }
+            let mut vp = Projected::new(&mut prob);
+            r = lm::minimize(&mut vp, &r.x, &bounds, &tail);
+            iterations += r.iterations;
+            // The moduli at the end (the search's last evaluation may have been a
+            // rejected trial).
+            vp.moduli_at(&r.x);
+            let joint = vp.joint(&r.x);
+            (r, joint, at_best)
+        }
+    };
     let mut joint_bounds = vec![(0.0, f64::INFINITY); 1 + n];
     joint_bounds.extend(bounds);
     let polish = lm::minimize(&mut prob, &joint, &joint_bounds, &tail);
@@ -1453,6 +1480,36 @@ fn refine(
         at_best,
         problem: prob,
     }
+}
+
+/// The projection's search from each start (their iterations added to
+/// `iterations`): the end of lowest cost (the first of them; the first start's when
+/// none is finite), and how many ends are within 10⁻⁶ of its cost.
+fn best_start(
+    vp: &mut Projected,
+    starts: &[Vec<f64>],
+    bounds: &[(f64, f64)],
+    lms: &LmSettings,
+    iterations: &mut usize,
+) -> (LmResult, usize) {
+    let mut results: Vec<LmResult> = starts
+        .iter()
+        .map(|s| lm::minimize(vp, s, bounds, lms))
+        .collect();
+    *iterations += results.iter().map(|r| r.iterations).sum::<usize>();
+    let best = results
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.cost.is_finite())
+        .min_by(|a, b| a.1.cost.total_cmp(&b.1.cost))
+        .map(|(i, _)| i)
+        .unwrap_or(0);
+    let bc = results[best].cost;
+    let at_best = results
+        .iter()
+        .filter(|r| (r.cost - bc).abs() <= 1e-6 * bc.max(f64::MIN_POSITIVE))
+        .count();
+    (results.swap_remove(best), at_best)
 }
 
 /// Points on which the multi-start search of a term count runs: a longer curve is

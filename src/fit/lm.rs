@@ -203,6 +203,22 @@ impl LmResult {
     }
 }
 
+/// JᵀJ as `jac.tr_mul(&jac)` computes it (each entry nalgebra's dot of two
+/// columns, which is symmetric in its operands bit for bit), each product below the
+/// diagonal taken once and mirrored: half the passes over a tall Jacobian.
+fn gram(jac: &DMatrix<f64>) -> DMatrix<f64> {
+    let n = jac.ncols();
+    let mut a = DMatrix::zeros(n, n);
+    for j in 0..n {
+        for i in j..n {
+            let v = jac.column(i).dot(&jac.column(j));
+            a[(i, j)] = v;
+            a[(j, i)] = v;
+        }
+    }
+    a
+}
+
 /// `v` moved into `[lo, hi]`. Unlike `f64::clamp` it never panics (NaN or inverted
 /// bounds); [`minimize`] refuses such bounds before it projects anything.
 pub fn project(v: f64, (lo, hi): (f64, f64)) -> f64 {
@@ -597,7 +613,7 @@ impl Lm {
         problem: &P,
     ) -> Result<(DMatrix<f64>, DVector<f64>), Termination> {
         if !problem.forms_normal_equations() {
-            return Ok((self.jac.tr_mul(&self.jac), self.jac.tr_mul(&self.r)));
+            return Ok((gram(&self.jac), self.jac.tr_mul(&self.r)));
         }
         problem.normal_equations(&self.x).ok_or_else(|| {
             Termination::Failed(
@@ -1024,6 +1040,22 @@ fn load(file: &Path, (m, n): (usize, usize), bounds: &[(f64, f64)]) -> Result<Lm
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`gram`] is `tr_mul` of the Jacobian with itself, bit for bit, on tall
+    /// matrices of several widths (odd lengths included).
+    #[test]
+    fn gram_is_tr_mul_bit_for_bit() {
+        for (m, n) in [(1, 1), (7, 3), (200, 9), (333, 5)] {
+            let jac = DMatrix::from_fn(m, n, |i, j| {
+                ((3 * i + 11 * j) as f64 * 0.7).sin() * (1.0 + j as f64)
+            });
+            let want = jac.tr_mul(&jac);
+            let got = gram(&jac);
+            for (g, w) in got.iter().zip(want.iter()) {
+                assert_eq!(g.to_bits(), w.to_bits(), "{m} × {n}");
+            }
+        }
+    }
 
     /// Rosenbrock as least squares: r = (10(y − x²), 1 − x).
     struct Rosen;

@@ -832,6 +832,57 @@ mod tests {
     /// solution (the problem is strictly convex: one minimiser) to 10⁻⁹ of its
     /// largest entry, with the same positive set, and a start from the answer takes
     /// no step.
+    /// One [`NnlsWork`] kept across 300 problems of one size (cold and warm
+    /// starts, the last solution's positive set among them, and refused problems
+    /// between them: a value not finite, a repeated column) gives each the
+    /// solution and iterations of a fresh work space, bit for bit: nothing of one
+    /// solve leaks into the next.
+    #[test]
+    fn kept_work_space_is_a_fresh_one() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
+        let k = 9;
+        let mut work = NnlsWork::new(k);
+        let mut last = vec![false; k];
+        for case in 0..300 {
+            let n = rng.gen_range(12..30);
+            let (_, _, mut g, h) = random_normal(&mut rng, n, k);
+            if case % 37 == 5 {
+                g[(2, 3)] = f64::NAN;
+            }
+            if case % 41 == 7 {
+                // Column 4 a copy of column 1: G_PP singular with both in P.
+                for i in 0..k {
+                    g[(i, 4)] = g[(i, 1)];
+                    g[(4, i)] = g[(1, i)];
+                }
+                g[(4, 4)] = g[(1, 1)];
+            }
+            let random: Vec<bool> = (0..k).map(|_| rng.gen_bool(0.5)).collect();
+            let start = match case % 3 {
+                0 => None,
+                1 => Some(&random[..]),
+                _ => Some(&last[..]),
+            };
+            let fresh = nnls_normal(&g, &h, start);
+            let kept = work.solve(g.as_slice(), h.as_slice(), start);
+            match (fresh, kept) {
+                (Ok(f), Ok(it)) => {
+                    assert_eq!(it, f.iterations, "case {case}");
+                    let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(bits(work.x()), bits(f.x.as_slice()), "case {case}");
+                    last = f.x.iter().map(|&v| v > 0.0).collect();
+                }
+                (Err(f), Err(w)) => assert_eq!(f, w, "case {case}"),
+                (f, w) => panic!("case {case}: fresh {f:?}, kept {w:?}"),
+            }
+        }
+        assert!(
+            work.solve(&[1.0], &[1.0], None).is_err(),
+            "the wrong size is refused"
+        );
+    }
+
     #[test]
     fn warm_start_is_cold_start() {
         use rand::{Rng, SeedableRng};

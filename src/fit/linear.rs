@@ -76,15 +76,25 @@ impl RowQr {
         }
     }
 
-    /// The factor of the matrix `a` (right-hand side zero).
+    /// The factor of the matrix `a` (right-hand side zero): its rows pushed in
+    /// order ([`RowQr::push`]), a block's columns copied into the stack at once
+    /// (the same stack, so the same factor bit for bit).
     pub fn of(a: &DMatrix<f64>) -> RowQr {
-        let mut qr = RowQr::with_rows(a.ncols(), a.nrows());
-        let mut row = vec![0.0; a.ncols()];
-        for i in 0..a.nrows() {
-            row.iter_mut()
-                .zip(a.row(i).iter())
-                .for_each(|(r, v)| *r = *v);
-            qr.push(&row, 0.0);
+        let (n, k) = a.shape();
+        let mut qr = RowQr::with_rows(k, n);
+        let (m, h) = (k + 1, k + 1 + qr.block);
+        for lo in (0..n).step_by(qr.block) {
+            let rows = (n - lo).min(qr.block);
+            for (j, col) in a.as_slice().chunks_exact(n).enumerate() {
+                qr.stack[j * h + m..j * h + m + rows].copy_from_slice(&col[lo..lo + rows]);
+            }
+            qr.stack[k * h + m..k * h + m + rows].fill(0.0);
+            qr.rows += rows;
+            qr.pending = rows;
+            if rows == qr.block {
+                reduce(&mut qr.stack, m, h, m + rows);
+                qr.pending = 0;
+            }
         }
         qr
     }
@@ -518,6 +528,33 @@ pub fn constrained_least_squares(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`RowQr::of`] (a block's columns copied at once) is the factor of the rows
+    /// pushed one by one with a zero right-hand side, bit for bit: the whole stack,
+    /// rows reduced and pending, for row counts around the block size.
+    #[test]
+    fn of_is_the_rows_pushed_one_by_one() {
+        for n in [0, 1, 5, BLOCK - 1, BLOCK, BLOCK + 1, 2 * BLOCK, 300] {
+            for k in [1, 3, 4] {
+                let a = DMatrix::from_fn(n, k, |i, j| {
+                    ((i * 7 + j * 13) as f64 * 0.37).sin() + j as f64
+                });
+                let mut pushed = RowQr::with_rows(k, n);
+                for i in 0..n {
+                    let row: Vec<f64> = (0..k).map(|j| a[(i, j)]).collect();
+                    pushed.push(&row, 0.0);
+                }
+                let of = RowQr::of(&a);
+                assert_eq!(
+                    (of.rows, of.pending),
+                    (pushed.rows, pushed.pending),
+                    "{n} × {k}"
+                );
+                let bits = |q: &RowQr| q.stack.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&of), bits(&pushed), "{n} × {k}");
+            }
+        }
+    }
 
     #[test]
     fn constraint_binds_only_when_needed() {

@@ -203,6 +203,22 @@ impl LmResult {
     }
 }
 
+/// JᵀJ as `jac.tr_mul(&jac)` computes it (each entry nalgebra's dot of two
+/// columns, which is symmetric in its operands bit for bit), each product below the
+/// diagonal taken once and mirrored: half the passes over a tall Jacobian.
+fn gram(jac: &DMatrix<f64>) -> DMatrix<f64> {
+    let n = jac.ncols();
+    let mut a = DMatrix::zeros(n, n);
+    for j in 0..n {
+        for i in j..n {
+            let v = jac.column(i).dot(&jac.column(j));
+            a[(i, j)] = v;
+            a[(j, i)] = v;
+        }
+    }
+    a
+}
+
 /// `v` moved into `[lo, hi]`. Unlike `f64::clamp` it never panics (NaN or inverted
 /// bounds); [`minimize`] refuses such bounds before it projects anything.
 pub fn project(v: f64, (lo, hi): (f64, f64)) -> f64 {
@@ -253,6 +269,10 @@ pub struct Lm {
     /// The Jacobian at the trial point, for [`LeastSquares::jacobian_with_trial`]
     /// (empty until first used; not part of a checkpoint).
     jac_trial: DMatrix<f64>,
+    /// The residuals at the trial point (kept across iterations so that a step
+    /// allocates nothing of the data's size; zeroed at each step as a fresh vector
+    /// would be; not part of a checkpoint).
+    r_trial: DVector<f64>,
     /// Whether the last iteration's first trial was accepted with ρ ≥
     /// [`TRUSTED_RHO`]: only then is the next first trial evaluated with the
     /// Jacobian ([`LeastSquares::jacobian_with_trial`]).
@@ -402,6 +422,7 @@ impl Lm {
             evaluations: 1,
             costs: Vec::new(),
             jac_trial: DMatrix::zeros(0, 0),
+            r_trial: DVector::zeros(0),
             trusted: true,
             secant: false,
         };
@@ -496,7 +517,12 @@ impl Lm {
             }
         }
         let mut x_new = vec![0.0; n];
-        let mut r_new = DVector::zeros(self.r.len());
+        if self.r_trial.len() == self.r.len() {
+            self.r_trial.fill(0.0);
+        } else {
+            self.r_trial = DVector::zeros(self.r.len());
+        }
+        let r_new = &mut self.r_trial;
         let mut trial_jac = self.trusted && problem.jacobian_with_trial();
         let mut first = true;
         if trial_jac && self.jac_trial.shape() != self.jac.shape() {
@@ -531,8 +557,8 @@ impl Lm {
             if pred > 0.0 {
                 self.evaluations += 1;
                 let ok = match trial_jac {
-                    true => problem.eval(&x_new, &mut r_new, Some(&mut self.jac_trial)),
-                    false => problem.eval(&x_new, &mut r_new, None),
+                    true => problem.eval(&x_new, r_new, Some(&mut self.jac_trial)),
+                    false => problem.eval(&x_new, r_new, None),
                 };
                 let cost_new = 0.5 * r_new.norm_squared();
                 if ok && cost_new < self.cost {
@@ -543,11 +569,11 @@ impl Lm {
                         && problem.secant_jacobian()
                         && !problem.forms_normal_equations();
                     if trial_jac {
-                        std::mem::swap(&mut self.r, &mut r_new);
+                        std::mem::swap(&mut self.r, r_new);
                         std::mem::swap(&mut self.jac, &mut self.jac_trial);
                     } else if self.secant {
-                        broyden(&mut self.jac, &dx, &(&r_new - &self.r));
-                        std::mem::swap(&mut self.r, &mut r_new);
+                        broyden(&mut self.jac, &dx, &(&*r_new - &self.r));
+                        std::mem::swap(&mut self.r, r_new);
                     } else {
                         self.evaluations += 1;
                         problem.eval(x, &mut self.r, Some(&mut self.jac));
@@ -587,7 +613,7 @@ impl Lm {
         problem: &P,
     ) -> Result<(DMatrix<f64>, DVector<f64>), Termination> {
         if !problem.forms_normal_equations() {
-            return Ok((self.jac.tr_mul(&self.jac), self.jac.tr_mul(&self.r)));
+            return Ok((gram(&self.jac), self.jac.tr_mul(&self.r)));
         }
         problem.normal_equations(&self.x).ok_or_else(|| {
             Termination::Failed(
@@ -1005,6 +1031,7 @@ fn load(file: &Path, (m, n): (usize, usize), bounds: &[(f64, f64)]) -> Result<Lm
         evaluations: s.evaluations,
         costs: unbits(&s.costs),
         jac_trial: DMatrix::zeros(0, 0),
+        r_trial: DVector::zeros(0),
         trusted: s.trusted,
         secant: s.secant,
     })
@@ -1013,6 +1040,22 @@ fn load(file: &Path, (m, n): (usize, usize), bounds: &[(f64, f64)]) -> Result<Lm
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`gram`] is `tr_mul` of the Jacobian with itself, bit for bit, on tall
+    /// matrices of several widths (odd lengths included).
+    #[test]
+    fn gram_is_tr_mul_bit_for_bit() {
+        for (m, n) in [(1, 1), (7, 3), (200, 9), (333, 5)] {
+            let jac = DMatrix::from_fn(m, n, |i, j| {
+                ((3 * i + 11 * j) as f64 * 0.7).sin() * (1.0 + j as f64)
+            });
+            let want = jac.tr_mul(&jac);
+            let got = gram(&jac);
+            for (g, w) in got.iter().zip(want.iter()) {
+                assert_eq!(g.to_bits(), w.to_bits(), "{m} × {n}");
+            }
+        }
+    }
 
     /// Rosenbrock as least squares: r = (10(y − x²), 1 − x).
     struct Rosen;

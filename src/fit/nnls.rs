@@ -53,29 +53,108 @@ pub fn nnls(
 /// as [`nnls`] of the A and b they came from, bit for bit when they hold the same
 /// dot products. The columns are scaled to unit norm through G's diagonal
 /// (G_ij/(√G_ii·√G_jj)); a zero diagonal leaves that coefficient at 0.
+/// [`NnlsWork::solve`] without its kept work space.
 pub fn nnls_normal(
     g: &DMatrix<f64>,
     h: &DVector<f64>,
     start: Option<&[bool]>,
 ) -> Result<NnlsSolution, String> {
-    let k = h.len();
-    let finite = |v: &[f64]| v.iter().all(|v| v.is_finite());
-    if !(finite(g.as_slice()) && finite(h.as_slice())) {
-        return Err("the problem holds a value that is not finite".into());
-    }
-    let d: Vec<f64> = (0..k).map(|j| unit_scale(g[(j, j)])).collect();
-    let mut gs = g.clone_owned();
-    for (gj, dj) in gs.as_mut_slice().chunks_exact_mut(k.max(1)).zip(&d) {
-        for (v, di) in gj.iter_mut().zip(&d) {
-            *v = *v * di * dj;
+    let mut work = NnlsWork::new(h.len());
+    let iterations = work.solve(g.as_slice(), h.as_slice(), start)?;
+    Ok(NnlsSolution {
+        x: DVector::from_column_slice(work.x()),
+        iterations,
+    })
+}
+
+/// The work space of [`nnls_normal`] for problems of k coefficients, kept by a
+/// caller that solves many (the variable projection, one an evaluation): no
+/// allocation a solve.
+#[derive(Debug, Clone)]
+pub struct NnlsWork {
+    k: usize,
+    /// 1/√G_jj (0 for a zero column).
+    d: Vec<f64>,
+    /// The scaled normal equations.
+    gs: Vec<f64>,
+    hs: Vec<f64>,
+    /// The scaled solution, then the solution.
+    x: Vec<f64>,
+    z: Vec<f64>,
+    w: Vec<f64>,
+    leaving: Vec<bool>,
+    /// The empty start.
+    cold: Vec<bool>,
+    f: PassiveFactor,
+}
+
+impl NnlsWork {
+    /// The work space of problems of `k` coefficients.
+    pub fn new(k: usize) -> NnlsWork {
+        NnlsWork {
+            k,
+            d: vec![0.0; k],
+            gs: Vec::with_capacity(k * k),
+            hs: vec![0.0; k],
+            x: vec![0.0; k],
+            z: vec![0.0; k],
+            w: vec![0.0; k],
+            leaving: vec![false; k],
+            cold: vec![false; k],
+            f: PassiveFactor::new(k),
         }
     }
-    let hs = DVector::from_fn(k, |i, _| h[i] * d[i]);
-    let x = solve_normal(&gs, &hs, start.unwrap_or(&vec![false; k]), &d)?;
-    Ok(NnlsSolution {
-        x: DVector::from_iterator(k, x.0.iter().zip(&d).map(|(v, s)| v * s)),
-        iterations: x.1,
-    })
+
+    /// [`nnls_normal`] of G (column-major k × k) and h: the solution into
+    /// [`NnlsWork::x`], the outer iterations returned. Err as [`nnls`] (a value
+    /// not finite, no convergence, a singular free set), or when G and h are not
+    /// of this work space's k.
+    pub fn solve(&mut self, g: &[f64], h: &[f64], start: Option<&[bool]>) -> Result<usize, String> {
+        let k = self.k;
+        if g.len() != k * k || h.len() != k {
+            return Err(format!(
+                "normal equations of {} coefficients for a work space of {k}",
+                h.len()
+            ));
+        }
+        let finite = |v: &[f64]| v.iter().all(|v| v.is_finite());
+        if !(finite(g) && finite(h)) {
+            return Err("the problem holds a value that is not finite".into());
+        }
+        for (j, dj) in self.d.iter_mut().enumerate() {
+            *dj = unit_scale(g[j * k + j]);
+        }
+        let d = &self.d;
+        self.gs.clear();
+        self.gs.extend_from_slice(g);
+        for (gj, dj) in self.gs.chunks_exact_mut(k.max(1)).zip(d) {
+            for (v, di) in gj.iter_mut().zip(d) {
+                *v = *v * di * dj;
+            }
+        }
+        for ((hs, h), di) in self.hs.iter_mut().zip(h).zip(d) {
+            *hs = h * di;
+        }
+        let start = start.unwrap_or(&self.cold);
+        let iterations = solve_normal(
+            &self.gs,
+            &self.hs,
+            start,
+            d,
+            &mut self.f,
+            [&mut self.x, &mut self.z, &mut self.w],
+            &mut self.leaving,
+        )?;
+        for (x, s) in self.x.iter_mut().zip(d) {
+            *x *= s;
+        }
+        Ok(iterations)
+    }
+
+    /// The solution of the last [`NnlsWork::solve`] that succeeded.
+    pub fn x(&self) -> &[f64] {
+        &self.x
+    }
 }
 
 /// 1/‖a‖ of a column whose squared norm is `square` (0 for a zero column).
@@ -211,30 +290,32 @@ fn dot_2x2(a: [&[f64]; 2], b: [&[f64]; 2]) -> [f64; 4] {
     })
 }
 
-/// Lawson–Hanson on the scaled normal equations (module notes). Returns the scaled
-/// solution and the outer iterations. The work space is allocated once here: the
-/// factor of G_PP is kept across the steps ([`PassiveFactor`]), and w = h − G·x
-/// takes only P's columns of G (x is zero off P).
+/// Lawson–Hanson on the scaled normal equations (module notes): the scaled
+/// solution into `x`, the outer iterations returned. The work space is the
+/// caller's ([`NnlsWork`]; `x`, `z`, `w` of k entries, every mark of `leaving`
+/// clear): the factor of G_PP is kept across the steps ([`PassiveFactor`]), and
+/// w = h − G·x takes only P's columns of G (x is zero off P).
 fn solve_normal(
-    g: &DMatrix<f64>,
-    h: &DVector<f64>,
+    g: &[f64],
+    h: &[f64],
     start: &[bool],
     d: &[f64],
-) -> Result<(Vec<f64>, usize), String> {
+    f: &mut PassiveFactor,
+    [x, z, w]: [&mut Vec<f64>; 3],
+    leaving: &mut [bool],
+) -> Result<usize, String> {
     let k = h.len();
-    let (g, h) = (g.as_slice(), h.as_slice());
     // Gradient tolerance: rounding of the normal equations, relative to ‖h‖∞.
     let tol = 1e-10
         * h.iter()
             .fold(0.0, |m: f64, v| m.max(v.abs()))
             .max(f64::MIN_POSITIVE);
     let usable = |j: usize| d[j] > 0.0;
-    let mut f = PassiveFactor::new(k);
-    let mut x = vec![0.0; k];
-    let mut z = vec![0.0; k];
-    let mut w = vec![0.0; k];
-    let mut leaving = vec![false; k];
-    warm_start(&mut f, g, h, start, &usable, &mut z, &mut leaving);
+    f.clear();
+    x.fill(0.0);
+    z.fill(0.0);
+    leaving.fill(false);
+    warm_start(f, g, h, start, &usable, z, leaving);
     for &j in &f.order {
         x[j] = z[j];
     }
@@ -243,8 +324,9 @@ fn solve_normal(
         // w = h − G·x: the columns of P only.
         w.copy_from_slice(h);
         for &j in &f.order {
+            let xj = x[j];
             for (wi, gi) in w.iter_mut().zip(&g[j * k..(j + 1) * k]) {
-                *wi -= gi * x[j];
+                *wi -= gi * xj;
             }
         }
         let best = (0..k)
@@ -253,7 +335,7 @@ fn solve_normal(
             .filter(|&(_, w)| w > tol)
             .max_by(|a, b| a.1.total_cmp(&b.1));
         let Some((t, _)) = best else {
-            return Ok((x, iterations));
+            return Ok(iterations);
         };
         iterations += 1;
         if iterations > 3 * k.max(1) {
@@ -264,7 +346,7 @@ fn solve_normal(
         }
         // Inner loop: keep the solution on P feasible.
         loop {
-            if !f.solve(&mut z) {
+            if !f.solve(z) {
                 return Err("the normal equations on the free set are singular".into());
             }
             if f.order.iter().all(|&j| z[j] > 0.0) {
@@ -286,7 +368,7 @@ fn solve_normal(
                     x[j] = 0.0;
                 }
             }
-            f.remove(&mut leaving);
+            f.remove(leaving);
             if f.order.is_empty() {
                 break;
             }
@@ -339,6 +421,7 @@ fn warm_start(
 /// rotates the factor back to triangular form ([`PassiveFactor::delete`]). No
 /// allocation after [`PassiveFactor::new`]. y = L⁻¹·h_P is kept alongside, so a
 /// solve is one back substitution.
+#[derive(Debug, Clone)]
 struct PassiveFactor {
     k: usize,
     /// P in entry order: row r of L belongs to `order[r]`.
@@ -749,6 +832,57 @@ mod tests {
     /// solution (the problem is strictly convex: one minimiser) to 10⁻⁹ of its
     /// largest entry, with the same positive set, and a start from the answer takes
     /// no step.
+    /// One [`NnlsWork`] kept across 300 problems of one size (cold and warm
+    /// starts, the last solution's positive set among them, and refused problems
+    /// between them: a value not finite, a repeated column) gives each the
+    /// solution and iterations of a fresh work space, bit for bit: nothing of one
+    /// solve leaks into the next.
+    #[test]
+    fn kept_work_space_is_a_fresh_one() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
+        let k = 9;
+        let mut work = NnlsWork::new(k);
+        let mut last = vec![false; k];
+        for case in 0..300 {
+            let n = rng.gen_range(12..30);
+            let (_, _, mut g, h) = random_normal(&mut rng, n, k);
+            if case % 37 == 5 {
+                g[(2, 3)] = f64::NAN;
+            }
+            if case % 41 == 7 {
+                // Column 4 a copy of column 1: G_PP singular with both in P.
+                for i in 0..k {
+                    g[(i, 4)] = g[(i, 1)];
+                    g[(4, i)] = g[(1, i)];
+                }
+                g[(4, 4)] = g[(1, 1)];
+            }
+            let random: Vec<bool> = (0..k).map(|_| rng.gen_bool(0.5)).collect();
+            let start = match case % 3 {
+                0 => None,
+                1 => Some(&random[..]),
+                _ => Some(&last[..]),
+            };
+            let fresh = nnls_normal(&g, &h, start);
+            let kept = work.solve(g.as_slice(), h.as_slice(), start);
+            match (fresh, kept) {
+                (Ok(f), Ok(it)) => {
+                    assert_eq!(it, f.iterations, "case {case}");
+                    let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(bits(work.x()), bits(f.x.as_slice()), "case {case}");
+                    last = f.x.iter().map(|&v| v > 0.0).collect();
+                }
+                (Err(f), Err(w)) => assert_eq!(f, w, "case {case}"),
+                (f, w) => panic!("case {case}: fresh {f:?}, kept {w:?}"),
+            }
+        }
+        assert!(
+            work.solve(&[1.0], &[1.0], None).is_err(),
+            "the wrong size is refused"
+        );
+    }
+
     #[test]
     fn warm_start_is_cold_start() {
         use rand::{Rng, SeedableRng};

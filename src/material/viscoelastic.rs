@@ -611,8 +611,10 @@ impl Schedule {
             false => &mut [],
         });
         let (mut s, mut d) = ([0.0; L], [0.0; L]);
+        // The exponential's constants as operands from memory (see `ExpTable`).
+        let table = std::hint::black_box(&numerics::ExpTable::<L>::SPLAT);
         for iv in &self.intervals {
-            iv.advance::<L, D>(&tau, &inv, &mut s, &mut d);
+            iv.advance::<L, D>(&tau, &inv, table, &mut s, &mut d);
             if let Some(o) = iv.out {
                 for (c, v) in hc.iter_mut().zip(&s) {
                     c[o] = *v;
@@ -635,18 +637,19 @@ impl Interval {
     /// The states `s` of the lanes' τ kernels (`inv` = 1/τ) carried across this
     /// interval, and their τ-derivatives `d` when `D`: over dt at input rate ṙ,
     /// s ← a·s + ṙτ(1 − a), d ← a·(d + (s − ṙτ)·dt/τ²) + ṙ(1 − a), a = e^(−dt/τ)
-    /// ([`numerics::exp`]); then the input's jump.
+    /// ([`numerics::exp`], its constants from `table`); then the input's jump.
     #[inline(always)]
     fn advance<const L: usize, const D: bool>(
         &self,
         tau: &[f64; L],
         inv: &[f64; L],
+        table: &numerics::ExpTable<L>,
         s: &mut [f64; L],
         d: &mut [f64; L],
     ) {
         if self.dt > 0.0 {
             for i in 0..L {
-                let a = numerics::exp(-self.dt * inv[i]);
+                let a = table.exp(-self.dt * inv[i], i);
                 let rt = self.rate * tau[i];
                 if D {
                     d[i] = a * (d[i] + (s[i] - rt) * self.dt * inv[i] * inv[i])

@@ -55,7 +55,7 @@
 //! (Gent: finite only up to its extensibility limit) first has the ends of its
 //! finite interval found by bisection on the grid.
 
-use crate::material::hyperelastic::powers::{Laurent, Parts, PowerSum, Split};
+use crate::material::hyperelastic::powers::{Laurent, Parts, Split, TangentPowers};
 use crate::material::hyperelastic::{AtParams, Mode, StrainEnergy};
 use serde::{Deserialize, Serialize};
 use std::sync::{Mutex, OnceLock, PoisonError};
@@ -145,6 +145,7 @@ impl Runs {
 struct Tangent<'a> {
     model: &'a dyn StrainEnergy,
     p: &'a [f64],
+    mode: Mode,
     at: AtParams,
 }
 
@@ -153,6 +154,7 @@ impl<'a> Tangent<'a> {
         Tangent {
             model,
             p,
+            mode,
             at: AtParams::new(model, p, mode),
         }
     }
@@ -264,6 +266,22 @@ fn last_like_first(t: &Tangent, lo: usize, hi: usize, first: bool) -> usize {
 fn signs(model: &dyn StrainEnergy, p: &[f64], mode: Mode) -> Runs {
     let mut runs = Runs::default();
     let t = Tangent::new(model, p, mode);
+    if let Some(cert) = model
+        .tangent_basis(mode)
+        .and_then(certificate)
+        .filter(|c| c.k == p.len())
+    {
+        let mut abs = [0.0; MAX_BASES];
+        for (a, v) in abs.iter_mut().zip(p) {
+            *a = v.abs();
+        }
+        let mut fallback = Fallback {
+            t: &t,
+            powers: None,
+        };
+        certify(cert, 0, 0, &abs[..p.len()], &mut fallback, &mut runs);
+        return runs;
+    }
     let Some(tp) = model.tangent_powers(p, mode) else {
         dense(&t, 0, GRID - 1, &mut runs);
         return runs;
@@ -308,21 +326,6 @@ fn signs(model: &dyn StrainEnergy, p: &[f64], mode: Mode) -> Runs {
             runs.push(lo, m, a);
             runs.push(m + 1, hi, b);
         }
-    } else if let Some(cert) = (!tp.bounded)
-        .then(|| model.tangent_basis(mode).and_then(certificate))
-        .flatten()
-        .filter(|c| c.k == p.len())
-    {
-        let mut abs = [0.0; MAX_BASES];
-        for (a, v) in abs.iter_mut().zip(p) {
-            *a = v.abs();
-        }
-        let mut fallback = Fallback {
-            t: &t,
-            sum: &tp.sum,
-            split: None,
-        };
-        certify(cert, 0, 0, p, &abs[..p.len()], &mut fallback, &mut runs);
     } else {
         bounded(&t, &tp.sum.split(), lo, hi, &mut runs);
     }
@@ -365,6 +368,10 @@ const LEVELS: usize = 6;
 /// The most bases (parameters) a certificate takes.
 const MAX_BASES: usize = 8;
 
+/// The most Bernstein coefficients a cell (a degree below the exponents a
+/// [`Laurent`] polynomial holds).
+const MAX_LEN: usize = 32;
+
 /// Relative widening of a certificate cell in μ, beyond the rounding of λ^g at its
 /// ends, so that the cell holds the grid stretches at its ends.
 const WIDEN: f64 = 1e-12;
@@ -378,37 +385,42 @@ struct Certificate {
     /// Bernstein coefficients a cell: the degree of Q in μ, plus one.
     len: usize,
     /// Per cell (the cells in heap order: cell c of level l is number 2^l − 1 + c,
-    /// its halves 2n + 1 and 2n + 2), `len` rows of the K bases' coefficients β_jk,
-    /// then `len` rows of those of their magnitudes' polynomials ρ_jk (≥ 0).
+    /// its halves 2n + 1 and 2n + 2), the K bases' `len` coefficients β_kj, basis
+    /// after basis, then the K largest coefficients ρ_k = max_j ρ_kj of the bases'
+    /// magnitudes' polynomials Σ_e |b_ke|·μ^e.
     coef: Vec<f64>,
 }
 
-/// C(n, i) for n, i ≤ 32 (exact in f64).
-fn binomial(n: usize, i: usize) -> f64 {
-    (0..i).fold(1.0, |c, r| c * (n - r) as f64 / (r + 1) as f64)
+/// Pascal's triangle to n = [`MAX_LEN`] − 1 (exact in f64).
+fn pascal() -> [[f64; MAX_LEN]; MAX_LEN] {
+    let mut c = [[0.0; MAX_LEN]; MAX_LEN];
+    for n in 0..MAX_LEN {
+        c[n][0] = 1.0;
+        for i in 1..=n {
+            c[n][i] = c[n - 1][i - 1] + c[n - 1][i];
+        }
+    }
+    c
 }
 
-/// The Bernstein coefficients on [a, b] (0 < a < b) of Q(μ) = Σ_m q_m·μ^m: with
-/// μ = a + h·t, Q = Σ_i τ_i·t^i, τ_i = Σ_{m ≥ i} q_m·C(m, i)·a^(m−i)·h^i, and
-/// β_j = Σ_{i ≤ j} C(j, i)/C(d, i)·τ_i (Farin, §5.7). Every weight is ≥ 0, so the
-/// rounding of β_j is a few units of the last place of the same sum over |q_m|.
-fn bernstein(q: &[f64], a: f64, b: f64) -> Vec<f64> {
+/// The Bernstein coefficients on [a, b] (0 < a < b) of Q(μ) = Σ_m q_m·μ^m (at most
+/// [`MAX_LEN`] of them; `c` from [`pascal`]): with μ = a + h·t, Q = Σ_i τ_i·t^i,
+/// τ_i = Σ_{m ≥ i} q_m·C(m, i)·a^(m−i)·h^i, and β_j = Σ_{i ≤ j} C(j, i)/C(d, i)·τ_i
+/// (Farin, §5.7). Every weight is ≥ 0, so the rounding of β_j is a few tens of
+/// units of the last place of the same sum over |q_m|.
+fn bernstein(q: &[f64], a: f64, b: f64, c: &[[f64; MAX_LEN]; MAX_LEN]) -> Vec<f64> {
     let d = q.len() - 1;
     let h = b - a;
     let tau: Vec<f64> = (0..=d)
         .map(|i| {
             (i..=d)
-                .map(|m| q[m] * binomial(m, i) * a.powi((m - i) as i32))
+                .map(|m| q[m] * c[m][i] * a.powi((m - i) as i32))
                 .sum::<f64>()
                 * h.powi(i as i32)
         })
         .collect();
     (0..=d)
-        .map(|j| {
-            (0..=j)
-                .map(|i| binomial(j, i) / binomial(d, i) * tau[i])
-                .sum()
-        })
+        .map(|j| (0..=j).map(|i| c[j][i] / c[d][i] * tau[i]).sum())
         .collect()
 }
 
@@ -436,62 +448,67 @@ impl Certificate {
         let lo = terms().map(|(e, _)| e).min()?;
         let step = terms().fold(0, |g, (e, _)| gcd(g, e - lo)).max(1);
         let len = terms().map(|(e, _)| (e - lo) / step).max()? as usize + 1;
-        // Q_k's coefficients in μ = λ^step.
-        let q: Vec<Vec<f64>> = basis
+        if len > MAX_LEN {
+            return None;
+        }
+        // Q_k's coefficients in μ = λ^step, and those of its magnitudes.
+        let q: Vec<[Vec<f64>; 2]> = basis
             .iter()
             .map(|b| {
                 let mut q = vec![0.0; len];
                 for (e, c) in b.terms().filter(|&(_, c)| c != 0.0) {
                     q[((e - lo) / step) as usize] = c;
                 }
-                q
+                let magnitudes = q.iter().map(|v| v.abs()).collect();
+                [q, magnitudes]
             })
             .collect();
-        let g = grid();
-        let mut coef = Vec::with_capacity(((1 << LEVELS) - 1) * 2 * len * k);
+        let (g, c) = (grid(), pascal());
+        let mut coef = Vec::with_capacity(((1 << LEVELS) - 1) * (len + 1) * k);
         for level in 0..LEVELS {
             let steps = (GRID - 1) >> level;
-            for c in 0..1 << level {
-                let a = g[c * steps].1.powi(step) * (1.0 - WIDEN);
-                let b = g[(c + 1) * steps].1.powi(step) * (1.0 + WIDEN);
-                let cell = coef.len();
-                coef.resize(cell + 2 * len * k, 0.0);
-                for (kk, qk) in q.iter().enumerate() {
-                    let magnitudes: Vec<f64> = qk.iter().map(|v| v.abs()).collect();
-                    let (beta, rho) = (bernstein(qk, a, b), bernstein(&magnitudes, a, b));
-                    for j in 0..len {
-                        coef[cell + j * k + kk] = beta[j];
-                        coef[cell + (len + j) * k + kk] = rho[j];
-                    }
+            for cell in 0..1 << level {
+                let a = g[cell * steps].1.powi(step) * (1.0 - WIDEN);
+                let b = g[(cell + 1) * steps].1.powi(step) * (1.0 + WIDEN);
+                let mut largest = Vec::with_capacity(k);
+                for [qk, magnitudes] in &q {
+                    coef.extend(bernstein(qk, a, b, &c));
+                    let rho = bernstein(magnitudes, a, b, &c);
+                    largest.push(rho.iter().fold(0.0, |m: f64, &r| m.max(r)));
                 }
+                coef.extend(largest);
             }
         }
         Some(Certificate { k, len, coef })
     }
 
-    /// What the coefficients of cell `n` say at parameters `p` (magnitudes `abs`):
-    /// positive (negative) when every β_j(p) exceeds (is below minus) 2·[`MARGIN`]·ρ_j(|p|).
+    /// What the coefficients of cell `n` say at parameters of magnitudes `abs`
+    /// (those of the parameters the check runs at; `p` then their signs' values).
+    ///
+    /// Positive (negative) when every β_j(p) = Σ_k p_k·β_kj exceeds (is below minus)
+    /// 2·[`MARGIN`]·Σ_k |p_k|·ρ_k, which is at least 2·[`MARGIN`] times the largest
+    /// coefficient of the magnitudes' polynomial on the cell, so at least
+    /// [`MARGIN`]·(P + N) anywhere in it; the rounding of β_j(p) is some 10⁻¹⁴ of
+    /// that bound.
     fn cell(&self, n: usize, p: &[f64], abs: &[f64]) -> Cell {
-        let rows = self.len * self.k;
-        let c = &self.coef[2 * n * rows..2 * (n + 1) * rows];
-        let (beta, rho) = c.split_at(rows);
-        let mut sign = Cell::Undecided;
-        for (b, r) in beta.chunks_exact(self.k).zip(rho.chunks_exact(self.k)) {
-            let v: f64 = b.iter().zip(p).map(|(b, p)| b * p).sum();
-            let tol = 2.0 * MARGIN * r.iter().zip(abs).map(|(r, a)| r * a).sum::<f64>();
-            let here = if v > tol {
-                Cell::Positive
-            } else if v < -tol {
-                Cell::Negative
-            } else {
-                return Cell::Undecided;
-            };
-            if sign != Cell::Undecided && here != sign {
-                return Cell::Undecided;
+        let (k, len) = (self.k, self.len);
+        let block = &self.coef[n * k * (len + 1)..(n + 1) * k * (len + 1)];
+        let (beta, rho) = block.split_at(k * len);
+        let tol = 2.0 * MARGIN * rho.iter().zip(abs).map(|(r, a)| r * a).sum::<f64>();
+        let mut v = [0.0; MAX_LEN];
+        let v = &mut v[..len];
+        for (row, &pk) in beta.chunks_exact(len).zip(p) {
+            for (v, b) in v.iter_mut().zip(row) {
+                *v += pk * b;
             }
-            sign = here;
         }
-        sign
+        if v.iter().all(|&x| x > tol) {
+            Cell::Positive
+        } else if v.iter().all(|&x| x < -tol) {
+            Cell::Negative
+        } else {
+            Cell::Undecided
+        }
     }
 }
 
@@ -511,11 +528,25 @@ fn certificate(basis: &'static [Laurent]) -> Option<&'static Certificate> {
 }
 
 /// What a cell the certificate leaves undecided falls back to: the convex bounds
-/// on the power sum, split by sign at the first need.
+/// on the tangent's power sum, built at the first need.
 struct Fallback<'a> {
     t: &'a Tangent<'a>,
-    sum: &'a PowerSum,
-    split: Option<Split<'a>>,
+    powers: Option<Option<TangentPowers>>,
+}
+
+impl Fallback<'_> {
+    /// The sign at grid stretches `lo..=hi` by the convex bounds (by direct
+    /// evaluation if the model gives no unbounded power form).
+    fn decide(&mut self, lo: usize, hi: usize, runs: &mut Runs) {
+        let t = self.t;
+        let tp = self
+            .powers
+            .get_or_insert_with(|| t.model.tangent_powers(t.p, t.mode));
+        match tp {
+            Some(tp) if !tp.bounded => bounded(t, &tp.sum.split(), lo, hi, runs),
+            _ => dense(t, lo, hi, runs),
+        }
+    }
 }
 
 /// The sign at every grid stretch of certificate cell `n` (level `level`): from
@@ -525,7 +556,6 @@ fn certify(
     cert: &Certificate,
     n: usize,
     level: usize,
-    p: &[f64],
     abs: &[f64],
     fallback: &mut Fallback,
     runs: &mut Runs,
@@ -533,18 +563,14 @@ fn certify(
     let steps = (GRID - 1) >> level;
     let c = n + 1 - (1 << level);
     let (i, j) = (c * steps, (c + 1) * steps);
-    match cert.cell(n, p, abs) {
+    match cert.cell(n, fallback.t.p, abs) {
         Cell::Positive => runs.push(i, j, true),
         Cell::Negative => runs.push(i, j, false),
         Cell::Undecided if level + 1 < LEVELS => {
-            certify(cert, 2 * n + 1, level + 1, p, abs, fallback, runs);
-            certify(cert, 2 * n + 2, level + 1, p, abs, fallback, runs);
+            certify(cert, 2 * n + 1, level + 1, abs, fallback, runs);
+            certify(cert, 2 * n + 2, level + 1, abs, fallback, runs);
         }
-        Cell::Undecided => {
-            let sum = fallback.sum;
-            let split = fallback.split.get_or_insert_with(|| sum.split());
-            bounded(fallback.t, split, i, j, runs);
-        }
+        Cell::Undecided => fallback.decide(i, j, runs),
     }
 }
 
@@ -612,19 +638,15 @@ mod tests {
             let q: Vec<f64> = (0..=d).map(|_| rng.gen_range(-1e3..1e3)).collect();
             let a = 10f64.powf(rng.gen_range(-2.0..1.5));
             let b = a * (1.0 + 10f64.powf(rng.gen_range(-3.0..0.5)));
-            let beta = bernstein(&q, a, b);
+            let c = pascal();
+            let beta = bernstein(&q, a, b, &c);
             let mags: Vec<f64> = q.iter().map(|v| v.abs()).collect();
-            assert!(bernstein(&mags, a, b).iter().all(|&r| r >= 0.0));
+            assert!(bernstein(&mags, a, b, &c).iter().all(|&r| r >= 0.0));
             let poly = |q: &[f64], x: f64| q.iter().rev().fold(0.0, |acc, c| acc * x + c);
             for t in [0.0, 0.1, 0.37, 0.5, 0.81, 1.0] {
                 let x = a + (b - a) * t;
                 let bern: f64 = (0..=d)
-                    .map(|j| {
-                        beta[j]
-                            * binomial(d, j)
-                            * t.powi(j as i32)
-                            * (1.0 - t).powi((d - j) as i32)
-                    })
+                    .map(|j| beta[j] * c[d][j] * t.powi(j as i32) * (1.0 - t).powi((d - j) as i32))
                     .sum();
                 let tol = 1e-13 * poly(&mags, x);
                 assert!((bern - poly(&q, x)).abs() <= tol, "d {d} t {t}");
@@ -726,13 +748,19 @@ mod tests {
                         }
                     })
                     .collect();
-                assert_eq!(drucker(m.as_ref(), &p), drucker_dense(m.as_ref(), &p), "{name} {p:?}");
+                assert_eq!(
+                    drucker(m.as_ref(), &p),
+                    drucker_dense(m.as_ref(), &p),
+                    "{name} {p:?}"
+                );
             }
             if k < 2 {
                 continue;
             }
             for _ in 0..6 {
-                let mut p: Vec<f64> = (0..k).map(|_| 10f64.powf(rng.gen_range(3.0..6.0))).collect();
+                let mut p: Vec<f64> = (0..k)
+                    .map(|_| 10f64.powf(rng.gen_range(3.0..6.0)))
+                    .collect();
                 for v in p.iter_mut().skip(2) {
                     *v *= 1e-4;
                 }
@@ -741,7 +769,11 @@ mod tests {
                 };
                 for rel in [-1e-6, -1e-9, -1e-12, -1e-15, 0.0, 1e-15, 1e-12, 1e-9, 1e-6] {
                     p[1] = b * (1.0 + rel);
-                    assert_eq!(drucker(m.as_ref(), &p), drucker_dense(m.as_ref(), &p), "{name} {p:?}");
+                    assert_eq!(
+                        drucker(m.as_ref(), &p),
+                        drucker_dense(m.as_ref(), &p),
+                        "{name} {p:?}"
+                    );
                 }
             }
         }

@@ -271,15 +271,15 @@ fn signs(model: &dyn StrainEnergy, p: &[f64], mode: Mode) -> Runs {
         .and_then(certificate)
         .filter(|c| c.k == p.len())
     {
-        let mut abs = [0.0; MAX_BASES];
-        for (a, v) in abs.iter_mut().zip(p) {
-            *a = v.abs();
+        let mut lanes = Lanes::default();
+        for ((v, a), &x) in lanes.p.iter_mut().zip(&mut lanes.abs).zip(p) {
+            (*v, *a) = (x, x.abs());
         }
         let mut fallback = Fallback {
             t: &t,
             powers: None,
         };
-        certify(cert, 0, 0, &abs[..p.len()], &mut fallback, &mut runs);
+        certify(cert, 0, 0, &lanes, &mut fallback, &mut runs);
         return runs;
     }
     let Some(tp) = model.tangent_powers(p, mode) else {
@@ -365,8 +365,24 @@ fn bounded(t: &Tangent, split: &Split, lo: usize, hi: usize, runs: &mut Runs) {
 /// steps (the last, 32 cells of 25 steps).
 const LEVELS: usize = 6;
 
-/// The most bases (parameters) a certificate takes.
-const MAX_BASES: usize = 8;
+/// The most bases (parameters) a certificate takes: the lanes of a row.
+const MAX_BASES: usize = 4;
+
+/// One coefficient of each basis (zero after the last), or the parameters.
+type Row = [f64; MAX_BASES];
+
+/// Σ a_k·b_k over a row.
+#[inline(always)]
+fn dot(a: &Row, b: &Row) -> f64 {
+    (a[0] * b[0] + a[1] * b[1]) + (a[2] * b[2] + a[3] * b[3])
+}
+
+/// The parameters and their magnitudes as rows (zero after the last).
+#[derive(Debug, Default)]
+struct Lanes {
+    p: Row,
+    abs: Row,
+}
 
 /// The most Bernstein coefficients a cell (a degree below the exponents a
 /// [`Laurent`] polynomial holds).
@@ -385,10 +401,10 @@ struct Certificate {
     /// Bernstein coefficients a cell: the degree of Q in μ, plus one.
     len: usize,
     /// Per cell (the cells in heap order: cell c of level l is number 2^l − 1 + c,
-    /// its halves 2n + 1 and 2n + 2), the K bases' `len` coefficients β_kj, basis
-    /// after basis, then the K largest coefficients ρ_k = max_j ρ_kj of the bases'
+    /// its halves 2n + 1 and 2n + 2), `len` rows of the bases' coefficients β_jk,
+    /// then a row of their largest coefficients ρ_k = max_j ρ_jk of the bases'
     /// magnitudes' polynomials Σ_e |b_ke|·μ^e.
-    coef: Vec<f64>,
+    coef: Vec<Row>,
 }
 
 /// Pascal's triangle to n = [`MAX_LEN`] − 1 (exact in f64).
@@ -464,48 +480,47 @@ impl Certificate {
             })
             .collect();
         let (g, c) = (grid(), pascal());
-        let mut coef = Vec::with_capacity(((1 << LEVELS) - 1) * (len + 1) * k);
+        let mut coef = Vec::with_capacity(((1 << LEVELS) - 1) * (len + 1));
         for level in 0..LEVELS {
             let steps = (GRID - 1) >> level;
             for cell in 0..1 << level {
                 let a = g[cell * steps].1.powi(step) * (1.0 - WIDEN);
                 let b = g[(cell + 1) * steps].1.powi(step) * (1.0 + WIDEN);
-                let mut largest = Vec::with_capacity(k);
-                for [qk, magnitudes] in &q {
-                    coef.extend(bernstein(qk, a, b, &c));
+                let cell = coef.len();
+                coef.resize(cell + len + 1, [0.0; MAX_BASES]);
+                for (kk, [qk, magnitudes]) in q.iter().enumerate() {
+                    for (row, beta) in coef[cell..].iter_mut().zip(bernstein(qk, a, b, &c)) {
+                        row[kk] = beta;
+                    }
                     let rho = bernstein(magnitudes, a, b, &c);
-                    largest.push(rho.iter().fold(0.0, |m: f64, &r| m.max(r)));
+                    coef[cell + len][kk] = rho.iter().fold(0.0, |m: f64, &r| m.max(r));
                 }
-                coef.extend(largest);
             }
         }
         Some(Certificate { k, len, coef })
     }
 
-    /// What the coefficients of cell `n` say at parameters of magnitudes `abs`
-    /// (those of the parameters the check runs at; `p` then their signs' values).
+    /// What the coefficients of cell `n` say at parameters `p`.
     ///
-    /// Positive (negative) when every β_j(p) = Σ_k p_k·β_kj exceeds (is below minus)
+    /// Positive (negative) when every β_j(p) = Σ_k p_k·β_jk exceeds (is below minus)
     /// 2·[`MARGIN`]·Σ_k |p_k|·ρ_k, which is at least 2·[`MARGIN`] times the largest
     /// coefficient of the magnitudes' polynomial on the cell, so at least
     /// [`MARGIN`]·(P + N) anywhere in it; the rounding of β_j(p) is some 10⁻¹⁴ of
     /// that bound.
-    fn cell(&self, n: usize, p: &[f64], abs: &[f64]) -> Cell {
-        let (k, len) = (self.k, self.len);
-        let block = &self.coef[n * k * (len + 1)..(n + 1) * k * (len + 1)];
-        let (beta, rho) = block.split_at(k * len);
-        let tol = 2.0 * MARGIN * rho.iter().zip(abs).map(|(r, a)| r * a).sum::<f64>();
-        let mut v = [0.0; MAX_LEN];
-        let v = &mut v[..len];
-        for (row, &pk) in beta.chunks_exact(len).zip(p) {
-            for (v, b) in v.iter_mut().zip(row) {
-                *v += pk * b;
-            }
-        }
-        if v.iter().all(|&x| x > tol) {
-            Cell::Positive
-        } else if v.iter().all(|&x| x < -tol) {
-            Cell::Negative
+    fn cell(&self, n: usize, p: &Lanes) -> Cell {
+        let rows = &self.coef[n * (self.len + 1)..(n + 1) * (self.len + 1)];
+        let (beta, rho) = rows.split_at(self.len);
+        let tol = 2.0 * MARGIN * dot(&rho[0], &p.abs);
+        let first = dot(&beta[0], &p.p);
+        let (sign, cell) = if first > tol {
+            (1.0, Cell::Positive)
+        } else if first < -tol {
+            (-1.0, Cell::Negative)
+        } else {
+            return Cell::Undecided;
+        };
+        if beta[1..].iter().all(|row| sign * dot(row, &p.p) > tol) {
+            cell
         } else {
             Cell::Undecided
         }
@@ -556,19 +571,19 @@ fn certify(
     cert: &Certificate,
     n: usize,
     level: usize,
-    abs: &[f64],
+    p: &Lanes,
     fallback: &mut Fallback,
     runs: &mut Runs,
 ) {
     let steps = (GRID - 1) >> level;
     let c = n + 1 - (1 << level);
     let (i, j) = (c * steps, (c + 1) * steps);
-    match cert.cell(n, fallback.t.p, abs) {
+    match cert.cell(n, p) {
         Cell::Positive => runs.push(i, j, true),
         Cell::Negative => runs.push(i, j, false),
         Cell::Undecided if level + 1 < LEVELS => {
-            certify(cert, 2 * n + 1, level + 1, abs, fallback, runs);
-            certify(cert, 2 * n + 2, level + 1, abs, fallback, runs);
+            certify(cert, 2 * n + 1, level + 1, p, fallback, runs);
+            certify(cert, 2 * n + 2, level + 1, p, fallback, runs);
         }
         Cell::Undecided => fallback.decide(i, j, runs),
     }
@@ -670,7 +685,10 @@ mod tests {
         let p = [69337.65358693252, -904.1759940890297, 17.328065272581014];
         for mode in Mode::ALL {
             let cert = certificate(m.tangent_basis(mode).unwrap()).unwrap();
-            let abs = p.map(f64::abs);
+            let lanes = Lanes {
+                p: [p[0], p[1], p[2], 0.0],
+                abs: [p[0].abs(), p[1].abs(), p[2].abs(), 0.0],
+            };
             let t = Tangent::new(m.as_ref(), &p, mode);
             // The cells the certificate decides, walked as `certify` walks them.
             let (mut decided, mut visited) = (Vec::new(), 0);
@@ -679,7 +697,7 @@ mod tests {
                 visited += 1;
                 let steps = (GRID - 1) >> level;
                 let c = n + 1 - (1 << level);
-                match cert.cell(n, &p, &abs) {
+                match cert.cell(n, &lanes) {
                     Cell::Positive => decided.push((c * steps, (c + 1) * steps)),
                     Cell::Negative => panic!("{mode}: a negative cell"),
                     Cell::Undecided => {

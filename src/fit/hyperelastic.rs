@@ -26,6 +26,7 @@ use crate::report::format::Fixed;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::fmt::Write as _;
 use std::time::Instant;
 
 /// Schema tag of hyperelastic fit files (the material files' reader knows it).
@@ -1033,16 +1034,19 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         }
         if m == Mode::Equibiaxial {
             escalate(Status::Warning);
-            let e = extrapolation.iter().rfind(|e| e.mode == m);
-            warnings.push(format!(
-                "no equibiaxial data: equibiaxial stress (the state of a compressed stack layer) is extrapolated{}",
-                e.map(|e| format!(
+            let mut w = String::from(
+                "no equibiaxial data: equibiaxial stress (the state of a compressed stack layer) is extrapolated",
+            );
+            if let Some(e) = extrapolation.iter().rfind(|e| e.mode == m) {
+                // Writing to a String cannot fail.
+                let _ = write!(
+                    w,
                     " — the model predicts {} MPa at λ = {}",
                     Fixed(e.stress_pa / 1e6, 4),
                     Fixed(e.stretch, 2)
-                ))
-                    .unwrap_or_default()
-            ));
+                );
+            }
+            warnings.push(w);
         }
     }
 

@@ -416,7 +416,7 @@ impl Fixed {
     /// |x|·10^digits rounded to an integer (module notes), None outside the range.
     fn scaled(&self) -> Option<u128> {
         let (x, digits) = (self.0.abs(), self.1);
-        if !(x < 9_007_199_254_740_992.0) || digits > 9 {
+        if x.is_nan() || x >= 9_007_199_254_740_992.0 || digits > 9 {
             return None;
         }
         let bits = x.to_bits();

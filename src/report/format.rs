@@ -451,11 +451,19 @@ impl std::fmt::Display for Fixed {
             return write!(f, "{x:.digits$}");
         };
         let sign = if x.is_sign_negative() { "-" } else { "" };
-        let unit = 10u128.pow(digits as u32);
         if digits == 0 {
-            write!(f, "{sign}{q}")
-        } else {
-            write!(f, "{sign}{}.{:0digits$}", q / unit, q % unit)
+            return write!(f, "{sign}{q}");
+        }
+        // In 64 bits where it fits: 128-bit division and printing are library calls.
+        match u64::try_from(q) {
+            Ok(q) => {
+                let unit = 10u64.pow(digits as u32);
+                write!(f, "{sign}{}.{:0digits$}", q / unit, q % unit)
+            }
+            Err(_) => {
+                let unit = 10u128.pow(digits as u32);
+                write!(f, "{sign}{}.{:0digits$}", q / unit, q % unit)
+            }
         }
     }
 }

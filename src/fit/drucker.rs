@@ -33,20 +33,21 @@
 //! That is the common case of a fitted model.
 //!
 //! A model whose tangent is linear in its parameters, T = Σ p_k·B_k(λ) (the
-//! polynomial models: [`StrainEnergy::tangent_basis`]), is first certified on fixed
-//! cells of the grid, halved four times (1, 2, 4, 8, 16 cells of 800/2^l grid steps;
-//! [`Certificate`]): with T = λ^lo·Q(μ), μ = λ^g (g the exponents' common step), the
-//! Bernstein coefficients of each basis' Q on every cell are computed once per model
-//! and mode, so a cell's coefficients are a product of that small table with p. If
-//! every coefficient exceeds 2·[`MARGIN`] times Σ|p_k|·ρ_k, ρ_k the largest Bernstein
-//! coefficient on the cell of B_k's magnitudes' polynomial Σ_e |b_ke|·λ^e (so the
-//! bound is ≥ 2·[`MARGIN`]·(P + N) anywhere in the cell), T > [`MARGIN`]·(P + N) on
-//! the whole cell (a Bernstein polynomial lies within the hull of its coefficients:
-//! Farin, *Curves and Surfaces for CAGD*, 5th ed., §5.7), and symmetrically for
-//! T < 0. A cell that is neither is halved; one of the last level goes to the convex
-//! bounds above. The fitted VHB 4910 Yeoh is certified in 5 to 9 cells a mode of some
-//! forty products each, where the bounds needed some 20 evaluations of the parts and
-//! a dozen bounds a mode.
+//! polynomial models: [`StrainEnergy::tangent_basis`]), goes another way before all
+//! of that: it is certified on fixed cells of the grid, halved four times (1, 2, 4,
+//! 8, 16 cells of 800/2^l grid steps; `Certificate`). With T = λ^lo·Q(μ), μ = λ^g
+//! (g the exponents' common step), the Bernstein coefficients of each basis' Q on
+//! every cell are computed once per model and mode, so a cell's coefficients are a
+//! product of that small table with p. If every coefficient exceeds 2·[`MARGIN`]
+//! times Σ|p_k|·ρ_k, ρ_k the largest Bernstein coefficient on the cell of B_k's
+//! magnitudes' polynomial Σ_e |b_ke|·λ^e (so the bound is ≥ 2·[`MARGIN`]·(P + N)
+//! anywhere in the cell), T > [`MARGIN`]·(P + N) on the whole cell (a Bernstein
+//! polynomial lies within the hull of its coefficients: Farin, *Curves and Surfaces
+//! for CAGD*, 5th ed., §5.7), and symmetrically for T < 0. A cell that is neither
+//! is halved; one of the last level goes to the convex bounds above (without the
+//! Descartes shortcut). The fitted VHB 4910 Yeoh is certified in 5 to 9 cells a
+//! mode of some forty products each, where the bounds needed some 20 evaluations of
+//! the parts and a dozen bounds a mode.
 //!
 //! The margin (10⁻⁹ of the terms' magnitude, some 10⁶ times the rounding of either
 //! way of evaluating T) keeps a decided cell decided whichever way T is computed, so

@@ -2,7 +2,7 @@
 
 use dea_fit::fit::drucker::{drucker, drucker_dense, GRID};
 use dea_fit::material::hyperelastic::ogden::Ogden;
-use dea_fit::material::hyperelastic::powers::TangentPowers;
+use dea_fit::material::hyperelastic::powers::{Laurent, TangentPowers};
 use dea_fit::material::hyperelastic::ParamInfo;
 use dea_fit::material::hyperelastic::{Mode, ModelSpec, OgdenForm, StrainEnergy};
 use proptest::prelude::*;
@@ -351,6 +351,9 @@ impl StrainEnergy for Counting<'_> {
     }
     fn tangent_powers(&self, p: &[f64], mode: Mode) -> Option<TangentPowers> {
         self.0.tangent_powers(p, mode)
+    }
+    fn tangent_basis(&self, mode: Mode) -> Option<&'static [Laurent]> {
+        self.0.tangent_basis(mode)
     }
     fn stress_jacobian(&self, p: &[f64], mode: Mode, lam: f64, out: &mut [f64]) {
         self.0.stress_jacobian(p, mode, lam, out)

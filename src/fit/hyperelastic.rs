@@ -22,16 +22,18 @@ use crate::material::file::{FittedRanges, HyperelasticPart, StretchRange};
 use crate::material::hyperelastic::{
     AtParams, Mode, ModelSpec, OgdenForm, StrainEnergy, MODEL_NAMES,
 };
+use crate::report::format::Fixed;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::fmt::Write as _;
 use std::time::Instant;
 
 /// Schema tag of hyperelastic fit files (the material files' reader knows it).
 pub const SCHEMA: &str = crate::material::file::HYPERELASTIC_SCHEMA;
 
 /// Estimator settings (checked by [`Settings::check`] before use).
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Settings {
     /// Residual definition (default absolute, see [`Residual`]).
     pub residual: Residual,
@@ -105,6 +107,25 @@ impl Settings {
             return Err(Error::settings("at least one start is needed"));
         }
         Ok(())
+    }
+
+    /// The settings as a fit's provenance records them (a JSON value), built once
+    /// for the settings of the last fit on this thread and cloned after: the
+    /// serializer costs some 3 k instructions, a clone a third of that (a run of
+    /// fits mostly has the same settings).
+    fn recorded(&self) -> serde_json::Value {
+        thread_local! {
+            static LAST: std::cell::RefCell<Option<(Settings, serde_json::Value)>> =
+                const { std::cell::RefCell::new(None) };
+        }
+        LAST.with_borrow_mut(|last| match last {
+            Some((s, v)) if s == self => v.clone(),
+            _ => {
+                let v = serde_json::to_value(self).unwrap_or_default();
+                *last = Some((self.clone(), v.clone()));
+                v
+            }
+        })
     }
 }
 
@@ -886,9 +907,9 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         if let Some(se) = se.filter(|se| *se > v.abs() && *v != 0.0) {
             escalate(Status::IllPosed);
             warnings.push(format!(
-                "{} is not determined by these data (standard error {:.0} % of its value)",
+                "{} is not determined by these data (standard error {} % of its value)",
                 info.name,
-                100.0 * se / v.abs()
+                Fixed(100.0 * se / v.abs(), 0)
             ));
         }
     }
@@ -922,8 +943,9 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         {
             escalate(Status::IllPosed);
             warnings.push(format!(
-                "{} ran to its bound ({:.4}): the data do not determine it (ill-posed)",
-                info.name, p[j]
+                "{} ran to its bound ({}): the data do not determine it (ill-posed)",
+                info.name,
+                Fixed(p[j], 4)
             ));
         }
     }
@@ -955,7 +977,7 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         let ranges: Vec<String> = d
             .unstable
             .iter()
-            .map(|[a, b]| format!("{a:.3}–{b:.3}"))
+            .map(|[a, b]| format!("{}–{}", Fixed(*a, 3), Fixed(*b, 3)))
             .collect();
         if in_data {
             escalate(Status::Unstable);
@@ -967,13 +989,13 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         } else {
             escalate(Status::Warning);
             warnings.push(format!(
-                "Drucker-unstable in {} at stretch {} (outside the data; checked {}–{}); stable for {:.3}–{:.3}",
+                "Drucker-unstable in {} at stretch {} (outside the data; checked {}–{}); stable for {}–{}",
                 d.mode,
                 ranges.join(", "),
                 DRUCKER_RANGE.0,
                 DRUCKER_RANGE.1,
-                d.stretch_min,
-                d.stretch_max
+                Fixed(d.stretch_min, 3),
+                Fixed(d.stretch_max, 3)
             ));
         }
     }
@@ -997,8 +1019,9 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
                 // Beyond the model's extensibility limit (Gent): no stress to list.
                 escalate(Status::Warning);
                 warnings.push(format!(
-                    "{} gives no finite {m} stress from λ = {l:.2} on (beyond its extensibility limit): the fitted limit lies inside the {m} range of interest",
-                    model.name()
+                    "{} gives no finite {m} stress from λ = {} on (beyond its extensibility limit): the fitted limit lies inside the {m} range of interest",
+                    model.name(),
+                    Fixed(l, 2)
                 ));
                 break;
             }
@@ -1011,12 +1034,19 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         }
         if m == Mode::Equibiaxial {
             escalate(Status::Warning);
-            let e = extrapolation.iter().rfind(|e| e.mode == m);
-            warnings.push(format!(
-                "no equibiaxial data: equibiaxial stress (the state of a compressed stack layer) is extrapolated{}",
-                e.map(|e| format!(" — the model predicts {:.4} MPa at λ = {:.2}", e.stress_pa / 1e6, e.stretch))
-                    .unwrap_or_default()
-            ));
+            let mut w = String::from(
+                "no equibiaxial data: equibiaxial stress (the state of a compressed stack layer) is extrapolated",
+            );
+            if let Some(e) = extrapolation.iter().rfind(|e| e.mode == m) {
+                // Writing to a String cannot fail.
+                let _ = write!(
+                    w,
+                    " — the model predicts {} MPa at λ = {}",
+                    Fixed(e.stress_pa / 1e6, 4),
+                    Fixed(e.stretch, 2)
+                );
+            }
+            warnings.push(w);
         }
     }
 
@@ -1084,7 +1114,7 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         selection: None,
         provenance: Provenance {
             files: data.sources.clone(),
-            settings: serde_json::to_value(settings).unwrap_or_default(),
+            settings: settings.recorded(),
         },
     })
 }

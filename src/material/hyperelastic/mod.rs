@@ -130,6 +130,14 @@ pub trait StrainEnergy: Send + Sync {
     fn tangent_powers(&self, _p: &[f64], _mode: Mode) -> Option<powers::TangentPowers> {
         None
     }
+    /// Where the tangent is linear in the parameters, T = Σ p_k·B_k(λ) in `mode`
+    /// (the polynomial models): the bases B_k, one per parameter, fixed by the model.
+    /// The Drucker check turns them once into coefficients on fixed stretch cells
+    /// (`fit/drucker.rs`), so that a check is a small product with the parameters.
+    /// None (the default) where the tangent is not linear in the parameters.
+    fn tangent_basis(&self, _mode: Mode) -> Option<&'static [powers::Laurent]> {
+        None
+    }
     /// True if the block evaluators ([`StrainEnergy::nominal_stresses`],
     /// [`StrainEnergy::stress_jacobians`]) read the points' ln λ
     /// ([`Points::ln_stretch`]): a fit problem takes the logarithms only then. The
@@ -274,6 +282,9 @@ impl StrainEnergy for WithoutCoefficients {
     }
     fn tangent_powers(&self, p: &[f64], mode: Mode) -> Option<powers::TangentPowers> {
         self.0.tangent_powers(p, mode)
+    }
+    fn tangent_basis(&self, mode: Mode) -> Option<&'static [powers::Laurent]> {
+        self.0.tangent_basis(mode)
     }
     fn reads_ln_stretch(&self) -> bool {
         self.0.reads_ln_stretch()

@@ -348,7 +348,7 @@ impl StrainEnergy for Polynomial {
         if p.len() != self.terms.len() {
             return None;
         }
-        let basis = &self.tangent_bases()?[mode.index()];
+        let basis = self.tangent_basis(mode)?;
         let mut sum = Laurent::ZERO;
         for (b, &c) in basis.iter().zip(p) {
             sum.add_assign_scaled(c, b);
@@ -357,6 +357,9 @@ impl StrainEnergy for Polynomial {
             sum: PowerSum::Integer(sum),
             bounded: false,
         })
+    }
+    fn tangent_basis(&self, mode: Mode) -> Option<&'static [Laurent]> {
+        Some(&self.tangent_bases()?[mode.index()])
     }
     fn stress_jacobian(&self, p: &[f64], mode: Mode, lam: f64, out: &mut [f64]) {
         // ∂P/∂p_k is term k's stress at p_k = 1 (the model is linear in p).

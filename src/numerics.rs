@@ -140,11 +140,6 @@ mod tests {
     /// [`exp`]'s proven 3·2⁻⁵³: the tolerance of comparing the two.
     const TOL: f64 = 5.0 * f64::EPSILON / 2.0;
 
-    /// [`exp`] is e^x to its proven bound against `f64::exp` (see [`TOL`]) over
-    /// −708…ln(f64::MAX) (2·10⁶ even steps, and 10⁴ magnitudes of either sign from
-    /// 10⁻³⁰⁰ to 1 where k = 0); exactly 1 at ±0 (a kernel over dt = 0 keeps its
-    /// state); the edges: 0 below −708 and at −∞, finite at ln(f64::MAX) and +∞
-    /// past it, NaN for NaN.
     /// [`ExpTable::exp`] in every lane of a table the compiler cannot see into is
     /// [`exp`], bit for bit (the same arithmetic), on arguments across the whole
     /// range, the edges and NaN included.
@@ -162,6 +157,11 @@ mod tests {
         assert!(table.exp(f64::NAN, 2).is_nan());
     }
 
+    /// [`exp`] is e^x to its proven bound against `f64::exp` (see [`TOL`]) over
+    /// −708…ln(f64::MAX) (2·10⁶ even steps, and 10⁴ magnitudes of either sign from
+    /// 10⁻³⁰⁰ to 1 where k = 0); exactly 1 at ±0 (a kernel over dt = 0 keeps its
+    /// state); the edges: 0 below −708 and at −∞, finite at ln(f64::MAX) and +∞
+    /// past it, NaN for NaN.
     #[test]
     fn exp_is_exp_to_rounding() {
         let even =

@@ -828,10 +828,6 @@ mod tests {
         }
     }
 
-    /// A warm start from any subset, right or wrong, ends at the cold start's
-    /// solution (the problem is strictly convex: one minimiser) to 10⁻⁹ of its
-    /// largest entry, with the same positive set, and a start from the answer takes
-    /// no step.
     /// One [`NnlsWork`] kept across 300 problems of one size (cold and warm
     /// starts, the last solution's positive set among them, and refused problems
     /// between them: a value not finite, a repeated column) gives each the
@@ -883,6 +879,10 @@ mod tests {
         );
     }
 
+    /// A warm start from any subset, right or wrong, ends at the cold start's
+    /// solution (the problem is strictly convex: one minimiser) to 10⁻⁹ of its
+    /// largest entry, with the same positive set, and a start from the answer takes
+    /// no step.
     #[test]
     fn warm_start_is_cold_start() {
         use rand::{Rng, SeedableRng};

@@ -2345,8 +2345,6 @@ mod tests {
         }
     }
 
-    /// The seed's Table 3.3 as a step to strain 0.5, `points` log-spaced over
-    /// 0.01–1000 s, 1 % noise, prepared.
     /// Kernels reused at the same τ are the ones a fresh problem computes: the
     /// joint problem's residuals and Jacobian after a projected evaluation at θ
     /// (kernels with derivatives, taken from the cache), after one without (the
@@ -2396,6 +2394,8 @@ mod tests {
         assert_eq!(bits(kept.as_slice()), bits(cold.c.as_slice()));
     }
 
+    /// The seed's Table 3.3 as a step to strain 0.5, `points` log-spaced over
+    /// 0.01–1000 s, 1 % noise, prepared.
     fn long_curve(points: usize) -> Prepared {
         use crate::io::relaxation::{from_table, log_times, RelaxationOptions, Synthetic};
         use crate::io::table::Table;

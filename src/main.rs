@@ -73,7 +73,13 @@ fn clean_up_on_signals() {
         let mut set: libc::sigset_t = std::mem::zeroed();
         libc::sigemptyset(&mut set);
         for s in INTERRUPTS {
-            libc::sigaddset(&mut set, s);
+            // A blocked signal is never discarded, even when ignored: leave an
+            // ignored one alone.
+            let mut now: libc::sigaction = std::mem::zeroed();
+            libc::sigaction(s, std::ptr::null(), &mut now);
+            if now.sa_sigaction != libc::SIG_IGN {
+                libc::sigaddset(&mut set, s);
+            }
         }
         libc::pthread_sigmask(libc::SIG_BLOCK, &set, std::ptr::null_mut());
         set

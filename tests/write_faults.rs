@@ -387,7 +387,8 @@ fn long_scene(dir: &Path) -> std::path::PathBuf {
 
 /// SIGINT and SIGTERM in the middle of a streamed `simulate --out`: the run ends by
 /// that signal (a shell reports 130, 143), its temporary file is gone, and neither
-/// the output nor the report folder it created (empty but for its marker) is left.
+/// the output nor the folders it created (the output's, and the report folder,
+/// empty but for its marker) are left.
 #[cfg(unix)]
 #[test]
 fn interrupted_simulate_leaves_no_litter() {
@@ -398,16 +399,17 @@ fn interrupted_simulate_leaves_no_litter() {
         let mut child = Command::new(env!("CARGO_BIN_EXE_dea-fit"))
             .arg("simulate")
             .arg(&scene)
-            .args(["--out", "out.csv", "--report", "rep"])
+            .args(["--out", "new/out.csv", "--report", "rep"])
             .current_dir(d.path())
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .spawn()
             .expect("the binary starts");
         let writing = || {
-            litter(d.path(), "out.csv")
+            let new = d.path().join("new");
+            litter(&new, "out.csv")
                 .iter()
-                .any(|n| std::fs::metadata(d.path().join(n)).is_ok_and(|m| m.len() > 0))
+                .any(|n| std::fs::metadata(new.join(n)).is_ok_and(|m| m.len() > 0))
         };
         let start = std::time::Instant::now();
         while !writing() {

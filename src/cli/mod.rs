@@ -161,14 +161,14 @@ pub fn write_fit_noted(
 }
 
 /// Write any other single output file (trajectory, synthetic data, generated
-/// export) by the same policy: a different old file is kept aside.
+/// export) by the same policy: a different old file is kept aside (compared in
+/// chunks, as [`commit_noted`] does).
 pub fn write_noted(path: &std::path::Path, bytes: &[u8]) -> Result<()> {
-    note(
-        path,
-        "file",
-        &dea_fit::io::write::write_keeping(path, bytes, |old| old == bytes)?,
-    );
-    Ok(())
+    use std::io::Write;
+    let mut f = dea_fit::io::write::AtomicFile::create(path)?;
+    f.write_all(bytes)
+        .map_err(|e| dea_fit::Error::io(path, e))?;
+    commit_noted(f)
 }
 
 /// Put a streamed single output file in place as [`write_noted`] does.

@@ -26,3 +26,4 @@ mod sim_sensitivities;
 mod sim_stream;
 mod support;
 mod trace;
+mod write_faults;

@@ -70,6 +70,7 @@ pub fn parse_claim(s: &str) -> Result<(f64, f64, Option<Basis>)> {
 /// Run the subcommand.
 pub fn run(a: Args) -> Result<i32> {
     let m = manifest::read(&a.manifest)?;
+    super::refuse_in_report(a.report.as_deref(), &[("--out", a.out.as_deref())])?;
     if a.generate {
         for (path, text) in composite::synthesize(&m)? {
             super::write_noted(&path, text.as_bytes())?;

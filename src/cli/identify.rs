@@ -309,6 +309,7 @@ pub fn run(a: Args) -> Result<i32> {
             .clone()
             .unwrap_or_else(|| Path::new("reports").join(&name))
     });
+    super::refuse_in_report(dir.as_deref(), &[("--out", Some(&out))])?;
     if let Some(d) = &dir {
         super::claim_dir(d)?;
     }

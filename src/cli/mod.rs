@@ -126,6 +126,7 @@ impl Output {
                 .clone()
                 .unwrap_or_else(|| Path::new("reports").join(name))
         });
+        refuse_in_report(dir.as_deref(), &[("--out", Some(&out))])?;
         if let Some(d) = &dir {
             claim_dir(d)?;
         }
@@ -160,14 +161,14 @@ pub fn write_fit_noted(
 }
 
 /// Write any other single output file (trajectory, synthetic data, generated
-/// export) by the same policy: a different old file is kept aside.
+/// export) by the same policy: a different old file is kept aside (compared in
+/// chunks, as [`commit_noted`] does).
 pub fn write_noted(path: &std::path::Path, bytes: &[u8]) -> Result<()> {
-    note(
-        path,
-        "file",
-        &dea_fit::io::write::write_keeping(path, bytes, |old| old == bytes)?,
-    );
-    Ok(())
+    use std::io::Write;
+    let mut f = dea_fit::io::write::AtomicFile::create(path)?;
+    f.write_all(bytes)
+        .map_err(|e| dea_fit::Error::io(path, e))?;
+    commit_noted(f)
 }
 
 /// Put a streamed single output file in place as [`write_noted`] does.
@@ -188,3 +189,65 @@ fn note(path: &std::path::Path, what: &str, r: &dea_fit::io::write::Replaced) {
 }
 
 pub use dea_fit::io::write::claim_dir;
+
+/// Refuse an output file of a command that overlaps the command's own report
+/// folder (lies in it, is it, or holds it): the report writes its files there
+/// (`index.md`, `index.html`, `run.json`, charts, a trajectory) and replaces them on
+/// every run, so such an output would be replaced by the report, or the report
+/// refused. Called by every command with both, before anything is written;
+/// `outputs` pairs each output with its flag. Paths are compared absolute, `.` and
+/// `..` resolved, through the symbolic links of the part that exists.
+pub fn refuse_in_report(
+    report: Option<&std::path::Path>,
+    outputs: &[(&str, Option<&std::path::Path>)],
+) -> Result<()> {
+    let Some(dir) = report else { return Ok(()) };
+    let d = resolved(dir);
+    for (flag, out) in outputs {
+        let Some(out) = out else { continue };
+        let o = resolved(out);
+        if o.starts_with(&d) || d.starts_with(&o) {
+            return Err(dea_fit::Error::settings(format!(
+                "{flag} {} overlaps the report folder {}: the report writes its own files there (index.md, index.html, run.json, charts) and replaces them on every run",
+                out.display(),
+                dir.display()
+            ))
+            .with_hint(format!(
+                "write {flag} outside {}, or choose another --report (or --no-report)",
+                dir.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// `p` absolute, with `.` and `..` resolved, and the longest part of it that exists
+/// through its symbolic links (so `rep/../rep/x` and a link to `rep` are `rep`).
+fn resolved(p: &std::path::Path) -> std::path::PathBuf {
+    use std::path::{Component, PathBuf};
+    let abs = std::env::current_dir().map_or_else(|_| p.to_path_buf(), |c| c.join(p));
+    let mut out = PathBuf::new();
+    for c in abs.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                out = out.canonicalize().unwrap_or(out);
+                out.pop();
+            }
+            c => out.push(c),
+        }
+    }
+    let mut head = out.clone();
+    let mut tail = Vec::new();
+    loop {
+        if let Ok(mut real) = head.canonicalize() {
+            real.extend(tail.iter().rev());
+            return real;
+        }
+        match head.file_name() {
+            Some(n) => tail.push(n.to_os_string()),
+            None => return out,
+        }
+        head.pop();
+    }
+}

@@ -125,6 +125,7 @@ pub fn run(a: Args) -> Result<i32> {
         return Err(Error::settings("no export files given")
             .with_hint("dea-fit permittivity sweep.csv --area 1.439e-3 --thickness 2.2mm±0.05mm"));
     }
+    super::refuse_in_report(a.report.as_deref(), &[("--out", a.out.as_deref())])?;
     let (opts, settings) = lcr_settings(&a.pair, &a.frequencies, &a.stray, a.edge)?;
     let flags = [
         quantity("--area", &a.area, Dimension::Area)?,

@@ -218,7 +218,7 @@ pub fn run(a: Args) -> Result<i32> {
                 shard: s,
                 evaluations: evals,
             };
-            shard::write(out, &file)?;
+            super::note(out, "shard", &shard::write(out, &file)?);
             let status = match failed {
                 0 => ranking::Status::Ok,
                 _ => ranking::Status::Incomplete,
@@ -255,6 +255,7 @@ fn present(info: &RunInfo, evals: &[Evaluated], p: &Present) -> Result<i32> {
             Path::new("reports").join(format!("rank-{}", slug.trim_matches('-')))
         })
     });
+    super::refuse_in_report(dir.as_deref(), &[("--csv", p.csv.as_deref())])?;
     if let Some(d) = &dir {
         super::claim_dir(d)?;
     }

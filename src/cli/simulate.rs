@@ -75,6 +75,10 @@ pub fn run(a: Args) -> Result<i32> {
     let dir = a
         .report
         .unwrap_or_else(|| PathBuf::from(format!("reports/sim-{}", scene.name)));
+    super::refuse_in_report(
+        (!a.no_report).then_some(&dir),
+        &[("--out", a.out.as_deref())],
+    )?;
     let csv = match (&a.out, a.no_report) {
         (Some(out), _) => Some(out.clone()),
         (None, false) => Some(dir.join("trajectory.csv")),

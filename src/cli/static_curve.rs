@@ -89,16 +89,18 @@ pub fn run(a: Args) -> Result<i32> {
             ),
         ),
     };
+    let dir = (!a.no_report).then(|| {
+        a.report
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(format!("reports/static-{}", scene.name)))
+    });
+    super::refuse_in_report(dir.as_deref(), &[("--out", a.out.as_deref())])?;
     if let Some(out) = &a.out {
         super::write_noted(out, static_report::curve_csv(&c).as_bytes())?;
     }
-    let page = match a.no_report {
-        true => None,
-        false => {
-            let dir = a
-                .report
-                .clone()
-                .unwrap_or_else(|| PathBuf::from(format!("reports/static-{}", scene.name)));
+    let page = match dir {
+        None => None,
+        Some(dir) => {
             super::claim_dir(&dir)?;
             let outcome = static_report::Outcome {
                 scene: &scene.name,

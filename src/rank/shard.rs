@@ -77,9 +77,11 @@ pub struct ShardFile {
     pub evaluations: Vec<Evaluated>,
 }
 
-/// Write a shard atomically. An existing file is replaced only when it is a shard
-/// file (a re-run of the task); anything else is refused.
-pub fn write(path: &Path, s: &ShardFile) -> Result<()> {
+/// Write a shard by the write policy ([`crate::io::write::write_keeping`]): an
+/// existing file is replaced only when it is a shard file (a re-run of the task),
+/// anything else is refused; an older, different shard is kept aside (what
+/// happened to it is returned), and two tasks writing one file both keep theirs.
+pub fn write(path: &Path, s: &ShardFile) -> Result<crate::io::write::Replaced> {
     if path.is_file() && read(path).is_err() {
         return Err(Error::settings(format!(
             "{} exists and is not a rank shard file: it is not replaced",
@@ -88,7 +90,7 @@ pub fn write(path: &Path, s: &ShardFile) -> Result<()> {
         .with_hint("choose another --out"));
     }
     let json = serde_json::to_string(s).expect("a shard serialises");
-    crate::io::write::atomic_write(path, json.as_bytes())
+    crate::io::write::write_keeping(path, json.as_bytes(), |old| old == json.as_bytes())
 }
 
 /// Read a shard file.

@@ -8,10 +8,13 @@
 //! The list is only ever written over an `index.html` that is itself a run list (it
 //! carries [`LIST_MARKER`]); a folder whose `index.html` is anything else (a page of
 //! your own, a run's page when reports are nested) keeps it, and gets no list.
+//!
+//! Runs finishing at once in one folder never drop each other from the list: the
+//! list is rebuilt under a lock ([`refresh_index`]).
 
 use super::page::{code, text, Cell, Page, Tone};
 use crate::error::{Error, Result};
-use crate::io::write::atomic_write;
+use crate::io::write::{atomic_write, lock_target};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -226,9 +229,13 @@ fn list_page(root: &Path, entries: &[Entry]) -> Page {
 
 /// Rebuild `root/index.html`, the list of the runs in `root`'s folders, unless
 /// `root/index.html` exists and is not a run list (it is then left alone). Written
-/// atomically.
+/// atomically, as a locked read-modify-write (the lock of `index.html`,
+/// [`crate::io::write`]): every run writes its metadata before it takes the lock,
+/// so the last of several runs finishing at once lists them all, and no run's
+/// rebuild from an older listing can replace a newer one.
 pub fn refresh_index(root: &Path) -> Result<()> {
     let path = root.join("index.html");
+    let _lock = lock_target(&path)?;
     match std::fs::read(&path) {
         Ok(old) if !String::from_utf8_lossy(&old).contains(LIST_MARKER) => return Ok(()),
         Ok(_) => {}

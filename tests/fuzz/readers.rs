@@ -681,8 +681,10 @@ fn design(path: &Path) -> Verdict {
     let Ok(s) = sweep::Sweep::parse(&[]) else {
         panic!("an empty sweep parses")
     };
-    let points = sweep::points(&d, &s);
-    let Ok(evals) = sweep::run(&d, &points, &|| {}) else {
+    let Ok(points) = sweep::Points::new(&d, &s) else {
+        return Verdict::Refused;
+    };
+    let Ok(evals) = sweep::run_all(&d, &points, None, &|| {}) else {
         return Verdict::Refused;
     };
     for e in evals.iter().map(|x| &x.evaluation) {

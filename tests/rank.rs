@@ -1476,7 +1476,7 @@ fn sweeps_are_counted_before_any_point_is_made() {
         ("voltage=1kV:2kV:250001", "expected 1 … 250000"),
         ("voltage=1kV:2kV:0", "expected 1 … 250000"),
     ] {
-        let err = Sweep::parse(&[flag.into()]).err().expect(flag).to_string();
+        let err = Sweep::parse(&[flag.into()]).expect_err(flag).to_string();
         assert!(err.contains(says), "{flag}: {err}");
     }
     for (spec, says) in [
@@ -1484,7 +1484,7 @@ fn sweeps_are_counted_before_any_point_is_made() {
         ("0/99999999999999999999999", "out of range"),
         ("3/3", "expected K/N with 0 ≤ K < N"),
     ] {
-        let err = sweep::Shard::parse(spec).err().expect(spec).to_string();
+        let err = sweep::Shard::parse(spec).expect_err(spec).to_string();
         assert!(err.contains(says), "{spec}: {err}");
     }
     let sw = Sweep::parse(&["loading=0:0.3:4".into(), "voltage=600V:900V:3".into()]).unwrap();

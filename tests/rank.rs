@@ -1467,14 +1467,14 @@ fn sweeps_are_counted_before_any_point_is_made() {
         .expect("refused")
         .to_string();
     assert!(
-        err.contains("40000100000 points") && err.contains("a run holds at most 250000"),
+        err.contains("40000100000 points") && err.contains("a run holds at most 100000"),
         "{err}"
     );
     for (flag, says) in [
         ("loading=0:0.4:18446744073709551616", "out of range"),
         ("loading=0:0.4:1e3", "not a whole number"),
-        ("voltage=1kV:2kV:250001", "expected 1 … 250000"),
-        ("voltage=1kV:2kV:0", "expected 1 … 250000"),
+        ("voltage=1kV:2kV:100001", "expected 1 … 100000"),
+        ("voltage=1kV:2kV:0", "expected 1 … 100000"),
     ] {
         let err = Sweep::parse(&[flag.into()]).expect_err(flag).to_string();
         assert!(err.contains(says), "{flag}: {err}");

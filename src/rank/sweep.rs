@@ -19,12 +19,13 @@ use rayon::prelude::*;
 use std::num::IntErrorKind;
 
 /// Most points a run (or a merge of its shards) may hold. Every evaluation is kept
-/// for the ranking, its table, JSON, CSV and report: about 5 KB each in memory and
-/// in a shard file (docs/rank.md, "Performance"), so a run at the budget holds about
-/// 1.2 GB and takes about a minute of two cores' time (≈ 4 000 evaluations/s). A
-/// range's count and the product of the sweep's dimensions (series × loadings ×
-/// drive levels) are checked against it before any point is made.
-pub const MAX_POINTS: usize = 250_000;
+/// for the ranking, its table, JSON, CSV and report: measured, a 16 010-point run
+/// peaks at 190 MB resident (≈ 10 KB a point: the evaluations and the ranking's
+/// copy; a shard file holds ≈ 4.8 KB a point), so a run at the budget holds about
+/// 1 GB and takes about 25 s of two cores (≈ 4 000 evaluations/s). A range's count
+/// and the product of the sweep's dimensions (series × loadings × drive levels) are
+/// checked against it before any point is made.
+pub const MAX_POINTS: usize = 100_000;
 
 /// Most shards of a sweep (`--shard K/N`): `rank merge` opens every one of them.
 /// N is also at most the number of points (a shard without points is a slip).
@@ -210,7 +211,7 @@ impl<'a> Points<'a> {
                     }
                 ))
                 .with_hint(format!(
-                    "every evaluation is kept for the ranking (about 5 KB each): sweep fewer points, e.g. a coarse sweep first and then a finer one around its best loading (dea-fit rank ... --sweep loading=A:B:N --sweep voltage=A:B:N with a product of counts of {MAX_POINTS} or less)"
+                    "every evaluation is kept for the ranking (about 10 KB each): sweep fewer points, e.g. a coarse sweep first and then a finer one around its best loading (dea-fit rank ... --sweep loading=A:B:N --sweep voltage=A:B:N with a product of counts of {MAX_POINTS} or less)"
                 )))
             }
         }

@@ -5,7 +5,8 @@
 # user, proctrack/linuxproc, task/none, select/cons_tres, no accounting), submits the
 # script `rank --slurm 4` prints (a 4-task shard array and a merge job after it with
 # --dependency=afterok), checks the merged table and CSV against a single-process
-# run byte for byte, and stops exactly the daemons it started, by their PIDs.
+# run byte for byte and that a shard altered by one character is refused, and stops
+# exactly the daemons it started, by their PIDs.
 #
 # Needs root (it installs packages and starts daemons). The cluster's files live in
 # a temporary directory (SLURM_CONF points there; /etc/slurm is not touched). A
@@ -110,4 +111,14 @@ ls rank-shards/shard-{0,1,2,3}.json >/dev/null
 cmp single.txt rank-shards/ranking.txt
 cmp single.csv merged.csv
 echo "slurm-rank: the merged table and CSV of 4 shards equal the single run ($(grep -c . single.csv) CSV lines)"
+# A shard altered by one character (a stroke 0.0… → 1.0…) is refused, named (exit 2).
+sed 's/"static_stroke":{"value":0\./"static_stroke":{"value":1./' rank-shards/shard-0.json > altered.json
+! cmp -s altered.json rank-shards/shard-0.json
+set +e
+"$bin" rank merge altered.json rank-shards/shard-{1,2,3}.json --no-report > /dev/null 2> altered.err
+rc=$?
+set -e
+[ $rc = 2 ] && grep -q 'altered.json' altered.err || {
+    echo "slurm-rank: an altered shard was not refused (exit $rc)" >&2; cat altered.err >&2; exit 1; }
+echo "slurm-rank: an altered shard is refused: $(cut -c1-120 altered.err)"
 echo "slurm-rank: ok in $(( $(date +%s) - t0 )) s"

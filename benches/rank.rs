@@ -16,7 +16,10 @@ fn bench(c: &mut Criterion) {
     });
     let sw = sweep::Sweep::parse(&["loading=0:0.6:13".into(), "voltage=600V:900V:4".into()])
         .expect("sweep");
-    let points = sweep::points(&d, &sw);
+    let points: Vec<_> = sweep::Points::new(&d, &sw)
+        .expect("points")
+        .iter(None)
+        .collect();
     c.bench_function(&format!("rank: sweep of {} points", points.len()), |b| {
         b.iter(|| sweep::run(&d, &points, &|| {}).expect("runs"))
     });

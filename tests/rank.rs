@@ -65,7 +65,8 @@ fn design(dir: &Path, manifest: &str) -> Design {
 
 /// Every point of a design, evaluated.
 fn evaluate(d: &Design, sweep: &Sweep) -> Vec<Evaluated> {
-    sweep::run(d, &sweep::points(d, sweep), &|| {}).expect("the sweep runs")
+    let pts = sweep::Points::new(d, sweep).expect("a sweep within the budget");
+    sweep::run_all(d, &pts, None, &|| {}).expect("the sweep runs")
 }
 
 fn value(f: &dea_fit::rank::Figure) -> f64 {
@@ -397,7 +398,7 @@ fn pareto_front_is_the_non_dominated_set() {
 fn results_do_not_depend_on_the_thread_count() {
     let d = manifest::read(&repo().join("datasets/design/silicone_fillers.toml")).unwrap();
     let sweep = Sweep::parse(&["voltage=600V:900V:2".into()]).unwrap();
-    let pts = sweep::points(&d, &sweep);
+    let pts: Vec<_> = sweep::Points::new(&d, &sweep).unwrap().iter(None).collect();
     let on = |n: usize| {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(n)
@@ -550,7 +551,7 @@ fn shards_merge_into_the_single_run_byte_for_byte() {
     .unwrap();
     refused(
         &["rank", "merge", "s0.json", "junk.json"],
-        "expected \"dea-fit/rank-shard/1\"",
+        "expected \"dea-fit/rank-shard/2\"",
     );
     // A shard is never written over a file that is not a shard.
     let o = run(w, &["rank", &design, "--shard", "0/3", "--out", "one.csv"]);
@@ -800,9 +801,13 @@ fn mutated_manifests_are_refused_or_evaluated() {
             continue;
         };
         accepted += 1;
-        let pts = sweep::points(&d, &Sweep::default());
-        let ev =
-            sweep::run(&d, &pts[..pts.len().min(6)], &|| {}).expect("an accepted design evaluates");
+        let sw = Sweep::default();
+        let pts: Vec<_> = sweep::Points::new(&d, &sw)
+            .unwrap()
+            .iter(None)
+            .take(6)
+            .collect();
+        let ev = sweep::run(&d, &pts, &|| {}).expect("an accepted design evaluates");
         for e in ev {
             let e = e.evaluation;
             for f in [
@@ -1178,4 +1183,404 @@ fn an_uncertainty_that_would_be_dropped_is_refused() {
         err.contains("nh_stack.toml:4") && err.contains("does not take"),
         "{err}"
     );
+}
+
+/// The shipped design copied into `w/design/` (manifest, scene, fits), so that a
+/// test may edit it; its path relative to `w`, as the shards then name it.
+fn shipped_design_in(w: &Path) -> String {
+    for rel in [
+        "silicone_fillers.toml",
+        "stack_silicone.toml",
+        "fits/sylgard_batio3-composite.json",
+        "fits/sylgard_batio3_20wt-neo-hookean.json",
+        "fits/sylgard_batio3_40wt-neo-hookean.json",
+    ] {
+        let to = w.join("design").join(rel);
+        std::fs::create_dir_all(to.parent().unwrap()).unwrap();
+        std::fs::copy(repo().join("datasets/design").join(rel), to).unwrap();
+    }
+    "design/silicone_fillers.toml".into()
+}
+
+/// Issue 32: `rank merge` trusts nothing a shard file says. Edits of the text of a
+/// shard (one character of a stroke, a key added or dropped, a unit, a drive of
+/// −800 V, the shard's K or N), a shard of a design that has changed since, and a
+/// huge N are refused with the file's name (exit 2, no panic); the same file
+/// reformatted (whitespace, key order) merges into the same ranking.
+#[test]
+fn an_altered_shard_is_refused_and_a_reformatted_one_merges_the_same() {
+    let dir = tempfile::tempdir().unwrap();
+    let w = dir.path();
+    let design = shipped_design_in(w);
+    for k in 0..3 {
+        let (spec, file) = (format!("{k}/3"), format!("s{k}.json"));
+        crate::support::run_ok(w, &["rank", &design, "--shard", &spec, "--out", &file]);
+    }
+    let merge = |first: &str| {
+        run(
+            w,
+            &[
+                "rank",
+                "merge",
+                first,
+                "s1.json",
+                "s2.json",
+                "--json",
+                "--no-report",
+            ],
+        )
+    };
+    let want = merge("s0.json");
+    assert!(want.status.success(), "{}", text(&want));
+    let s0 = std::fs::read_to_string(w.join("s0.json")).unwrap();
+    let first = |pat: &str| {
+        s0.find(pat)
+            .unwrap_or_else(|| panic!("no {pat} in s0.json"))
+    };
+    let replaced = |from: &str, to: &str| s0.replacen(from, to, 1);
+    let filler = first("\"filler\":\"");
+    let digest = s0.rfind("\"sha256\":\"").unwrap() + "\"sha256\":\"".len();
+    let filler_end = filler + s0[filler..].find("\",").unwrap() + 2;
+    let cases: Vec<(&str, String, &str)> = vec![
+        (
+            "one character of a stroke (0.00… → 1.00…)",
+            replaced(
+                "\"static_stroke\":{\"value\":0.",
+                "\"static_stroke\":{\"value\":1.",
+            ),
+            "does not match its digest",
+        ),
+        (
+            "a key added",
+            replaced("{\"evaluation\":{", "{\"evaluation\":{\"extra\":1,"),
+            "unknown field `extra`",
+        ),
+        (
+            "the filler key dropped",
+            format!("{}{}", &s0[..filler], &s0[filler_end..]),
+            "does not match its digest",
+        ),
+        (
+            "a unit",
+            replaced("\"unit\":\"Pa\"", "\"unit\":\"kPa\""),
+            "does not match its digest",
+        ),
+        (
+            "a drive of −800 V",
+            replaced(
+                "\"voltage\":{\"value\":800.0",
+                "\"voltage\":{\"value\":-800.0",
+            ),
+            "does not match its digest",
+        ),
+        (
+            "the shard's K",
+            replaced("\"shard\":{\"k\":0", "\"shard\":{\"k\":1"),
+            "does not match its digest",
+        ),
+        (
+            "a huge N",
+            replaced("\"n\":3}", "\"n\":18446744073709551615}"),
+            "does not match its digest",
+        ),
+        (
+            "the digest",
+            format!("{}0{}", &s0[..digest], &s0[digest + 1..]),
+            "does not match its digest",
+        ),
+    ];
+    for (what, altered, says) in cases {
+        assert_ne!(altered, s0, "{what}: the edit applies");
+        std::fs::write(w.join("t.json"), &altered).unwrap();
+        let o = merge("t.json");
+        assert_eq!(o.status.code(), Some(2), "{what}:\n{}", text(&o));
+        assert!(
+            text(&o).contains("t.json") && text(&o).contains(says),
+            "{what} should name t.json and say {says:?}:\n{}",
+            text(&o)
+        );
+    }
+    // Semantically void: whitespace and key order.
+    let mut v: serde_json::Value = serde_json::from_str(&s0).unwrap();
+    let run_info = v["run"].take();
+    v.as_object_mut().unwrap().remove("run");
+    v.as_object_mut().unwrap().insert("run".into(), run_info);
+    std::fs::write(w.join("t.json"), serde_json::to_string_pretty(&v).unwrap()).unwrap();
+    let o = merge("t.json");
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        o.stdout == want.stdout,
+        "a reformatted shard merges the same"
+    );
+    // The design changed since the shards were computed (one comment added).
+    let m = w.join(&design);
+    let mut text_m = std::fs::read_to_string(&m).unwrap();
+    text_m.push_str("# edited after the sweep\n");
+    std::fs::write(&m, text_m).unwrap();
+    let o = merge("s0.json");
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("another design") && text(&o).contains("design hash"),
+        "{}",
+        text(&o)
+    );
+}
+
+/// The shards of the shipped design's own sweep (three), made with the library
+/// from a copy of the design in `w`.
+fn library_shards(w: &Path) -> Vec<dea_fit::rank::shard::ShardFile> {
+    use dea_fit::rank::shard::{RunInfo, ShardFile};
+    let d = manifest::read(&w.join(shipped_design_in(w))).unwrap();
+    let sw = Sweep::default();
+    let pts = sweep::Points::new(&d, &sw).unwrap();
+    let info = RunInfo::new(&d, &sw, pts.len());
+    (0..3)
+        .map(|k| {
+            let s = sweep::Shard { k, n: 3 };
+            let ev = sweep::run_all(&d, &pts, Some(s), &|| {}).unwrap();
+            ShardFile::new(info.clone(), &sw, s, ev)
+        })
+        .collect()
+}
+
+/// Issue 32: a shard whose digest was made again after an edit (the digest is not a
+/// signature) still has to hold what the design can give: the candidate's names and
+/// catalogue figures, the point's drive, units, values in their domains, standard
+/// errors finite and ≥ 0, evaluations of its own shard, and N within its bounds.
+#[test]
+fn a_re_signed_shard_with_values_the_design_cannot_give_is_refused() {
+    use dea_fit::rank::shard::{self, ShardFile};
+    let dir = tempfile::tempdir().unwrap();
+    let w = dir.path();
+    let files = library_shards(w);
+    let paths: Vec<std::path::PathBuf> = (0..3).map(|k| w.join(format!("s{k}.json"))).collect();
+    let merge_with = |alter: &dyn Fn(&mut ShardFile, usize)| {
+        for (k, (f, p)) in files.iter().zip(&paths).enumerate() {
+            let mut f = f.clone();
+            alter(&mut f, k);
+            f.sha256 = f.digest();
+            shard::write(p, &f).unwrap();
+        }
+        shard::merge(&paths, None)
+    };
+    let (_, want) = merge_with(&|_, _| {}).expect("the untouched shards merge");
+    assert_eq!(want.len(), 29);
+    type Alter = Box<dyn Fn(&mut ShardFile, usize)>;
+    let first = |g: fn(&mut Evaluation)| -> Alter {
+        Box::new(move |f: &mut ShardFile, k| {
+            if k == 0 {
+                g(&mut f.evaluations[0].evaluation)
+            }
+        })
+    };
+    let cases: Vec<(&str, Alter, &str)> = vec![
+        (
+            "a stroke of 100.8 %",
+            first(|e| e.static_stroke.value = e.static_stroke.value.map(|v| v + 1.0)),
+            "static_stroke",
+        ),
+        (
+            "a drive of −800 V",
+            first(|e| e.voltage.value = Some(-800.0)),
+            "drive voltage -800 V is not the point's 800 V",
+        ),
+        (
+            "a unit",
+            first(|e| e.response_time.unit = "ms".into()),
+            "unit 'ms', expected 's'",
+        ),
+        ("a name", first(|e| e.name.push('!')), "is not the design's"),
+        (
+            "the filler dropped",
+            first(|e| e.filler = None),
+            "filler None",
+        ),
+        (
+            "a note of a catalogue figure",
+            first(|e| e.eps_r.note = Some("measured".into())),
+            "eps_r is not the design's",
+        ),
+        (
+            "εr changed",
+            first(|e| e.eps_r.value = e.eps_r.value.map(|v| v * 1.01)),
+            "eps_r is not the design's",
+        ),
+        (
+            "a negative standard error",
+            first(|e| e.static_stroke.std_error = Some(-1e-3)),
+            "standard error",
+        ),
+        (
+            "a response time of 0 s",
+            first(|e| e.response_time.value = Some(0.0)),
+            "not positive",
+        ),
+        (
+            "an evaluation moved to another shard",
+            first(|e| e.index = 1),
+            "does not belong to shard 0/3",
+        ),
+        (
+            "a huge N in every shard",
+            Box::new(|f: &mut ShardFile, _| f.shard.n = usize::MAX),
+            "expected 1 … 10000",
+        ),
+        (
+            "more shards than points",
+            Box::new(|f: &mut ShardFile, _| f.shard.n = 1000),
+            "at most one shard per point",
+        ),
+        (
+            "another point count",
+            Box::new(|f: &mut ShardFile, _| f.run.points = 30),
+            "points '29' vs '30'",
+        ),
+        (
+            "a shard given as another",
+            Box::new(|f: &mut ShardFile, k| f.shard.k = [0, 0, 2][k]),
+            "is given twice",
+        ),
+    ];
+    for (what, alter, says) in cases {
+        let err = merge_with(&*alter).expect_err(what).to_string();
+        assert!(err.contains(says), "{what} should say {says:?}: {err}");
+    }
+    let (_, again) = merge_with(&|_, _| {}).unwrap();
+    assert!(again == want);
+}
+
+/// Issue 32: a sweep whose dimensions are each within their cap but whose product
+/// is not is refused from the counts alone (no point made), and counts are whole
+/// numbers in range; the points made one at a time from their index are the run's
+/// order (series × loading × voltage), and a shard evaluated a chunk at a time gives
+/// the same evaluations as its points evaluated at once.
+#[test]
+fn sweeps_are_counted_before_any_point_is_made() {
+    let d = manifest::read(&repo().join("datasets/design/silicone_fillers.toml")).unwrap();
+    let huge = Sweep::parse(&[
+        "loading=0:0.4:100000".into(),
+        "voltage=1kV:2kV:100000".into(),
+    ])
+    .unwrap();
+    let err = sweep::Points::new(&d, &huge)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        err.contains("40000100000 points") && err.contains("a run holds at most 100000"),
+        "{err}"
+    );
+    for (flag, says) in [
+        ("loading=0:0.4:18446744073709551616", "out of range"),
+        ("loading=0:0.4:1e3", "not a whole number"),
+        ("voltage=1kV:2kV:100001", "expected 1 … 100000"),
+        ("voltage=1kV:2kV:0", "expected 1 … 100000"),
+    ] {
+        let err = Sweep::parse(&[flag.into()]).expect_err(flag).to_string();
+        assert!(err.contains(says), "{flag}: {err}");
+    }
+    for (spec, says) in [
+        ("0/18446744073709551615", "expected 1 … 10000"),
+        ("0/99999999999999999999999", "out of range"),
+        ("3/3", "expected K/N with 0 ≤ K < N"),
+    ] {
+        let err = sweep::Shard::parse(spec).expect_err(spec).to_string();
+        assert!(err.contains(says), "{spec}: {err}");
+    }
+    let sw = Sweep::parse(&["loading=0:0.3:4".into(), "voltage=600V:900V:3".into()]).unwrap();
+    let pts = sweep::Points::new(&d, &sw).unwrap();
+    let mut want = Vec::new();
+    for (si, s) in d.series.iter().enumerate() {
+        let loadings = match s.filler {
+            Some(_) => sw.loadings.clone().unwrap(),
+            None => s.loadings.clone(),
+        };
+        for &l in &loadings {
+            for &v in sw.voltages.as_ref().unwrap() {
+                want.push((si, l, v));
+            }
+        }
+    }
+    let got: Vec<(usize, f64, f64)> = pts
+        .iter(None)
+        .enumerate()
+        .map(|(i, p)| {
+            assert_eq!(p.index, i);
+            let manifest::Level::Voltage(v) = p.level else {
+                panic!("a swept voltage")
+            };
+            (p.series, p.loading, v)
+        })
+        .collect();
+    assert_eq!(got, want);
+    assert!(pts.get(pts.len()).is_none());
+    let s = sweep::Shard { k: 2, n: 5 };
+    let of_shard: Vec<_> = pts.iter(None).filter(|p| s.holds(p.index)).collect();
+    assert_eq!(pts.count(Some(s)), of_shard.len());
+    let chunked = sweep::run_all(&d, &pts, Some(s), &|| {}).unwrap();
+    let at_once = sweep::run(&d, &of_shard, &|| {}).unwrap();
+    assert!(chunked == at_once);
+}
+
+/// Issue 32: the flags of the ranking and its outputs are refused with `--shard`
+/// (a shard is not ranked: they belong to `rank merge`) before anything is
+/// evaluated or written; `--strict` and `--no-report` are taken. `--slurm` passes
+/// them to the merge job, and with `--json` its output is `ranking.json`. A shard
+/// count beyond its bounds is refused.
+#[test]
+fn flags_a_shard_cannot_honour_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let w = dir.path();
+    let design = repo()
+        .join("datasets/design/silicone_fillers.toml")
+        .display()
+        .to_string();
+    let shard = ["rank", design.as_str(), "--shard", "0/3", "--out", "s.json"];
+    for (extra, says) in [
+        (vec!["--csv", "x.csv"], "--shard with --csv"),
+        (vec!["--report", "rep"], "--shard with --report"),
+        (vec!["--json"], "--shard with --json"),
+        (
+            vec!["--by", "force", "--top", "3"],
+            "--shard with --by, --top",
+        ),
+        (vec!["--pareto", "stroke,force"], "--shard with --pareto"),
+    ] {
+        let mut a = shard.to_vec();
+        a.extend(&extra);
+        let o = run(w, &a);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}:\n{}", text(&o));
+        assert!(text(&o).contains(says), "{extra:?}:\n{}", text(&o));
+        assert!(
+            names_empty(w),
+            "{extra:?} wrote {:?}",
+            crate::support::names_in(w)
+        );
+    }
+    for spec in ["0/18446744073709551615", "0/30"] {
+        let o = run(w, &["rank", &design, "--shard", spec, "--out", "s.json"]);
+        assert_eq!(o.status.code(), Some(2), "{spec}:\n{}", text(&o));
+        assert!(names_empty(w));
+    }
+    let mut a = shard.to_vec();
+    a.extend(["--strict", "--no-report"]);
+    crate::support::run_ok(w, &a);
+    assert_eq!(crate::support::names_in(w), ["s.json"]);
+
+    let o = crate::support::run_ok(
+        w,
+        &["rank", &design, "--slurm", "2", "--json", "--by", "force"],
+    );
+    let script = String::from_utf8_lossy(&o.stdout);
+    for want in [
+        "#SBATCH --output=rank-shards/ranking.json",
+        "'--json'",
+        "'--by' 'force'",
+        "the ranking (JSON) will be in rank-shards/ranking.json",
+    ] {
+        assert!(script.contains(want), "missing {want:?} in\n{script}");
+    }
+    let o = run(w, &["rank", &design, "--slurm", "30"]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("at most one shard per point"));
 }

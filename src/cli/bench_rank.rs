@@ -73,9 +73,9 @@ pub fn run(a: &RankArgs) -> Result<super::bench::Verdict> {
         let mut pts_line = Vec::new();
         for &l in &a.loadings {
             let sw = Sweep::parse(&[format!("loading=0:0.4:{l}"), "voltage=600V:1kV:10".into()])?;
-            let points = sweep::points(&d, &sw);
+            let points = sweep::Points::new(&d, &sw)?;
             let (c0, t0) = (cpu_seconds(), Instant::now());
-            let ev = pool.install(|| sweep::run(&d, &points, &|| {}))?;
+            let ev = pool.install(|| sweep::run_all(&d, &points, None, &|| {}))?;
             let (wall, cpu) = (t0.elapsed().as_secs_f64(), cpu_seconds() - c0);
             let failed = ev
                 .iter()

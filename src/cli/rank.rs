@@ -10,7 +10,7 @@ use dea_fit::rank::manifest;
 use dea_fit::rank::ranking::{self, Objective};
 use dea_fit::rank::report;
 use dea_fit::rank::shard::{self, RunInfo, ShardFile, SlurmJob};
-use dea_fit::rank::sweep::{self, Shard, Sweep};
+use dea_fit::rank::sweep::{self, Points, Shard, Sweep};
 use dea_fit::{Error, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -29,8 +29,10 @@ pub struct Args {
     /// voltage=1kV:8kV:15). Repeatable.
     #[arg(long, value_name = "KEY=RANGE")]
     sweep: Vec<String>,
-    /// Evaluate only shard K of N (the points whose index is K modulo N, K from 0)
-    /// and write them to --out; `rank merge` joins the shards.
+    /// Evaluate only shard K of N (the points whose index is K modulo N, K from 0;
+    /// N at most 10000 and at most the number of points) and write them to --out;
+    /// `rank merge` joins and ranks the shards (the ranking and output flags are
+    /// refused here: give them to the merge).
     #[arg(long, value_name = "K/N", requires = "out")]
     shard: Option<String>,
     /// The shard file to write (with --shard).
@@ -58,6 +60,10 @@ struct MergeArgs {
     /// The shard files (all N of them).
     #[arg(required = true)]
     shards: Vec<PathBuf>,
+    /// The design manifest the shards were computed from (default: the manifest
+    /// path the shards name). It is read again to check the shards.
+    #[arg(long)]
+    design: Option<PathBuf>,
     #[command(flatten)]
     present: Present,
 }
@@ -65,15 +71,16 @@ struct MergeArgs {
 /// Ranking and output flags, shared by a run and a merge.
 #[derive(Debug, Clone, clap::Args)]
 struct Present {
-    /// Objective to rank by: stroke, max-stroke, force, speed, fm, beta, loss.
-    #[arg(long, default_value = "stroke")]
-    by: String,
-    /// The two objectives of the Pareto front.
-    #[arg(long, default_value = "stroke,speed", value_name = "A,B")]
-    pareto: String,
-    /// Rows of the printed table and the report's table (0: all).
-    #[arg(long, default_value_t = 20)]
-    top: usize,
+    /// Objective to rank by: stroke, max-stroke, force, speed, fm, beta, loss
+    /// (default stroke).
+    #[arg(long)]
+    by: Option<String>,
+    /// The two objectives of the Pareto front (default stroke,speed).
+    #[arg(long, value_name = "A,B")]
+    pareto: Option<String>,
+    /// Rows of the printed table and the report's table (0: all; default 20).
+    #[arg(long)]
+    top: Option<usize>,
     /// Print the ranking as JSON.
     #[arg(long)]
     json: bool,
@@ -91,17 +98,22 @@ struct Present {
     strict: bool,
 }
 
+/// Default of `--pareto`.
+const PARETO: &str = "stroke,speed";
+/// Default of `--top`.
+const TOP: usize = 20;
+
 impl Present {
     /// The objective and the Pareto pair, checked before any work.
     fn objectives(&self) -> Result<(Objective, [Objective; 2])> {
-        let by = Objective::parse(&self.by)?;
-        let pair: Vec<&str> = self.pareto.split(',').collect();
+        let by = Objective::parse(self.by.as_deref().unwrap_or("stroke"))?;
+        let pareto = self.pareto.as_deref().unwrap_or(PARETO);
+        let pair: Vec<&str> = pareto.split(',').collect();
         let [a, b] = pair[..] else {
-            return Err(Error::settings(format!(
-                "--pareto {}: expected two objectives A,B",
-                self.pareto
-            ))
-            .with_hint("e.g. --pareto stroke,speed"));
+            return Err(
+                Error::settings(format!("--pareto {pareto}: expected two objectives A,B"))
+                    .with_hint("e.g. --pareto stroke,speed"),
+            );
         };
         let (a, b) = (Objective::parse(a)?, Objective::parse(b)?);
         if a == b {
@@ -110,17 +122,56 @@ impl Present {
         Ok((by, [a, b]))
     }
 
+    /// Rows of the tables.
+    fn top(&self) -> usize {
+        self.top.unwrap_or(TOP)
+    }
+
+    /// A shard is not ranked: the flags of the ranking and its outputs are refused
+    /// with it (honoured by `rank merge`); `--strict` (the shard's exit status) and
+    /// `--no-report` (no report is written) hold as they are.
+    fn refuse_with_shard(&self) -> Result<()> {
+        let given: Vec<&str> = [
+            (self.by.is_some(), "--by"),
+            (self.pareto.is_some(), "--pareto"),
+            (self.top.is_some(), "--top"),
+            (self.json, "--json"),
+            (self.csv.is_some(), "--csv"),
+            (self.report.is_some(), "--report"),
+        ]
+        .into_iter()
+        .filter_map(|(on, f)| on.then_some(f))
+        .collect();
+        match given.is_empty() {
+            true => Ok(()),
+            false => Err(Error::settings(format!(
+                "--shard with {}: a shard writes only its shard file (--out); the ranking and its table, JSON, CSV and report are made by rank merge",
+                given.join(", ")
+            ))
+            .with_hint(format!(
+                "drop {} here and give {} to dea-fit rank merge SHARD-FILES...",
+                given.join(", "),
+                match given.len() {
+                    1 => "it",
+                    _ => "them",
+                }
+            ))),
+        }
+    }
+
     /// The flags as words, for the merge job of a Slurm script (paths as given: the
     /// jobs run in the directory the script was written in).
     fn words(&self) -> Vec<String> {
-        let mut w = vec![
-            "--by".into(),
-            self.by.clone(),
-            "--pareto".into(),
-            self.pareto.clone(),
-            "--top".into(),
-            self.top.to_string(),
-        ];
+        let mut w = Vec::new();
+        if let Some(by) = &self.by {
+            w.extend(["--by".into(), by.clone()]);
+        }
+        if let Some(p) = &self.pareto {
+            w.extend(["--pareto".into(), p.clone()]);
+        }
+        if let Some(t) = self.top {
+            w.extend(["--top".into(), t.to_string()]);
+        }
         if self.json {
             w.push("--json".into());
         }
@@ -154,15 +205,19 @@ fn progress(n: usize) -> ProgressBar {
 pub fn run(a: Args) -> Result<i32> {
     if let Some(Sub::Merge(m)) = a.merge {
         m.present.objectives()?;
-        let (info, evals) = shard::merge(&m.shards)?;
+        let (info, evals) = shard::merge(&m.shards, m.design.as_deref())?;
         return present(&info, &evals, &m.present);
     }
     let design = a.design.expect("clap requires the design");
     a.present.objectives()?;
     let sweep = Sweep::parse(&a.sweep)?;
     let shard = a.shard.as_deref().map(Shard::parse).transpose()?;
+    if shard.is_some() {
+        a.present.refuse_with_shard()?;
+    }
     let d = manifest::read(&design)?;
-    let points = sweep::points(&d, &sweep);
+    let points = Points::new(&d, &sweep)?;
+    let shard = shard.map(|s| s.check(points.len())).transpose()?;
     let info = RunInfo::new(&d, &sweep, points.len());
     if let Some(n) = a.slurm {
         if n == 0 || n > shard::MAX_SLURM_TASKS {
@@ -172,6 +227,9 @@ pub fn run(a: Args) -> Result<i32> {
             ))
             .with_hint("Slurm's default MaxArraySize is 1001; put more work into each shard"));
         }
+        Shard { k: 0, n }
+            .check(points.len())
+            .map_err(|e| Error::settings(format!("--slurm {n}: {e}")))?;
         if a.shard_dir.is_empty()
             || !a
                 .shard_dir
@@ -195,16 +253,13 @@ pub fn run(a: Args) -> Result<i32> {
                 sweep: a.sweep.clone(),
                 merge_flags: a.present.words(),
                 dir: a.shard_dir.clone(),
+                json: a.present.json,
             })
         );
         return Ok(0);
     }
-    let chosen: Vec<_> = match shard {
-        Some(s) => points.into_iter().filter(|p| s.holds(p.index)).collect(),
-        None => points,
-    };
-    let bar = progress(chosen.len());
-    let evals = sweep::run(&d, &chosen, &|| bar.inc(1))?;
+    let bar = progress(points.count(shard));
+    let evals = sweep::run_all(&d, &points, shard, &|| bar.inc(1))?;
     bar.finish_and_clear();
     match (shard, &a.out) {
         (Some(s), Some(out)) => {
@@ -212,12 +267,7 @@ pub fn run(a: Args) -> Result<i32> {
                 .iter()
                 .filter(|e| e.evaluation.state == State::Failed)
                 .count();
-            let file = ShardFile {
-                schema: shard::SCHEMA.into(),
-                run: info.clone(),
-                shard: s,
-                evaluations: evals,
-            };
+            let file = ShardFile::new(info.clone(), &sweep, s, evals);
             super::note(out, "shard", &shard::write(out, &file)?);
             let status = match failed {
                 0 => ranking::Status::Ok,
@@ -263,12 +313,12 @@ fn present(info: &RunInfo, evals: &[Evaluated], p: &Present) -> Result<i32> {
         super::write_noted(c, report::csv(evals, &r).as_bytes())?;
     }
     let page = dir
-        .map(|d| report::write(&d, info, evals, &r, p.top))
+        .map(|d| report::write(&d, info, evals, &r, p.top()))
         .transpose()?;
     if p.json {
         println!("{}", report::json(info, evals, &r));
     } else {
-        print!("{}", report::summary(info, evals, &r, p.top)?);
+        print!("{}", report::summary(info, evals, &r, p.top())?);
         if let Some(pg) = page {
             eprintln!("report: {}", pg.display());
         }

@@ -102,6 +102,7 @@ impl std::fmt::Display for Limit {
 
 /// A point of the static stroke–voltage curve.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct CurvePoint {
     /// Voltage (V).
     #[serde(rename = "voltage_V")]
@@ -112,6 +113,7 @@ pub struct CurvePoint {
 
 /// Everything computed for one candidate at one drive.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Evaluation {
     /// Index of the point in the sweep.
     pub index: usize,
@@ -222,6 +224,7 @@ impl Evaluation {
 
 /// An evaluation with its static stroke–voltage curve (for the report).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Evaluated {
     /// The figures.
     pub evaluation: Evaluation,
@@ -260,6 +263,22 @@ fn weakest(p: &[Provenance]) -> Provenance {
         .unwrap_or(&Provenance::Measured)
 }
 
+/// The catalogue figures of candidate `c` computed from its properties: β = εr/Y
+/// and Fm = 3ε0·εr·Eb²/Y (Sommer-Larsen & Larsen 2004, seed §2.6).
+pub fn catalogue(c: &Candidate) -> (Figure, Figure) {
+    let v = |f: &Figure| f.value.unwrap_or(f64::NAN);
+    let (eps, y, eb) = (v(&c.eps_r), v(&c.youngs_modulus), v(&c.breakdown));
+    let cat = weakest(&[c.eps_r.provenance, c.youngs_modulus.provenance]);
+    let beta = Figure::new(eps / y, "1/Pa", cat, "εr/Y");
+    let fm = Figure::new(
+        3.0 * EPS0 * eps * eb * eb / y,
+        "1",
+        weakest(&[cat, c.breakdown.provenance]),
+        "3ε0·εr·Eb²/Y (Sommer-Larsen & Larsen 2004, seed §2.6)",
+    );
+    (beta, fm)
+}
+
 /// Evaluate candidate `c` at drive `level` on `template` (from [`step_scene`]);
 /// `index` is the point's place in the sweep. Never fails: what could not be
 /// computed is a figure without value and the state `failed`, with the reason.
@@ -271,15 +290,8 @@ pub fn evaluate(
     index: usize,
 ) -> Evaluated {
     let v = |f: &Figure| f.value.unwrap_or(f64::NAN);
-    let (eps, y, eb) = (v(&c.eps_r), v(&c.youngs_modulus), v(&c.breakdown));
-    let cat = weakest(&[c.eps_r.provenance, c.youngs_modulus.provenance]);
-    let beta = Figure::new(eps / y, "1/Pa", cat, "εr/Y");
-    let fm = Figure::new(
-        3.0 * EPS0 * eps * eb * eb / y,
-        "1",
-        weakest(&[cat, c.breakdown.provenance]),
-        "3ε0·εr·Eb²/Y (Sommer-Larsen & Larsen 2004, seed §2.6)",
-    );
+    let (eps, eb) = (v(&c.eps_r), v(&c.breakdown));
+    let (beta, fm) = catalogue(c);
     let sim_src = format!("simulator: {scene_name} with the candidate's constants");
     let mut e = Evaluation {
         index,

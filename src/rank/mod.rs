@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! design.toml ──manifest::read (units → SI, file:line:col errors)──► Design
-//! Design + Sweep ──sweep::points──► Point (series, loading, voltage), in one fixed order
+//! Design + Sweep ──sweep::Points──► Point (series, loading, voltage), in one fixed order
 //! Point ──candidate::build──► Candidate (εr, modulus, tan δ, Eb with provenance; the material)
 //! Candidate + drive ──figures::evaluate (static curve, pull-in, breakdown, damped step)──► Evaluation
 //! Evaluations ──ranking::rank──► Ranking (order by an objective, Pareto front, best loading per series)
@@ -59,6 +59,7 @@ impl std::fmt::Display for Provenance {
 /// One number of the output with its unit and where it comes from. `value` is
 /// `None` where the figure does not exist (a stroke past pull-in); `note` says why.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Figure {
     /// Value (SI), or none.
     pub value: Option<f64>,

@@ -38,10 +38,12 @@ pub enum Reader {
     Design,
     /// One or two material files for `dea-fit export`, each code's card made.
     Export,
+    /// Shard files of a rank sweep, altered, merged (`rank merge`; fuzz/merge.rs).
+    Merge,
 }
 
 impl Reader {
-    pub const ALL: [Reader; 10] = [
+    pub const ALL: [Reader; 11] = [
         Reader::Tensile,
         Reader::Relaxation,
         Reader::Lcr,
@@ -52,6 +54,7 @@ impl Reader {
         Reader::Identified,
         Reader::Design,
         Reader::Export,
+        Reader::Merge,
     ];
 
     pub fn name(self) -> &'static str {
@@ -66,6 +69,7 @@ impl Reader {
             Reader::Identified => "identified",
             Reader::Design => "design",
             Reader::Export => "export",
+            Reader::Merge => "merge",
         }
     }
 
@@ -97,6 +101,8 @@ pub enum Oracle {
     /// If accepted, the scene's material is this (an identified file read by name,
     /// every part).
     Material(Material),
+    /// What `rank merge` must do with altered shard files.
+    Merge(super::merge::Expect),
 }
 
 /// The material an identified file states, by name: the hyperelastic parameters in
@@ -166,6 +172,7 @@ const EXPORT_DIR: &str = "tests/data/export";
 /// case before mutation.
 pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
     let paths: Vec<String> = match r {
+        Reader::Merge => return super::merge::seeds(),
         Reader::Tensile => ["datasets/treloar", "datasets/vhb4910", "tests/data/ok"]
             .iter()
             .flat_map(|d| dir(d))
@@ -423,6 +430,9 @@ impl Material {
 /// A case from a seed: text mutations for every reader, structure-aware ones for
 /// scenes, fit files and identified files half of the time.
 pub fn generate(r: Reader, seeds: &[Vec<(String, Vec<u8>)>], rng: &mut ChaCha8Rng) -> Case {
+    if r == Reader::Merge {
+        return super::merge::generate(seeds, rng);
+    }
     let mut files = seeds.choose(rng).unwrap().clone();
     // a material file's case mutates the file, beside the scene that reads it; an
     // export case one of its files; a design case its manifest or, a quarter of the
@@ -494,6 +504,7 @@ pub fn replay(r: Reader, case: &Case, dir: &Path) -> String {
             repo(&format!("{TRACE_HOST_DIR}/stack.toml")).display()
         ),
         Reader::Design => format!("dea-fit rank {f} --no-report"),
+        Reader::Merge => super::merge::replay(case, dir),
         Reader::Export => {
             let files: Vec<String> = case
                 .files
@@ -653,6 +664,7 @@ pub fn run(r: Reader, case: &Case, dir: &Path) -> Verdict {
         }
         Reader::Scene | Reader::Fit | Reader::Identified => simulate(&path, &case.oracle),
         Reader::Design => design(&path),
+        Reader::Merge => super::merge::run(case, dir),
         Reader::Export => {
             let paths: Vec<PathBuf> = case.files.iter().map(|(n, _)| dir.join(n)).collect();
             export(&paths, &case.oracle)
@@ -681,8 +693,10 @@ fn design(path: &Path) -> Verdict {
     let Ok(s) = sweep::Sweep::parse(&[]) else {
         panic!("an empty sweep parses")
     };
-    let points = sweep::points(&d, &s);
-    let Ok(evals) = sweep::run(&d, &points, &|| {}) else {
+    let Ok(points) = sweep::Points::new(&d, &s) else {
+        return Verdict::Refused;
+    };
+    let Ok(evals) = sweep::run_all(&d, &points, None, &|| {}) else {
         return Verdict::Refused;
     };
     for e in evals.iter().map(|x| &x.evaluation) {

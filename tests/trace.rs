@@ -379,7 +379,7 @@ fn synth_trace_round_trip() {
         assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
         let t = trace::read(&out).expect("a synth trace reads");
         let base = Scene::read(&crate::support::repo().join(scene_file)).expect("scene");
-        let mut scene = t.scene(&base).expect("trace scene");
+        let mut scene = t.scene(&base, None).expect("trace scene");
         scene.source = Source::Ideal;
         let run = sim::simulate(&scene, &sim::RunOptions::default()).expect("runs");
         assert_eq!(run.samples.len(), t.time_s.len());
@@ -484,7 +484,7 @@ fn trace_scene_times_and_start() {
         "time_s,voltage_V,contraction_um\n10,0,0\n10.5,100,1\n11.25,100,2\n",
     )
     .expect("reads");
-    let s = t.scene(&base).expect("scene");
+    let s = t.scene(&base, None).expect("scene");
     assert_eq!(s.time.samples, vec![0.5, 1.25]);
     assert_eq!(s.time.span, 1.25);
     let t = read_text(
@@ -492,7 +492,7 @@ fn trace_scene_times_and_start() {
         "time_s,voltage_V,contraction_um\n0,4000,0\n1,5000,1\n2,5000,2\n",
     )
     .expect("reads");
-    let e = t.scene(&base).err().expect("not at rest").to_string();
+    let e = t.scene(&base, None).err().expect("not at rest").to_string();
     assert!(e.contains("b.csv:2:2") && e.contains("at rest"), "{e}");
 }
 

@@ -15,6 +15,7 @@
 
 pub mod assessment;
 pub mod band;
+pub mod checkpoint;
 pub mod failure;
 pub mod material;
 pub mod noise;
@@ -275,6 +276,9 @@ pub fn identify_with(
     let (mut problem, all, given) = prepare(experiments, settings)?;
     let profiled = profile_indices(&problem, settings)?;
     let (n, k) = problem.dims();
+    let parts = checkpoint::parts(&problem, settings);
+    let control = &checkpoint::stamped(control, &parts);
+    refuse_foreign_checkpoints(&problem, settings, control)?;
     let x_start = problem.x_of(&problem.theta);
     let design = search::starts(&problem, x_start, settings.starts, settings.seed)?;
     let ms = search::run_all(&problem, &design, &settings.lm, control);
@@ -361,6 +365,32 @@ pub fn identify_with(
         stretch_range: stretch_range(&runs),
         runs,
     })))
+}
+
+/// Refuse the run when a search is to resume from a checkpoint file that exists
+/// but is not one of this problem's ([`crate::fit::lm::Checkpoint::check`]:
+/// damaged, edited, another format, or written for another trace, scene, free
+/// set, constants, settings, tool version or start): resuming it would report
+/// another problem's constants as this one's.
+fn refuse_foreign_checkpoints(
+    problem: &Problem,
+    settings: &Settings,
+    control: &(dyn Fn(usize) -> Control + Sync),
+) -> Result<()> {
+    let bounds = problem.x_bounds();
+    for i in 0..=settings.starts {
+        let c = control(i);
+        let Some(cp) = c.checkpoint.filter(|cp| c.resume && cp.file.exists()) else {
+            continue;
+        };
+        cp.check(problem.dims(), &bounds).map_err(|why| {
+            Error::settings(why).with_hint(
+                "resume with the traces, scene and settings the checkpoint was written for, \
+                 or give another --checkpoint name (or delete the file) to start afresh",
+            )
+        })?;
+    }
+    Ok(())
 }
 
 /// The status of an identification: `not_converged` when the search did not

@@ -386,7 +386,8 @@ pub fn run(a: Args) -> Result<i32> {
         .iter()
         .map(|e| validate(&id, e))
         .collect::<Result<_>>()?;
-    // a held-out trace the identified constants cannot run is a finding, not an error
+    // a held-out trace the identified constants cannot run, or miss, is a finding,
+    // not an error
     for w in validation.iter().filter_map(Validation::warning) {
         id.warnings.push(w);
         if id.status == Status::Ok {
@@ -456,7 +457,12 @@ pub fn run(a: Args) -> Result<i32> {
             println!("report: {}", r.display());
         }
     }
-    Ok(id.status.exit_code(a.output.strict))
+    // a held-out trace the constants miss is a warning, blocking under --strict
+    let missed = validation.iter().any(|v| !v.passed());
+    Ok(id
+        .status
+        .exit_code(a.output.strict)
+        .max(i32::from(a.output.strict && missed)))
 }
 
 /// Print a failed run (JSON or text) and give its exit status, 1: no fit file or

@@ -1207,6 +1207,66 @@ mod tests {
         }
     }
 
+    /// A fresh search keeps a file already at its checkpoint's name aside at its
+    /// first save (the write policy) and replaces its own state after that; the
+    /// file names its problem's parts, and a file of other parts, a truncated one
+    /// or an edited one is refused with the reason.
+    #[test]
+    fn checkpoints_keep_a_users_file_and_refuse_what_is_not_theirs() {
+        let inf = f64::INFINITY;
+        let bounds = [(-inf, inf); 2];
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("mine.0");
+        std::fs::write(&file, "the user's notes").unwrap();
+        let cp = |part: &str| Checkpoint {
+            file: file.clone(),
+            every: 1,
+            problem: vec![("trace 1".into(), part.into())],
+        };
+        let mut control = Control {
+            checkpoint: Some(cp("a")),
+            ..Control::default()
+        };
+        let res = search(
+            &mut Rosen,
+            &[-1.2, 1.0],
+            &bounds,
+            &LmSettings::default(),
+            &mut control,
+        );
+        assert!(
+            matches!(res.termination, Termination::Converged(_)),
+            "{res:?}"
+        );
+        assert!(res.iterations > 2, "saved more than once: {res:?}");
+        let kept = dir.path().join("mine.previous-1.0");
+        assert_eq!(std::fs::read_to_string(&kept).unwrap(), "the user's notes");
+        assert_eq!(
+            std::fs::read_dir(dir.path()).unwrap().count(),
+            2,
+            "one file kept aside"
+        );
+        assert_eq!(cp("a").check((2, 2), &bounds), Ok(()));
+        let other = cp("b").check((2, 2), &bounds).unwrap_err();
+        assert!(
+            other.contains("another problem") && other.contains("trace 1"),
+            "{other}"
+        );
+        let good = std::fs::read_to_string(&file).unwrap();
+        for (what, text) in [
+            ("truncated", good[..good.len() / 2].to_string()),
+            (
+                "edited",
+                good.replacen("\"iterations\":", "\"iterations\":1", 1),
+            ),
+            ("empty", String::new()),
+        ] {
+            std::fs::write(&file, &text).unwrap();
+            let why = cp("a").check((2, 2), &bounds).unwrap_err();
+            assert!(why.contains("mine.0"), "{what}: {why}");
+        }
+    }
+
     #[test]
     fn solves_rosenbrock_and_respects_bounds() {
         let inf = f64::INFINITY;

@@ -7,7 +7,9 @@
 //!
 //! The parts: `tool` (the dea-fit version: another version may pose the problem
 //! otherwise), `trace N` (each trace's sample times, measured drive as the
-//! simulator sees it, channels' values and σ), `scene` (actuator, load, source,
+//! simulator sees it, channels' values), `sigma` (every channel's noise σ, which
+//! weighs its residuals: given, or from the data, and for the polish from the
+//! best search's residuals), `scene` (actuator, load, source,
 //! control, tolerances and integrator, the material's model and structure),
 //! `free` (the free constants, their search coordinates and bounds), `constants`
 //! (every constant's value: the fixed ones and the free ones' start), `settings`
@@ -19,7 +21,7 @@
 
 use super::problem::Problem;
 use super::Settings;
-use crate::fit::lm::Control;
+use crate::fit::lm::{Control, LeastSquares};
 use sha2::{Digest, Sha256};
 use std::fmt::Write;
 
@@ -66,7 +68,7 @@ pub fn parts(problem: &Problem, settings: &Settings) -> Vec<(String, String)> {
         h.feed(&e.scene.time);
         h.feed(&e.scene.input);
         for c in &e.channels {
-            h.feed(&(c.kind.name(), c.sigma, &c.values));
+            h.feed(&(c.kind.name(), &c.values));
         }
         out.push((format!("trace {}", j + 1), h.hex()));
         let s = &e.scene;
@@ -76,6 +78,7 @@ pub fn parts(problem: &Problem, settings: &Settings) -> Vec<(String, String)> {
         scene.feed(&(&m.spec, &m.viscous, m.composite, m.density, m.resistivity));
     }
     out.push(("scene".into(), scene.hex()));
+    out.push(sigma(problem));
     let mut free = Hasher::new();
     for c in &problem.free {
         free.feed(&(&c.name, c.index, c.space, c.bounds, c.start_box, &c.mixture));
@@ -88,6 +91,33 @@ pub fn parts(problem: &Problem, settings: &Settings) -> Vec<(String, String)> {
     s.feed(&(settings.seed, settings.starts, problem.run));
     out.push(("settings".into(), s.hex()));
     out
+}
+
+/// The `sigma` part: every channel's σ, in the order of the traces.
+fn sigma(problem: &Problem) -> (String, String) {
+    let mut h = Hasher::new();
+    for e in &problem.experiments {
+        for c in &e.channels {
+            h.feed(&(c.kind.name(), c.sigma));
+        }
+    }
+    ("sigma".into(), h.hex())
+}
+
+/// The polish's `control` after its σ were estimated from the best search's
+/// residuals: its `sigma` part is the polish problem's. A checkpoint it cannot
+/// resume from (a polish of another best search, whose σ differ, or a file that
+/// is not one of this problem's) is not read: the polish starts afresh from this
+/// run's best, its first save keeping that file aside.
+pub fn for_polish(c: &mut Control, problem: &Problem) {
+    let Some(cp) = &mut c.checkpoint else { return };
+    let (name, digest) = sigma(problem);
+    for part in cp.problem.iter_mut().filter(|p| p.0 == name) {
+        part.1 = digest.clone();
+    }
+    if c.resume && cp.file.exists() && cp.check(problem.dims(), &problem.x_bounds()).is_err() {
+        c.resume = false;
+    }
 }
 
 /// `control` with each checkpoint stamped with `parts` and the search's index

@@ -367,18 +367,19 @@ pub fn identify_with(
     })))
 }
 
-/// Refuse the run when a search is to resume from a checkpoint file that exists
+/// Refuse the run when a start is to resume from a checkpoint file that exists
 /// but is not one of this problem's ([`crate::fit::lm::Checkpoint::check`]:
 /// damaged, edited, another format, or written for another trace, scene, free
-/// set, constants, settings, tool version or start): resuming it would report
-/// another problem's constants as this one's.
+/// set, constants, σ, settings, tool version or start): resuming it would report
+/// another problem's constants as this one's. (The polish's σ are known only
+/// after the search: its checkpoint is checked then, [`checkpoint::for_polish`].)
 fn refuse_foreign_checkpoints(
     problem: &Problem,
     settings: &Settings,
     control: &(dyn Fn(usize) -> Control + Sync),
 ) -> Result<()> {
     let bounds = problem.x_bounds();
-    for i in 0..=settings.starts {
+    for i in 0..settings.starts {
         let c = control(i);
         let Some(cp) = c.checkpoint.filter(|cp| c.resume && cp.file.exists()) else {
             continue;
@@ -450,6 +451,7 @@ fn polish(
     }
     let mut p = problem.clone();
     let mut c = control(settings.starts);
+    checkpoint::for_polish(&mut c, problem);
     c.known_start = Some((r0, j0));
     let polish = crate::fit::lm::search(&mut p, &best.x, &problem.x_bounds(), &settings.lm, &mut c);
     match polish.cost.is_finite() {

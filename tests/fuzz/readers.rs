@@ -38,10 +38,12 @@ pub enum Reader {
     Design,
     /// One or two material files for `dea-fit export`, each code's card made.
     Export,
+    /// A checkpoint of `dea-fit identify`, resumed (`super::checkpoint`).
+    Checkpoint,
 }
 
 impl Reader {
-    pub const ALL: [Reader; 10] = [
+    pub const ALL: [Reader; 11] = [
         Reader::Tensile,
         Reader::Relaxation,
         Reader::Lcr,
@@ -52,6 +54,7 @@ impl Reader {
         Reader::Identified,
         Reader::Design,
         Reader::Export,
+        Reader::Checkpoint,
     ];
 
     pub fn name(self) -> &'static str {
@@ -66,6 +69,7 @@ impl Reader {
             Reader::Identified => "identified",
             Reader::Design => "design",
             Reader::Export => "export",
+            Reader::Checkpoint => "checkpoint",
         }
     }
 
@@ -172,6 +176,7 @@ pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
             .filter(|p| !p.ends_with("relaxation.csv") && !p.ends_with(".md"))
             .collect(),
         Reader::Relaxation => vec!["datasets/vhb4910/relaxation.csv".into()],
+        Reader::Checkpoint => return super::checkpoint::seeds(),
         Reader::Trace => ["step.csv", "sine.csv", "validate.csv"]
             .iter()
             .map(|f| format!("{TRACE_HOST_DIR}/{f}"))
@@ -494,6 +499,7 @@ pub fn replay(r: Reader, case: &Case, dir: &Path) -> String {
             repo(&format!("{TRACE_HOST_DIR}/stack.toml")).display()
         ),
         Reader::Design => format!("dea-fit rank {f} --no-report"),
+        Reader::Checkpoint => super::checkpoint::replay(&case.files[0].0, dir),
         Reader::Export => {
             let files: Vec<String> = case
                 .files
@@ -657,6 +663,7 @@ pub fn run(r: Reader, case: &Case, dir: &Path) -> Verdict {
             let paths: Vec<PathBuf> = case.files.iter().map(|(n, _)| dir.join(n)).collect();
             export(&paths, &case.oracle)
         }
+        Reader::Checkpoint => super::checkpoint::run(&path),
         Reader::Trace => {
             let base = Scene::read(&repo(&format!("{TRACE_HOST_DIR}/stack.toml"))).unwrap();
             let Ok(t) = dea_fit::io::trace::read(&path) else {

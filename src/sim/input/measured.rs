@@ -582,10 +582,10 @@ fn find_corners(t: &[f64], v: &[f64], sigma: f64, work: &Work) -> Vec<(usize, us
 /// local feature, and without the clip every corner removed makes its
 /// neighbours' segments longer, so that removing most of a long record's
 /// candidates refitted splines over ever longer spans (work of the record's
-/// length times the candidates' count). 2048 samples hold the whole of every
-/// record shipped (datasets/identify, ≤ 2501 rows), so that those are fitted as
-/// before.
-const GAIN_REACH: usize = 2048;
+/// length times the candidates' count). A record of at most 4097 samples is never
+/// clipped (every one shipped: datasets/identify, ≤ 2501 rows), so that those are
+/// fitted as before.
+const GAIN_REACH: usize = 4096;
 
 /// Samples kept clear of a neighbouring corner when a corner's sides are fitted.
 const NEIGHBOUR_MARGIN: usize = 2;

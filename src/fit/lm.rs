@@ -803,7 +803,8 @@ pub struct Control {
     /// Save the search to resume it later.
     pub checkpoint: Option<Checkpoint>,
     /// Continue from the checkpoint file if it exists (else start afresh). Without
-    /// this an existing checkpoint file is overwritten, never read.
+    /// this an existing checkpoint file is never read: the search's first save
+    /// keeps it aside ([`Checkpoint::file`]).
     pub resume: bool,
     /// Stop with [`Termination::WallTime`] once an iteration ends past this time.
     pub max_wall: Option<Duration>,

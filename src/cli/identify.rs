@@ -74,14 +74,17 @@ pub struct Args {
     /// JSON-lines iteration trace of every start.
     #[arg(long, value_name = "FILE")]
     trace: Option<PathBuf>,
-    /// Checkpoint file of the search (one per start: FILE.0, FILE.1, …).
+    /// Checkpoint file of the search (one per start: FILE.0, FILE.1, …; each names
+    /// its problem, and is resumed on that problem only). Files already there are
+    /// refused without --resume.
     #[arg(long, value_name = "FILE")]
     checkpoint: Option<PathBuf>,
     /// Resume the search from --checkpoint.
     #[arg(long, requires = "checkpoint")]
     resume: bool,
-    /// Wall-time limit per start in seconds (a start stopped by it is not converged;
-    /// with --checkpoint it can be resumed).
+    /// Wall-time limit in seconds (above 0, at most 1e9): of each start (a start
+    /// stopped by it is not converged; with --checkpoint it can be resumed), and of
+    /// the traces' preparation (an error past it).
     #[arg(long, value_name = "SECONDS")]
     max_time: Option<f64>,
     #[command(flatten)]

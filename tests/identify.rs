@@ -1771,3 +1771,22 @@ fn a_held_out_trace_that_is_missed_is_a_warning_blocking_under_strict() {
         "{c}"
     );
 }
+
+/// A selection fits one problem per candidate: `--checkpoint` with `--arms auto`
+/// is refused (exit 2) before anything runs, not left to resume one candidate's
+/// search as another's.
+#[test]
+fn a_checkpoint_with_a_selection_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = worked_step(
+        dir.path(),
+        &["--arms", "auto", "--checkpoint", "ck", "--no-report"],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--checkpoint") && err.contains("--arms auto"),
+        "{err}"
+    );
+    assert_eq!(super::support::names_in(dir.path()), Vec::<String>::new());
+}

@@ -1520,3 +1520,273 @@ fn an_optimum_moved_by_the_integration_error_is_not_reported_converged() {
     );
     assert_eq!(tight.status.to_string(), "ok", "{:?}", tight.warnings);
 }
+
+/// `path`'s trace with its third column (the contraction) scaled by `factor`,
+/// written to `out`: another problem of the same length.
+fn scaled_contraction(path: &Path, factor: f64, out: &Path) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut header_seen = false;
+    let lines: Vec<String> = text
+        .lines()
+        .map(|l| {
+            if l.starts_with('#') || !header_seen {
+                header_seen |= !l.starts_with('#');
+                return l.to_string();
+            }
+            let mut f: Vec<String> = l.split(',').map(str::to_string).collect();
+            let c: f64 = f[2].parse().unwrap();
+            f[2] = format!("{:.4}", c * factor);
+            f.join(",")
+        })
+        .collect();
+    std::fs::write(out, lines.join("\n") + "\n").unwrap();
+}
+
+/// A checkpoint carries what defines its problem (issue 32): written for the step
+/// trace, it is refused (exit 2, naming the part) on another trace of the same
+/// length even under --strict, and on another free set; a truncated or edited
+/// file is refused, never resumed; on its own problem it is resumed, and ends as
+/// an uninterrupted run does (the same constants, bit for bit in the JSON).
+#[test]
+fn a_checkpoint_is_resumed_only_on_its_own_problem() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = super::support::repo().join("datasets/identify");
+    let common = ["--free", "eps_r,C10", "--no-report", "--json"];
+    let run = |extra: &[&str]| {
+        let mut a = common.to_vec();
+        a.extend_from_slice(extra);
+        worked_step(dir.path(), &a)
+    };
+    let first = run(&[
+        "--max-iterations",
+        "1",
+        "--checkpoint",
+        "ck",
+        "--out",
+        "a.json",
+    ]);
+    assert_eq!(
+        first.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    let ck0 = dir.path().join("ck.0");
+    let saved = std::fs::read(&ck0).expect("start 0 checkpointed");
+    // the same trace with the contraction 10 % larger: same rows, other problem
+    let b = dir.path().join("b.csv");
+    scaled_contraction(&d.join("step.csv"), 1.1, &b);
+    let scene = d.join("stack.toml").display().to_string();
+    let mut args = vec!["identify", "b.csv", "--scene", &scene, "--starts", "1"];
+    args.extend_from_slice(&common);
+    args.extend_from_slice(&[
+        "--checkpoint",
+        "ck",
+        "--resume",
+        "--strict",
+        "--out",
+        "b.json",
+    ]);
+    let other = super::support::run(dir.path(), &args);
+    let err = String::from_utf8_lossy(&other.stderr);
+    assert_eq!(other.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("written for another problem") && err.contains("trace 1"),
+        "{err}"
+    );
+    assert!(!dir.path().join("b.json").exists());
+    // another free set on the same trace
+    let o = worked_step(
+        dir.path(),
+        &[
+            "--free",
+            "eps_r",
+            "--no-report",
+            "--checkpoint",
+            "ck",
+            "--resume",
+        ],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("free"), "{err}");
+    // damaged files: refused by name, the run writes nothing
+    let text = String::from_utf8(saved.clone()).unwrap();
+    for (what, bad) in [
+        ("truncated", text[..text.len() / 3].to_string()),
+        ("edited", text.replacen("\"cost\":", "\"cost\":1", 1)),
+    ] {
+        std::fs::write(&ck0, &bad).unwrap();
+        let o = run(&["--checkpoint", "ck", "--resume", "--out", "c.json"]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{what}: {err}");
+        assert!(err.contains("ck.0"), "{what}: {err}");
+        assert!(!dir.path().join("c.json").exists(), "{what}");
+    }
+    // its own problem: resumed, and the result of a run never interrupted
+    std::fs::write(&ck0, &saved).unwrap();
+    let resumed = run(&["--checkpoint", "ck", "--resume", "--out", "r.json"]);
+    assert_eq!(
+        resumed.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&resumed.stderr)
+    );
+    let whole = run(&["--out", "w.json"]);
+    let params = |o: &std::process::Output| -> serde_json::Value {
+        serde_json::from_slice::<serde_json::Value>(&o.stdout).expect("JSON")["parameters"].clone()
+    };
+    assert_eq!(params(&resumed), params(&whole));
+}
+
+/// Side files go through the write policy after the settings are checked (issue
+/// 32): a run refused (exit 2) leaves a user's file named by `--trace` byte for
+/// byte, a run that ends keeps it aside (`notes.previous-1.txt`) and puts its
+/// trace in place; `--checkpoint mine` over a user's `mine.0` is refused without
+/// `--resume`, the file untouched.
+#[test]
+fn side_files_never_replace_a_users_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let notes = dir.path().join("notes.txt");
+    std::fs::write(&notes, "my notes\n").unwrap();
+    let refused = worked_step(
+        dir.path(),
+        &[
+            "--free",
+            "no_such_constant",
+            "--no-report",
+            "--trace",
+            "notes.txt",
+        ],
+    );
+    assert_eq!(
+        refused.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&refused.stderr)
+    );
+    assert_eq!(std::fs::read(&notes).unwrap(), b"my notes\n");
+    let names = super::support::names_in(dir.path());
+    assert_eq!(names, ["notes.txt"], "no temporary left: {names:?}");
+    let done = worked_step(
+        dir.path(),
+        &[
+            "--free",
+            "eps_r",
+            "--no-report",
+            "--trace",
+            "notes.txt",
+            "--out",
+            "f.json",
+        ],
+    );
+    assert_eq!(
+        done.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&done.stderr)
+    );
+    let kept = dir.path().join("notes.previous-1.txt");
+    assert_eq!(std::fs::read(&kept).unwrap(), b"my notes\n");
+    let trace = std::fs::read_to_string(&notes).unwrap();
+    assert!(
+        trace.lines().count() > 1 && trace.contains("\"start\":0"),
+        "{trace}"
+    );
+    let mine = dir.path().join("mine.0");
+    std::fs::write(&mine, "a user's file\n").unwrap();
+    let o = worked_step(
+        dir.path(),
+        &[
+            "--free",
+            "eps_r",
+            "--no-report",
+            "--checkpoint",
+            "mine",
+            "--out",
+            "g.json",
+        ],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("mine.0") && err.contains("--resume"), "{err}");
+    assert_eq!(std::fs::read(&mine).unwrap(), b"a user's file\n");
+    assert!(!dir.path().join("g.json").exists());
+}
+
+/// `--max-time` outside (0, 10⁹] s is refused at the flag with exit 2, never a
+/// panic of `Duration` (issue 32: 1e20 crashed).
+#[test]
+fn max_time_out_of_range_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for t in ["1e20", "inf", "nan", "-1", "0", "2e9"] {
+        let flag = format!("--max-time={t}");
+        let o = worked_step(dir.path(), &["--no-report", &flag]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{t}: {err}");
+        assert!(
+            err.contains("--max-time") && !err.contains("panicked"),
+            "{t}: {err}"
+        );
+    }
+}
+
+/// A held-out trace the identified constants miss (the held-out triangle with its
+/// contraction 1.5 times the real one: 8 σ off) is a warning with its numbers
+/// (trace, channel, RMS error in σ), status `warning`, and exit 1 under --strict;
+/// the real held-out trace passes (within the allowed RMS error).
+#[test]
+fn a_held_out_trace_that_is_missed_is_a_warning_blocking_under_strict() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = super::support::repo().join("datasets/identify");
+    let missed = dir.path().join("missed.csv");
+    scaled_contraction(&d.join("validate.csv"), 1.5, &missed);
+    let real = d.join("validate.csv").display().to_string();
+    let common = ["--free", "eps_r", "--no-report", "--json", "--strict"];
+    let run = |held: &str| {
+        let mut a = common.to_vec();
+        a.extend_from_slice(&["--validate", held]);
+        worked_step(dir.path(), &a)
+    };
+    let ok = run(&real);
+    let v: serde_json::Value = serde_json::from_slice(&ok.stdout).expect("JSON");
+    let c = &v["validation"][0]["channels"][0];
+    assert!(
+        c["rms_sigmas"].as_f64().unwrap() <= c["allowed_rms_sigmas"].as_f64().unwrap(),
+        "{c}"
+    );
+    assert_eq!(ok.status.code(), Some(0), "{}", v["warnings"]);
+    let bad = run("missed.csv");
+    let v: serde_json::Value = serde_json::from_slice(&bad.stdout).expect("JSON");
+    assert_eq!(bad.status.code(), Some(1), "{v}");
+    assert_eq!(v["status"], "warning");
+    let w = v["warnings"].to_string();
+    assert!(
+        w.contains("missed.csv") && w.contains("contraction") && w.contains(" σ"),
+        "{w}"
+    );
+    let c = &v["validation"][0]["channels"][0];
+    assert!(
+        c["rms_sigmas"].as_f64().unwrap() > c["allowed_rms_sigmas"].as_f64().unwrap(),
+        "{c}"
+    );
+}
+
+/// A selection fits one problem per candidate: `--checkpoint` with `--arms auto`
+/// is refused (exit 2) before anything runs, not left to resume one candidate's
+/// search as another's.
+#[test]
+fn a_checkpoint_with_a_selection_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = worked_step(
+        dir.path(),
+        &["--arms", "auto", "--checkpoint", "ck", "--no-report"],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--checkpoint") && err.contains("--arms auto"),
+        "{err}"
+    );
+    assert_eq!(super::support::names_in(dir.path()), Vec::<String>::new());
+}

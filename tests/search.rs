@@ -35,6 +35,7 @@ fn checkpoint(dir: &tempfile::TempDir) -> Checkpoint {
     Checkpoint {
         file: dir.path().join("search.ckpt"),
         every: 1,
+        problem: Vec::new(),
     }
 }
 

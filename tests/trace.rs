@@ -2,11 +2,13 @@
 //! noise, the signal reconstructed), the trace reader, `Trace::scene`, and
 //! `synth trace` round trips.
 
+use dea_fit::sim::input::measured::Work;
 use dea_fit::sim::input::Measured;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use std::f64::consts::PI;
+use std::time::{Duration, Instant};
 
 /// A noisy record of `truth` at `times`: Gaussian noise σ, seeded.
 fn record(times: &[f64], truth: &dyn Fn(f64) -> f64, sigma: f64, seed: u64) -> Vec<f64> {
@@ -379,7 +381,7 @@ fn synth_trace_round_trip() {
         assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
         let t = trace::read(&out).expect("a synth trace reads");
         let base = Scene::read(&crate::support::repo().join(scene_file)).expect("scene");
-        let mut scene = t.scene(&base).expect("trace scene");
+        let mut scene = t.scene(&base, None).expect("trace scene");
         scene.source = Source::Ideal;
         let run = sim::simulate(&scene, &sim::RunOptions::default()).expect("runs");
         assert_eq!(run.samples.len(), t.time_s.len());
@@ -484,7 +486,7 @@ fn trace_scene_times_and_start() {
         "time_s,voltage_V,contraction_um\n10,0,0\n10.5,100,1\n11.25,100,2\n",
     )
     .expect("reads");
-    let s = t.scene(&base).expect("scene");
+    let s = t.scene(&base, None).expect("scene");
     assert_eq!(s.time.samples, vec![0.5, 1.25]);
     assert_eq!(s.time.span, 1.25);
     let t = read_text(
@@ -492,7 +494,7 @@ fn trace_scene_times_and_start() {
         "time_s,voltage_V,contraction_um\n0,4000,0\n1,5000,1\n2,5000,2\n",
     )
     .expect("reads");
-    let e = t.scene(&base).err().expect("not at rest").to_string();
+    let e = t.scene(&base, None).err().expect("not at rest").to_string();
     assert!(e.contains("b.csv:2:2") && e.contains("at rest"), "{e}");
 }
 
@@ -566,4 +568,64 @@ fn synth_status_and_strict() {
     );
     assert_eq!(r.status.code(), Some(0));
     assert!(String::from_utf8_lossy(&r.stdout).contains("status: completed"));
+}
+
+/// The measured-input fit is linear in the record's length: a slow sine in noise
+/// (whose long record once gave hundreds of candidate corners, each removal
+/// refitting splines over ever longer spans: 60 000 rows 6.4 s, 300 000 rows 93 s)
+/// takes at most 6 times the least-squares work (samples visited by its fits,
+/// [`Work::samples`]: a count, not a time) on a record 5 times as long. The
+/// allowance over 5 is the spline's knot-count search on the final segments, which
+/// grows with the logarithm of their length.
+#[test]
+fn measured_fit_work_grows_linearly_with_the_record() {
+    let work = |span: f64| {
+        let times = regular(span, 1e-3);
+        let v = record(
+            &times,
+            &|t| 0.5 * A * (1.0 - (4.0 * PI * t).cos()),
+            SIGMA,
+            3,
+        );
+        let w = Work::until(None);
+        Measured::fit_with(&times, &v, &w).expect("a valid record");
+        w.samples()
+    };
+    let (short, long) = (work(8.0), work(40.0));
+    let ratio = long as f64 / short as f64;
+    println!("work {short} → {long} samples, ×{ratio:.2} for ×5 the record");
+    assert!(ratio <= 6.0, "work {short} → {long}: ×{ratio:.2}");
+}
+
+/// A fit past its deadline ends in an error that says so (never a partial signal),
+/// and so does a trace's scene built under a spent time budget, with the hint.
+#[test]
+fn a_measured_fit_past_its_deadline_is_an_error() {
+    let times = regular(3.0, 1e-3);
+    let v = record(&times, &triangle, SIGMA, 1);
+    let past = Instant::now()
+        .checked_sub(Duration::from_secs(1))
+        .expect("a second ago");
+    let w = Work::until(Some(past));
+    let e = Measured::fit_with(&times, &v, &w).expect_err("deadline passed");
+    assert!(e.contains("time budget ran out"), "{e}");
+    assert_eq!(w.samples(), 0, "no fit runs past the deadline");
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("t.csv");
+    let mut csv = String::from("time_s,voltage_V,contraction_um\n");
+    for (t, x) in times.iter().zip(&v) {
+        csv.push_str(&format!("{t},{},0\n", x - v[0]));
+    }
+    std::fs::write(&file, csv).unwrap();
+    let t = dea_fit::io::trace::read(&file).expect("a trace");
+    let base = dea_fit::sim::scene::Scene::read(
+        &super::support::repo().join("datasets/identify/stack.toml"),
+    )
+    .unwrap();
+    let e = t
+        .scene(&base, Some(past))
+        .err()
+        .expect("budget spent")
+        .to_string();
+    assert!(e.contains("time budget") && e.contains("--max-time"), "{e}");
 }

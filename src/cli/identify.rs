@@ -10,12 +10,16 @@ use dea_fit::identify::problem::{ChannelKind, Experiment};
 use dea_fit::identify::selection::{select, Candidate, Choose};
 use dea_fit::identify::{identify_with, Identification, Run, Settings};
 use dea_fit::io::trace;
+use dea_fit::io::write::AtomicFile;
 use dea_fit::observe::{Progress, Trace as TraceFile};
 use dea_fit::sim::scene::Scene;
 use dea_fit::units::parse_quantity;
 use dea_fit::{Error, Result};
 use serde::Serialize;
+use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, PoisonError};
+use std::time::{Duration, Instant};
 
 /// Identify material constants from actuator traces (one experiment per file,
 /// fitted jointly).
@@ -70,14 +74,17 @@ pub struct Args {
     /// JSON-lines iteration trace of every start.
     #[arg(long, value_name = "FILE")]
     trace: Option<PathBuf>,
-    /// Checkpoint file of the search (one per start: FILE.0, FILE.1, …).
+    /// Checkpoint file of the search (one per start: FILE.0, FILE.1, …; each names
+    /// its problem, and is resumed on that problem only). Files already there are
+    /// refused without --resume.
     #[arg(long, value_name = "FILE")]
     checkpoint: Option<PathBuf>,
     /// Resume the search from --checkpoint.
     #[arg(long, requires = "checkpoint")]
     resume: bool,
-    /// Wall-time limit per start in seconds (a start stopped by it is not converged;
-    /// with --checkpoint it can be resumed).
+    /// Wall-time limit in seconds (above 0, at most 1e9): of each start (a start
+    /// stopped by it is not converged; with --checkpoint it can be resumed), and of
+    /// the traces' preparation (an error past it).
     #[arg(long, value_name = "SECONDS")]
     max_time: Option<f64>,
     #[command(flatten)]
@@ -156,6 +163,7 @@ fn auto(flag: &str, value: Option<&str>, hint: &str) -> Result<bool> {
 fn experiments(
     files: &[PathBuf],
     base: &Scene,
+    deadline: Option<Instant>,
 ) -> Result<(Vec<Experiment>, Vec<serde_json::Value>)> {
     let mut exps = Vec::with_capacity(files.len());
     let mut prov = Vec::with_capacity(files.len());
@@ -164,9 +172,100 @@ fn experiments(
         prov.push(
             serde_json::json!({"file": f.display().to_string(), "sha256": t.provenance.sha256}),
         );
-        exps.push(Experiment::from_trace(&t, base)?);
+        exps.push(Experiment::from_trace_within(&t, base, deadline)?);
     }
     Ok((exps, prov))
+}
+
+/// The largest `--max-time`: 10⁹ s (about 32 years), beyond any run, and well
+/// inside what a `Duration` holds (1.8·10¹⁹ s).
+pub const MAX_TIME_S: f64 = 1e9;
+
+/// The wall-time limit of `--max-time SECONDS`: finite, above 0 and at most
+/// [`MAX_TIME_S`], else refused (never a panic of `Duration`).
+fn wall_limit(seconds: Option<f64>) -> Result<Option<Duration>> {
+    let Some(t) = seconds else { return Ok(None) };
+    if !(t.is_finite() && t > 0.0 && t <= MAX_TIME_S) {
+        return Err(Error::settings(format!(
+            "--max-time {t}: give a number of seconds above 0 and at most {MAX_TIME_S:e}"
+        ))
+        .with_hint("leave --max-time out for no time limit"));
+    }
+    Ok(Some(Duration::from_secs_f64(t)))
+}
+
+/// Refuse to start afresh over checkpoint files already there (`FILE.0` …
+/// `FILE.starts`, the last the polish's): without `--resume` they would be
+/// replaced, and they may be a search to resume or not checkpoints at all.
+fn refuse_existing_checkpoints(file: &Path, starts: usize) -> Result<()> {
+    let named = Checkpoint {
+        file: file.to_path_buf(),
+        every: 1,
+        problem: Vec::new(),
+    };
+    let found: Vec<String> = (0..=starts)
+        .map(|i| named.for_start(i).file)
+        .filter(|f| std::fs::symlink_metadata(f).is_ok())
+        .map(|f| f.display().to_string())
+        .collect();
+    if found.is_empty() {
+        return Ok(());
+    }
+    Err(Error::settings(format!(
+        "--checkpoint {}: {} already there; a fresh search would replace {}",
+        file.display(),
+        found.join(", "),
+        if found.len() == 1 { "it" } else { "them" }
+    ))
+    .with_hint("add --resume to continue that search, or give another --checkpoint name"))
+}
+
+/// The `--trace` file as the write policy has it: lines go to a temporary file
+/// beside the target ([`AtomicFile`]), put in place by [`TraceOut::commit`] when
+/// the run has ended (a different file already there kept aside); a run refused
+/// before that leaves the target as it was.
+struct TraceOut {
+    file: Arc<Mutex<Option<AtomicFile>>>,
+    path: PathBuf,
+}
+
+/// The writer the [`TraceFile`] writes into: the shared temporary file.
+struct Shared(Arc<Mutex<Option<AtomicFile>>>);
+
+impl Write for Shared {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let mut f = self.0.lock().unwrap_or_else(PoisonError::into_inner);
+        f.as_mut().map_or(Ok(buf.len()), |f| f.write(buf))
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        let mut f = self.0.lock().unwrap_or_else(PoisonError::into_inner);
+        f.as_mut().map_or(Ok(()), |f| f.flush())
+    }
+}
+
+impl TraceOut {
+    fn create(path: &Path) -> Result<TraceOut> {
+        Ok(TraceOut {
+            file: Arc::new(Mutex::new(Some(AtomicFile::create(path)?))),
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// The trace the observers write.
+    fn trace(&self) -> TraceFile {
+        TraceFile::to_writer(Box::new(Shared(self.file.clone())), &self.path)
+    }
+
+    /// Put the trace in place (after every [`TraceOut::trace`] is dropped, which
+    /// flushes its lines).
+    fn commit(self) -> Result<()> {
+        let file = self
+            .file
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .take();
+        file.map_or(Ok(()), super::commit_noted)
+    }
 }
 
 /// The stem of the first trace (for the default names).
@@ -190,9 +289,20 @@ pub fn run(a: Args) -> Result<i32> {
             "give the model in the scene, or --hyperelastic auto to choose an invariant model",
         )?,
     };
+    let max_wall = wall_limit(a.max_time)?;
+    // the traces' preparation (fitting each measured drive) is under the time
+    // budget too: it ends by the command's start plus --max-time
+    let deadline = max_wall.map(|d| std::time::Instant::now() + d);
+    if a.checkpoint.is_some() && (choose.arms || choose.hyperelastic) {
+        return Err(Error::settings(
+            "--checkpoint with --arms auto or --hyperelastic auto: a checkpoint holds the \
+             search of one problem, and a selection fits one per candidate",
+        )
+        .with_hint("give the model and arms in the scene to checkpoint the search"));
+    }
     let base = Scene::read(&a.scene)?;
-    let (exps, traces) = experiments(&a.traces, &base)?;
-    let (mut held, _) = experiments(&a.validate, &base)?;
+    let (exps, traces) = experiments(&a.traces, &base, deadline)?;
+    let (mut held, _) = experiments(&a.validate, &base, deadline)?;
     // a held-out trace the scene cannot start on is refused before the search
     for e in &held {
         e.check_start(&dea_fit::identify::params::theta(&e.scene))?;
@@ -215,14 +325,13 @@ pub fn run(a: Args) -> Result<i32> {
         profiles: a.profiles.clone(),
     };
     settings.check()?;
-    if let Some(t) = a.max_time {
-        if !(t.is_finite() && t > 0.0) {
-            return Err(Error::settings(format!(
-                "--max-time {t}: give a positive number of seconds"
-            )));
-        }
+    if let (Some(f), false) = (&a.checkpoint, a.resume) {
+        refuse_existing_checkpoints(f, a.starts)?;
     }
-    let trace_file = a.trace.as_deref().map(TraceFile::create).transpose()?;
+    // settings checked: the trace goes to a temporary file, put in place when the
+    // run ends (a run refused later leaves the file there as it was)
+    let trace_out = a.trace.as_deref().map(TraceOut::create).transpose()?;
+    let trace_file = trace_out.as_ref().map(TraceOut::trace);
     let bar = (!a.output.json).then(|| Progress::bar(a.starts + 1));
     let control = |i: usize| {
         let mut c = Control::default();
@@ -236,11 +345,13 @@ pub fn run(a: Args) -> Result<i32> {
             Checkpoint {
                 file: f.clone(),
                 every: 1,
+                // stamped with the problem's parts by identify_with
+                problem: Vec::new(),
             }
             .for_start(i)
         });
         c.resume = a.resume;
-        c.max_wall = a.max_time.map(std::time::Duration::from_secs_f64);
+        c.max_wall = max_wall;
         c
     };
     // The experiments as identified (with the chosen model and arms, when a
@@ -261,6 +372,10 @@ pub fn run(a: Args) -> Result<i32> {
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
+    drop(trace_file);
+    if let Some(t) = trace_out {
+        t.commit()?;
+    }
     let mut id = match run {
         Run::Identified(id) => *id,
         Run::Failed(f) => return Ok(failed(&f, a.output.json)),
@@ -274,7 +389,8 @@ pub fn run(a: Args) -> Result<i32> {
         .iter()
         .map(|e| validate(&id, e))
         .collect::<Result<_>>()?;
-    // a held-out trace the identified constants cannot run is a finding, not an error
+    // a held-out trace the identified constants cannot run, or miss, is a finding,
+    // not an error
     for w in validation.iter().filter_map(Validation::warning) {
         id.warnings.push(w);
         if id.status == Status::Ok {
@@ -345,7 +461,12 @@ pub fn run(a: Args) -> Result<i32> {
             println!("report: {}", r.display());
         }
     }
-    Ok(id.status.exit_code(a.output.strict))
+    // a held-out trace the constants miss is a warning, blocking under --strict
+    let missed = validation.iter().any(|v| !v.passed());
+    Ok(id
+        .status
+        .exit_code(a.output.strict)
+        .max(i32::from(a.output.strict && missed)))
 }
 
 /// Print a failed run (JSON or text) and give its exit status, 1: no fit file or

@@ -10,12 +10,16 @@
 //! limit. [`minimize`] is the same search without those (docs/architecture.md,
 //! "argmin: what it bought, what it cost").
 
+use crate::io::write::AtomicFile;
 use argmin::core::checkpointing::{Checkpoint as Save, CheckpointingFrequency};
 use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::{Executor, IterState, Problem, Solver, State, TerminationReason, KV};
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
+use std::io::Write;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::Duration;
 
 /// A nonlinear least-squares problem: minimise ½‖r(p)‖².
@@ -746,14 +750,24 @@ impl<P: LeastSquares + ?Sized> Solver<Held<'_, P>, LmState> for LmSolver<'_> {
     }
 }
 
-/// Where and how often a search saves itself.
+/// Where and how often a search saves itself, and what problem it belongs to.
 #[derive(Debug, Clone)]
 pub struct Checkpoint {
-    /// The checkpoint file (JSON, written atomically: a temporary file renamed).
+    /// The checkpoint file (JSON, written by the house's write policy
+    /// ([`crate::io::write`]): a temporary file beside it renamed over it; the
+    /// first save of a search that did not resume from it keeps a different file
+    /// already there aside as `<stem>.previous-<n>.<ext>`).
     pub file: PathBuf,
     /// Save after every this many iterations (≥ 1); a search stopped by the wall
     /// time saves at once whatever the cadence.
     pub every: u64,
+    /// What defines the problem the search belongs to, part by part: (name, value
+    /// or digest), from the caller (identification: the tool version, each trace's
+    /// data, the scene, the free set, the constants, the settings that move the
+    /// optimum, the start; `crate::identify::checkpoint`). Saved in the file; a
+    /// file whose parts differ is refused, naming them. Empty: only the sizes and
+    /// bounds are checked.
+    pub problem: Vec<(String, String)>,
 }
 
 impl Checkpoint {
@@ -764,7 +778,16 @@ impl Checkpoint {
         Checkpoint {
             file: name.into(),
             every: self.every,
+            problem: self.problem.clone(),
         }
+    }
+
+    /// Whether a search of a problem with `dims` (residuals, parameters), `bounds`
+    /// and this checkpoint's [`Checkpoint::problem`] could resume from the file:
+    /// the reason when not (not a checkpoint, damaged or edited, of another
+    /// format, or written for another problem).
+    pub fn check(&self, dims: (usize, usize), bounds: &[(f64, f64)]) -> Result<(), String> {
+        load(self, dims, bounds).map(|_| ())
     }
 }
 
@@ -780,7 +803,8 @@ pub struct Control {
     /// Save the search to resume it later.
     pub checkpoint: Option<Checkpoint>,
     /// Continue from the checkpoint file if it exists (else start afresh). Without
-    /// this an existing checkpoint file is overwritten, never read.
+    /// this an existing checkpoint file is never read: the search's first save
+    /// keeps it aside ([`Checkpoint::file`]).
     pub resume: bool,
     /// Stop with [`Termination::WallTime`] once an iteration ends past this time.
     pub max_wall: Option<Duration>,
@@ -820,9 +844,10 @@ pub fn search<P: LeastSquares + ?Sized>(
     control: &mut Control,
 ) -> LmResult {
     let resumed = match (&control.checkpoint, control.resume) {
-        (Some(c), true) if c.file.exists() => Some(load(&c.file, problem.dims(), bounds)),
+        (Some(c), true) if c.file.exists() => Some(load(c, problem.dims(), bounds)),
         _ => None,
     };
+    let fresh = resumed.is_none();
     let mut lm = match resumed {
         Some(Ok(mut lm)) => {
             lm.settings = *settings;
@@ -834,6 +859,9 @@ pub fn search<P: LeastSquares + ?Sized>(
             Err(failed) => return *failed,
         },
     };
+    // a search that did not resume from the file keeps what is there aside at its
+    // first save; later saves (and a resumed search's) replace its own state
+    let keep = Arc::new(AtomicBool::new(fresh));
     let state = lm.state();
     let mut executor = Executor::new(
         Held(problem),
@@ -850,7 +878,7 @@ pub fn search<P: LeastSquares + ?Sized>(
         executor = executor.add_observer(Forward(observer), ObserverMode::Always);
     }
     if let Some(c) = &control.checkpoint {
-        executor = executor.checkpointing(FileCheckpoint(c.clone()));
+        executor = executor.checkpointing(FileCheckpoint(c.clone(), keep.clone()));
     }
     if let Some(limit) = control.max_wall {
         executor = executor.timeout(limit);
@@ -870,7 +898,7 @@ pub fn search<P: LeastSquares + ?Sized>(
         },
     };
     if let (Termination::WallTime, Some(c)) = (&termination, &control.checkpoint) {
-        if let Err(e) = save(&c.file, &lm) {
+        if let Err(e) = save(c, &lm, &keep) {
             return lm.finish(Termination::Failed(e));
         }
     }
@@ -897,10 +925,11 @@ impl Observe<LmState> for Forward {
     }
 }
 
-/// argmin's checkpointing hook for the LM: saves [`Lm`] as [`Saved`]. Loading is
+/// argmin's checkpointing hook for the LM: saves [`Lm`] as [`Saved`] (the flag:
+/// whether the next save keeps a different file aside, see [`save`]). Loading is
 /// done by [`search`] itself (it must give the caller's settings to the loaded
 /// search and check the file belongs to the problem).
-struct FileCheckpoint(Checkpoint);
+struct FileCheckpoint(Checkpoint, Arc<AtomicBool>);
 
 impl<'s> Save<LmSolver<'s>, LmState> for FileCheckpoint {
     /// A search the solver has stopped is not saved: resuming repeats its last
@@ -909,7 +938,7 @@ impl<'s> Save<LmSolver<'s>, LmState> for FileCheckpoint {
         if solver.stopped.is_some() {
             return Ok(());
         }
-        save(&self.0.file, solver.lm).map_err(argmin::core::Error::msg)
+        save(&self.0, solver.lm, &self.1).map_err(argmin::core::Error::msg)
     }
     fn load(&self) -> Result<Option<(LmSolver<'s>, LmState)>, argmin::core::Error> {
         Ok(None)
@@ -925,6 +954,8 @@ impl<'s> Save<LmSolver<'s>, LmState> for FileCheckpoint {
 #[derive(Serialize, Deserialize)]
 struct Saved {
     format: String,
+    /// [`Checkpoint::problem`] of the search that wrote it.
+    problem: Vec<(String, String)>,
     residuals: usize,
     bounds: Vec<(u64, u64)>,
     x: Vec<u64>,
@@ -935,24 +966,36 @@ struct Saved {
     nu: u64,
     iterations: usize,
     evaluations: usize,
-    /// The costs so far (absent in a file written before they were kept: the pace
-    /// of [`out_of_reach`] is then measured from the resume on).
-    #[serde(default)]
+    /// The costs so far (the pace of [`out_of_reach`]).
     costs: Vec<u64>,
-    /// [`Lm::trusted`] (absent in older files: trusted).
-    #[serde(default = "yes")]
+    /// [`Lm::trusted`].
     trusted: bool,
-    /// [`Lm::secant`] (absent in older files: evaluated).
-    #[serde(default)]
+    /// [`Lm::secant`].
     secant: bool,
+    /// sha256 of the file's JSON written with this field empty ([`Saved::digest`]):
+    /// a damaged or edited file is refused, not resumed.
+    digest: String,
 }
 
-fn yes() -> bool {
-    true
+impl Saved {
+    /// The sha256 (hex) of `self` serialised with an empty `digest`.
+    fn digest(&mut self) -> String {
+        let kept = std::mem::take(&mut self.digest);
+        let text = serde_json::to_string(self).expect("a checkpoint serialises");
+        self.digest = kept;
+        crate::io::sha256_hex(text.as_bytes())
+    }
 }
 
-/// The `format` of a checkpoint file this version reads.
-const FORMAT: &str = "dea-fit lm checkpoint 1";
+/// The first lines every version of the file has: its format.
+#[derive(Deserialize)]
+struct Head {
+    format: String,
+}
+
+/// The `format` of a checkpoint file this version reads (2: the problem's parts
+/// and the digest; a file of format 1 carries neither and is refused).
+const FORMAT: &str = "dea-fit lm checkpoint 2";
 
 fn bits(v: &[f64]) -> Vec<u64> {
     v.iter().map(|x| x.to_bits()).collect()
@@ -962,11 +1005,16 @@ fn unbits(v: &[u64]) -> Vec<f64> {
     v.iter().map(|&b| f64::from_bits(b)).collect()
 }
 
-/// Write `lm` to `file` (a temporary file beside it renamed over it, so a search
-/// killed while saving leaves the previous checkpoint whole).
-fn save(file: &Path, lm: &Lm) -> Result<(), String> {
-    let saved = Saved {
+/// Write `lm` to the checkpoint's file by the write policy: a temporary file
+/// beside it renamed over it (a search killed while saving leaves the previous
+/// checkpoint whole). While `keep` is set (a search's first save, unless it
+/// resumed from the file), a different file already there is kept aside as
+/// `<stem>.previous-<n>.<ext>` ([`AtomicFile::commit_keeping`]) instead of
+/// replaced; later saves replace the search's own state.
+fn save(c: &Checkpoint, lm: &Lm, keep: &AtomicBool) -> Result<(), String> {
+    let mut saved = Saved {
         format: FORMAT.into(),
+        problem: c.problem.clone(),
         residuals: lm.r.len(),
         bounds: lm
             .bounds
@@ -984,23 +1032,85 @@ fn save(file: &Path, lm: &Lm) -> Result<(), String> {
         costs: bits(&lm.costs),
         trusted: lm.trusted,
         secant: lm.secant,
+        digest: String::new(),
     };
+    saved.digest = saved.digest();
     let text = serde_json::to_string(&saved).map_err(|e| e.to_string())?;
-    let mut tmp = file.as_os_str().to_owned();
-    tmp.push(".tmp");
-    std::fs::write(&tmp, text)
-        .and_then(|()| std::fs::rename(&tmp, file))
-        .map_err(|e| format!("cannot write the checkpoint {}: {e}", file.display()))
+    let written = (|| {
+        let mut f = AtomicFile::create(&c.file)?;
+        f.write_all(text.as_bytes())
+            .map_err(|e| crate::Error::io(&c.file, e))?;
+        match keep.load(Ordering::Relaxed) {
+            true => f.commit_keeping().map(|_| ()),
+            false => f.commit(),
+        }
+    })();
+    written.map_err(|e| format!("cannot write the checkpoint {}: {e}", c.file.display()))?;
+    keep.store(false, Ordering::Relaxed);
+    Ok(())
 }
 
-/// Read a checkpoint of a problem with `dims` (residuals, parameters) and `bounds`;
-/// a file of another format or another problem is refused with the reason.
-fn load(file: &Path, (m, n): (usize, usize), bounds: &[(f64, f64)]) -> Result<Lm, String> {
+/// The parts of `here` that `saved` does not have alike, in words: a short value
+/// (the tool version, the start) in full, a digest by its first 12 digits.
+fn differing(saved: &[(String, String)], here: &[(String, String)]) -> Vec<String> {
+    let short = |v: &str| match v.len() > 24 {
+        true => format!("{}…", &v[..12.min(v.len())]),
+        false => v.to_string(),
+    };
+    let mut out: Vec<String> = here
+        .iter()
+        .filter_map(|(name, v)| match saved.iter().find(|(n, _)| n == name) {
+            Some((_, s)) if s == v => None,
+            Some((_, s)) => Some(format!(
+                "{name} ({} in the file, {} here)",
+                short(s),
+                short(v)
+            )),
+            None => Some(format!("{name} (absent in the file)")),
+        })
+        .collect();
+    out.extend(
+        saved
+            .iter()
+            .filter(|(n, _)| !here.iter().any(|(h, _)| h == n))
+            .map(|(n, _)| format!("{n} (not part of this problem)")),
+    );
+    out
+}
+
+/// Read the checkpoint `c` of a problem with `dims` (residuals, parameters) and
+/// `bounds`; a file that is not a whole checkpoint of this format (damaged,
+/// truncated, edited: its digest), or one written for another problem
+/// ([`Checkpoint::problem`], sizes, bounds), is refused with the reason.
+fn load(c: &Checkpoint, (m, n): (usize, usize), bounds: &[(f64, f64)]) -> Result<Lm, String> {
+    let file = &c.file;
     let what = |e: String| format!("checkpoint {}: {e}", file.display());
     let text = std::fs::read_to_string(file).map_err(|e| what(e.to_string()))?;
-    let s: Saved = serde_json::from_str(&text).map_err(|e| what(e.to_string()))?;
-    if s.format != FORMAT {
-        return Err(what(format!("format {:?}, expected {FORMAT:?}", s.format)));
+    let damaged = |e: serde_json::Error| {
+        what(format!(
+            "not a whole checkpoint file (damaged or truncated?): {e}"
+        ))
+    };
+    let head: Head = serde_json::from_str(&text).map_err(damaged)?;
+    if head.format != FORMAT {
+        return Err(what(format!(
+            "format {:?}, expected {FORMAT:?} (written by another version of dea-fit)",
+            head.format
+        )));
+    }
+    let mut s: Saved = serde_json::from_str(&text).map_err(damaged)?;
+    if s.digest() != s.digest {
+        return Err(what(
+            "its content does not match its digest: the file was damaged or edited".into(),
+        ));
+    }
+    let other = differing(&s.problem, &c.problem);
+    if !other.is_empty() {
+        return Err(what(format!(
+            "written for another problem: {} differ{}",
+            other.join(", "),
+            if other.len() == 1 { "s" } else { "" }
+        )));
     }
     let same_bounds = s.bounds.len() == bounds.len()
         && s.bounds
@@ -1010,23 +1120,40 @@ fn load(file: &Path, (m, n): (usize, usize), bounds: &[(f64, f64)]) -> Result<Lm
     if s.residuals != m || s.x.len() != n || !same_bounds {
         return Err(what(format!(
             "written for a problem with {} residuals, {} parameters and other bounds or \
-             these; this one has {m} residuals and {n} parameters (delete the file to start afresh)",
+             these; this one has {m} residuals and {n} parameters",
             s.residuals,
             s.x.len()
         )));
     }
-    if s.r.len() != m || s.jac.len() != m * n {
+    if s.r.len() != m || s.jac.len() != m.saturating_mul(n) {
         return Err(what("residuals or Jacobian of the wrong size".into()));
+    }
+    let x = unbits(&s.x);
+    let finite = |v: &[u64]| v.iter().all(|&b| f64::from_bits(b).is_finite());
+    let (cost, mu, nu) = (
+        f64::from_bits(s.cost),
+        f64::from_bits(s.mu),
+        f64::from_bits(s.nu),
+    );
+    if x.iter().zip(bounds).any(|(&v, &b)| project(v, b) != v)
+        || !(finite(&s.x) && finite(&s.r) && finite(&s.jac) && finite(&s.costs))
+        || !(cost.is_finite() && mu > 0.0 && mu.is_finite() && nu > 0.0 && nu.is_finite())
+        || s.costs.len() > s.iterations.saturating_add(1)
+    {
+        return Err(what(
+            "a value outside its domain (a parameter outside its bounds, a non-finite number)"
+                .into(),
+        ));
     }
     Ok(Lm {
         settings: LmSettings::default(),
         bounds: bounds.to_vec(),
-        x: unbits(&s.x),
+        x,
         r: DVector::from_vec(unbits(&s.r)),
         jac: DMatrix::from_vec(m, n, unbits(&s.jac)),
-        cost: f64::from_bits(s.cost),
-        mu: f64::from_bits(s.mu),
-        nu: f64::from_bits(s.nu),
+        cost,
+        mu,
+        nu,
         iterations: s.iterations,
         evaluations: s.evaluations,
         costs: unbits(&s.costs),
@@ -1078,6 +1205,66 @@ mod tests {
                 j[(1, 1)] = 0.0;
             }
             true
+        }
+    }
+
+    /// A fresh search keeps a file already at its checkpoint's name aside at its
+    /// first save (the write policy) and replaces its own state after that; the
+    /// file names its problem's parts, and a file of other parts, a truncated one
+    /// or an edited one is refused with the reason.
+    #[test]
+    fn checkpoints_keep_a_users_file_and_refuse_what_is_not_theirs() {
+        let inf = f64::INFINITY;
+        let bounds = [(-inf, inf); 2];
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("mine.0");
+        std::fs::write(&file, "the user's notes").unwrap();
+        let cp = |part: &str| Checkpoint {
+            file: file.clone(),
+            every: 1,
+            problem: vec![("trace 1".into(), part.into())],
+        };
+        let mut control = Control {
+            checkpoint: Some(cp("a")),
+            ..Control::default()
+        };
+        let res = search(
+            &mut Rosen,
+            &[-1.2, 1.0],
+            &bounds,
+            &LmSettings::default(),
+            &mut control,
+        );
+        assert!(
+            matches!(res.termination, Termination::Converged(_)),
+            "{res:?}"
+        );
+        assert!(res.iterations > 2, "saved more than once: {res:?}");
+        let kept = dir.path().join("mine.previous-1.0");
+        assert_eq!(std::fs::read_to_string(&kept).unwrap(), "the user's notes");
+        assert_eq!(
+            std::fs::read_dir(dir.path()).unwrap().count(),
+            2,
+            "one file kept aside"
+        );
+        assert_eq!(cp("a").check((2, 2), &bounds), Ok(()));
+        let other = cp("b").check((2, 2), &bounds).unwrap_err();
+        assert!(
+            other.contains("another problem") && other.contains("trace 1"),
+            "{other}"
+        );
+        let good = std::fs::read_to_string(&file).unwrap();
+        for (what, text) in [
+            ("truncated", good[..good.len() / 2].to_string()),
+            (
+                "edited",
+                good.replacen("\"iterations\":", "\"iterations\":1", 1),
+            ),
+            ("empty", String::new()),
+        ] {
+            std::fs::write(&file, &text).unwrap();
+            let why = cp("a").check((2, 2), &bounds).unwrap_err();
+            assert!(why.contains("mine.0"), "{what}: {why}");
         }
     }
 

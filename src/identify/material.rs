@@ -78,7 +78,34 @@ pub struct Prediction {
     pub rmse: f64,
     /// Seed Eq. 3.28 (%).
     pub rmse_pct: Option<f64>,
+    /// Noise σ of the held-out channel, estimated from its own data as the fit's
+    /// channels are ([`super::noise::from_data`]; SI).
+    pub sigma: f64,
+    /// The RMS error in units of that σ: about 1 for a prediction within the noise.
+    pub rms_sigmas: f64,
+    /// The largest `rms_sigmas` a passing prediction has ([`allowed_rms_sigmas`]).
+    pub allowed_rms_sigmas: f64,
 }
+
+impl Prediction {
+    /// Whether the prediction is within [`Prediction::allowed_rms_sigmas`].
+    pub fn passed(&self) -> bool {
+        self.rms_sigmas <= self.allowed_rms_sigmas
+    }
+}
+
+/// How far a held-out prediction may miss, as its RMS error over the channel's
+/// noise σ: [`VALIDATION_RMS_SIGMAS`] times the fit's own RMS residual in σ,
+/// √(χ²/dof), or times 1 when the fit is within its noise. A prediction within the
+/// noise has about 1, and one that misses by as much again as the fit misses its
+/// own traces about √(χ²/dof); three times either is a model or constants that
+/// do not carry over to the held-out drive.
+pub fn allowed_rms_sigmas(id: &Identification) -> f64 {
+    VALIDATION_RMS_SIGMAS * id.chi2_per_dof.sqrt().max(1.0)
+}
+
+/// The factor of [`allowed_rms_sigmas`].
+pub const VALIDATION_RMS_SIGMAS: f64 = 3.0;
 
 /// A held-out trace predicted (`--validate`).
 #[derive(Debug, Clone, Serialize)]
@@ -94,12 +121,37 @@ pub struct Validation {
 }
 
 impl Validation {
-    /// The warning of a failed prediction.
+    /// Whether the held-out trace is predicted: the run completed and every channel
+    /// is within its allowed error ([`Prediction::passed`]).
+    pub fn passed(&self) -> bool {
+        self.failed.is_none() && self.channels.iter().all(Prediction::passed)
+    }
+
+    /// The warning of a failed prediction, or of each channel missed, with its
+    /// numbers.
     pub fn warning(&self) -> Option<String> {
-        self.failed.as_ref().map(|why| {
-            format!(
+        if let Some(why) = &self.failed {
+            return Some(format!(
                 "{}: the identified constants do not predict this held-out trace: {why}",
                 self.file
+            ));
+        }
+        let missed: Vec<String> = self
+            .channels
+            .iter()
+            .filter(|c| !c.passed())
+            .map(|c| {
+                format!(
+                    "{} RMS error {:.3e} {} = {:.1} σ (σ {:.3e} {} from its data; at most {:.1} σ passes)",
+                    c.channel, c.rmse, c.unit, c.rms_sigmas, c.sigma, c.unit, c.allowed_rms_sigmas
+                )
+            })
+            .collect();
+        (!missed.is_empty()).then(|| {
+            format!(
+                "{}: the identified constants miss this held-out trace: {}",
+                self.file,
+                missed.join("; ")
             )
         })
     }
@@ -124,6 +176,10 @@ pub fn validate(id: &Identification, exp: &Experiment) -> Result<Validation> {
         });
     }
     let s0 = o.samples[0];
+    let times: Vec<f64> = std::iter::once(0.0)
+        .chain(exp.scene.time.samples.iter().copied())
+        .collect();
+    let allowed = allowed_rms_sigmas(id);
     let channels = exp
         .channels
         .iter()
@@ -137,11 +193,16 @@ pub fn validate(id: &Identification, exp: &Experiment) -> Result<Validation> {
             }
             let rmse = (ss / n.max(1) as f64).sqrt();
             let measured: Vec<f64> = c.values.iter().copied().filter(|v| v.is_finite()).collect();
+            let sigma = super::noise::from_data(&times, &c.values);
             Prediction {
                 channel: c.kind,
                 unit: c.kind.unit(),
                 rmse,
                 rmse_pct: rmse_percent(rmse, &measured),
+                sigma,
+                // a NaN (no value to compare) never passes
+                rms_sigmas: rmse / sigma,
+                allowed_rms_sigmas: allowed,
             }
         })
         .collect();

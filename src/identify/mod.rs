@@ -15,6 +15,7 @@
 
 pub mod assessment;
 pub mod band;
+pub mod checkpoint;
 pub mod failure;
 pub mod material;
 pub mod noise;
@@ -275,6 +276,9 @@ pub fn identify_with(
     let (mut problem, all, given) = prepare(experiments, settings)?;
     let profiled = profile_indices(&problem, settings)?;
     let (n, k) = problem.dims();
+    let parts = checkpoint::parts(&problem, settings);
+    let control = &checkpoint::stamped(control, &parts);
+    refuse_foreign_checkpoints(&problem, settings, control)?;
     let x_start = problem.x_of(&problem.theta);
     let design = search::starts(&problem, x_start, settings.starts, settings.seed)?;
     let ms = search::run_all(&problem, &design, &settings.lm, control);
@@ -363,6 +367,33 @@ pub fn identify_with(
     })))
 }
 
+/// Refuse the run when a start is to resume from a checkpoint file that exists
+/// but is not one of this problem's ([`crate::fit::lm::Checkpoint::check`]:
+/// damaged, edited, another format, or written for another trace, scene, free
+/// set, constants, σ, settings, tool version or start): resuming it would report
+/// another problem's constants as this one's. (The polish's σ are known only
+/// after the search: its checkpoint is checked then, [`checkpoint::for_polish`].)
+fn refuse_foreign_checkpoints(
+    problem: &Problem,
+    settings: &Settings,
+    control: &(dyn Fn(usize) -> Control + Sync),
+) -> Result<()> {
+    let bounds = problem.x_bounds();
+    for i in 0..settings.starts {
+        let c = control(i);
+        let Some(cp) = c.checkpoint.filter(|cp| c.resume && cp.file.exists()) else {
+            continue;
+        };
+        cp.check(problem.dims(), &bounds).map_err(|why| {
+            Error::settings(why).with_hint(
+                "resume with the traces, scene and settings the checkpoint was written for, \
+                 or give another --checkpoint name (or delete the file) to start afresh",
+            )
+        })?;
+    }
+    Ok(())
+}
+
 /// The status of an identification: `not_converged` when the search did not
 /// converge or the integration error moved the optimum by more than
 /// [`MAX_INTEGRATION_SHIFT`] standard errors, `ill_posed` when a constant is not
@@ -420,6 +451,7 @@ fn polish(
     }
     let mut p = problem.clone();
     let mut c = control(settings.starts);
+    checkpoint::for_polish(&mut c, problem);
     c.known_start = Some((r0, j0));
     let polish = crate::fit::lm::search(&mut p, &best.x, &problem.x_bounds(), &settings.lm, &mut c);
     match polish.cost.is_finite() {

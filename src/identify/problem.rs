@@ -598,7 +598,17 @@ impl Experiment {
     /// model (rise time, resistance) is replaced by an ideal source: the supply's
     /// dynamics are already in the measurement.
     pub fn from_trace(trace: &crate::io::trace::Trace, base: &Scene) -> crate::Result<Experiment> {
-        let mut scene = trace.scene(base)?;
+        Experiment::from_trace_within(trace, base, None)
+    }
+
+    /// [`Experiment::from_trace`] with the measured drive fitted by `deadline`
+    /// (the run's time budget; past it, an error).
+    pub fn from_trace_within(
+        trace: &crate::io::trace::Trace,
+        base: &Scene,
+        deadline: Option<std::time::Instant>,
+    ) -> crate::Result<Experiment> {
+        let mut scene = trace.scene(base, deadline)?;
         scene.source = crate::sim::scene::Source::Ideal;
         Ok(Experiment {
             name: trace.provenance.path.clone(),

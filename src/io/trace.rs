@@ -15,6 +15,7 @@
 use super::table::{column_unit, split_header, Table};
 use crate::error::{Error, Location, Result};
 use crate::sim::budget::{self, Domain};
+use crate::sim::input::measured::Work;
 use crate::sim::input::{Measured, Term, Waveform};
 use crate::sim::scene::Scene;
 use crate::sim::Sample;
@@ -22,6 +23,7 @@ use crate::units::Dimension;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::sync::Arc;
+use std::time::Instant;
 
 /// Where a trace came from.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -395,15 +397,23 @@ impl Trace {
     }
 
     /// The measured drive as a smooth input with its real corners
-    /// (`sim::input::measured`), on the trace's times shifted to start at 0.
-    pub fn input(&self) -> Result<Measured> {
+    /// (`sim::input::measured`), on the trace's times shifted to start at 0,
+    /// fitted by `deadline` (None: no limit; past it, an error with a hint).
+    pub fn input(&self, deadline: Option<Instant>) -> Result<Measured> {
         let t0 = self.time_s[0];
         let t: Vec<f64> = self.time_s.iter().map(|t| t - t0).collect();
-        Measured::fit(&t, &self.voltage_v).map_err(|e| {
-            Error::input(
+        let work = Work::until(deadline);
+        Measured::fit_with(&t, &self.voltage_v, &work).map_err(|e| {
+            let err = Error::input(
                 Location::file(&self.provenance.path),
                 format!("the voltage: {e}"),
-            )
+            );
+            match deadline.is_some_and(|d| Instant::now() > d) {
+                true => err.with_hint(
+                    "give a longer time budget (identify --max-time) or a shorter trace",
+                ),
+                false => err,
+            }
         })
     }
 
@@ -417,7 +427,8 @@ impl Trace {
     /// at t = 0): a trace whose first voltage exceeds [`START_SHARE`] of its largest
     /// |V| (and 3 noise σ) did not start at rest and is refused. A base scene with
     /// a closed loop is refused too: a measured voltage replaces the controller.
-    pub fn scene(&self, base: &Scene) -> Result<Scene> {
+    /// The measured drive is fitted by `deadline` ([`Trace::input`]).
+    pub fn scene(&self, base: &Scene, deadline: Option<Instant>) -> Result<Scene> {
         let file = &self.provenance.path;
         if base.control.is_some() {
             return Err(Error::settings(format!(
@@ -426,7 +437,7 @@ impl Trace {
             ))
             .with_hint("use a scene without [control]: the measured drive becomes its input"));
         }
-        let input = self.input()?;
+        let input = self.input(deadline)?;
         let vmax = self.voltage_v.iter().fold(0.0, |a: f64, v| a.max(v.abs()));
         let v0 = self.voltage_v[0];
         if v0.abs() > (START_SHARE * vmax).max(3.0 * input.noise()) {

@@ -197,8 +197,8 @@ fn channel_rows(id: &Identification, validation: &[Validation]) -> Vec<Vec<Strin
                 held.clone(),
                 c.channel.to_string(),
                 blank(),
-                blank(),
-                blank(),
+                si(c.sigma, c.unit),
+                "held-out data".into(),
                 si(c.rmse, c.unit),
                 pct(c.rmse_pct),
             ]);

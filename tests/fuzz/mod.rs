@@ -8,6 +8,7 @@
 //! new child goes on with the next case. Cases are made from a seeded ChaCha8 stream
 //! per (reader, case), so the parent remakes any case to write its reproducer.
 
+mod checkpoint;
 mod merge;
 mod mutate;
 mod readers;

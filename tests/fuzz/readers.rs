@@ -40,10 +40,12 @@ pub enum Reader {
     Export,
     /// Shard files of a rank sweep, altered, merged (`rank merge`; fuzz/merge.rs).
     Merge,
+    /// A checkpoint of `dea-fit identify`, resumed (`super::checkpoint`).
+    Checkpoint,
 }
 
 impl Reader {
-    pub const ALL: [Reader; 11] = [
+    pub const ALL: [Reader; 12] = [
         Reader::Tensile,
         Reader::Relaxation,
         Reader::Lcr,
@@ -55,6 +57,7 @@ impl Reader {
         Reader::Design,
         Reader::Export,
         Reader::Merge,
+        Reader::Checkpoint,
     ];
 
     pub fn name(self) -> &'static str {
@@ -70,6 +73,7 @@ impl Reader {
             Reader::Design => "design",
             Reader::Export => "export",
             Reader::Merge => "merge",
+            Reader::Checkpoint => "checkpoint",
         }
     }
 
@@ -179,6 +183,7 @@ pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
             .filter(|p| !p.ends_with("relaxation.csv") && !p.ends_with(".md"))
             .collect(),
         Reader::Relaxation => vec!["datasets/vhb4910/relaxation.csv".into()],
+        Reader::Checkpoint => return super::checkpoint::seeds(),
         Reader::Trace => ["step.csv", "sine.csv", "validate.csv"]
             .iter()
             .map(|f| format!("{TRACE_HOST_DIR}/{f}"))
@@ -505,6 +510,7 @@ pub fn replay(r: Reader, case: &Case, dir: &Path) -> String {
         ),
         Reader::Design => format!("dea-fit rank {f} --no-report"),
         Reader::Merge => super::merge::replay(case, dir),
+        Reader::Checkpoint => super::checkpoint::replay(&case.files[0].0, dir),
         Reader::Export => {
             let files: Vec<String> = case
                 .files
@@ -669,6 +675,7 @@ pub fn run(r: Reader, case: &Case, dir: &Path) -> Verdict {
             let paths: Vec<PathBuf> = case.files.iter().map(|(n, _)| dir.join(n)).collect();
             export(&paths, &case.oracle)
         }
+        Reader::Checkpoint => super::checkpoint::run(&path),
         Reader::Trace => {
             let base = Scene::read(&repo(&format!("{TRACE_HOST_DIR}/stack.toml"))).unwrap();
             let Ok(t) = dea_fit::io::trace::read(&path) else {

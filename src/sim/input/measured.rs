@@ -56,6 +56,9 @@
 //!
 //! Before the first sample and after the last the value is held.
 
+use std::cell::Cell;
+use std::time::Instant;
+
 /// Noise floor as a fraction of the record's range (0.1 %): below any real drive's
 /// noise; it keeps a noiseless synthetic record from being split at its rounding.
 pub const NOISE_FLOOR: f64 = 1e-3;
@@ -78,6 +81,45 @@ pub const STEP_NEIGHBOURS: usize = 6;
 pub const STEP_DOMINANCE: f64 = 2.0;
 /// Fewest samples on each side of a candidate corner (the hinge needs both sides).
 const MIN_SIDE: usize = 4;
+
+/// The work of a [`Measured::fit_with`] and the deadline it must end by. The unit
+/// of work is a sample visited by a least-squares fit (a hinge window of the
+/// corner test, a spline of the pieces or of a corner's worth): the fit is
+/// linear in the record's length when this count is. Once the deadline has
+/// passed every further fit is skipped and the fit ends in an error that says so
+/// (never a partial signal taken as whole).
+#[derive(Debug, Default)]
+pub struct Work {
+    deadline: Option<Instant>,
+    samples: Cell<u64>,
+    exceeded: Cell<bool>,
+}
+
+impl Work {
+    /// No work done yet, to end by `deadline` (None: no limit).
+    pub fn until(deadline: Option<Instant>) -> Work {
+        Work {
+            deadline,
+            ..Work::default()
+        }
+    }
+
+    /// Samples visited by the fits so far.
+    pub fn samples(&self) -> u64 {
+        self.samples.get()
+    }
+
+    /// Count a fit over `n` samples: false (the fit is to be skipped) once the
+    /// deadline has passed.
+    fn spend(&self, n: usize) -> bool {
+        if self.exceeded.get() || self.deadline.is_some_and(|d| Instant::now() > d) {
+            self.exceeded.set(true);
+            return false;
+        }
+        self.samples.set(self.samples.get() + n as u64);
+        true
+    }
+}
 
 /// A measured signal: smooth Hermite pieces between corners.
 #[derive(Debug, Clone, PartialEq)]
@@ -107,6 +149,12 @@ impl Measured {
     /// Fit samples `(times, values)`: times finite and strictly increasing, values
     /// finite, at least two. The error says what is wrong (the caller locates it).
     pub fn fit(times: &[f64], values: &[f64]) -> Result<Measured, String> {
+        Measured::fit_with(times, values, &Work::default())
+    }
+
+    /// [`Measured::fit`] counting its `work` and ending by its deadline: past it,
+    /// an error says how far the fit came.
+    pub fn fit_with(times: &[f64], values: &[f64], work: &Work) -> Result<Measured, String> {
         let n = times.len();
         if n < 2 || values.len() != n {
             return Err(format!(
@@ -132,13 +180,21 @@ impl Measured {
             });
         let noise = noise_sigma(times, values).max(NOISE_FLOOR * (hi - lo));
         let mut segs = if noise > 0.0 {
-            find_corners(times, values, noise)
+            find_corners(times, values, noise, work)
         } else {
             // a constant record: one piece
             vec![(0, n - 1, times[0], false)]
         };
         segs.sort_by(|a, b| a.2.total_cmp(&b.2));
-        Ok(build(times, values, noise, &segs))
+        let m = build(times, values, noise, &segs, work);
+        if work.exceeded.get() {
+            return Err(format!(
+                "the time budget ran out while the measured signal ({n} samples) was fitted, \
+                 after {} samples of least-squares work",
+                work.samples()
+            ));
+        }
+        Ok(m)
     }
 
     /// Value and time derivative at `t` (right-continuous at corners; held outside
@@ -377,7 +433,7 @@ fn solve5(l: &[[f64; 5]; 5], b: &[f64; 5]) -> [f64; 5] {
 
 /// The segments between corners (steps 2 and 3): (first sample, last sample, start
 /// time, is a step), unsorted.
-fn find_corners(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize, f64, bool)> {
+fn find_corners(t: &[f64], v: &[f64], sigma: f64, work: &Work) -> Vec<(usize, usize, f64, bool)> {
     let n = t.len();
     // boundaries: sample index and corner time; a step's two corners are samples
     let mut bounds: Vec<(usize, f64)> = vec![(0, t[0]), (n - 1, t[n - 1])];
@@ -390,18 +446,21 @@ fn find_corners(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize, f64, boo
     }
     bounds.sort_by_key(|b| b.0);
     bounds.dedup_by_key(|b| b.0);
+    // the rises are found in the order of their samples: both lists are sorted
+    let is_step = |b: usize| steps.binary_search(&b).is_ok();
+    let is_step_end = |b: usize| step_ends.binary_search(&b).is_ok();
     // the largest hinge t-ratio at c over the window scales, and its window
     let ratio = |bounds: &[(usize, f64)], c: usize| -> (f64, usize, usize) {
         let none = (0.0, 0, 0);
         let k = bounds.partition_point(|b| b.0 <= c);
-        if k == 0 || k >= bounds.len() || bounds[k - 1].0 == c || steps.contains(&bounds[k - 1].0) {
+        if k == 0 || k >= bounds.len() || bounds[k - 1].0 == c || is_step(bounds[k - 1].0) {
             return none;
         }
         let (lo, hi) = (bounds[k - 1].0, bounds[k].0);
         let mut best = none;
         for w in WINDOWS {
             let (a, b) = (lo.max(c.saturating_sub(w)), hi.min(c + w));
-            if c - a < MIN_SIDE || b - c < MIN_SIDE {
+            if c - a < MIN_SIDE || b - c < MIN_SIDE || !work.spend(b - a + 1) {
                 continue;
             }
             let (r, rss) = hinge_fit(t, v, a, b, t[c], sigma);
@@ -419,13 +478,21 @@ fn find_corners(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize, f64, boo
     };
     let mut r: Vec<(f64, usize, usize)> = (0..n).map(|c| ratio(&bounds, c)).collect();
     let reach = WINDOWS[WINDOWS.len() - 1];
-    while let Some((c, &(best, a, b))) = r
+    // The largest ratio first, the last sample of equal ones (the order of a scan
+    // of `r` for its maximum, kept in a heap so that each corner costs log n, not
+    // n). A ratio is ≥ 0 (or NaN, largest as in `total_cmp`), so its bits order as
+    // it does; an entry whose ratio has since changed is stale and skipped.
+    let threshold = CORNER_SIGMAS.to_bits();
+    let mut heap: std::collections::BinaryHeap<(u64, usize)> = r
         .iter()
         .enumerate()
-        .max_by(|x, y| x.1 .0.total_cmp(&y.1 .0))
-    {
-        if best <= CORNER_SIGMAS {
-            break;
+        .map(|(c, x)| (x.0.to_bits(), c))
+        .filter(|e| e.0 > threshold)
+        .collect();
+    while let Some((key, c)) = heap.pop() {
+        let (best, a, b) = r[c];
+        if best.to_bits() != key {
+            continue;
         }
         let k = bounds.partition_point(|x| x.0 <= c);
         let between = (bounds[k - 1].1, bounds[k].1);
@@ -440,28 +507,50 @@ fn find_corners(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize, f64, boo
         bounds.insert(k, (c, tc));
         for j in c.saturating_sub(reach)..=(c + reach).min(n - 1) {
             r[j] = ratio(&bounds, j);
+            if r[j].0.to_bits() > threshold {
+                heap.push((r[j].0.to_bits(), j));
+            }
         }
     }
     // a hinge corner stays only where splitting its segment lowers the BIC of the
     // smooth fits: a smooth peak that a hinge imitates over a long window is one
-    // spline with a few more knots
-    let is_step = |b: usize| steps.contains(&b);
+    // spline with a few more knots. Each corner's gain depends on its neighbours
+    // only: after a removal the two beside it are computed again, the others kept.
+    let gain = |bounds: &[(usize, f64)], i: usize| -> Option<f64> {
+        if i == 0 || i + 1 >= bounds.len() {
+            return None;
+        }
+        let (p, c, q) = (bounds[i - 1], bounds[i], bounds[i + 1]);
+        if is_step(c.0) || is_step(p.0) || is_step_end(c.0) {
+            return None;
+        }
+        // its neighbours' segments, each side clipped to GAIN_REACH samples
+        let (lo, hi) = (
+            p.0.max(c.0.saturating_sub(GAIN_REACH)),
+            q.0.min(c.0 + GAIN_REACH),
+        );
+        let a = if lo == p.0 { p.1 } else { t[lo] };
+        let b = if hi == q.0 { q.1 } else { t[hi] };
+        let m = (hi - lo + 1) as f64;
+        Some(corner_gain(t, v, (a, c.1, b), sigma, m, work))
+    };
+    let mut gains: Vec<Option<f64>> = (0..bounds.len()).map(|i| gain(&bounds, i)).collect();
     loop {
         let mut worst: Option<(usize, f64)> = None;
-        for i in 1..bounds.len().saturating_sub(1) {
-            let (p, c, q) = (bounds[i - 1], bounds[i], bounds[i + 1]);
-            if is_step(c.0) || is_step(p.0) || step_ends.contains(&c.0) {
-                continue;
-            }
-            let m = (q.0 - p.0 + 1) as f64;
-            let gain = corner_gain(t, v, (p.1, c.1, q.1), sigma, m);
-            if worst.is_none_or(|w| gain < w.1) {
-                worst = Some((i, gain));
+        for (i, g) in gains.iter().enumerate() {
+            if let Some(g) = *g {
+                if worst.is_none_or(|w| g < w.1) {
+                    worst = Some((i, g));
+                }
             }
         }
         match worst {
             Some((i, g)) if g < 0.0 => {
                 bounds.remove(i);
+                gains.remove(i);
+                for j in [i - 1, i] {
+                    gains[j] = gain(&bounds, j);
+                }
             }
             _ => break,
         }
@@ -470,7 +559,7 @@ fn find_corners(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize, f64, boo
     // neighbouring corners (less a margin for their own uncertainty)
     for i in 1..bounds.len().saturating_sub(1) {
         let c = bounds[i].0;
-        if is_step(c) || step_ends.contains(&c) {
+        if is_step(c) || is_step_end(c) {
             continue;
         }
         let (lo, hi) = (
@@ -487,6 +576,16 @@ fn find_corners(t: &[f64], v: &[f64], sigma: f64) -> Vec<(usize, usize, f64, boo
         .map(|w| (w[0].0, w[1].0, w[0].1, is_step(w[0].0)))
         .collect()
 }
+
+/// Samples on each side of a corner over which its BIC gain ([`corner_gain`]) is
+/// measured, at most (its neighbouring corners' segments, clipped): a corner is a
+/// local feature, and without the clip every corner removed makes its
+/// neighbours' segments longer, so that removing most of a long record's
+/// candidates refitted splines over ever longer spans (work of the record's
+/// length times the candidates' count). A record of at most 4097 samples is never
+/// clipped (every one shipped: datasets/identify, ≤ 2501 rows), so that those are
+/// fitted as before.
+const GAIN_REACH: usize = 4096;
 
 /// Samples kept clear of a neighbouring corner when a corner's sides are fitted.
 const NEIGHBOUR_MARGIN: usize = 2;
@@ -729,7 +828,13 @@ fn join_spread(t: &[f64], (a, b): (usize, usize), th: f64, degree: usize) -> Opt
 }
 
 /// Hermite pieces on each segment, joined at the corners (step 4).
-fn build(t: &[f64], v: &[f64], noise: f64, segs: &[(usize, usize, f64, bool)]) -> Measured {
+fn build(
+    t: &[f64],
+    v: &[f64],
+    noise: f64,
+    segs: &[(usize, usize, f64, bool)],
+    work: &Work,
+) -> Measured {
     let n = t.len();
     let mut knots: Vec<f64> = Vec::new();
     let mut pieces: Vec<[f64; 4]> = Vec::new();
@@ -739,7 +844,7 @@ fn build(t: &[f64], v: &[f64], noise: f64, segs: &[(usize, usize, f64, bool)]) -
         let t1 = segs.get(k + 1).map_or(t[n - 1], |s| s.2);
         let seg = Segment { t0, t1, step };
         first.push(pieces.len());
-        let (ks, ps) = fit_segment(t, v, &seg, noise);
+        let (ks, ps) = fit_segment(t, v, &seg, noise, work);
         if knots.is_empty() {
             knots.push(ks[0]);
         }
@@ -766,7 +871,7 @@ fn build(t: &[f64], v: &[f64], noise: f64, segs: &[(usize, usize, f64, bool)]) -
         let ks = &knots[a..=b];
         let lo = t.partition_point(|&x| x < ks[0]);
         let hi = t.partition_point(|&x| x <= ks[ks.len() - 1]);
-        match hermite_lsq(&t[lo..hi], &v[lo..hi], ks, *fixed).filter(|_| hi - lo >= 4) {
+        match hermite_lsq(&t[lo..hi], &v[lo..hi], ks, *fixed, work).filter(|_| hi - lo >= 4) {
             Some((u, _)) => {
                 for j in 0..b - a {
                     pieces[a + j] = [u[2 * j], u[2 * j + 1], u[2 * j + 2], u[2 * j + 3]];
@@ -823,7 +928,13 @@ fn build(t: &[f64], v: &[f64], noise: f64, segs: &[(usize, usize, f64, bool)]) -
 
 /// Knots and Hermite pieces of one segment. A step is one straight piece (its
 /// values are set from its neighbours afterwards).
-fn fit_segment(t: &[f64], v: &[f64], s: &Segment, sigma: f64) -> (Vec<f64>, Vec<[f64; 4]>) {
+fn fit_segment(
+    t: &[f64],
+    v: &[f64],
+    s: &Segment,
+    sigma: f64,
+    work: &Work,
+) -> (Vec<f64>, Vec<[f64; 4]>) {
     let lo = t.partition_point(|&x| x < s.t0);
     let hi = t.partition_point(|&x| x <= s.t1);
     let (ts, vs) = (&t[lo..hi], &v[lo..hi]);
@@ -834,7 +945,7 @@ fn fit_segment(t: &[f64], v: &[f64], s: &Segment, sigma: f64) -> (Vec<f64>, Vec<
         let sl = (y1 - y0) / (s.t1 - s.t0);
         return (vec![s.t0, s.t1], vec![[y0, sl, y1, sl]]);
     }
-    let Some((_, knots, u)) = segment_fit(t, v, (s.t0, s.t1), sigma, m as f64, true) else {
+    let Some((_, knots, u)) = segment_fit(t, v, (s.t0, s.t1), sigma, m as f64, true, work) else {
         let (y0, y1) = line_fit(ts, vs, s.t0, s.t1);
         let sl = (y1 - y0) / (s.t1 - s.t0);
         return (vec![s.t0, s.t1], vec![[y0, sl, y1, sl]]);
@@ -849,10 +960,17 @@ fn fit_segment(t: &[f64], v: &[f64], s: &Segment, sigma: f64) -> (Vec<f64>, Vec<
 /// both sides, or the two sides' knots as one C¹ spline (the split without its
 /// slope jump, so the comparison is nested), against the two sides' splines: the
 /// RSS the split saves must exceed [`CORNER_SIGMAS`]² σ² (as a hinge's t-ratio).
-fn corner_gain(t: &[f64], v: &[f64], (a, c, b): (f64, f64, f64), sigma: f64, m: f64) -> f64 {
+fn corner_gain(
+    t: &[f64],
+    v: &[f64],
+    (a, c, b): (f64, f64, f64),
+    sigma: f64,
+    m: f64,
+    work: &Work,
+) -> f64 {
     let (Some(l), Some(r)) = (
-        segment_fit(t, v, (a, c), sigma, m, false),
-        segment_fit(t, v, (c, b), sigma, m, false),
+        segment_fit(t, v, (a, c), sigma, m, false, work),
+        segment_fit(t, v, (c, b), sigma, m, false, work),
     ) else {
         return f64::INFINITY;
     };
@@ -860,11 +978,11 @@ fn corner_gain(t: &[f64], v: &[f64], (a, c, b): (f64, f64, f64), sigma: f64, m: 
     let hi = t.partition_point(|&x| x <= b);
     let mut knots = l.1.clone();
     knots.extend_from_slice(&r.1[1..]);
-    let joined = hermite_lsq(&t[lo..hi], &v[lo..hi], &knots, [None, None])
+    let joined = hermite_lsq(&t[lo..hi], &v[lo..hi], &knots, [None, None], work)
         .map_or(f64::INFINITY, |(_, rss)| {
             rss / (sigma * sigma) + 2.0 * knots.len() as f64 * m.ln()
         });
-    let merged = segment_fit(t, v, (a, b), sigma, m, false).map_or(f64::INFINITY, |f| f.0);
+    let merged = segment_fit(t, v, (a, b), sigma, m, false, work).map_or(f64::INFINITY, |f| f.0);
     // the split has two unknowns more than the joined spline (a second value and
     // slope at c): refund their BIC and ask, as of a hinge, a 6σ saving instead
     merged.min(joined) - l.0 - r.0 + 2.0 * m.ln() - CORNER_SIGMAS * CORNER_SIGMAS
@@ -884,6 +1002,7 @@ fn segment_fit(
     sigma: f64,
     m: f64,
     graded: bool,
+    work: &Work,
 ) -> Option<(f64, Vec<f64>, Vec<f64>)> {
     let lo = t.partition_point(|&x| x < t0);
     let hi = t.partition_point(|&x| x <= t1);
@@ -898,8 +1017,14 @@ fn segment_fit(
         let even = quantile_knots(ts, t0, t1, k);
         let graded = graded.then(|| graded_knots(ts, &even)).flatten();
         for knots in [Some(even), graded].into_iter().flatten() {
-            if let Some((u, rss)) = hermite_lsq(ts, vs, &knots, [None, None]) {
-                let score = rss / (sigma * sigma) + 2.0 * knots.len() as f64 * m.ln();
+            // the score is at least its penalty: a spline whose penalty alone
+            // reaches the best score cannot beat it (not fitted)
+            let penalty = 2.0 * knots.len() as f64 * m.ln();
+            if best.as_ref().is_some_and(|b| penalty >= b.0) {
+                continue;
+            }
+            if let Some((u, rss)) = hermite_lsq(ts, vs, &knots, [None, None], work) {
+                let score = rss / (sigma * sigma) + penalty;
                 if best.as_ref().is_none_or(|b| score < b.0) {
                     best = Some((score, knots, u));
                 }
@@ -966,13 +1091,17 @@ fn quantile_knots(ts: &[f64], t0: f64, t1: f64, k: usize) -> Vec<f64> {
 /// Least-squares C¹ cubic Hermite spline on `knots`: unknowns (y_j, s_j) per knot,
 /// banded normal equations (half-bandwidth 3) solved by banded Cholesky; the value
 /// at the first and at the last knot held where `fixed` gives it. Returns the
-/// unknowns and the RSS.
+/// unknowns and the RSS; `None` when singular, or past the deadline of `work`.
 fn hermite_lsq(
     ts: &[f64],
     vs: &[f64],
     knots: &[f64],
     fixed: [Option<f64>; 2],
+    work: &Work,
 ) -> Option<(Vec<f64>, f64)> {
+    if !work.spend(ts.len()) {
+        return None;
+    }
     const W: usize = 4;
     let nu = 2 * knots.len();
     let mut a = vec![[0.0; W]; nu]; // a[i][d] = A[i][i + d]

@@ -17,7 +17,7 @@ use crate::io::manifest::Manifest;
 use crate::material::check::{fmt_g, PERMITTIVITY};
 use crate::material::dielectric::{volume_fraction, weight_fraction, MixingRule, Pair};
 use crate::rank::manifest::TAN_DELTA;
-use crate::units::count_product;
+use crate::units::{count_product, MAX_POINTS};
 use nalgebra::{DMatrix, DVector};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -806,10 +806,11 @@ fn three() -> f64 {
     3.0
 }
 
-/// Most rows `composite --generate` makes in all (samples × frequencies): the
-/// exports are held in memory until every one is made (about 40 bytes a row, so
-/// 160 MB), and a measured series has a few hundred.
-pub const GENERATED_ROWS: usize = 4_000_000;
+/// Most rows `composite --generate` makes in all (samples × frequencies): as many
+/// as one file of `synth` ([`MAX_POINTS`]), since the exports are held in memory
+/// until every one is made (about 40 bytes a row); a measured series has a few
+/// hundred.
+pub const GENERATED_ROWS: usize = MAX_POINTS;
 
 /// The largest noise_pct of a synthetic series: at a relative σ of 20 % a negative
 /// capacitance is a 5σ event, already one in 3·10⁶ rows.

@@ -822,7 +822,7 @@ pub const PER_DECADE: CountRange = CountRange::new(
 /// Points of the log sweep from `f_min` to `f_max` (Hz) at `per_decade` points per
 /// decade: round(log10(f_max/f_min)·per_decade) + 1, checked against
 /// [`PER_DECADE`] and [`MAX_POINTS`] in floating point before anything is sized by
-/// it. Refused unless 0 < f_min < f_max < ∞.
+/// it. Refused unless 0 < f_min < f_max < ∞, both in [`FREQUENCY_RANGE_HZ`].
 pub fn log_sweep_points(
     f_min: f64,
     f_max: f64,
@@ -834,6 +834,10 @@ pub fn log_sweep_points(
             fmt_g(f_min),
             fmt_g(f_max)
         ));
+    }
+    // A sweep the tool makes is one its readers take back.
+    if let Some((msg, _)) = [f_min, f_max].into_iter().find_map(frequency_problem) {
+        return Err(msg);
     }
     let per_decade = PER_DECADE.check(per_decade as u64)?;
     const SWEEP: CountRange = CountRange::new(1, MAX_POINTS, "points of one sweep");

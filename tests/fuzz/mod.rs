@@ -8,6 +8,8 @@
 //! new child goes on with the next case. Cases are made from a seeded ChaCha8 stream
 //! per (reader, case), so the parent remakes any case to write its reproducer.
 
+mod flags;
+mod generate;
 mod mutate;
 mod readers;
 

@@ -38,10 +38,15 @@ pub enum Reader {
     Design,
     /// One or two material files for `dea-fit export`, each code's card made.
     Export,
+    /// A composite manifest's [synthetic] values, its exports generated
+    /// (`composite --generate`, tests/fuzz/generate.rs).
+    Generate,
+    /// Numeric flag values of the real commands (tests/fuzz/flags.rs).
+    Flags,
 }
 
 impl Reader {
-    pub const ALL: [Reader; 10] = [
+    pub const ALL: [Reader; 12] = [
         Reader::Tensile,
         Reader::Relaxation,
         Reader::Lcr,
@@ -52,6 +57,8 @@ impl Reader {
         Reader::Identified,
         Reader::Design,
         Reader::Export,
+        Reader::Generate,
+        Reader::Flags,
     ];
 
     pub fn name(self) -> &'static str {
@@ -66,6 +73,8 @@ impl Reader {
             Reader::Identified => "identified",
             Reader::Design => "design",
             Reader::Export => "export",
+            Reader::Generate => "generate",
+            Reader::Flags => "flags",
         }
     }
 
@@ -197,6 +206,9 @@ pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
             .filter(|p| p.ends_with(".json"))
             .chain(["tests/data/identified/stack-step-identified.json".into()])
             .collect(),
+        Reader::Generate => vec![super::generate::SEED.into()],
+        // a case is made whole, not mutated from a file
+        Reader::Flags => return vec![Vec::new()],
     };
     paths
         .iter()
@@ -424,6 +436,23 @@ impl Material {
 /// scenes, fit files and identified files half of the time.
 pub fn generate(r: Reader, seeds: &[Vec<(String, Vec<u8>)>], rng: &mut ChaCha8Rng) -> Case {
     let mut files = seeds.choose(rng).unwrap().clone();
+    let whole = match r {
+        Reader::Flags => Some(("args.txt".to_string(), super::flags::case(rng))),
+        Reader::Generate => Some((
+            files[0].0.clone(),
+            super::generate::mutate(&String::from_utf8_lossy(&files[0].1), rng),
+        )),
+        _ => None,
+    };
+    if let Some((name, Mutated { bytes, what, kind })) = whole {
+        return Case {
+            what: format!("{name} ({what})"),
+            files: vec![(name, bytes)],
+            kind,
+            oracle: Oracle::Any,
+            model: "",
+        };
+    }
     // a material file's case mutates the file, beside the scene that reads it; an
     // export case one of its files; a design case its manifest or, a quarter of the
     // time, its composite fit
@@ -494,6 +523,8 @@ pub fn replay(r: Reader, case: &Case, dir: &Path) -> String {
             repo(&format!("{TRACE_HOST_DIR}/stack.toml")).display()
         ),
         Reader::Design => format!("dea-fit rank {f} --no-report"),
+        Reader::Generate => format!("dea-fit composite {f} --generate"),
+        Reader::Flags => super::flags::replay(&case.files[0].1, dir),
         Reader::Export => {
             let files: Vec<String> = case
                 .files
@@ -653,6 +684,8 @@ pub fn run(r: Reader, case: &Case, dir: &Path) -> Verdict {
         }
         Reader::Scene | Reader::Fit | Reader::Identified => simulate(&path, &case.oracle),
         Reader::Design => design(&path),
+        Reader::Generate => super::generate::run(&path, dir),
+        Reader::Flags => super::flags::run(&case.files[0].1, dir),
         Reader::Export => {
             let paths: Vec<PathBuf> = case.files.iter().map(|(n, _)| dir.join(n)).collect();
             export(&paths, &case.oracle)

@@ -150,6 +150,14 @@ fn composite_with(edits: &[(&str, &str)]) -> (dea_fit::Result<manifest::Manifest
 #[test]
 fn synthetic_tables_generating_unphysical_series_are_refused() {
     let per_decade = "points_per_decade = 4";
+    // 56 more samples: 63 sweeps of 18001 points (18 decades at 1000) pass 10⁶ rows
+    let more_samples: String = "\n".to_string()
+        + &(0..56)
+            .map(|i| {
+                format!("[[sample]]\nname = \"extra {i}\"\nfile = \"x{i}.csv\"\nfraction = 0.1\n\n")
+            })
+            .collect::<String>()
+        + "[synthetic]\n";
     let cases: [(&[(&str, &str)], &str, &str); 12] = [
         (
             &[(
@@ -203,12 +211,12 @@ fn synthetic_tables_generating_unphysical_series_are_refused() {
         (
             &[(per_decade, "points_per_decade = 100000000")],
             "points_per_decade",
-            "from 1 to 10000",
+            "from 1 to 1000",
         ),
         (
             &[(per_decade, "points_per_decade = 9223372036854775807")],
             "points_per_decade",
-            "from 1 to 10000",
+            "from 1 to 1000",
         ),
         (
             &[("freq_min = 100.0", "freq_min = 1e-300")],
@@ -217,12 +225,13 @@ fn synthetic_tables_generating_unphysical_series_are_refused() {
         ),
         (
             &[
-                (per_decade, "points_per_decade = 10000"),
+                (per_decade, "points_per_decade = 1000"),
                 ("freq_min = 100.0", "freq_min = 1e-6"),
                 ("freq_max = 1.0e6", "freq_max = 1e12"),
+                ("\n[synthetic]\n", &more_samples),
             ],
             "points_per_decade",
-            "7 samples × 180001 frequencies is more than 1000000 in all",
+            "63 samples × 18001 frequencies is more than 1000000 in all",
         ),
     ];
     for (edits, key_line, what) in cases {

@@ -811,12 +811,15 @@ fn written(points: &[(f64, Complex<f64>)], pairs: &[Pair], columns: &[&str]) -> 
     )
 }
 
-/// Points per decade of a log sweep: an LCR meter's whole sweep holds at most 1601
-/// points, so 10⁴ per decade is already far finer than any instrument.
+/// Points per decade of a log sweep: at most 1000, so that the frequencies, rounded
+/// to four significant digits as a meter prints them (at worst 0.05 % off), stay
+/// distinct (a step of 10^(1/1000) − 1 = 0.23 %) and the readers take the sweep back
+/// (at 7356 a decade two points both print as 100 Hz). An LCR meter's whole sweep
+/// holds at most 1601 points.
 pub const PER_DECADE: CountRange = CountRange::new(
     1,
-    10_000,
-    "points per decade of a log sweep; a meter's whole sweep holds at most 1601",
+    1000,
+    "points per decade of a log sweep; more would repeat frequencies rounded to 4 digits",
 );
 
 /// Points of the log sweep from `f_min` to `f_max` (Hz) at `per_decade` points per

@@ -128,6 +128,9 @@ fn sigma_in_a_scene_is_refused_not_dropped() {
     }
 }
 
+/// Text edits: each `from` → `to` once.
+type Edits<'a> = &'a [(&'a str, &'a str)];
+
 /// The shipped composite manifest with its text edited (each `from` → `to` once),
 /// and the edited text.
 fn composite_with(edits: &[(&str, &str)]) -> (dea_fit::Result<manifest::Manifest>, String) {
@@ -158,7 +161,7 @@ fn synthetic_tables_generating_unphysical_series_are_refused() {
             })
             .collect::<String>()
         + "[synthetic]\n";
-    let cases: [(&[(&str, &str)], &str, &str); 12] = [
+    let cases: [(Edits, &str, &str); 12] = [
         (
             &[(
                 "eps_filler_per_decade = -0.03",
@@ -236,7 +239,7 @@ fn synthetic_tables_generating_unphysical_series_are_refused() {
     ];
     for (edits, key_line, what) in cases {
         let (m, text) = composite_with(edits);
-        let e = m.err().expect("refused").to_string();
+        let e = m.expect_err("refused").to_string();
         let line = 1 + text
             .lines()
             .position(|l| l.starts_with(key_line))

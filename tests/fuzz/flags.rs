@@ -3,7 +3,7 @@
 //! 0, −1, huge, 2⁶⁴ − 1, 1e308, inf, nan, 1e-300, garbage, a wrong unit. Each case
 //! is one run of `dea-fit` in a fresh directory, killed after [`RUN_LIMIT`]: no
 //! panic, no abort, no hang; a refusal is exit 2 with an `error:` line; an accepted
-//! run (exit 0 or 1) writes only finite numbers into its CSV files.
+//! run (exit 0 or 1) writes CSV files with at least one row and finite numbers only.
 
 use super::mutate::Mutated;
 use super::readers::Verdict;
@@ -306,9 +306,13 @@ pub fn replay(bytes: &[u8], dir: &Path) -> String {
     format!("cd {} && dea-fit {}", dir.display(), quoted.join(" "))
 }
 
-/// Every field of every CSV line that is a number is finite.
+/// A header and at least one row (a count that wrapped to 0 once wrote an empty
+/// sweep under `ok`), and every field of every CSV line that is a number finite.
 fn finite_csv(path: &Path) -> Result<(), String> {
     let text = std::fs::read_to_string(path).map_err(|e| e.to_string())?;
+    if text.lines().filter(|l| !l.starts_with('#')).count() < 2 {
+        return Err(format!("{}: no data row", path.display()));
+    }
     for (i, line) in text
         .lines()
         .enumerate()
@@ -389,7 +393,7 @@ pub fn run(bytes: &[u8], dir: &Path) -> Verdict {
             for p in csvs {
                 if let Err(detail) = finite_csv(&p) {
                     return Verdict::Failed {
-                        class: "flags: a non-finite value written".into(),
+                        class: "flags: a non-finite value or no row written".into(),
                         detail,
                     };
                 }

@@ -36,8 +36,8 @@ fn bench(c: &mut Criterion) {
         }),
     )
     .expect("valid");
-    let e4990a = lcr::write_e4990a(Pair::ZTheta, &sweep_points());
-    let plain = lcr::write_csv(Pair::CpD, &sweep_points());
+    let e4990a = lcr::write_e4990a(Pair::ZTheta, &sweep_points()).unwrap();
+    let plain = lcr::write_csv(Pair::CpD, &sweep_points()).unwrap();
     let path = Path::new("bench.csv");
     c.bench_function("read+analyse E4990A 201 points", |b| {
         b.iter(|| {

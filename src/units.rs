@@ -255,6 +255,13 @@ pub fn parse_quantity(text: &str, dim: Dimension) -> Result<f64, String> {
     parse_one(text.trim(), dim, None)
 }
 
+/// The largest σ / |value| [`parse_uncertain`] takes: a σ a hundred times its
+/// value leaves not even the value's order of magnitude, and one of 1e300 would
+/// overflow every uncertainty propagated from it (σ² is +∞), which then reads as
+/// "exact". (A value of exactly 0, a stray capacitance of 0 ± 0.05 pF, takes any
+/// finite σ.)
+pub const MAX_RELATIVE_SIGMA: f64 = 100.0;
+
 /// Parse a quantity of dimension `dim` with an optional standard uncertainty:
 /// `2.2 mm ± 0.05 mm`, `2.2 mm ± 0.05` (the value's unit), `250 ± 12 kPa` (the
 /// uncertainty's unit for both, as in (250 ± 12) kPa); `+-` and `+/-` for `±`.
@@ -275,6 +282,11 @@ pub fn parse_uncertain(text: &str, dim: Dimension) -> Result<Quantity, String> {
     let t = parse_one(tol, dim, Some(&unit_main))?;
     if t < 0.0 {
         return Err(format!("the uncertainty in '{text}' must not be negative"));
+    }
+    if value != 0.0 && t > MAX_RELATIVE_SIGMA * value.abs() {
+        return Err(format!(
+            "the uncertainty in '{text}' is more than {MAX_RELATIVE_SIGMA} times the value: such a σ says the value is unknown, and it would overflow what is propagated from it (a σ is one standard uncertainty, in the value's unit)"
+        ));
     }
     Ok(Quantity {
         value,
@@ -326,7 +338,8 @@ fn parse_one(s: &str, dim: Dimension, default_unit: Option<&str>) -> Result<f64,
     if unit.is_empty() {
         return Ok(v);
     }
-    dim.factor(unit)
+    let si = dim
+        .factor(unit)
         .map(|f| v * f)
         .ok_or_else(|| match dim.suggest(unit) {
             Some(u) => format!(
@@ -339,7 +352,11 @@ fn parse_one(s: &str, dim: Dimension, default_unit: Option<&str>) -> Result<f64,
                 "unknown unit '{unit}' in '{s}'; expected one of {}",
                 dim.accepted()
             ),
-        })
+        })?;
+    match si.is_finite() {
+        true => Ok(si),
+        false => Err(format!("'{s}' is not a finite number in SI ({})", dim.si())),
+    }
 }
 
 /// Factor of an SI prefix letter (`p`, `n`, `u`, `µ`, `m`, `k`, `M`, `G`, `T`, `f`).
@@ -381,6 +398,99 @@ pub fn parse_engineering(text: &str, unit: &str) -> Option<f64> {
     Some(v * f).filter(|x| x.is_finite())
 }
 
+/// Most points one series a command makes may hold (a sweep, a curve, a set of
+/// sample times): 10⁶ rows is about 20 MB of CSV and some 50 MB in memory; a larger
+/// count is a typo or an overflowed value, not an experiment.
+pub const MAX_POINTS: usize = 1_000_000;
+
+/// The range of a count a user gives (a flag's value, a file's integer), checked as
+/// a whole number inside `min..=max` before anything is sized by it, so that a
+/// wrapped or absurd value (2⁶⁴ − 1, 10⁹, −1, `1e8`) is refused with the bound and
+/// its reason instead of becoming an empty result, an abort or gigabytes.
+///
+/// ```
+/// use dea_fit::units::CountRange;
+/// const POINTS: CountRange = CountRange::new(10, 100_000, "points of one curve");
+/// assert_eq!(POINTS.parse("200"), Ok(200));
+/// assert!(POINTS.parse("18446744073709551615").unwrap_err().contains("from 10 to 100000"));
+/// assert!(POINTS.parse("1e8").is_err());
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CountRange {
+    /// Smallest count accepted.
+    pub min: usize,
+    /// Largest count accepted.
+    pub max: usize,
+    /// What the count is and why the bound, for the error (e.g. "points of one
+    /// curve; 10⁵ resolve λ to 1e-5").
+    pub why: &'static str,
+}
+
+impl CountRange {
+    /// A range `min..=max` with the reason of its bounds.
+    pub const fn new(min: usize, max: usize, why: &'static str) -> CountRange {
+        CountRange { min, max, why }
+    }
+
+    fn expected(&self) -> String {
+        format!(
+            "expected a whole number from {} to {} ({})",
+            self.min, self.max, self.why
+        )
+    }
+
+    /// A count written as text: an optional sign and decimal digits only (no
+    /// exponent, no fraction), inside the range.
+    pub fn parse(&self, text: &str) -> Result<usize, String> {
+        let t = text.trim();
+        let digits = t.strip_prefix(['+', '-']).unwrap_or(t);
+        if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+            return Err(format!("'{t}' is not a whole number; {}", self.expected()));
+        }
+        // More digits than an i128 holds is out of range all the same.
+        let n = t.parse::<i128>().unwrap_or(match t.starts_with('-') {
+            true => i128::MIN,
+            false => i128::MAX,
+        });
+        self.check(n)
+            .map_err(|_| format!("{t} is out of range; {}", self.expected()))
+    }
+
+    /// A count read as an integer of any width (a TOML integer, a `u64` flag),
+    /// inside the range.
+    pub fn check(&self, n: impl Into<i128>) -> Result<usize, String> {
+        let n: i128 = n.into();
+        match usize::try_from(n) {
+            Ok(c) if (self.min..=self.max).contains(&c) => Ok(c),
+            _ => Err(format!("{n} is out of range; {}", self.expected())),
+        }
+    }
+
+    /// A count computed in floating point (the points of a log sweep: decades ×
+    /// points per decade), rounded and checked while still a float, so that an
+    /// infinite or huge value never reaches an integer cast.
+    pub fn check_real(&self, x: f64) -> Result<usize, String> {
+        let r = x.round();
+        match r.is_finite() && r >= self.min as f64 && r <= self.max as f64 {
+            true => Ok(r as usize),
+            false => Err(format!("{x:.6e} is out of range; {}", self.expected())),
+        }
+    }
+}
+
+/// The product of counts (sweep dimensions, samples × points), checked against
+/// `budget` without overflowing: `Err` names each factor, the budget and why.
+pub fn count_product(factors: &[(&str, usize)], budget: usize, why: &str) -> Result<usize, String> {
+    let total = factors
+        .iter()
+        .try_fold(1usize, |acc, (_, n)| acc.checked_mul(*n))
+        .filter(|&t| t <= budget);
+    total.ok_or_else(|| {
+        let parts: Vec<String> = factors.iter().map(|(w, n)| format!("{n} {w}")).collect();
+        format!("{} is more than {budget} in all ({why})", parts.join(" × "))
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -410,6 +520,30 @@ mod tests {
             None
         );
         assert!(parse_uncertain("1 ± -2", Dimension::Fraction).is_err());
+        // a σ that is not finite, or absurd beside its value, is refused, never
+        // dropped as "exact"; 0 ± σ (a stray capacitance) takes a finite σ
+        for t in [
+            "0.0012 ± 1e300",
+            "0.0012 ± 0.121",
+            "2 mm ± 1e308 mm",
+            "1 ± inf",
+            "1 ± nan",
+        ] {
+            let e = parse_uncertain(t, Dimension::Number)
+                .or_else(|_| parse_uncertain(t, Dimension::Length));
+            assert!(e.is_err(), "{t}");
+        }
+        assert!(parse_uncertain("0.0012 ± 1e300", Dimension::Number)
+            .unwrap_err()
+            .contains("more than 100 times the value"));
+        let q = parse_uncertain("0.0012 ± 0.12", Dimension::Number).unwrap();
+        assert_eq!(q.tolerance, Some(0.12));
+        let q = parse_uncertain("0 ± 0.05pF", Dimension::Capacitance).unwrap();
+        assert!((q.tolerance.unwrap() - 5e-14).abs() < 1e-26);
+        // a finite number that overflows in SI is refused, not +∞
+        assert!(parse_quantity("1e308 kPa", Dimension::Stress)
+            .unwrap_err()
+            .contains("not a finite number"));
         // where no σ is carried, a ± is refused rather than dropped
         assert!(parse_quantity("250 kPa ± 12 kPa", Dimension::Stress)
             .unwrap_err()
@@ -429,6 +563,47 @@ mod tests {
             .contains("did you mean 'mm2'?"));
         assert_eq!(Dimension::Stress.suggest("mpa"), Some("MPa"));
         assert_eq!(Dimension::Stress.suggest("ksi"), None);
+    }
+
+    #[test]
+    fn counts_are_whole_numbers_in_range_before_use() {
+        let r = CountRange::new(2, 1000, "points of a test");
+        assert_eq!(r.parse(" 25 "), Ok(25));
+        assert_eq!(r.parse("+2"), Ok(2));
+        // wrapped, huge, negative, zero and non-integer values are refused with the
+        // range and its reason
+        for t in [
+            "18446744073709551615",
+            "9223372036854775807",
+            "99999999999999999999999999999999999999999",
+            "-1",
+            "0",
+            "1001",
+        ] {
+            let e = r.parse(t).unwrap_err();
+            assert!(e.contains("from 2 to 1000 (points of a test)"), "{t}: {e}");
+        }
+        for t in ["1e8", "2.5", "inf", "nan", "", "ten", "0x10"] {
+            assert!(
+                r.parse(t).unwrap_err().contains("not a whole number"),
+                "{t}"
+            );
+        }
+        assert_eq!(r.check(1000u64), Ok(1000));
+        assert!(r.check(i64::MIN).is_err());
+        assert!(r.check(u64::MAX).is_err());
+        assert_eq!(r.check_real(24.4), Ok(24));
+        for x in [f64::INFINITY, f64::NAN, 1e19, -3.0, 1000.6] {
+            assert!(r.check_real(x).is_err(), "{x}");
+        }
+        assert_eq!(
+            count_product(&[("a", 1000), ("b", 1000)], 1_000_000, "t"),
+            Ok(1_000_000)
+        );
+        let e = count_product(&[("a", 1000), ("b", 1001)], 1_000_000, "why").unwrap_err();
+        assert!(e.contains("1000 a × 1001 b") && e.contains("why"), "{e}");
+        // a product that overflows usize is refused, not wrapped
+        assert!(count_product(&[("a", usize::MAX), ("b", 2)], usize::MAX, "t").is_err());
     }
 
     #[test]

@@ -14,6 +14,7 @@ mod identify;
 mod identify_mass_fraction;
 mod material_file;
 mod models;
+mod numeric_input;
 mod permittivity;
 mod rank;
 mod relaxation;

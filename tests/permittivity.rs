@@ -235,15 +235,15 @@ fn formats_round_trip_to_the_generating_permittivity() {
     let pts = synthetic_points(2.72, 0.0012, &g);
     let dir = tempfile::tempdir().unwrap();
     let texts = [
-        ("cpd.csv", lcr::write_csv(Pair::CpD, &pts)),
-        ("csrs.csv", lcr::write_csv(Pair::CsRs, &pts)),
-        ("cprp.csv", lcr::write_csv(Pair::CpRp, &pts)),
-        ("ztheta.csv", lcr::write_csv(Pair::ZTheta, &pts)),
-        ("rx.csv", lcr::write_csv(Pair::RX, &pts)),
-        ("gb.csv", lcr::write_csv(Pair::GB, &pts)),
-        ("e4990a.csv", lcr::write_e4990a(Pair::ZTheta, &pts)),
-        ("e4990a_rx.csv", lcr::write_e4990a(Pair::RX, &pts)),
-        ("hioki.csv", lcr::write_hioki(&pts)),
+        ("cpd.csv", lcr::write_csv(Pair::CpD, &pts).unwrap()),
+        ("csrs.csv", lcr::write_csv(Pair::CsRs, &pts).unwrap()),
+        ("cprp.csv", lcr::write_csv(Pair::CpRp, &pts).unwrap()),
+        ("ztheta.csv", lcr::write_csv(Pair::ZTheta, &pts).unwrap()),
+        ("rx.csv", lcr::write_csv(Pair::RX, &pts).unwrap()),
+        ("gb.csv", lcr::write_csv(Pair::GB, &pts).unwrap()),
+        ("e4990a.csv", lcr::write_e4990a(Pair::ZTheta, &pts).unwrap()),
+        ("e4990a_rx.csv", lcr::write_e4990a(Pair::RX, &pts).unwrap()),
+        ("hioki.csv", lcr::write_hioki(&pts).unwrap()),
     ];
     for (name, text) in texts {
         let p = dir.path().join(name);
@@ -347,7 +347,7 @@ fn stray_and_edge_corrections() {
     let p = dir.path().join("s.csv");
     std::fs::write(
         &p,
-        lcr::write_csv(Pair::CpD, &[(f, y + Complex::new(1e-15, 0.0))]),
+        lcr::write_csv(Pair::CpD, &[(f, y + Complex::new(1e-15, 0.0))]).unwrap(),
     )
     .unwrap();
     let s = lcr::read(&p, &LcrOptions::default()).unwrap();

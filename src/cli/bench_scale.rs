@@ -22,23 +22,28 @@ use dea_fit::material::hyperelastic::{Mode, ModelSpec, StrainEnergy};
 use dea_fit::material::viscoelastic::preset;
 use dea_fit::report::format::{si, table};
 use dea_fit::report::plot::{Chart, Series, Style};
+use dea_fit::units::CountRange;
 use dea_fit::{Error, Result};
 use rand::SeedableRng;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
+/// Rows of one timed size: a 10⁷-row table is some 400 MB in memory, the most a
+/// 2-core bench machine should be asked to read.
+const ROWS: CountRange = CountRange::new(10, 10_000_000, "rows of one timed size");
+
 /// What `bench scale` measures.
 #[derive(Debug, clap::Args)]
 pub struct ScaleArgs {
     /// Fewest rows: the first size of every series.
-    #[arg(long, default_value_t = 1000)]
+    #[arg(long, default_value_t = 1000, value_parser = |s: &str| ROWS.parse(s))]
     min_rows: usize,
     /// Most rows read (the reader and reading + Yeoh fit).
-    #[arg(long, default_value_t = 1_000_000)]
+    #[arg(long, default_value_t = 1_000_000, value_parser = |s: &str| ROWS.parse(s))]
     max_rows: usize,
     /// Most rows fitted by the automatic choices (`hyperelastic --model auto`,
     /// `relaxation --terms auto`).
-    #[arg(long, default_value_t = 100_000)]
+    #[arg(long, default_value_t = 100_000, value_parser = |s: &str| ROWS.parse(s))]
     max_fit_rows: usize,
     /// Seconds spent repeating each size (at least --min-repeats runs).
     #[arg(long, default_value_t = 0.5)]

@@ -7,9 +7,12 @@ use dea_fit::fit::hyperelastic::{self, HyperelasticFit, Settings};
 use dea_fit::fit::problem::Residual;
 use dea_fit::io::tensile::{self, TensileOptions};
 use dea_fit::material::hyperelastic::{Mode, ModelSpec, OgdenForm};
-use dea_fit::units::{parse_quantity, Dimension};
+use dea_fit::units::{parse_quantity, CountRange, Dimension};
 use dea_fit::{Error, Result};
 use std::path::PathBuf;
+
+/// `--max-starts`: a model has at most a few hundred multi-start points.
+const STARTS: CountRange = CountRange::new(1, 100_000, "multi-start points to use");
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum Form {
@@ -56,7 +59,7 @@ pub struct Args {
     #[command(flatten)]
     output: Output,
     /// Use at most N multi-start points (default: all).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = |s: &str| STARTS.parse(s))]
     max_starts: Option<usize>,
 }
 

@@ -8,7 +8,7 @@
 //! `--no-report`) holds the voltage–stretch chart with the pull-in and the table.
 
 use dea_fit::report::static_curve as static_report;
-use dea_fit::sim::static_curve::{self, Search, MIN_POINTS};
+use dea_fit::sim::static_curve::{self, Search};
 use dea_fit::sim::{full_plant, scene::Scene};
 use dea_fit::{Error, Result};
 use std::path::PathBuf;
@@ -25,8 +25,8 @@ pub struct Args {
     /// old file is kept aside.
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Number of curve points (at least 10).
-    #[arg(long, default_value_t = 200)]
+    /// Number of curve points (10 to 100000).
+    #[arg(long, default_value_t = 200, value_parser = |s: &str| static_curve::POINTS.parse(s))]
     points: usize,
     /// Smallest stretch examined.
     #[arg(long, default_value_t = 0.3)]
@@ -48,15 +48,18 @@ pub fn run(a: Args) -> Result<i32> {
     if !(a.stretch_min > 0.0 && a.stretch_min < 1.0) {
         return Err(Error::settings("--stretch-min must be in (0, 1)"));
     }
-    if a.points < MIN_POINTS {
-        return Err(Error::settings(format!(
-            "--points {} is too few to look for a peak: the pull-in must be bracketed by curve points",
-            a.points
-        ))
-        .with_hint(format!("use --points {MIN_POINTS} or more (default 200)")));
-    }
     let p = full_plant(&scene)?;
     let c = static_curve::static_curve(&p, a.points, a.stretch_min);
+    dea_fit::io::finite_output(
+        "the static curve",
+        c.curve.iter().chain(&c.pull_in).flat_map(|p| {
+            [
+                ("voltage_V", p.voltage_v),
+                ("stretch", p.stretch),
+                ("capacitance_F", p.capacitance_f),
+            ]
+        }),
+    )?;
     let v_in = dea_fit::sim::drive_max(&scene);
     let (status, line) = match (c.search, c.pull_in) {
         (Search::PullIn, Some(pi)) if v_in >= pi.voltage_v => (

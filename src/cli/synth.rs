@@ -9,7 +9,7 @@
 use dea_fit::io::trace::ChannelKind;
 use dea_fit::material::hyperelastic::{Mode, ModelSpec, OgdenForm};
 use dea_fit::sim::{self, scene::Scene, RunStatus};
-use dea_fit::units::{parse_quantity, Dimension, Quantity};
+use dea_fit::units::{parse_quantity, CountRange, Dimension, Quantity, MAX_POINTS};
 use dea_fit::{Error, Result};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -17,8 +17,8 @@ use rand_distr::{Distribution, Normal};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-/// Most points `synth` writes (a 10⁶-row file is about 20 MB).
-const MAX_POINTS: usize = 1_000_000;
+/// The COUNT of `--time` and `--stretch`: points of the file `synth` writes.
+const FILE_POINTS: CountRange = CountRange::new(2, MAX_POINTS, "rows of one synthetic file");
 
 /// Generate synthetic data.
 #[derive(Debug, clap::Args)]
@@ -221,12 +221,12 @@ fn relaxation(a: Args) -> Result<i32> {
                 .map_err(|e| Error::settings(format!("--ramp-time: {e}")))?,
         ),
     };
-    let (t0, t1, count) = range(&a.time, "--time", |x| {
+    let (t0, t1, count) = range(&a.time, ("--time", "START:STOP:COUNT"), FILE_POINTS, |x| {
         x.trim().parse::<f64>().map_err(|_| x.to_string())
     })?;
-    if !(t0 > 0.0 && t1 > t0 && t1.is_finite() && (2..=MAX_POINTS).contains(&count)) {
+    if !(t0 > 0.0 && t1 > t0 && t1.is_finite()) {
         return Err(Error::settings(format!(
-            "--time '{}': expected 0 < START < STOP (s) and a COUNT from 2 to {MAX_POINTS}",
+            "--time '{}': expected 0 < START < STOP (s)",
             a.time
         )));
     }
@@ -310,24 +310,26 @@ fn prony_from_params(params: &[String]) -> Result<dea_fit::material::viscoelasti
     dea_fit::material::viscoelastic::Prony::new(e_inf, &terms)
 }
 
-/// `START:STOP:COUNT` with START and STOP read by `parse`.
+/// `START:STOP:COUNT` (`form` names the three, e.g. `FMIN:FMAX:PER_DECADE`) with
+/// START and STOP read by `parse` and COUNT a whole number in `count` (checked
+/// before anything is sized by it).
 fn range(
     text: &str,
-    flag: &str,
+    (flag, form): (&str, &str),
+    count: CountRange,
     parse: impl Fn(&str) -> std::result::Result<f64, String>,
 ) -> Result<(f64, f64, usize)> {
-    let bad =
-        |why: &str| Error::settings(format!("{flag} '{text}': expected START:STOP:COUNT{why}"));
+    let bad = |why: &str| Error::settings(format!("{flag} '{text}': expected {form}{why}"));
     let parts: Vec<&str> = text.split(':').collect();
     let [a, b, n] = parts.as_slice() else {
         return Err(bad(""));
     };
     let a = parse(a).map_err(|e| bad(&format!(" ({e})")))?;
     let b = parse(b).map_err(|e| bad(&format!(" ({e})")))?;
-    let n = n
-        .trim()
-        .parse::<usize>()
-        .map_err(|_| bad(" (COUNT an integer)"))?;
+    let last = form.rsplit(':').next().unwrap_or(form);
+    let n = count
+        .parse(n)
+        .map_err(|e| bad(&format!(" ({last}: {e})")))?;
     Ok((a, b, n))
 }
 
@@ -337,18 +339,29 @@ fn range(
 /// as the chosen pair, parameters in its `#` lines.
 fn lcr(a: Args) -> Result<i32> {
     use dea_fit::fit::permittivity::Geometry;
-    use dea_fit::io::lcr::{log_frequencies, synthetic_points, write_csv};
+    use dea_fit::io::lcr::{
+        log_frequencies, log_sweep_points, synthetic_points, write_csv, PER_DECADE,
+    };
+    use dea_fit::material::check::PERMITTIVITY;
     use dea_fit::material::dielectric::Pair;
+    use dea_fit::rank::manifest::TAN_DELTA;
     refuse_unused(&a, &["--eps-r", "--area", "--diameter", "--thickness"])?;
     let noise = relative_noise(&a, "Cp and of D")?;
     let eps = a.eps_r.ok_or_else(|| {
         Error::settings("synth lcr needs --eps-r").with_hint("e.g. --eps-r 4.7 --tan-delta 0.005")
     })?;
-    if !(eps.is_finite() && eps >= 1.0 && a.tan_delta.is_finite() && a.tan_delta >= 0.0) {
-        return Err(Error::settings(format!(
-            "--eps-r {eps} --tan-delta {}: expected εr ≥ 1 and tan δ ≥ 0",
-            a.tan_delta
-        )));
+    // The plausible ranges of the readers (εr 1 … 1e5, tan δ 0 or 1e-7 … 10).
+    for (flag, v, dom) in [
+        ("--eps-r", eps, &PERMITTIVITY),
+        ("--tan-delta", a.tan_delta, &TAN_DELTA),
+    ] {
+        dom.check(flag, v).map_err(|e| {
+            Error::settings(format!(
+                "{}; expected εr ≥ 1 and tan δ ≥ 0 in their plausible ranges",
+                e.msg
+            ))
+            .with_hint(e.hint)
+        })?;
     }
     let q = |flag: &str, v: &Option<String>, dim| -> Result<_> {
         v.as_deref()
@@ -373,16 +386,17 @@ fn lcr(a: Args) -> Result<i32> {
         Error::settings(format!("--pair '{}': unknown pair", a.pair))
             .with_hint("cp-d, cp-rp, cs-d, cs-rs, z-theta, r-x, g-b, …")
     })?;
-    let (f0, f1, per_decade) = range(&a.sweep, "--sweep", |x| {
-        parse_quantity(x, Dimension::Frequency).map_err(|e| e.to_string())
+    let (f0, f1, per_decade) = range(
+        &a.sweep,
+        ("--sweep", "FMIN:FMAX:PER_DECADE"),
+        PER_DECADE,
+        |x| parse_quantity(x, Dimension::Frequency).map_err(|e| e.to_string()),
+    )?;
+    log_sweep_points(f0, f1, per_decade).map_err(|e| {
+        Error::settings(format!("--sweep '{}': {e}", a.sweep))
+            .with_hint("e.g. --sweep 100Hz:1MHz:4")
     })?;
     let freqs = log_frequencies(f0, f1, per_decade)?;
-    if freqs.len() > MAX_POINTS {
-        return Err(Error::settings(format!(
-            "--sweep '{}': more than {MAX_POINTS} points",
-            a.sweep
-        )));
-    }
     let normal = Normal::new(0.0, noise).map_err(|e| Error::settings(format!("--noise: {e}")))?;
     let mut rng = ChaCha8Rng::seed_from_u64(a.seed);
     let c0 = geometry.empty_capacitance();
@@ -409,7 +423,7 @@ fn lcr(a: Args) -> Result<i32> {
         "# noise: relative {noise} on Cp and on D (Gaussian standard deviations), seed {} (ChaCha8)",
         a.seed
     );
-    s.push_str(&write_csv(pair, &pts));
+    s.push_str(&write_csv(pair, &pts)?);
     super::write_noted(&a.out, s.as_bytes())?;
     eprintln!("wrote {} ({} frequencies)", a.out.display(), freqs.len());
     println!("status: ok");
@@ -469,26 +483,18 @@ fn hyperelastic(a: Args) -> Result<i32> {
     }
     let mode = Mode::parse(&a.mode)
         .ok_or_else(|| Error::settings(format!("unknown mode '{}'", a.mode)))?;
-    let parts: Vec<&str> = a.stretch.split(':').collect();
-    let bad = || {
-        Error::settings(format!(
-            "--stretch '{}': expected START:STOP:COUNT",
-            a.stretch
-        ))
-    };
-    if parts.len() != 3 {
-        return Err(bad());
-    }
-    let (l0, l1): (f64, f64) = (
-        parts[0].parse().map_err(|_| bad())?,
-        parts[1].parse().map_err(|_| bad())?,
-    );
-    let count: usize = parts[2].parse().map_err(|_| bad())?;
-    // The same tensile domain the reader enforces, and a count a file can hold.
+    let (l0, l1, count) = range(
+        &a.stretch,
+        ("--stretch", "START:STOP:COUNT"),
+        FILE_POINTS,
+        |x| x.trim().parse::<f64>().map_err(|_| x.to_string()),
+    )?;
+    // The same tensile domain the reader enforces.
     let (lo, hi) = dea_fit::data::STRETCH_RANGE;
-    if !(2..=MAX_POINTS).contains(&count) || ![l0, l1].iter().all(|l| (lo..=hi).contains(l)) {
-        return Err(bad().with_hint(format!(
-            "stretches within {lo}–{hi}, a count from 2 to {MAX_POINTS}"
+    if ![l0, l1].iter().all(|l| (lo..=hi).contains(l)) {
+        return Err(Error::settings(format!(
+            "--stretch '{}': expected START:STOP:COUNT with stretches within {lo}–{hi}",
+            a.stretch
         )));
     }
     let noise_abs = parse_quantity(&a.noise_abs, Dimension::Stress)
@@ -747,19 +753,32 @@ fn trace(a: Args) -> Result<i32> {
     header.extend(kinds.iter().map(|&k| column(k).0.to_string()));
     let _ = writeln!(s, "{}", header.join(","));
     let vn = noise_of("voltage");
+    // Every row (time, voltage, each channel in its unit) before any is written.
+    let mut rows: Vec<Vec<f64>> = Vec::with_capacity(out.samples.len());
     for smp in &out.samples {
         let mut v = smp.voltage_v;
         if let Some(n) = vn {
             v += n.sigma(v) * unit.sample(&mut rng);
         }
-        let _ = write!(s, "{:.7},{v:.3}", smp.time_s);
+        let mut row = vec![smp.time_s, v];
         for &k in &kinds {
-            let (_, f, dec) = column(k);
             let mut x = k.simulated(smp, out.rest_length_m).expect("not a force");
             if let Some(n) = noise_of(k.name()) {
                 x += n.sigma(x) * unit.sample(&mut rng);
             }
-            let _ = write!(s, ",{:.*}", dec, x * f);
+            row.push(x * column(k).1);
+        }
+        rows.push(row);
+    }
+    dea_fit::io::finite_output(
+        "the synthetic trace",
+        rows.iter()
+            .flat_map(|r| header.iter().map(String::as_str).zip(r.iter().copied())),
+    )?;
+    for row in &rows {
+        let _ = write!(s, "{:.7},{:.3}", row[0], row[1]);
+        for (&k, x) in kinds.iter().zip(&row[2..]) {
+            let _ = write!(s, ",{:.*}", column(k).2, x);
         }
         s.push('\n');
     }

@@ -14,7 +14,10 @@ use super::{Parameter, Status};
 use crate::error::{Error, Result};
 use crate::io::lcr;
 use crate::io::manifest::Manifest;
+use crate::material::check::{fmt_g, PERMITTIVITY};
 use crate::material::dielectric::{volume_fraction, weight_fraction, MixingRule, Pair};
+use crate::rank::manifest::TAN_DELTA;
+use crate::units::{count_product, MAX_POINTS};
 use nalgebra::{DMatrix, DVector};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -803,6 +806,107 @@ fn three() -> f64 {
     3.0
 }
 
+/// Most rows `composite --generate` makes in all (samples × frequencies): as many
+/// as one file of `synth` ([`MAX_POINTS`]), since the exports are held in memory
+/// until every one is made (about 40 bytes a row); a measured series has a few
+/// hundred.
+pub const GENERATED_ROWS: usize = MAX_POINTS;
+
+/// The largest noise_pct of a synthetic series: at a relative σ of 20 % a negative
+/// capacitance is a 5σ event, already one in 3·10⁶ rows.
+pub const MAX_NOISE_PCT: f64 = 20.0;
+
+impl Synthetic {
+    /// The series at frequency `f` (Hz) and filler volume fraction `phi`: (εm, εf,
+    /// ε′ of the rule, tan δ) with εm(f) = εm + s_m·log10(f/100 Hz),
+    /// εf(f) = εf·(1 + s_f·log10(f/100 Hz)) and tan δ linear in φ.
+    pub fn at(&self, f: f64, phi: f64) -> (f64, f64, f64, f64) {
+        let dec = (f / 100.0).log10();
+        let em = self.eps_matrix + self.eps_matrix_per_decade * dec;
+        let ef = self.eps_filler * (1.0 + self.eps_filler_per_decade * dec);
+        let tan = self.tan_delta_matrix + (self.tan_delta_filler - self.tan_delta_matrix) * phi;
+        (em, ef, self.rule.eval(em, ef, phi, self.shape), tan)
+    }
+
+    /// Check the table and the series it GENERATES for `samples` (name, φ): every
+    /// number finite, the noise in [0, [`MAX_NOISE_PCT`]] %, the stray ≥ 0, the
+    /// sweep's count in range ([`lcr::log_sweep_points`]) and samples × points
+    /// within [`GENERATED_ROWS`], and at every sample and frequency εm, εf and the
+    /// rule's ε′ plausible relative permittivities ([`PERMITTIVITY`]) and tan δ a
+    /// plausible loss tangent: finite inputs can still make a negative or infinite
+    /// εr (eps_filler_per_decade = −0.3 turns εf negative above 2 MHz). Returns the
+    /// sweep's point count, or the key to blame and why.
+    pub fn check(
+        &self,
+        samples: &[(&str, f64)],
+    ) -> std::result::Result<usize, (&'static str, String)> {
+        let numbers = [
+            ("eps_matrix", self.eps_matrix),
+            ("eps_matrix_per_decade", self.eps_matrix_per_decade),
+            ("eps_filler", self.eps_filler),
+            ("eps_filler_per_decade", self.eps_filler_per_decade),
+            ("shape", self.shape),
+            ("tan_delta_matrix", self.tan_delta_matrix),
+            ("tan_delta_filler", self.tan_delta_filler),
+            ("noise_pct", self.noise_pct),
+            ("freq_min", self.freq_min),
+            ("freq_max", self.freq_max),
+            ("stray_pf", self.stray_pf),
+        ];
+        if let Some((k, v)) = numbers.iter().find(|(_, v)| !v.is_finite()) {
+            return Err((k, format!("{k} must be a finite number, found {v}")));
+        }
+        if !(0.0..=MAX_NOISE_PCT).contains(&self.noise_pct) {
+            return Err((
+                "noise_pct",
+                format!(
+                    "noise_pct must be in [0, {MAX_NOISE_PCT}] %, found {} (a larger relative σ makes negative capacitances)",
+                    fmt_g(self.noise_pct)
+                ),
+            ));
+        }
+        if self.stray_pf < 0.0 {
+            return Err((
+                "stray_pf",
+                format!("stray_pf must be ≥ 0, found {}", fmt_g(self.stray_pf)),
+            ));
+        }
+        let n = lcr::log_sweep_points(self.freq_min, self.freq_max, self.points_per_decade)
+            .map_err(|e| ("points_per_decade", format!("points_per_decade: {e}")))?;
+        count_product(
+            &[("samples", samples.len()), ("frequencies", n)],
+            GENERATED_ROWS,
+            "rows of all the exports, held in memory until every one is made",
+        )
+        .map_err(|e| ("points_per_decade", format!("points_per_decade: {e}")))?;
+        let freqs = lcr::log_frequencies(self.freq_min, self.freq_max, self.points_per_decade)
+            .map_err(|e| ("points_per_decade", e.to_string()))?;
+        for &(name, phi) in samples {
+            for &f in &freqs {
+                let (em, ef, eps, tan) = self.at(f, phi);
+                let bad = [
+                    ("eps_matrix", "the matrix εr", em, &PERMITTIVITY),
+                    ("eps_filler", "the filler εr", ef, &PERMITTIVITY),
+                    ("rule", "the mixture's εr", eps, &PERMITTIVITY),
+                    ("tan_delta_filler", "tan δ", tan, &TAN_DELTA),
+                ]
+                .into_iter()
+                .find_map(|(key, what, v, dom)| dom.check(what, v).err().map(|e| (key, e)));
+                if let Some((key, e)) = bad {
+                    return Err((
+                        key,
+                        format!(
+                            "the generated series is not physical at sample '{name}' (φ = {phi:.4}), {f} Hz: {}; {}",
+                            e.msg, e.hint
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(n)
+    }
+}
+
 /// Export format of a synthetic sample file.
 pub const SYNTH_FORMATS: [&str; 5] = [
     "csv-cp-d",
@@ -821,8 +925,16 @@ pub fn synthesize(m: &Manifest) -> Result<Vec<(std::path::PathBuf, String)>> {
         return Err(Error::settings("the manifest has no [synthetic] table")
             .with_hint("add [synthetic] with rule, eps_matrix, eps_filler, noise_pct, seed, ..."));
     };
-    let freqs = lcr::log_frequencies(s.freq_min, s.freq_max, s.points_per_decade)
-        .map_err(|e| e.with_hint("set [synthetic] freq_min, freq_max, points_per_decade"))?;
+    let phis: Vec<(&str, f64)> = m
+        .samples
+        .iter()
+        .map(|x| (x.name.as_str(), x.volume_fraction))
+        .collect();
+    s.check(&phis).map_err(|(key, e)| {
+        Error::settings(format!("[synthetic] {key}: {e}"))
+            .with_hint("set [synthetic] so that every generated value is physical")
+    })?;
+    let freqs = lcr::log_frequencies(s.freq_min, s.freq_max, s.points_per_decade)?;
     let noise = Normal::new(0.0, s.noise_pct / 100.0)
         .map_err(|e| Error::settings(format!("noise_pct: {e}")))?;
     let mut out = Vec::new();
@@ -836,19 +948,16 @@ pub fn synthesize(m: &Manifest) -> Result<Vec<(std::path::PathBuf, String)>> {
             &noise,
             &mut rng,
             |f| {
-                let dec = (f / 100.0).log10();
-                let em = s.eps_matrix + s.eps_matrix_per_decade * dec;
-                let ef = s.eps_filler * (1.0 + s.eps_filler_per_decade * dec);
-                let tan = s.tan_delta_matrix + (s.tan_delta_filler - s.tan_delta_matrix) * phi;
-                (s.rule.eval(em, ef, phi, s.shape), tan)
+                let (_, _, eps, tan) = s.at(f, phi);
+                (eps, tan)
             },
         );
         let text = match sample.format.as_deref().unwrap_or("csv-cp-d") {
-            "csv-cp-d" => lcr::write_csv(Pair::CpD, &pts),
-            "csv-cs-rs" => lcr::write_csv(Pair::CsRs, &pts),
-            "csv-cp-rp" => lcr::write_csv(Pair::CpRp, &pts),
-            "e4990a-z-theta" => lcr::write_e4990a(Pair::ZTheta, &pts),
-            "hioki" => lcr::write_hioki(&pts),
+            "csv-cp-d" => lcr::write_csv(Pair::CpD, &pts)?,
+            "csv-cs-rs" => lcr::write_csv(Pair::CsRs, &pts)?,
+            "csv-cp-rp" => lcr::write_csv(Pair::CpRp, &pts)?,
+            "e4990a-z-theta" => lcr::write_e4990a(Pair::ZTheta, &pts)?,
+            "hioki" => lcr::write_hioki(&pts)?,
             other => {
                 return Err(Error::settings(format!(
                     "sample '{}': unknown synthetic format '{other}'",

@@ -6,10 +6,11 @@
 use super::Status;
 use crate::error::{Error, Location, Result};
 use crate::io::lcr::{self, Format, LcrOptions, Sweep};
-use crate::material::check::PERMITTIVITY;
+use crate::material::check::{Domain, PERMITTIVITY};
 use crate::material::dielectric::{
     ac_conductivity, complex_permittivity, kirchhoff_edge_capacitance, Pair, EPS0,
 };
+use crate::sim::budget::LENGTH;
 use crate::units::Quantity;
 use nalgebra::Complex;
 use rayon::prelude::*;
@@ -48,6 +49,29 @@ impl Geometry {
         diameter: Option<Quantity>,
         thickness: Option<Quantity>,
     ) -> Result<Geometry> {
+        // A coupon's lengths in the scenes' plausible range (1e-7 m … 10 m), its
+        // area in that range squared: 1e308 mm is no diameter, and would make C0
+        // and every value written from it +∞.
+        let plausible = |key: &str, v: f64, dom: &Domain| {
+            dom.check(key, v)
+                .map_err(|v| Error::settings(v.msg).with_hint(v.hint))
+        };
+        let area_dom = Domain {
+            what: "plate area",
+            unit: "m²",
+            min: LENGTH.min * LENGTH.min,
+            max: LENGTH.max * LENGTH.max,
+            ..LENGTH
+        };
+        for (key, q, dom) in [
+            ("area", area, &area_dom),
+            ("diameter", diameter, &LENGTH),
+            ("thickness", thickness, &LENGTH),
+        ] {
+            if let Some(q) = q {
+                plausible(key, q.value, dom)?;
+            }
+        }
         let (area, area_std) = match (area, diameter) {
             (Some(a), None) => (a.value, a.tolerance.unwrap_or(0.0)),
             (None, Some(d)) => (

@@ -18,8 +18,9 @@
 
 use super::table::{Row, Table};
 use crate::error::{Error, Location, Result};
+use crate::material::check::fmt_g;
 use crate::material::dielectric::Pair;
-use crate::units::{parse_engineering, parse_quantity, Dimension};
+use crate::units::{parse_engineering, parse_quantity, CountRange, Dimension, MAX_POINTS};
 use nalgebra::Complex;
 use serde::{Deserialize, Serialize};
 use std::borrow::Cow;
@@ -780,26 +781,85 @@ pub fn status_meaning(code: i64) -> &'static str {
 
 /// Write points as a plain `freq_Hz,<a>,<b>` CSV of `pair` (the inverse of the
 /// reader, used for synthetic data and round-trip tests). Angles in degrees.
-pub fn write_csv(pair: Pair, points: &[(f64, Complex<f64>)]) -> String {
+/// Every value is finite ([`super::finite_output`]), or nothing is made.
+pub fn write_csv(pair: Pair, points: &[(f64, Complex<f64>)]) -> Result<String> {
     let (ha, hb) = csv_header(pair);
+    written(points, &[pair], &["freq_Hz", ha, hb])?;
     let mut s = format!("freq_Hz,{ha},{hb}\n");
     for &(f, y) in points {
         let (a, b) = scaled(pair, y, f);
         s.push_str(&format!("{f},{a:.10e},{b:.10e}\n"));
     }
-    s
+    Ok(s)
+}
+
+/// The guard of the synthetic writers: f and each pair's two readings of every
+/// point finite (`columns`: f's name, then two per pair).
+fn written(points: &[(f64, Complex<f64>)], pairs: &[Pair], columns: &[&str]) -> Result<()> {
+    super::finite_output(
+        "the synthetic export",
+        points.iter().flat_map(|&(f, y)| {
+            let readings = pairs.iter().flat_map(move |&p| {
+                let (a, b) = scaled(p, y, f);
+                [a, b]
+            });
+            columns
+                .iter()
+                .copied()
+                .zip(std::iter::once(f).chain(readings))
+        }),
+    )
+}
+
+/// Points per decade of a log sweep: at most 1000, so that the frequencies, rounded
+/// to four significant digits as a meter prints them (at worst 0.05 % off), stay
+/// distinct (a step of 10^(1/1000) − 1 = 0.23 %) and the readers take the sweep back
+/// (at 7356 a decade two points both print as 100 Hz). An LCR meter's whole sweep
+/// holds at most 1601 points.
+pub const PER_DECADE: CountRange = CountRange::new(
+    1,
+    1000,
+    "points per decade of a log sweep; more would repeat frequencies rounded to 4 digits",
+);
+
+/// Points of the log sweep from `f_min` to `f_max` (Hz) at `per_decade` points per
+/// decade: round(log10(f_max/f_min)·per_decade) + 1, checked against
+/// [`PER_DECADE`] and [`MAX_POINTS`] in floating point before anything is sized by
+/// it. Refused unless 0 < f_min < f_max < ∞, both in [`FREQUENCY_RANGE_HZ`].
+pub fn log_sweep_points(
+    f_min: f64,
+    f_max: f64,
+    per_decade: usize,
+) -> std::result::Result<usize, String> {
+    if !(f_min > 0.0 && f_max > f_min && f_max.is_finite()) {
+        return Err(format!(
+            "a log sweep needs 0 < f_min < f_max < ∞, found {} Hz to {} Hz",
+            fmt_g(f_min),
+            fmt_g(f_max)
+        ));
+    }
+    // A sweep the tool makes is one its readers take back.
+    if let Some((msg, _)) = [f_min, f_max].into_iter().find_map(frequency_problem) {
+        return Err(msg);
+    }
+    let per_decade = PER_DECADE.check(per_decade as u64)?;
+    const SWEEP: CountRange = CountRange::new(1, MAX_POINTS, "points of one sweep");
+    SWEEP
+        .check_real((f_max / f_min).log10() * per_decade as f64 + 1.0)
+        .map_err(|e| {
+            format!(
+                "{} Hz to {} Hz at {per_decade} per decade: {e}",
+                fmt_g(f_min),
+                fmt_g(f_max)
+            )
+        })
 }
 
 /// Log-spaced frequencies from `f_min` to `f_max` (Hz) at `per_decade` points per
 /// decade, each rounded to four significant digits as a meter's frequency list
-/// prints them. Refused unless 0 < f_min < f_max and per_decade ≥ 1.
+/// prints them; their count is [`log_sweep_points`] (refused outside its range).
 pub fn log_frequencies(f_min: f64, f_max: f64, per_decade: usize) -> Result<Vec<f64>> {
-    if !(f_min > 0.0 && f_max > f_min && f_max.is_finite() && per_decade > 0) {
-        return Err(Error::settings(format!(
-            "a log sweep needs 0 < f_min < f_max and at least 1 point per decade, found {f_min} Hz, {f_max} Hz, {per_decade}"
-        )));
-    }
-    let n = ((f_max / f_min).log10() * per_decade as f64).round() as usize + 1;
+    let n = log_sweep_points(f_min, f_max, per_decade).map_err(Error::settings)?;
     Ok((0..n)
         .map(|i| {
             let f = f_min * 10f64.powf(i as f64 / per_decade as f64);
@@ -834,7 +894,8 @@ pub fn synthetic_points(
 }
 
 /// Write points in the E4990A block format (`!` header, CRLF, `+d.ddde+ddd`).
-pub fn write_e4990a(pair: Pair, points: &[(f64, Complex<f64>)]) -> String {
+/// Every value is finite ([`super::finite_output`]), or nothing is made.
+pub fn write_e4990a(pair: Pair, points: &[(f64, Complex<f64>)]) -> Result<String> {
     let (ha, hb) = match pair {
         Pair::ZTheta => ("|Z|(Ohm)-data", "theta-z(deg)-data"),
         Pair::RX => ("R(Ohm)-data", "X(Ohm)-data"),
@@ -846,6 +907,7 @@ pub fn write_e4990a(pair: Pair, points: &[(f64, Complex<f64>)]) -> String {
         Pair::ZTheta | Pair::RX | Pair::YTheta => pair,
         _ => Pair::CpD,
     };
+    written(points, &[pair], &["frequency", ha, hb])?;
     let e = |v: f64| {
         let s = format!("{v:+.11e}");
         let (m, x) = s.split_once('e').expect("exponent");
@@ -861,12 +923,18 @@ pub fn write_e4990a(pair: Pair, points: &[(f64, Complex<f64>)]) -> String {
         s.push_str(&format!("{}, {}, {}\r\n", e(f), e(a), e(b)));
     }
     s.push_str("END\r\n");
-    s
+    Ok(s)
 }
 
 /// Write points as a Hioki-style CSV: instrument preamble lines, then
 /// `FREQ[Hz],Z[ohm],PHASE[deg],Cp[F],D` (several pairs; the reader picks Cp–D).
-pub fn write_hioki(points: &[(f64, Complex<f64>)]) -> String {
+/// Every value is finite ([`super::finite_output`]), or nothing is made.
+pub fn write_hioki(points: &[(f64, Complex<f64>)]) -> Result<String> {
+    written(
+        points,
+        &[Pair::ZTheta, Pair::CpD],
+        &["FREQ[Hz]", "Z[ohm]", "PHASE[deg]", "Cp[F]", "D"],
+    )?;
     let mut s =
         String::from("\"dea-fit synthetic export (Hioki LCR style)\"\n\"SPEED\",\"SLOW\"\n\n");
     s.push_str("FREQ[Hz],Z[ohm],PHASE[deg],Cp[F],D\n");
@@ -875,7 +943,7 @@ pub fn write_hioki(points: &[(f64, Complex<f64>)]) -> String {
         let (cp, d) = scaled(Pair::CpD, y, f);
         s.push_str(&format!("{f},{z:.8e},{th:.6},{cp:.8e},{d:.8e}\n"));
     }
-    s
+    Ok(s)
 }
 
 fn csv_header(pair: Pair) -> (&'static str, &'static str) {

@@ -185,6 +185,26 @@ impl Ctx<'_> {
         Error::input(Location::at(self.path, l, c), msg)
     }
 
+    /// The span of `key = …` in the table whose span (or header's) is `table`, up
+    /// to the next table header (the table's own span if the key is not written
+    /// there: a default).
+    fn key_in(&self, table: std::ops::Range<usize>, key: &str) -> std::ops::Range<usize> {
+        let rest = self.text.get(table.start..).unwrap_or("");
+        let body = match rest.match_indices("\n[").next() {
+            Some((end, _)) if end >= table.end - table.start => &rest[..end],
+            _ => rest,
+        };
+        let at = body.match_indices(key).find(|&(i, _)| {
+            let line_start = body[..i].rfind('\n').map_or(0, |n| n + 1);
+            body[line_start..i].trim().is_empty()
+                && body[i + key.len()..].trim_start().starts_with('=')
+        });
+        match at {
+            Some((i, _)) => table.start + i..table.start + i + key.len(),
+            None => table,
+        }
+    }
+
     /// A quantity with an optional ± standard uncertainty (geometry, stray).
     fn quantity(
         &self,
@@ -410,9 +430,14 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Manifest> {
         .with_hint("add [[sample]] tables (name, file, fraction) or [[claim]] tables"));
     }
     if let Some(s) = &spec.synthetic {
-        if s.get_ref().noise_pct < 0.0 {
-            return Err(cx.err(s.span(), "noise_pct must be ≥ 0"));
-        }
+        let phis: Vec<(&str, f64)> = samples
+            .iter()
+            .map(|x| (x.name.as_str(), x.volume_fraction))
+            .collect();
+        s.get_ref().check(&phis).map_err(|(key, e)| {
+            cx.err(cx.key_in(s.span(), key), e)
+                .with_hint("the [synthetic] table must generate finite, physical values at every sample and frequency (docs/composites.md)")
+        })?;
     }
     Ok(Manifest {
         path: path.to_path_buf(),

@@ -18,3 +18,24 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
         .map(|b| format!("{b:02x}"))
         .collect()
 }
+
+/// The one guard of the values a command writes (synthetic files, curves, result
+/// rows): every value finite, or an error saying which and that nothing was
+/// written, so that no file holds `inf` or `NaN` under a good status. `what` names
+/// the output (e.g. "the synthetic sweep"), `values` are (column, value) pairs in
+/// the order written.
+pub fn finite_output<'a>(
+    what: &str,
+    values: impl IntoIterator<Item = (&'a str, f64)>,
+) -> crate::error::Result<()> {
+    match values.into_iter().enumerate().find(|(_, (_, v))| !v.is_finite()) {
+        None => Ok(()),
+        Some((i, (column, v))) => Err(crate::error::Error::settings(format!(
+            "{what}: {column} would be {v} (value {} of the output), not a finite number; nothing was written",
+            i + 1
+        ))
+        .with_hint(
+            "the inputs are outside the range where the model gives numbers: check their values and units",
+        )),
+    }
+}

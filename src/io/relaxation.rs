@@ -423,9 +423,18 @@ impl Synthetic {
             "time_s,stress_kPa{}",
             if self.record_strain { ",strain" } else { "" }
         );
-        for (k, &t) in self.times.iter().enumerate() {
-            let e: f64 = unit.sample(&mut rng);
-            let y = clean[k] * (1.0 + self.noise * e);
+        let stress: Vec<f64> = clean
+            .iter()
+            .map(|c| c * (1.0 + self.noise * unit.sample(&mut rng)))
+            .collect();
+        super::finite_output(
+            "the synthetic relaxation curve",
+            self.times
+                .iter()
+                .zip(&stress)
+                .flat_map(|(&t, &y)| [("time_s", t), ("stress_kPa", y / 1e3)]),
+        )?;
+        for (k, (&t, &y)) in self.times.iter().zip(&stress).enumerate() {
             let _ = write!(s, "{t:.6e},{:.6e}", y / 1e3);
             if self.record_strain {
                 let _ = write!(s, ",{:.9}", sched.input()[k]);

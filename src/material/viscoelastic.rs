@@ -268,7 +268,7 @@ impl Creep {
             + self
                 .terms
                 .iter()
-                .map(|r| r.compliance * (1.0 - (-t / r.lambda).exp()))
+                .map(|r| r.compliance * -(-t / r.lambda).exp_m1())
                 .sum::<f64>()
     }
 
@@ -636,8 +636,11 @@ const KERNEL_CHUNK: usize = 8;
 impl Interval {
     /// The states `s` of the lanes' τ kernels (`inv` = 1/τ) carried across this
     /// interval, and their τ-derivatives `d` when `D`: over dt at input rate ṙ,
-    /// s ← a·s + ṙτ(1 − a), d ← a·(d + (s − ṙτ)·dt/τ²) + ṙ(1 − a), a = e^(−dt/τ)
-    /// ([`numerics::exp`], its constants from `table`); then the input's jump.
+    /// s ← a·s + ṙτ·b, d ← a·(d + (s − ṙτ)·dt/τ²) + ṙ·b, a = e^(−dt/τ)
+    /// ([`numerics::exp`], its constants from `table`) and b = 1 − a without
+    /// cancellation ([`numerics::one_minus_exp_neg`]: at dt/τ = 10⁻¹⁶, 1 − a is 0
+    /// or 2⁻⁵³, and a 10⁻¹⁷ s ramp would lose its whole strain); then the input's
+    /// jump.
     #[inline(always)]
     fn advance<const L: usize, const D: bool>(
         &self,
@@ -649,13 +652,15 @@ impl Interval {
     ) {
         if self.dt > 0.0 {
             for i in 0..L {
-                let a = table.exp(-self.dt * inv[i], i);
+                let x = self.dt * inv[i];
+                let a = table.exp(-x, i);
+                // 1 − a without its cancellation at small dt/τ (a ramp that is a step)
+                let b = numerics::one_minus_exp_neg(x, a);
                 let rt = self.rate * tau[i];
                 if D {
-                    d[i] = a * (d[i] + (s[i] - rt) * self.dt * inv[i] * inv[i])
-                        + self.rate * (1.0 - a);
+                    d[i] = a * (d[i] + (s[i] - rt) * self.dt * inv[i] * inv[i]) + self.rate * b;
                 }
-                s[i] = a * s[i] + rt * (1.0 - a);
+                s[i] = a * s[i] + rt * b;
             }
         }
         for v in s.iter_mut() {
@@ -835,6 +840,84 @@ mod tests {
             assert_eq!(h4, h);
             assert_eq!(d4, d);
         }
+    }
+
+    /// The limits of the ramp kernel against their closed forms (issue 32: 1 − e^(−dt/τ)
+    /// by subtraction lost a 10⁻¹⁷ s ramp's whole strain): ramp → step (t_r → 0), the
+    /// ramp's own interval dt → 0, and τ → ∞. Tolerance 1e-13 relative: the kernel's
+    /// recursion is exact for a linear ramp, so only rounding differs (a few 2⁻⁵³ a
+    /// step over ≤ 60 steps, and the 5·10⁻¹⁵ of `one_minus_exp_neg`).
+    #[test]
+    fn ramp_kernel_limits_match_closed_forms() {
+        let rel = |a: f64, b: f64| match a == b {
+            true => 0.0,
+            false => ((a - b) / b).abs(),
+        };
+        // up to 100 s: e^(−t/τ) stays a normal number for every τ ≥ 0.153 s
+        // (`numerics::exp` is 0 below e^(−708), libm's is subnormal there)
+        let times: Vec<f64> = (0..44).map(|i| 1e-3 * 1.3f64.powi(i)).collect();
+        let x0 = 0.5;
+        for tau in [0.153, 0.464, 32.0, 215.85] {
+            let mut step = vec![0.0; times.len()];
+            Schedule::new(&History::step(x0), &times)
+                .unwrap()
+                .kernel(tau, &mut step, None);
+            // ramp → step: h(t ≥ t_r) = x0·(τ/t_r)(e^(t_r/τ) − 1)·e^(−t/τ), the step's
+            // response times a factor 1 + t_r/(2τ) + …, which is 1 to rounding here
+            for tr in [1e-17, 1e-14, 1e-9] {
+                let mut h = vec![0.0; times.len()];
+                Schedule::new(&History::ramp(x0, tr), &times)
+                    .unwrap()
+                    .kernel(tau, &mut h, None);
+                for ((t, v), s) in times.iter().zip(&h).zip(&step) {
+                    let exact = x0 * (tau / tr) * (tr / tau).exp_m1() * (-t / tau).exp();
+                    assert!(
+                        rel(*v, exact) < 1e-13,
+                        "τ {tau} t_r {tr} t {t}: {v} vs {exact}"
+                    );
+                    assert!(
+                        rel(*v, *s) < 1e-13 + tr / tau,
+                        "τ {tau} t_r {tr}: {v} vs step {s}"
+                    );
+                }
+            }
+            // dt → 0 inside the ramp: h(t ≤ t_r) = (x0/t_r)·τ·(1 − e^(−t/τ)) → x0·t/t_r
+            let tr = 1e-12;
+            let inside = [1e-17, 1e-15, 2.5e-13, 1e-12];
+            let mut h = vec![0.0; inside.len()];
+            Schedule::new(&History::ramp(x0, tr), &inside)
+                .unwrap()
+                .kernel(tau, &mut h, None);
+            for (t, v) in inside.iter().zip(&h) {
+                let exact = x0 / tr * tau * -(-t / tau).exp_m1();
+                assert!(rel(*v, exact) < 1e-13, "τ {tau} t {t}: {v} vs {exact}");
+            }
+        }
+        // τ → ∞: nothing relaxes; h = x0·(τ/t_r)(e^(t_r/τ) − 1)·e^(−t/τ) → x0
+        for tau in [1e9, 1e12, 1e15] {
+            let tr = 0.8;
+            let mut h = vec![0.0; times.len()];
+            Schedule::new(&History::ramp(x0, tr), &times)
+                .unwrap()
+                .kernel(tau, &mut h, None);
+            for (t, v) in times.iter().zip(&h) {
+                let exact = match *t <= tr {
+                    true => x0 / tr * tau * -(-t / tau).exp_m1(),
+                    false => x0 * (tau / tr) * (tr / tau).exp_m1() * (-t / tau).exp(),
+                };
+                assert!(rel(*v, exact) < 1e-13, "τ {tau} t {t}: {v} vs {exact}");
+            }
+        }
+        // the creep compliance's retardation terms as λ → ∞: R·(1 − e^(−t/λ)) ≈ R·t/λ
+        let c = Creep {
+            j_g: 0.0,
+            terms: vec![RetardationTerm {
+                lambda: 1e15,
+                compliance: 2.0,
+            }],
+            fluidity: 0.0,
+        };
+        assert!(rel(c.compliance(1e-3), 2.0 * 1e-3 / 1e15) < 1e-15);
     }
 
     #[test]

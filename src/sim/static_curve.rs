@@ -7,6 +7,7 @@
 //! stable equilibrium exists.
 
 use super::plant::Plant;
+use crate::units::CountRange;
 use serde::Serialize;
 
 /// A point of the curve.
@@ -57,6 +58,15 @@ pub fn voltage_at(p: &Plant, lam: f64) -> Option<f64> {
 
 /// Fewest curve points a search may use: the peak must be bracketed by grid points.
 pub const MIN_POINTS: usize = 10;
+
+/// The curve points a user may ask for: at least [`MIN_POINTS`], at most 10⁵ (a
+/// step of 1e-5 in λ over the widest range, far finer than a chart shows; the peak
+/// is refined by golden section whatever the grid).
+pub const POINTS: CountRange = CountRange::new(
+    MIN_POINTS,
+    100_000,
+    "points of the static curve; the peak is refined to 1e-10 in λ whatever the grid",
+);
 
 /// The curve on `n` (at least [`MIN_POINTS`]) points from the rest stretch down to
 /// `stretch_min`, and the peak refined by golden-section search to 1e-10 in λ. The

@@ -9,6 +9,8 @@
 //! per (reader, case), so the parent remakes any case to write its reproducer.
 
 mod checkpoint;
+mod flags;
+mod generate;
 mod merge;
 mod mutate;
 mod readers;

@@ -42,10 +42,15 @@ pub enum Reader {
     Merge,
     /// A checkpoint of `dea-fit identify`, resumed (`super::checkpoint`).
     Checkpoint,
+    /// A composite manifest's [synthetic] values, its exports generated
+    /// (`composite --generate`, tests/fuzz/generate.rs).
+    Generate,
+    /// Numeric flag values of the real commands (tests/fuzz/flags.rs).
+    Flags,
 }
 
 impl Reader {
-    pub const ALL: [Reader; 12] = [
+    pub const ALL: [Reader; 14] = [
         Reader::Tensile,
         Reader::Relaxation,
         Reader::Lcr,
@@ -58,6 +63,8 @@ impl Reader {
         Reader::Export,
         Reader::Merge,
         Reader::Checkpoint,
+        Reader::Generate,
+        Reader::Flags,
     ];
 
     pub fn name(self) -> &'static str {
@@ -74,6 +81,8 @@ impl Reader {
             Reader::Export => "export",
             Reader::Merge => "merge",
             Reader::Checkpoint => "checkpoint",
+            Reader::Generate => "generate",
+            Reader::Flags => "flags",
         }
     }
 
@@ -209,6 +218,9 @@ pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
             .filter(|p| p.ends_with(".json"))
             .chain(["tests/data/identified/stack-step-identified.json".into()])
             .collect(),
+        Reader::Generate => vec![super::generate::SEED.into()],
+        // a case is made whole, not mutated from a file
+        Reader::Flags => return vec![Vec::new()],
     };
     paths
         .iter()
@@ -439,6 +451,23 @@ pub fn generate(r: Reader, seeds: &[Vec<(String, Vec<u8>)>], rng: &mut ChaCha8Rn
         return super::merge::generate(seeds, rng);
     }
     let mut files = seeds.choose(rng).unwrap().clone();
+    let whole = match r {
+        Reader::Flags => Some(("args.txt".to_string(), super::flags::case(rng))),
+        Reader::Generate => Some((
+            files[0].0.clone(),
+            super::generate::mutate(&String::from_utf8_lossy(&files[0].1), rng),
+        )),
+        _ => None,
+    };
+    if let Some((name, Mutated { bytes, what, kind })) = whole {
+        return Case {
+            what: format!("{name} ({what})"),
+            files: vec![(name, bytes)],
+            kind,
+            oracle: Oracle::Any,
+            model: "",
+        };
+    }
     // a material file's case mutates the file, beside the scene that reads it; an
     // export case one of its files; a design case its manifest or, a quarter of the
     // time, its composite fit
@@ -511,6 +540,8 @@ pub fn replay(r: Reader, case: &Case, dir: &Path) -> String {
         Reader::Design => format!("dea-fit rank {f} --no-report"),
         Reader::Merge => super::merge::replay(case, dir),
         Reader::Checkpoint => super::checkpoint::replay(&case.files[0].0, dir),
+        Reader::Generate => format!("dea-fit composite {f} --generate"),
+        Reader::Flags => super::flags::replay(&case.files[0].1, dir),
         Reader::Export => {
             let files: Vec<String> = case
                 .files
@@ -671,6 +702,8 @@ pub fn run(r: Reader, case: &Case, dir: &Path) -> Verdict {
         Reader::Scene | Reader::Fit | Reader::Identified => simulate(&path, &case.oracle),
         Reader::Design => design(&path),
         Reader::Merge => super::merge::run(case, dir),
+        Reader::Generate => super::generate::run(&path, dir),
+        Reader::Flags => super::flags::run(&case.files[0].1, dir),
         Reader::Export => {
             let paths: Vec<PathBuf> = case.files.iter().map(|(n, _)| dir.join(n)).collect();
             export(&paths, &case.oracle)

@@ -1423,7 +1423,7 @@ fn a_re_signed_shard_with_values_the_design_cannot_give_is_refused() {
         (
             "a huge N in every shard",
             Box::new(|f: &mut ShardFile, _| f.shard.n = usize::MAX),
-            "expected 1 … 10000",
+            "from 1 to 10000",
         ),
         (
             "more shards than points",
@@ -1473,14 +1473,14 @@ fn sweeps_are_counted_before_any_point_is_made() {
     for (flag, says) in [
         ("loading=0:0.4:18446744073709551616", "out of range"),
         ("loading=0:0.4:1e3", "not a whole number"),
-        ("voltage=1kV:2kV:100001", "expected 1 … 100000"),
-        ("voltage=1kV:2kV:0", "expected 1 … 100000"),
+        ("voltage=1kV:2kV:100001", "from 1 to 100000"),
+        ("voltage=1kV:2kV:0", "from 1 to 100000"),
     ] {
         let err = Sweep::parse(&[flag.into()]).expect_err(flag).to_string();
         assert!(err.contains(says), "{flag}: {err}");
     }
     for (spec, says) in [
-        ("0/18446744073709551615", "expected 1 … 10000"),
+        ("0/18446744073709551615", "from 1 to 10000"),
         ("0/99999999999999999999999", "out of range"),
         ("3/3", "expected K/N with 0 ≤ K < N"),
     ] {

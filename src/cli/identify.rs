@@ -13,13 +13,21 @@ use dea_fit::io::trace;
 use dea_fit::io::write::AtomicFile;
 use dea_fit::observe::{Progress, Trace as TraceFile};
 use dea_fit::sim::scene::Scene;
-use dea_fit::units::parse_quantity;
+use dea_fit::units::{parse_quantity, CountRange};
 use dea_fit::{Error, Result};
 use serde::Serialize;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::{Duration, Instant};
+
+/// `--starts`: each start is a whole simulator-in-the-loop search (seconds to
+/// minutes), and one checkpoint file is kept per start.
+const STARTS: CountRange = CountRange::new(1, 1000, "searches from different starting constants");
+
+/// `--max-iterations`: an LM search converges in tens of iterations; more than
+/// 10⁵ is a slip, not a budget (`--max-time` bounds the wall time).
+const ITERATIONS: CountRange = CountRange::new(1, 100_000, "iterations of one start's search");
 
 /// Identify material constants from actuator traces (one experiment per file,
 /// fitted jointly).
@@ -44,13 +52,13 @@ pub struct Args {
     #[arg(long, value_name = "NAME=VALUE")]
     sigma: Vec<String>,
     /// Number of starts (the scene's values are the first).
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = 8, value_parser = |s: &str| STARTS.parse(s))]
     starts: usize,
     /// Seed of the start design.
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Iteration limit per start.
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, value_parser = |s: &str| ITERATIONS.parse(s))]
     max_iterations: usize,
     /// Relative tolerance of the simulator (default: the scene's).
     #[arg(long)]

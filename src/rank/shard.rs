@@ -21,7 +21,7 @@
 use super::candidate;
 use super::figures::{catalogue, CurvePoint, Evaluated, State, KEPT_POINTS};
 use super::manifest::{self, Design, Level};
-use super::sweep::{Point, Points, Shard, Sweep, MAX_SHARDS};
+use super::sweep::{Point, Points, Shard, Sweep, MAX_SHARDS, SHARD_COUNT};
 use super::Figure;
 use crate::error::{Error, Location, Result};
 use serde::{Deserialize, Serialize};
@@ -285,12 +285,10 @@ pub fn merge(paths: &[PathBuf], design: Option<&Path>) -> Result<(RunInfo, Vec<E
     }
     // N bounded before anything is sized by it: by the stated maximum, then by the
     // number of points the design itself gives.
-    if n == 0 || n > MAX_SHARDS {
-        return Err(Error::input(
-            Location::file(first),
-            format!("shard count {n}: expected 1 … {MAX_SHARDS}"),
-        )
-        .with_hint(RERUN));
+    if let Err(why) = SHARD_COUNT.check(n as u64) {
+        return Err(
+            Error::input(Location::file(first), format!("shard count {why}")).with_hint(RERUN),
+        );
     }
 
     // The design, read again: the same identity as the shards', or refused.

@@ -14,9 +14,8 @@ use super::figures::{evaluate, step_scene, Evaluated};
 use super::manifest::{Design, Level};
 use super::short;
 use crate::error::{Error, Result};
-use crate::units::{parse_quantity, Dimension};
+use crate::units::{parse_quantity, CountRange, Dimension};
 use rayon::prelude::*;
-use std::num::IntErrorKind;
 
 /// Most points a run (or a merge of its shards) may hold. Every evaluation is kept
 /// for the ranking, its table, JSON, CSV and report: measured, a 16 010-point run
@@ -35,19 +34,19 @@ pub const MAX_SHARDS: usize = 10_000;
 /// busy, few enough that only a chunk of points exists at a time.
 const CHUNK: usize = 1024;
 
-/// A count typed by the user, as a whole number in `1 ..= max` (never through a
-/// float): `what` names it in the message.
-pub fn count(text: &str, max: usize, what: &str) -> std::result::Result<usize, String> {
-    let t = text.trim();
-    match t.parse::<usize>() {
-        Ok(n) if (1..=max).contains(&n) => Ok(n),
-        Ok(n) => Err(format!("{what} {n}: expected 1 … {max}")),
-        Err(e) if *e.kind() == IntErrorKind::PosOverflow => {
-            Err(format!("{what} {t} is out of range: expected 1 … {max}"))
-        }
-        Err(_) => Err(format!("{what} '{t}' is not a whole number (1 … {max})")),
-    }
-}
+/// The count of one `--sweep` range: a whole number (never through a float).
+const RANGE_POINTS: CountRange = CountRange::new(
+    1,
+    MAX_POINTS,
+    "points of one range; the product of the sweep's dimensions is checked against the same budget",
+);
+
+/// The N of `--shard K/N` (and of the shards `rank merge` reads).
+pub const SHARD_COUNT: CountRange = CountRange::new(
+    1,
+    MAX_SHARDS,
+    "shards of one sweep: rank merge opens every one",
+);
 
 /// `start:stop:count` → `count` evenly spaced values (ends included, each rounded
 /// to 12 significant digits); each end a quantity of `dim` (a bare number is SI;
@@ -61,7 +60,9 @@ pub fn range(text: &str, dim: Dimension) -> std::result::Result<Vec<f64>, String
     };
     let q = |s: &str| parse_quantity(s, dim);
     let (a, b) = (q(a)?, q(b)?);
-    let n = count(n, MAX_POINTS, &format!("'{text}': count"))?;
+    let n = RANGE_POINTS
+        .parse(n)
+        .map_err(|why| format!("'{text}': count {why}"))?;
     if n == 1 && a != b {
         return Err(format!(
             "'{text}': one point needs start = stop (or a count of 2 or more)"
@@ -286,7 +287,7 @@ impl Shard {
                 .with_hint("e.g. --shard 3/16 (shards are numbered 0 … N−1, as Slurm array tasks)")
         };
         let (k, n) = s.split_once('/').ok_or_else(bad)?;
-        let n = count(n, MAX_SHARDS, "the shard count").map_err(|why| {
+        let n = SHARD_COUNT.parse(n).map_err(|why| {
             Error::settings(format!("--shard {s}: {why}")).with_hint(format!(
                 "at most {MAX_SHARDS} shards, and at most one per point of the sweep"
             ))

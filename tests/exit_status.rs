@@ -43,12 +43,13 @@ fn printed_status(o: &Output) -> Option<String> {
 }
 
 /// Statuses that block (exit 1) under `--strict`.
-const BLOCKING: [&str; 7] = [
+const BLOCKING: [&str; 8] = [
     "approximate",
     "blocking",
     "ill_posed",
     "unstable",
     "not_converged",
+    "not_validated",
     "pull_in",
     "failed",
 ];
@@ -693,7 +694,8 @@ fn identify_without_any_start_that_simulates_is_failed() {
 
 /// A held-out trace the identified constants cannot run (the worked example's step
 /// identified, the stiff 25 kV trace held out: the identified stack pulls in) is a
-/// finding about the constants, not a refused input: status `warning` (exit 0), the
+/// finding about the constants, not a refused input: status `not_validated` (exit 0
+/// without `--strict`, 1 with it), the
 /// warning names the trace and the pull-in, the JSON's validation says why, and the
 /// fit file is written.
 #[test]
@@ -722,7 +724,7 @@ fn identify_with_a_held_out_trace_it_cannot_predict_warns() {
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
     check_agrees(&args, &o);
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
-    assert_eq!(v["status"], "warning");
+    assert_eq!(v["status"], "not_validated");
     let why = v["validation"][0]["failed"].as_str().unwrap_or("");
     assert!(why.starts_with("pull_in"), "{}", v["validation"]);
     assert!(
@@ -737,4 +739,9 @@ fn identify_with_a_held_out_trace_it_cannot_predict_warns() {
         v["warnings"]
     );
     assert!(dir.path().join("fit.json").exists());
+    // the same under --strict: the status blocks, and the exit status says so
+    let strict: Vec<&str> = args.iter().copied().chain(["--strict"]).collect();
+    let o = run(dir.path(), &strict);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    check_agrees(&strict, &o);
 }

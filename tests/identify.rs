@@ -1733,10 +1733,11 @@ fn max_time_out_of_range_is_refused() {
 
 /// A held-out trace the identified constants miss (the held-out triangle with its
 /// contraction 1.5 times the real one: 8 σ off) is a warning with its numbers
-/// (trace, channel, RMS error in σ), status `warning`, and exit 1 under --strict;
+/// (trace, channel, RMS error in σ), status `not_validated`, which blocks (exit 1)
+/// under --strict;
 /// the real held-out trace passes (within the allowed RMS error).
 #[test]
-fn a_held_out_trace_that_is_missed_is_a_warning_blocking_under_strict() {
+fn a_held_out_trace_that_is_missed_is_not_validated_blocking_under_strict() {
     let dir = tempfile::tempdir().unwrap();
     let d = super::support::repo().join("datasets/identify");
     let missed = dir.path().join("missed.csv");
@@ -1759,7 +1760,7 @@ fn a_held_out_trace_that_is_missed_is_a_warning_blocking_under_strict() {
     let bad = run("missed.csv");
     let v: serde_json::Value = serde_json::from_slice(&bad.stdout).expect("JSON");
     assert_eq!(bad.status.code(), Some(1), "{v}");
-    assert_eq!(v["status"], "warning");
+    assert_eq!(v["status"], "not_validated");
     let w = v["warnings"].to_string();
     assert!(
         w.contains("missed.csv") && w.contains("contraction") && w.contains(" σ"),

@@ -398,11 +398,12 @@ pub fn run(a: Args) -> Result<i32> {
         .map(|e| validate(&id, e))
         .collect::<Result<_>>()?;
     // a held-out trace the identified constants cannot run, or miss, is a finding,
-    // not an error
+    // not an error: status `not_validated` (blocking under --strict) unless the
+    // identification already blocks for its own reason
     for w in validation.iter().filter_map(Validation::warning) {
         id.warnings.push(w);
-        if id.status == Status::Ok {
-            id.status = Status::Warning;
+        if !id.status.is_blocking() {
+            id.status = Status::NotValidated;
         }
     }
     let provenance = serde_json::json!({
@@ -469,12 +470,7 @@ pub fn run(a: Args) -> Result<i32> {
             println!("report: {}", r.display());
         }
     }
-    // a held-out trace the constants miss is a warning, blocking under --strict
-    let missed = validation.iter().any(|v| !v.passed());
-    Ok(id
-        .status
-        .exit_code(a.output.strict)
-        .max(i32::from(a.output.strict && missed)))
+    Ok(id.status.exit_code(a.output.strict))
 }
 
 /// Print a failed run (JSON or text) and give its exit status, 1: no fit file or

@@ -411,7 +411,7 @@ pub struct Card {
     /// `exact` when the card is the fit's model (the read-back tests check it),
     /// `approximate` when a warning says where it is not, or the blocking status
     /// of a fit it was made from (`ill_posed`, `unstable`, `not_converged`,
-    /// `failed`): the card is only as good as its fit.
+    /// `not_validated`, `failed`): the card is only as good as its fit.
     pub status: &'static str,
     /// The input files.
     pub sources: Vec<SourceFile>,
@@ -494,6 +494,7 @@ pub fn card(m: &Material, target: Target, opts: &Options) -> Result<Card> {
         Some("ill_posed") => "ill_posed",
         Some("unstable") => "unstable",
         Some("not_converged") => "not_converged",
+        Some("not_validated") => "not_validated",
         Some(_) => "failed",
         None if exact => "exact",
         None => "approximate",

@@ -46,13 +46,17 @@ pub enum Status {
     Unstable,
     /// The search did not converge.
     NotConverged,
+    /// Identified constants that miss, or cannot run, a held-out trace
+    /// (`identify --validate`): they fit the traces they came from but do not
+    /// predict another measurement of the same actuator.
+    NotValidated,
     /// No result: an input could not be used (a batch with a file that failed).
     Failed,
 }
 
 impl std::fmt::Display for Status {
     /// The same name the JSON uses (`ok`, `warning`, `ill_posed`, `unstable`,
-    /// `not_converged`, `failed`): the one spelling of a status in every output.
+    /// `not_converged`, `not_validated`, `failed`): the one spelling of a status in every output.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
             Status::Ok => "ok",
@@ -60,6 +64,7 @@ impl std::fmt::Display for Status {
             Status::IllPosed => "ill_posed",
             Status::Unstable => "unstable",
             Status::NotConverged => "not_converged",
+            Status::NotValidated => "not_validated",
             Status::Failed => "failed",
         })
     }
@@ -70,7 +75,11 @@ impl Status {
     pub fn is_blocking(self) -> bool {
         matches!(
             self,
-            Status::IllPosed | Status::Unstable | Status::NotConverged | Status::Failed
+            Status::IllPosed
+                | Status::Unstable
+                | Status::NotConverged
+                | Status::NotValidated
+                | Status::Failed
         )
     }
 

@@ -181,7 +181,8 @@ pub struct SolverSummary {
 /// The result of [`identify`].
 #[derive(Debug, Clone, Serialize)]
 pub struct Identification {
-    /// Status (blocking under `--strict`: `ill_posed`, `not_converged`).
+    /// Status (blocking under `--strict`: `ill_posed`, `not_converged`; the CLI
+    /// makes it `not_validated` when a held-out trace is missed).
     pub status: Status,
     /// The free constants.
     pub parameters: Vec<Estimate>,

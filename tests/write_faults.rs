@@ -271,7 +271,23 @@ fn output_inside_the_report_folder_is_refused() {
     let lcr = lcr.to_str().unwrap();
     let manifest = repo().join("datasets/composites/sylgard_batio3.toml");
     let manifest = manifest.to_str().unwrap();
-    let cases: Vec<Vec<&str>> = vec![
+    let step = repo().join("datasets/identify/step.csv");
+    let step = step.to_str().unwrap();
+    let stack = repo().join("datasets/identify/stack.toml");
+    let stack = stack.to_str().unwrap();
+    // identify: each of its files (the fit, --trace, --checkpoint's FILE.k), refused
+    // before the search runs
+    let identify = |flag: &'static str, file: &'static str| {
+        vec![
+            "identify", step, "--scene", stack, "--free", "eps_r", flag, file, "--report", "rep",
+        ]
+    };
+    let mut cases: Vec<Vec<&str>> = vec![
+        identify("--out", "rep/fit.json"),
+        identify("--trace", "rep/trace.jsonl"),
+        identify("--checkpoint", "rep/ck"),
+    ];
+    cases.extend([
         vec![
             "hyperelastic",
             data,
@@ -342,7 +358,7 @@ fn output_inside_the_report_folder_is_refused() {
             "--report",
             "rep",
         ],
-    ];
+    ]);
     for args in cases {
         let d = tempdir();
         let o = run(d.path(), &args);

@@ -333,6 +333,28 @@ pub fn run(a: Args) -> Result<i32> {
         profiles: a.profiles.clone(),
     };
     settings.check()?;
+    // every file this run writes, known before anything runs: none inside the
+    // report folder
+    let name = format!("{}-identified", stem(&a.traces[0]));
+    let out = a
+        .output
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("fits").join(format!("{name}.json")));
+    let dir = (!a.output.no_report).then(|| {
+        a.output
+            .report
+            .clone()
+            .unwrap_or_else(|| Path::new("reports").join(&name))
+    });
+    super::refuse_in_report(
+        dir.as_deref(),
+        &[
+            ("--out", Some(&out)),
+            ("--trace", a.trace.as_deref()),
+            ("--checkpoint", a.checkpoint.as_deref()),
+        ],
+    )?;
     if let (Some(f), false) = (&a.checkpoint, a.resume) {
         refuse_existing_checkpoints(f, a.starts)?;
     }
@@ -422,19 +444,6 @@ pub fn run(a: Args) -> Result<i32> {
     });
     let file = material_file(&id, &kept[0].scene, provenance)?;
     let json = file.to_json()?;
-    let name = format!("{}-identified", stem(&a.traces[0]));
-    let out = a
-        .output
-        .out
-        .clone()
-        .unwrap_or_else(|| Path::new("fits").join(format!("{name}.json")));
-    let dir = (!a.output.no_report).then(|| {
-        a.output
-            .report
-            .clone()
-            .unwrap_or_else(|| Path::new("reports").join(&name))
-    });
-    super::refuse_in_report(dir.as_deref(), &[("--out", Some(&out))])?;
     if let Some(d) = &dir {
         super::claim_dir(d)?;
     }

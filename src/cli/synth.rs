@@ -339,9 +339,7 @@ fn range(
 /// as the chosen pair, parameters in its `#` lines.
 fn lcr(a: Args) -> Result<i32> {
     use dea_fit::fit::permittivity::Geometry;
-    use dea_fit::io::lcr::{
-        log_frequencies, log_sweep_points, synthetic_points, write_csv, PER_DECADE,
-    };
+    use dea_fit::io::lcr::{log_frequencies, synthetic_points, write_csv, PER_DECADE};
     use dea_fit::material::check::PERMITTIVITY;
     use dea_fit::material::dielectric::Pair;
     use dea_fit::rank::manifest::TAN_DELTA;
@@ -392,11 +390,10 @@ fn lcr(a: Args) -> Result<i32> {
         PER_DECADE,
         |x| parse_quantity(x, Dimension::Frequency).map_err(|e| e.to_string()),
     )?;
-    log_sweep_points(f0, f1, per_decade).map_err(|e| {
+    let freqs = log_frequencies(f0, f1, per_decade).map_err(|e| {
         Error::settings(format!("--sweep '{}': {e}", a.sweep))
             .with_hint("e.g. --sweep 100Hz:1MHz:4")
     })?;
-    let freqs = log_frequencies(f0, f1, per_decade)?;
     let normal = Normal::new(0.0, noise).map_err(|e| Error::settings(format!("--noise: {e}")))?;
     let mut rng = ChaCha8Rng::seed_from_u64(a.seed);
     let c0 = geometry.empty_capacitance();

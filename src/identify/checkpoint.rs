@@ -47,11 +47,7 @@ impl Hasher {
     }
 
     fn hex(self) -> String {
-        self.0
-            .finalize()
-            .iter()
-            .map(|b| format!("{b:02x}"))
-            .collect()
+        crate::io::hex(&self.0.finalize())
     }
 }
 

@@ -15,7 +15,7 @@ pub const AD_CRITICAL_5: f64 = 0.757;
 
 /// Anderson–Darling test of complete data (None with survivors: see docs/breakdown.md).
 pub(super) fn test(data: &Data, mle: &Point) -> Option<Goodness> {
-    if data.fail.iter().any(|&f| f == 0.0) {
+    if data.fail.contains(&0.0) {
         return None;
     }
     let n = data.len();

@@ -318,7 +318,7 @@ pub(crate) fn solve_spd(a: &[[f64; DIM]; DIM], b: &[f64; DIM], n: usize) -> Opti
         for k in 0..j {
             s -= l[j][k] * l[j][k];
         }
-        if !(s > 0.0) || !s.is_finite() {
+        if s <= 0.0 || !s.is_finite() {
             return None;
         }
         l[j][j] = s.sqrt();

@@ -80,10 +80,10 @@ fn published_example_nag_with_standard_errors() {
 /// blog.csdn.net/weixin_30134145/article/details/115929233): ten specimens on test
 /// for 70 h, six failures at 10, 20, 35, 52, 56, 63 and four survivors at 70:
 /// a = 74.6426, b = 1.6194, bounds a 44.5897..124.9509, b 0.7795..3.3645 (Fisher,
-/// log scale). To the printed digits, except α's lower bound to one unit of the
-/// last digit: MATLAB prints 44.5897 where the converged value is 44.589643 (the
-/// `reliability` package agrees with us to 1e-8), a difference of 2·10⁻⁷ relative
-/// — the stopping tolerance of MATLAB's iteration.
+/// log scale). To the printed digits, except α's bounds to two units of the last
+/// digit: MATLAB prints 44.5897 and 124.9509 where the converged values are
+/// 44.589643 and 124.951057 (the `reliability` package agrees with us to 1e-8), a
+/// difference of ≤ 1.3·10⁻⁶ relative — the stopping tolerance of MATLAB's iteration.
 #[test]
 fn published_censored_example() {
     let mut s = complete(&[10.0, 20.0, 35.0, 52.0, 56.0, 63.0]);
@@ -93,8 +93,8 @@ fn published_censored_example() {
     printed(f.alpha.value, 74.6426, 4);
     printed(f.beta.value, 1.6194, 4);
     let (lo, hi) = f.alpha.fisher95.unwrap();
-    within_units(lo, 44.5897, 4, 1.0);
-    printed(hi, 124.9509, 4);
+    within_units(lo, 44.5897, 4, 2.0);
+    within_units(hi, 124.9509, 4, 2.0);
     let (lo, hi) = f.beta.fisher95.unwrap();
     printed(lo, 0.7795, 4);
     printed(hi, 3.3645, 4);
@@ -216,4 +216,89 @@ fn bad_series_are_refused() {
     // The crate error carries a hint.
     let err: dea_fit::Error = WeibullError::AllSurvived { n: 3 }.into();
     assert!(err.to_string().contains("hint"));
+}
+
+/// The reference series and the `reliability` package's fits of them
+/// (.ci/weibull-reference.sh writes datasets/breakdown/reference/reliability.json).
+fn reference_series(name: &str) -> Vec<Specimen> {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/breakdown/reference");
+    let text = std::fs::read_to_string(dir.join(name)).expect("reference series");
+    text.lines()
+        .skip(1)
+        .map(|l| {
+            let (e, s) = l.split_once(',').expect("two columns");
+            Specimen::new(e.parse::<f64>().expect("field") * 1e6, s.trim() == "1")
+        })
+        .collect()
+}
+
+/// dea-fit against the independent implementation, like with like (conventions in
+/// .ci/weibull_reference.py): MLE, RRX and RRY (Bernard positions, Johnson's
+/// adjusted ranks for the survivors) on a complete, a censored (survivors at the
+/// rig's limit and one mid-series) and a small series; α, β, their standard
+/// errors, Fisher bounds and ℓ.
+/// Tolerances: rank regression is closed form, so its α and β agree to 1e-8
+/// (the JSON keeps ten digits), and its σ and bounds (reliability's autograd
+/// Hessian at the same point) to 2e-5. The MLE to 1e-4 relative, its σ and bounds
+/// to 5e-4: reliability's optimizer (L-BFGS-B) stops early — on complete-20 its
+/// β = 8.267244 where the root of the profile score is 8.266896 (scipy's brentq
+/// to 1e-14 agrees with ours to 1e-13), ℓ 3·10⁻⁸ below the maximum; σ moves with
+/// the estimate at first order. ℓ to 1e-7 relative.
+#[test]
+fn agrees_with_the_reliability_package() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("datasets/breakdown/reference");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("reliability.json")).unwrap())
+            .unwrap();
+    let series = json["series"].as_object().expect("series");
+    assert!(series.len() >= 3);
+    let mut compared = 0;
+    for (name, refs) in series {
+        let specimens = reference_series(name);
+        assert_eq!(specimens.len() as u64, refs["n"].as_u64().unwrap());
+        for (method, key) in [
+            (Method::Mle, "mle"),
+            (Method::Rrx, "rrx"),
+            (Method::Rry, "rry"),
+        ] {
+            let r = &refs[key];
+            let s = Settings {
+                method,
+                ..Settings::default()
+            };
+            let f = fit(&specimens, &s).expect("fits");
+            let (tol_est, tol_se) = if method == Method::Mle {
+                (1e-4, 5e-4)
+            } else {
+                (1e-8, 2e-5)
+            };
+            let close = |ours: f64, theirs: &serde_json::Value, tol: f64, what: &str| {
+                let theirs = theirs.as_f64().unwrap();
+                assert!(
+                    (ours - theirs).abs() <= tol * theirs.abs(),
+                    "{name} {key} {what}: {ours} vs reliability {theirs}"
+                );
+            };
+            close(f.alpha.value / 1e6, &r["alpha"], tol_est, "alpha");
+            close(f.beta.value, &r["beta"], tol_est, "beta");
+            close(
+                f.alpha.std_error.unwrap() / 1e6,
+                &r["alpha_se"],
+                tol_se,
+                "alpha σ",
+            );
+            close(f.beta.std_error.unwrap(), &r["beta_se"], tol_se, "beta σ");
+            let (lo, hi) = f.alpha.fisher95.unwrap();
+            close(lo / 1e6, &r["alpha_ci95"][0], tol_se, "alpha lower");
+            close(hi / 1e6, &r["alpha_ci95"][1], tol_se, "alpha upper");
+            let (lo, hi) = f.beta.fisher95.unwrap();
+            close(lo, &r["beta_ci95"][0], tol_se, "beta lower");
+            close(hi, &r["beta_ci95"][1], tol_se, "beta upper");
+            // ℓ of the fields in V/µm = ℓ in V/m + r·ln 10⁶.
+            let ll = f.log_likelihood + f.failures as f64 * 1e6f64.ln();
+            close(ll, &r["log_likelihood"], 1e-7, "log-likelihood");
+            compared += 1;
+        }
+    }
+    assert_eq!(compared, 3 * series.len());
 }

@@ -850,11 +850,18 @@ impl Model {
     }
 
     /// The covariance of the natural parameters: the inverse observed information.
+    /// The information is that of (α, β), as `reliability` and Weibull++ take it,
+    /// carried to u = ln α: −ℓ_αα·α² = −ℓ_uu + ℓ_u. At a maximum ℓ_u = 0 and the
+    /// two agree; at a rank-regression estimate ℓ_u ≠ 0 and this is the convention
+    /// of the references (tests/weibull.rs, `agrees_with_the_reliability_package`).
     fn covariance(&self) -> Option<Vec<Vec<f64>>> {
-        let info = match self.gamma {
+        let mut info = match self.gamma {
             Some(g) => threshold::information(self, g),
             None => self.data.information(&self.point),
         };
+        if self.gamma.is_none() {
+            info[0][0] += self.data.held_derivative(&self.point, Hold::Loc(0), 0.0);
+        }
         let m = info.len();
         let mat = nalgebra::DMatrix::from_fn(m, m, |i, j| info[i][j]);
         let inv = mat.cholesky()?.inverse();

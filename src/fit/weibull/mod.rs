@@ -15,6 +15,7 @@ mod rank;
 mod threshold;
 
 use crate::fit::Status;
+use crate::material::breakdown::Weibull;
 use likelihood::{Data, Hold, Point, LOC};
 use std::fmt;
 
@@ -1113,14 +1114,18 @@ impl WeibullFit {
             .collect()
     }
 
-    /// The fitted CDF F(E) at the reference area and covariates.
-    pub fn cdf(&self, field: f64) -> f64 {
-        let m = &self.model;
-        let shifted = field - m.gamma.unwrap_or(0.0);
-        if shifted <= 0.0 {
-            return 0.0;
+    /// The fitted two-parameter law at the reference area and covariates (the
+    /// shared core's [`Weibull`]: its cdf, percentile and area scaling).
+    pub fn law(&self) -> Weibull {
+        Weibull {
+            alpha: self.alpha.value,
+            beta: self.beta.value,
         }
-        let y = m.point.beta * ((shifted / m.scale).ln() - m.point.c[0]);
-        -(-y.exp()).exp_m1()
+    }
+
+    /// The fitted CDF F(E) at the reference area and covariates (E − γ with a
+    /// threshold).
+    pub fn cdf(&self, field: f64) -> f64 {
+        self.law().cdf(field - self.model.gamma.unwrap_or(0.0))
     }
 }

@@ -637,6 +637,7 @@ pub fn fit(specimens: &[Specimen], settings: &Settings) -> Result<WeibullFit, We
                 likelihood::Maximum {
                     point: start,
                     loglik: data.loglik(&start, 0.0),
+                    held_slope: 0.0,
                     iterations: e.iterations,
                 },
                 e.iterations,
@@ -989,7 +990,7 @@ impl Model {
                 }
                 let m = self.data.maximize(p, hold, k).ok()?;
                 *warm = m.point;
-                let slope = self.data.held_derivative(&m.point, hold, k);
+                let slope = m.held_slope;
                 let slope = if hold == Hold::Beta {
                     slope * m.point.beta
                 } else {
@@ -1015,7 +1016,9 @@ impl Model {
             // Bracket [inner (h > 0), outer (h ≤ 0)]; Newton from the outer end.
             let (mut v, mut h) = (outer, h_out);
             for _ in 0..100 {
-                if h.0.abs() < 1e-10 || (outer - inner).abs() < 1e-13 * (1.0 + v.abs()) {
+                // ℓ to 1e-9 (v to ≈ 10⁻⁹σ, as dℓ_p/dv ≈ 2/σ at the bound), or a
+                // bracket narrower than 10⁻¹⁰ of the first step.
+                if h.0.abs() < 1e-9 || (outer - inner).abs() < 1e-10 * step0 {
                     return Some(v);
                 }
                 let newton = v - h.0 / h.1;

@@ -4,6 +4,10 @@
 //! by the weakest-link law, standard errors from the observed information, Fisher
 //! and likelihood-ratio bounds, percentiles and a goodness-of-fit test.
 //!
+//! Covariates follow the power law that Huang, Shian, Diebold, Suo & Clarke 2012
+//! (Appl. Phys. Lett. 101:122905, doi:10.1063/1.4754549) found for the breakdown
+//! of VHB, E_B = 51·h^−0.25·λ^0.63.
+//!
 //! The model (IEEE Std 930-2004, IEC 62539:2007): F(E) = 1 − exp[−(E/α)^β] at the
 //! reference electrode area A₀; a specimen of area A has F_A(E) = 1 − exp[−(A/A₀)(E/α)^β]
 //! (the weakest link: independent flaws, hazard additive over area; Weibull 1951,
@@ -340,7 +344,7 @@ impl WeibullError {
             WeibullError::TooFewBreakdowns { .. } => "a Weibull fit needs at least two breakdowns (IEEE 930 asks for ten or more)",
             WeibullError::Degenerate { .. } => "the field steps are too coarse to resolve the spread: use finer steps, or report the single field",
             WeibullError::ConstantCovariate { .. } => "drop the covariate: a constant value carries no information on its exponent",
-            WeibullError::Unsupported(_) => "use --method mle for covariates, a threshold or mixed electrode areas",
+            WeibullError::Unsupported(_) => "rank regression fits one area without threshold or covariates (use --method mle); see docs/breakdown.md",
         }
     }
 }

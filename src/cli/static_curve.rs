@@ -162,10 +162,7 @@ pub fn run(a: Args) -> Result<i32> {
             said.push_str(&format!("note: {n}\n"));
         }
         print!("{}", dea_fit::report::format::fit_width(&said));
-        print!(
-            "{}",
-            static_report::shape_table(&c, bline.as_ref())
-        );
+        print!("{}", static_report::shape_table(&c, bline.as_ref()));
         if let Some(out) = &a.out {
             println!("curve: {}", out.display());
         }
@@ -201,7 +198,12 @@ fn against_breakdown(
     c: &static_curve::StaticCurve,
     v_in: f64,
     status: &'static str,
-) -> (&'static str, Option<String>, breakdown::Check, Option<Point>) {
+) -> (
+    &'static str,
+    Option<String>,
+    breakdown::Check,
+    Option<Point>,
+) {
     let a = &scene.actuator;
     let bottom = c.pull_in.map_or(c.stretch_min, |q| q.stretch);
     // The field under the input: at its static equilibrium on the stable branch,

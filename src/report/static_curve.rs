@@ -80,7 +80,10 @@ fn shape_rows(c: &StaticCurve, b: Option<&BreakdownLine>) -> (Vec<String>, Vec<V
     );
     let breakdown = b.map(|b| {
         si_column(
-            &rows.iter().map(|r| b.voltage(r.0.stretch)).collect::<Vec<_>>(),
+            &rows
+                .iter()
+                .map(|r| b.voltage(r.0.stretch))
+                .collect::<Vec<_>>(),
             "V",
             5,
         )

@@ -226,7 +226,11 @@ mod tests {
         let c = check(Some(&strength), peak, "the largest field");
         // 20 V/µm against 25: margin 0.2 (1e-12: one division).
         assert!((c.margin.unwrap() - 0.2).abs() < 1e-12);
-        assert!(!c.exceeded && c.message.contains("margin 20.0 %"), "{}", c.message);
+        assert!(
+            !c.exceeded && c.message.contains("margin 20.0 %"),
+            "{}",
+            c.message
+        );
         peak.widen(&s, Some(3.0), 3e3, 1.0);
         let c = check(Some(&strength), peak, "the largest field");
         assert!(c.exceeded && c.message.starts_with("beyond breakdown"));

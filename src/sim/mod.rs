@@ -749,8 +749,7 @@ impl Recorder<'_, '_> {
         e.current_max_a = e.current_max_a.max(x.current_a.abs());
         e.power_max_w = e.power_max_w.max(x.power_w);
         e.leakage_max_w = e.leakage_max_w.max(x.leakage_w);
-        d.field
-            .widen(&p.actuator, Some(t), x.voltage_v, x.stretch);
+        d.field.widen(&p.actuator, Some(t), x.voltage_v, x.stretch);
         if p.control.is_some() {
             let (ss, lo, hi) = &mut d.tracking;
             *ss += (1.0 - x.length_m / self.rest_length_m - x.reference).powi(2);

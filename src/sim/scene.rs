@@ -810,9 +810,9 @@ fn read_breakdown(
         }
         Some(toml::Value::Table(b)) => {
             c.known(b, key, &["fit", "prestretch"])?;
-            let f = c.string(b, key, "fit")?.ok_or_else(|| {
-                c.err(&format!("{key}.fit"), "is missing").with_hint(hint)
-            })?;
+            let f = c
+                .string(b, key, "fit")?
+                .ok_or_else(|| c.err(&format!("{key}.fit"), "is missing").with_hint(hint))?;
             let prestretch = c.number(b, key, "prestretch")?;
             if let Some(p) = prestretch {
                 if !(p >= 1.0 && p <= 100.0) {
@@ -836,7 +836,10 @@ fn read_breakdown(
             Ok(Some(s))
         }
         Some(v) => Err(c
-            .err(key, format!("expected a field such as \"25 V/um\" or {{ fit = ... }}, found {v}"))
+            .err(
+                key,
+                format!("expected a field such as \"25 V/um\" or {{ fit = ... }}, found {v}"),
+            )
             .with_hint(hint)),
     }
 }

@@ -815,7 +815,7 @@ fn read_breakdown(
                 .ok_or_else(|| c.err(&format!("{key}.fit"), "is missing").with_hint(hint))?;
             let prestretch = c.number(b, key, "prestretch")?;
             if let Some(p) = prestretch {
-                if !(p >= 1.0 && p <= 100.0) {
+                if !(1.0..=100.0).contains(&p) {
                     return Err(c
                         .err(
                             &format!("{key}.prestretch"),

@@ -598,7 +598,7 @@ fn static_out_writes_the_curve_as_csv() {
     assert_eq!(rows.len(), curve.len());
     assert!(
         rows.len() > 190,
-        "the whole curve (200 points, 1 at rest dropped)"
+        "the whole curve (200 points from the rest state at 0 V)"
     );
     let c_ref =
         10.0 * 4.7 * 8.854_187_812_8e-12 * std::f64::consts::PI * 2.25e-3f64.powi(2) / 500e-6;
@@ -631,7 +631,11 @@ fn static_out_writes_the_curve_as_csv() {
         .skip(2)
         .take_while(|l| !l.starts_with("curve:"))
         .collect();
-    assert_eq!(table.len(), 11, "ten rows and the pull-in:\n{text}");
+    assert_eq!(
+        table.len(),
+        12,
+        "ten rows, the breakdown and the pull-in:\n{text}"
+    );
     let volts: Vec<f64> = table
         .iter()
         .map(|l| l.split_whitespace().next().unwrap().parse().unwrap())
@@ -659,6 +663,153 @@ fn static_out_writes_the_curve_as_csv() {
     ok(&o);
     assert_eq!(names_in(dir.path()), ["curve.csv", "curve.previous-1.csv"]);
     assert!(stderr(&o).contains("kept as"), "{}", stderr(&o));
+}
+
+/// The README's scene with `breakdown = "25 V/um"` and the 5 kV step replaced,
+/// written to `dir/name`.
+fn breakdown_scene(dir: &Path, name: &str, breakdown: Option<&str>, amplitude: &str) -> String {
+    let text = std::fs::read_to_string(repo().join("datasets/scenes/stack_step_5kV.toml"))
+        .expect("the README's scene");
+    let line = match breakdown {
+        Some(b) => format!("breakdown = {b}\n"),
+        None => String::new(),
+    };
+    let text = text
+        .replace("breakdown = \"25 V/um\"\n", &line)
+        .replace(
+            "amplitude = \"5 kV\"",
+            &format!("amplitude = \"{amplitude}\""),
+        )
+        .replace("span = \"10 s\"", "span = \"50 ms\"")
+        .replace("samples = 2000", "samples = 10");
+    std::fs::write(dir.join(name), text).expect("written");
+    name.to_string()
+}
+
+/// `static` says which of breakdown and pull-in comes first, a case each way: on
+/// the README's scene (25 V/µm, stated) the field reaches Eb at V_b = Eb·zd0·λ on
+/// the stable branch, 11.8 kV, long before the pull-in at 20.75 kV (where the true
+/// field is 65 V/µm); at 100 V/µm the pull-in comes first. Without a breakdown the
+/// output (table and JSON) says none was checked.
+#[test]
+fn static_says_whether_breakdown_or_pull_in_comes_first() {
+    let dir = tempdir();
+    let json = |scene: &str| -> Value {
+        serde_json::from_str(&ok(&run(
+            dir.path(),
+            &["static", scene, "--json", "--no-report"],
+        )))
+        .expect("JSON")
+    };
+    let readme = repo_file("datasets/scenes/stack_step_5kV.toml");
+    let v = json(&readme);
+    let b = &v["breakdown"];
+    assert_eq!(b["first"], "breakdown", "{b}");
+    assert_eq!(b["checked"], true);
+    assert_eq!(v["status"], "ok", "5 kV stays below breakdown");
+    let (vb, lam) = (
+        b["point"]["voltage_V"].as_f64().unwrap(),
+        b["point"]["stretch"].as_f64().unwrap(),
+    );
+    // On the curve the field meets Eb: V = Eb·zd0·λ, to 1e-9 relative (λ bisected to
+    // 1e-12, the curve's slope a few kV per unit λ).
+    assert!(
+        (vb / (25e6 * 500e-6 * lam) - 1.0).abs() < 1e-9,
+        "{vb} at {lam}"
+    );
+    let v_pi = v["pull_in"]["voltage_V"].as_f64().unwrap();
+    assert!(
+        vb < v_pi && (11_000.0..12_500.0).contains(&vb),
+        "{vb} {v_pi}"
+    );
+    // The field under the 5 kV input: E = V/(zd0·λ), margin 1 − E/Eb (1e-12: rounding).
+    let e = b["peak"]["field_V_per_m"].as_f64().unwrap();
+    let l_in = b["peak"]["stretch"].as_f64().unwrap();
+    assert!((e / (5e3 / (500e-6 * l_in)) - 1.0).abs() < 1e-12);
+    assert!((b["margin"].as_f64().unwrap() - (1.0 - e / 25e6)).abs() < 1e-12);
+    let text = ok(&run(dir.path(), &["static", &readme, "--no-report"]));
+    assert!(text.contains("breakdown comes first"), "{text}");
+    assert!(
+        text.contains("64.96 V/µm"),
+        "the true field at pull-in:\n{text}"
+    );
+    assert!(
+        text.lines().any(|l| l.trim_end().ends_with("breakdown")),
+        "{text}"
+    );
+
+    let strong = breakdown_scene(dir.path(), "strong.toml", Some("\"100 V/um\""), "5 kV");
+    let v = json(&strong);
+    assert_eq!(v["breakdown"]["first"], "pull_in", "{}", v["breakdown"]);
+    assert!(v["breakdown"]["point"].is_null());
+    let text = ok(&run(dir.path(), &["static", &strong, "--no-report"]));
+    assert!(text.contains("pull-in comes first"), "{text}");
+
+    let none = breakdown_scene(dir.path(), "none.toml", None, "5 kV");
+    let v = json(&none);
+    assert_eq!(v["breakdown"]["checked"], false);
+    assert!(v["breakdown"]["message"]
+        .as_str()
+        .unwrap()
+        .starts_with("breakdown not checked: the scene states none"));
+    let text = ok(&run(dir.path(), &["static", &none, "--no-report"]));
+    assert!(
+        text.contains("breakdown not checked: the scene states none"),
+        "{text}"
+    );
+    assert!(!text.contains("breakdown V_b"), "{text}");
+}
+
+/// A drive beyond breakdown (15 kV: past V_b = 11.8 kV, below the pull-in at
+/// 20.75 kV) is the status `breakdown` of `static` and of `simulate`, in the summary
+/// and the JSON: exit 0, and exit 1 under `--strict`; 10 kV (static field 20.5 V/µm,
+/// the step's overshoot included below 25) is not.
+#[test]
+fn a_drive_beyond_breakdown_blocks_under_strict() {
+    let dir = tempdir();
+    let over = breakdown_scene(dir.path(), "over.toml", Some("\"25 V/um\""), "15 kV");
+    for cmd in ["static", "simulate"] {
+        let o = run(dir.path(), &[cmd, &over, "--no-report"]);
+        assert_eq!(o.status.code(), Some(0), "{cmd}: {}", stderr(&o));
+        let t = stdout(&o);
+        assert!(
+            t.contains("status: breakdown") && t.contains("beyond breakdown"),
+            "{cmd}: {t}"
+        );
+        let o = run(dir.path(), &[cmd, &over, "--no-report", "--strict"]);
+        assert_eq!(o.status.code(), Some(1), "{cmd} --strict: {}", stdout(&o));
+        assert!(stdout(&o).contains("status: breakdown"));
+        let v: Value = serde_json::from_str(&stdout(&run(
+            dir.path(),
+            &[cmd, &over, "--no-report", "--json"],
+        )))
+        .expect("JSON");
+        assert_eq!(v["status"], "breakdown", "{cmd}");
+        assert_eq!(v["breakdown"]["exceeded"], true, "{cmd}");
+        assert!(v["breakdown"]["margin"].as_f64().unwrap() < 0.0, "{cmd}");
+    }
+    let below = breakdown_scene(dir.path(), "below.toml", Some("\"25 V/um\""), "10 kV");
+    for (cmd, status) in [("static", "ok"), ("simulate", "completed")] {
+        let o = run(dir.path(), &[cmd, &below, "--no-report", "--strict"]);
+        assert_eq!(o.status.code(), Some(0), "{cmd}: {}", stdout(&o));
+        assert!(
+            stdout(&o).contains(&format!("status: {status}")),
+            "{}",
+            stdout(&o)
+        );
+    }
+    let v: Value = serde_json::from_str(&ok(&run(
+        dir.path(),
+        &["simulate", &below, "--no-report", "--json"],
+    )))
+    .expect("JSON");
+    let b = &v["breakdown"];
+    assert_eq!(b["checked"], true);
+    assert!(
+        b["field_max_V_per_m"].as_f64().unwrap()
+            >= b["field_max_at_samples_V_per_m"].as_f64().unwrap()
+    );
+    assert_eq!(v["integrator"]["status"], "completed");
 }
 
 // ---------------------------------------------------------------------------------

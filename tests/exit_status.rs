@@ -43,9 +43,10 @@ fn printed_status(o: &Output) -> Option<String> {
 }
 
 /// Statuses that block (exit 1) under `--strict`.
-const BLOCKING: [&str; 8] = [
+const BLOCKING: [&str; 9] = [
     "approximate",
     "blocking",
+    "breakdown",
     "ill_posed",
     "unstable",
     "not_converged",

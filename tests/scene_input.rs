@@ -240,3 +240,216 @@ fn a_relaxation_fit_drives_the_viscous_arms_like_the_same_arms_inline() {
     let (ee, el) = (swing(&elastic, 0.1, 0.3), swing(&elastic, 1.7, 1.9));
     assert!((el / ee - 1.0).abs() < 0.1, "{el} vs {ee}");
 }
+
+/// The README's scene with its `breakdown = "25 V/um"` line (line 19) replaced.
+fn with_breakdown(value: &str) -> String {
+    let text = std::fs::read_to_string(repo().join("datasets/scenes/stack_step_5kV.toml")).unwrap();
+    assert!(text.lines().nth(18) == Some("breakdown = \"25 V/um\""));
+    text.replace("breakdown = \"25 V/um\"", &format!("breakdown = {value}"))
+}
+
+/// A breakdown fit file as `dea-fit breakdown --out` writes it (the core's serde
+/// struct): α = 30 V/µm at a 1 cm² specimen, β = 10, with standard errors.
+fn breakdown_fit() -> dea_fit::material::file::BreakdownFit {
+    use dea_fit::material::file::{BreakdownFit, BreakdownParameter};
+    let p = |name: &str, unit: &str, value: f64, s: f64| BreakdownParameter {
+        name: name.into(),
+        unit: unit.into(),
+        value,
+        std_error: Some(s),
+        ci95: None,
+    };
+    BreakdownFit {
+        schema: "dea-fit/breakdown/1".into(),
+        tool_version: "test".into(),
+        status: "ok".into(),
+        method: "mle".into(),
+        positions: None,
+        n: 15,
+        failures: 15,
+        survived: 0,
+        parameters: vec![p("alpha", "V/m", 30e6, 0.8e6), p("beta", "1", 10.0, 2.0)],
+        correlation: vec![vec![Some(1.0), Some(0.3)], vec![Some(0.3), Some(1.0)]],
+        beta_unbiased: None,
+        log_likelihood: -20.0,
+        percentiles: Vec::new(),
+        reference_area: Some(1e-4),
+        reference_thickness: None,
+        reference_prestretch: None,
+        thickness_range: None,
+        prestretch_range: None,
+        bounds: "fisher".into(),
+        warnings: Vec::new(),
+        provenance: serde_json::Value::Null,
+    }
+}
+
+/// Every wrong `material.breakdown` is refused at its line and column, naming the
+/// key, with a hint: non-positive, implausible, wrong unit, not a quantity, an
+/// unknown key of the fit table, a missing file, a fit file of another schema, a
+/// prestretch that is not a stretch.
+#[test]
+fn a_wrong_breakdown_is_refused_at_its_key() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(
+        repo().join("tests/data/bad_cli/files/fitfile_yeoh.json"),
+        dir.path().join("yeoh.json"),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("b.json"),
+        serde_json::to_string(&breakdown_fit()).unwrap(),
+    )
+    .unwrap();
+    for (value, at, want) in [
+        (
+            "\"-5 V/um\"",
+            "s.toml:19:1:",
+            "not a plausible breakdown field",
+        ),
+        (
+            "\"0 V/um\"",
+            "s.toml:19:1:",
+            "not a plausible breakdown field",
+        ),
+        ("25", "s.toml:19:1:", "not a plausible breakdown field"),
+        ("\"25 kPa\"", "s.toml:19:1:", "material.breakdown"),
+        ("\"25 ± 2 kV\"", "s.toml:19:1:", "material.breakdown"),
+        ("true", "s.toml:19:1:", "expected a field such as"),
+        ("{ fitt = \"b.json\" }", "s.toml:19:", "did you mean 'fit'?"),
+        ("{ fit = \"none.json\" }", "s.toml:19:", "cannot read"),
+        (
+            "{ fit = \"b.json\", prestretch = 0.5 }",
+            "s.toml:19:",
+            "a stretch from 1 to 100",
+        ),
+        ("{ fit = \"yeoh.json\" }", "yeoh.json", "breakdown"),
+    ] {
+        let e = Scene::parse(&with_breakdown(value), &dir.path().join("s.toml"))
+            .err()
+            .unwrap_or_else(|| panic!("{value} was accepted"));
+        let s = e.to_string();
+        let s = s.trim_start_matches(&format!("{}/", dir.path().display()));
+        assert!(s.starts_with(at) && s.contains(want), "{value}: {s}");
+        if at.starts_with("s.toml") {
+            assert!(s.contains("material.breakdown"), "{value}: {s}");
+        }
+        assert!(s.contains("hint:"), "{value}: no hint: {s}");
+    }
+}
+
+/// A stated breakdown keeps its σ (or none) and names its line; a scene without one
+/// has none (nothing is checked).
+#[test]
+fn a_stated_breakdown_carries_its_sigma_and_source() {
+    use dea_fit::material::breakdown::StrengthOrigin;
+    let s = Scene::parse(&with_breakdown("\"25 ± 2 V/um\""), Path::new("s.toml")).unwrap();
+    let b = s.breakdown.expect("stated");
+    // Unit conversion only: 1e-12 relative.
+    assert!((b.field / 25e6 - 1.0).abs() < 1e-12);
+    assert!((b.std_error.unwrap() / 2e6 - 1.0).abs() < 1e-12);
+    assert_eq!(b.origin, StrengthOrigin::Stated);
+    assert!(b.source.starts_with("s.toml:19:1"), "{}", b.source);
+    let s = Scene::parse(&with_breakdown("\"25 kV/mm\""), Path::new("s.toml")).unwrap();
+    assert_eq!(s.breakdown.unwrap().std_error, None);
+    let none = with_breakdown("\"1 V/um\"").replace("breakdown = \"1 V/um\"\n", "");
+    assert!(Scene::parse(&none, Path::new("s.toml"))
+        .unwrap()
+        .breakdown
+        .is_none());
+}
+
+/// A fitted breakdown is α carried by the weakest-link law from the specimens' area
+/// to the whole film under field — all nd layers of a stack (nd·π·r0²), every
+/// element of a helix (Np·Ne·A_e) — and by a thickness exponent to the layer
+/// thickness; the notes say so, and a prestretch exponent without the scene's
+/// `prestretch` is said not to be applied.
+#[test]
+fn a_fitted_breakdown_is_scaled_to_the_film_under_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, fit: &dea_fit::material::file::BreakdownFit| {
+        std::fs::write(dir.path().join(name), serde_json::to_string(fit).unwrap()).unwrap()
+    };
+    let plain = breakdown_fit();
+    write("b.json", &plain);
+    let s = Scene::parse(
+        &with_breakdown("{ fit = \"b.json\" }"),
+        &dir.path().join("s.toml"),
+    )
+    .unwrap();
+    let b = s.breakdown.expect("fitted");
+    let area = 10.0 * std::f64::consts::PI * 2.25e-3f64.powi(2);
+    let want = 30e6 * (1e-4 / area).powf(0.1);
+    // One pow: 1e-12 relative.
+    assert!(
+        (b.field / want - 1.0).abs() < 1e-12,
+        "{} vs {want}",
+        b.field
+    );
+    assert!(b.std_error.is_some_and(|e| e > 0.0));
+    assert!(b.law.is_some());
+    assert!(
+        b.notes[0].contains(&format!("× {:.3}", (1e-4 / area).powf(0.1))),
+        "{:?}",
+        b.notes
+    );
+    assert!(s.files.iter().any(|f| f.ends_with("b.json")));
+
+    // A helix: the film is every element's electrode area (Eq. 4.12 at λ = 1).
+    let helix = std::fs::read_to_string(repo().join("datasets/scenes/hdea_step_10N.toml"))
+        .unwrap()
+        .replace(
+            "breakdown = \"25 V/um\"",
+            "breakdown = { fit = \"b.json\" }",
+        );
+    let h = Scene::parse(&helix, &dir.path().join("h.toml")).unwrap();
+    let a = h.actuator.film_area();
+    assert!(a > 100.0 * std::f64::consts::PI * (0.03f64.powi(2) - 0.01f64.powi(2)) * 0.99);
+    let hb = h.breakdown.unwrap();
+    assert!((hb.field / (30e6 * (1e-4 / a).powf(0.1)) - 1.0).abs() < 1e-12);
+
+    // Covariates: thickness applied (500 µm against the fit's 100 µm), prestretch
+    // not applied without the scene's prestretch, applied with it.
+    let mut cov = breakdown_fit();
+    cov.parameters
+        .push(dea_fit::material::file::BreakdownParameter {
+            name: "thickness_exponent".into(),
+            unit: "1".into(),
+            value: -0.4,
+            std_error: Some(0.05),
+            ci95: None,
+        });
+    cov.parameters
+        .push(dea_fit::material::file::BreakdownParameter {
+            name: "prestretch_exponent".into(),
+            unit: "1".into(),
+            value: 0.5,
+            std_error: Some(0.05),
+            ci95: None,
+        });
+    cov.correlation = Vec::new();
+    cov.reference_thickness = Some(100e-6);
+    cov.reference_prestretch = Some(3.0);
+    write("c.json", &cov);
+    let s = Scene::parse(
+        &with_breakdown("{ fit = \"c.json\" }"),
+        &dir.path().join("s.toml"),
+    )
+    .unwrap();
+    let b = s.breakdown.unwrap();
+    assert!((b.field / (want * 5f64.powf(-0.4)) - 1.0).abs() < 1e-12);
+    assert!(
+        b.notes
+            .iter()
+            .any(|n| n.contains("prestretch_exponent not applied")),
+        "{:?}",
+        b.notes
+    );
+    let s = Scene::parse(
+        &with_breakdown("{ fit = \"c.json\", prestretch = 4 }"),
+        &dir.path().join("s.toml"),
+    )
+    .unwrap();
+    let b4 = s.breakdown.unwrap();
+    assert!((b4.field / (b.field * (4.0f64 / 3.0).powf(0.5)) - 1.0).abs() < 1e-12);
+}

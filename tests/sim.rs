@@ -1069,3 +1069,44 @@ fn an_actuator_without_moving_mass_runs_quasi_static_or_is_refused() {
     assert!(err.contains("no moving mass"), "{err}");
     assert!(err.contains("effective_mass_fraction"), "{err}");
 }
+
+/// The largest field of a run comes from the whole integration, not only from the
+/// output samples: a 2 ms voltage pulse (0 → 20 kV → 0, ramps) between output
+/// samples 10 ms apart peaks at 1 ms at E = V/(H·λ) ≥ 20 V/µm, while every sample
+/// sees 0 V; checked against a stated 15 V/µm it is beyond breakdown.
+#[test]
+fn the_largest_field_includes_a_peak_between_output_samples() {
+    let s = scene(
+        &nh_layer(
+            "{ nv = \"1000 Pa s\" }",
+            "[[input]]\nkind = \"ramp\"\nstart = \"0 s\"\nend = \"1 ms\"\nto = \"20 kV\"\n\
+         [[input]]\nkind = \"ramp\"\nstart = \"1 ms\"\nend = \"2 ms\"\nto = \"-20 kV\"",
+            "span = \"100 ms\"\nsamples = 10",
+        )
+        .replace(
+            "density = \"1000 kg/m3\"",
+            "density = \"1000 kg/m3\"\nbreakdown = \"15 V/um\"",
+        ),
+    );
+    let o = simulate(&s, &RunOptions::default()).unwrap();
+    assert_eq!(o.integrator.status, RunStatus::Completed);
+    let peak = o.peak_field;
+    // Nominal 20 kV / 1 mm = 20 V/µm; the layer is thinner under field, so the true
+    // field is above it (no tolerance needed: λ ≤ 1 without a load).
+    assert!(peak.field >= 20e6, "{peak:?}");
+    assert_eq!(
+        peak.voltage_v, 20e3,
+        "at the pulse's top, a kink the steps land on"
+    );
+    assert!((peak.time_s.unwrap() - 1e-3).abs() < 1e-9, "{peak:?}");
+    // E = V/(H·λ) at the recorded state (1e-12: one division).
+    assert!((peak.field / (20e3 / (1e-3 * peak.stretch)) - 1.0).abs() < 1e-12);
+    // Every output sample is at 0 V: the samples alone would miss the pulse.
+    assert_eq!(
+        o.peak_field_sampled.field, 0.0,
+        "{:?}",
+        o.peak_field_sampled
+    );
+    let c = dea_fit::sim::breakdown::check(s.breakdown.as_ref(), peak, "the largest field");
+    assert!(c.exceeded && c.margin.unwrap() < -0.3, "{}", c.message);
+}

@@ -1,10 +1,12 @@
 //! `dea-fit simulate`: run a scene; trajectory CSV, charts and summary.
 //!
-//! Status: `completed` (the whole span, every state and output finite), `pull_in`
-//! (stopped at pull-in: a result; exit 1 under `--strict`), `failed` (integrator
-//! failure, step budget, non-finite state or output, with the time: no result past
-//! it, exit 1 whatever `--strict` says; the partial trajectory is still written for
-//! diagnosis).
+//! Status: `completed` (the whole span, every state and output finite), `breakdown`
+//! (the largest true field in a layer over the run reaches the scene's breakdown
+//! field: a result; exit 1 under `--strict`), `pull_in` (stopped at pull-in below
+//! breakdown: a result; exit 1 under `--strict`), `failed` (integrator failure, step
+//! budget, non-finite state or output, with the time: no result past it, exit 1
+//! whatever `--strict` says; the partial trajectory is still written for
+//! diagnosis). The run's own status stays in `integrator.status`.
 //!
 //! The trajectory is streamed to its CSV as the run reaches each sample (memory
 //! does not grow with the sample count); the file appears when complete. The
@@ -13,7 +15,7 @@
 
 use dea_fit::io::write::AtomicFile;
 use dea_fit::report::simulation::{self, TrajectoryCsv};
-use dea_fit::sim::{self, integrate::Method, scene::Scene, RunOptions, RunStatus};
+use dea_fit::sim::{self, breakdown, integrate::Method, scene::Scene, RunOptions, RunStatus};
 use dea_fit::{Error, Result};
 use std::path::PathBuf;
 
@@ -47,7 +49,8 @@ pub struct Args {
     /// Do not write the report (charts, index.md) nor, without --out, the trajectory.
     #[arg(long)]
     no_report: bool,
-    /// Exit with status 1 at pull-in too (a failed run always exits 1).
+    /// Exit with status 1 at pull-in or beyond breakdown too (a failed run always
+    /// exits 1).
     #[arg(long)]
     strict: bool,
 }
@@ -118,13 +121,40 @@ pub fn run(a: Args) -> Result<i32> {
             None => file.commit()?,
         }
     }
+    let check = breakdown::check(
+        scene.breakdown.as_ref(),
+        o.peak_field,
+        "the largest true field E = V/h(λ) over the run (every accepted step)",
+    );
+    // A film that breaks down ends the run whatever came after (a pull-in too).
+    let status = match (o.integrator.status, check.exceeded) {
+        (RunStatus::Failed, _) => "failed".to_string(),
+        (_, true) => "breakdown".to_string(),
+        (s, false) => s.to_string(),
+    };
     let page = (!a.no_report)
-        .then(|| simulation::write(&o, &a.scene.display().to_string(), &dir))
+        .then(|| simulation::write(&o, &a.scene.display().to_string(), &dir, &status, &check))
         .transpose()?;
     let last = o.samples.last().copied();
     let summary = serde_json::json!({
         "scene": o.scene,
-        "status": o.integrator.status,
+        "status": status,
+        "breakdown": serde_json::json!({
+            "checked": check.checked,
+            "field_max_V_per_m": check.peak.field,
+            "at": check.peak,
+            "taken_over": "every accepted step of the integration and every output sample",
+            "field_max_at_samples_V_per_m": o.peak_field_sampled.field,
+            "breakdown_V_per_m": check.breakdown,
+            "breakdown_std_error_V_per_m": check.std_error,
+            "origin": check.origin,
+            "source": check.source,
+            "notes": check.notes,
+            "margin": check.margin,
+            "probability": check.probability,
+            "exceeded": check.exceeded,
+            "message": check.message,
+        }),
         "events": o.events,
         "fidelity": o.fidelity,
         "axial_mode": o.mode,
@@ -166,7 +196,12 @@ pub fn run(a: Args) -> Result<i32> {
                     .to_string())
         );
         print!("{}", dea_fit::report::format::fit_width(&head));
-        println!("status: {}", o.integrator.status);
+        let mut said = format!("{}\n", check.message);
+        for n in &check.notes {
+            said.push_str(&format!("note: {n}\n"));
+        }
+        print!("{}", dea_fit::report::format::fit_width(&said));
+        println!("status: {status}");
         for w in &o.warnings {
             print!(
                 "{}",
@@ -177,9 +212,9 @@ pub fn run(a: Args) -> Result<i32> {
             println!("report: {}", p.display());
         }
     }
-    Ok(match o.integrator.status {
-        RunStatus::Completed => 0,
-        RunStatus::PullIn => i32::from(a.strict),
-        RunStatus::Failed => 1,
+    Ok(match status.as_str() {
+        "completed" => 0,
+        "failed" => 1,
+        _ => i32::from(a.strict),
     })
 }

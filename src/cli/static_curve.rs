@@ -1,14 +1,20 @@
 //! `dea-fit static`: static voltage–stretch curve of a scene's actuator and its peak.
 //!
 //! Status: `ok` (the curve and its peak, or no peak down to `--stretch-min`, and the
-//! scene's input stays below any pull-in), `pull_in` (the scene's largest input
-//! voltage reaches the pull-in voltage: exit 1 under `--strict`), `failed` (the
-//! search could not look: exit 1). Text output: that line, the curve's shape as a
-//! table, the status; `--out` writes the whole curve as CSV; the report (unless
-//! `--no-report`) holds the voltage–stretch chart with the pull-in and the table.
+//! scene's input stays below any pull-in and below breakdown), `breakdown` (the
+//! true field under the scene's largest input reaches the scene's breakdown field
+//! on the stable branch: exit 1 under `--strict`), `pull_in` (the scene's largest
+//! input voltage reaches the pull-in voltage first: exit 1 under `--strict`),
+//! `failed` (the search could not look: exit 1). Text output: that line, which of
+//! breakdown and pull-in comes first, the field against breakdown (or that none was
+//! checked), the curve's shape as a table (with the breakdown voltage
+//! V_b(λ) = Eb·h(λ)), the status; `--out` writes the whole curve as CSV; the report
+//! (unless `--no-report`) holds the voltage–stretch chart with the pull-in, the
+//! breakdown curve and the table.
 
-use dea_fit::report::static_curve as static_report;
-use dea_fit::sim::static_curve::{self, Search};
+use dea_fit::report::static_curve::{self as static_report, BreakdownLine};
+use dea_fit::sim::breakdown::{self, v_per_um, FieldPeak};
+use dea_fit::sim::static_curve::{self, Point, Search};
 use dea_fit::sim::{full_plant, scene::Scene};
 use dea_fit::{Error, Result};
 use std::path::PathBuf;
@@ -18,7 +24,8 @@ use std::path::PathBuf;
 pub struct Args {
     /// Scene file.
     scene: PathBuf,
-    /// Print JSON (`status`, `message`, `search`, `curve`, `pull_in`, `curve_file`).
+    /// Print JSON (`status`, `message`, `search`, `curve`, `pull_in`, `breakdown`,
+    /// `curve_file`).
     #[arg(long)]
     json: bool,
     /// Write the whole curve as CSV (`voltage_V,stretch,capacitance_F`); a different
@@ -37,7 +44,8 @@ pub struct Args {
     /// Do not write the report (chart, shape table, index.md, index.html).
     #[arg(long)]
     no_report: bool,
-    /// Exit with status 1 when the scene's input reaches the pull-in voltage.
+    /// Exit with status 1 when the scene's input reaches the pull-in voltage or
+    /// drives the film beyond breakdown.
     #[arg(long)]
     strict: bool,
 }
@@ -92,6 +100,8 @@ pub fn run(a: Args) -> Result<i32> {
             ),
         ),
     };
+    let (status, order, check, bd) = against_breakdown(&scene, &p, &c, v_in, status);
+    let bline = line_of(&scene, bd);
     let dir = (!a.no_report).then(|| {
         a.report
             .clone()
@@ -112,6 +122,9 @@ pub fn run(a: Args) -> Result<i32> {
                 status,
                 message: &line,
                 input_peak_v: v_in,
+                breakdown: bline.as_ref(),
+                check: &check,
+                order: order.as_deref(),
             };
             Some(static_report::write(&outcome, &dir)?)
         }
@@ -120,6 +133,15 @@ pub fn run(a: Args) -> Result<i32> {
         let mut v = serde_json::to_value(&c).expect("serialisable");
         v["status"] = status.into();
         v["message"] = line.clone().into();
+        let mut b = serde_json::to_value(&check).expect("serialisable");
+        b["first"] = match (&bd, c.pull_in, check.checked) {
+            (Some(_), _, _) => "breakdown".into(),
+            (None, Some(_), true) => "pull_in".into(),
+            _ => serde_json::Value::Null,
+        };
+        b["point"] = serde_json::to_value(bd).expect("serialisable");
+        b["order"] = order.clone().into();
+        v["breakdown"] = b;
         v["curve_file"] = a.out.as_ref().map(|o| o.display().to_string()).into();
         v["report"] = page.as_ref().map(|p| p.display().to_string()).into();
         println!(
@@ -131,7 +153,16 @@ pub fn run(a: Args) -> Result<i32> {
             "{}",
             dea_fit::report::format::fit_width(&format!("{}: {line}\n", scene.name))
         );
-        print!("{}", static_report::shape_table(&c));
+        let mut said = String::new();
+        if let Some(o) = &order {
+            said.push_str(&format!("{o}\n"));
+        }
+        said.push_str(&format!("{}\n", check.message));
+        for n in &check.notes {
+            said.push_str(&format!("note: {n}\n"));
+        }
+        print!("{}", dea_fit::report::format::fit_width(&said));
+        print!("{}", static_report::shape_table(&c, bline.as_ref()));
         if let Some(out) = &a.out {
             println!("curve: {}", out.display());
         }
@@ -142,7 +173,117 @@ pub fn run(a: Args) -> Result<i32> {
     }
     Ok(match status {
         "failed" => 1,
-        "pull_in" => i32::from(a.strict),
+        "pull_in" | "breakdown" => i32::from(a.strict),
         _ => 0,
     })
+}
+
+/// The breakdown line of the scene's actuator, where the scene states breakdown.
+fn line_of(scene: &Scene, point: Option<Point>) -> Option<BreakdownLine<'_>> {
+    scene.breakdown.as_ref().map(|s| BreakdownLine {
+        actuator: &scene.actuator,
+        field: s.field,
+        point,
+    })
+}
+
+/// The static curve against the scene's breakdown field: the status (`breakdown`
+/// when the field under the scene's largest input `v_in` reaches Eb, else
+/// `status`), which of breakdown and pull-in comes first on the way up (in words),
+/// the check of the largest field under the input, and the point where the curve's
+/// field reaches Eb on the stable branch.
+fn against_breakdown(
+    scene: &Scene,
+    p: &dea_fit::sim::plant::Plant,
+    c: &static_curve::StaticCurve,
+    v_in: f64,
+    status: &'static str,
+) -> (
+    &'static str,
+    Option<String>,
+    breakdown::Check,
+    Option<Point>,
+) {
+    let a = &scene.actuator;
+    let bottom = c.pull_in.map_or(c.stretch_min, |q| q.stretch);
+    // The field under the input: at its static equilibrium on the stable branch,
+    // or, past the pull-in (no equilibrium), at least the pull-in's.
+    let below = c.pull_in.is_none_or(|q| v_in < q.voltage_v);
+    let (peak, what) = match (below, p.static_stretch(v_in, p.lam0)) {
+        (true, Ok(l)) if l >= bottom => (
+            FieldPeak {
+                field: a.field(v_in, l),
+                voltage_v: v_in,
+                stretch: l,
+                time_s: None,
+            },
+            format!(
+                "the true field E = V/h(λ) under the scene's largest input ({v_in:.1} V, stretch {l:.6})"
+            ),
+        ),
+        _ => {
+            let q = c.pull_in.unwrap_or(Point {
+                stretch: bottom,
+                voltage_v: static_curve::voltage_at(p, bottom).unwrap_or(0.0),
+                capacitance_f: 0.0,
+            });
+            (
+                FieldPeak {
+                    field: a.field(q.voltage_v, q.stretch),
+                    voltage_v: q.voltage_v,
+                    stretch: q.stretch,
+                    time_s: None,
+                },
+                format!(
+                    "the scene's input ({v_in:.1} V) has no static equilibrium; the true field E = V/h(λ) at the end of the stable branch (stretch {:.6}, a lower bound)",
+                    q.stretch
+                ),
+            )
+        }
+    };
+    let check = breakdown::check(scene.breakdown.as_ref(), peak, &what);
+    let Some(eb) = scene.breakdown.as_ref().map(|s| s.field) else {
+        return (status, None, check, None);
+    };
+    let bd = static_curve::breakdown_point(p, c, eb);
+    let order = match (bd, c.pull_in, c.search) {
+        (_, _, Search::Undetermined) => None,
+        (Some(b), Some(q), _) => Some(format!(
+            "breakdown comes first: the field reaches Eb = {} at {:.1} V (stretch {:.6}), below the pull-in at {:.1} V, where it would be {}",
+            v_per_um(eb),
+            b.voltage_v,
+            b.stretch,
+            q.voltage_v,
+            v_per_um(a.field(q.voltage_v, q.stretch))
+        )),
+        (Some(b), None, _) => Some(format!(
+            "breakdown comes first: the field reaches Eb = {} at {:.1} V (stretch {:.6}); no pull-in down to stretch {}",
+            v_per_um(eb),
+            b.voltage_v,
+            b.stretch,
+            c.stretch_min
+        )),
+        (None, Some(q), _) => Some(format!(
+            "pull-in comes first: at the pull-in ({:.1} V, stretch {:.6}) the field is {}, below Eb = {}",
+            q.voltage_v,
+            q.stretch,
+            v_per_um(a.field(q.voltage_v, q.stretch)),
+            v_per_um(eb)
+        )),
+        (None, None, _) => Some(format!(
+            "neither breakdown nor pull-in down to stretch {}: the field there is {}, below Eb = {}",
+            c.stretch_min,
+            v_per_um(a.field(
+                static_curve::voltage_at(p, c.stretch_min).unwrap_or(0.0),
+                c.stretch_min
+            )),
+            v_per_um(eb)
+        )),
+    };
+    let status = match (status, check.exceeded) {
+        ("failed", _) => "failed",
+        (_, true) => "breakdown",
+        (s, false) => s,
+    };
+    (status, order, check, bd)
 }

@@ -2,7 +2,7 @@
 //! and a Markdown summary; and the trajectory CSV.
 
 use super::format::si;
-use super::page::{code, strong, text, Page};
+use super::page::{code, strong, text, Page, Tone};
 use super::plot::{band, Chart, Series, Style};
 use super::runs::Run;
 use crate::error::Result;
@@ -202,7 +202,15 @@ fn trace(
 /// Write `stroke.svg`, `voltage.svg`, `power.svg` (and `sensitivities.svg`) and the
 /// page (`index.md`, `index.html`, `run.json`) into `dir`; `input` names the scene
 /// file. Returns the HTML page.
-pub fn write(o: &Outcome, input: &str, dir: &Path) -> Result<PathBuf> {
+/// `status` is the command's (the run's, or `breakdown`); `check` the largest
+/// field against breakdown.
+pub fn write(
+    o: &Outcome,
+    input: &str,
+    dir: &Path,
+    status: &str,
+    check: &crate::sim::breakdown::Check,
+) -> Result<PathBuf> {
     let pts = |f: &dyn Fn(&crate::sim::Sample) -> f64| -> Vec<(f64, f64)> {
         o.samples.iter().map(|s| (s.time_s, f(s))).collect()
     };
@@ -274,7 +282,7 @@ pub fn write(o: &Outcome, input: &str, dir: &Path) -> Result<PathBuf> {
     let x = o.extremes();
     let mut page = Page::new(format!("Simulation: {}", o.scene));
     page.para(vec![text("Scene: "), code(input)]);
-    page.status_line(o.integrator.status, o.integrator.status);
+    page.status_line(status, Tone::of(status));
     let mut facts = vec![vec![
         text("fidelity: "),
         strong(o.fidelity.model.to_string()),
@@ -310,6 +318,10 @@ pub fn write(o: &Outcome, input: &str, dir: &Path) -> Result<PathBuf> {
         si(x.power_max_w, "W"),
         si(x.leakage_max_w, "W")
     ))]);
+    facts.push(vec![text(check.message.clone())]);
+    for n in &check.notes {
+        facts.push(vec![text(format!("breakdown strength: {n}"))]);
+    }
     for e in &o.events {
         facts.push(vec![
             strong(e.kind.to_string()),
@@ -400,6 +412,10 @@ pub fn write(o: &Outcome, input: &str, dir: &Path) -> Result<PathBuf> {
         format!("max stroke {}", si(o.rest_length_m - shortest, "m")),
         format!("max power {}", si(x.power_max_w, "W")),
         format!("{} event(s)", o.events.len()),
+        match check.margin {
+            Some(m) => format!("breakdown margin {:.0} %", 100.0 * m),
+            None => "breakdown not checked".into(),
+        },
     ]);
     page.write(dir, "index", run)
 }

@@ -9,6 +9,7 @@
 //! [`simulate`] is a pure function of the scene: identification can run many scenes
 //! in parallel (rayon) and re-run one with changed `scene.material.params`.
 
+pub mod breakdown;
 pub mod budget;
 pub mod derivatives;
 pub mod fidelity;
@@ -176,6 +177,14 @@ pub struct Outcome {
     /// Extremes over every sample.
     #[serde(skip)]
     extremes: Extremes,
+    /// The largest true field in a layer, E = V/h(λ) (`Actuator::field`), over
+    /// every output sample and every accepted step of the integration: a peak
+    /// between samples is in it.
+    #[serde(skip)]
+    pub peak_field: breakdown::FieldPeak,
+    /// The same over the output samples only (what a trajectory shows).
+    #[serde(skip)]
+    pub peak_field_sampled: breakdown::FieldPeak,
     /// Forward sensitivities at the samples, if asked for ([`RunOptions::sensitivities`]).
     #[serde(skip)]
     pub sensitivities: Option<Sensitivities>,
@@ -698,6 +707,10 @@ struct Recorder<'s, 'k> {
 /// What a [`Recorder`] gathered over every sample.
 struct Recorded {
     extremes: Extremes,
+    /// The largest field over the samples ([`Outcome::peak_field_sampled`]).
+    field: breakdown::FieldPeak,
+    /// The largest field over the samples and accepted steps ([`Outcome::peak_field`]).
+    field_steps: breakdown::FieldPeak,
     /// Σ (contraction − reference)², the reference's range (closed loop).
     tracking: (f64, f64, f64),
     first_bad: Option<Sample>,
@@ -736,6 +749,7 @@ impl Recorder<'_, '_> {
         e.current_max_a = e.current_max_a.max(x.current_a.abs());
         e.power_max_w = e.power_max_w.max(x.power_w);
         e.leakage_max_w = e.leakage_max_w.max(x.leakage_w);
+        d.field.widen(&p.actuator, Some(t), x.voltage_v, x.stretch);
         if p.control.is_some() {
             let (ss, lo, hi) = &mut d.tracking;
             *ss += (1.0 - x.length_m / self.rest_length_m - x.reference).powi(2);
@@ -804,6 +818,9 @@ fn integrate<'s, 'k>(
     let mut y = p.initial_state();
     let mut stats = Stats::default();
     let wants_steps = env.as_ref().is_some_and(|e| e.wants_steps());
+    // A run with a report (an envelope) also keeps the largest field at every
+    // accepted step; a bare trajectory (identification's inner loop) does not.
+    let track_field = env.is_some();
     let kept = (scene.time.samples.len() + 2).div_ceil(every) + 1;
     let mut rec = Recorder {
         every,
@@ -825,6 +842,8 @@ fn integrate<'s, 'k>(
                 leakage_max_w: 0.0,
             },
             tracking: (0.0, f64::INFINITY, f64::NEG_INFINITY),
+            field: breakdown::FieldPeak::NONE,
+            field_steps: breakdown::FieldPeak::NONE,
             first_bad: None,
             envelope: (None, None),
             sink_error: None,
@@ -861,8 +880,14 @@ fn integrate<'s, 'k>(
     let last_sample = std::cell::Cell::new(0.0);
     // The end of the last accepted step (where auto's BDF hands over).
     let last_step = std::cell::Cell::new(0.0);
+    let step_field = std::cell::Cell::new(breakdown::FieldPeak::NONE);
     let mut step = |t: f64, y: &[f64]| {
         last_step.set(t);
+        if track_field {
+            let mut f = step_field.get();
+            f.widen(&p.actuator, Some(t), p.voltage(t, y), y[0]);
+            step_field.set(f);
+        }
         if wants_steps && t > last_sample.get() {
             // a sample's length, current and power (see `sample`)
             let e = p.output(t, y);
@@ -983,7 +1008,11 @@ fn integrate<'s, 'k>(
             (RunStatus::Failed, why, t, Vec::new())
         }
     };
-    let (samples, sens, count, record) = rec.finish();
+    let (samples, sens, count, mut record) = rec.finish();
+    record.field_steps = match step_field.get() {
+        f if f.field > record.field.field => f,
+        _ => record.field,
+    };
     // A finite state can still give a non-finite output (a stretch outside the
     // model's domain): such a run has no result either.
     let (status, message) = match &record.first_bad {
@@ -1061,6 +1090,8 @@ fn summarise(scene: &Scene, run: Prepared, ran: Integrated) -> Outcome {
         decimation: ran.decimation,
         envelope,
         extremes: x,
+        peak_field: rec.field_steps,
+        peak_field_sampled: rec.field,
         sensitivities: tr.sensitivities,
     }
 }

@@ -7,6 +7,7 @@ use super::input::{Term, Waveform};
 use super::integrate::Method;
 use super::presets;
 use crate::error::{Error, Location, Result};
+use crate::material::breakdown::Strength;
 use crate::material::check::{did_you_mean, Domain, Violation, MASS_FRACTION};
 use crate::material::dielectric::MixingRule;
 use crate::material::file::{
@@ -14,7 +15,7 @@ use crate::material::file::{
     IdentifiedMaterial, Viscous,
 };
 use crate::material::hyperelastic::{ModelSpec, OgdenForm, StrainEnergy, MODEL_NAMES};
-use crate::units::{parse_quantity, Dimension};
+use crate::units::{parse_quantity, parse_uncertain, Dimension};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -202,6 +203,10 @@ pub struct Scene {
     /// composite files, tables), in the order read: what a hash of its inputs
     /// must cover (the design hash of `dea-fit rank`).
     pub files: Vec<PathBuf>,
+    /// The film's breakdown strength (`material.breakdown`), stated or from a
+    /// breakdown fit scaled to the film under field ([`Actuator::film_area`]); None:
+    /// the scene states none and no field is checked.
+    pub breakdown: Option<Strength>,
 }
 
 /// The reader's context: the file, its text, and the byte offset of every key and
@@ -472,7 +477,9 @@ impl Scene {
                     .unwrap_or_else(|| "scene".into())
             });
         let actuator = read_actuator(&c, c.table(&root, "actuator")?)?;
-        let (material, actuator_mass) = read_material(&c, c.table(&root, "material")?, &dir)?;
+        let material_table = c.table(&root, "material")?;
+        let (material, actuator_mass) = read_material(&c, material_table, &dir)?;
+        let breakdown = read_breakdown(&c, material_table, &dir, &actuator)?;
         let load = read_load(&c, c.opt_table(&root, "load")?, actuator_mass)?;
         let source = read_source(&c, c.opt_table(&root, "source")?)?;
         let time = read_time(&c, c.table(&root, "time")?)?;
@@ -507,6 +514,7 @@ impl Scene {
             control,
             time,
             files: c.files.take(),
+            breakdown,
         };
         budget::validate(&scene).map_err(|v| c.violation(v))?;
         budget::rest_state(&scene).map_err(|v| c.violation(v))?;
@@ -768,6 +776,74 @@ fn read_permittivity(
     Ok((comp.eps_r(), Some(comp)))
 }
 
+/// `material.breakdown`: a stated field (`"25 V/um"`, `"25 ± 2 V/um"`, or a bare
+/// number in V/m), or a breakdown fit (`{ fit = "fits/x-breakdown.json" }`, relative
+/// to the scene, with the film's `prestretch` when the fit has that covariate)
+/// carried by [`crate::material::file::BreakdownFit::strength`] to the film under
+/// field ([`Actuator::film_area`]) and to its thickness as built (the gap h(1)).
+fn read_breakdown(
+    c: &Ctx,
+    t: &toml::Table,
+    dir: &Path,
+    actuator: &Actuator,
+) -> Result<Option<Strength>> {
+    let key = "material.breakdown";
+    let hint = "e.g. breakdown = \"25 ± 2 V/um\" (value ± one standard uncertainty), or { fit = \"fits/x-breakdown.json\" } from dea-fit breakdown --out";
+    let plausible = |k: &str, v: f64| {
+        crate::rank::manifest::BREAKDOWN
+            .check(k, v)
+            .map_err(|v| c.violation(v))
+    };
+    let source = || format!("{} {key}", c.loc(key));
+    match t.get("breakdown") {
+        None => Ok(None),
+        Some(toml::Value::String(s)) => {
+            let q = parse_uncertain(s, Dimension::ElectricField)
+                .map_err(|e| c.err(key, e).with_hint(hint))?;
+            plausible(key, q.value)?;
+            Ok(Some(Strength::stated(q.value, q.tolerance, source())))
+        }
+        Some(toml::Value::Float(_) | toml::Value::Integer(_)) => {
+            let v = c.number(t, "material", "breakdown")?.unwrap_or(f64::NAN);
+            plausible(key, v)?;
+            Ok(Some(Strength::stated(v, None, source())))
+        }
+        Some(toml::Value::Table(b)) => {
+            c.known(b, key, &["fit", "prestretch"])?;
+            let f = c
+                .string(b, key, "fit")?
+                .ok_or_else(|| c.err(&format!("{key}.fit"), "is missing").with_hint(hint))?;
+            let prestretch = c.number(b, key, "prestretch")?;
+            if let Some(p) = prestretch {
+                if !(1.0..=100.0).contains(&p) {
+                    return Err(c
+                        .err(
+                            &format!("{key}.prestretch"),
+                            format!("must be a stretch from 1 to 100, found {p}"),
+                        )
+                        .with_hint("the in-plane prestretch λp of the film as made (1: none)"));
+                }
+            }
+            let path = c.file_ref(dir, &format!("{key}.fit"), f)?;
+            let fit = file::read_breakdown(&path)?;
+            let s = fit.strength(
+                Some(actuator.film_area()),
+                Some(actuator.gap(1.0)),
+                prestretch,
+                &path.display().to_string(),
+            );
+            plausible(key, s.field)?;
+            Ok(Some(s))
+        }
+        Some(v) => Err(c
+            .err(
+                key,
+                format!("expected a field such as \"25 V/um\" or {{ fit = ... }}, found {v}"),
+            )
+            .with_hint(hint)),
+    }
+}
+
 fn read_material(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<(Material, Option<f64>)> {
     let s = "material";
     c.known(
@@ -781,6 +857,7 @@ fn read_material(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<(Material, Opti
             "density",
             "resistivity_ohm_m",
             "actuator_mass",
+            "breakdown",
         ],
     )?;
     let identified = read_identified(c, t, dir)?;

@@ -39,7 +39,7 @@ pub enum Search {
 /// The static curve and its peak.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct StaticCurve {
-    /// Points from the loaded rest state towards thinner layers.
+    /// Points from the loaded rest state (0 V) towards thinner layers.
     pub curve: Vec<Point>,
     /// What the search found.
     pub search: Search,
@@ -79,10 +79,14 @@ pub fn static_curve(p: &Plant, n: usize, stretch_min: f64) -> StaticCurve {
     let grid: Vec<f64> = (0..n)
         .map(|i| lam0 + (stretch_min - lam0) * i as f64 / (n - 1) as f64)
         .collect();
+    // The rest state is the equilibrium at 0 V by definition (the formula's
+    // rounding there can fall just below zero and drop it).
     let curve: Vec<Point> = grid
         .iter()
-        .filter_map(|&l| {
-            voltage_at(p, l).map(|v| Point {
+        .enumerate()
+        .filter_map(|(i, &l)| {
+            let v = if i == 0 { Some(0.0) } else { voltage_at(p, l) };
+            v.map(|v| Point {
                 stretch: l,
                 voltage_v: v,
                 capacitance_f: p.capacitance(l).0,
@@ -138,4 +142,45 @@ pub fn static_curve(p: &Plant, n: usize, stretch_min: f64) -> StaticCurve {
         pull_in,
         stretch_min,
     }
+}
+
+/// The point of the stable branch (from the rest state, where the field is zero,
+/// down to the pull-in, or to the smallest stretch examined without one) where
+/// the true field E = V(λ)/h(λ) (`Actuator::field`) reaches `eb`: there the static
+/// voltage meets the breakdown voltage V_b(λ) = Eb·h(λ). The first curve point at or
+/// above it, refined by bisection to 1e-12 in λ (the field rises along the branch:
+/// V rises and h falls). None: the field stays below `eb` on the whole branch.
+pub fn breakdown_point(p: &Plant, c: &StaticCurve, eb: f64) -> Option<Point> {
+    let bottom = c.pull_in.map_or(c.stretch_min, |q| q.stretch);
+    let field = |l: f64| voltage_at(p, l).map_or(0.0, |v| p.actuator.field(v, l));
+    let lams: Vec<f64> = c
+        .curve
+        .iter()
+        .map(|q| q.stretch)
+        .filter(|&l| l > bottom)
+        .chain([bottom])
+        .collect();
+    let i = lams.iter().position(|&l| field(l) >= eb)?;
+    let l = match i {
+        0 => lams[0],
+        _ => {
+            let (mut hi, mut lo) = (lams[i - 1], lams[i]);
+            for _ in 0..60 {
+                if hi - lo <= 1e-12 {
+                    break;
+                }
+                let mid = 0.5 * (hi + lo);
+                match field(mid) >= eb {
+                    true => lo = mid,
+                    false => hi = mid,
+                }
+            }
+            lo
+        }
+    };
+    Some(Point {
+        stretch: l,
+        voltage_v: voltage_at(p, l).unwrap_or(0.0),
+        capacitance_f: p.capacitance(l).0,
+    })
 }

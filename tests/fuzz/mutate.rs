@@ -257,9 +257,9 @@ fn typo(k: &str, rng: &mut ChaCha8Rng) -> String {
     c.into_iter().collect()
 }
 
-const UNITS: [&str; 16] = [
+const UNITS: [&str; 17] = [
     "um", "mm", "m", "kV", "V", "s", "ms", "Hz", "kg", "N", "%", "kPa", "kg/m3", "g/cm3", "",
-    "furlong",
+    "furlong", "V/um",
 ];
 const KINDS: [&str; 9] = [
     "stack", "helix", "step", "ramp", "triangle", "sine", "csv", "pid", "free",

@@ -22,7 +22,7 @@
 //!   composite held at the matrix's value — both with a warning.
 //! * **Density**: φρf + (1 − φ)ρm.
 //!
-//! Standard errors ([`Candidate::one_sigma`]) come from the fit files and from
+//! Standard errors (carried to the figures by [`Candidate::shifts`]) come from the fit files and from
 //! values written in the manifest as `value ± σ` (a value written without ± is
 //! taken as exact), to first order (GUM, JCGM 100:2008):
 //! * εr of a composite fit's rule from its εm, εf (and n) with their correlation;
@@ -147,40 +147,68 @@ pub struct Candidate {
     pub warnings: Vec<String>,
 }
 
+/// A property of a candidate moved by ±1σ ([`Candidate::shifts`]).
+#[derive(Debug, Clone)]
+pub struct Shift {
+    /// The property: `Y` or `εr` (`Eb` too, which enters the state, the limits
+    /// and, under `breakdown_fraction`, the drive).
+    pub what: &'static str,
+    /// The candidate with the property 1σ higher.
+    pub up: Candidate,
+    /// The candidate with the property 1σ lower; None where that is not
+    /// positive (σ ≥ the value: no first-order propagation holds).
+    pub down: Option<Candidate>,
+}
+
 impl Candidate {
-    /// The candidate with each property that has a standard error moved up by
-    /// 1σ, one at a time, named: `Y` (the hyperelastic and viscous parts scaled
-    /// together, the direction the stiffening rule moves them), `εr`, `Eb` and
-    /// `tan δ`. The figures' first-order standard errors follow from these
-    /// ([`super::sweep::run`]).
-    pub fn one_sigma(&self) -> Vec<(&'static str, Candidate)> {
-        let up = |f: &Figure| match (f.value, f.std_error) {
+    /// The candidate with each property that has a standard error and reaches the
+    /// simulator moved by ±1σ, one at a time, named: `Y` (the hyperelastic and
+    /// viscous parts scaled together, the direction the stiffening rule moves
+    /// them), `εr` and `Eb`. The figures' first-order standard errors follow from
+    /// these by central differences ([`super::figures::Evaluation::spread`]).
+    /// tan δ is not moved: it enters only the loss per cycle, linearly, whose
+    /// derivative is exact (and β, Fm are closed forms: [`super::figures::catalogue`]).
+    pub fn shifts(&self) -> Vec<Shift> {
+        let step = |f: &Figure| match (f.value, f.std_error) {
             (Some(v), Some(s)) if s > 0.0 && v.is_finite() => Some((v, s)),
             _ => None,
         };
         let mut out = Vec::new();
-        if let Some((y, s)) = up(&self.youngs_modulus) {
-            let x = 1.0 + s / y;
-            let mut c = self.clone();
-            c.hyperelastic = HyperelasticPart {
-                ranges: self.hyperelastic.ranges.clone(),
-                ..scaled(&self.hyperelastic, x)
+        if let Some((y, s)) = step(&self.youngs_modulus) {
+            let moved = |sign: f64| {
+                let x = 1.0 + sign * s / y;
+                let mut c = self.clone();
+                c.hyperelastic = HyperelasticPart {
+                    ranges: self.hyperelastic.ranges.clone(),
+                    ..scaled(&self.hyperelastic, x)
+                };
+                c.viscous = scaled_viscous(&self.viscous, x);
+                c.youngs_modulus.value = Some(y + sign * s);
+                c
             };
-            c.viscous = scaled_viscous(&self.viscous, x);
-            c.youngs_modulus.value = Some(y + s);
-            out.push(("Y", c));
+            out.push(Shift {
+                what: "Y",
+                up: moved(1.0),
+                down: (s < y).then(|| moved(-1.0)),
+            });
         }
         type Field = fn(&mut Candidate) -> &mut Figure;
-        let figures: [(&'static str, &Figure, Field); 3] = [
+        let figures: [(&'static str, &Figure, Field); 2] = [
             ("εr", &self.eps_r, |c| &mut c.eps_r),
             ("Eb", &self.breakdown, |c| &mut c.breakdown),
-            ("tan δ", &self.tan_delta, |c| &mut c.tan_delta),
         ];
-        for (name, figure, field) in figures {
-            if let Some((v, s)) = up(figure) {
-                let mut c = self.clone();
-                field(&mut c).value = Some(v + s);
-                out.push((name, c));
+        for (what, figure, field) in figures {
+            if let Some((v, s)) = step(figure) {
+                let moved = |x: f64| {
+                    let mut c = self.clone();
+                    field(&mut c).value = Some(x);
+                    c
+                };
+                out.push(Shift {
+                    what,
+                    up: moved(v + s),
+                    down: (s < v).then(|| moved(v - s)),
+                });
             }
         }
         out

@@ -508,7 +508,7 @@ pub fn check_evaluation(d: &Design, p: &Point, e: &Evaluated) -> std::result::Re
     same_figure("beta", &ev.beta, &beta)?;
     same_figure("fm", &ev.fm, &fm)?;
     // The candidate's warnings, then at most the one of the standard errors
-    // (`Evaluation::spread`: "<name>: with <property> 1σ higher the state is …").
+    // (`Evaluation::spread`: "<name>: with <property> 1σ higher|lower …").
     let spread = format!("{}: with ", c.name);
     let own = ev.warnings.starts_with(&c.warnings);
     let rest = ev.warnings.get(c.warnings.len()..).unwrap_or_default();
@@ -516,7 +516,7 @@ pub fn check_evaluation(d: &Design, p: &Point, e: &Evaluated) -> std::result::Re
         || rest.len() > 1
         || rest
             .iter()
-            .any(|w| !(w.starts_with(&spread) && w.contains(" 1σ higher the state is ")))
+            .any(|w| !(w.starts_with(&spread) && w.contains(" 1σ ")))
     {
         return Err("its warnings are not the candidate's".into());
     }

@@ -151,8 +151,8 @@ fn figures_match_hand_computation() {
     // The step settles (overdamped, rise time 1 ms): a 10–90 % time exists, a few ms.
     let t = value(&e.response_time);
     assert!(t > 1e-4 && t < 2e-2, "t10–90 {t}");
-    // Provenance: matrix numbers are the manifest's (measured), with their line.
-    assert_eq!(e.eps_r.provenance, dea_fit::rank::Provenance::Measured);
+    // Provenance: matrix numbers are the manifest's (stated), with their line.
+    assert_eq!(e.eps_r.provenance, dea_fit::rank::Provenance::Stated);
     assert!(
         e.eps_r.source.contains("design.toml:"),
         "{}",
@@ -347,7 +347,8 @@ fn falling_breakdown_field_moves_the_optimum_inside() {
     assert!(!best("falling").at_edge);
     assert!((best("falling").resolution.unwrap() - 0.025).abs() < 1e-12);
     assert!((best("held").loading - 0.3).abs() < 1e-12 && best("held").at_edge);
-    // Interpolated breakdown fields are predicted, measured ones measured.
+    // Interpolated breakdown fields are predicted, the ones written in the
+    // manifest stated.
     let at = |x: f64| {
         list.iter()
             .find(|e| e.series == "falling" && (e.loading - x).abs() < 1e-9)
@@ -355,7 +356,7 @@ fn falling_breakdown_field_moves_the_optimum_inside() {
     };
     assert_eq!(
         at(0.1).breakdown_field.provenance,
-        dea_fit::rank::Provenance::Measured
+        dea_fit::rank::Provenance::Stated
     );
     assert_eq!(
         at(0.05).breakdown_field.provenance,
@@ -551,7 +552,7 @@ fn shards_merge_into_the_single_run_byte_for_byte() {
     .unwrap();
     refused(
         &["rank", "merge", "s0.json", "junk.json"],
-        "expected \"dea-fit/rank-shard/2\"",
+        &format!("expected \"{}\"", dea_fit::rank::shard::SCHEMA),
     );
     // A shard is never written over a file that is not a shard.
     let o = run(w, &["rank", &design, "--shard", "0/3", "--out", "one.csv"]);

@@ -308,7 +308,7 @@ pub fn build(d: &Design, si: usize, loading: f64) -> Result<Candidate> {
         .collect();
     let eps_r = match measured_at(&s.measured, loading, |p| p.eps_r) {
         Some((u, src)) => {
-            Figure::new(u.value, "1", Provenance::Measured, src).with_std_error(u.std_error)
+            Figure::new(u.value, "1", Provenance::Stated, src).with_std_error(u.std_error)
         }
         None => {
             let (v, prov, src, sigma) = model(loading);
@@ -637,7 +637,7 @@ fn interpolated(
     .chain(
         s.measured
             .iter()
-            .filter_map(|p| get(p).map(|v| (p.loading, v, p.source.clone(), Provenance::Measured))),
+            .filter_map(|p| get(p).map(|v| (p.loading, v, p.source.clone(), Provenance::Stated))),
     )
     .collect();
     let xs: Vec<f64> = knots.iter().map(|k| k.0).collect();

@@ -30,6 +30,9 @@
 //!   sine at the drive frequency, π·C(λd)·(V/2)²·tan δ (the loss of its AC part of
 //!   amplitude V/2, with the capacitance at the drive: an upper bound, C grows with
 //!   the stroke).
+//! * **margins** at the operating point: to breakdown 1 − E/Eb, E = V/g(λd) the
+//!   true field at the static stroke; to pull-in 1 − V/V_pull-in. Below
+//!   [`SMALL_MARGIN`] the ranking warns.
 
 use super::candidate::Candidate;
 use super::manifest::{Design, Level};
@@ -52,6 +55,12 @@ pub const STRETCH_MIN: f64 = 0.3;
 pub const CURVE_POINTS: usize = 60;
 /// Points of the stroke–voltage curve kept for the report.
 pub const KEPT_POINTS: usize = 16;
+/// A margin to breakdown or to pull-in at the operating point below this (10 %)
+/// is a warning of the ranking: breakdown fields scatter by more (a Weibull β of
+/// 10 puts 10 % of specimens below 0.8α), and a drive within 10 % of pull-in
+/// sits on the flat top of the static curve, where a few % of modulus or
+/// thickness decide between a stroke and a collapse.
+pub const SMALL_MARGIN: f64 = 0.1;
 
 /// The state of a candidate at the drive voltage.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -169,13 +178,18 @@ pub struct Evaluation {
     pub energy_in: Figure,
     /// Dielectric loss per cycle.
     pub loss_per_cycle: Figure,
+    /// Margin to breakdown at the operating point, 1 − E/Eb (E the true field at
+    /// the static stroke; below [`SMALL_MARGIN`] a warning of the ranking).
+    pub breakdown_margin: Figure,
+    /// Margin to pull-in, 1 − V/V_pull-in (none without a pull-in).
+    pub pull_in_margin: Figure,
     /// Warnings of the candidate's properties.
     pub warnings: Vec<String>,
 }
 
 impl Evaluation {
     /// Every figure of the evaluation with its field name, in the order above.
-    pub fn figures_mut(&mut self) -> [(&'static str, &mut Figure); 13] {
+    pub fn figures_mut(&mut self) -> [(&'static str, &mut Figure); 15] {
         [
             ("voltage", &mut self.voltage),
             ("eps_r", &mut self.eps_r),
@@ -190,6 +204,8 @@ impl Evaluation {
             ("response_time", &mut self.response_time),
             ("energy_in", &mut self.energy_in),
             ("loss_per_cycle", &mut self.loss_per_cycle),
+            ("breakdown_margin", &mut self.breakdown_margin),
+            ("pull_in_margin", &mut self.pull_in_margin),
         ]
     }
 
@@ -263,7 +279,7 @@ impl Evaluation {
 /// The figures whose standard errors come from evaluations of the shifted
 /// candidate ([`Evaluation::spread`]): the others are the candidate's properties
 /// (their own σ) and the closed forms β and Fm ([`catalogue`]).
-const SIMULATED: [&str; 7] = [
+const SIMULATED: [&str; 9] = [
     "voltage",
     "static_stroke",
     "max_stroke",
@@ -271,6 +287,8 @@ const SIMULATED: [&str; 7] = [
     "response_time",
     "energy_in",
     "loss_per_cycle",
+    "breakdown_margin",
+    "pull_in_margin",
 ];
 
 /// An evaluation with its static stroke–voltage curve (for the report).
@@ -302,12 +320,14 @@ pub fn gap(a: &Actuator, lam: f64) -> f64 {
     }
 }
 
-/// The weakest provenance of several inputs (measured < fitted < predicted).
+/// The weakest provenance of several inputs (measured < fitted < stated <
+/// predicted: a typed value is an assertion, a prediction rests on typed ones).
 fn weakest(p: &[Provenance]) -> Provenance {
     let order = |x: &Provenance| match x {
         Provenance::Measured => 0,
         Provenance::Fitted => 1,
-        Provenance::Predicted => 2,
+        Provenance::Stated => 2,
+        Provenance::Predicted => 3,
     };
     *p.iter()
         .max_by_key(|x| order(x))
@@ -397,6 +417,8 @@ pub fn evaluate(
         response_time: Figure::none("s", Provenance::Predicted, &sim_src, "not evaluated"),
         energy_in: Figure::none("J", Provenance::Predicted, &sim_src, "not evaluated"),
         loss_per_cycle: Figure::none("J", Provenance::Predicted, &sim_src, "not evaluated"),
+        breakdown_margin: Figure::none("1", Provenance::Predicted, &sim_src, "not evaluated"),
+        pull_in_margin: Figure::none("1", Provenance::Predicted, &sim_src, "not evaluated"),
         warnings: c.warnings.clone(),
     };
     let mut scene = template.clone();
@@ -439,7 +461,7 @@ pub fn evaluate(
         Level::BreakdownFraction(f) => f * eb * gap(&a, lam0),
     };
     e.voltage = match level {
-        Level::Voltage(_) => Figure::new(vd, "V", Provenance::Measured, "drive voltage"),
+        Level::Voltage(_) => Figure::new(vd, "V", Provenance::Stated, "drive voltage"),
         Level::BreakdownFraction(f) => Figure::new(
             vd,
             "V",
@@ -528,6 +550,32 @@ pub fn evaluate(
             }
             other => format!("no static equilibrium at {}: {other}", si(vd, "V")),
         }),
+    };
+    // The margins at the operating point: 1 − V/V_pull-in, and 1 − E/Eb with E
+    // the true field at the static equilibrium (at or below 0: reached).
+    let margin_src = format!("static curve; {sim_src}");
+    e.pull_in_margin = match pull {
+        Some(q) => Figure::new(
+            1.0 - vd / q.voltage_v,
+            "1",
+            Provenance::Predicted,
+            format!("1 − V/V_pull-in; {margin_src}"),
+        ),
+        None => Figure::none(
+            "1",
+            Provenance::Predicted,
+            &margin_src,
+            format!("no pull-in down to stretch {STRETCH_MIN}"),
+        ),
+    };
+    e.breakdown_margin = match &lam_d {
+        Ok(l) => Figure::new(
+            1.0 - vd / gap(&a, *l) / eb,
+            "1",
+            Provenance::Predicted,
+            format!("1 − E/Eb, E = V/gap at the static stroke; {margin_src}"),
+        ),
+        Err(why) => Figure::none("1", Provenance::Predicted, &margin_src, why),
     };
     // Pulled in, or no equilibrium, or broken down at the static stroke: the
     // static and dynamic figures have no value, and the reason is the state's note.

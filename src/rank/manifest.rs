@@ -211,7 +211,8 @@ pub struct Stated<T> {
     /// or written in the manifest as `value ± σ`. None for a preset or a value
     /// written without ±, which the ranking's confidence takes as exact.
     pub std_error: Option<f64>,
-    /// Measured (written in the manifest), fitted (a fit file) or predicted.
+    /// Stated (written in the manifest or the scene), fitted (a fit file) or
+    /// predicted.
     pub provenance: Provenance,
     /// `manifest:line (note)` or the fit file.
     pub source: String,
@@ -572,7 +573,7 @@ impl Ctx<'_> {
                 ranges: None,
             },
             std_error,
-            provenance: Provenance::Measured,
+            provenance: Provenance::Stated,
             source: self.here(&span, note),
         })
     }
@@ -678,7 +679,7 @@ impl Ctx<'_> {
                 arms,
             },
             std_error: None,
-            provenance: Provenance::Measured,
+            provenance: Provenance::Stated,
             source: self.here(&span, note),
         })
     }
@@ -823,7 +824,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
         let with = |u: Uncertain, s: &Span| Stated {
             value: u.value,
             std_error: u.std_error,
-            provenance: Provenance::Measured,
+            provenance: Provenance::Stated,
             source: cx.here(s, &m.source),
         };
         let viscous = match &m.viscous {
@@ -831,7 +832,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
             None => Stated {
                 value: scene.material.viscous.clone(),
                 std_error: None,
-                provenance: Provenance::Measured,
+                provenance: Provenance::Stated,
                 source: format!("{} [material] viscous", scene_path.display()),
             },
         };
@@ -887,7 +888,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
                 Stated {
                     value: u.value,
                     std_error: u.std_error,
-                    provenance: Provenance::Measured,
+                    provenance: Provenance::Stated,
                     source: cx.here(&f.eps_r.span(), &f.source),
                 }
             },

@@ -11,17 +11,22 @@
 //!   was a composite's mixing rule), each parameter with its uncertainty
 //!   ([`IdentifiedMaterial`]);
 //! - a composite fit (`dea-fit composite --out`, [`COMPOSITE_SCHEMA`]) holds the
-//!   mixing rules a scene's εr(w) can come from ([`CompositePermittivity`]).
+//!   mixing rules a scene's εr(w) can come from ([`CompositePermittivity`]);
+//! - a breakdown fit (`dea-fit breakdown --out`, [`BREAKDOWN_SCHEMA`]) holds the
+//!   Weibull law of the breakdown field a scene or a ranking checks against
+//!   ([`BreakdownFit`]).
 //!
 //! The estimators (`fit::`) write the first two and the last; this module, below both `fit` and
 //! `sim`, defines the material part of each and reads it.
 
+mod breakdown;
 mod composite;
 mod hyperelastic;
 mod identified;
 mod spread;
 mod viscous;
 
+pub use breakdown::{read_breakdown, BreakdownFit, BreakdownParameter, BreakdownPercentile};
 pub use composite::{read_mixture, CompositePermittivity};
 pub use hyperelastic::{expected_params, FittedRanges, HyperelasticPart, StretchRange};
 pub use identified::{IdentifiedMaterial, ParamUncertainty};
@@ -41,6 +46,8 @@ pub const RELAXATION_SCHEMA: &str = "dea-fit/relaxation-fit/1";
 pub const IDENTIFIED_SCHEMA: &str = "dea-fit/identified/1";
 /// Schema tag of composite fit files.
 pub const COMPOSITE_SCHEMA: &str = "dea-fit/composite-fit/1";
+/// Schema tag of breakdown fit files.
+pub const BREAKDOWN_SCHEMA: &str = "dea-fit/breakdown/1";
 
 /// Read the hyperelastic part of a hyperelastic fit or an identified material file.
 /// Its parameters are in the model's order.
@@ -225,7 +232,10 @@ fn read_text(path: &Path, accepted: &[&'static str], what: &str) -> Result<(Stri
                     COMPOSITE_SCHEMA => {
                         "this is a composite fit: use it as material.relative_permittivity = { composite = ..., mass_fraction = ... }"
                     }
-                    _ => "write it with dea-fit hyperelastic --out, relaxation --out, composite --out or identify",
+                    BREAKDOWN_SCHEMA => {
+                        "this is a breakdown fit: use it as material.breakdown = { fit = ... }"
+                    }
+                    _ => "write it with dea-fit hyperelastic --out, relaxation --out, composite --out, breakdown --out or identify",
                 };
                 Err(err(path, "schema", format!("expected {want}, found \"{s}\"")).with_hint(hint))
             }

@@ -1675,3 +1675,227 @@ fn flags_a_shard_cannot_honour_are_refused() {
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     assert!(text(&o).contains("at most one shard per point"));
 }
+
+/// A breakdown fit written through the core's serialization (the file `dea-fit
+/// breakdown --out` writes): α = 30 V/µm at a 1 cm² specimen area, β = 10, with
+/// standard errors 0.6 V/µm and 1.5 (uncorrelated), named `bd.json` in `dir`.
+fn breakdown_fit(dir: &Path, name: &str) -> dea_fit::material::file::BreakdownFit {
+    use dea_fit::material::file::{BreakdownFit, BreakdownParameter, BREAKDOWN_SCHEMA};
+    let p = |name: &str, unit: &str, value: f64, s: f64| BreakdownParameter {
+        name: name.into(),
+        unit: unit.into(),
+        value,
+        std_error: Some(s),
+        ci95: None,
+    };
+    let fit = BreakdownFit {
+        schema: BREAKDOWN_SCHEMA.into(),
+        tool_version: "test".into(),
+        status: "ok".into(),
+        method: "mle".into(),
+        positions: None,
+        n: 15,
+        failures: 15,
+        survived: 0,
+        parameters: vec![p("alpha", "V/m", 30e6, 0.6e6), p("beta", "1", 10.0, 1.5)],
+        // stated uncorrelated (a fit without a correlation gives no σ once β moves Eb)
+        correlation: vec![vec![Some(1.0), Some(0.0)], vec![Some(0.0), Some(1.0)]],
+        beta_unbiased: None,
+        log_likelihood: -20.0,
+        percentiles: Vec::new(),
+        reference_area: Some(1e-4),
+        reference_thickness: None,
+        reference_prestretch: None,
+        thickness_range: None,
+        prestretch_range: None,
+        bounds: "fisher".into(),
+        warnings: Vec::new(),
+        provenance: serde_json::Value::Null,
+    };
+    std::fs::write(dir.join(name), serde_json::to_string_pretty(&fit).unwrap()).unwrap();
+    fit
+}
+
+/// Breakdown from a fit file (issue 33): α scaled to the scene's whole active
+/// electrode area by the weakest-link law, Eb = α·(A0/A)^(1/β) with A = 10
+/// layers × π·(5 mm)² (1e-12: one pow), its σ by the delta method from the
+/// file's standard errors (uncorrelated: u² = (f·u_α)² + (Eb·ln(A0/A)/β²·u_β)²,
+/// 1e-9), provenance `fitted` with the file and the area in its source; the same
+/// at a `[[series.measured]]` point; the σ reaches Fm in closed form; and the
+/// breakdown-limited stroke ends where the field reaches that scaled value.
+#[test]
+fn a_breakdown_fit_is_scaled_to_the_actuator() {
+    let dir = tempfile::tempdir().unwrap();
+    breakdown_fit(dir.path(), "bd.json");
+    let mut m = head("voltage = \"400 V\"");
+    m.push_str(&matrix("F", 3.0, 100.0, "1 V/um").replace(
+        "breakdown = \"1 V/um\"",
+        "breakdown = { fit = \"bd.json\" }",
+    ));
+    m.push_str("[[filler]]\nname = \"B\"\ndensity = \"5 g/cm3\"\neps_r = 50\n");
+    m.push_str("[[series]]\nmatrix = \"F\"\n[[series]]\nname = \"filled\"\nmatrix = \"F\"\nfiller = \"B\"\nbasis = \"volume\"\nloadings = [0.1]\npermittivity = { rule = \"maxwell-garnett\" }\n[[series.measured]]\nloading = 0.1\nbreakdown = { fit = \"bd.json\" }\n");
+    let d = design(dir.path(), &m);
+    let ev = evaluate(&d, &Sweep::default());
+    let area = 10.0 * std::f64::consts::PI * 25e-6;
+    let f = (1e-4f64 / area).powf(0.1);
+    let eb = 30e6 * f;
+    let u = (f * 0.6e6).hypot(eb * (1e-4f64 / area).ln() / 100.0 * 1.5);
+    for e in ev.iter().map(|x| &x.evaluation) {
+        let b = &e.breakdown_field;
+        assert!(
+            (value(b) / eb - 1.0).abs() < 1e-12,
+            "{}: Eb {}",
+            e.name,
+            value(b)
+        );
+        let s = b.std_error.expect("the fit's σ");
+        assert!((s / u - 1.0).abs() < 1e-9, "{}: σ {s} vs {u}", e.name);
+        assert_eq!(b.provenance, dea_fit::rank::Provenance::Fitted);
+        assert!(
+            b.source.contains("bd.json") && b.source.contains("10 layers × π·r0²"),
+            "{}",
+            b.source
+        );
+        // Fm's σ in closed form: the relative σ of Eb twice, εr and Y exact
+        let fm = value(&e.fm);
+        let got = e.fm.std_error.expect("σ of Fm");
+        assert!((got / (2.0 * fm * s / eb) - 1.0).abs() < 1e-12, "σ Fm");
+    }
+    // The largest stroke ends where V/g(λ) reaches the scaled Eb (1e-9: the
+    // bisection's 1e-12 in λ), under the neo-Hookean closed form of the curve.
+    let e = &ev[0].evaluation;
+    assert_eq!(
+        e.max_stroke_limit,
+        Limit::Breakdown,
+        "24 V/µm comes before pull-in's 67"
+    );
+    let q = e.breakdown.expect("its breakdown point");
+    let lam = 1.0 - q.stroke;
+    assert!((q.voltage_v / (Z0 * lam) / eb - 1.0).abs() < 1e-9);
+}
+
+/// A bad breakdown reference is refused at the manifest's line and column, with
+/// the fit file's own error after it: a missing file, a file of another schema,
+/// a table with another key. A typed `breakdown = "19 ± 1 V/um"` keeps working
+/// (stated, with its σ).
+#[test]
+fn a_bad_breakdown_reference_is_located() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("nh_stack.toml"), SCENE).unwrap();
+    std::fs::write(
+        dir.path().join("other.json"),
+        "{\"schema\": \"dea-fit/hyperelastic-fit/1\"}",
+    )
+    .unwrap();
+    let refused = |eb: &str, says: &[&str]| {
+        let m = format!(
+            "{}{}[[series]]\nmatrix = \"M\"\n",
+            head("voltage = \"400 V\""),
+            matrix("M", 3.0, 100.0, "1 V/um").replace("\"1 V/um\"", eb)
+        );
+        let p = dir.path().join("design.toml");
+        std::fs::write(&p, &m).unwrap();
+        let line = m.lines().position(|l| l.starts_with("breakdown")).unwrap() + 1;
+        let e = manifest::read(&p).err().expect("refused").to_string();
+        assert!(e.contains(&format!("design.toml:{line}:13")), "{e}");
+        for s in says {
+            assert!(e.contains(s), "{e} should say {s}");
+        }
+    };
+    refused(
+        "{ fit = \"missing.json\" }",
+        &["cannot read", "missing.json"],
+    );
+    refused(
+        "{ fit = \"other.json\" }",
+        &["breakdown.fit = \"other.json\"", "other.json", "schema"],
+    );
+    refused("{ file = \"other.json\" }", &["'file' is not a key"]);
+    refused("[1, 2]", &["expected a field with a unit"]);
+    let m = format!(
+        "{}{}[[series]]\nmatrix = \"M\"\n",
+        head("voltage = \"400 V\""),
+        matrix("M", 3.0, 100.0, "19 ± 1 V/um")
+    );
+    let d = design(dir.path(), &m);
+    let b = &d.matrices[0].breakdown;
+    assert_eq!((b.value, b.std_error), (19e6, Some(1e6)));
+    assert_eq!(b.provenance, dea_fit::rank::Provenance::Stated);
+}
+
+/// Margins at the operating point (issue 33): to breakdown 1 − E/Eb with E =
+/// V/(z0·λ) the true field at the static stroke, to pull-in 1 − V/V_pi (exact
+/// arithmetic on the evaluation's own numbers: 1e-12). Driven within 10 % of its
+/// breakdown the leader gets a warning naming it, and the ranking's status says
+/// so; the lead over the second, resting on Eb and εr stated without ±, names
+/// them (JSON `lead` too).
+#[test]
+fn small_margins_are_warned_and_the_lead_names_its_exact_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    // neo-Hookean, μ = 100 kPa, εr 3: at 1500 V the static stretch is ≈ 0.9025, a
+    // true field of ≈ 33.2 V/µm; Eb 35 V/µm puts the margin near 5 %.
+    let mut m = head("voltage = \"1500 V\"");
+    m.push_str(&matrix("near", 3.0, 100.0, "35 V/um"));
+    m.push_str(&matrix("far", 3.0, 110.0, "300 V/um"));
+    m.push_str("[[series]]\nmatrix = \"near\"\n[[series]]\nmatrix = \"far\"\n");
+    let d = design(dir.path(), &m);
+    let (ev, r) = by_stroke(&d);
+    let near = &ev[0];
+    assert_eq!(near.state, State::Ok, "{}", near.state_note);
+    let lam = 1.0 - value(&near.static_stroke);
+    let want = 1.0 - 1500.0 / (Z0 * lam) / 35e6;
+    let got = value(&near.breakdown_margin);
+    assert!((got - want).abs() < 1e-12, "margin {got} vs {want}");
+    assert!(got > 0.0 && got < 0.1, "margin {got}");
+    let pi = near.pull_in.expect("a pull-in").voltage_v;
+    assert!((value(&near.pull_in_margin) - (1.0 - 1500.0 / pi)).abs() < 1e-12);
+    assert_eq!(r.order[0], 0, "the softer one leads on stroke");
+    assert!(
+        r.warnings
+            .iter()
+            .any(|w| w.contains("driven within 10 % of breakdown")
+                && w.contains("the leader near among them")),
+        "{:?}",
+        r.warnings
+    );
+    assert_eq!(r.status, ranking::Status::Warning);
+    let lead = r.lead.as_ref().expect("the lead rests on stated values");
+    assert_eq!((lead.first.as_str(), lead.second.as_str()), ("near", "far"));
+    for what in [
+        "εr of near",
+        "Y of near",
+        "Eb of near",
+        "εr of far",
+        "Eb of far",
+    ] {
+        assert!(
+            lead.without_std_error.iter().any(|w| w.starts_with(what)),
+            "{what}: {:?}",
+            lead.without_std_error
+        );
+    }
+    assert!(lead
+        .without_std_error
+        .iter()
+        .all(|w| w.contains(": stated, ")));
+    std::fs::write(dir.path().join("design.toml"), &m).unwrap();
+    let o = run(
+        dir.path(),
+        &["rank", "design.toml", "--no-report", "--json"],
+    );
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    assert_eq!(v["lead"]["first"], "near");
+    assert!(
+        v["candidates"][0]["breakdown_margin"]["value"]
+            .as_f64()
+            .unwrap()
+            < 0.1
+    );
+    let o = run(dir.path(), &["rank", "design.toml", "--no-report"]);
+    let t = text(&o);
+    // the table wraps its headers: the column's words, and the lead's note
+    assert!(
+        t.contains("margin") && t.contains("rests on inputs without a standard error"),
+        "{t}"
+    );
+}

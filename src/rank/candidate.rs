@@ -16,7 +16,8 @@
 //!   Y = 3μ0 of the result. The viscous part (Nv, arm moduli and viscosities; the
 //!   relaxation times unchanged) is scaled by the same factor μ0/μ0,matrix: a rigid
 //!   filler amplifies the strain of the matrix, whose whole stress grows with it.
-//! * **tan δ, breakdown field**: a measured value at x; else interpolated linearly
+//! * **tan δ, breakdown field**: a value at x (stated, or for Eb from a breakdown
+//!   fit scaled to the actuator's film, `manifest::Film`); else interpolated linearly
 //!   in x between the measured loadings (the matrix counts as measured at x = 0);
 //!   beyond the last measured loading held at its value, and with no measured
 //!   composite held at the matrix's value — both with a warning.
@@ -272,7 +273,7 @@ pub fn build(d: &Design, si: usize, loading: f64) -> Result<Candidate> {
             hyperelastic: m.hyperelastic.value.clone(),
             viscous: m.viscous.value.clone(),
             rules: "matrix alone".into(),
-            warnings: Vec::new(),
+            warnings: m.breakdown.warnings.clone(),
         });
     };
     let f = &d.fillers[fi];
@@ -390,7 +391,7 @@ pub fn build(d: &Design, si: usize, loading: f64) -> Result<Candidate> {
         loading,
         "tan δ",
         "1",
-        |p| p.tan_delta,
+        |p| p.tan_delta.map(|u| typed(p, u)),
         &mut warnings,
     );
     let breakdown = interpolated(
@@ -399,7 +400,7 @@ pub fn build(d: &Design, si: usize, loading: f64) -> Result<Candidate> {
         loading,
         "breakdown field",
         "V/m",
-        |p| p.breakdown,
+        |p| p.breakdown.clone(),
         &mut warnings,
     );
     Ok(Candidate {
@@ -564,6 +565,17 @@ fn eps_model(d: &Design, s: &Series, phi: f64, x: f64) -> (f64, Provenance, Stri
     }
 }
 
+/// A value typed at a measured point, with the point's line.
+fn typed(p: &MeasuredPoint, u: Uncertain) -> Stated<f64> {
+    Stated {
+        value: u.value,
+        std_error: u.std_error,
+        provenance: Provenance::Stated,
+        source: p.source.clone(),
+        warnings: Vec::new(),
+    }
+}
+
 /// The value of a measured point exactly at `x`, with its source.
 fn measured_at(
     points: &[MeasuredPoint],
@@ -615,59 +627,66 @@ fn correction(knots: &[(f64, f64, &str)], x: f64) -> (f64, String) {
 /// tan δ or the breakdown field at x: measured, interpolated between the measured
 /// loadings (the matrix at 0), or held with a warning. A standard uncertainty is
 /// carried as the value is: interpolated with weights 1 − w and w of two
-/// independent measurements, u = √((1 − w)²u₁² + w²u₂²), or held.
+/// independent measurements, u = √((1 − w)²u₁² + w²u₂²), or held. The warnings
+/// of the values used (a breakdown fit not scaled to the actuator) are the
+/// candidate's.
 fn interpolated(
     s: &Series,
     matrix: &Stated<f64>,
     x: f64,
     what: &str,
     unit: &str,
-    get: impl Fn(&MeasuredPoint) -> Option<Uncertain>,
+    get: impl Fn(&MeasuredPoint) -> Option<Stated<f64>>,
     warnings: &mut Vec<String>,
 ) -> Figure {
-    let knots: Vec<(f64, Uncertain, String, Provenance)> = std::iter::once((
-        0.0,
-        Uncertain {
-            value: matrix.value,
-            std_error: matrix.std_error,
-        },
-        matrix.source.clone(),
-        matrix.provenance,
-    ))
-    .chain(
-        s.measured
-            .iter()
-            .filter_map(|p| get(p).map(|v| (p.loading, v, p.source.clone(), Provenance::Stated))),
-    )
-    .collect();
+    let knots: Vec<(f64, Stated<f64>)> = std::iter::once((0.0, matrix.clone()))
+        .chain(
+            s.measured
+                .iter()
+                .filter_map(|p| get(p).map(|v| (p.loading, v))),
+        )
+        .collect();
     let xs: Vec<f64> = knots.iter().map(|k| k.0).collect();
+    let mut used = |k: &Stated<f64>| {
+        for w in &k.warnings {
+            if !warnings.contains(w) {
+                warnings.push(w.clone());
+            }
+        }
+    };
     match place(&xs, x) {
-        Place::At(i) => Figure::new(knots[i].1.value, unit, knots[i].3, knots[i].2.clone())
-            .with_std_error(knots[i].1.std_error),
+        Place::At(i) => {
+            let k = &knots[i].1;
+            used(k);
+            Figure::new(k.value, unit, k.provenance, k.source.clone()).with_std_error(k.std_error)
+        }
         Place::Between(i, w) => {
-            let (a, b) = (&knots[i], &knots[i + 1]);
-            let sigma = match (a.1.std_error, b.1.std_error) {
+            let ((xa, a), (xb, b)) = (&knots[i], &knots[i + 1]);
+            used(a);
+            used(b);
+            let sigma = match (a.std_error, b.std_error) {
                 (None, None) => None,
                 (sa, sb) => Some(((1.0 - w) * sa.unwrap_or(0.0)).hypot(w * sb.unwrap_or(0.0))),
             };
             Figure::new(
-                a.1.value + w * (b.1.value - a.1.value),
+                a.value + w * (b.value - a.value),
                 unit,
                 Provenance::Predicted,
                 format!(
                     "linear in loading between {} at {} ({}) and {} at {} ({})",
-                    short(a.1.value),
-                    loading_label(a.0, s.basis),
-                    a.2,
-                    short(b.1.value),
-                    loading_label(b.0, s.basis),
-                    b.2
+                    short(a.value),
+                    loading_label(*xa, s.basis),
+                    a.source,
+                    short(b.value),
+                    loading_label(*xb, s.basis),
+                    b.source
                 ),
             )
             .with_std_error(sigma)
         }
         Place::Beyond => {
-            let last = &knots[knots.len() - 1];
+            let (xl, last) = &knots[knots.len() - 1];
+            used(last);
             let why = match knots.len() {
                 1 => format!(
                     "{}: no measured {what} of a composite: held at the matrix's value",
@@ -676,17 +695,17 @@ fn interpolated(
                 _ => format!(
                     "{}: {what} beyond the measured loadings held at its value at {}",
                     s.name,
-                    loading_label(last.0, s.basis)
+                    loading_label(*xl, s.basis)
                 ),
             };
             warnings.push(why.clone());
             Figure::new(
-                last.1.value,
+                last.value,
                 unit,
                 Provenance::Predicted,
-                format!("held: {}", last.2),
+                format!("held: {}", last.source),
             )
-            .with_std_error(last.1.std_error)
+            .with_std_error(last.std_error)
             .noted(why)
         }
     }

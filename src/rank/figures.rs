@@ -320,6 +320,30 @@ pub fn gap(a: &Actuator, lam: f64) -> f64 {
     }
 }
 
+/// The active electrode area of the actuator as built (m²; every layer's), the
+/// same in words, and the thickness of one dielectric layer (m): the film a
+/// breakdown fit is scaled to (weakest link: a breakdown anywhere under field
+/// fails the actuator, so the whole active area counts). A stack: nd·π·r0²; a
+/// helix: Np·Ne electrode areas of one element at λ = 1 (seed Eq. 4.12), of
+/// element thickness z0.
+pub fn electrode_area(a: &Actuator) -> (f64, String, f64) {
+    match a {
+        Actuator::Stack(s) => (
+            s.layers as f64 * s.area0(),
+            format!("{} layers × π·r0²", s.layers),
+            s.layer_m,
+        ),
+        Actuator::Helix(h) => {
+            let n = h.periods * h.per_period;
+            (
+                n as f64 * h.electrode_area(1.0),
+                format!("{n} elements × A_e (seed Eq. 4.12)"),
+                h.thickness_m,
+            )
+        }
+    }
+}
+
 /// The weakest provenance of several inputs (measured < fitted < stated <
 /// predicted: a typed value is an assertion, a prediction rests on typed ones).
 fn weakest(p: &[Provenance]) -> Provenance {

@@ -27,4 +27,5 @@ mod sim_sensitivities;
 mod sim_stream;
 mod support;
 mod trace;
+mod weibull;
 mod write_faults;

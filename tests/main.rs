@@ -2,6 +2,7 @@
 
 mod bad_cli;
 mod bench;
+mod breakdown;
 mod cli;
 mod completions;
 mod datasets;
@@ -27,4 +28,5 @@ mod sim_sensitivities;
 mod sim_stream;
 mod support;
 mod trace;
+mod weibull;
 mod write_faults;

@@ -12,6 +12,7 @@ pub mod nnls;
 pub mod permittivity;
 pub mod problem;
 pub mod relaxation;
+pub mod weibull;
 
 use serde::{Deserialize, Serialize};
 

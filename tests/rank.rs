@@ -634,6 +634,26 @@ fn shipped_design_data_regenerate() {
                 .unwrap(),
         "datasets/design/fits/sylgard_batio3-composite.json is not what dea-fit composite writes"
     );
+    // The breakdown fit of VHB 4910, by its command in datasets/design/README.md
+    // (from the repository root: the file names its input by that path).
+    let bd = w.join("bd.json");
+    let o = run(
+        &repo(),
+        &[
+            "breakdown",
+            "datasets/breakdown/vhb4910-coupons.csv",
+            "--out",
+            &bd.display().to_string(),
+            "--no-report",
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        std::fs::read(&bd).unwrap()
+            == std::fs::read(repo().join("datasets/design/fits/vhb4910-coupons-breakdown.json"))
+                .unwrap(),
+        "datasets/design/fits/vhb4910-coupons-breakdown.json is not what dea-fit breakdown writes"
+    );
     for (wt, mu, seed) in [("20", "323.8kPa", "2020"), ("40", "403.6kPa", "2040")] {
         let csv = format!("s{wt}.csv");
         let o = run(
@@ -740,6 +760,44 @@ fn shipped_design_ranks() {
         find("Sylgard 184 + BaTiO3 10 wt%")["youngs_modulus"]["provenance"],
         "predicted"
     );
+    // VHB 4910's breakdown from its Weibull fit, carried to the stack's 20 layers
+    // × π·(5 mm)² by the weakest-link law (1e-12: one pow), fitted, with its σ.
+    let fit: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            repo().join("datasets/design/fits/vhb4910-coupons-breakdown.json"),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    let (alpha, beta) = (
+        fit["parameters"][0]["value"].as_f64().unwrap(),
+        fit["parameters"][1]["value"].as_f64().unwrap(),
+    );
+    let a0 = fit["reference_area_m2"].as_f64().unwrap();
+    let area = 20.0 * std::f64::consts::PI * 25e-6;
+    let eb = &find("VHB 4910")["breakdown_field"];
+    let want = alpha * (a0 / area).powf(1.0 / beta);
+    assert!(
+        (eb["value"].as_f64().unwrap() / want - 1.0).abs() < 1e-12,
+        "{eb}"
+    );
+    assert_eq!(eb["provenance"], "fitted");
+    assert!(eb["std_error"].as_f64().unwrap() > 0.0);
+    assert!(eb["source"].as_str().unwrap().contains("20 layers × π·r0²"));
+    // The leader is driven within 10 % of its (stated) breakdown field: said, and
+    // its lead over the second rests on values stated without σ: named.
+    let warnings = v["warnings"].as_array().unwrap();
+    assert!(
+        warnings.iter().any(|w| {
+            let w = w.as_str().unwrap();
+            w.contains("within 10 % of breakdown") && w.contains("the leader")
+        }),
+        "{warnings:?}"
+    );
+    assert!(!v["lead"]["without_std_error"]
+        .as_array()
+        .unwrap()
+        .is_empty());
 }
 
 /// Mutated design manifests (a line dropped or repeated, a number replaced by an

@@ -154,6 +154,7 @@ fn leaders(page: &mut Page, evals: &[Evaluated], r: &Ranking, top: usize) {
     let (y_unit, youngs) = column(&|e| &e.youngs_modulus, "Pa");
     let (t_unit, rise) = column(&|e| &e.response_time, "s");
     let percent = |f: &Figure| fmt_fig(f, |v| sig(100.0 * v, 4));
+    let margin = |f: &Figure| fmt_fig(f, |v| sig(100.0 * v, 2));
     let rows: Vec<Vec<String>> = r.order[..shown_n]
         .iter()
         .enumerate()
@@ -173,8 +174,11 @@ fn leaders(page: &mut Page, evals: &[Evaluated], r: &Ranking, top: usize) {
                 percent(&e.static_stroke),
                 format!("{} ({})", percent(&e.max_stroke), e.max_stroke_limit),
                 rise[k].clone(),
-                percent(&e.breakdown_margin),
-                percent(&e.pull_in_margin),
+                format!(
+                    "{} / {}",
+                    margin(&e.breakdown_margin),
+                    margin(&e.pull_in_margin)
+                ),
             ];
             if extra {
                 row.push(r.by.value(e).map_or("—".into(), |v| fmt_objective(r.by, v)));
@@ -201,8 +205,7 @@ fn leaders(page: &mut Page, evals: &[Evaluated], r: &Ranking, top: usize) {
         "stroke (%)",
         "max stroke % (limit)",
         &t_h,
-        "Eb margin (%)",
-        "pull-in margin (%)",
+        "margin % Eb / Vpi",
     ];
     if extra {
         header.push(r.by.name());
@@ -214,8 +217,8 @@ fn leaders(page: &mut Page, evals: &[Evaluated], r: &Ranking, top: usize) {
     page.text(format!(
         "εr, Y: predicted by the series' rules, fitted, or stated in the manifest (their \
          provenance per candidate: --csv, --json); Fm: figure of merit; t10–90: rise time \
-         of the step response; margins at the operating point: to breakdown 1 − E/Eb (E \
-         the true field at the static stroke), to pull-in 1 − V/V_pull-in (below {} %: a \
+         of the step response; margin at the operating point to breakdown 1 − E/Eb (E \
+         the true field at the static stroke) / to pull-in 1 − V/Vpi (below {} %: a \
          warning).",
         short(100.0 * super::figures::SMALL_MARGIN)
     ));

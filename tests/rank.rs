@@ -1343,6 +1343,7 @@ fn shipped_design_in(w: &Path) -> String {
         "fits/sylgard_batio3-composite.json",
         "fits/sylgard_batio3_20wt-neo-hookean.json",
         "fits/sylgard_batio3_40wt-neo-hookean.json",
+        "fits/vhb4910-coupons-breakdown.json",
     ] {
         let to = w.join("design").join(rel);
         std::fs::create_dir_all(to.parent().unwrap()).unwrap();

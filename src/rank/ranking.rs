@@ -146,7 +146,8 @@ impl Objective {
 pub enum Status {
     /// Every candidate evaluated; every property from data or a stated model.
     Ok,
-    /// Some properties were held or extrapolated (the warnings say which).
+    /// Some properties were held or extrapolated, or candidates are driven close
+    /// to breakdown or pull-in (the warnings say which).
     Warning,
     /// Some candidates could not be evaluated (they are listed, not ranked):
     /// blocking under `--strict`.

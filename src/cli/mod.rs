@@ -47,7 +47,7 @@ enum Command {
     /// Fit Prony / Kelvin-Maxwell constants to a stress-relaxation curve.
     Relaxation(relaxation::Args),
     /// Generate synthetic test data from known constants (with noise and seed).
-    Synth(synth::Args),
+    Synth(Box<synth::Args>),
     /// Simulate an actuator scene: trajectory CSV, charts, summary.
     Simulate(simulate::Args),
     /// Static voltage–stretch curve and pull-in of a scene's actuator.
@@ -70,7 +70,7 @@ pub fn run(cli: Cli) -> Result<i32> {
         Command::Hyperelastic(a) => hyperelastic::run(a),
         Command::Relaxation(a) => relaxation::run(a),
         Command::Identify(a) => identify::run(a),
-        Command::Synth(a) => synth::run(a),
+        Command::Synth(a) => synth::run(*a),
         Command::Permittivity(a) => permittivity::run(a),
         Command::Composite(a) => composite::run(a),
         Command::Breakdown(a) => breakdown::run(a),

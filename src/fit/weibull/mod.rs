@@ -15,6 +15,7 @@ mod rank;
 mod threshold;
 
 use crate::fit::Status;
+use crate::material::breakdown::Weibull;
 use likelihood::{Data, Hold, Point, LOC};
 use std::fmt;
 
@@ -850,11 +851,18 @@ impl Model {
     }
 
     /// The covariance of the natural parameters: the inverse observed information.
+    /// The information is that of (α, β), as `reliability` and Weibull++ take it,
+    /// carried to u = ln α: −ℓ_αα·α² = −ℓ_uu + ℓ_u. At a maximum ℓ_u = 0 and the
+    /// two agree; at a rank-regression estimate ℓ_u ≠ 0 and this is the convention
+    /// of the references (tests/weibull.rs, `agrees_with_the_reliability_package`).
     fn covariance(&self) -> Option<Vec<Vec<f64>>> {
-        let info = match self.gamma {
+        let mut info = match self.gamma {
             Some(g) => threshold::information(self, g),
             None => self.data.information(&self.point),
         };
+        if self.gamma.is_none() {
+            info[0][0] += self.data.held_derivative(&self.point, Hold::Loc(0), 0.0);
+        }
         let m = info.len();
         let mat = nalgebra::DMatrix::from_fn(m, m, |i, j| info[i][j]);
         let inv = mat.cholesky()?.inverse();
@@ -1106,14 +1114,18 @@ impl WeibullFit {
             .collect()
     }
 
-    /// The fitted CDF F(E) at the reference area and covariates.
-    pub fn cdf(&self, field: f64) -> f64 {
-        let m = &self.model;
-        let shifted = field - m.gamma.unwrap_or(0.0);
-        if shifted <= 0.0 {
-            return 0.0;
+    /// The fitted two-parameter law at the reference area and covariates (the
+    /// shared core's [`Weibull`]: its cdf, percentile and area scaling).
+    pub fn law(&self) -> Weibull {
+        Weibull {
+            alpha: self.alpha.value,
+            beta: self.beta.value,
         }
-        let y = m.point.beta * ((shifted / m.scale).ln() - m.point.c[0]);
-        -(-y.exp()).exp_m1()
+    }
+
+    /// The fitted CDF F(E) at the reference area and covariates (E − γ with a
+    /// threshold).
+    pub fn cdf(&self, field: f64) -> f64 {
+        self.law().cdf(field - self.model.gamma.unwrap_or(0.0))
     }
 }

@@ -2,6 +2,7 @@
 
 mod bad_cli;
 mod bench;
+mod breakdown;
 mod cli;
 mod completions;
 mod datasets;

@@ -7,6 +7,7 @@ mod bench_rank;
 mod bench_relaxation;
 mod bench_scale;
 mod bench_simulate;
+mod breakdown;
 mod completions;
 mod composite;
 mod export;
@@ -37,6 +38,8 @@ enum Command {
     Hyperelastic(hyperelastic::Args),
     /// Relative permittivity and loss per frequency from LCR-meter exports.
     Permittivity(permittivity::Args),
+    /// Weibull breakdown strength of a specimen series: α, β, percentiles, bounds, probability plot.
+    Breakdown(breakdown::Args),
     /// Fit mixing rules to a composite series described by a TOML manifest.
     Composite(composite::Args),
     /// Identify material constants from measured actuator traces (simulator in the loop).
@@ -44,7 +47,7 @@ enum Command {
     /// Fit Prony / Kelvin-Maxwell constants to a stress-relaxation curve.
     Relaxation(relaxation::Args),
     /// Generate synthetic test data from known constants (with noise and seed).
-    Synth(synth::Args),
+    Synth(Box<synth::Args>),
     /// Simulate an actuator scene: trajectory CSV, charts, summary.
     Simulate(simulate::Args),
     /// Static voltage–stretch curve and pull-in of a scene's actuator.
@@ -67,9 +70,10 @@ pub fn run(cli: Cli) -> Result<i32> {
         Command::Hyperelastic(a) => hyperelastic::run(a),
         Command::Relaxation(a) => relaxation::run(a),
         Command::Identify(a) => identify::run(a),
-        Command::Synth(a) => synth::run(a),
+        Command::Synth(a) => synth::run(*a),
         Command::Permittivity(a) => permittivity::run(a),
         Command::Composite(a) => composite::run(a),
+        Command::Breakdown(a) => breakdown::run(a),
         Command::Bench(a) => bench::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Static(a) => static_curve::run(a),

@@ -2,7 +2,9 @@
 //! `dea-fit synth relaxation`: a stress-relaxation curve from a Prony series (the
 //! `io::relaxation` format); `dea-fit synth lcr`: an LCR sweep of a lossy capacitor
 //! (the `io::lcr` plain-CSV format); `dea-fit synth trace SCENE`: an actuator trace
-//! simulated from a scene (the `io::trace` format). Gaussian noise from a seeded
+//! simulated from a scene (the `io::trace` format); `dea-fit synth breakdown`: a
+//! breakdown series from a Weibull law with a thickness spread and a rig limit (the
+//! `io::breakdown` format). Gaussian noise from a seeded
 //! generator; the generating command and parameters are written into the file's
 //! comment lines. Each prints a `status:` line (`--strict`: a blocking status exits 1).
 
@@ -23,7 +25,7 @@ const FILE_POINTS: CountRange = CountRange::new(2, MAX_POINTS, "rows of one synt
 /// Generate synthetic data.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// What to generate: hyperelastic, relaxation, lcr or trace.
+    /// What to generate: hyperelastic, relaxation, lcr, trace or breakdown.
     what: String,
     /// The scene to simulate (synth trace).
     scene: Option<PathBuf>,
@@ -57,13 +59,15 @@ pub struct Args {
     /// synth lcr: its loss tangent tan δ (flat in frequency).
     #[arg(long, default_value_t = 0.0)]
     tan_delta: f64,
-    /// synth lcr: electrode area (m² or with a unit, e.g. 14.39cm2).
+    /// synth lcr: electrode area (m² or with a unit, e.g. 14.39cm2); synth
+    /// breakdown: every specimen's electrode area (written as an area_mm2 column).
     #[arg(long)]
     area: Option<String>,
     /// synth lcr: electrode diameter (e.g. 30mm).
     #[arg(long)]
     diameter: Option<String>,
-    /// synth lcr: coupon thickness (e.g. 1mm).
+    /// synth lcr: coupon thickness (e.g. 1mm); synth breakdown: the films' mean
+    /// thickness (e.g. 300um).
     #[arg(long)]
     thickness: Option<String>,
     /// synth lcr: log sweep FMIN:FMAX:PER_DECADE (e.g. 100Hz:100kHz:4).
@@ -75,6 +79,23 @@ pub struct Args {
     /// synth lcr: the pair the file records (cp-d, cp-rp, cs-d, cs-rs, z-theta, r-x, g-b, …).
     #[arg(long, default_value = "cp-d")]
     pair: String,
+    /// synth breakdown: the Weibull characteristic field α (e.g. 30V/um).
+    #[arg(long)]
+    alpha: Option<String>,
+    /// synth breakdown: the Weibull shape β (e.g. 8).
+    #[arg(long)]
+    beta: Option<f64>,
+    /// synth breakdown: number of specimens.
+    #[arg(long)]
+    n: Option<String>,
+    /// synth breakdown: the rig's limit, a voltage (9kV) or a field (40V/um): a
+    /// specimen that would break down beyond it is written as survived at it.
+    #[arg(long)]
+    limit: Option<String>,
+    /// synth breakdown: relative standard deviation of the thickness (e.g. 5% or
+    /// 0.05; Gaussian).
+    #[arg(long)]
+    thickness_spread: Option<String>,
     /// Mode: uniaxial, equibiaxial or planar.
     #[arg(long, default_value = "uniaxial")]
     mode: String,
@@ -115,8 +136,12 @@ pub fn run(a: Args) -> Result<i32> {
         "relaxation" => relaxation(a),
         "lcr" => lcr(a),
         "trace" => trace(a),
-        w => Err(Error::settings(format!("cannot synthesise '{w}'"))
-            .with_hint("use: dea-fit synth hyperelastic, relaxation, lcr, or trace SCENE")),
+        "breakdown" => breakdown(a),
+        w => Err(
+            Error::settings(format!("cannot synthesise '{w}'")).with_hint(
+                "use: dea-fit synth hyperelastic, relaxation, lcr, breakdown, or trace SCENE",
+            ),
+        ),
     }
 }
 
@@ -172,6 +197,11 @@ fn refuse_unused(a: &Args, used: &[&str]) -> Result<()> {
         ("--area", a.area.is_some()),
         ("--diameter", a.diameter.is_some()),
         ("--thickness", a.thickness.is_some()),
+        ("--alpha", a.alpha.is_some()),
+        ("--beta", a.beta.is_some()),
+        ("--n", a.n.is_some()),
+        ("--limit", a.limit.is_some()),
+        ("--thickness-spread", a.thickness_spread.is_some()),
     ];
     match given.iter().find(|(f, set)| *set && !used.contains(f)) {
         Some((f, _)) => Err(Error::settings(format!("synth {} takes no {f}", a.what))
@@ -786,4 +816,189 @@ fn trace(a: Args) -> Result<i32> {
     }
     println!("status: {status}");
     Ok(i32::from(a.strict && status == RunStatus::PullIn))
+}
+
+/// The COUNT of `--n`: specimens of one synthetic breakdown series.
+const SPECIMENS: CountRange = CountRange::new(2, MAX_POINTS, "specimens of one series");
+
+/// `synth breakdown`: a breakdown series of `--n` specimens. Each film's thickness is
+/// h·(1 + s·z) (z standard normal, redrawn until positive), its breakdown field
+/// E = α·(−ln U)^(1/β) (U uniform: the two-parameter Weibull law F(E) =
+/// 1 − exp[−(E/α)^β], IEEE Std 930-2004) and its breakdown voltage E·h; a voltage
+/// beyond the rig's limit is written as survived at the limit (right-censored).
+/// Written as `specimen,voltage_kV,thickness_um,survived[,area_mm2]`, the
+/// generating parameters in the `#` lines.
+fn breakdown(a: Args) -> Result<i32> {
+    use rand_distr::Weibull;
+    refuse_unused(
+        &a,
+        &[
+            "--alpha",
+            "--beta",
+            "--n",
+            "--limit",
+            "--thickness",
+            "--thickness-spread",
+            "--area",
+        ],
+    )?;
+    if !a.noise.is_empty() || a.noise_abs != "0" {
+        return Err(Error::settings("synth breakdown takes no --noise")
+            .with_hint("the scatter is the Weibull law's own: set it with --beta"));
+    }
+    let need = |flag: &str, v: &Option<String>| {
+        v.clone().ok_or_else(|| {
+            Error::settings(format!("synth breakdown needs {flag}")).with_hint(
+                "e.g. dea-fit synth breakdown --alpha 30V/um --beta 8 --n 15 --limit 9kV --thickness 300um --out s.csv",
+            )
+        })
+    };
+    let positive = |flag: &str, text: &str, dim: Dimension| -> Result<f64> {
+        match parse_quantity(text, dim) {
+            Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+            Ok(v) => Err(Error::settings(format!("{flag} must be > 0, found {v}"))),
+            Err(e) => Err(Error::settings(format!("{flag}: {e}"))),
+        }
+    };
+    let alpha = positive(
+        "--alpha",
+        &need("--alpha", &a.alpha)?,
+        Dimension::ElectricField,
+    )?;
+    let beta = a.beta.ok_or_else(|| need("--beta", &None).unwrap_err())?;
+    if !(beta.is_finite() && beta > 0.0) {
+        return Err(Error::settings(format!("--beta must be > 0, found {beta}")));
+    }
+    let n = SPECIMENS
+        .parse(&need("--n", &a.n)?)
+        .map_err(|e| Error::settings(format!("--n: {e}")))?;
+    let thickness = positive(
+        "--thickness",
+        &need("--thickness", &a.thickness)?,
+        Dimension::Length,
+    )?;
+    let spread = match &a.thickness_spread {
+        None => 0.0,
+        Some(t) => match parse_quantity(t, Dimension::Fraction) {
+            Ok(v) if v.is_finite() && (0.0..0.5).contains(&v) => v,
+            Ok(v) => {
+                return Err(Error::settings(format!(
+                    "--thickness-spread must be from 0 to 50 %, found {v}"
+                )))
+            }
+            Err(e) => return Err(Error::settings(format!("--thickness-spread: {e}"))),
+        },
+    };
+    let area = a
+        .area
+        .as_deref()
+        .map(|t| positive("--area", t, Dimension::Area))
+        .transpose()?;
+    // The limit as a voltage, or as a field (then the voltage at each film's thickness).
+    let limit = a
+        .limit
+        .as_deref()
+        .map(|t| {
+            positive("--limit", t, Dimension::Voltage)
+                .map(|v| (v, true))
+                .or_else(|_| positive("--limit", t, Dimension::ElectricField).map(|e| (e, false)))
+                .map_err(|_| {
+                    Error::settings(format!("--limit '{t}': expected a voltage or a field"))
+                        .with_hint("e.g. --limit 9kV (the supply's) or --limit 40V/um")
+                })
+        })
+        .transpose()?;
+    let law =
+        Weibull::new(alpha, beta).map_err(|e| Error::settings(format!("--alpha/--beta: {e}")))?;
+    let normal = Normal::new(0.0, 1.0).expect("a unit normal");
+    let mut rng = ChaCha8Rng::seed_from_u64(a.seed);
+    let mut rows = Vec::with_capacity(n);
+    for _ in 0..n {
+        let h = loop {
+            let h = thickness * (1.0 + spread * normal.sample(&mut rng));
+            if h > 0.0 {
+                break h;
+            }
+        };
+        let e: f64 = law.sample(&mut rng);
+        let v_limit = limit.map(|(l, volts)| if volts { l } else { l * h });
+        // Rounded as written (0.1 V, 0.01 µm), so the fit sees what the file holds.
+        let (v, survived) = match v_limit {
+            Some(l) if e * h >= l => (l, true),
+            _ => (e * h, false),
+        };
+        rows.push(((v * 1e1).round() / 1e4, (h * 1e8).round() / 1e2, survived));
+    }
+    dea_fit::io::finite_output(
+        "the synthetic breakdown series",
+        rows.iter()
+            .flat_map(|r| [("voltage_kV", r.0), ("thickness_um", r.1)]),
+    )?;
+    let survivors = rows.iter().filter(|r| r.2).count();
+    if n - survivors < 2 {
+        return Err(Error::settings(format!(
+            "the limit leaves {} breakdown(s) among {n} specimens: a series needs two or more; nothing was written",
+            n - survivors
+        ))
+        .with_hint("raise --limit, or lower --alpha"));
+    }
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# synthetic breakdown series made by dea-fit {} (dea-fit synth breakdown)",
+        env!("CARGO_PKG_VERSION")
+    );
+    let _ = writeln!(s, "# command: {}", command_line());
+    let _ = writeln!(
+        s,
+        "# param alpha = {alpha:e} V/m, beta = {beta:e} (two-parameter Weibull F(E) = 1 - exp(-(E/alpha)^beta){})",
+        match area {
+            Some(ar) => format!(", at the specimens' electrode area {ar:e} m2"),
+            None => String::new(),
+        }
+    );
+    let _ = writeln!(
+        s,
+        "# thickness: {thickness:e} m, relative spread {spread} (Gaussian standard deviation); the field law does not depend on it"
+    );
+    match limit {
+        Some((l, true)) => {
+            let _ = writeln!(
+                s,
+                "# limit: {l:e} V (the rig's: beyond it a specimen is written as survived at it)"
+            );
+        }
+        Some((l, false)) => {
+            let _ = writeln!(
+                s,
+                "# limit: {l:e} V/m (the rig's: beyond it a specimen is written as survived at it)"
+            );
+        }
+        None => {}
+    }
+    let _ = writeln!(
+        s,
+        "# specimens: {n}, breakdowns {}, survived {survivors}; seed {} (ChaCha8)",
+        n - survivors,
+        a.seed
+    );
+    let _ = writeln!(
+        s,
+        "specimen,voltage_kV,thickness_um,survived{}",
+        if area.is_some() { ",area_mm2" } else { "" }
+    );
+    for (i, (v, h, survived)) in rows.iter().enumerate() {
+        let _ = write!(s, "s{:02},{v:.4},{h:.2},{}", i + 1, u8::from(*survived));
+        if let Some(ar) = area {
+            let _ = write!(s, ",{}", ar * 1e6);
+        }
+        s.push('\n');
+    }
+    super::write_noted(&a.out, s.as_bytes())?;
+    eprintln!(
+        "wrote {} ({n} specimens, {survivors} survived at the limit)",
+        a.out.display()
+    );
+    println!("status: ok");
+    Ok(0)
 }

@@ -1,6 +1,7 @@
 //! Reading and writing files: a located delimited-table reader, the tensile-test
 //! reader, and atomic writes.
 
+pub mod breakdown;
 pub mod lcr;
 pub mod manifest;
 pub mod relaxation;

@@ -16,13 +16,14 @@
 //!   Y = 3μ0 of the result. The viscous part (Nv, arm moduli and viscosities; the
 //!   relaxation times unchanged) is scaled by the same factor μ0/μ0,matrix: a rigid
 //!   filler amplifies the strain of the matrix, whose whole stress grows with it.
-//! * **tan δ, breakdown field**: a measured value at x; else interpolated linearly
+//! * **tan δ, breakdown field**: a value at x (stated, or for Eb from a breakdown
+//!   fit scaled to the actuator's film, `manifest::Film`); else interpolated linearly
 //!   in x between the measured loadings (the matrix counts as measured at x = 0);
 //!   beyond the last measured loading held at its value, and with no measured
 //!   composite held at the matrix's value — both with a warning.
 //! * **Density**: φρf + (1 − φ)ρm.
 //!
-//! Standard errors ([`Candidate::one_sigma`]) come from the fit files and from
+//! Standard errors (carried to the figures by [`Candidate::shifts`]) come from the fit files and from
 //! values written in the manifest as `value ± σ` (a value written without ± is
 //! taken as exact), to first order (GUM, JCGM 100:2008):
 //! * εr of a composite fit's rule from its εm, εf (and n) with their correlation;
@@ -147,40 +148,68 @@ pub struct Candidate {
     pub warnings: Vec<String>,
 }
 
+/// A property of a candidate moved by ±1σ ([`Candidate::shifts`]).
+#[derive(Debug, Clone)]
+pub struct Shift {
+    /// The property: `Y` or `εr` (`Eb` too, which enters the state, the limits
+    /// and, under `breakdown_fraction`, the drive).
+    pub what: &'static str,
+    /// The candidate with the property 1σ higher.
+    pub up: Candidate,
+    /// The candidate with the property 1σ lower; None where that is not
+    /// positive (σ ≥ the value: no first-order propagation holds).
+    pub down: Option<Candidate>,
+}
+
 impl Candidate {
-    /// The candidate with each property that has a standard error moved up by
-    /// 1σ, one at a time, named: `Y` (the hyperelastic and viscous parts scaled
-    /// together, the direction the stiffening rule moves them), `εr`, `Eb` and
-    /// `tan δ`. The figures' first-order standard errors follow from these
-    /// ([`super::sweep::run`]).
-    pub fn one_sigma(&self) -> Vec<(&'static str, Candidate)> {
-        let up = |f: &Figure| match (f.value, f.std_error) {
+    /// The candidate with each property that has a standard error and reaches the
+    /// simulator moved by ±1σ, one at a time, named: `Y` (the hyperelastic and
+    /// viscous parts scaled together, the direction the stiffening rule moves
+    /// them), `εr` and `Eb`. The figures' first-order standard errors follow from
+    /// these by central differences ([`super::figures::Evaluation::spread`]).
+    /// tan δ is not moved: it enters only the loss per cycle, linearly, whose
+    /// derivative is exact (and β, Fm are closed forms: [`super::figures::catalogue`]).
+    pub fn shifts(&self) -> Vec<Shift> {
+        let step = |f: &Figure| match (f.value, f.std_error) {
             (Some(v), Some(s)) if s > 0.0 && v.is_finite() => Some((v, s)),
             _ => None,
         };
         let mut out = Vec::new();
-        if let Some((y, s)) = up(&self.youngs_modulus) {
-            let x = 1.0 + s / y;
-            let mut c = self.clone();
-            c.hyperelastic = HyperelasticPart {
-                ranges: self.hyperelastic.ranges.clone(),
-                ..scaled(&self.hyperelastic, x)
+        if let Some((y, s)) = step(&self.youngs_modulus) {
+            let moved = |sign: f64| {
+                let x = 1.0 + sign * s / y;
+                let mut c = self.clone();
+                c.hyperelastic = HyperelasticPart {
+                    ranges: self.hyperelastic.ranges.clone(),
+                    ..scaled(&self.hyperelastic, x)
+                };
+                c.viscous = scaled_viscous(&self.viscous, x);
+                c.youngs_modulus.value = Some(y + sign * s);
+                c
             };
-            c.viscous = scaled_viscous(&self.viscous, x);
-            c.youngs_modulus.value = Some(y + s);
-            out.push(("Y", c));
+            out.push(Shift {
+                what: "Y",
+                up: moved(1.0),
+                down: (s < y).then(|| moved(-1.0)),
+            });
         }
         type Field = fn(&mut Candidate) -> &mut Figure;
-        let figures: [(&'static str, &Figure, Field); 3] = [
+        let figures: [(&'static str, &Figure, Field); 2] = [
             ("εr", &self.eps_r, |c| &mut c.eps_r),
             ("Eb", &self.breakdown, |c| &mut c.breakdown),
-            ("tan δ", &self.tan_delta, |c| &mut c.tan_delta),
         ];
-        for (name, figure, field) in figures {
-            if let Some((v, s)) = up(figure) {
-                let mut c = self.clone();
-                field(&mut c).value = Some(v + s);
-                out.push((name, c));
+        for (what, figure, field) in figures {
+            if let Some((v, s)) = step(figure) {
+                let moved = |x: f64| {
+                    let mut c = self.clone();
+                    field(&mut c).value = Some(x);
+                    c
+                };
+                out.push(Shift {
+                    what,
+                    up: moved(v + s),
+                    down: (s < v).then(|| moved(v - s)),
+                });
             }
         }
         out
@@ -244,7 +273,7 @@ pub fn build(d: &Design, si: usize, loading: f64) -> Result<Candidate> {
             hyperelastic: m.hyperelastic.value.clone(),
             viscous: m.viscous.value.clone(),
             rules: "matrix alone".into(),
-            warnings: Vec::new(),
+            warnings: m.breakdown.warnings.clone(),
         });
     };
     let f = &d.fillers[fi];
@@ -280,7 +309,7 @@ pub fn build(d: &Design, si: usize, loading: f64) -> Result<Candidate> {
         .collect();
     let eps_r = match measured_at(&s.measured, loading, |p| p.eps_r) {
         Some((u, src)) => {
-            Figure::new(u.value, "1", Provenance::Measured, src).with_std_error(u.std_error)
+            Figure::new(u.value, "1", Provenance::Stated, src).with_std_error(u.std_error)
         }
         None => {
             let (v, prov, src, sigma) = model(loading);
@@ -362,7 +391,7 @@ pub fn build(d: &Design, si: usize, loading: f64) -> Result<Candidate> {
         loading,
         "tan δ",
         "1",
-        |p| p.tan_delta,
+        |p| p.tan_delta.map(|u| typed(p, u)),
         &mut warnings,
     );
     let breakdown = interpolated(
@@ -371,7 +400,7 @@ pub fn build(d: &Design, si: usize, loading: f64) -> Result<Candidate> {
         loading,
         "breakdown field",
         "V/m",
-        |p| p.breakdown,
+        |p| p.breakdown.clone(),
         &mut warnings,
     );
     Ok(Candidate {
@@ -536,6 +565,17 @@ fn eps_model(d: &Design, s: &Series, phi: f64, x: f64) -> (f64, Provenance, Stri
     }
 }
 
+/// A value typed at a measured point, with the point's line.
+fn typed(p: &MeasuredPoint, u: Uncertain) -> Stated<f64> {
+    Stated {
+        value: u.value,
+        std_error: u.std_error,
+        provenance: Provenance::Stated,
+        source: p.source.clone(),
+        warnings: Vec::new(),
+    }
+}
+
 /// The value of a measured point exactly at `x`, with its source.
 fn measured_at(
     points: &[MeasuredPoint],
@@ -587,59 +627,66 @@ fn correction(knots: &[(f64, f64, &str)], x: f64) -> (f64, String) {
 /// tan δ or the breakdown field at x: measured, interpolated between the measured
 /// loadings (the matrix at 0), or held with a warning. A standard uncertainty is
 /// carried as the value is: interpolated with weights 1 − w and w of two
-/// independent measurements, u = √((1 − w)²u₁² + w²u₂²), or held.
+/// independent measurements, u = √((1 − w)²u₁² + w²u₂²), or held. The warnings
+/// of the values used (a breakdown fit not scaled to the actuator) are the
+/// candidate's.
 fn interpolated(
     s: &Series,
     matrix: &Stated<f64>,
     x: f64,
     what: &str,
     unit: &str,
-    get: impl Fn(&MeasuredPoint) -> Option<Uncertain>,
+    get: impl Fn(&MeasuredPoint) -> Option<Stated<f64>>,
     warnings: &mut Vec<String>,
 ) -> Figure {
-    let knots: Vec<(f64, Uncertain, String, Provenance)> = std::iter::once((
-        0.0,
-        Uncertain {
-            value: matrix.value,
-            std_error: matrix.std_error,
-        },
-        matrix.source.clone(),
-        matrix.provenance,
-    ))
-    .chain(
-        s.measured
-            .iter()
-            .filter_map(|p| get(p).map(|v| (p.loading, v, p.source.clone(), Provenance::Measured))),
-    )
-    .collect();
+    let knots: Vec<(f64, Stated<f64>)> = std::iter::once((0.0, matrix.clone()))
+        .chain(
+            s.measured
+                .iter()
+                .filter_map(|p| get(p).map(|v| (p.loading, v))),
+        )
+        .collect();
     let xs: Vec<f64> = knots.iter().map(|k| k.0).collect();
+    let mut used = |k: &Stated<f64>| {
+        for w in &k.warnings {
+            if !warnings.contains(w) {
+                warnings.push(w.clone());
+            }
+        }
+    };
     match place(&xs, x) {
-        Place::At(i) => Figure::new(knots[i].1.value, unit, knots[i].3, knots[i].2.clone())
-            .with_std_error(knots[i].1.std_error),
+        Place::At(i) => {
+            let k = &knots[i].1;
+            used(k);
+            Figure::new(k.value, unit, k.provenance, k.source.clone()).with_std_error(k.std_error)
+        }
         Place::Between(i, w) => {
-            let (a, b) = (&knots[i], &knots[i + 1]);
-            let sigma = match (a.1.std_error, b.1.std_error) {
+            let ((xa, a), (xb, b)) = (&knots[i], &knots[i + 1]);
+            used(a);
+            used(b);
+            let sigma = match (a.std_error, b.std_error) {
                 (None, None) => None,
                 (sa, sb) => Some(((1.0 - w) * sa.unwrap_or(0.0)).hypot(w * sb.unwrap_or(0.0))),
             };
             Figure::new(
-                a.1.value + w * (b.1.value - a.1.value),
+                a.value + w * (b.value - a.value),
                 unit,
                 Provenance::Predicted,
                 format!(
                     "linear in loading between {} at {} ({}) and {} at {} ({})",
-                    short(a.1.value),
-                    loading_label(a.0, s.basis),
-                    a.2,
-                    short(b.1.value),
-                    loading_label(b.0, s.basis),
-                    b.2
+                    short(a.value),
+                    loading_label(*xa, s.basis),
+                    a.source,
+                    short(b.value),
+                    loading_label(*xb, s.basis),
+                    b.source
                 ),
             )
             .with_std_error(sigma)
         }
         Place::Beyond => {
-            let last = &knots[knots.len() - 1];
+            let (xl, last) = &knots[knots.len() - 1];
+            used(last);
             let why = match knots.len() {
                 1 => format!(
                     "{}: no measured {what} of a composite: held at the matrix's value",
@@ -648,17 +695,17 @@ fn interpolated(
                 _ => format!(
                     "{}: {what} beyond the measured loadings held at its value at {}",
                     s.name,
-                    loading_label(last.0, s.basis)
+                    loading_label(*xl, s.basis)
                 ),
             };
             warnings.push(why.clone());
             Figure::new(
-                last.1.value,
+                last.value,
                 unit,
                 Provenance::Predicted,
-                format!("held: {}", last.2),
+                format!("held: {}", last.source),
             )
-            .with_std_error(last.1.std_error)
+            .with_std_error(last.std_error)
             .noted(why)
         }
     }

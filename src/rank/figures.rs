@@ -30,6 +30,9 @@
 //!   sine at the drive frequency, π·C(λd)·(V/2)²·tan δ (the loss of its AC part of
 //!   amplitude V/2, with the capacitance at the drive: an upper bound, C grows with
 //!   the stroke).
+//! * **margins** at the operating point: to breakdown 1 − E/Eb, E = V/g(λd) the
+//!   true field at the static stroke; to pull-in 1 − V/V_pull-in. Below
+//!   [`SMALL_MARGIN`] the ranking warns.
 
 use super::candidate::Candidate;
 use super::manifest::{Design, Level};
@@ -52,6 +55,12 @@ pub const STRETCH_MIN: f64 = 0.3;
 pub const CURVE_POINTS: usize = 60;
 /// Points of the stroke–voltage curve kept for the report.
 pub const KEPT_POINTS: usize = 16;
+/// A margin to breakdown or to pull-in at the operating point below this (10 %)
+/// is a warning of the ranking: breakdown fields scatter by more (a Weibull β of
+/// 10 puts 10 % of specimens below 0.8α), and a drive within 10 % of pull-in
+/// sits on the flat top of the static curve, where a few % of modulus or
+/// thickness decide between a stroke and a collapse.
+pub const SMALL_MARGIN: f64 = 0.1;
 
 /// The state of a candidate at the drive voltage.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -169,13 +178,18 @@ pub struct Evaluation {
     pub energy_in: Figure,
     /// Dielectric loss per cycle.
     pub loss_per_cycle: Figure,
+    /// Margin to breakdown at the operating point, 1 − E/Eb (E the true field at
+    /// the static stroke; below [`SMALL_MARGIN`] a warning of the ranking).
+    pub breakdown_margin: Figure,
+    /// Margin to pull-in, 1 − V/V_pull-in (none without a pull-in).
+    pub pull_in_margin: Figure,
     /// Warnings of the candidate's properties.
     pub warnings: Vec<String>,
 }
 
 impl Evaluation {
     /// Every figure of the evaluation with its field name, in the order above.
-    pub fn figures_mut(&mut self) -> [(&'static str, &mut Figure); 13] {
+    pub fn figures_mut(&mut self) -> [(&'static str, &mut Figure); 15] {
         [
             ("voltage", &mut self.voltage),
             ("eps_r", &mut self.eps_r),
@@ -190,37 +204,92 @@ impl Evaluation {
             ("response_time", &mut self.response_time),
             ("energy_in", &mut self.energy_in),
             ("loss_per_cycle", &mut self.loss_per_cycle),
+            ("breakdown_margin", &mut self.breakdown_margin),
+            ("pull_in_margin", &mut self.pull_in_margin),
         ]
     }
 
-    /// The first-order standard errors of the figures from evaluations of the same
-    /// candidate with one property moved up by its σ each (`shifted`, named;
-    /// [`super::candidate::Candidate::one_sigma`]): u(f) = √Σᵢ (fᵢ − f)², the
-    /// properties being independent (they come from different experiments). A
-    /// shift that moves the candidate into another state (pulled in, broken down)
-    /// leaves every figure without a standard error, and a warning says so.
-    pub fn spread(&mut self, shifted: Vec<(&str, Evaluation)>) {
-        if let Some((what, s)) = shifted.iter().find(|(_, s)| s.state != self.state) {
-            self.warnings.push(format!(
-                "{}: with {what} 1σ higher the state is {} ({}), so its figures have no standard error",
-                self.name, s.state, s.state_note
-            ));
-            return;
+    /// The first-order standard errors of the simulated figures (drive, strokes,
+    /// force, response time, energy, loss) by central differences: `shifts` holds,
+    /// per property with a σ, the evaluations of the same candidate with that
+    /// property 1σ higher and 1σ lower ([`super::candidate::Candidate::shifts`]),
+    /// and u(f)² = Σᵢ ((f₊ᵢ − f₋ᵢ)/2)² + (∂f/∂tan δ · u(tan δ))², the properties
+    /// being independent (they come from different experiments; GUM, JCGM
+    /// 100:2008, eq. 10). The central difference at ±1σ has no second-order term:
+    /// it differs from the derivative by f‴σ²/6 (exact for a quadratic; 0.25 % for
+    /// a figure going as 1/Y at a 5 % σ), against the one-sided step's f″σ/2, and
+    /// it looks at the states on both sides. The loss per cycle is linear in tan δ
+    /// (exact derivative, no evaluation); the catalogue figures' σ are their closed
+    /// forms ([`catalogue`]); εr, Y, tan δ and Eb keep their own. A shift that moves
+    /// the candidate into another state (pulled in, broken down), or a σ not
+    /// smaller than its value (no 1σ lower), leaves the simulated figures without
+    /// a standard error, and a warning says so.
+    pub fn spread(&mut self, shifts: Vec<(&str, Evaluation, Option<Evaluation>)>) {
+        for (what, up, down) in &shifts {
+            let why = match down {
+                None => {
+                    Some("1σ lower is not positive (σ is not smaller than the value)".to_string())
+                }
+                Some(_) if up.state != self.state => Some(format!(
+                    "1σ higher the state is {} ({})",
+                    up.state, up.state_note
+                )),
+                Some(d) if d.state != self.state => Some(format!(
+                    "1σ lower the state is {} ({})",
+                    d.state, d.state_note
+                )),
+                Some(_) => None,
+            };
+            if let Some(why) = why {
+                self.warnings.push(format!(
+                    "{}: with {what} {why}, so its figures have no standard error",
+                    self.name
+                ));
+                return;
+            }
         }
-        let values: Vec<[Option<f64>; 13]> = shifted
-            .into_iter()
-            .map(|(_, mut s)| s.figures_mut().map(|(_, f)| f.value))
+        let values = |e: &Evaluation| e.clone().figures_mut().map(|(_, f)| f.value);
+        let pairs: Vec<_> = shifts
+            .iter()
+            .filter_map(|(_, up, down)| down.as_ref().map(|d| (values(up), values(d))))
             .collect();
-        for (i, (_, f)) in self.figures_mut().into_iter().enumerate() {
+        // ∂loss/∂tan δ · u(tan δ) = loss · u(tan δ)/tan δ (loss ∝ tan δ)
+        let tan = match (self.tan_delta.value, self.tan_delta.std_error) {
+            (Some(t), Some(u)) if t > 0.0 => u / t,
+            _ => 0.0,
+        };
+        for (i, (name, f)) in self.figures_mut().into_iter().enumerate() {
+            if !SIMULATED.contains(&name) {
+                continue;
+            }
             let Some(v) = f.value else { continue };
-            let var = values
+            let var = pairs
                 .iter()
-                .map(|o| o[i].map(|w| (w - v).powi(2)))
-                .sum::<Option<f64>>();
+                .map(|(u, d)| u[i].zip(d[i]).map(|(a, b)| (0.5 * (a - b)).powi(2)))
+                .sum::<Option<f64>>()
+                .map(|x| match name {
+                    "loss_per_cycle" => x + (v * tan).powi(2),
+                    _ => x,
+                });
             f.std_error = var.filter(|x| x.is_finite() && *x > 0.0).map(f64::sqrt);
         }
     }
 }
+
+/// The figures whose standard errors come from evaluations of the shifted
+/// candidate ([`Evaluation::spread`]): the others are the candidate's properties
+/// (their own σ) and the closed forms β and Fm ([`catalogue`]).
+const SIMULATED: [&str; 9] = [
+    "voltage",
+    "static_stroke",
+    "max_stroke",
+    "blocked_force",
+    "response_time",
+    "energy_in",
+    "loss_per_cycle",
+    "breakdown_margin",
+    "pull_in_margin",
+];
 
 /// An evaluation with its static stroke–voltage curve (for the report).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -251,12 +320,38 @@ pub fn gap(a: &Actuator, lam: f64) -> f64 {
     }
 }
 
-/// The weakest provenance of several inputs (measured < fitted < predicted).
+/// The active electrode area of the actuator as built (m²; every layer's), the
+/// same in words, and the thickness of one dielectric layer (m): the film a
+/// breakdown fit is scaled to (weakest link: a breakdown anywhere under field
+/// fails the actuator, so the whole active area counts). A stack: nd·π·r0²; a
+/// helix: Np·Ne electrode areas of one element at λ = 1 (seed Eq. 4.12), of
+/// element thickness z0.
+pub fn electrode_area(a: &Actuator) -> (f64, String, f64) {
+    match a {
+        Actuator::Stack(s) => (
+            s.layers as f64 * s.area0(),
+            format!("{} layers × π·r0²", s.layers),
+            s.layer_m,
+        ),
+        Actuator::Helix(h) => {
+            let n = h.periods * h.per_period;
+            (
+                n as f64 * h.electrode_area(1.0),
+                format!("{n} elements × A_e (seed Eq. 4.12)"),
+                h.thickness_m,
+            )
+        }
+    }
+}
+
+/// The weakest provenance of several inputs (measured < fitted < stated <
+/// predicted: a typed value is an assertion, a prediction rests on typed ones).
 fn weakest(p: &[Provenance]) -> Provenance {
     let order = |x: &Provenance| match x {
         Provenance::Measured => 0,
         Provenance::Fitted => 1,
-        Provenance::Predicted => 2,
+        Provenance::Stated => 2,
+        Provenance::Predicted => 3,
     };
     *p.iter()
         .max_by_key(|x| order(x))
@@ -264,18 +359,43 @@ fn weakest(p: &[Provenance]) -> Provenance {
 }
 
 /// The catalogue figures of candidate `c` computed from its properties: β = εr/Y
-/// and Fm = 3ε0·εr·Eb²/Y (Sommer-Larsen & Larsen 2004, seed §2.6).
+/// and Fm = 3ε0·εr·Eb²/Y (Sommer-Larsen & Larsen 2004, seed §2.6), with their
+/// first-order standard errors in closed form from the properties' (independent):
+/// (u_β/β)² = (u_ε/εr)² + (u_Y/Y)², (u_Fm/Fm)² = (u_ε/εr)² + (2u_Eb/Eb)² + (u_Y/Y)².
 pub fn catalogue(c: &Candidate) -> (Figure, Figure) {
     let v = |f: &Figure| f.value.unwrap_or(f64::NAN);
     let (eps, y, eb) = (v(&c.eps_r), v(&c.youngs_modulus), v(&c.breakdown));
+    let rel = |f: &Figure, power: f64| match (f.value, f.std_error) {
+        (Some(x), Some(s)) if x != 0.0 => Some(power * s / x),
+        _ => None,
+    };
+    let (re, ry, rb) = (
+        rel(&c.eps_r, 1.0),
+        rel(&c.youngs_modulus, 1.0),
+        rel(&c.breakdown, 2.0),
+    );
+    // √Σ of the relative parts that exist (none: no σ)
+    let combine = |parts: &[Option<f64>]| {
+        parts.iter().any(Option::is_some).then(|| {
+            parts
+                .iter()
+                .map(|p| p.unwrap_or(0.0).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        })
+    };
     let cat = weakest(&[c.eps_r.provenance, c.youngs_modulus.provenance]);
-    let beta = Figure::new(eps / y, "1/Pa", cat, "εr/Y");
+    let b = eps / y;
+    let beta =
+        Figure::new(b, "1/Pa", cat, "εr/Y").with_std_error(combine(&[re, ry]).map(|r| r * b));
+    let f = 3.0 * EPS0 * eps * eb * eb / y;
     let fm = Figure::new(
-        3.0 * EPS0 * eps * eb * eb / y,
+        f,
         "1",
         weakest(&[cat, c.breakdown.provenance]),
         "3ε0·εr·Eb²/Y (Sommer-Larsen & Larsen 2004, seed §2.6)",
-    );
+    )
+    .with_std_error(combine(&[re, rb, ry]).map(|r| r * f));
     (beta, fm)
 }
 
@@ -321,6 +441,8 @@ pub fn evaluate(
         response_time: Figure::none("s", Provenance::Predicted, &sim_src, "not evaluated"),
         energy_in: Figure::none("J", Provenance::Predicted, &sim_src, "not evaluated"),
         loss_per_cycle: Figure::none("J", Provenance::Predicted, &sim_src, "not evaluated"),
+        breakdown_margin: Figure::none("1", Provenance::Predicted, &sim_src, "not evaluated"),
+        pull_in_margin: Figure::none("1", Provenance::Predicted, &sim_src, "not evaluated"),
         warnings: c.warnings.clone(),
     };
     let mut scene = template.clone();
@@ -363,7 +485,7 @@ pub fn evaluate(
         Level::BreakdownFraction(f) => f * eb * gap(&a, lam0),
     };
     e.voltage = match level {
-        Level::Voltage(_) => Figure::new(vd, "V", Provenance::Measured, "drive voltage"),
+        Level::Voltage(_) => Figure::new(vd, "V", Provenance::Stated, "drive voltage"),
         Level::BreakdownFraction(f) => Figure::new(
             vd,
             "V",
@@ -452,6 +574,32 @@ pub fn evaluate(
             }
             other => format!("no static equilibrium at {}: {other}", si(vd, "V")),
         }),
+    };
+    // The margins at the operating point: 1 − V/V_pull-in, and 1 − E/Eb with E
+    // the true field at the static equilibrium (at or below 0: reached).
+    let margin_src = format!("static curve; {sim_src}");
+    e.pull_in_margin = match pull {
+        Some(q) => Figure::new(
+            1.0 - vd / q.voltage_v,
+            "1",
+            Provenance::Predicted,
+            format!("1 − V/V_pull-in; {margin_src}"),
+        ),
+        None => Figure::none(
+            "1",
+            Provenance::Predicted,
+            &margin_src,
+            format!("no pull-in down to stretch {STRETCH_MIN}"),
+        ),
+    };
+    e.breakdown_margin = match &lam_d {
+        Ok(l) => Figure::new(
+            1.0 - vd / gap(&a, *l) / eb,
+            "1",
+            Provenance::Predicted,
+            format!("1 − E/Eb, E = V/gap at the static stroke; {margin_src}"),
+        ),
+        Err(why) => Figure::none("1", Provenance::Predicted, &margin_src, why),
     };
     // Pulled in, or no equilibrium, or broken down at the static stroke: the
     // static and dynamic figures have no value, and the reason is the state's note.

@@ -121,7 +121,7 @@ struct MatrixSpec {
     density: Spanned<Text>,
     eps_r: Spanned<Text>,
     tan_delta: Spanned<Text>,
-    breakdown: Spanned<Text>,
+    breakdown: Spanned<toml::Value>,
     hyperelastic: Spanned<HyperSpec>,
     viscous: Option<Spanned<ViscousSpec>>,
 }
@@ -198,7 +198,7 @@ struct MeasuredSpec {
     source: Option<String>,
     eps_r: Option<Spanned<Text>>,
     tan_delta: Option<Spanned<Text>>,
-    breakdown: Option<Spanned<Text>>,
+    breakdown: Option<Spanned<toml::Value>>,
     hyperelastic: Option<Spanned<HyperSpec>>,
 }
 
@@ -211,10 +211,14 @@ pub struct Stated<T> {
     /// or written in the manifest as `value ± σ`. None for a preset or a value
     /// written without ±, which the ranking's confidence takes as exact.
     pub std_error: Option<f64>,
-    /// Measured (written in the manifest), fitted (a fit file) or predicted.
+    /// Stated (written in the manifest or the scene), fitted (a fit file) or
+    /// predicted.
     pub provenance: Provenance,
     /// `manifest:line (note)` or the fit file.
     pub source: String,
+    /// What a candidate using it is warned of (a breakdown fit that could not be
+    /// scaled to the actuator, or was extrapolated).
+    pub warnings: Vec<String>,
 }
 
 /// How each candidate is driven.
@@ -314,8 +318,9 @@ pub struct MeasuredPoint {
     pub eps_r: Option<Uncertain>,
     /// Loss tangent at the drive frequency.
     pub tan_delta: Option<Uncertain>,
-    /// Breakdown field (V/m).
-    pub breakdown: Option<Uncertain>,
+    /// Breakdown field (V/m): stated, or from a breakdown fit scaled to the
+    /// actuator.
+    pub breakdown: Option<Stated<f64>>,
     /// Hyperelastic constants (fitted from a file or written in the manifest).
     pub hyperelastic: Option<Stated<HyperelasticPart>>,
 }
@@ -477,6 +482,105 @@ impl Ctx<'_> {
             .with_hint(hint)
     }
 
+    /// A breakdown field: stated (`"19 V/um"`, `"19 ± 1 V/um"`, a bare SI number)
+    /// or `{ fit = "fits/x-breakdown.json" }`, a breakdown fit whose α (and σ)
+    /// is carried to the actuator's film ([`Film`]; `BreakdownFit::strength`).
+    /// What was scaled is the source's note; what could not be scaled or was
+    /// extrapolated is also a warning of every candidate that uses it.
+    fn breakdown(
+        &self,
+        q: &Spanned<toml::Value>,
+        key: &str,
+        note: &Option<String>,
+        film: &Film,
+    ) -> Result<Stated<f64>> {
+        let span = q.span();
+        let text = match q.get_ref() {
+            toml::Value::String(s) => Some(Text::Str(s.clone())),
+            toml::Value::Float(v) => Some(Text::Num(*v)),
+            toml::Value::Integer(v) => Some(Text::Num(*v as f64)),
+            _ => None,
+        };
+        if let Some(t) = text {
+            let u = self.uncertain(
+                &Spanned::new(span.clone(), t),
+                Dimension::ElectricField,
+                Some(&BREAKDOWN),
+                key,
+            )?;
+            return Ok(Stated {
+                value: u.value,
+                std_error: u.std_error,
+                provenance: Provenance::Stated,
+                source: self.here(&span, note),
+                warnings: Vec::new(),
+            });
+        }
+        let hint = "breakdown = \"19 V/um\", \"19 ± 1 V/um\" or { fit = \"fits/x-breakdown.json\" } (written by dea-fit breakdown --out)";
+        let f = match q.get_ref() {
+            toml::Value::Table(t) if t.len() == 1 => match t.get("fit") {
+                Some(toml::Value::String(f)) => f.clone(),
+                _ => {
+                    let k = t.keys().next().map_or("", String::as_str);
+                    return Err(self
+                        .err(
+                            &span,
+                            format!("{key}: '{k}' is not a key of a breakdown reference"),
+                        )
+                        .with_hint(hint));
+                }
+            },
+            _ => {
+                return Err(self
+                    .err(
+                        &span,
+                        format!("{key}: expected a field with a unit or {{ fit = \"...\" }}"),
+                    )
+                    .with_hint(hint))
+            }
+        };
+        let path = self.file(&span, &format!("{key}.fit"), &f)?;
+        // the manifest's place first, then the fit file's own error
+        let fit = file::read_breakdown(&path).map_err(|e| match e {
+            Error::Input { loc, msg, hint } => {
+                let (l, c) = line_col(self.text, span.start);
+                Error::Input {
+                    loc: Location::at(self.path, l, c),
+                    msg: format!("{key}.fit = \"{f}\": {loc}: {msg}"),
+                    hint,
+                }
+            }
+            other => self.err(&span, format!("{key}.fit = \"{f}\": {other}")),
+        })?;
+        let s = fit.strength(
+            Some(film.area_m2),
+            Some(film.thickness_m),
+            None,
+            &path.display().to_string(),
+        );
+        let value = self.checked(&span, &BREAKDOWN, key, s.field)?;
+        // "α × …" notes say what was scaled; the others what was not, or was
+        // extrapolated (material::file::BreakdownFit::strength)
+        let warnings = s
+            .notes
+            .iter()
+            .filter(|n| !n.starts_with("α ×") && !n.starts_with("three-parameter"))
+            .map(|n| format!("breakdown of {f}: {n}"))
+            .collect();
+        Ok(Stated {
+            value,
+            std_error: s.std_error,
+            provenance: Provenance::Fitted,
+            source: format!(
+                "{} (Weibull α at {}: {})",
+                s.source,
+                film.describe,
+                s.notes.join("; ")
+            ),
+            warnings,
+        })
+    }
+
     /// A hyperelastic part: a preset, a fit file (hyperelastic or identified) or a
     /// model with its parameters by name.
     fn hyperelastic(
@@ -509,6 +613,7 @@ impl Ctx<'_> {
                     std_error: None,
                     provenance: Provenance::Fitted,
                     source: "preset vhb4910-yeoh (seed Table 3.2, Wissler & Mazza 2005)".into(),
+                    warnings: Vec::new(),
                 }),
                 o => Err(self.unknown(&span, &format!("{key}.preset"), o, &["vhb4910-yeoh"])),
             };
@@ -523,6 +628,7 @@ impl Ctx<'_> {
                 value,
                 provenance: Provenance::Fitted,
                 source: path.display().to_string(),
+                warnings: Vec::new(),
             });
         }
         let m = s.model.as_deref().unwrap_or_default();
@@ -572,8 +678,9 @@ impl Ctx<'_> {
                 ranges: None,
             },
             std_error,
-            provenance: Provenance::Measured,
+            provenance: Provenance::Stated,
             source: self.here(&span, note),
+            warnings: Vec::new(),
         })
     }
 
@@ -611,6 +718,7 @@ impl Ctx<'_> {
                     std_error: None,
                     provenance: Provenance::Fitted,
                     source: format!("preset {p}"),
+                    warnings: Vec::new(),
                 })
                 .ok_or_else(|| self.unknown(&span, &format!("{key}.preset"), p, &names));
         }
@@ -633,6 +741,7 @@ impl Ctx<'_> {
                 std_error: None,
                 provenance: Provenance::Fitted,
                 source: path.display().to_string(),
+                warnings: Vec::new(),
             });
         }
         let mut arms = Vec::new();
@@ -678,8 +787,9 @@ impl Ctx<'_> {
                 arms,
             },
             std_error: None,
-            provenance: Provenance::Measured,
+            provenance: Provenance::Stated,
             source: self.here(&span, note),
+            warnings: Vec::new(),
         })
     }
 }
@@ -783,6 +893,9 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
         }
     };
 
+    // The actuator's film, which a breakdown fit is scaled to.
+    let film = Film::of(&scene, &scene_path);
+
     // Matrices.
     let mut matrices: Vec<Matrix> = Vec::new();
     for (i, m) in spec.matrix.iter().enumerate() {
@@ -814,31 +927,29 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
             Some(&TAN_DELTA),
             &format!("{key}.tan_delta"),
         )?;
-        let eb = cx.uncertain(
-            &m.breakdown,
-            Dimension::ElectricField,
-            Some(&BREAKDOWN),
-            &format!("{key}.breakdown"),
-        )?;
+        let breakdown =
+            cx.breakdown(&m.breakdown, &format!("{key}.breakdown"), &m.source, &film)?;
         let with = |u: Uncertain, s: &Span| Stated {
             value: u.value,
             std_error: u.std_error,
-            provenance: Provenance::Measured,
+            provenance: Provenance::Stated,
             source: cx.here(s, &m.source),
+            warnings: Vec::new(),
         };
         let viscous = match &m.viscous {
             Some(v) => cx.viscous(v, &format!("{key}.viscous"), &m.source)?,
             None => Stated {
                 value: scene.material.viscous.clone(),
                 std_error: None,
-                provenance: Provenance::Measured,
+                provenance: Provenance::Stated,
                 source: format!("{} [material] viscous", scene_path.display()),
+                warnings: Vec::new(),
             },
         };
         matrices.push(Matrix {
             eps_r: with(eps, &m.eps_r.span()),
             tan_delta: with(tan, &m.tan_delta.span()),
-            breakdown: with(eb, &m.breakdown.span()),
+            breakdown,
             hyperelastic: cx.hyperelastic(
                 &m.hyperelastic,
                 &format!("{key}.hyperelastic"),
@@ -887,8 +998,9 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
                 Stated {
                     value: u.value,
                     std_error: u.std_error,
-                    provenance: Provenance::Measured,
+                    provenance: Provenance::Stated,
                     source: cx.here(&f.eps_r.span(), &f.source),
+                    warnings: Vec::new(),
                 }
             },
             name,
@@ -898,7 +1010,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
     // Series.
     let mut series: Vec<Series> = Vec::new();
     for (i, s) in spec.series.iter().enumerate() {
-        series.push(read_series(&cx, i, s, &matrices, &fillers)?);
+        series.push(read_series(&cx, i, s, &matrices, &fillers, &film)?);
         let last = series.last().expect("pushed");
         if series[..i].iter().any(|o| o.name == last.name) {
             let at = s.name.as_ref().map(|n| n.span()).unwrap_or(s.matrix.span());
@@ -970,6 +1082,7 @@ fn read_series(
     s: &SeriesSpec,
     matrices: &[Matrix],
     fillers: &[Filler],
+    film: &Film,
 ) -> Result<Series> {
     let key = format!("series[{i}]");
     let matrix_names: Vec<&str> = matrices.iter().map(|m| m.name.as_str()).collect();
@@ -1233,14 +1346,7 @@ fn read_series(
         let breakdown = x
             .breakdown
             .as_ref()
-            .map(|e| {
-                cx.uncertain(
-                    e,
-                    Dimension::ElectricField,
-                    Some(&BREAKDOWN),
-                    &format!("{mk}.breakdown"),
-                )
-            })
+            .map(|e| cx.breakdown(e, &format!("{mk}.breakdown"), &x.source, film))
             .transpose()?;
         let hyperelastic = match &x.hyperelastic {
             Some(h) => Some(cx.hyperelastic(h, &format!("{mk}.hyperelastic"), &x.source)?),
@@ -1271,4 +1377,35 @@ fn read_series(
         stiffening,
         measured,
     })
+}
+
+/// The actuator's film as a breakdown fit sees it: the electrode area under
+/// field (all of it: a film fails where its weakest part does, so the whole
+/// active area counts) and the layer thickness; a scene states no prestretch.
+#[derive(Debug, Clone)]
+pub struct Film {
+    /// Active electrode area (m²): [`super::figures::electrode_area`].
+    pub area_m2: f64,
+    /// Thickness of one dielectric layer (m).
+    pub thickness_m: f64,
+    /// Both in words, with the scene.
+    pub describe: String,
+}
+
+impl Film {
+    /// The film of `scene` (read from `path`).
+    pub fn of(scene: &Scene, path: &Path) -> Film {
+        let a = scene.actuator;
+        let (area, how, h) = super::figures::electrode_area(&a);
+        Film {
+            area_m2: area,
+            thickness_m: h,
+            describe: format!(
+                "the electrode area of {} ({how} = {} m², the whole film under field) and its {} µm layer",
+                path.display(),
+                crate::report::format::sig(area, 4),
+                crate::report::format::sig(1e6 * h, 4)
+            ),
+        }
+    }
 }

@@ -33,17 +33,21 @@ pub fn short(v: f64) -> String {
     }
 }
 
-/// Where a number comes from.
+/// What a number is, by where it comes from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Provenance {
-    /// Written in the design manifest as a measured value (its line says where).
+    /// Read from a data file (a measured series).
     Measured,
-    /// From a fit file (hyperelastic, relaxation, identified, composite).
+    /// From a fit file (hyperelastic, relaxation, identified, composite, breakdown).
     Fitted,
     /// From a stated model (a mixing rule, a stiffening rule, an interpolation) or
     /// the simulator.
     Predicted,
+    /// Typed into the design manifest or the actuator scene, with or without `± σ`
+    /// (its `file:line` says where). Without ± it carries no standard error: the
+    /// ranking takes it as exact and says when an order rests on it.
+    Stated,
 }
 
 impl std::fmt::Display for Provenance {
@@ -52,6 +56,7 @@ impl std::fmt::Display for Provenance {
             Provenance::Measured => "measured",
             Provenance::Fitted => "fitted",
             Provenance::Predicted => "predicted",
+            Provenance::Stated => "stated",
         })
     }
 }
@@ -65,18 +70,18 @@ pub struct Figure {
     pub value: Option<f64>,
     /// SI unit (`1` for dimensionless).
     pub unit: String,
-    /// Measured, fitted or predicted.
+    /// Measured, fitted, predicted or stated.
     pub provenance: Provenance,
     /// The file (with line) or the rule it comes from.
     pub source: String,
     /// Why there is no value, or what limits it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
-    /// Standard error (SI) from the standard errors the fit files state, to first
-    /// order ([`sweep::run`]): values written in the manifest count as exact, so
-    /// it is a lower bound of the whole uncertainty. None: no fitted constant
-    /// with a standard error reaches it, or a 1σ change moves the candidate into
-    /// another state (a warning says so).
+    /// Standard error (SI), to first order, from the standard errors the fit files
+    /// state and the `± σ` written in the manifest ([`sweep::run`]): values stated
+    /// without ± count as exact, so it is a lower bound of the whole uncertainty.
+    /// None: no input with a standard error reaches it, or a ±1σ change moves the
+    /// candidate into another state (a warning says so).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub std_error: Option<f64>,
 }

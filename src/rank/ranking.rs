@@ -6,7 +6,7 @@
 //! energy figures, and is listed after the ranked ones with the reason — never
 //! ranked on the numbers of a state it cannot reach. Ties keep the run's order.
 
-use super::figures::{Evaluation, State};
+use super::figures::{Evaluation, State, SMALL_MARGIN};
 use super::Figure;
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -99,6 +99,20 @@ impl Objective {
         }
     }
 
+    /// The candidate's properties the objective depends on, named, with their
+    /// figures: εr and Y always; Eb for all but β (Fm holds it, and it sets the
+    /// states and limits the simulated figures have); tan δ for the loss.
+    pub fn inputs(self, e: &Evaluation) -> Vec<(&'static str, &Figure)> {
+        let mut v = vec![("εr", &e.eps_r), ("Y", &e.youngs_modulus)];
+        if self != Objective::Beta {
+            v.push(("Eb", &e.breakdown_field));
+        }
+        if self == Objective::Loss {
+            v.push(("tan δ", &e.tan_delta));
+        }
+        v
+    }
+
     /// The value of the objective for an evaluation (None: not ranked on it).
     pub fn value(self, e: &Evaluation) -> Option<f64> {
         self.figure(e).value.filter(|v| v.is_finite())
@@ -132,7 +146,8 @@ impl Objective {
 pub enum Status {
     /// Every candidate evaluated; every property from data or a stated model.
     Ok,
-    /// Some properties were held or extrapolated (the warnings say which).
+    /// Some properties were held or extrapolated, or candidates are driven close
+    /// to breakdown or pull-in (the warnings say which).
     Warning,
     /// Some candidates could not be evaluated (they are listed, not ranked):
     /// blocking under `--strict`.
@@ -214,6 +229,23 @@ pub struct BestLoading {
     pub at_edge: bool,
 }
 
+/// What the order of the first two ranked candidates rests on: the inputs of the
+/// objective, of either, that carry no standard error (stated without ±, a
+/// preset, or predicted from such values only), which the standard errors and
+/// `apart` take as exact.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Lead {
+    /// The first-ranked candidate.
+    pub first: String,
+    /// The second.
+    pub second: String,
+    /// Whether the two are told apart within their standard errors (null: either
+    /// has none).
+    pub apart: Option<bool>,
+    /// Those inputs in words, grouped by source: "Eb of A, B: stated, design.toml:23".
+    pub without_std_error: Vec<String>,
+}
+
 /// The ranking of a run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Ranking {
@@ -233,6 +265,9 @@ pub struct Ranking {
     /// [`APART`] standard errors of the difference. None for the first, and where
     /// either objective has no standard error.
     pub apart: Vec<Option<bool>>,
+    /// The lead of the first over the second, where it rests on inputs without a
+    /// standard error (None: fewer than two ranked, or every input has one).
+    pub lead: Option<Lead>,
     /// Pareto front.
     pub pareto: Pareto,
     /// Best loading per series and drive level.
@@ -306,6 +341,7 @@ pub fn rank(evals: &[Evaluation], by: Objective, pareto: [Objective; 2]) -> Rank
             warnings.push(w.clone());
         }
     }
+    warnings.extend(small_margins(evals, ranked.first().map(|x| x.0)));
     let failed: Vec<&Evaluation> = evals.iter().filter(|e| e.state == State::Failed).collect();
     if let Some(f) = failed.first() {
         warnings.push(format!(
@@ -324,8 +360,13 @@ pub fn rank(evals: &[Evaluation], by: Objective, pareto: [Objective; 2]) -> Rank
     } else {
         Status::Ok
     };
+    let lead = match ranked[..] {
+        [(a, _), (b, _), ..] => lead(&evals[a], &evals[b], by, apart[b]),
+        _ => None,
+    };
     Ranking {
         by,
+        lead,
         pareto: front(evals, &same_as, pareto),
         best: best_loadings(evals, by),
         order,
@@ -335,6 +376,80 @@ pub fn rank(evals: &[Evaluation], by: Objective, pareto: [Objective; 2]) -> Rank
         status,
         warnings,
     }
+}
+
+/// A warning for each kind of margin (to breakdown, to pull-in) that some
+/// candidates in state `ok` have below [`SMALL_MARGIN`]: how many, the smallest,
+/// and the leader (`lead`, by index in `evals`) when it is one of them.
+fn small_margins(evals: &[Evaluation], lead: Option<usize>) -> Vec<String> {
+    type Get = fn(&Evaluation) -> &Figure;
+    let kinds: [(&str, Get); 2] = [
+        (
+            "breakdown (the field at the static stroke against Eb)",
+            |e| &e.breakdown_margin,
+        ),
+        ("pull-in (the drive against the pull-in voltage)", |e| {
+            &e.pull_in_margin
+        }),
+    ];
+    let pct = |m: f64| format!("{} %", super::short(100.0 * m));
+    let mut out = Vec::new();
+    for (what, get) in kinds {
+        let small = |e: &Evaluation| {
+            get(e)
+                .value
+                .filter(|m| e.state == State::Ok && *m < SMALL_MARGIN)
+        };
+        let close: Vec<(usize, f64)> = evals
+            .iter()
+            .enumerate()
+            .filter_map(|(i, e)| small(e).map(|m| (i, m)))
+            .collect();
+        let Some(&(least, m)) = close.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
+            continue;
+        };
+        let leader = lead
+            .and_then(|i| close.iter().find(|c| c.0 == i))
+            .map_or(String::new(), |&(i, m)| {
+                format!("; the leader {} among them, at {}", evals[i].name, pct(m))
+            });
+        out.push(format!(
+            "{} candidate(s) driven within {} of {what}: smallest margin {} ({} at {}){leader}",
+            close.len(),
+            pct(SMALL_MARGIN),
+            pct(m),
+            evals[least].name,
+            crate::report::format::si(evals[least].voltage.value.unwrap_or(f64::NAN), "V"),
+        ));
+    }
+    out
+}
+
+/// The lead of `a` over `b` on `by` when it rests on inputs without a standard
+/// error (grouped by property and source, in the order met).
+fn lead(a: &Evaluation, b: &Evaluation, by: Objective, apart: Option<bool>) -> Option<Lead> {
+    let mut groups: Vec<(&str, String, Vec<&str>)> = Vec::new();
+    for e in [a, b] {
+        for (what, f) in by.inputs(e) {
+            if f.std_error.is_some() || f.value.is_none() {
+                continue;
+            }
+            let from = format!("{}, {}", f.provenance, f.source);
+            match groups.iter_mut().find(|g| g.0 == what && g.1 == from) {
+                Some(g) => g.2.push(&e.name),
+                None => groups.push((what, from, vec![&e.name])),
+            }
+        }
+    }
+    (!groups.is_empty()).then(|| Lead {
+        first: a.name.clone(),
+        second: b.name.clone(),
+        apart,
+        without_std_error: groups
+            .into_iter()
+            .map(|(what, from, names)| format!("{what} of {}: {from}", names.join(", ")))
+            .collect(),
+    })
 }
 
 /// The Pareto front: sorted by the first objective's goodness (then the second's),

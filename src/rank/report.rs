@@ -68,6 +68,8 @@ struct Output<'a> {
     status: super::ranking::Status,
     warnings: &'a [String],
     candidates: Vec<Row<'a>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    lead: Option<&'a super::ranking::Lead>,
     pareto: &'a super::ranking::Pareto,
     best_loading: &'a [super::ranking::BestLoading],
 }
@@ -120,6 +122,7 @@ pub fn json(info: &RunInfo, evals: &[Evaluated], r: &Ranking) -> String {
         status: r.status,
         warnings: &r.warnings,
         candidates,
+        lead: r.lead.as_ref(),
         pareto: &r.pareto,
         best_loading: &r.best,
     };
@@ -151,6 +154,7 @@ fn leaders(page: &mut Page, evals: &[Evaluated], r: &Ranking, top: usize) {
     let (y_unit, youngs) = column(&|e| &e.youngs_modulus, "Pa");
     let (t_unit, rise) = column(&|e| &e.response_time, "s");
     let percent = |f: &Figure| fmt_fig(f, |v| sig(100.0 * v, 4));
+    let margin = |f: &Figure| fmt_fig(f, |v| sig(100.0 * v, 2));
     let rows: Vec<Vec<String>> = r.order[..shown_n]
         .iter()
         .enumerate()
@@ -170,6 +174,11 @@ fn leaders(page: &mut Page, evals: &[Evaluated], r: &Ranking, top: usize) {
                 percent(&e.static_stroke),
                 format!("{} ({})", percent(&e.max_stroke), e.max_stroke_limit),
                 rise[k].clone(),
+                format!(
+                    "{} / {}",
+                    margin(&e.breakdown_margin),
+                    margin(&e.pull_in_margin)
+                ),
             ];
             if extra {
                 row.push(r.by.value(e).map_or("—".into(), |v| fmt_objective(r.by, v)));
@@ -196,6 +205,7 @@ fn leaders(page: &mut Page, evals: &[Evaluated], r: &Ranking, top: usize) {
         "stroke (%)",
         "max stroke % (limit)",
         &t_h,
+        "margin % Eb / Vpi",
     ];
     if extra {
         header.push(r.by.name());
@@ -204,16 +214,33 @@ fn leaders(page: &mut Page, evals: &[Evaluated], r: &Ranking, top: usize) {
     header.push(&sigma);
     page.heading("The leaders");
     page.table(&header, rows);
-    page.text(
-        "εr, Y: predicted by the series' rules or read from fits and the manifest (their \
+    page.text(format!(
+        "εr, Y: predicted by the series' rules, fitted, or stated in the manifest (their \
          provenance per candidate: --csv, --json); Fm: figure of merit; t10–90: rise time \
-         of the step response.",
-    );
+         of the step response; margin at the operating point to breakdown 1 − E/Eb (E \
+         the true field at the static stroke) / to pull-in 1 − V/Vpi (below {} %: a \
+         warning).",
+        short(100.0 * super::figures::SMALL_MARGIN)
+    ));
     if r.apart[..].iter().any(|a| a.is_some()) {
         page.text(format!(
-            "σ: first-order standard error from the fit files' standard errors (values written in the manifest count as exact); n≈: cannot be told apart from the candidate above (within {} σ of their difference).",
+            "σ: first-order standard error from the fit files' standard errors and the ± written in the manifest (values stated without ± count as exact); n≈: cannot be told apart from the candidate above (within {} σ of their difference).",
             APART
         ));
+    }
+    if let Some(l) = &r.lead {
+        page.text(format!(
+            "The lead of {} over {} on {} rests on inputs without a standard error, taken as exact{}:",
+            l.first,
+            l.second,
+            r.by.name(),
+            match l.apart {
+                Some(true) => " (they are told apart by the others' σ alone)",
+                Some(false) => " (and within the others' σ they cannot be told apart)",
+                None => "",
+            }
+        ));
+        page.bullets(l.without_std_error.clone());
     }
     if ranked > shown_n {
         page.text(format!(
@@ -297,6 +324,8 @@ pub fn csv(evals: &[Evaluated], r: &Ranking) -> String {
         "response_time_s",
         "energy_in_J",
         "loss_per_cycle_J",
+        "breakdown_margin",
+        "pull_in_margin",
         "rank",
         "objective",
         "objective_std_error",
@@ -336,6 +365,8 @@ pub fn csv(evals: &[Evaluated], r: &Ranking) -> String {
             num(&e.response_time),
             num(&e.energy_in),
             num(&e.loss_per_cycle),
+            num(&e.breakdown_margin),
+            num(&e.pull_in_margin),
             r.ranks[i].map_or(String::new(), |x| x.to_string()),
             r.by.value(e).map_or(String::new(), |v| v.to_string()),
             r.by.std_error(e).map_or(String::new(), |v| v.to_string()),

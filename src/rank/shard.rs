@@ -28,8 +28,10 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// Schema tag of shard files (2: with the digest and the sweep flags).
-pub const SCHEMA: &str = "dea-fit/rank-shard/2";
+/// Schema tag of shard files (2: with the digest and the sweep flags; 3: the
+/// provenance `stated`, the margins to breakdown and pull-in, σ by central
+/// differences).
+pub const SCHEMA: &str = "dea-fit/rank-shard/3";
 
 /// The prefix of every shard schema, of any version: a file with it is a shard
 /// file that a re-run of its task may replace.
@@ -398,7 +400,7 @@ pub fn merge(paths: &[PathBuf], design: Option<&Path>) -> Result<(RunInfo, Vec<E
 const STROKE_SLACK: f64 = 1e-9;
 
 /// The unit of every figure of an evaluation, by field name (SI; `1`: none).
-const UNITS: [(&str, &str); 13] = [
+const UNITS: [(&str, &str); 15] = [
     ("voltage", "V"),
     ("eps_r", "1"),
     ("youngs_modulus", "Pa"),
@@ -412,6 +414,8 @@ const UNITS: [(&str, &str); 13] = [
     ("response_time", "s"),
     ("energy_in", "J"),
     ("loss_per_cycle", "J"),
+    ("breakdown_margin", "1"),
+    ("pull_in_margin", "1"),
 ];
 
 /// The domain of a figure's value: the name of the rule and whether it holds.
@@ -421,6 +425,7 @@ fn domain(field: &str, v: f64) -> std::result::Result<(), &'static str> {
         "static_stroke" | "max_stroke" => (-STROKE_SLACK..1.0).contains(&v),
         "eps_r" | "youngs_modulus" | "beta" | "fm" | "breakdown_field" | "response_time" => v > 0.0,
         "tan_delta" | "blocked_force" | "loss_per_cycle" => v >= 0.0,
+        "breakdown_margin" | "pull_in_margin" => v <= 1.0,
         _ => true,
     };
     match (v.is_finite(), ok, field) {
@@ -429,6 +434,7 @@ fn domain(field: &str, v: f64) -> std::result::Result<(), &'static str> {
         (true, false, "voltage") => Err("not a drive voltage (0 … the simulator's budget)"),
         (true, false, "static_stroke" | "max_stroke") => Err("not a stroke (0 ≤ s < 1)"),
         (true, false, "tan_delta" | "blocked_force" | "loss_per_cycle") => Err("negative"),
+        (true, false, "breakdown_margin" | "pull_in_margin") => Err("not a margin (≤ 1)"),
         (true, false, _) => Err("not positive"),
     }
 }
@@ -508,7 +514,7 @@ pub fn check_evaluation(d: &Design, p: &Point, e: &Evaluated) -> std::result::Re
     same_figure("beta", &ev.beta, &beta)?;
     same_figure("fm", &ev.fm, &fm)?;
     // The candidate's warnings, then at most the one of the standard errors
-    // (`Evaluation::spread`: "<name>: with <property> 1σ higher the state is …").
+    // (`Evaluation::spread`: "<name>: with <property> 1σ higher|lower …").
     let spread = format!("{}: with ", c.name);
     let own = ev.warnings.starts_with(&c.warnings);
     let rest = ev.warnings.get(c.warnings.len()..).unwrap_or_default();
@@ -516,7 +522,7 @@ pub fn check_evaluation(d: &Design, p: &Point, e: &Evaluated) -> std::result::Re
         || rest.len() > 1
         || rest
             .iter()
-            .any(|w| !(w.starts_with(&spread) && w.contains(" 1σ higher the state is ")))
+            .any(|w| !(w.starts_with(&spread) && w.contains(" 1σ ")))
     {
         return Err("its warnings are not the candidate's".into());
     }

@@ -319,9 +319,10 @@ impl Shard {
 }
 
 /// Evaluate `points` of the design in parallel; `on_done` is called after each.
-/// The result is in the order of `points`. A candidate with properties that have
-/// standard errors is evaluated once more per such property, moved up by its σ,
-/// for the figures' standard errors ([`super::figures::Evaluation::spread`]).
+/// The result is in the order of `points`. A candidate with properties that reach
+/// the simulator with standard errors is evaluated twice more per such property,
+/// moved by ±1σ, for the figures' standard errors by central differences
+/// ([`super::figures::Evaluation::spread`]).
 pub fn run(d: &Design, points: &[Point], on_done: &(dyn Fn() + Sync)) -> Result<Vec<Evaluated>> {
     let template = step_scene(d);
     let scene_name = d.scene_path.display().to_string();
@@ -329,14 +330,14 @@ pub fn run(d: &Design, points: &[Point], on_done: &(dyn Fn() + Sync)) -> Result<
         .par_iter()
         .map(|pt| {
             let c = candidate::build(d, pt.series, pt.loading)?;
+            let eval = |c: &candidate::Candidate| {
+                evaluate(&template, &scene_name, c, pt.level, pt.index).evaluation
+            };
             let mut e = evaluate(&template, &scene_name, &c, pt.level, pt.index);
             let shifted = c
-                .one_sigma()
+                .shifts()
                 .into_iter()
-                .map(|(what, c)| {
-                    let s = evaluate(&template, &scene_name, &c, pt.level, pt.index);
-                    (what, s.evaluation)
-                })
+                .map(|s| (s.what, eval(&s.up), s.down.as_ref().map(eval)))
                 .collect();
             e.evaluation.spread(shifted);
             on_done();

@@ -3,6 +3,7 @@
 //! ([`runs`]); plus aligned text tables and SI formatting for terminal output.
 
 pub mod bench;
+pub mod breakdown;
 pub mod format;
 pub mod hyperelastic;
 pub mod identify;

@@ -1,6 +1,7 @@
 //! Line-and-scatter charts as SVG (plotters), shared by every report.
 
 use crate::error::{Error, Result};
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -21,6 +22,9 @@ pub struct Series {
 pub enum Style {
     /// Markers only (data).
     Points,
+    /// Open markers (censored data: a value not reached, e.g. a specimen that
+    /// survived).
+    OpenPoints,
     /// Solid line (model).
     Line,
     /// Dashed line (model outside its data).
@@ -35,6 +39,69 @@ pub enum Style {
 
 /// The legend of a fit's confidence band ([`Style::Band`] around a fitted curve).
 pub const BAND_LABEL: &str = "±1σ confidence band of the fit (parameter covariance)";
+
+/// The `y_unit` of a Weibull probability-paper axis: y is ln(−ln(1 − F)), its ticks
+/// sit at round shares F (0.1 % … 99.9 %) and read in % (IEEE Std 930-2004 §6.1).
+pub const PROBABILITY_PAPER: &str = "probability paper (Weibull)";
+
+/// The shares F at which a probability-paper axis has ticks.
+const PAPER_TICKS: [f64; 12] = [
+    0.001, 0.002, 0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 0.632, 0.9, 0.99,
+];
+
+/// The label of a probability-paper tick at y = ln(−ln(1 − F)): F in %, to the
+/// digits a tick needs ("0.1 %", "63.2 %").
+fn paper_label(y: f64) -> String {
+    let p = 100.0 * -(-y.exp()).exp_m1();
+    let s = format!("{p:.1}");
+    format!("{} %", s.trim_end_matches(".0"))
+}
+
+/// An axis whose ticks are given: a probability-paper axis' round shares, a log
+/// axis shorter than a decade (where plotters' own log ticks give none).
+struct Ticked<R>(R, Vec<f64>);
+
+impl<R: Ranged<ValueType = f64>> Ranged for Ticked<R> {
+    type FormatOption = plotters::coord::ranged1d::DefaultFormatting;
+    type ValueType = f64;
+    fn map(&self, v: &f64, limit: (i32, i32)) -> i32 {
+        self.0.map(v, limit)
+    }
+    fn key_points<Hint: plotters::coord::ranged1d::KeyPointHint>(&self, _: Hint) -> Vec<f64> {
+        self.1.clone()
+    }
+    fn range(&self) -> std::ops::Range<f64> {
+        self.0.range()
+    }
+}
+
+/// Ticks of a log axis from `lo` to `hi` (0 < lo < hi) shorter than a decade:
+/// 1, 2, 5 × 10ᵏ inside it; when those are fewer than four, every m × 10ᵏ
+/// (m = 1…9), then every half (m = 1, 1.5, …, 9.5); None for a longer axis
+/// (plotters' own ticks serve it).
+fn short_log_ticks(lo: f64, hi: f64) -> Option<Vec<f64>> {
+    if !(lo > 0.0 && hi / lo < 10.0) {
+        return None;
+    }
+    let k0 = lo.log10().floor() as i32;
+    let within = |ms: &[f64]| -> Vec<f64> {
+        (k0..=k0 + 1)
+            .flat_map(|k| ms.iter().map(move |m| m * 10f64.powi(k)))
+            .filter(|v| (lo..=hi).contains(v))
+            .collect()
+    };
+    let units: Vec<f64> = (1..10).map(f64::from).collect();
+    let halves: Vec<f64> = (2..20).map(|h| f64::from(h) / 2.0).collect();
+    let mut sets = [within(&[1.0, 2.0, 5.0]), within(&units), within(&halves)].into_iter();
+    let mut ticks = sets.next().unwrap_or_default();
+    for finer in sets {
+        if ticks.len() >= 4 {
+            break;
+        }
+        ticks = finer;
+    }
+    Some(ticks)
+}
 
 /// The points of an [`Style::ErrorBars`] series: y ± σ at each x (a σ that is zero
 /// or not finite draws nothing).
@@ -74,7 +141,8 @@ pub struct Chart {
     pub log_x: bool,
     /// SI unit of the x values (prefix chosen by the chart), if any.
     pub x_unit: Option<String>,
-    /// SI unit of the y values (prefix chosen by the chart), if any.
+    /// SI unit of the y values (prefix chosen by the chart), if any; or
+    /// [`PROBABILITY_PAPER`]: y is ln(−ln(1 − F)), ticks at round F in %.
     pub y_unit: Option<String>,
 }
 
@@ -272,7 +340,7 @@ const PLOT_SIZE: (u32, u32) = (900, 560);
 /// multiply values by and the label with the prefixed unit ("stress (kPa)").
 fn axis_scale(label: &str, unit: Option<&str>, (lo, hi): (f64, f64)) -> (f64, String) {
     match unit {
-        Some(u) if !u.is_empty() && u != "1" => {
+        Some(u) if !u.is_empty() && u != "1" && u != PROBABILITY_PAPER => {
             let (f, p) = super::format::prefix(lo.abs().max(hi.abs()));
             (f, format!("{label} ({p}{u})"))
         }
@@ -334,6 +402,7 @@ impl Chart {
         let (y0, y1) = range(all().map(|p| p.1), false);
         let (fx, x_desc) = axis_scale(&self.x_label, self.x_unit.as_deref(), (x0, x1));
         let (fy, y_desc) = axis_scale(&self.y_label, self.y_unit.as_deref(), (y0, y1));
+        let paper = self.y_unit.as_deref() == Some(PROBABILITY_PAPER);
         let mut builder = ChartBuilder::on(&plot_area);
         builder
             .caption(&self.title, ("sans-serif", 22))
@@ -347,7 +416,10 @@ impl Chart {
                     .configure_mesh()
                     .x_desc(x_desc.as_str())
                     .y_desc(y_desc.as_str())
-                    .y_label_formatter(&|v| tick_label(*v * fy, y0 * fy, y1 * fy))
+                    .y_label_formatter(&|v| match paper {
+                        true => paper_label(*v),
+                        false => tick_label(*v * fy, y0 * fy, y1 * fy),
+                    })
                     .x_label_formatter(&|v| match self.log_x {
                         // a log axis' ticks are decades and their multiples
                         true => log_tick_label(*v * fx),
@@ -365,6 +437,9 @@ impl Chart {
                     match s.style {
                         Style::Points => {
                             chart.draw_series(pts.map(|p| Circle::new(p, 3, c.filled())))?;
+                        }
+                        Style::OpenPoints => {
+                            chart.draw_series(pts.map(|p| Circle::new(p, 4, c.stroke_width(2))))?;
                         }
                         Style::Line => {
                             chart.draw_series(LineSeries::new(pts, c.stroke_width(2)))?;
@@ -407,10 +482,27 @@ impl Chart {
                 }
             }};
         }
-        if self.log_x {
-            body!(builder.build_cartesian_2d((x0..x1).log_scale(), y0..y1)?);
-        } else {
-            body!(builder.build_cartesian_2d(x0..x1, y0..y1)?);
+        let ticks = || -> Vec<f64> {
+            PAPER_TICKS
+                .iter()
+                .map(|&f| (-(-f).ln_1p()).ln())
+                .filter(|y| (y0..=y1).contains(y))
+                .collect()
+        };
+        let short = self.log_x.then(|| short_log_ticks(x0, x1)).flatten();
+        let log = || -> LogCoord<f64> { (x0..x1).log_scale().into() };
+        let paper_y = || Ticked::<RangedCoordf64>((y0..y1).into(), ticks());
+        match (self.log_x, short, paper) {
+            (true, None, false) => body!(builder.build_cartesian_2d((x0..x1).log_scale(), y0..y1)?),
+            (true, None, true) => {
+                body!(builder.build_cartesian_2d((x0..x1).log_scale(), paper_y())?)
+            }
+            (true, Some(t), false) => body!(builder.build_cartesian_2d(Ticked(log(), t), y0..y1)?),
+            (true, Some(t), true) => {
+                body!(builder.build_cartesian_2d(Ticked(log(), t), paper_y())?)
+            }
+            (false, _, false) => body!(builder.build_cartesian_2d(x0..x1, y0..y1)?),
+            (false, _, true) => body!(builder.build_cartesian_2d(x0..x1, paper_y())?),
         }
         let mut y = top as i32;
         for (s, lines) in &entries {
@@ -442,6 +534,7 @@ fn legend_key<DB: DrawingBackend>(
     let line = |a: i32, b: i32| PathElement::new(vec![(x + a, y), (x + b, y)], c.stroke_width(2));
     match style {
         Style::Points => area.draw(&Circle::new((x + 12, y), 4, c.filled())),
+        Style::OpenPoints => area.draw(&Circle::new((x + 12, y), 4, c.stroke_width(2))),
         Style::Line => area.draw(&line(0, 24)),
         Style::Dashed => {
             area.draw(&line(0, 6))?;

@@ -5,6 +5,7 @@
 
 use super::mutate::{self, Mutated};
 use dea_fit::fit::{composite, hyperelastic, permittivity, relaxation, Status};
+use dea_fit::io::breakdown as breakdown_io;
 use dea_fit::io::lcr::{self, LcrOptions};
 use dea_fit::io::relaxation::RelaxationOptions;
 use dea_fit::io::tensile::{self, TensileOptions};
@@ -47,10 +48,13 @@ pub enum Reader {
     Generate,
     /// Numeric flag values of the real commands (tests/fuzz/flags.rs).
     Flags,
+    /// A breakdown series (`io::breakdown`), fitted, its fit file written and read
+    /// back by the core's reader.
+    Breakdown,
 }
 
 impl Reader {
-    pub const ALL: [Reader; 14] = [
+    pub const ALL: [Reader; 15] = [
         Reader::Tensile,
         Reader::Relaxation,
         Reader::Lcr,
@@ -65,6 +69,7 @@ impl Reader {
         Reader::Checkpoint,
         Reader::Generate,
         Reader::Flags,
+        Reader::Breakdown,
     ];
 
     pub fn name(self) -> &'static str {
@@ -83,6 +88,7 @@ impl Reader {
             Reader::Checkpoint => "checkpoint",
             Reader::Generate => "generate",
             Reader::Flags => "flags",
+            Reader::Breakdown => "breakdown",
         }
     }
 
@@ -192,6 +198,10 @@ pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
             .filter(|p| !p.ends_with("relaxation.csv") && !p.ends_with(".md"))
             .collect(),
         Reader::Relaxation => vec!["datasets/vhb4910/relaxation.csv".into()],
+        Reader::Breakdown => dir("datasets/breakdown")
+            .into_iter()
+            .filter(|p| p.ends_with(".csv"))
+            .collect(),
         Reader::Checkpoint => return super::checkpoint::seeds(),
         Reader::Trace => ["step.csv", "sine.csv", "validate.csv"]
             .iter()
@@ -527,6 +537,7 @@ pub fn replay(r: Reader, case: &Case, dir: &Path) -> String {
             case.model
         ),
         Reader::Relaxation => format!("dea-fit relaxation {f} --strain 0.5 --max-terms 3 {out}"),
+        Reader::Breakdown => format!("dea-fit breakdown {f} {out}"),
         Reader::Lcr => format!("dea-fit permittivity {f} --diameter 42.8mm --thickness 2.2mm"),
         Reader::Manifest => format!("dea-fit composite {f}"),
         Reader::Scene | Reader::Fit | Reader::Identified => format!(
@@ -590,6 +601,67 @@ fn check_fit(
     match failure {
         Some((class, detail)) => Verdict::Failed { class, detail },
         None => Verdict::Accepted,
+    }
+}
+
+/// A breakdown case: read, fitted (maximum likelihood), its fit file's object made,
+/// written and read back by `material::file::read_breakdown`. A usable status with
+/// a non-finite parameter, percentile or log-likelihood, or a fit file the core
+/// refuses, is a failure.
+fn breakdown(path: &Path, dir: &Path) -> Verdict {
+    use dea_fit::fit::weibull;
+    let Ok(series) = breakdown_io::read(path, &breakdown_io::BreakdownOptions::default()) else {
+        return Verdict::Refused;
+    };
+    let specimens: Vec<weibull::Specimen> = series
+        .specimens
+        .iter()
+        .map(|s| weibull::Specimen {
+            field: s.field,
+            survived: s.survived,
+            area: s.area,
+            thickness: s.thickness,
+            prestretch: s.prestretch,
+        })
+        .collect();
+    let Ok(f) = weibull::fit(&specimens, &weibull::Settings::default()) else {
+        return Verdict::Refused;
+    };
+    if f.status.is_blocking() {
+        return Verdict::Accepted;
+    }
+    let r = match dea_fit::report::breakdown::result(&f, &[series], None, Value::Null) {
+        Ok(r) => r,
+        Err(e) => {
+            return Verdict::Failed {
+                class: format!("breakdown: status {} without percentiles", f.status),
+                detail: e.to_string(),
+            }
+        }
+    };
+    let out = finite("parameter", r.fit.parameters.iter().map(|p| p.value))
+        .and(finite(
+            "percentile",
+            r.fit.percentiles.iter().map(|p| p.value),
+        ))
+        .and(finite("log_likelihood", [r.fit.log_likelihood]));
+    if let Err(detail) = out {
+        return Verdict::Failed {
+            class: format!("breakdown: status {} with a non-finite output", f.status),
+            detail,
+        };
+    }
+    let file = dir.join("breakdown-fit.json");
+    std::fs::write(&file, serde_json::to_string_pretty(&r).unwrap()).unwrap();
+    match dea_fit::material::file::read_breakdown(&file) {
+        Ok(_) => Verdict::Accepted,
+        Err(e) => Verdict::Failed {
+            class: format!(
+                "breakdown: status {} with a fit file the core refuses",
+                f.status
+            ),
+            detail: e.to_string(),
+        },
     }
 }
 
@@ -669,6 +741,7 @@ pub fn run(r: Reader, case: &Case, dir: &Path) -> Verdict {
             let out = points_finite(&s);
             check_fit("permittivity", s.status, Some(0.0), out)
         }
+        Reader::Breakdown => breakdown(&path, dir),
         Reader::Manifest => {
             let Ok(m) = manifest::read(&path) else {
                 return Verdict::Refused;

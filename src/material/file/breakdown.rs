@@ -40,6 +40,9 @@ pub struct BreakdownPercentile {
     pub p: f64,
     /// E_p (V/m).
     pub value: f64,
+    /// Standard error (V/m), where the fit gives one.
+    #[serde(default)]
+    pub std_error: Option<f64>,
     /// 95 % bounds (V/m).
     #[serde(default)]
     pub ci95: Option<[f64; 2]>,

@@ -369,8 +369,14 @@ fn large_censored_series_recovers_the_law() {
         .into_iter()
         .map(|e| Specimen::new(e.min(limit), e > limit))
         .collect();
-    let f = fit(&specimens, &mle()).expect("fits");
+    let all = Settings {
+        all_lr_bounds: true,
+        ..mle()
+    };
+    let f = fit(&specimens, &all).expect("fits");
     assert!((f.survived as f64 / 3000.0 - 0.2).abs() < 0.03);
+    // Without asking, LR bounds are not computed where the table shows Fisher's.
+    assert_eq!(fit(&specimens, &mle()).expect("fits").beta.lr95, None);
     let within = |est: &dea_fit::fit::weibull::Estimate, truth: f64| {
         let s = est.std_error.unwrap();
         assert!(

@@ -40,6 +40,15 @@ pub(crate) const fn d(
     }
 }
 
+/// Plausible breakdown fields: elastomers break down at 10–300 V/µm.
+pub const BREAKDOWN: Domain = d(
+    "breakdown field",
+    "V/m",
+    1e5,
+    2e9,
+    false,
+    "elastomers break down at 10–300 V/µm (1e7–3e8 V/m); write it with a unit, e.g. \"80 V/um\"",
+);
 /// Relative permittivity εr.
 pub const PERMITTIVITY: Domain = d(
     "relative permittivity",

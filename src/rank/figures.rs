@@ -43,7 +43,7 @@ use crate::report::format::si;
 use crate::sim::input::{Term, Waveform};
 use crate::sim::plant::EPS0;
 use crate::sim::scene::{Actuator, Material, Scene};
-use crate::sim::static_curve::{static_curve, voltage_at, Search};
+use crate::sim::static_curve::{breakdown_point, static_curve, voltage_at, Search};
 use crate::sim::{self, RunOptions, RunStatus};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -311,37 +311,21 @@ pub fn step_scene(d: &Design) -> Scene {
     s
 }
 
-/// The electrode gap at stretch λ: z0·λ for a stack layer, z0·λ·sin α for a helix
-/// element (seed Eq. 4.3).
-pub fn gap(a: &Actuator, lam: f64) -> f64 {
-    match a {
-        Actuator::Stack(s) => s.layer_m * lam,
-        Actuator::Helix(h) => h.thickness_m * lam * h.alpha(lam).sin(),
-    }
-}
-
 /// The active electrode area of the actuator as built (m²; every layer's), the
-/// same in words, and the thickness of one dielectric layer (m): the film a
-/// breakdown fit is scaled to (weakest link: a breakdown anywhere under field
-/// fails the actuator, so the whole active area counts). A stack: nd·π·r0²; a
-/// helix: Np·Ne electrode areas of one element at λ = 1 (seed Eq. 4.12), of
-/// element thickness z0.
+/// same in words, and the electrode gap as built h(1) (m): the film a breakdown
+/// fit is scaled to (weakest link: a breakdown anywhere under field fails the
+/// actuator, so the whole active area counts), the same film the scene's own
+/// check uses (`Actuator::film_area`, `Actuator::gap`). A stack: nd·π·r0²; a
+/// helix: Np·Ne electrode areas of one element at λ = 1 (seed Eq. 4.12).
 pub fn electrode_area(a: &Actuator) -> (f64, String, f64) {
-    match a {
-        Actuator::Stack(s) => (
-            s.layers as f64 * s.area0(),
-            format!("{} layers × π·r0²", s.layers),
-            s.layer_m,
+    let how = match a {
+        Actuator::Stack(s) => format!("{} layers × π·r0²", s.layers),
+        Actuator::Helix(h) => format!(
+            "{} elements × A_e (seed Eq. 4.12)",
+            h.periods * h.per_period
         ),
-        Actuator::Helix(h) => {
-            let n = h.periods * h.per_period;
-            (
-                n as f64 * h.electrode_area(1.0),
-                format!("{n} elements × A_e (seed Eq. 4.12)"),
-                h.thickness_m,
-            )
-        }
-    }
+    };
+    (a.film_area(), how, a.gap(1.0))
 }
 
 /// The weakest provenance of several inputs (measured < fitted < stated <
@@ -482,7 +466,7 @@ pub fn evaluate(
     let stroke = |lam: f64| 1.0 - lam / lam0;
     let vd = match level {
         Level::Voltage(x) => x,
-        Level::BreakdownFraction(f) => f * eb * gap(&a, lam0),
+        Level::BreakdownFraction(f) => f * eb * a.gap(lam0),
     };
     e.voltage = match level {
         Level::Voltage(_) => Figure::new(vd, "V", Provenance::Stated, "drive voltage"),
@@ -504,9 +488,7 @@ pub fn evaluate(
         voltage_v: q.voltage_v,
         stroke: stroke(q.stretch),
     });
-    let bottom = pull.map_or(STRETCH_MIN, |q| q.stretch);
-    let field = |lam: f64| voltage_at(&p, lam).map_or(0.0, |v| v / gap(&a, lam));
-    let lam_b = breakdown_stretch(lam0, &sc.curve, bottom, eb, &field);
+    let lam_b = breakdown_point(&p, &sc, eb).map(|q| q.stretch);
     e.breakdown = lam_b.map(|l| CurvePoint {
         voltage_v: voltage_at(&p, l).unwrap_or(f64::NAN),
         stroke: stroke(l),
@@ -548,7 +530,7 @@ pub fn evaluate(
 
     // The static state at the drive.
     let (_, dc0, _) = p.capacitance(lam0);
-    e.blocked_force = match vd / gap(&a, lam0) >= eb {
+    e.blocked_force = match vd / a.gap(lam0) >= eb {
         true => Figure::none(
             "N",
             Provenance::Predicted,
@@ -594,7 +576,7 @@ pub fn evaluate(
     };
     e.breakdown_margin = match &lam_d {
         Ok(l) => Figure::new(
-            1.0 - vd / gap(&a, *l) / eb,
+            1.0 - vd / a.gap(*l) / eb,
             "1",
             Provenance::Predicted,
             format!("1 − E/Eb, E = V/gap at the static stroke; {margin_src}"),
@@ -609,7 +591,7 @@ pub fn evaluate(
             false => (State::Failed, why),
         })
         .and_then(|l| {
-            let field_d = vd / gap(&a, l);
+            let field_d = vd / a.gap(l);
             match field_d >= eb {
                 true => Err((
                     State::Breakdown,
@@ -685,44 +667,6 @@ pub fn evaluate(
     }
 }
 
-/// The stretch on the stable branch (from the rest state `lam0`, where the field is
-/// zero, down to `bottom`, the pull-in or the smallest stretch examined) where the
-/// field reaches `eb`: the first curve point at or above it, refined by bisection
-/// (the field rises along the branch).
-fn breakdown_stretch(
-    lam0: f64,
-    curve: &[crate::sim::static_curve::Point],
-    bottom: f64,
-    eb: f64,
-    field: &impl Fn(f64) -> f64,
-) -> Option<f64> {
-    let lams: Vec<f64> = std::iter::once(lam0)
-        .chain(
-            curve
-                .iter()
-                .map(|q| q.stretch)
-                .filter(|&l| l > bottom && l < lam0),
-        )
-        .chain([bottom])
-        .collect();
-    let i = lams.iter().position(|&l| field(l) >= eb)?;
-    if i == 0 {
-        return Some(lams[0]);
-    }
-    let (mut hi, mut lo) = (lams[i - 1], lams[i]);
-    for _ in 0..60 {
-        let mid = 0.5 * (hi + lo);
-        match field(mid) >= eb {
-            true => lo = mid,
-            false => hi = mid,
-        }
-        if hi - lo < 1e-12 {
-            break;
-        }
-    }
-    Some(lo)
-}
-
 /// 10–90 % time of the contraction after a step to `vd`, from the simulator.
 fn step_response(scene: &mut Scene, vd: f64, eb: f64, static_stroke: f64, src: &str) -> Figure {
     scene.input = Waveform {
@@ -749,7 +693,7 @@ fn step_response(scene: &mut Scene, vd: f64, eb: f64, static_stroke: f64, src: &
     let a = &scene.actuator;
     let mut peak_field: f64 = 0.0;
     for s in &tr.samples {
-        peak_field = peak_field.max(s.voltage_v / gap(a, s.stretch));
+        peak_field = peak_field.max(s.voltage_v / a.gap(s.stretch));
     }
     if peak_field >= eb {
         return none(format!(

@@ -42,7 +42,9 @@ use super::candidate::Stiffening;
 use super::Provenance;
 use crate::error::{Error, Location, Result};
 use crate::fit::composite::Basis;
-use crate::material::check::{check_hyperelastic, d, did_you_mean, Domain, PERMITTIVITY};
+use crate::material::check::{
+    check_hyperelastic, d, did_you_mean, Domain, BREAKDOWN, PERMITTIVITY,
+};
 use crate::material::dielectric::{MixingRule, Mixture};
 use crate::material::file::{self, Arm, HyperelasticPart, Spread, Viscous};
 use crate::material::hyperelastic::{ModelSpec, OgdenForm, MODEL_NAMES};
@@ -54,15 +56,6 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use toml::Spanned;
 
-/// Plausible breakdown fields: elastomers break down at 10–300 V/µm.
-pub const BREAKDOWN: Domain = d(
-    "breakdown field",
-    "V/m",
-    1e5,
-    2e9,
-    false,
-    "elastomers break down at 10–300 V/µm (1e7–3e8 V/m); write it with a unit, e.g. \"80 V/um\"",
-);
 /// Plausible loss tangents.
 pub const TAN_DELTA: Domain = d(
     "loss tangent",

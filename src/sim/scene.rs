@@ -790,7 +790,7 @@ fn read_breakdown(
     let key = "material.breakdown";
     let hint = "e.g. breakdown = \"25 ± 2 V/um\" (value ± one standard uncertainty), or { fit = \"fits/x-breakdown.json\" } from dea-fit breakdown --out";
     let plausible = |k: &str, v: f64| {
-        crate::rank::manifest::BREAKDOWN
+        crate::material::check::BREAKDOWN
             .check(k, v)
             .map_err(|v| c.violation(v))
     };

@@ -4,6 +4,10 @@
 //! by the weakest-link law, standard errors from the observed information, Fisher
 //! and likelihood-ratio bounds, percentiles and a goodness-of-fit test.
 //!
+//! Covariates follow the power law that Huang, Shian, Diebold, Suo & Clarke 2012
+//! (Appl. Phys. Lett. 101:122905, doi:10.1063/1.4754549) found for the breakdown
+//! of VHB, E_B = 51·h^−0.25·λ^0.63.
+//!
 //! The model (IEEE Std 930-2004, IEC 62539:2007): F(E) = 1 − exp[−(E/α)^β] at the
 //! reference electrode area A₀; a specimen of area A has F_A(E) = 1 − exp[−(A/A₀)(E/α)^β]
 //! (the weakest link: independent flaws, hazard additive over area; Weibull 1951,
@@ -340,7 +344,7 @@ impl WeibullError {
             WeibullError::TooFewBreakdowns { .. } => "a Weibull fit needs at least two breakdowns (IEEE 930 asks for ten or more)",
             WeibullError::Degenerate { .. } => "the field steps are too coarse to resolve the spread: use finer steps, or report the single field",
             WeibullError::ConstantCovariate { .. } => "drop the covariate: a constant value carries no information on its exponent",
-            WeibullError::Unsupported(_) => "use --method mle for covariates, a threshold or mixed electrode areas",
+            WeibullError::Unsupported(_) => "rank regression fits one area without threshold or covariates (use --method mle); see docs/breakdown.md",
         }
     }
 }
@@ -637,6 +641,7 @@ pub fn fit(specimens: &[Specimen], settings: &Settings) -> Result<WeibullFit, We
                 likelihood::Maximum {
                     point: start,
                     loglik: data.loglik(&start, 0.0),
+                    held_slope: 0.0,
                     iterations: e.iterations,
                 },
                 e.iterations,
@@ -989,7 +994,7 @@ impl Model {
                 }
                 let m = self.data.maximize(p, hold, k).ok()?;
                 *warm = m.point;
-                let slope = self.data.held_derivative(&m.point, hold, k);
+                let slope = m.held_slope;
                 let slope = if hold == Hold::Beta {
                     slope * m.point.beta
                 } else {
@@ -1015,7 +1020,9 @@ impl Model {
             // Bracket [inner (h > 0), outer (h ≤ 0)]; Newton from the outer end.
             let (mut v, mut h) = (outer, h_out);
             for _ in 0..100 {
-                if h.0.abs() < 1e-10 || (outer - inner).abs() < 1e-13 * (1.0 + v.abs()) {
+                // ℓ to 1e-9 (v to ≈ 10⁻⁹σ, as dℓ_p/dv ≈ 2/σ at the bound), or a
+                // bracket narrower than 10⁻¹⁰ of the first step.
+                if h.0.abs() < 1e-9 || (outer - inner).abs() < 1e-10 * step0 {
                     return Some(v);
                 }
                 let newton = v - h.0 / h.1;

@@ -1,0 +1,42 @@
+//! Weibull bench: the maximum-likelihood fit of a 10⁴-specimen breakdown series
+//! (docs/breakdown.md, "Performance": ≤ 5 ms in-process), complete and with 20 %
+//! survivors at the rig's limit; everything `fit` computes (estimates,
+//! information, likelihood-ratio bounds of α and β, plot positions, goodness of fit)
+//! and the E_1 % percentile with its bounds.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use dea_fit::fit::weibull::{fit, Settings, Specimen};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::hint::black_box;
+
+fn series(n: usize, censored: bool) -> Vec<Specimen> {
+    let (alpha, beta) = (30e6, 8.0);
+    let limit = alpha * (-(0.2f64).ln()).powf(1.0 / beta);
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    (0..n)
+        .map(|_| {
+            let e = alpha * (-(1.0 - rng.gen::<f64>()).ln()).powf(1.0 / beta);
+            match censored && e > limit {
+                true => Specimen::new(limit, true),
+                false => Specimen::new(e, false),
+            }
+        })
+        .collect()
+}
+
+fn bench(c: &mut Criterion) {
+    let settings = Settings::default();
+    for (name, censored) in [("complete", false), ("censored", true)] {
+        let s = series(10_000, censored);
+        c.bench_function(&format!("weibull mle 10^4 specimens, {name}"), |b| {
+            b.iter(|| {
+                let f = fit(black_box(&s), &settings).expect("fits");
+                f.percentile(0.01, None).expect("percentile")
+            })
+        });
+    }
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

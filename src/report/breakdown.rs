@@ -13,6 +13,7 @@ use super::runs::Run;
 use crate::error::Result;
 use crate::fit::weibull::{BoundKind, Estimate, Method, Percentile, WeibullFit};
 use crate::io::breakdown::BreakdownSeries;
+use crate::material::breakdown::area_factor;
 use crate::material::file::{
     BreakdownFit, BreakdownParameter, BreakdownPercentile, BREAKDOWN_SCHEMA,
 };
@@ -160,7 +161,7 @@ pub fn result(
             area_m2: a,
             alpha_factor: fit
                 .reference_area
-                .map_or(1.0, |a0| (a0 / a).powf(1.0 / fit.beta.value)),
+                .map_or(1.0, |a0| area_factor(a0, a, fit.beta.value)),
             percentiles: at(Some(a))?,
         }),
         None => None,

@@ -679,6 +679,30 @@ mod tests {
         assert_eq!(labels(1.0, 1.002, &[1.0005]), ["1.0005"]);
     }
 
+    /// A probability-paper tick at y = ln(−ln(1 − F)) reads F in %, and a log axis
+    /// shorter than a decade gets ticks (plotters gives it none): the coarsest set
+    /// of m·10ᵏ with at least four inside, exact decimals.
+    #[test]
+    fn probability_paper_and_short_log_axes_have_ticks() {
+        for (f, want) in [
+            (0.001f64, "0.1 %"),
+            (0.01, "1 %"),
+            (0.632, "63.2 %"),
+            (0.99, "99 %"),
+        ] {
+            assert_eq!(paper_label((-(-f).ln_1p()).ln()), want);
+        }
+        assert_eq!(
+            short_log_ticks(1.1e7, 3.6e7).unwrap(),
+            [1.5e7, 2e7, 2.5e7, 3e7, 3.5e7]
+        );
+        assert_eq!(
+            short_log_ticks(1.0, 9.5).unwrap(),
+            [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]
+        );
+        assert_eq!(short_log_ticks(1.0, 100.0), None);
+    }
+
     /// Log-axis ticks read as the decades and multiples they are.
     #[test]
     fn log_tick_labels_are_exact() {

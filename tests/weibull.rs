@@ -576,6 +576,7 @@ fn covariates_recover_the_exponents() {
     }
     let s = Settings {
         covariates: vec![Covariate::Thickness, Covariate::Prestretch],
+        all_lr_bounds: true,
         ..Settings::default()
     };
     let f = fit(&specimens, &s).expect("fits");

@@ -1737,40 +1737,10 @@ fn flags_a_shard_cannot_honour_are_refused() {
 
 /// A breakdown fit written through the core's serialization (the file `dea-fit
 /// breakdown --out` writes): α = 30 V/µm at a 1 cm² specimen area, β = 10, with
-/// standard errors 0.6 V/µm and 1.5 (uncorrelated), named `bd.json` in `dir`.
+/// standard errors 0.6 V/µm and 1.5 (stated uncorrelated: a fit without a
+/// correlation gives no σ once β moves Eb), named `name` in `dir`.
 fn breakdown_fit(dir: &Path, name: &str) -> dea_fit::material::file::BreakdownFit {
-    use dea_fit::material::file::{BreakdownFit, BreakdownParameter, BREAKDOWN_SCHEMA};
-    let p = |name: &str, unit: &str, value: f64, s: f64| BreakdownParameter {
-        name: name.into(),
-        unit: unit.into(),
-        value,
-        std_error: Some(s),
-        ci95: None,
-    };
-    let fit = BreakdownFit {
-        schema: BREAKDOWN_SCHEMA.into(),
-        tool_version: "test".into(),
-        status: "ok".into(),
-        method: "mle".into(),
-        positions: None,
-        n: 15,
-        failures: 15,
-        survived: 0,
-        parameters: vec![p("alpha", "V/m", 30e6, 0.6e6), p("beta", "1", 10.0, 1.5)],
-        // stated uncorrelated (a fit without a correlation gives no σ once β moves Eb)
-        correlation: vec![vec![Some(1.0), Some(0.0)], vec![Some(0.0), Some(1.0)]],
-        beta_unbiased: None,
-        log_likelihood: -20.0,
-        percentiles: Vec::new(),
-        reference_area: Some(1e-4),
-        reference_thickness: None,
-        reference_prestretch: None,
-        thickness_range: None,
-        prestretch_range: None,
-        bounds: "fisher".into(),
-        warnings: Vec::new(),
-        provenance: serde_json::Value::Null,
-    };
+    let fit = crate::support::breakdown_fit(0.6e6, 1.5, 0.0);
     std::fs::write(dir.join(name), serde_json::to_string_pretty(&fit).unwrap()).unwrap();
     fit
 }

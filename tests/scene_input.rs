@@ -248,40 +248,10 @@ fn with_breakdown(value: &str) -> String {
     text.replace("breakdown = \"25 V/um\"", &format!("breakdown = {value}"))
 }
 
-/// A breakdown fit file as `dea-fit breakdown --out` writes it (the core's serde
-/// struct): α = 30 V/µm at a 1 cm² specimen, β = 10, with standard errors.
+/// A breakdown fit file as `dea-fit breakdown --out` writes it: α = 30 V/µm at a
+/// 1 cm² specimen, β = 10, with standard errors 0.8 V/µm and 2 (correlation 0.3).
 fn breakdown_fit() -> dea_fit::material::file::BreakdownFit {
-    use dea_fit::material::file::{BreakdownFit, BreakdownParameter};
-    let p = |name: &str, unit: &str, value: f64, s: f64| BreakdownParameter {
-        name: name.into(),
-        unit: unit.into(),
-        value,
-        std_error: Some(s),
-        ci95: None,
-    };
-    BreakdownFit {
-        schema: "dea-fit/breakdown/1".into(),
-        tool_version: "test".into(),
-        status: "ok".into(),
-        method: "mle".into(),
-        positions: None,
-        n: 15,
-        failures: 15,
-        survived: 0,
-        parameters: vec![p("alpha", "V/m", 30e6, 0.8e6), p("beta", "1", 10.0, 2.0)],
-        correlation: vec![vec![Some(1.0), Some(0.3)], vec![Some(0.3), Some(1.0)]],
-        beta_unbiased: None,
-        log_likelihood: -20.0,
-        percentiles: Vec::new(),
-        reference_area: Some(1e-4),
-        reference_thickness: None,
-        reference_prestretch: None,
-        thickness_range: None,
-        prestretch_range: None,
-        bounds: "fisher".into(),
-        warnings: Vec::new(),
-        provenance: serde_json::Value::Null,
-    }
+    crate::support::breakdown_fit(0.8e6, 2.0, 0.3)
 }
 
 /// Every wrong `material.breakdown` is refused at its line and column, naming the

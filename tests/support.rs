@@ -53,3 +53,47 @@ pub fn names_in(dir: &Path) -> Vec<String> {
     v.sort();
     v
 }
+
+/// A breakdown fit as `dea-fit breakdown --out` writes it (the core's serde struct):
+/// α = 30 V/µm at a 1 cm² specimen area, β = 10, 15 breakdowns, with standard
+/// errors `se_alpha` (V/m) and `se_beta` and their correlation `rho`.
+pub fn breakdown_fit(
+    se_alpha: f64,
+    se_beta: f64,
+    rho: f64,
+) -> dea_fit::material::file::BreakdownFit {
+    use dea_fit::material::file::{BreakdownFit, BreakdownParameter, BREAKDOWN_SCHEMA};
+    let p = |name: &str, unit: &str, value: f64, s: f64| BreakdownParameter {
+        name: name.into(),
+        unit: unit.into(),
+        value,
+        std_error: Some(s),
+        ci95: None,
+    };
+    BreakdownFit {
+        schema: BREAKDOWN_SCHEMA.into(),
+        tool_version: "test".into(),
+        status: "ok".into(),
+        method: "mle".into(),
+        positions: None,
+        n: 15,
+        failures: 15,
+        survived: 0,
+        parameters: vec![
+            p("alpha", "V/m", 30e6, se_alpha),
+            p("beta", "1", 10.0, se_beta),
+        ],
+        correlation: vec![vec![Some(1.0), Some(rho)], vec![Some(rho), Some(1.0)]],
+        beta_unbiased: None,
+        log_likelihood: -20.0,
+        percentiles: Vec::new(),
+        reference_area: Some(1e-4),
+        reference_thickness: None,
+        reference_prestretch: None,
+        thickness_range: None,
+        prestretch_range: None,
+        bounds: "fisher".into(),
+        warnings: Vec::new(),
+        provenance: serde_json::Value::Null,
+    }
+}

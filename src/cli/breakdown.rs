@@ -5,7 +5,9 @@ use super::Output;
 use clap::ValueEnum;
 use dea_fit::error::Location;
 use dea_fit::fit::weibull::{self, Covariate, Method, Positions, Settings, Specimen};
-use dea_fit::io::breakdown::{self as reader, BreakdownOptions, BreakdownSeries};
+use dea_fit::io::breakdown::{
+    self as reader, BreakdownOptions, BreakdownSeries, BreakdownSpecimen,
+};
 use dea_fit::report::breakdown::{result, summary, write, BreakdownResult};
 use dea_fit::units::{parse_quantity, Dimension};
 use dea_fit::{Error, Result};
@@ -168,13 +170,7 @@ pub fn run(a: Args) -> Result<i32> {
     let specimens: Vec<Specimen> = series
         .iter()
         .flat_map(|s| &s.specimens)
-        .map(|s| Specimen {
-            field: s.field,
-            survived: s.survived,
-            area: s.area,
-            thickness: s.thickness,
-            prestretch: s.prestretch,
-        })
+        .map(BreakdownSpecimen::weibull)
         .collect();
     let fit = weibull::fit(&specimens, &settings).map_err(|e| located(e, &series))?;
     if area.is_some() && fit.reference_area.is_none() {

@@ -61,6 +61,19 @@ pub struct BreakdownSeries {
     pub conversions: Vec<String>,
 }
 
+impl BreakdownSpecimen {
+    /// The specimen as the Weibull estimators take it (SI).
+    pub fn weibull(&self) -> crate::fit::weibull::Specimen {
+        crate::fit::weibull::Specimen {
+            field: self.field,
+            survived: self.survived,
+            area: self.area,
+            thickness: self.thickness,
+            prestretch: self.prestretch,
+        }
+    }
+}
+
 impl BreakdownSeries {
     /// Specimens that broke down.
     pub fn failures(&self) -> usize {

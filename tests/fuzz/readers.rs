@@ -616,13 +616,7 @@ fn breakdown(path: &Path, dir: &Path) -> Verdict {
     let specimens: Vec<weibull::Specimen> = series
         .specimens
         .iter()
-        .map(|s| weibull::Specimen {
-            field: s.field,
-            survived: s.survived,
-            area: s.area,
-            thickness: s.thickness,
-            prestretch: s.prestretch,
-        })
+        .map(breakdown_io::BreakdownSpecimen::weibull)
         .collect();
     let Ok(f) = weibull::fit(&specimens, &weibull::Settings::default()) else {
         return Verdict::Refused;

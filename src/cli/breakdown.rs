@@ -122,18 +122,6 @@ fn settings(a: &Args) -> Settings {
     }
 }
 
-/// The data name of the outputs: `<folder>-<stem>` of the first file.
-fn data_name(file: &Path) -> String {
-    let s = file
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "series".into());
-    match file.parent().and_then(|p| p.file_name()) {
-        Some(d) => format!("{}-{s}", d.to_string_lossy()),
-        None => s,
-    }
-}
-
 /// Run the subcommand.
 pub fn run(a: Args) -> Result<i32> {
     if a.files.is_empty() {
@@ -151,7 +139,7 @@ pub fn run(a: Args) -> Result<i32> {
     let area = positive("--area", a.area.as_deref(), Dimension::Area)?;
     let settings = settings(&a);
     let o = &a.output;
-    let name = format!("{}-breakdown", data_name(&a.files[0]));
+    let name = format!("{}-breakdown", super::data_name(&a.files[0], "series"));
     let out = o
         .out
         .clone()

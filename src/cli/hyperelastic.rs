@@ -107,18 +107,7 @@ fn load(a: &Args) -> Result<Dataset> {
 
 fn run_name(a: &Args, model: &str) -> String {
     let first = a.files.iter().chain(&a.equibiaxial).chain(&a.planar).next();
-    let stem = first
-        .map(|f| {
-            let s = f
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            match f.parent().and_then(|p| p.file_name()) {
-                Some(d) => format!("{}-{s}", d.to_string_lossy()),
-                None => s,
-            }
-        })
-        .unwrap_or_else(|| "fit".into());
+    let stem = first.map_or_else(|| "fit".into(), |f| super::data_name(f, ""));
     format!("{stem}-{model}")
 }
 

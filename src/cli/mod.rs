@@ -84,6 +84,20 @@ pub fn run(cli: Cli) -> Result<i32> {
     }
 }
 
+/// The name of a run's data in default file and report names: `<folder>-<stem>`
+/// of its (first) file, e.g. `treloar-uniaxial` for datasets/treloar/uniaxial.csv
+/// (the stem alone for a file without a folder, `fallback` without a stem).
+pub fn data_name(file: &std::path::Path, fallback: &str) -> String {
+    let s = file.file_stem().map_or_else(
+        || fallback.to_string(),
+        |s| s.to_string_lossy().into_owned(),
+    );
+    match file.parent().and_then(|p| p.file_name()) {
+        Some(d) => format!("{}-{s}", d.to_string_lossy()),
+        None => s,
+    }
+}
+
 /// Output flags every fitting command shares.
 #[derive(Debug, clap::Args)]
 pub struct Output {

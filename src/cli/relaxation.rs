@@ -189,16 +189,7 @@ pub fn run(a: Args) -> Result<i32> {
     let qlv = a.hyperelastic.as_deref().map(load_qlv).transpose()?;
     let loading = Loading { strain, ramp_time };
     let fit = relaxation::fit(&data, &loading, qlv.as_ref(), &settings)?;
-    let stem = {
-        let s = file
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "relaxation".into());
-        match file.parent().and_then(|p| p.file_name()) {
-            Some(d) => format!("{}-{s}", d.to_string_lossy()),
-            None => s,
-        }
-    };
+    let stem = super::data_name(&file, "relaxation");
     let name = format!(
         "{stem}-{}{}",
         if qlv.is_some() { "qlv" } else { "prony" },

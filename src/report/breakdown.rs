@@ -406,6 +406,12 @@ fn page(
                 .collect(),
         );
     }
+    if r.goodness.is_none() && f.survived > 0 {
+        page.text(format!(
+            "Goodness of fit: not tested. The Anderson–Darling test here is for complete series, and {} of {} specimens survived (docs/breakdown.md); judge the straightness of the Weibull plot by eye.",
+            f.survived, f.n
+        ));
+    }
     if let Some(g) = &r.goodness {
         page.text(format!(
             "Goodness of fit: {} = {:.4} (5 % critical value {:.4}{}): {}.",

@@ -646,3 +646,32 @@ fn small_series_warn_with_the_width_of_beta() {
         "{w}"
     );
 }
+
+/// A censored series counts its breakdowns: 15 specimens of which 10 survived at
+/// the rig's limit carry the information of 5 breakdowns, and are warned so
+/// (status warning), while 15 with 12 breakdowns are not.
+#[test]
+fn heavily_censored_series_warn_by_their_breakdowns() {
+    let fields = [22e6, 24e6, 25e6, 27e6, 28e6];
+    let mut specimens = complete(&fields);
+    specimens.extend((0..10).map(|_| Specimen::new(29e6, true)));
+    let f = fit(&specimens, &mle()).expect("fits");
+    assert!(
+        f.warnings
+            .iter()
+            .any(|w| w.contains("only 5 breakdowns (15 specimens, 10 survived")),
+        "{:?}",
+        f.warnings
+    );
+    assert_eq!(f.status, dea_fit::fit::Status::Warning);
+    let mut many = complete(&[
+        20e6, 21e6, 22e6, 23e6, 24e6, 25e6, 26e6, 26.5e6, 27e6, 27.5e6, 28e6, 28.5e6,
+    ]);
+    many.extend((0..3).map(|_| Specimen::new(29e6, true)));
+    let g = fit(&many, &mle()).expect("fits");
+    assert!(
+        !g.warnings.iter().any(|w| w.contains("only")),
+        "{:?}",
+        g.warnings
+    );
+}

@@ -755,17 +755,22 @@ pub fn fit(specimens: &[Specimen], settings: &Settings) -> Result<WeibullFit, We
     } else {
         BoundKind::Fisher
     };
-    if n < 10 {
-        if let Some((lo, hi)) = beta.bounds(bounds) {
-            warnings.push(format!(
-                "only {n} specimens (IEEE 930 asks for at least 10): β's 95 % interval is {lo:.3}..{hi:.3} ({} bounds), a factor {:.2} wide",
+    // IEEE 930 asks for at least 10 specimens; with survivors the information is
+    // in the breakdowns, so a censored series counts those.
+    if failures < 10 {
+        let few = match n - failures {
+            0 => format!("only {n} specimens (IEEE 930 asks for at least 10)"),
+            survived => format!(
+                "only {failures} breakdowns ({n} specimens, {survived} survived; IEEE 930 asks for at least 10, and with survivors the breakdowns carry the information)"
+            ),
+        };
+        match beta.bounds(bounds) {
+            Some((lo, hi)) => warnings.push(format!(
+                "{few}: β's 95 % interval is {lo:.3}..{hi:.3} ({} bounds), a factor {:.2} wide",
                 bounds.name(),
                 hi / lo
-            ));
-        } else {
-            warnings.push(format!(
-                "only {n} specimens (IEEE 930 asks for at least 10)"
-            ));
+            )),
+            None => warnings.push(few),
         }
     }
     if status == Status::Ok && !warnings.is_empty() {

@@ -445,45 +445,63 @@ fn page_renders_in_chromium() {
             "fit.json",
         ],
     );
-    let page = dir.path().join("rep/index.html");
-    let png = dir.path().join("page.png");
-    let shot = std::process::Command::new("chromium")
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--hide-scrollbars",
-            &format!("--screenshot={}", png.display()),
-            "--window-size=1000,1400",
-            &format!("file://{}", page.display()),
-        ])
-        .output()
-        .expect("chromium runs (apt-get install chromium)");
-    assert!(
-        png.is_file(),
-        "no screenshot: {}",
-        String::from_utf8_lossy(&shot.stderr)
+    // The breakdown report's Weibull probability plot too (issue 33).
+    run_ok(
+        dir.path(),
+        &[
+            "breakdown",
+            &shipped("datasets/breakdown/vhb4910-coupons.csv"),
+            "--report",
+            "bd",
+            "--out",
+            "bd.json",
+        ],
     );
-    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()));
-    let mut reader = decoder.read_info().expect("a PNG");
-    let mut buf = vec![0; reader.output_buffer_size().expect("a size")];
-    let info = reader.next_frame(&mut buf).expect("a frame");
-    assert_eq!((info.width, info.height), (1000, 1400));
-    let channels = info.color_type.samples();
-    let bytes = &buf[..info.buffer_size()];
-    // Palette colour 0 (31, 119, 180): the data markers and the model curve.
-    let blue = bytes
-        .chunks(channels)
-        .filter(|p| {
-            (p[0] as i32 - 31).abs() < 12
-                && (p[1] as i32 - 119).abs() < 12
-                && (p[2] as i32 - 180).abs() < 12
-        })
-        .count();
-    assert!(
-        blue > 500,
-        "only {blue} pixels of the charts' blue: the SVG did not render"
-    );
+    // Fewest pixels of palette colour 0 each page shows when its chart renders: the
+    // hyperelastic page's data markers and model curve; the breakdown page's 20
+    // markers (≈ 12 px each: 249 rendered, its fit line and band are red).
+    for (folder, fewest) in [("rep", 500), ("bd", 150)] {
+        let page = dir.path().join(folder).join("index.html");
+        let png = dir.path().join(format!("{folder}.png"));
+        let shot = std::process::Command::new("chromium")
+            .args([
+                "--headless",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--hide-scrollbars",
+                &format!("--screenshot={}", png.display()),
+                "--window-size=1000,1400",
+                &format!("file://{}", page.display()),
+            ])
+            .output()
+            .expect("chromium runs (apt-get install chromium)");
+        assert!(
+            png.is_file(),
+            "no screenshot of {folder}: {}",
+            String::from_utf8_lossy(&shot.stderr)
+        );
+        let decoder =
+            png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()));
+        let mut reader = decoder.read_info().expect("a PNG");
+        let mut buf = vec![0; reader.output_buffer_size().expect("a size")];
+        let info = reader.next_frame(&mut buf).expect("a frame");
+        assert_eq!((info.width, info.height), (1000, 1400));
+        let channels = info.color_type.samples();
+        let bytes = &buf[..info.buffer_size()];
+        // Palette colour 0 (31, 119, 180): the data markers and the model curve.
+        let blue = bytes
+            .chunks(channels)
+            .filter(|p| {
+                (p[0] as i32 - 31).abs() < 12
+                    && (p[1] as i32 - 119).abs() < 12
+                    && (p[2] as i32 - 180).abs() < 12
+            })
+            .count();
+        assert!(
+            blue > fewest,
+            "{folder}: only {blue} pixels of the charts' blue: the SVG did not render"
+        );
+    }
 }
 
 /// One renderer per result kind: what permittivity, composite, identify and rank

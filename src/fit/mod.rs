@@ -5,6 +5,7 @@ pub mod composite;
 pub mod diagnostics;
 pub mod drucker;
 pub mod hyperelastic;
+pub mod identifiability;
 pub mod linear;
 pub mod lm;
 pub mod multistart;

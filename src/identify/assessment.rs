@@ -18,20 +18,12 @@
 
 use super::params::{Constant, Role, Space};
 use crate::fit::diagnostics::uncertainty;
+use crate::fit::identifiability;
 use crate::report::format::si;
 use nalgebra::DMatrix;
 use serde::Serialize;
 
-/// Largest relative standard error of an identified constant (a 95 % interval
-/// within about a factor 2.7 either way).
-pub const MAX_REL_SIGMA: f64 = 0.5;
-
-/// Largest |correlation| between two identified constants: beyond it the trace fixes
-/// only their combination.
-pub const MAX_CORRELATION: f64 = 0.999;
-
-/// Correlation above which a warning names the pair.
-pub const WARN_CORRELATION: f64 = 0.99;
+pub use crate::fit::identifiability::{MAX_CORRELATION, MAX_REL_SIGMA, WARN_CORRELATION};
 
 /// One identified constant, as printed and written (`--json` `parameters`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -162,7 +154,7 @@ pub fn assess(
         let why = match bound[j] {
             Some(side) => Some((
                 Weakness::AtBound(side),
-                weakness(free_sd, values[j], free_partner),
+                weakness(&free[j], free_sd, values[j], full.t95, free_partner),
             )),
             None => {
                 // inside: its σ with the bounded ones held, and a trade-off with
@@ -172,7 +164,14 @@ pub fn assess(
                     .filter(|&b| b != a)
                     .filter_map(|b| held.correlation[a][b].map(|r| (inside[b], r)))
                     .chain(free_partner.filter(|&(k, _)| bound[k].is_some()));
-                weakness(estimates[j].std_error, values[j], partners).map(|w| (w, None))
+                weakness(
+                    &free[j],
+                    estimates[j].std_error,
+                    values[j],
+                    held.t95,
+                    partners,
+                )
+                .map(|w| (w, None))
             }
         };
         if let Some((w, cause)) = why {
@@ -212,19 +211,25 @@ fn in_theta(
 }
 
 /// Why a constant with σ `sd` at `value`, correlated with the free constants
-/// `partners` (index, ρ), is not pinned down, if it is not.
+/// `partners` (index, ρ), is not pinned down, if it is not: the one rule
+/// ([`identifiability::judge`]), a sign-free constant (searched linearly) also held
+/// to an interval that excludes 0.
 fn weakness(
+    c: &Constant,
     sd: Option<f64>,
     value: f64,
+    t95: Option<f64>,
     partners: impl Iterator<Item = (usize, f64)>,
 ) -> Option<Weakness> {
-    let partner = partners.max_by(|p, q| p.1.abs().total_cmp(&q.1.abs()));
-    match (sd.map(|s| s / value.abs()), partner) {
-        (None, _) => Some(Weakness::Singular),
-        (Some(r), _) if r.is_nan() || r > MAX_REL_SIGMA => Some(Weakness::Loose(r)),
-        (_, Some((k, rho))) if rho.abs() > MAX_CORRELATION => Some(Weakness::Traded(k, rho)),
-        _ => None,
-    }
+    let sign_free = matches!(c.space, Space::Linear { .. });
+    let limit = identifiability::limit(sign_free, t95.unwrap_or(1.96));
+    identifiability::judge(identifiability::rel_sigma(value, sd), limit, partners).map(
+        |w| match w {
+            identifiability::Weakness::Singular => Weakness::Singular,
+            identifiability::Weakness::Loose(r) => Weakness::Loose(r),
+            identifiability::Weakness::Traded(k, rho) => Weakness::Traded(k, rho),
+        },
+    )
 }
 
 /// Which bound of its search a constant ended at.

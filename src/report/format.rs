@@ -265,10 +265,18 @@ pub fn wrap(text: &str, width: usize) -> Vec<String> {
     lines
 }
 
-/// A table cell broken into lines of at most `width` characters: a list
-/// ("1.2 s, 3.4 s") between its items, so that a value stays with its unit;
-/// anything longer than `width` by [`wrap`].
+/// A table cell broken into lines of at most `width` characters: a list of values
+/// ("1.2 s, 3.4 s": every item at most two words, a number and its unit) between
+/// its items, so that a value stays with its unit; prose (a reason with commas in
+/// it) and anything longer than `width` by [`wrap`], so a sentence fills its lines
+/// instead of breaking at every comma.
 fn wrap_list(cell: &str, width: usize) -> Vec<String> {
+    if cell
+        .split(", ")
+        .any(|item| item.split_whitespace().count() > 2)
+    {
+        return wrap(cell, width);
+    }
     let mut lines: Vec<String> = Vec::new();
     let mut line = String::new();
     let items: Vec<&str> = cell.split(", ").collect();
@@ -559,6 +567,11 @@ mod tests {
         assert_eq!(
             wrap_list("no: the search stopped", 10),
             ["no: the", "search", "stopped"]
+        );
+        // prose with commas fills its lines (it broke after every comma before)
+        assert_eq!(
+            wrap_list("no: at the bound, not the trace, holds it there, so", 24),
+            ["no: at the bound, not", "the trace, holds it", "there, so"]
         );
         assert_eq!(wrap("abcdefghij", 4), ["abcd", "efgh", "ij"]);
         assert!(wrap("", 10).is_empty());

@@ -13,6 +13,7 @@ mod fuzz;
 mod html_report;
 mod identify;
 mod identify_mass_fraction;
+mod identify_reduce;
 mod material_file;
 mod models;
 mod numeric_input;

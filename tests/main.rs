@@ -14,6 +14,7 @@ mod html_report;
 mod identify;
 mod identify_intervals;
 mod identify_mass_fraction;
+mod identify_reduce;
 mod material_file;
 mod models;
 mod numeric_input;

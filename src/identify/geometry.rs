@@ -295,10 +295,7 @@ fn widen(c: &super::params::Constant, x: f64, sx: f64, e: &mut Estimate) {
         let (a, b) = (c.space.x(lo), c.space.x(hi));
         let (a, b) = (a.min(b), a.max(b));
         let out = |w: f64| w.hypot(Z_975 * sx);
-        let (lo, hi) = (
-            c.space.theta(x - out(x - a)),
-            c.space.theta(x + out(b - x)),
-        );
+        let (lo, hi) = (c.space.theta(x - out(x - a)), c.space.theta(x + out(b - x)));
         [lo.min(hi), lo.max(hi)]
     });
     if !e.identifiable {

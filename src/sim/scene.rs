@@ -449,8 +449,8 @@ impl Ctx<'_> {
         let hint = || {
             format!("give the length, or the length with one standard deviation of it in [0, the length], e.g. {key} = \"50 ± 1 um\"")
         };
-        let q = parse_uncertain(s, Dimension::Length)
-            .map_err(|e| self.err(&k, e).with_hint(hint()))?;
+        let q =
+            parse_uncertain(s, Dimension::Length).map_err(|e| self.err(&k, e).with_hint(hint()))?;
         if !q.value.is_finite() {
             return Err(self
                 .err(&k, format!("must be a finite length, found {}", q.value))

@@ -112,6 +112,9 @@ pub struct Geometry {
     /// What the intervals include, and what a 1 % error of each length does, in
     /// words (a note, not a warning).
     pub note: String,
+    /// A tolerance as the scene would state it (its thickness at 1 %), for the note.
+    #[serde(skip)]
+    example: String,
 }
 
 impl Geometry {
@@ -164,6 +167,10 @@ pub fn include(
     let cols: Vec<usize> = (0..estimates.len())
         .filter(|&j| estimates[j].std_error.is_some())
         .collect();
+    let thickness = match scene.actuator {
+        crate::sim::scene::Actuator::Stack(s) => (Length::LayerThickness, s.layer_m),
+        crate::sim::scene::Actuator::Helix(h) => (Length::Thickness, h.thickness_m),
+    };
     let mut g = Geometry {
         included: false,
         tolerances,
@@ -171,7 +178,19 @@ pub fn include(
         constants: Vec::new(),
         failed: None,
         note: String::new(),
+        example: format!(
+            "{} = \"{} ± {} um\"",
+            thickness.0,
+            sig(thickness.1 * 1e6, 3),
+            sig(thickness.1 * 1e4, 3)
+        ),
     };
+    if cols.is_empty() {
+        // no constant has an interval to widen or a move to report
+        g.included = !g.tolerances.is_empty();
+        g.note = g.statement();
+        return g;
+    }
     let moves = match moves(problem, x, jac, &cols, &lengths) {
         Ok(m) => m,
         Err(why) => {
@@ -360,7 +379,7 @@ impl Geometry {
                     }
                 )
             }
-            (false, true) => "The intervals exclude the geometry: the scene states no tolerance of its lengths (e.g. layer_thickness = \"500 ± 5 um\", one standard deviation), so they hold only if the geometry is exact".to_string(),
+            (false, true) => format!("The intervals exclude the geometry: the scene states no tolerance of its lengths (e.g. {}, one standard deviation), so they hold only if the geometry is exact", self.example),
             (false, false) => "The intervals exclude the geometry's stated tolerances (their effect could not be computed)".to_string(),
         }
     }

@@ -21,7 +21,7 @@
 //! J over the free constants that have an interval (one at a bound of its search is
 //! held there, as in the assessment), solved by [`RowQr`] as in
 //! [`super::integration_shift`]; ∂r/∂ln g is a forward difference of the scaled
-//! residuals with g moved by the relative step [`STEP`] (one simulator run per
+//! residuals with ln g moved by [`STEP`] (one simulator run per
 //! length and experiment, and one at the nominal geometry, so that both sides of the
 //! difference are the same kind of run). The experiments are of one actuator: a
 //! length moves by the same fraction in each.
@@ -260,7 +260,8 @@ fn moves(
             for e in &mut p.experiments {
                 let a = &mut e.scene.actuator;
                 let v = a.length(l).ok_or("a length of another kind of actuator")?;
-                *a = a.with_length(l, v * (1.0 + STEP)).expect("its own length");
+                // ln g moves by exactly STEP
+                *a = a.with_length(l, v * STEP.exp()).expect("its own length");
             }
         }
         let mut r = DVector::zeros(n);
@@ -268,7 +269,7 @@ fn moves(
             true => Ok(r),
             false => Err(match moved {
                 None => "the run at the nominal geometry".to_string(),
-                Some(l) => format!("the run with {l} {} % larger", 100.0 * STEP),
+                Some(l) => format!("the run with {l} {:.1} % larger", 100.0 * STEP),
             } + &format!(
                 " failed ({})",
                 p.failure().unwrap_or_else(|| "no reason given".into())

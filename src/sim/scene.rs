@@ -121,12 +121,16 @@ impl std::fmt::Display for Length {
 
 /// The stated tolerance of a geometry length (`layer_thickness = "50 ± 1 um"`): one
 /// standard deviation of the real length about the value the simulator runs.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Tolerance {
     /// Which length.
     pub length: Length,
     /// Its standard deviation σ (m), 0 ≤ σ ≤ the length.
     pub sigma_m: f64,
+    /// Where the scene states it (for a reader that does not carry it, and refuses
+    /// it there: `dea-fit rank`).
+    #[serde(skip)]
+    pub at: Location,
 }
 
 impl Actuator {
@@ -472,6 +476,7 @@ impl Ctx<'_> {
             tol.push(Tolerance {
                 length: l,
                 sigma_m: sigma,
+                at: self.loc(&k),
             });
         }
         Ok(Some(q.value))

@@ -17,6 +17,7 @@ pub mod assessment;
 pub mod band;
 pub mod checkpoint;
 pub mod failure;
+pub mod geometry;
 pub mod material;
 pub mod noise;
 pub mod params;
@@ -226,6 +227,9 @@ pub struct Identification {
     /// (σ by dεr/dw, the interval the rule's image of w's).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub derived: Vec<Estimate>,
+    /// What the scene's geometry tolerances add to σ and the intervals, or that the
+    /// intervals exclude them ([`geometry`]).
+    pub geometry: geometry::Geometry,
     /// Profile likelihoods asked for (`--profiles`).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub profiles: Vec<profile::Profile>,
@@ -353,6 +357,9 @@ pub fn identify_with(
         profile::assess(&problem, &x, &jac, rss, &ctx, &profiled, &settings.lm);
     let interval_seconds = started.elapsed().as_secs_f64();
     let experiments = channel_fits(&problem, &given, &r);
+    // the scene's geometry tolerances into σ and the intervals (identify::geometry)
+    let mut assessment = assessment;
+    let geometry = geometry::include(&problem, &x, &jac, &mut assessment.estimates);
     let mut warnings = warnings(
         &problem,
         &assessment,
@@ -363,6 +370,7 @@ pub fn identify_with(
     );
     warnings.extend(structured_residuals(&problem, &r));
     warnings.extend(assessment.warnings.iter().cloned());
+    warnings.extend(geometry.warning());
     let shift = integration_shift(&mut problem, &x, &r, &jac, &assessment.estimates);
     warnings.extend(shift_warning(&shift));
     let shift = shift.ok().flatten();
@@ -397,6 +405,7 @@ pub fn identify_with(
         aicc,
         bic,
         assessment,
+        geometry,
         profiles,
         theta,
         stretch_range,

@@ -818,6 +818,17 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
     let sc = &spec.actuator.scene;
     let scene_path = cx.file(&sc.span(), "actuator.scene", sc.get_ref())?;
     let scene = Scene::read(&scene_path)?;
+    // the figures are of the nominal geometry: a tolerance would be dropped
+    if let Some(t) = scene.tolerances.first() {
+        return Err(Error::input(
+            t.at.clone(),
+            format!(
+                "actuator.{}: rank does not take a tolerance of the geometry (its figures are of the nominal geometry: the tolerance would be dropped)",
+                t.length
+            ),
+        )
+        .with_hint("write the length alone in the design's scene (dea-fit identify takes the tolerance into its intervals)"));
+    }
     // what the scene reads (its material's fit files) counts for the design hash
     cx.files.borrow_mut().extend(scene.files.iter().cloned());
     if scene.control.is_some() {

@@ -9,6 +9,7 @@ use super::plot::{band, Chart, Series, Style, BAND_LABEL};
 use super::runs::Run;
 use crate::error::{Error, Result};
 use crate::identify::failure::Failure;
+use crate::identify::geometry::Geometry;
 use crate::identify::material::Validation;
 use crate::identify::noise::SigmaSource;
 use crate::identify::params;
@@ -127,6 +128,7 @@ fn page(
     );
     held_section(id, &mut page);
     reduction_section(id, &mut page);
+    geometry_section(&id.geometry, &mut page);
     page.heading("Channels");
     page.table(
         &["trace", "channel", "points", "σ", "σ from", "RMSE", "%RMSE"],
@@ -280,6 +282,47 @@ fn reduction_section(id: &Identification, page: &mut Page) {
             .as_ref()
             .map_or(String::new(), |f| format!(" The same model directly: {f}.")),
     ));
+}
+
+/// What the scene's geometry adds to the intervals ([`crate::identify::geometry`]):
+/// whether they include its tolerances, and per constant the σ from the trace, the
+/// σ from the geometry and the move per 1 % of each length.
+fn geometry_section(g: &Geometry, page: &mut Page) {
+    page.heading("Geometry");
+    page.text(format!("{}.", g.statement()));
+    let Some(first) = g.constants.first() else {
+        if let Some(why) = &g.failed {
+            page.text(format!("Not computed: {why}."));
+        }
+        return;
+    };
+    let mut header = vec![
+        "parameter".to_string(),
+        "σ from the trace".into(),
+        "σ from the geometry".into(),
+    ];
+    header.extend(
+        first
+            .per_percent
+            .iter()
+            .map(|m| format!("per +1 % {}", m.length)),
+    );
+    let rows = g
+        .constants
+        .iter()
+        .map(|t| {
+            let sd = |s: Option<f64>| s.map_or("—".into(), |s| constant(&t.name, s, &t.unit));
+            let mut row = vec![t.name.clone(), sd(t.sigma_trace)];
+            row.push(match g.included {
+                true => sd(t.sigma_geometry),
+                false => "excluded".into(),
+            });
+            row.extend(t.per_percent.iter().map(|m| m.words(&t.unit)));
+            row
+        })
+        .collect();
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
+    page.table(&header, rows);
 }
 
 /// The channels table: each identified channel (points, σ and where it came from,

@@ -72,6 +72,104 @@ pub enum Actuator {
     Helix(HelixGeometry),
 }
 
+/// A length of the actuator's geometry, by its scene key.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Length {
+    /// A stack's electrode radius r0.
+    Radius,
+    /// A stack's elastomer layer thickness zd0.
+    LayerThickness,
+    /// A stack's electrode thickness ze0.
+    ElectrodeThickness,
+    /// A helix's outer radius Ro0.
+    OuterRadius,
+    /// A helix's inner radius Ri0.
+    InnerRadius,
+    /// A helix's vertical element thickness z0.
+    Thickness,
+}
+
+impl Length {
+    /// The lengths of a stack's geometry.
+    pub const STACK: [Length; 3] = [
+        Length::Radius,
+        Length::LayerThickness,
+        Length::ElectrodeThickness,
+    ];
+    /// The lengths of a helix's geometry.
+    pub const HELIX: [Length; 3] = [Length::OuterRadius, Length::InnerRadius, Length::Thickness];
+
+    /// The key in `[actuator]`.
+    pub fn key(self) -> &'static str {
+        match self {
+            Length::Radius => "radius",
+            Length::LayerThickness => "layer_thickness",
+            Length::ElectrodeThickness => "electrode_thickness",
+            Length::OuterRadius => "outer_radius",
+            Length::InnerRadius => "inner_radius",
+            Length::Thickness => "thickness",
+        }
+    }
+}
+
+impl std::fmt::Display for Length {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.key())
+    }
+}
+
+/// The stated tolerance of a geometry length (`layer_thickness = "50 ± 1 um"`): one
+/// standard deviation of the real length about the value the simulator runs.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Tolerance {
+    /// Which length.
+    pub length: Length,
+    /// Its standard deviation σ (m), 0 ≤ σ ≤ the length.
+    pub sigma_m: f64,
+    /// Where the scene states it (for a reader that does not carry it, and refuses
+    /// it there: `dea-fit rank`).
+    #[serde(skip)]
+    pub at: Location,
+}
+
+impl Actuator {
+    /// The lengths of this actuator's geometry ([`Length::STACK`] or [`Length::HELIX`]).
+    pub fn lengths(&self) -> [Length; 3] {
+        match self {
+            Actuator::Stack(_) => Length::STACK,
+            Actuator::Helix(_) => Length::HELIX,
+        }
+    }
+
+    /// A length's field of this actuator's geometry (None: the other kind's).
+    fn length_mut(&mut self, l: Length) -> Option<&mut f64> {
+        match (self, l) {
+            (Actuator::Stack(s), Length::Radius) => Some(&mut s.radius_m),
+            (Actuator::Stack(s), Length::LayerThickness) => Some(&mut s.layer_m),
+            (Actuator::Stack(s), Length::ElectrodeThickness) => Some(&mut s.electrode_m),
+            (Actuator::Helix(h), Length::OuterRadius) => Some(&mut h.outer_m),
+            (Actuator::Helix(h), Length::InnerRadius) => Some(&mut h.inner_m),
+            (Actuator::Helix(h), Length::Thickness) => Some(&mut h.thickness_m),
+            _ => None,
+        }
+    }
+
+    /// The value of a length (m); None for a length of the other kind.
+    pub fn length(&self, l: Length) -> Option<f64> {
+        let mut a = *self;
+        a.length_mut(l).map(|v| *v)
+    }
+
+    /// This geometry with the length `l` at `value` (m); None for a length of the
+    /// other kind.
+    pub fn with_length(&self, l: Length, value: f64) -> Option<Actuator> {
+        let mut a = *self;
+        *a.length_mut(l)? = value;
+        Some(a)
+    }
+}
+
 /// Material constants.
 #[derive(Clone)]
 pub struct Material {
@@ -185,8 +283,13 @@ pub struct TimeSpec {
 pub struct Scene {
     /// Scene name (file stem unless given).
     pub name: String,
-    /// Actuator.
+    /// Actuator (the nominal geometry, which the simulator runs).
     pub actuator: Actuator,
+    /// The stated tolerances of the geometry's lengths, in the order of
+    /// [`Actuator::lengths`] (`layer_thickness = "50 ± 1 um"`); empty when the scene
+    /// states none. `dea-fit identify` carries them into its intervals
+    /// ([`crate::identify::geometry`]).
+    pub tolerances: Vec<Tolerance>,
     /// Material.
     pub material: Material,
     /// Load.
@@ -336,6 +439,54 @@ impl Ctx<'_> {
                 ))
         })
     }
+    /// A length of `[actuator]`: a quantity, or a string with its tolerance
+    /// (`"50 ± 1 um"`, the reader of every `±` in the project,
+    /// [`parse_uncertain`]), the tolerance pushed to `tol`. The σ is one standard
+    /// deviation and at most the length (a larger one says the length is unknown,
+    /// and a length is positive); a negative, non-finite or larger σ is refused at
+    /// the key.
+    fn length(&self, t: &toml::Table, l: Length, tol: &mut Vec<Tolerance>) -> Result<Option<f64>> {
+        let (key, k) = (l.key(), format!("actuator.{}", l.key()));
+        let Some(toml::Value::String(s)) = t.get(key) else {
+            return self.quantity(t, "actuator", key, Dimension::Length);
+        };
+        let hint = || {
+            format!("give the length, or the length with one standard deviation of it in [0, the length], e.g. {key} = \"50 ± 1 um\"")
+        };
+        let q =
+            parse_uncertain(s, Dimension::Length).map_err(|e| self.err(&k, e).with_hint(hint()))?;
+        if !q.value.is_finite() {
+            return Err(self
+                .err(&k, format!("must be a finite length, found {}", q.value))
+                .with_hint(hint()));
+        }
+        if let Some(sigma) = q.tolerance {
+            if !(sigma.is_finite() && (0.0..=q.value).contains(&sigma)) {
+                return Err(self
+                    .err(
+                        &k,
+                        format!(
+                            "the tolerance {} of '{s}' must be a finite standard deviation from 0 to the length ({})",
+                            crate::report::format::si(sigma, "m"),
+                            crate::report::format::si(q.value, "m"),
+                        ),
+                    )
+                    .with_hint(hint()));
+            }
+            tol.push(Tolerance {
+                length: l,
+                sigma_m: sigma,
+                at: self.loc(&k),
+            });
+        }
+        Ok(Some(q.value))
+    }
+    fn need_length(&self, t: &toml::Table, l: Length, tol: &mut Vec<Tolerance>) -> Result<f64> {
+        self.length(t, l, tol)?.ok_or_else(|| {
+            self.err(&format!("actuator.{}", l.key()), "is missing")
+                .with_hint(format!("give it with a unit, e.g. {} = \"1 m\"", l.key()))
+        })
+    }
     /// A plain (dimensionless or unit-in-the-name) number; always finite.
     fn number(&self, t: &toml::Table, sec: &str, key: &str) -> Result<Option<f64>> {
         let k = format!("{sec}.{key}");
@@ -476,7 +627,7 @@ impl Scene {
                     .map(|s| s.to_string_lossy().into_owned())
                     .unwrap_or_else(|| "scene".into())
             });
-        let actuator = read_actuator(&c, c.table(&root, "actuator")?)?;
+        let (actuator, tolerances) = read_actuator(&c, c.table(&root, "actuator")?)?;
         let material_table = c.table(&root, "material")?;
         let (material, actuator_mass) = read_material(&c, material_table, &dir)?;
         let breakdown = read_breakdown(&c, material_table, &dir, &actuator)?;
@@ -507,6 +658,7 @@ impl Scene {
         let scene = Scene {
             name,
             actuator,
+            tolerances,
             material,
             load,
             source,
@@ -522,9 +674,12 @@ impl Scene {
     }
 }
 
-fn read_actuator(c: &Ctx, t: &toml::Table) -> Result<Actuator> {
+/// `[actuator]`: a stack or a helix, and the tolerances its lengths state
+/// ([`Ctx::length`]).
+fn read_actuator(c: &Ctx, t: &toml::Table) -> Result<(Actuator, Vec<Tolerance>)> {
     let s = "actuator";
-    match c.string(t, s, "kind")? {
+    let mut tol = Vec::new();
+    let actuator = match c.string(t, s, "kind")? {
         Some("stack") => {
             c.known(
                 t,
@@ -538,17 +693,16 @@ fn read_actuator(c: &Ctx, t: &toml::Table) -> Result<Actuator> {
                     "electrodes",
                 ],
             )?;
-            Ok(Actuator::Stack(StackGeometry {
-                radius_m: c.need(t, s, "radius", Dimension::Length)?,
-                layer_m: c.need(t, s, "layer_thickness", Dimension::Length)?,
-                electrode_m: c
-                    .quantity(t, s, "electrode_thickness", Dimension::Length)?
-                    .unwrap_or(0.0),
+            let [r, l, e] = Length::STACK;
+            Actuator::Stack(StackGeometry {
+                radius_m: c.need_length(t, r, &mut tol)?,
+                layer_m: c.need_length(t, l, &mut tol)?,
+                electrode_m: c.length(t, e, &mut tol)?.unwrap_or(0.0),
                 layers: c.need_count(t, s, "layers", &budget::COUNT)?,
                 electrodes: c
                     .count(t, s, "electrodes", &budget::ELECTRODE_COUNT)?
                     .unwrap_or(0),
-            }))
+            })
         }
         Some("helix") => {
             c.known(
@@ -573,20 +727,24 @@ fn read_actuator(c: &Ctx, t: &toml::Table) -> Result<Actuator> {
                         .with_hint("use planar (seed Eq. 4.18) or free"))
                 }
             };
-            Ok(Actuator::Helix(HelixGeometry {
-                outer_m: c.need(t, s, "outer_radius", Dimension::Length)?,
-                inner_m: c.need(t, s, "inner_radius", Dimension::Length)?,
-                thickness_m: c.need(t, s, "thickness", Dimension::Length)?,
+            let [o, i, z] = Length::HELIX;
+            Actuator::Helix(HelixGeometry {
+                outer_m: c.need_length(t, o, &mut tol)?,
+                inner_m: c.need_length(t, i, &mut tol)?,
+                thickness_m: c.need_length(t, z, &mut tol)?,
                 periods: c.need_count(t, s, "periods", &budget::COUNT)?,
                 per_period: c.need_count(t, s, "per_period", &budget::COUNT)?,
                 lateral,
-            }))
+            })
         }
-        Some(o) => Err(c.unknown_name("actuator.kind", o, &["stack", "helix"])),
-        None => Err(c
-            .err("actuator.kind", "is missing")
-            .with_hint("use stack or helix")),
-    }
+        Some(o) => return Err(c.unknown_name("actuator.kind", o, &["stack", "helix"])),
+        None => {
+            return Err(c
+                .err("actuator.kind", "is missing")
+                .with_hint("use stack or helix"))
+        }
+    };
+    Ok((actuator, tol))
 }
 
 /// The hyperelastic part: a preset, a material file (a hyperelastic fit or an

@@ -12,6 +12,7 @@ mod export;
 mod fuzz;
 mod html_report;
 mod identify;
+mod identify_coverage;
 mod identify_mass_fraction;
 mod material_file;
 mod models;

@@ -7,10 +7,21 @@
 //! relative standard error is σ_x and the 95 % interval θ·exp(±t·σ_x) (asymmetric,
 //! always positive); for a linear one σ_θ = s·σ_x and θ ± t·σ_θ.
 //!
-//! **Not identifiable** when σ_θ/|θ| > [`MAX_REL_SIGMA`], or |ρ| > [`MAX_CORRELATION`]
-//! with another free constant, or the information matrix is singular, or the
-//! constant ended at a bound of its search (the bound holds it, not the trace: it
-//! gets no σ or interval, and the others' covariance is taken with it held there). The weakest
+//! The covariance is that of every free constant free: the constants the trace does
+//! not pin down (flagged loose or traded) and, as a local linearisation, those that
+//! ended at a bound of their search stay in it, so no interval is silently
+//! conditional on a value the trace did not fix. Only where that information is
+//! singular for a constant inside its bounds is its σ taken from the problem with the
+//! bounded constants held, and its estimate then names them (`conditional_on`).
+//! Where the linearisation fails the interval is the profile likelihood's
+//! ([`super::profile`]); the estimate says which kind it holds (`interval`).
+//!
+//! **Not identifiable** ([`identifiability`], the one rule) when σ_θ/|θ| >
+//! [`MAX_REL_SIGMA`] (of the equivalent symmetric interval for a profile interval),
+//! or |ρ| > [`MAX_CORRELATION`] with another free constant, or the information matrix
+//! is singular, or its profile interval is one-sided, or the constant ended at a
+//! bound of its search (the bound holds it, not the trace: it gets no σ or
+//! interval, and is reported as held by the bound, not as fixed there). The weakest
 //! direction of the column-normalised Jacobian (its smallest singular vector) names
 //! the constants that trade off against each other; the known cases get their own
 //! explanation (small strains and higher polynomial terms, εr against the moduli
@@ -18,7 +29,7 @@
 
 use super::params::{Constant, Role, Space};
 use crate::fit::diagnostics::uncertainty;
-use crate::fit::identifiability;
+use crate::fit::identifiability::{self, rel_sigma};
 use crate::report::format::si;
 use nalgebra::DMatrix;
 use serde::Serialize;
@@ -34,9 +45,13 @@ pub struct Estimate {
     pub value: f64,
     /// SI unit.
     pub unit: String,
-    /// Standard error (SI), None when the information matrix is singular.
+    /// Standard error (SI): the linearised one for a Wald interval, that of the
+    /// equivalent symmetric interval ([`identifiability::equivalent_rel_sigma`]) for
+    /// a profile interval; None when the information matrix is singular, the
+    /// constant is held by a bound, or its interval is one-sided.
     pub std_error: Option<f64>,
-    /// 95 % interval (SI).
+    /// 95 % interval (SI); for an interval open on one side ([`Estimate::open`]) the
+    /// bound of the search at that end.
     pub ci95: Option<[f64; 2]>,
     /// Whether the trace pins it down.
     pub identifiable: bool,
@@ -45,8 +60,61 @@ pub struct Estimate {
     pub reason: Option<String>,
     /// The start value (the scene's).
     pub start: f64,
-    /// At a bound of the search.
+    /// At a bound of the search (held there by the bound: no σ, no interval).
     pub at_bound: bool,
+    /// How the 95 % interval was found (None: no interval).
+    pub interval: Option<Kind>,
+    /// The side on which the profile does not reach the 95 % level before the
+    /// bound of the search (None: two-sided, or no interval). A one-sided constant
+    /// is not identifiable.
+    pub open: Option<Open>,
+    /// The constants whose values the interval is conditional on (held at a bound
+    /// of their search where the interval was found); empty when every other free
+    /// constant was free.
+    pub conditional_on: Vec<String>,
+}
+
+/// How an interval was found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Kind {
+    /// Linearised (Wald): θ ± t·σ, or θ·exp(±t·σ_x) for a log-searched constant,
+    /// from the covariance; kept where the profile at ±2σ agrees with the
+    /// quadratic model ([`super::profile::WALD_TOLERANCE`]).
+    Wald,
+    /// Profile likelihood: where χ² with the others re-fitted rises by t²·s².
+    Profile,
+}
+
+impl std::fmt::Display for Kind {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str(match self {
+            Kind::Wald => "Wald",
+            Kind::Profile => "profile",
+        })
+    }
+}
+
+/// The open side of a one-sided interval.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Open {
+    /// The trace does not exclude smaller values down to the search's lower bound.
+    Below,
+    /// The trace does not exclude larger values up to the search's upper bound.
+    Above,
+    /// Neither (a flat profile).
+    Both,
+}
+
+impl std::fmt::Display for Open {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str(match self {
+            Open::Below => "below",
+            Open::Above => "above",
+            Open::Both => "both ways",
+        })
+    }
 }
 
 /// What the traces show, for the explanations.
@@ -69,25 +137,40 @@ pub struct Context {
 pub struct Assessment {
     /// Per free constant.
     pub estimates: Vec<Estimate>,
-    /// Correlation matrix of the free constants (None where undefined).
+    /// Correlation matrix of the free constants, every one free (None where
+    /// undefined).
     pub correlation: Vec<Vec<Option<f64>>>,
     /// Condition number of the column-normalised Jacobian.
     pub condition: f64,
     /// Constants with the largest weight in the weakest direction, and that
     /// direction's singular value relative to the largest.
     pub weakest: (Vec<String>, f64),
+    /// What the profiles found that the caller must warn of (a χ² below the
+    /// optimum's: the search missed the optimum) ([`super::profile`]).
+    #[serde(skip)]
+    pub warnings: Vec<String>,
+}
+
+/// The linearised assessment and what the profile stage needs of it.
+#[derive(Debug, Clone)]
+pub(super) struct Linear {
+    /// The assessment, every interval Wald.
+    pub assessment: Assessment,
+    /// σ in search coordinates behind each estimate's Wald interval (None: none).
+    pub sigma_x: Vec<Option<f64>>,
+    /// Covariance of every free constant free, in search coordinates (NaN when
+    /// singular).
+    pub covariance: DMatrix<f64>,
+    /// The Student quantile of the 95 % intervals (ν = N − p).
+    pub t: f64,
+    /// The weakest direction's members (indices), for the reasons.
+    weakest: Vec<usize>,
 }
 
 /// Assess the optimum `x` (search coordinates) with Jacobian `jac` of the scaled
-/// residuals and 2·cost = `rss`.
-///
-/// A constant that ended at a bound of its search is held there by the bound, not
-/// by the trace (otherwise the search would have moved it inside): it gets no σ and
-/// no interval and is not identifiable; the others' σ, intervals and correlations
-/// are those of the optimum with it held at the bound (its column left out, as an
-/// active constraint). Whether it drifted there along a direction the trace does
-/// not pin down, or the trace pushed it, the problem with every constant free says
-/// (its weakness there, in the reason).
+/// residuals and 2·cost = `rss`, linearised: Wald intervals from the covariance
+/// with every free constant free ([`linear`]); [`super::profile::assess`] checks
+/// them against the profile likelihood.
 pub fn assess(
     free: &[Constant],
     x: &[f64],
@@ -95,6 +178,30 @@ pub fn assess(
     rss: f64,
     ctx: &Context,
 ) -> Assessment {
+    linear(free, x, jac, rss, ctx).assessment
+}
+
+/// The linearised assessment ([`assess`]).
+///
+/// σ comes from s²(JᵀJ)⁻¹ with every free constant free, also those the trace
+/// does not pin down and those at a bound of their search (to first order, as if
+/// the bound were not there): a σ conditional on a value the trace did not fix
+/// would be too small (the rig trace: C10 ±1.0 % with C30 held at its bound, ±3.2 %
+/// with it free, and the truth 2.2 % off). A constant that ended at a bound is held
+/// there by the bound, not by the trace (otherwise the search would have moved it
+/// inside): it gets no σ and no interval and is not identifiable. Only where the
+/// full information is singular for a constant inside its bounds is its σ the one
+/// with the bounded constants held (their columns left out), and the estimate
+/// names them in `conditional_on`. Whether a bounded constant drifted there along a
+/// direction the trace does not pin down, or the trace pushed it, its weakness with
+/// every constant free says (in the reason).
+pub(super) fn linear(
+    free: &[Constant],
+    x: &[f64],
+    jac: &DMatrix<f64>,
+    rss: f64,
+    ctx: &Context,
+) -> Linear {
     let values: Vec<f64> = free
         .iter()
         .zip(x)
@@ -107,18 +214,41 @@ pub fn assess(
         .collect();
     // every constant free: what the trace pins down, and the weakest direction
     let full = uncertainty(jac, rss);
+    let t = full.t95.unwrap_or(1.96);
     let weakest = weakest_direction(jac);
     // the constants inside their bounds, and each one's column in the held problem
+    // (only consulted where the full information is singular)
     let inside: Vec<usize> = (0..free.len()).filter(|&j| bound[j].is_none()).collect();
     let column = |j: usize| inside.iter().position(|&k| k == j);
     let held = uncertainty(&jac.select_columns(inside.iter()), rss);
+    let held_names: Vec<String> = (0..free.len())
+        .filter(|&j| bound[j].is_some())
+        .map(|j| free[j].name.clone())
+        .collect();
+    let conditional: Vec<bool> = (0..free.len())
+        .map(|j| {
+            bound[j].is_none()
+                && full.std_error[j].is_none()
+                && column(j).is_some_and(|a| held.std_error[a].is_some())
+        })
+        .collect();
+    let sigma_x: Vec<Option<f64>> = (0..free.len())
+        .map(|j| match (bound[j], conditional[j]) {
+            (Some(_), _) => None,
+            (None, true) => column(j).and_then(|a| held.std_error[a]),
+            (None, false) => full.std_error[j],
+        })
+        .collect();
     let correlation: Vec<Vec<Option<f64>>> = (0..free.len())
         .map(|j| {
             (0..free.len())
-                .map(|l| match (column(j), column(l)) {
-                    (Some(a), Some(b)) => held.correlation[a][b],
-                    _ => None,
-                })
+                .map(
+                    |l| match (conditional[j] || conditional[l], column(j), column(l)) {
+                        (true, Some(a), Some(b)) => held.correlation[a][b],
+                        (true, _, _) => None,
+                        (false, _, _) => full.correlation[j][l],
+                    },
+                )
                 .collect()
         })
         .collect();
@@ -126,12 +256,7 @@ pub fn assess(
         .iter()
         .enumerate()
         .map(|(j, c)| {
-            let (sd, ci) = in_theta(
-                c,
-                values[j],
-                column(j).and_then(|a| held.std_error[a]),
-                held.t95,
-            );
+            let (sd, ci) = in_theta(c, values[j], sigma_x[j], t);
             Estimate {
                 name: c.name.clone(),
                 value: values[j],
@@ -142,61 +267,107 @@ pub fn assess(
                 reason: None,
                 start: c.start,
                 at_bound: bound[j].is_some(),
+                interval: ci.map(|_| Kind::Wald),
+                open: None,
+                conditional_on: match conditional[j] {
+                    true => held_names.clone(),
+                    false => Vec::new(),
+                },
             }
         })
         .collect();
-    for j in 0..free.len() {
-        // with every constant free (for a constant at a bound: why it went there)
-        let free_sd = in_theta(&free[j], values[j], full.std_error[j], full.t95).0;
-        let free_partner = (0..free.len())
-            .filter(|&k| k != j)
-            .filter_map(|k| full.correlation[j][k].map(|r| (k, r)));
+    let mut lin = Linear {
+        assessment: Assessment {
+            estimates: Vec::new(),
+            correlation,
+            condition: full.condition,
+            weakest: (
+                weakest.0.iter().map(|&k| free[k].name.clone()).collect(),
+                weakest.1,
+            ),
+            warnings: Vec::new(),
+        },
+        sigma_x,
+        covariance: full.covariance,
+        t,
+        weakest: weakest.0,
+    };
+    for (j, e) in estimates.iter_mut().enumerate() {
         let why = match bound[j] {
-            Some(side) => Some((
-                Weakness::AtBound(side),
-                weakness(&free[j], free_sd, values[j], full.t95, free_partner),
-            )),
-            None => {
-                // inside: its σ with the bounded ones held, and a trade-off with
-                // a held one
-                let a = column(j).expect("inside");
-                let partners = (0..inside.len())
-                    .filter(|&b| b != a)
-                    .filter_map(|b| held.correlation[a][b].map(|r| (inside[b], r)))
-                    .chain(free_partner.filter(|&(k, _)| bound[k].is_some()));
-                weakness(
-                    &free[j],
-                    estimates[j].std_error,
-                    values[j],
-                    held.t95,
-                    partners,
-                )
-                .map(|w| (w, None))
+            // with every constant free: why it went there
+            Some(side) => {
+                let free_sd = in_theta(&free[j], values[j], full.std_error[j], t).0;
+                let partners = lin.partners(j);
+                Some((
+                    Weakness::AtBound(side),
+                    weakness(&free[j], rel_sigma(values[j], free_sd), t, partners),
+                ))
             }
+            None => weakness(
+                &free[j],
+                rel_sigma(values[j], e.std_error),
+                t,
+                lin.partners(j),
+            )
+            .map(|w| (w, None)),
         };
         if let Some((w, cause)) = why {
-            estimates[j].identifiable = false;
-            estimates[j].reason = Some(explain(free, j, w, cause, &weakest.0, ctx));
+            e.identifiable = false;
+            e.reason = Some(explain(free, j, w, cause, &lin.weakest, ctx));
         }
     }
-    let names: Vec<String> = weakest.0.iter().map(|&k| free[k].name.clone()).collect();
-    Assessment {
-        estimates,
-        correlation,
-        condition: full.condition,
-        weakest: (names, weakest.1),
+    lin.assessment.estimates = estimates;
+    lin
+}
+
+impl Linear {
+    /// The other free constants' correlations with constant j (index, ρ).
+    fn partners(&self, j: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
+        self.assessment.correlation[j]
+            .iter()
+            .enumerate()
+            .filter(move |&(k, _)| k != j)
+            .filter_map(|(k, r)| r.map(|r| (k, r)))
+    }
+
+    /// Constant j's interval becomes its profile interval [lo, hi] (θ), open on
+    /// side `open` (the bound of the search at that end), conditional on `given`,
+    /// judged by the one rule ([`identifiability`]): its width through the
+    /// equivalent symmetric interval ([`identifiability::equivalent_rel_sigma`],
+    /// the same threshold whatever the interval's kind), and a one-sided interval
+    /// not identifiable.
+    pub(super) fn with_profile(
+        &mut self,
+        free: &[Constant],
+        j: usize,
+        [lo, hi]: [f64; 2],
+        open: Option<Open>,
+        given: Vec<String>,
+        ctx: &Context,
+    ) {
+        let c = &free[j];
+        let value = self.assessment.estimates[j].value;
+        let log = matches!(c.space, Space::Log);
+        let rel = identifiability::equivalent_rel_sigma(value, lo, hi, self.t, log);
+        let why = match open {
+            Some(side) => Some(Weakness::OneSided(side)),
+            None => weakness(c, Some(rel), self.t, self.partners(j)),
+        };
+        let reason = why.map(|w| explain(free, j, w, None, &self.weakest, ctx));
+        let e = &mut self.assessment.estimates[j];
+        e.ci95 = Some([lo, hi]);
+        e.interval = Some(Kind::Profile);
+        e.open = open;
+        e.conditional_on = given;
+        e.std_error = (open.is_none() && rel.is_finite()).then(|| rel * value.abs());
+        e.identifiable = reason.is_none();
+        e.reason = reason;
     }
 }
 
 /// σ and 95 % interval in θ of a constant at `value` with σ_x (search coordinates):
 /// θ·σ_x and θ·exp(±t·σ_x) in log space, s·σ_x and θ ± t·s·σ_x in linear.
-fn in_theta(
-    c: &Constant,
-    value: f64,
-    sx: Option<f64>,
-    t95: Option<f64>,
-) -> (Option<f64>, Option<[f64; 2]>) {
-    let t = t95.unwrap_or(1.96);
+fn in_theta(c: &Constant, value: f64, sx: Option<f64>, t: f64) -> (Option<f64>, Option<[f64; 2]>) {
     match (sx, c.space) {
         (None, _) => (None, None),
         (Some(sx), Space::Log) => (
@@ -210,26 +381,23 @@ fn in_theta(
     }
 }
 
-/// Why a constant with σ `sd` at `value`, correlated with the free constants
-/// `partners` (index, ρ), is not pinned down, if it is not: the one rule
-/// ([`identifiability::judge`]), a sign-free constant (searched linearly) also held
-/// to an interval that excludes 0.
+/// Why a constant with relative standard error `rel` (None: singular), correlated
+/// with the free constants `partners` (index, ρ), is not pinned down, if it is not:
+/// the one rule ([`identifiability::judge`]), a sign-free constant (searched
+/// linearly) also held to an interval that excludes 0.
 fn weakness(
     c: &Constant,
-    sd: Option<f64>,
-    value: f64,
-    t95: Option<f64>,
+    rel: Option<f64>,
+    t: f64,
     partners: impl Iterator<Item = (usize, f64)>,
 ) -> Option<Weakness> {
     let sign_free = matches!(c.space, Space::Linear { .. });
-    let limit = identifiability::limit(sign_free, t95.unwrap_or(1.96));
-    identifiability::judge(identifiability::rel_sigma(value, sd), limit, partners).map(
-        |w| match w {
-            identifiability::Weakness::Singular => Weakness::Singular,
-            identifiability::Weakness::Loose(r) => Weakness::Loose(r),
-            identifiability::Weakness::Traded(k, rho) => Weakness::Traded(k, rho),
-        },
-    )
+    let limit = identifiability::limit(sign_free, t);
+    identifiability::judge(rel, limit, partners).map(|w| match w {
+        identifiability::Weakness::Singular => Weakness::Singular,
+        identifiability::Weakness::Loose(r) => Weakness::Loose(r),
+        identifiability::Weakness::Traded(k, rho) => Weakness::Traded(k, rho),
+    })
 }
 
 /// Which bound of its search a constant ended at.
@@ -269,6 +437,8 @@ enum Weakness {
     Traded(usize, f64),
     /// Held at a bound of the search.
     AtBound(Side),
+    /// Its profile interval is open on this side.
+    OneSided(Open),
 }
 
 /// The free constants (indices) with |component| > 0.3 in the smallest singular
@@ -318,6 +488,22 @@ fn explain(
             format!(
                 "at the {word} bound of its search ({}): the bound, not the trace, holds it there, so it has no σ or interval",
                 si(b, c.unit)
+            )
+        }
+        Weakness::OneSided(side) => {
+            let (word, bound) = match side {
+                Open::Below => (
+                    "below",
+                    format!("the lower bound of its search ({})", si(c.bounds.0, c.unit)),
+                ),
+                Open::Above => (
+                    "above",
+                    format!("the upper bound of its search ({})", si(c.bounds.1, c.unit)),
+                ),
+                Open::Both => ("both ways", "either bound of its search".to_string()),
+            };
+            format!(
+                "its 95 % profile interval is open {word}: the trace excludes no value between the estimate and {bound}"
             )
         }
     };

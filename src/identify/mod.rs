@@ -31,7 +31,7 @@ use crate::fit::linear::RowQr;
 use crate::fit::lm::{Control, LeastSquares, LmSettings, Termination};
 use crate::fit::Status;
 use crate::sim::RunOptions;
-use assessment::{assess, Assessment, Context, Estimate, WARN_CORRELATION};
+use assessment::{Assessment, Context, Estimate, WARN_CORRELATION};
 use failure::Failure;
 use nalgebra::{DMatrix, DVector};
 use noise::{Sigma, SigmaSource};
@@ -176,6 +176,10 @@ pub struct SolverSummary {
     /// runs at 1/100 of the tolerance (None when not checked: no identified
     /// constant, or the more accurate run failed, which a warning says).
     pub integration_shift: Option<f64>,
+    /// Wall-clock seconds of the interval stage ([`profile::assess`]: the
+    /// covariance, the profile checks and intervals, the `--profiles` grids), part
+    /// of `seconds`.
+    pub interval_seconds: f64,
 }
 
 /// The result of [`identify`].
@@ -300,6 +304,7 @@ pub fn identify_with(
             termination,
             final_costs: ms.waterfall(),
             integration_shift: None,
+            interval_seconds: 0.0,
         }
     };
     let Some(best) = ms.best().cloned() else {
@@ -324,8 +329,11 @@ pub fn identify_with(
     let theta = problem.theta_at(&x);
     let rss = r.norm_squared();
     let ctx = context(&problem, &runs);
-    let assessment = assess(&problem.free, &x, &jac, rss, &ctx);
-    let profiles = profiles(&problem, &x, rss, &jac, &profiled, settings);
+    // σ, intervals (Wald, or profile where the linearisation fails), identifiability
+    let started = Instant::now();
+    let (assessment, profiles) =
+        profile::assess(&problem, &x, &jac, rss, &ctx, &profiled, &settings.lm);
+    let interval_seconds = started.elapsed().as_secs_f64();
     let experiments = channel_fits(&problem, &given, &r);
     let mut warnings = warnings(
         &problem,
@@ -336,6 +344,7 @@ pub fn identify_with(
         settings.starts,
     );
     warnings.extend(structured_residuals(&problem, &r));
+    warnings.extend(assessment.warnings.iter().cloned());
     let shift = integration_shift(&mut problem, &x, &r, &jac, &assessment.estimates);
     warnings.extend(shift_warning(&shift));
     let shift = shift.ok().flatten();
@@ -354,6 +363,7 @@ pub fn identify_with(
         experiments,
         solver: SolverSummary {
             integration_shift: shift.map(|s| s.sigmas),
+            interval_seconds,
             ..solver(&problem, iterations, termination.to_string())
         },
         cost: 0.5 * rss,
@@ -752,6 +762,7 @@ fn derived(free: &[params::Constant], estimates: &[Estimate]) -> Vec<Estimate> {
                 reason: e.reason.clone(),
                 start: m.eps_r(e.start),
                 at_bound: e.at_bound,
+                ..e.clone()
             })
         })
         .collect()
@@ -774,22 +785,6 @@ fn profile_indices(problem: &Problem, settings: &Settings) -> Result<Vec<usize>>
                         .with_hint(format!("the free constants: {}", free.join(", ")))
                 })
         })
-        .collect()
-}
-
-/// The profiles of the free constants `idx`, in parallel.
-fn profiles(
-    problem: &Problem,
-    x: &[f64],
-    rss: f64,
-    jac: &DMatrix<f64>,
-    idx: &[usize],
-    settings: &Settings,
-) -> Vec<profile::Profile> {
-    use rayon::prelude::*;
-    let u = crate::fit::diagnostics::uncertainty(jac, rss);
-    idx.par_iter()
-        .map(|&j| profile::profile(problem, x, 0.5 * rss, j, u.std_error[j], &settings.lm))
         .collect()
 }
 

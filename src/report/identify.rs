@@ -106,6 +106,7 @@ fn page(
                 format!("{}{note}", p.name),
                 v,
                 ci,
+                interval_kind(p),
                 if p.identifiable {
                     "yes".into()
                 } else {
@@ -115,7 +116,13 @@ fn page(
         })
         .collect();
     page.table(
-        &["parameter", "value ± σ", "95 % interval", "identifiable"],
+        &[
+            "parameter",
+            "value ± σ",
+            "95 % interval",
+            "kind",
+            "identifiable",
+        ],
         rows,
     );
     page.heading("Channels");
@@ -133,8 +140,9 @@ fn page(
                 .unwrap_or_else(|| "beyond the grid".into())
         };
         format!(
-            "profile {}: Δχ² ≤ 3.84 from {} to {}",
+            "profile {}: Δχ² ≤ {:.2} from {} to {}",
             p.name,
+            p.threshold,
             side(p.interval[0]),
             side(p.interval[1])
         )
@@ -148,12 +156,37 @@ fn page(
         "{} start(s), {} at the best objective, {} abandoned; {} iterations, {} simulator runs ({} with sensitivities), {:.3} s.",
         v.starts, v.starts_at_best, v.starts_abandoned, v.iterations, v.simulator_runs, v.sensitivity_runs, v.seconds
     ));
+    page.text(format!(
+        "Intervals (covariance, profile checks and intervals): {:.3} s of these.",
+        v.interval_seconds
+    ));
     if let Some(z) = v.integration_shift {
         page.text(format!(
             "Integration check: at 1/100 of the simulator's tolerance the optimum moves by {z:.2e} standard errors at most."
         ));
     }
     Ok(page)
+}
+
+/// The kind of an estimate's interval for the constants table: Wald or profile,
+/// its open side, what it is conditional on; "held by the bound" for a constant at a
+/// bound of its search (no interval).
+fn interval_kind(p: &crate::identify::assessment::Estimate) -> String {
+    let mut s = match (p.interval, p.at_bound) {
+        (Some(k), _) => k.to_string(),
+        (None, true) => "held by the bound".into(),
+        (None, false) => "—".into(),
+    };
+    if let Some(o) = p.open {
+        s.push_str(&format!(", open {o}"));
+    }
+    if !p.conditional_on.is_empty() {
+        s.push_str(&format!(
+            ", given {} at a bound",
+            p.conditional_on.join(", ")
+        ));
+    }
+    s
 }
 
 /// The channels table: each identified channel (points, σ and where it came from,
@@ -472,11 +505,8 @@ fn charts(
                         style: Style::Line,
                     },
                     Series {
-                        label: "95 % (3.84)".into(),
-                        points: vec![
-                            (lo, crate::identify::profile::DELTA_CHI2_95),
-                            (hi, crate::identify::profile::DELTA_CHI2_95),
-                        ],
+                        label: format!("95 % (t²s² = {:.2})", p.threshold),
+                        points: vec![(lo, p.threshold), (hi, p.threshold)],
                         color: 1,
                         style: Style::Dashed,
                     },

@@ -331,6 +331,7 @@ pub fn run(a: Args) -> Result<i32> {
         },
         rtol: a.rtol,
         profiles: a.profiles.clone(),
+        warm: Vec::new(),
     };
     settings.check()?;
     // every file this run writes, known before anything runs: none inside the
@@ -390,6 +391,14 @@ pub fn run(a: Args) -> Result<i32> {
         Choose {
             arms: false,
             hyperelastic: false,
+        } if a.free.is_none() && a.fix.is_empty() => {
+            // the default: the smallest identifiable model
+            let (run, kept) = dea_fit::identify::reduce::identify(exps, &settings, &control)?;
+            (run, kept, None)
+        }
+        Choose {
+            arms: false,
+            hyperelastic: false,
         } => {
             let kept = exps.clone();
             (identify_with(exps, &settings, &control)?, kept, None)
@@ -437,7 +446,7 @@ pub fn run(a: Args) -> Result<i32> {
         },
         "settings": {
             "free": id.parameters.iter().map(|p| p.name.clone()).collect::<Vec<_>>(),
-            "fixed": id.fixed.iter().map(|(n, v)| serde_json::json!({"name": n, "value": v})).collect::<Vec<_>>(),
+            "held": &id.held,
             "starts": a.starts, "seed": a.seed, "rtol": a.rtol, "sigma": a.sigma,
             "arms": a.arms, "hyperelastic": a.hyperelastic,
         },

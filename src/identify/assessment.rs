@@ -538,7 +538,7 @@ fn explain(
         .find(|k| k.role.is_dielectric());
     let why = if let Some(d) = dielectric.filter(|_| !ctx.capacitance && has(&modulus)) {
         format!(
-            "contraction alone cannot separate εr{} from the moduli: the Maxwell pressure scales with εr and the elastic stress with the moduli, so only their ratio is seen; measure the capacitance too (C ∝ εr) or fix {}",
+            "contraction alone cannot separate εr{} from the moduli: the Maxwell pressure scales with εr and the elastic stress with the moduli, so only their ratio is seen; measure the capacitance too (C ∝ εr) or fix {} at the scene's value (as the default run does; every other interval is then conditional on it)",
             match d.role {
                 Role::MassFraction => " (here the filler mass fraction)",
                 _ => "",
@@ -547,13 +547,16 @@ fn explain(
         )
     } else if c.role == Role::HigherOrder {
         format!(
-            "the traces reach a strain of only {:.2} %, where the terms beyond the leading modulus are below the noise; fix {} or add a trace with larger strain",
+            "the traces reach a strain of only {:.2} %, where the terms beyond the leading modulus are below the noise; {} or add a trace with larger strain",
             100.0 * ctx.max_strain,
-            c.name
+            match super::reduce::drop_advice(free, c) {
+                Some(fix) => format!("drop it (--fix {fix}, as the default run does)"),
+                None => format!("fix {}", c.name),
+            }
         )
     } else if let Some(tau) = slow_arm(c, &partners, ctx) {
         format!(
-            "an arm with τ = {} is slower than the {} trace: within it the arm acts as extra stiffness, traded against the leading modulus; use a longer trace or fix the arm",
+            "an arm with τ = {} is slower than the {} trace: within it the arm acts as extra stiffness, traded against the leading modulus; use a longer trace, or remove the arm from the scene (as the default run does)",
             si(tau, "s"),
             si(ctx.span, "s")
         )

@@ -22,6 +22,7 @@ pub mod noise;
 pub mod params;
 pub mod problem;
 pub mod profile;
+pub mod reduce;
 pub mod search;
 pub mod selection;
 
@@ -58,6 +59,11 @@ pub struct Settings {
     pub rtol: Option<f64>,
     /// Free constants to profile ([`profile`]).
     pub profiles: Vec<String>,
+    /// Values by name the first start takes in place of the scene's (a refit
+    /// warm-started from a previous optimum, [`reduce`]); the scene's values are
+    /// then the second start. A name that is not free is ignored; a value outside
+    /// its search box is moved onto the box.
+    pub warm: Vec<(String, f64)>,
 }
 
 /// The smallest decrease of ½χ² a search step must promise
@@ -84,6 +90,7 @@ impl Default for Settings {
             },
             rtol: None,
             profiles: Vec::new(),
+            warm: Vec::new(),
         }
     }
 }
@@ -190,8 +197,15 @@ pub struct Identification {
     pub status: Status,
     /// The free constants.
     pub parameters: Vec<Estimate>,
-    /// The constants held fixed, with their values (SI).
-    pub fixed: Vec<(String, f64)>,
+    /// The constants not fitted: fixed by `--fix NAME=VALUE` (stated), held at
+    /// the scene's values, or dropped by the model reduction ([`reduce`]).
+    pub held: Vec<reduce::Held>,
+    /// The held constants every estimate's interval is conditional on (the held
+    /// ones but those dropped): the intervals assume these values exact.
+    pub conditional_on: Vec<String>,
+    /// The default model reduction, when it reduced the scene's model.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reduction: Option<reduce::Reduction>,
     /// Warnings.
     pub warnings: Vec<String>,
     /// Per experiment and channel.
@@ -278,14 +292,18 @@ pub fn identify_with(
 ) -> Result<Run> {
     settings.check()?;
     let t0 = Instant::now();
-    let (mut problem, all, given) = prepare(experiments, settings)?;
+    let (mut problem, all, stated, given) = prepare(experiments, settings)?;
     let profiled = profile_indices(&problem, settings)?;
     let (n, k) = problem.dims();
     let parts = checkpoint::parts(&problem, settings);
     let control = &checkpoint::stamped(control, &parts);
     refuse_foreign_checkpoints(&problem, settings, control)?;
-    let x_start = problem.x_of(&problem.theta);
-    let design = search::starts(&problem, x_start, settings.starts, settings.seed)?;
+    let x_scene = problem.x_of(&problem.theta);
+    let x_start = warm_start(&problem, &settings.warm).unwrap_or_else(|| x_scene.clone());
+    let mut design = search::starts(&problem, x_start, settings.starts, settings.seed)?;
+    if !settings.warm.is_empty() && design.len() > 1 {
+        design[1] = x_scene;
+    }
     let ms = search::run_all(&problem, &design, &settings.lm, control);
     let mut iterations: usize = ms.runs.iter().map(|r| r.1.iterations).sum();
     let solver = |problem: &Problem, iterations: usize, termination: String| {
@@ -348,15 +366,23 @@ pub fn identify_with(
     let shift = integration_shift(&mut problem, &x, &r, &jac, &assessment.estimates);
     warnings.extend(shift_warning(&shift));
     let shift = shift.ok().flatten();
-    let status = status(&termination, shift.as_ref(), &assessment, &warnings);
+    let stretch_range = stretch_range(&runs);
+    let unstable = drucker_unstable(&problem.experiments[0].scene, &theta, stretch_range);
+    warnings.extend(unstable.clone());
+    let status = status(
+        &termination,
+        shift.as_ref(),
+        unstable.is_some(),
+        &assessment,
+        &warnings,
+    );
     let (aicc, bic) = information_criteria(rss, n, k);
+    let held = reduce::held(&all, &problem.free, &stated, &theta);
     Ok(Run::Identified(Box::new(Identification {
         status,
-        fixed: all
-            .iter()
-            .filter(|c| !problem.free.iter().any(|f| f.name == c.name))
-            .map(|c| (c.name.clone(), theta[c.index]))
-            .collect(),
+        conditional_on: reduce::conditional_on(&held),
+        held,
+        reduction: None,
         parameters: assessment.estimates.clone(),
         derived: derived(&problem.free, &assessment.estimates),
         warnings,
@@ -373,7 +399,7 @@ pub fn identify_with(
         assessment,
         profiles,
         theta,
-        stretch_range: stretch_range(&runs),
+        stretch_range,
         runs,
     })))
 }
@@ -407,11 +433,15 @@ fn refuse_foreign_checkpoints(
 
 /// The status of an identification: `not_converged` when the search did not
 /// converge or the integration error moved the optimum by more than
-/// [`MAX_INTEGRATION_SHIFT`] standard errors, `ill_posed` when a constant is not
-/// identified, else `warning` with any warning and `ok` without.
+/// [`MAX_INTEGRATION_SHIFT`] standard errors, `unstable` when the hyperelastic law
+/// at the optimum is not Drucker-stable over the traced stretches
+/// ([`drucker_unstable`]), `ill_posed` when a constant is not identified (a
+/// constant at a bound of its search box is not), else `warning` with any warning
+/// and `ok` without.
 fn status(
     termination: &Termination,
     shift: Option<&Shift>,
+    unstable: bool,
     assessment: &Assessment,
     warnings: &[String],
 ) -> Status {
@@ -419,6 +449,8 @@ fn status(
         || shift.is_some_and(|s| s.sigmas > MAX_INTEGRATION_SHIFT)
     {
         Status::NotConverged
+    } else if unstable {
+        Status::Unstable
     } else if assessment.estimates.iter().any(|e| !e.identifiable) {
         Status::IllPosed
     } else if warnings.is_empty() {
@@ -426,6 +458,72 @@ fn status(
     } else {
         Status::Warning
     }
+}
+
+/// The first start of a warm-started search ([`Settings::warm`]): the named
+/// values in search coordinates (moved onto the box when outside), the scene's
+/// for a constant not named; None when nothing is named.
+fn warm_start(problem: &Problem, warm: &[(String, f64)]) -> Option<Vec<f64>> {
+    if warm.is_empty() {
+        return None;
+    }
+    let scene = problem.x_of(&problem.theta);
+    Some(
+        problem
+            .free
+            .iter()
+            .zip(problem.x_bounds())
+            .zip(scene)
+            .map(|((c, (lo, hi)), x0)| {
+                warm.iter()
+                    .find(|(n, _)| *n == c.name)
+                    .map(|&(_, v)| c.space.x(v))
+                    .filter(|x| x.is_finite())
+                    .map_or(x0, |x| x.clamp(lo, hi))
+            })
+            .collect(),
+    )
+}
+
+/// Relative margin in stretch beyond the traced range over which the identified
+/// hyperelastic law must be Drucker-stable: [λmin/(1 + m), λmax·(1 + m)], m = 0.1
+/// (a scene run a little past the traces must not meet an instability the fit put
+/// there).
+pub const DRUCKER_MARGIN: f64 = 0.1;
+
+/// The finding when the hyperelastic law of `scene`'s material at θ is not
+/// Drucker-stable (dP/dλ ≤ 0, [`crate::fit::drucker`]) in the actuator's mode
+/// anywhere over the traced stretches `range` widened by [`DRUCKER_MARGIN`].
+pub fn drucker_unstable(
+    scene: &crate::sim::scene::Scene,
+    theta: &[f64],
+    range: (f64, f64),
+) -> Option<String> {
+    let m = &scene.material;
+    let p = &theta[..m.params.len()];
+    let mode = crate::sim::full_plant(scene).ok()?.mode;
+    let (lo, hi) = (
+        range.0.min(1.0) / (1.0 + DRUCKER_MARGIN),
+        range.1.max(1.0) * (1.0 + DRUCKER_MARGIN),
+    );
+    let d = crate::fit::drucker::drucker(m.model.as_ref(), p)
+        .into_iter()
+        .find(|d| d.mode == mode)?;
+    let bad: Vec<String> = d
+        .unstable
+        .iter()
+        .filter(|[a, b]| *a <= hi && *b >= lo)
+        .map(|[a, b]| format!("{a:.3}–{b:.3}"))
+        .collect();
+    (!bad.is_empty()).then(|| {
+        format!(
+            "the identified hyperelastic law is Drucker-unstable in {mode} at stretch {} within the traced range {:.4}–{:.4} widened by {:.0} %: not a material law; fix the higher terms (e.g. at 0) or add a trace that reaches the stretches where it stiffens",
+            bad.join(", "),
+            range.0,
+            range.1,
+            100.0 * DRUCKER_MARGIN
+        )
+    })
 }
 
 /// Smallest and largest stretch over every sample of the runs.
@@ -477,7 +575,7 @@ fn polish(
 fn prepare(
     mut experiments: Vec<Experiment>,
     settings: &Settings,
-) -> Result<(Problem, Vec<params::Constant>, Vec<Vec<bool>>)> {
+) -> Result<(Problem, Vec<params::Constant>, Vec<usize>, Vec<Vec<bool>>)> {
     let first = experiments
         .first()
         .ok_or_else(|| Error::settings("no trace to identify from"))?;
@@ -532,7 +630,8 @@ fn prepare(
     for e in &problem.experiments {
         e.check_start(&problem.theta)?;
     }
-    Ok((problem, all, given))
+    let stated = fixed.iter().map(|&(k, _)| k).collect();
+    Ok((problem, all, stated, given))
 }
 
 /// The warnings of an identification: correlated pairs, constants at a bound, the

@@ -25,6 +25,16 @@
 //! linearly too, x = w/[`MASS_FRACTION_SCALE`] within [0, 0.999]
 //! ([`crate::material::check::MASS_FRACTION`]): 0, the pure matrix, must stay
 //! reachable, which ln w cannot.
+//!
+//! **Search boxes** (the bounds no estimate may leave), stated multiples of the
+//! scene's values θ0: a positive constant within θ0/100 … 100·θ0 (a relaxation
+//! time θ0/1000 … 1000·θ0), a model parameter also within its model's own limits;
+//! a sign-free one within θ0 ± 100·s, s = max(|θ0|, 10⁻³·μ0) for a modulus
+//! (max(|θ0|, 0.1) otherwise); nv of a scene without dashpot 0 … 100·μ0 s; a mass
+//! fraction its whole domain. The box is not physics: an estimate that ends on it
+//! is held by the box, not the trace, so it is not identifiable and the run is
+//! `ill_posed` ([`super::assessment`]). Physics bounds the hyperelastic law
+//! itself: Drucker-stable over the traced stretches ([`super::drucker_unstable`]).
 
 use crate::error::{Error, Result};
 use crate::material::check::MASS_FRACTION;
@@ -419,8 +429,10 @@ pub fn choose(all: &[Constant], free: Option<&[String]>, fix: &[String]) -> Resu
                     Error::settings(format!("--fix {name}={v}: {}", bad.msg)).with_hint(bad.hint)
                 })?;
             }
+            // nv = 0 is a model without dashpot (what the reduction sets)
+            let zero_ok = c.role == Role::Nv && x == 0.0;
             if !x.is_finite()
-                || (matches!(c.space, Space::Log) && x <= 0.0)
+                || (matches!(c.space, Space::Log) && x <= 0.0 && !zero_ok)
                 || x < c.bounds.0.min(0.0)
             {
                 return Err(Error::settings(format!(

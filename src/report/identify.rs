@@ -125,6 +125,8 @@ fn page(
         ],
         rows,
     );
+    held_section(id, &mut page);
+    reduction_section(id, &mut page);
     page.heading("Channels");
     page.table(
         &["trace", "channel", "points", "σ", "σ from", "RMSE", "%RMSE"],
@@ -187,6 +189,97 @@ fn interval_kind(p: &crate::identify::assessment::Estimate) -> String {
         ));
     }
     s
+}
+
+/// The constants not fitted, under the constants: each one's value and how it got
+/// it (`fixed`: typed in; `scene`: the scene's value; `dropped`: by the model
+/// reduction, with its reason), and what the intervals above are conditional on.
+fn held_section(id: &Identification, page: &mut Page) {
+    use crate::identify::reduce::How;
+    if id.held.is_empty() {
+        return;
+    }
+    page.text("Held (not fitted):".to_string());
+    let rows = id
+        .held
+        .iter()
+        .map(|h| {
+            vec![
+                h.name.clone(),
+                constant(&h.name, h.value, &h.unit),
+                match h.how {
+                    How::Fixed => "fixed (stated)",
+                    How::Scene => "scene's value",
+                    How::Dropped => "dropped",
+                }
+                .to_string(),
+                h.reason.clone().unwrap_or_default(),
+            ]
+        })
+        .collect();
+    page.table(&["held", "value", "how", "why"], rows);
+    if !id.conditional_on.is_empty() {
+        let on: Vec<String> = id
+            .held
+            .iter()
+            .filter(|h| id.conditional_on.contains(&h.name))
+            .map(|h| format!("{} = {}", h.name, constant(&h.name, h.value, &h.unit)))
+            .collect();
+        page.text(format!(
+            "Every interval above is conditional on the held {}: it assumes {} exact, and does not include their uncertainty.",
+            on.join(", "),
+            match on.len() {
+                1 => "this value",
+                _ => "these values",
+            }
+        ));
+    }
+}
+
+/// The default model reduction, when it reduced the scene's model: the full
+/// model's fit, each round (what it dropped and why), ΔAICc and the flags that
+/// give the reduced model directly.
+fn reduction_section(id: &Identification, page: &mut Page) {
+    use crate::identify::reduce::MAX_DELTA_AICC;
+    let Some(r) = &id.reduction else { return };
+    page.heading("Model reduced");
+    let aicc = |a: Option<f64>| a.map_or("—".into(), |a| format!("{a:.1}"));
+    page.text(format!(
+        "The scene's full model ({} free constants) left {} not identifiable (status {}, χ²/dof {:.4}, AICc {}); the constants above are those of the smallest model whose constants the traces pin down, reached by dropping one constant per round (the same σ throughout).",
+        r.full.free,
+        r.full.not_identifiable.join(", "),
+        r.full.status,
+        r.full.chi2_per_dof,
+        aicc(r.full.aicc),
+    ));
+    let rows = r
+        .rounds
+        .iter()
+        .enumerate()
+        .map(|(i, d)| {
+            vec![
+                (i + 1).to_string(),
+                d.action.clone(),
+                format!("{:.4}", d.chi2_per_dof),
+                aicc(d.aicc),
+                d.reason.clone(),
+            ]
+        })
+        .collect();
+    page.table(&["round", "dropped", "χ²/dof", "AICc", "why"], rows);
+    let delta = r
+        .delta_aicc
+        .map_or("undefined".into(), |d| format!("{d:.1}"));
+    page.text(format!(
+        "ΔAICc (reduced − full) = {delta}{}{}",
+        match r.delta_aicc.is_some_and(|d| d > MAX_DELTA_AICC) {
+            true => format!(": above {MAX_DELTA_AICC}, the full model fits much better and the dropped terms together matter."),
+            false => format!(" (at most {MAX_DELTA_AICC}: the dropped terms do not matter to the fit)."),
+        },
+        r.flags
+            .as_ref()
+            .map_or(String::new(), |f| format!(" The same model directly: {f}.")),
+    ));
 }
 
 /// The channels table: each identified channel (points, σ and where it came from,

@@ -1,0 +1,585 @@
+//! Model no more than the trace needs, by default: when the scene's full model
+//! leaves constants not identifiable ([`crate::fit::identifiability`], the one
+//! rule), the answer is the smallest model whose constants all are, found by
+//! backward elimination; and the constants every identification holds (fixed by
+//! the user, held at the scene's values, dropped by the reduction), typed, for
+//! every output.
+//!
+//! **Backward elimination** ([`identify`]). After the full model's fit, while some
+//! constant is not identifiable, one is dropped per round, in this priority
+//! (of the constants not identifiable):
+//! 1. the highest higher-order hyperelastic term, set to 0: Yeoh C30, then C20;
+//!    Mooney-Rivlin C01 (leaving neo-Hookean); an Ogden pair beyond the first
+//!    (μk = 0, its αk then acts on nothing and is held where it was);
+//! 2. a Maxwell arm whose k or τ is not identifiable, the slowest of them first,
+//!    removed from the model (not merged with a neighbour: the refit lets the
+//!    remaining arms and the leading modulus take up what it carried, with no
+//!    rule needed for a merged τ);
+//! 3. the dashpot nv, set to 0;
+//! 4. εr (or the filler mass fraction that sets it): it cannot be dropped (the
+//!    Maxwell pressure needs it), so it is held at the scene's stated value, and
+//!    every other interval is then conditional on that value (the output says so:
+//!    [`Held`], `conditional_on`).
+//!
+//! A constant of none of these kinds (the leading modulus traded against another,
+//! Gent's Jm) is left as it is: the reduction stops when nothing it may drop is
+//! not identifiable, and the status then says `ill_posed`. Each round refits from
+//! [`REFIT_STARTS`] starts, the previous optimum and the scene's values, with the
+//! full model's noise σ (so that χ² and AICc compare across the rounds), and
+//! re-assesses.
+//!
+//! Beside the reduced model stand the full model's χ²/dof and AICc and
+//! ΔAICc = AICc(reduced) − AICc(full) (both on the same σ): above
+//! [`MAX_DELTA_AICC`] the full model is much better (Burnham & Anderson 2002:
+//! ΔAICc > 10, essentially no support for the worse model), so the dropped terms
+//! together matter even though none is identifiable on its own, and the run is a
+//! `warning` at least. `--free`, `--fix`, `--hyperelastic auto` and `--arms auto`
+//! say what to fit, and then nothing is reduced.
+
+use super::noise::Sigma;
+use super::params::{self, Constant, Role};
+use super::problem::Experiment;
+use super::{identify_with, Identification, Run, Settings};
+use crate::error::Result;
+use crate::fit::lm::Control;
+use crate::fit::Status;
+use crate::report::format::si;
+use serde::Serialize;
+use std::time::Instant;
+
+/// ΔAICc = AICc(reduced) − AICc(full) above which the dropped terms together
+/// matter: the run warns (Burnham & Anderson 2002, §2.6: ΔAICc > 10 leaves the
+/// worse model essentially no support).
+pub const MAX_DELTA_AICC: f64 = 10.0;
+
+/// Starts of each refit of the reduction: the previous optimum and the scene's
+/// values.
+pub const REFIT_STARTS: usize = 2;
+
+/// How a constant that is not fitted got its value.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum How {
+    /// Typed in: `--fix NAME=VALUE` (a stated value).
+    Fixed,
+    /// The scene's value: `--fix NAME`, not named in `--free`, or held there by
+    /// the reduction (εr that a trace cannot pin down).
+    Scene,
+    /// Dropped by the reduction: a term set to 0 or an arm removed.
+    Dropped,
+}
+
+/// A constant held during the fit, and why.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Held {
+    /// Name (`C20`, `arm2.k`, `eps_r`).
+    pub name: String,
+    /// Its value (SI); 0 for a dropped term or a removed arm's spring.
+    pub value: f64,
+    /// SI unit.
+    pub unit: String,
+    /// How it got the value.
+    pub how: How,
+    /// Why (for what the reduction held or dropped: the assessment's reason).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+}
+
+/// The held constants the estimates' intervals are conditional on: every one but
+/// those dropped (a term the model no longer has conditions nothing).
+pub fn conditional_on(held: &[Held]) -> Vec<String> {
+    held.iter()
+        .filter(|h| h.how != How::Dropped)
+        .map(|h| h.name.clone())
+        .collect()
+}
+
+/// One round of the reduction.
+#[derive(Debug, Clone, Serialize)]
+pub struct Round {
+    /// The constant it dropped (or held, for εr).
+    pub constant: String,
+    /// What it did, e.g. `C30 = 0`, `arm 2 removed`, `eps_r held at 4.7`.
+    pub action: String,
+    /// Why: the assessment's reason for that constant in the model before.
+    pub reason: String,
+    /// χ²/dof of the model after the round (the full model's σ).
+    pub chi2_per_dof: f64,
+    /// AICc of the model after the round.
+    pub aicc: Option<f64>,
+}
+
+/// The full model's fit, beside the reduced one.
+#[derive(Debug, Clone, Serialize)]
+pub struct FullFit {
+    /// Free constants.
+    pub free: usize,
+    /// χ²/(N − p).
+    pub chi2_per_dof: f64,
+    /// AICc.
+    pub aicc: Option<f64>,
+    /// Its status.
+    pub status: Status,
+    /// The constants it did not pin down.
+    pub not_identifiable: Vec<String>,
+}
+
+/// What the reduction did.
+#[derive(Debug, Clone, Serialize)]
+pub struct Reduction {
+    /// The full model's fit.
+    pub full: FullFit,
+    /// The rounds, in order.
+    pub rounds: Vec<Round>,
+    /// AICc(reduced) − AICc(full), same σ (None when either is undefined).
+    pub delta_aicc: Option<f64>,
+    /// The flags that give the reduced model directly (`--fix C20=0,C30=0`), when
+    /// flags can (a removed arm needs the scene edited).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub flags: Option<String>,
+    /// Wall-clock seconds of the full fit and every round.
+    pub seconds: f64,
+}
+
+/// The held constants of a run: every constant of the scene that is not free, its
+/// value from θ; `stated` the indices in θ that `--fix NAME=VALUE` set.
+pub fn held(all: &[Constant], free: &[Constant], stated: &[usize], theta: &[f64]) -> Vec<Held> {
+    all.iter()
+        .filter(|c| !free.iter().any(|f| f.name == c.name))
+        .map(|c| Held {
+            name: c.name.clone(),
+            value: theta[c.index],
+            unit: c.unit.to_string(),
+            how: match stated.contains(&c.index) {
+                true => How::Fixed,
+                false => How::Scene,
+            },
+            reason: None,
+        })
+        .collect()
+}
+
+/// The `--fix` list that drops the higher-order term `c` of `free` and every
+/// higher one of the same model (`C20=0,C30=0`; an Ogden pair's μ at 0 with its α
+/// held at the scene's value): the advice for a term the trace cannot see, which
+/// is what the default run does to it. None for a term that 0 does not drop
+/// (Gent's Jm, the leading Ogden pair's α).
+pub fn drop_advice(free: &[Constant], c: &Constant) -> Option<String> {
+    let ogden = c.name.starts_with("alpha") || c.name.starts_with("mu");
+    let from = match ogden {
+        true => c.index / 2 * 2,
+        false => c.index,
+    };
+    if c.role != Role::HigherOrder || c.name == "Jm" || (ogden && from == 0) {
+        return None;
+    }
+    let list: Vec<String> = free
+        .iter()
+        .filter(|k| k.role == Role::HigherOrder && k.index >= from)
+        .map(|k| match k.name.starts_with("alpha") {
+            true => format!("{}={}", k.name, k.start),
+            false => format!("{}=0", k.name),
+        })
+        .collect();
+    Some(list.join(","))
+}
+
+/// What one round does.
+#[derive(Debug, Clone, PartialEq)]
+enum Step {
+    /// Fix these constants at these values (the first is the one dropped).
+    Zero(Vec<(String, f64)>),
+    /// Remove the arm of this index (0-based).
+    Arm(usize),
+    /// Hold this constant at the scene's value.
+    Hold(String),
+}
+
+/// The next step of the reduction for identification `id` of a model with the
+/// constants `all` (module documentation's priority): the step, the constant it
+/// is about and the assessment's reason; None when nothing it may drop is weak.
+fn next_step(id: &Identification, all: &[Constant], model: &str) -> Option<(Step, String, String)> {
+    let weak: Vec<&Constant> = all
+        .iter()
+        .filter(|c| {
+            id.parameters
+                .iter()
+                .any(|e| e.name == c.name && !e.identifiable)
+        })
+        .collect();
+    let reason = |name: &str| {
+        id.parameters
+            .iter()
+            .find(|e| e.name == name)
+            .and_then(|e| e.reason.clone())
+            .unwrap_or_default()
+    };
+    let value = |name: &str| {
+        id.parameters
+            .iter()
+            .find(|e| e.name == name)
+            .map_or(0.0, |e| e.value)
+    };
+    let ogden = model.starts_with("ogden");
+    let higher = weak
+        .iter()
+        .filter(|c| c.role == Role::HigherOrder && (!ogden || c.index >= 2) && c.name != "Jm")
+        .max_by_key(|c| c.index);
+    if let Some(c) = higher {
+        let step = match ogden {
+            true => {
+                let pair = c.index / 2 + 1;
+                let mu = format!("mu{pair}");
+                let alpha = format!("alpha{pair}");
+                let a = value(&alpha);
+                Step::Zero(vec![(mu, 0.0), (alpha, a)])
+            }
+            false => Step::Zero(vec![(c.name.clone(), 0.0)]),
+        };
+        return Some((step, c.name.clone(), reason(&c.name)));
+    }
+    let arm = weak
+        .iter()
+        .filter_map(|c| match c.role {
+            Role::ArmK(j) | Role::ArmTau(j) => Some((j, c.name.as_str())),
+            _ => None,
+        })
+        .max_by(|a, b| {
+            let tau = |j: usize| value(&format!("arm{}.tau", j + 1));
+            tau(a.0).total_cmp(&tau(b.0))
+        });
+    if let Some((j, name)) = arm {
+        return Some((Step::Arm(j), name.to_string(), reason(name)));
+    }
+    if let Some(c) = weak.iter().find(|c| c.role == Role::Nv) {
+        return Some((
+            Step::Zero(vec![(c.name.clone(), 0.0)]),
+            c.name.clone(),
+            reason(&c.name),
+        ));
+    }
+    weak.iter()
+        .find(|c| c.role.is_dielectric())
+        .map(|c| (Step::Hold(c.name.clone()), c.name.clone(), reason(&c.name)))
+}
+
+/// The values of `id`'s free constants by name, with arm `removed` (0-based)
+/// left out and the arms after it renamed one down: the warm start of the next
+/// round.
+fn warm(id: &Identification, removed: Option<usize>) -> Vec<(String, f64)> {
+    id.parameters
+        .iter()
+        .filter_map(|e| {
+            let Some(r) = removed else {
+                return Some((e.name.clone(), e.value));
+            };
+            let arm = e
+                .name
+                .strip_prefix("arm")
+                .and_then(|s| s.split_once('.'))
+                .and_then(|(n, what)| n.parse::<usize>().ok().map(|n| (n, what)));
+            match arm {
+                Some((n, _)) if n == r + 1 => None,
+                Some((n, what)) if n > r + 1 => Some((format!("arm{}.{what}", n - 1), e.value)),
+                _ => Some((e.name.clone(), e.value)),
+            }
+        })
+        .collect()
+}
+
+/// Identify with the default model reduction (module documentation): the full
+/// model first; when it leaves constants not identifiable, the rounds. Returns the
+/// run (the reduced model's identification, with its [`Reduction`] and its held
+/// constants, or the full model's when nothing was reduced) and the experiments
+/// as identified (arms removed from their scenes).
+pub fn identify(
+    experiments: Vec<Experiment>,
+    settings: &Settings,
+    control: &(dyn Fn(usize) -> Control + Sync),
+) -> Result<(Run, Vec<Experiment>)> {
+    let t0 = Instant::now();
+    let full = match identify_with(experiments.clone(), settings, control)? {
+        Run::Identified(id) => *id,
+        failed => return Ok((failed, experiments)),
+    };
+    let weak = |id: &Identification| id.parameters.iter().any(|e| !e.identifiable);
+    if !weak(&full) || full.status == Status::NotConverged {
+        return Ok((Run::Identified(Box::new(full)), experiments));
+    }
+    // the rounds: the full model's σ, few starts, no checkpoints (those are the
+    // full search's), profiles only at the end
+    let mut s = settings.clone();
+    s.starts = REFIT_STARTS.min(settings.starts);
+    s.profiles.clear();
+    for e in &full.experiments {
+        for c in &e.channels {
+            if !s.sigma.iter().any(|(k, _)| *k == c.channel) {
+                s.sigma.push((c.channel, Sigma::Absolute(c.sigma)));
+            }
+        }
+    }
+    let round_control = |i: usize| Control {
+        checkpoint: None,
+        resume: false,
+        ..control(i)
+    };
+    let mut exps = experiments;
+    let mut current = full.clone();
+    let mut rounds = Vec::new();
+    let mut dropped: Vec<Held> = Vec::new();
+    let mut removed_arm = false;
+    let mut warnings = Vec::new();
+    while weak(&current) {
+        let all = params::constants(&exps[0].scene);
+        let model = exps[0].scene.material.spec.name.clone();
+        let Some((step, name, reason)) = next_step(&current, &all, &model) else {
+            break;
+        };
+        let mut next_settings = s.clone();
+        let mut next_exps = exps.clone();
+        let unit_of = |n: &str| {
+            all.iter()
+                .find(|c| c.name == n)
+                .map_or("", |c| c.unit)
+                .to_string()
+        };
+        let unit = unit_of(&name);
+        let (action, removed, held) = match &step {
+            Step::Zero(list) => {
+                for (n, v) in list {
+                    next_settings.fix.push(format!("{n}={v:e}"));
+                }
+                let action = list
+                    .iter()
+                    .map(|(n, v)| format!("{n} = {}", si(*v, &unit_of(n))))
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                (action, None, How::Dropped)
+            }
+            Step::Arm(j) => {
+                for e in &mut next_exps {
+                    e.scene.material.viscous.arms.remove(*j);
+                }
+                let tau = current
+                    .parameters
+                    .iter()
+                    .find(|e| e.name == format!("arm{}.tau", j + 1))
+                    .map_or(String::new(), |e| format!(" (τ = {})", si(e.value, "s")));
+                removed_arm = true;
+                (
+                    format!("arm {} removed{tau}", j + 1),
+                    Some(*j),
+                    How::Dropped,
+                )
+            }
+            Step::Hold(n) => {
+                next_settings.fix.push(n.clone());
+                let v = all
+                    .iter()
+                    .find(|c| c.name == *n)
+                    .map_or(f64::NAN, |c| c.start);
+                (
+                    format!("{n} held at the scene's {}", si(v, &unit)),
+                    None,
+                    How::Scene,
+                )
+            }
+        };
+        next_settings.warm = warm(&current, removed);
+        let run = identify_with(next_exps.clone(), &next_settings, &round_control);
+        let id = match run {
+            Ok(Run::Identified(id)) => *id,
+            Ok(Run::Failed(f)) => {
+                warnings.push(format!(
+                    "the reduction stopped before {action}: its refit failed ({})",
+                    f.reason
+                ));
+                break;
+            }
+            Err(e) => {
+                warnings.push(format!(
+                    "the reduction stopped before {action}: its refit was refused ({e})"
+                ));
+                break;
+            }
+        };
+        match &step {
+            Step::Zero(list) => dropped.extend(list.iter().map(|(n, v)| Held {
+                name: n.clone(),
+                value: *v,
+                unit: unit_of(n),
+                how: held,
+                reason: Some(reason.clone()),
+            })),
+            Step::Arm(j) => dropped.push(Held {
+                name: format!("arm{}.k", j + 1),
+                value: 0.0,
+                unit: "Pa".into(),
+                how: held,
+                reason: Some(format!("{action}: {reason}")),
+            }),
+            Step::Hold(n) => dropped.push(Held {
+                name: n.clone(),
+                value: all
+                    .iter()
+                    .find(|c| c.name == *n)
+                    .map_or(f64::NAN, |c| c.start),
+                unit: unit.clone(),
+                how: held,
+                reason: Some(reason.clone()),
+            }),
+        }
+        rounds.push(Round {
+            constant: name,
+            action,
+            reason,
+            chi2_per_dof: id.chi2_per_dof,
+            aicc: id.aicc,
+        });
+        s = next_settings;
+        exps = next_exps;
+        current = id;
+    }
+    if rounds.is_empty() {
+        let mut full = full;
+        full.warnings.extend(warnings);
+        return Ok((Run::Identified(Box::new(full)), exps));
+    }
+    // profiles asked for: of the reduced model's constants, from its optimum
+    if !settings.profiles.is_empty() {
+        let mut p = s.clone();
+        p.starts = 1;
+        p.warm = warm(&current, None);
+        p.profiles = settings
+            .profiles
+            .iter()
+            .filter(|n| current.parameters.iter().any(|e| e.name == **n))
+            .cloned()
+            .collect();
+        for n in settings.profiles.iter().filter(|n| !p.profiles.contains(n)) {
+            warnings.push(format!(
+                "no profile of {n}: the reduction dropped or held it"
+            ));
+        }
+        if !p.profiles.is_empty() {
+            if let Ok(Run::Identified(id)) = identify_with(exps.clone(), &p, &round_control) {
+                current = *id;
+            }
+        }
+    }
+    let mut id = current;
+    // σ came from the full model's residuals, not from the user
+    for (e, f) in id.experiments.iter_mut().zip(&full.experiments) {
+        for (c, fc) in e.channels.iter_mut().zip(&f.channels) {
+            c.sigma_source = fc.sigma_source;
+        }
+    }
+    for d in dropped {
+        match id.held.iter_mut().find(|h| h.name == d.name) {
+            Some(h) => *h = d,
+            None => id.held.push(d),
+        }
+    }
+    id.conditional_on = conditional_on(&id.held);
+    let delta = id.aicc.zip(full.aicc).map(|(r, f)| r - f);
+    if let Some(d) = delta.filter(|&d| d > MAX_DELTA_AICC) {
+        warnings.push(format!(
+            "the full model fits much better than the reduced one (ΔAICc = {d:.1} > {MAX_DELTA_AICC}): the dropped terms together matter, though none is identifiable on its own; the reduced model's intervals hold only if those terms are truly negligible (a trace with larger strain, longer or with more channels pins them down)"
+        ));
+    }
+    if !warnings.is_empty() && id.status == Status::Ok {
+        id.status = Status::Warning;
+    }
+    id.warnings.extend(warnings);
+    let flags = (!removed_arm).then(|| {
+        let fixes: Vec<String> = id
+            .held
+            .iter()
+            .filter(|h| h.reason.is_some())
+            .map(|h| match h.how {
+                How::Scene => h.name.clone(),
+                _ => format!("{}={}", h.name, h.value),
+            })
+            .collect();
+        format!("--fix {}", fixes.join(","))
+    });
+    id.reduction = Some(Reduction {
+        full: FullFit {
+            free: full.parameters.len(),
+            chi2_per_dof: full.chi2_per_dof,
+            aicc: full.aicc,
+            status: full.status,
+            not_identifiable: full
+                .parameters
+                .iter()
+                .filter(|e| !e.identifiable)
+                .map(|e| e.name.clone())
+                .collect(),
+        },
+        rounds,
+        delta_aicc: delta,
+        flags,
+        seconds: t0.elapsed().as_secs_f64(),
+    });
+    Ok((Run::Identified(Box::new(id)), exps))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::identify::params::Space;
+
+    fn constant(name: &str, index: usize, role: Role, start: f64) -> Constant {
+        Constant {
+            name: name.into(),
+            unit: "Pa",
+            index,
+            start,
+            space: Space::Linear { scale: 1.0 },
+            bounds: (-100.0, 100.0),
+            start_box: (-3.0, 3.0),
+            role,
+            mixture: None,
+        }
+    }
+
+    /// The advice for a higher term names it and every higher one at 0 (what the
+    /// reduction drops), an Ogden pair's α at its value, never a lower pair.
+    #[test]
+    fn the_advice_drops_the_term_and_every_higher_one() {
+        let yeoh = [
+            constant("C10", 0, Role::LeadingModulus, 7e4),
+            constant("C20", 1, Role::HigherOrder, -888.0),
+            constant("C30", 2, Role::HigherOrder, 16.7),
+        ];
+        assert_eq!(drop_advice(&yeoh, &yeoh[1]).unwrap(), "C20=0,C30=0");
+        assert_eq!(drop_advice(&yeoh, &yeoh[2]).unwrap(), "C30=0");
+        assert_eq!(drop_advice(&yeoh, &yeoh[0]), None);
+        let ogden = [
+            constant("mu1", 0, Role::LeadingModulus, 1e5),
+            constant("alpha1", 1, Role::HigherOrder, 2.0),
+            constant("mu2", 2, Role::HigherOrder, 1e3),
+            constant("alpha2", 3, Role::HigherOrder, -2.0),
+        ];
+        assert_eq!(drop_advice(&ogden, &ogden[3]).unwrap(), "mu2=0,alpha2=-2");
+        assert_eq!(drop_advice(&ogden, &ogden[1]), None);
+    }
+
+    /// Held constants condition the intervals unless dropped.
+    #[test]
+    fn dropped_terms_condition_nothing() {
+        let h = |name: &str, how| Held {
+            name: name.into(),
+            value: 0.0,
+            unit: "Pa".into(),
+            how,
+            reason: None,
+        };
+        let held = [
+            h("C20", How::Dropped),
+            h("eps_r", How::Scene),
+            h("nv", How::Fixed),
+        ];
+        assert_eq!(conditional_on(&held), vec!["eps_r", "nv"]);
+    }
+}

@@ -2,13 +2,13 @@
 //! known constants from traces the simulator made, with noise; detection of what a
 //! trace cannot pin down.
 
+use super::support::{relative_noise, trace};
 use dea_fit::identify::params::{set_theta, theta};
 use dea_fit::identify::problem::{simulated, ChannelKind};
 use dea_fit::identify::{identify, Settings};
 use dea_fit::sim::scene::Scene;
 use dea_fit::sim::{simulate, RunOptions};
 use std::path::Path;
-use super::support::{relative_noise, trace};
 
 /// The damped shipped stack (Yeoh, seed Table 4.2 arms, nv) driven by a 5 kV step
 /// with a 1 ms rise, `span` seconds at `samples` equal intervals.

@@ -1249,28 +1249,27 @@ fn hermite_lsq(
 
 #[cfg(test)]
 mod tests {
-    use super::Measured;
+    use super::{lookup_table, Measured};
 
     /// The bucketed search ([`Measured::piece_end`]) gives what a binary search
     /// over every knot gives, at every knot, halfway between two, a hair below
-    /// each, before the first and past the last, for knots spaced unevenly (a
-    /// record with a step, then a sine on slightly jittered sample times).
+    /// each, and past the last, for knots spaced very unevenly (quadratically
+    /// spreading, then a tight cluster: many buckets empty, some holding dozens).
     #[test]
     fn the_lookup_finds_the_piece_of_a_binary_search() {
-        let times: Vec<f64> = (0..400)
-            .map(|i| 1e-3 * i as f64 + 1e-7 * ((i * 7919) % 13) as f64)
-            .collect();
-        let values: Vec<f64> = times
-            .iter()
-            .map(|&t| match t < 0.1 {
-                true => 0.0,
-                false => 3000.0 + 1000.0 * (6.0 * t).sin(),
-            })
-            .collect();
-        let m = Measured::fit(&times, &values).expect("a valid record");
+        let mut knots: Vec<f64> = (0..300).map(|i| 1e-4 * (i * i) as f64).collect();
+        let end = knots[knots.len() - 1];
+        knots.extend((1..100).map(|i| end + 1e-6 * i as f64));
+        let m = Measured {
+            pieces: vec![[0.0; 4]; knots.len() - 1],
+            corners: vec![knots[0], knots[knots.len() - 1]],
+            steps: Vec::new(),
+            noise: 0.0,
+            lookup: lookup_table(&knots),
+            knots,
+        };
         let k = &m.knots;
-        assert!(k.len() > 10, "{} knots", k.len());
-        let mut ts = vec![k[0], k[k.len() - 1], k[k.len() - 1] + 1.0];
+        let mut ts = vec![k[0], k[k.len() - 1] + 1.0];
         for w in k.windows(2) {
             ts.extend([w[1], 0.5 * (w[0] + w[1]), w[1] - 1e-12 * (w[1] - w[0])]);
         }

@@ -13,6 +13,7 @@ mod fuzz;
 mod html_report;
 mod identify;
 mod identify_coverage;
+mod identify_intervals;
 mod identify_mass_fraction;
 mod material_file;
 mod models;

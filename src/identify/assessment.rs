@@ -68,9 +68,12 @@ pub struct Estimate {
     /// bound of the search (None: two-sided, or no interval). A one-sided constant
     /// is not identifiable.
     pub open: Option<Open>,
-    /// The constants whose values the interval is conditional on (held at a bound
-    /// of their search where the interval was found); empty when every other free
-    /// constant was free.
+    /// The constants whose values the interval is conditional on: for a Wald
+    /// interval the constants held at a bound of their search when the full
+    /// information is singular, for a profile interval those a bound held in the
+    /// re-fits at its ends (the search box; for a constant that ended at a bound,
+    /// the box released by its width, [`super::profile`]); empty when every other
+    /// free constant was free.
     pub conditional_on: Vec<String>,
 }
 

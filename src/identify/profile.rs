@@ -453,7 +453,7 @@ impl<'a> Profiler<'a> {
         let v = lm::project(xj + sign * CHECK_SIGMAS * sx, (lo, hi));
         let expected = ((v - xj) / sx).powi(2) * self.base.s2;
         let p = self.at(v).clone();
-        let agrees = !(expected > 0.0) || (p.delta / expected - 1.0).abs() <= WALD_TOLERANCE;
+        let agrees = expected <= 0.0 || (p.delta / expected - 1.0).abs() <= WALD_TOLERANCE;
         (p, agrees)
     }
 

@@ -15,6 +15,7 @@ mod identify;
 mod identify_coverage;
 mod identify_intervals;
 mod identify_mass_fraction;
+mod identify_reduce;
 mod material_file;
 mod models;
 mod numeric_input;

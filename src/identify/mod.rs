@@ -499,14 +499,30 @@ pub fn drucker_unstable(
     theta: &[f64],
     range: (f64, f64),
 ) -> Option<String> {
-    let m = &scene.material;
-    let p = &theta[..m.params.len()];
     let mode = crate::sim::full_plant(scene).ok()?.mode;
+    let m = &scene.material;
+    let bad = unstable_within(m.model.as_ref(), &theta[..m.params.len()], mode, range)?;
+    Some(format!(
+        "the identified hyperelastic law is Drucker-unstable in {mode} at stretch {bad} within the traced range {:.4}–{:.4} widened by {:.0} %: not a material law; fix the higher terms (e.g. at 0) or add a trace that reaches the stretches where it stiffens",
+        range.0,
+        range.1,
+        100.0 * DRUCKER_MARGIN
+    ))
+}
+
+/// The stretches (as text) where the law `model` at `p` is Drucker-unstable in
+/// `mode` within `range` widened by [`DRUCKER_MARGIN`] (and always about λ = 1).
+fn unstable_within(
+    model: &dyn crate::material::hyperelastic::StrainEnergy,
+    p: &[f64],
+    mode: crate::material::hyperelastic::Mode,
+    range: (f64, f64),
+) -> Option<String> {
     let (lo, hi) = (
         range.0.min(1.0) / (1.0 + DRUCKER_MARGIN),
         range.1.max(1.0) * (1.0 + DRUCKER_MARGIN),
     );
-    let d = crate::fit::drucker::drucker(m.model.as_ref(), p)
+    let d = crate::fit::drucker::drucker(model, p)
         .into_iter()
         .find(|d| d.mode == mode)?;
     let bad: Vec<String> = d
@@ -515,15 +531,36 @@ pub fn drucker_unstable(
         .filter(|[a, b]| *a <= hi && *b >= lo)
         .map(|[a, b]| format!("{a:.3}–{b:.3}"))
         .collect();
-    (!bad.is_empty()).then(|| {
-        format!(
-            "the identified hyperelastic law is Drucker-unstable in {mode} at stretch {} within the traced range {:.4}–{:.4} widened by {:.0} %: not a material law; fix the higher terms (e.g. at 0) or add a trace that reaches the stretches where it stiffens",
-            bad.join(", "),
-            range.0,
-            range.1,
-            100.0 * DRUCKER_MARGIN
-        )
-    })
+    (!bad.is_empty()).then(|| bad.join(", "))
+}
+
+/// The search's physics bound ([`Problem::infeasible`]): a trial θ whose law is
+/// Drucker-unstable over the stretches the traces reach at the starting constants
+/// (widened by [`DRUCKER_MARGIN`]) is infeasible. None when the starting law is
+/// itself unstable there (the status at the optimum says so) or the traces do
+/// not run at the start (the start check says why).
+fn drucker_bound(problem: &Problem) -> Option<problem::Infeasible> {
+    let scene = &problem.experiments[0].scene;
+    let model = scene.material.model.clone();
+    let np = scene.material.params.len();
+    let mode = crate::sim::full_plant(scene).ok()?.mode;
+    let mut range = (f64::INFINITY, f64::NEG_INFINITY);
+    for e in &problem.experiments {
+        let o = crate::sim::trajectory(&e.scene, &problem.run).ok()?;
+        for s in &o.samples {
+            range = (range.0.min(s.stretch), range.1.max(s.stretch));
+        }
+    }
+    if !(range.0.is_finite() && range.1.is_finite())
+        || unstable_within(model.as_ref(), &problem.theta[..np], mode, range).is_some()
+    {
+        return None;
+    }
+    Some(std::sync::Arc::new(move |theta: &[f64]| {
+        unstable_within(model.as_ref(), &theta[..np], mode, range).map(|at| {
+            format!("the hyperelastic law is Drucker-unstable in {mode} at stretch {at}, within the traced stretches {:.4}–{:.4} widened by {:.0} %", range.0, range.1, 100.0 * DRUCKER_MARGIN)
+        })
+    }))
 }
 
 /// Smallest and largest stretch over every sample of the runs.
@@ -630,6 +667,8 @@ fn prepare(
     for e in &problem.experiments {
         e.check_start(&problem.theta)?;
     }
+    let mut problem = problem;
+    problem.infeasible = drucker_bound(&problem);
     let stated = fixed.iter().map(|&(k, _)| k).collect();
     Ok((problem, all, stated, given))
 }
@@ -1000,4 +1039,49 @@ fn context(problem: &Problem, runs: &[crate::sim::Outcome]) -> Context {
         }
     }
     ctx
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The shipped damped stack (Yeoh) as a noisy contraction trace.
+    fn experiment() -> Experiment {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("datasets/scenes/stack_step_5kV_damped.toml");
+        let mut scene = crate::sim::scene::Scene::read(&path).expect("shipped scene");
+        scene.time.span = 0.2;
+        scene.time.samples = (1..=50).map(|i| 0.004 * i as f64).collect();
+        Experiment::synthetic(&scene, &[(ChannelKind::Contraction, 1e-7)], 3).expect("runs")
+    }
+
+    /// A trial θ whose Yeoh law is Drucker-unstable over the traced stretches
+    /// (C20 = −100·C10 softens it at once past λ = 1) is an infeasible point of
+    /// the search, rejected with the reason before any simulation; the scene's own
+    /// (stable) θ is evaluated.
+    #[test]
+    fn an_unstable_law_is_an_infeasible_trial() {
+        let settings = Settings {
+            free: Some(vec!["C10".into(), "C20".into()]),
+            ..Settings::default()
+        };
+        let (mut problem, ..) = prepare(vec![experiment()], &settings).expect("prepares");
+        assert!(problem.infeasible.is_some(), "the starting law is stable");
+        let (n, k) = problem.dims();
+        let mut r = DVector::zeros(n);
+        let x0 = problem.x_of(&problem.theta);
+        assert!(problem.eval(&x0, &mut r, None), "{:?}", problem.failure());
+        let mut theta = problem.theta.clone();
+        theta[1] = -100.0 * theta[0];
+        let runs = problem.counts.get();
+        let x = problem.x_of(&theta);
+        assert_eq!(x.len(), k);
+        assert!(!problem.eval(&x, &mut r, None));
+        let why = problem.failure().unwrap_or_default();
+        assert!(why.contains("Drucker-unstable"), "{why}");
+        assert_eq!(problem.counts.get(), runs, "rejected before any run");
+        let scene = &problem.experiments[0].scene;
+        assert!(drucker_unstable(scene, &theta, (1.0, 1.01)).is_some());
+        assert!(drucker_unstable(scene, &problem.theta, (1.0, 1.01)).is_none());
+    }
 }

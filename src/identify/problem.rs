@@ -204,7 +204,14 @@ pub struct Problem {
     /// Why this copy's last evaluation failed ([`LeastSquares::failure`]); each
     /// start's copy keeps its own.
     failure: Option<String>,
+    /// Why θ is not a candidate, checked before any run (the hyperelastic law
+    /// Drucker-unstable over the traced stretches: [`super::drucker_unstable`]);
+    /// such a point is an infeasible step of the search.
+    pub infeasible: Option<Infeasible>,
 }
+
+/// The physics test of [`Problem::infeasible`]: why θ is not a candidate, if not.
+pub type Infeasible = Arc<dyn Fn(&[f64]) -> Option<String> + Send + Sync>;
 
 impl Problem {
     /// The problem of fitting `free` (θ elsewhere at `theta`) to `experiments`. An
@@ -256,6 +263,7 @@ impl Problem {
             far: false,
             counts: Arc::default(),
             failure: None,
+            infeasible: None,
         })
     }
 
@@ -547,6 +555,10 @@ impl LeastSquares for Problem {
             .find(|(_, v)| !v.is_finite())
         {
             self.failure = Some(format!("{} = {v}", c.name));
+            return false;
+        }
+        if let Some(why) = self.infeasible.as_ref().and_then(|f| f(&theta)) {
+            self.failure = Some(why);
             return false;
         }
         match self.simulate_at(&theta, jac.is_some()) {

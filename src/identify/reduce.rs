@@ -8,19 +8,27 @@
 //! **Backward elimination** ([`identify`]). After the full model's fit, while some
 //! constant is not identifiable, one is dropped per round, in this priority
 //! (of the constants not identifiable):
-//! 1. the highest higher-order hyperelastic term, set to 0: Yeoh C30, then C20;
+//! 1. εr (or the filler mass fraction that sets it): it cannot be dropped (the
+//!    Maxwell pressure needs it), so it is held at the scene's stated value, and
+//!    every other interval is then conditional on that value (the output says so:
+//!    [`Held`], `conditional_on`). It goes first because a weak εr (a trace
+//!    without capacitance sees only εr over the moduli) lets every modulus drift
+//!    with it: dropping terms first would chase that drift (on a contraction-only
+//!    trace of a one-arm Yeoh stack, C10 went to 6.9 MPa with εr = 457, and four
+//!    rounds dropped C30, C20, the arm and nv to a model 880 AICc worse);
+//! 2. the highest higher-order hyperelastic term, set to 0: Yeoh C30, then C20;
 //!    Mooney-Rivlin C01 (leaving neo-Hookean); an Ogden pair beyond the first
 //!    (μk = 0, its αk then acts on nothing and is held where it was);
-//! 2. a Maxwell arm whose k or τ is not identifiable, the slowest of them first,
+//! 3. a Maxwell arm whose k or τ is not identifiable, the slowest of them first,
 //!    removed from the model (not merged with a neighbour: the refit lets the
 //!    remaining arms and the leading modulus take up what it carried, with no
 //!    rule needed for a merged τ);
-//! 3. the dashpot nv, set to 0;
-//! 4. εr (or the filler mass fraction that sets it): it cannot be dropped (the
-//!    Maxwell pressure needs it), so it is held at the scene's stated value, and
-//!    every other interval is then conditional on that value (the output says so:
-//!    [`Held`], `conditional_on`).
+//! 4. the dashpot nv, set to 0.
 //!
+//! A constant that ended at a bound of its search box because the trace pushed it
+//! there (not one that drifted there along a direction the trace does not pin
+//! down) is not dropped: the box is wrong, not the model; the run stays
+//! `ill_posed` and its reason says to start the scene nearer.
 //! A constant of none of these kinds (the leading modulus traded against another,
 //! Gent's Jm) is left as it is: the reduction stops when nothing it may drop is
 //! not identifiable, and the status then says `ill_posed`. Each round refits from
@@ -51,6 +59,10 @@ use std::time::Instant;
 /// matter: the run warns (Burnham & Anderson 2002, §2.6: ΔAICc > 10 leaves the
 /// worse model essentially no support).
 pub const MAX_DELTA_AICC: f64 = 10.0;
+
+/// What the assessment's reason of a constant at a bound says when it drifted
+/// there ([`super::assessment`]): the with-every-constant-free weakness follows.
+const DRIFTED: &str = "it drifted there";
 
 /// Starts of each refit of the reduction: the previous optimum and the scene's
 /// values.
@@ -199,12 +211,17 @@ enum Step {
 /// constants `all` (module documentation's priority): the step, the constant it
 /// is about and the assessment's reason; None when nothing it may drop is weak.
 fn next_step(id: &Identification, all: &[Constant], model: &str) -> Option<(Step, String, String)> {
+    // a constant the trace pushed onto a bound of its box (not one that drifted
+    // there along a direction the trace does not pin down) is well seen: the box is
+    // wrong, not the model, and dropping it would lie
     let weak: Vec<&Constant> = all
         .iter()
         .filter(|c| {
-            id.parameters
-                .iter()
-                .any(|e| e.name == c.name && !e.identifiable)
+            id.parameters.iter().any(|e| {
+                e.name == c.name
+                    && !e.identifiable
+                    && (!e.at_bound || e.reason.as_deref().is_some_and(|r| r.contains(DRIFTED)))
+            })
         })
         .collect();
     let reason = |name: &str| {
@@ -220,6 +237,12 @@ fn next_step(id: &Identification, all: &[Constant], model: &str) -> Option<(Step
             .find(|e| e.name == name)
             .map_or(0.0, |e| e.value)
     };
+    // εr first: it cannot be dropped, and when it is weak (a trace without
+    // capacitance sees only εr over the moduli) every modulus drifts with it, so
+    // dropping terms first would chase that drift
+    if let Some(c) = weak.iter().find(|c| c.role.is_dielectric()) {
+        return Some((Step::Hold(c.name.clone()), c.name.clone(), reason(&c.name)));
+    }
     let ogden = model.starts_with("ogden");
     let higher = weak
         .iter()
@@ -251,16 +274,13 @@ fn next_step(id: &Identification, all: &[Constant], model: &str) -> Option<(Step
     if let Some((j, name)) = arm {
         return Some((Step::Arm(j), name.to_string(), reason(name)));
     }
-    if let Some(c) = weak.iter().find(|c| c.role == Role::Nv) {
-        return Some((
+    weak.iter().find(|c| c.role == Role::Nv).map(|c| {
+        (
             Step::Zero(vec![(c.name.clone(), 0.0)]),
             c.name.clone(),
             reason(&c.name),
-        ));
-    }
-    weak.iter()
-        .find(|c| c.role.is_dielectric())
-        .map(|c| (Step::Hold(c.name.clone()), c.name.clone(), reason(&c.name)))
+        )
+    })
 }
 
 /// The values of `id`'s free constants by name, with arm `removed` (0-based)

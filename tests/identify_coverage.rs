@@ -21,10 +21,11 @@
 //! about 0.2 s; the replicates run in parallel (rayon).
 
 use super::support::{relative_noise, trace};
+use dea_fit::fit::lm::Control;
 use dea_fit::identify::assessment::Estimate;
 use dea_fit::identify::params::{constants, set_theta, theta};
 use dea_fit::identify::problem::ChannelKind;
-use dea_fit::identify::{identify, Settings};
+use dea_fit::identify::{identify, reduce, Settings};
 use dea_fit::sim::scene::Scene;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -90,18 +91,16 @@ struct Study {
 }
 
 impl Study {
-    fn add(&mut self, truth: &Scene, estimates: &[Estimate]) {
-        let all = constants(truth);
-        let th = theta(truth);
-        for e in estimates {
+    /// Count the estimates (each with its true value) of one replicate.
+    fn add(&mut self, estimates: &[(Estimate, f64)]) {
+        for (e, truth) in estimates {
             let t = self.constants.entry(e.name.clone()).or_default();
             if !e.identifiable {
                 continue;
             }
-            let c = all.iter().find(|c| c.name == e.name).expect("a constant");
             let ci = e.ci95.expect("an identifiable constant has an interval");
             t.called += 1;
-            if ci[0] <= th[c.index] && th[c.index] <= ci[1] {
+            if ci[0] <= *truth && *truth <= ci[1] {
                 t.covered += 1;
             }
         }
@@ -172,9 +171,8 @@ fn min_covered(n: usize) -> usize {
 
 /// The fixes the reasons of the constants not identified advise: `NAME=VALUE` where
 /// a reason spells out `--fix NAME=VALUE`, else `NAME` (held at the scene's value).
-fn advised_fixes(estimates: &[Estimate]) -> Vec<String> {
+fn advised_fixes<'a>(estimates: impl Iterator<Item = &'a Estimate>) -> Vec<String> {
     estimates
-        .iter()
         .filter(|e| !e.identifiable)
         .filter_map(|e| {
             let reason = e.reason.as_deref()?;
@@ -191,11 +189,16 @@ fn advised_fixes(estimates: &[Estimate]) -> Vec<String> {
         .collect()
 }
 
-/// The outcome of one identification: its estimates, None if it failed, or the
-/// error of a refused input (an advised fix the tool does not accept).
-type Outcome = Result<Option<Vec<Estimate>>, String>;
+/// The outcome of one identification: its estimates with their true values, None
+/// if it failed, or the error of a refused input (an advised fix the tool does not
+/// accept).
+type Outcome = Result<Option<Vec<(Estimate, f64)>>, String>;
 
-/// Identify the replicate `seed` of `s` with `fix`.
+/// Identify the replicate `seed` of `s`: as the command line does by default (the
+/// smallest identifiable model, [`reduce::identify`]) without `fix`, else with the
+/// constants in `fix` held. An arm the reduction removed takes its label from the
+/// arms after it: each remaining arm is compared with the true arm of the nearest
+/// relaxation time (in ln τ).
 fn run(s: &Scenario, seed: u64, fix: &[String]) -> Outcome {
     let mut exp = trace(&s.truth, &s.channels, seed);
     let mut start = theta(&s.truth);
@@ -209,8 +212,60 @@ fn run(s: &Scenario, seed: u64, fix: &[String]) -> Outcome {
         fix: fix.to_vec(),
         ..Settings::default()
     };
-    let run = identify(vec![exp], &settings).map_err(|e| e.to_string())?;
-    Ok(run.identified().ok().map(|id| id.parameters))
+    let err = |e: dea_fit::Error| e.to_string();
+    let (run, kept) = match fix.is_empty() {
+        true => reduce::identify(vec![exp], &settings, &|_| Control::default()).map_err(err)?,
+        false => (
+            identify(vec![exp.clone()], &settings).map_err(err)?,
+            vec![exp],
+        ),
+    };
+    let Ok(id) = run.identified() else {
+        return Ok(None);
+    };
+    let all = constants(&s.truth);
+    let th = theta(&s.truth);
+    // (k, τ) of each arm, true and as identified
+    let pairs = |scene: &Scene| -> Vec<(f64, f64)> {
+        let arms = &scene.material.viscous.arms;
+        arms.iter().map(|a| (a.k_pa, a.eta_pa_s / a.k_pa)).collect()
+    };
+    let (arms, fitted) = (pairs(&s.truth), pairs(&kept[0].scene));
+    let truth_of = |name: &str| -> f64 {
+        let arm = name
+            .strip_prefix("arm")
+            .and_then(|r| r.split_once('.'))
+            .and_then(|(j, what)| j.parse::<usize>().ok().map(|j| (j - 1, what)));
+        match arm {
+            Some((j, what)) if fitted.len() < arms.len() => {
+                let near = |a: &(f64, f64)| (a.1.ln() - fitted[j].1.ln()).abs();
+                let a = arms
+                    .iter()
+                    .min_by(|a, b| near(a).total_cmp(&near(b)))
+                    .expect("an arm");
+                match what {
+                    "k" => a.0,
+                    _ => a.1,
+                }
+            }
+            _ => {
+                th[all
+                    .iter()
+                    .find(|c| c.name == name)
+                    .expect("a constant")
+                    .index]
+            }
+        }
+    };
+    Ok(Some(
+        id.parameters
+            .into_iter()
+            .map(|e| {
+                let t = truth_of(&e.name);
+                (e, t)
+            })
+            .collect(),
+    ))
 }
 
 /// Run the scenario's replicates in parallel, by default and with the advised
@@ -221,7 +276,7 @@ fn study(s: &Scenario) {
         .map(|seed| {
             let default = run(s, seed, &[]);
             let fixes = match &default {
-                Ok(Some(e)) => advised_fixes(e),
+                Ok(Some(e)) => advised_fixes(e.iter().map(|(e, _)| e)),
                 _ => Vec::new(),
             };
             let fixed = match fixes.is_empty() {
@@ -235,7 +290,7 @@ fn study(s: &Scenario) {
     for (d, fixes, f) in &results {
         for (study, outcome) in [(&mut default, d), (&mut advised, f)] {
             match outcome {
-                Ok(Some(e)) => study.add(&s.truth, e),
+                Ok(Some(e)) => study.add(e),
                 Ok(None) => study.failed += 1,
                 Err(why) if !study.refused.contains(why) => study.refused.push(why.clone()),
                 Err(_) => {}

@@ -180,7 +180,7 @@ fn bench_scale_writes_rows_slopes_and_chart() {
 #[test]
 fn bench_identify_times_the_interval_stage_apart() {
     let text = format!(
-        "name = \"bench_case\"\n{}[material]\nhyperelastic = {{ model = \"neo-hookean\", parameters = {{ mu = \"138.6 kPa\" }} }}\nviscous = {{ nv = \"1875 Pa s\", arms = [ {{ k = \"50 kPa\", tau = \"0.2 s\" }} ] }}\nrelative_permittivity = 4.7\n[source]\nrise_time = \"20 ms\"\n[[input]]\nkind = \"step\"\namplitude = \"5 kV\"\n[time]\nspan = \"1 s\"\nsamples = 200\n",
+        "name = \"bench_case\"\n{}[material]\nhyperelastic = {{ model = \"neo-hookean\", parameters = {{ mu = \"138.6 kPa\" }} }}\nviscous = {{ nv = \"1875 Pa s\", arms = [ {{ k = \"50 kPa\", tau = \"0.2 s\" }} ] }}\nrelative_permittivity = 4.7\ndensity = \"960 kg/m3\"\n[source]\nrise_time = \"20 ms\"\n[[input]]\nkind = \"step\"\namplitude = \"5 kV\"\n[time]\nspan = \"1 s\"\nsamples = 200\n",
         super::support::SEED_STACK_ACTUATOR
     );
     let scene = dea_fit::sim::scene::Scene::parse(&text, Path::new("bench_case.toml")).unwrap();

@@ -319,7 +319,13 @@ fn both_channels(truth: &Scene) -> Vec<(ChannelKind, f64)> {
 /// Small strain: a 3 kV step strains the stack by 0.32 %, where Yeoh's C20 and C30
 /// are far below the noise; two arms (τ = 0.05 s and 0.3 s) and the dashpot,
 /// contraction and capacitance, all nine constants free.
+/// Measured (covered / reported identifiable): main 2124710, full model: 118 of
+/// 131 (arm1.k 15 of 19); with id-intervals 21bbef6 and id-reduce ab11a9e, full
+/// model: 124 of 129; with the default reduction (id-reduce c1bceee: C30, C20 → 0,
+/// and in 7 replicates arm 2 removed): 97 of 126 (C10 13 of 20, arm1.τ 13 of 20,
+/// nv 11 of 20): the model without the arm the trace has biases the others.
 #[test]
+#[ignore = "needs issue-34 intervals and reduction (branches id-intervals, id-reduce)"]
 fn intervals_hold_at_small_strain() {
     let truth = stack(
         r#"{ k = "106 kPa", tau = "0.05 s" }, { k = "45 kPa", tau = "0.3 s" }"#,

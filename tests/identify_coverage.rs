@@ -323,7 +323,9 @@ fn both_channels(truth: &Scene) -> Vec<(ChannelKind, f64)> {
 /// 131 (arm1.k 15 of 19); with id-intervals 21bbef6 and id-reduce ab11a9e, full
 /// model: 124 of 129; with the default reduction (id-reduce c1bceee: C30, C20 → 0,
 /// and in 7 replicates arm 2 removed): 97 of 126 (C10 13 of 20, arm1.τ 13 of 20,
-/// nv 11 of 20): the model without the arm the trace has biases the others.
+/// nv 11 of 20: as many misses of C10 and arm1.τ as replicates without arm 2, so
+/// probably the model without an arm the trace has biases the others; not checked
+/// replicate by replicate).
 #[test]
 #[ignore = "needs issue-34 intervals and reduction (branches id-intervals, id-reduce)"]
 fn intervals_hold_at_small_strain() {

@@ -343,7 +343,14 @@ fn intervals_hold_at_small_strain() {
 
 /// A slow arm: τ = 1 s in a 1 s trace, beside a fast one (0.05 s), at 0.9 % strain
 /// (5 kV); contraction and capacitance, all nine constants free.
+/// Measured: main 2124710, full model: 95 of 102, with the advised fixes 78 of 89
+/// (C10 10 of 13, εr 12 of 15); with id-intervals 21bbef6 and id-reduce ab11a9e,
+/// full model: 87 of 99 (arm1.k and arm1.τ 16 of 20); with the default reduction
+/// of id-reduce c1bceee (the slow arm removed in 19 of 20 replicates): 28 of 87 (C10
+/// 0 of 17, arm1.τ 0 of 18, nv 6 of 18): without the slow arm, C10 and the fast
+/// arm carry its stiffness and their intervals exclude the true values.
 #[test]
+#[ignore = "needs issue-34 intervals and reduction (branches id-intervals, id-reduce)"]
 fn intervals_hold_with_an_arm_as_slow_as_the_trace() {
     let truth = stack(
         r#"{ k = "106 kPa", tau = "0.05 s" }, { k = "45 kPa", tau = "1 s" }"#,

@@ -173,3 +173,24 @@ fn bench_scale_writes_rows_slopes_and_chart() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--min-rows"));
 }
+
+/// `bench identify`'s rows carry the interval stage's time apart from the whole
+/// run's: positive (the stage ran: covariance, profile checks) and part of it. A
+/// one-arm stack stepped for 1 s at 200 samples, one start, so the case is quick.
+#[test]
+fn bench_identify_times_the_interval_stage_apart() {
+    let text = format!(
+        "name = \"bench_case\"\n{}[material]\nhyperelastic = {{ model = \"neo-hookean\", parameters = {{ mu = \"138.6 kPa\" }} }}\nviscous = {{ nv = \"1875 Pa s\", arms = [ {{ k = \"50 kPa\", tau = \"0.2 s\" }} ] }}\nrelative_permittivity = 4.7\ndensity = \"960 kg/m3\"\n[source]\nrise_time = \"20 ms\"\n[[input]]\nkind = \"step\"\namplitude = \"5 kV\"\n[time]\nspan = \"1 s\"\nsamples = 200\n",
+        super::support::SEED_STACK_ACTUATOR
+    );
+    let scene = dea_fit::sim::scene::Scene::parse(&text, Path::new("bench_case.toml")).unwrap();
+    let rows = dea_fit::bench::identify_rows(&scene, &[1e-6], &[1], 1, &mut |_| {}).unwrap();
+    assert_eq!(rows.len(), 1);
+    let r = &rows[0];
+    assert!(
+        r.interval_s > 0.0 && r.interval_s < r.seconds,
+        "interval stage {} s of {} s",
+        r.interval_s,
+        r.seconds
+    );
+}

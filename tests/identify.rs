@@ -2,8 +2,9 @@
 //! known constants from traces the simulator made, with noise; detection of what a
 //! trace cannot pin down.
 
+use super::support::{relative_noise, trace};
 use dea_fit::identify::params::{set_theta, theta};
-use dea_fit::identify::problem::{simulated, ChannelKind, Experiment};
+use dea_fit::identify::problem::{simulated, ChannelKind};
 use dea_fit::identify::{identify, Settings};
 use dea_fit::sim::scene::Scene;
 use dea_fit::sim::{simulate, RunOptions};
@@ -20,11 +21,6 @@ fn stack(span: &str, samples: usize) -> Scene {
         .replace("span = \"10 s\"", &format!("span = \"{span}\""))
         .replace("samples = 2000", &format!("samples = {samples}"));
     Scene::parse(&text, Path::new("stack.toml")).expect("valid scene")
-}
-
-/// A trace of `scene` with Gaussian noise: (quantity, σ) per channel, seeded.
-fn trace(scene: &Scene, channels: &[(ChannelKind, f64)], seed: u64) -> Experiment {
-    Experiment::synthetic(scene, channels, seed).expect("the scene runs")
 }
 
 /// Peak contraction of a scene (m), for noise levels relative to the signal.
@@ -514,22 +510,6 @@ fn coverage(
         }
     }
     (covered, total)
-}
-
-/// Noise σ of each channel as a fraction of its peak |value| in `truth`.
-fn relative_noise(truth: &Scene, rel: &[(ChannelKind, f64)]) -> Vec<(ChannelKind, f64)> {
-    let o = simulate(truth, &RunOptions::default()).expect("runs");
-    let s0 = o.samples[0];
-    rel.iter()
-        .map(|&(q, r)| {
-            let peak = o
-                .samples
-                .iter()
-                .map(|s| simulated(q, &s0, s).abs())
-                .fold(0.0, f64::max);
-            (q, r * peak)
-        })
-        .collect()
 }
 
 /// The 95 % intervals cover the truth at about their rate. Stack with one arm and a

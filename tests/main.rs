@@ -12,6 +12,7 @@ mod export;
 mod fuzz;
 mod html_report;
 mod identify;
+mod identify_coverage;
 mod identify_geometry;
 mod identify_intervals;
 mod identify_mass_fraction;

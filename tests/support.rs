@@ -1,5 +1,8 @@
 //! Helpers every test module that runs the real binary shares.
 
+use dea_fit::identify::problem::{simulated, ChannelKind, Experiment};
+use dea_fit::sim::scene::Scene;
+use dea_fit::sim::{simulate, RunOptions};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -96,4 +99,25 @@ pub fn breakdown_fit(
         warnings: Vec::new(),
         provenance: serde_json::Value::Null,
     }
+}
+
+/// A trace of `scene` with Gaussian noise: (quantity, σ) per channel, seeded.
+pub fn trace(scene: &Scene, channels: &[(ChannelKind, f64)], seed: u64) -> Experiment {
+    Experiment::synthetic(scene, channels, seed).expect("the scene runs")
+}
+
+/// Noise σ of each channel as a fraction of its peak |value| in `truth`.
+pub fn relative_noise(truth: &Scene, rel: &[(ChannelKind, f64)]) -> Vec<(ChannelKind, f64)> {
+    let o = simulate(truth, &RunOptions::default()).expect("runs");
+    let s0 = o.samples[0];
+    rel.iter()
+        .map(|&(q, r)| {
+            let peak = o
+                .samples
+                .iter()
+                .map(|s| simulated(q, &s0, s).abs())
+                .fold(0.0, f64::max);
+            (q, r * peak)
+        })
+        .collect()
 }

@@ -29,7 +29,7 @@ pub fn run(scene: &Path) -> Result<super::bench::Verdict> {
         bar.inc(1);
     })?;
     bar.finish_and_clear();
-    let mut csv = String::from("rtol,starts,seconds,per_start_s,max_rel_error,max_z,identified,free,starts_at_best,iterations,simulator_runs,status\n");
+    let mut csv = String::from("rtol,starts,seconds,per_start_s,interval_s,max_rel_error,max_z,identified,free,starts_at_best,iterations,simulator_runs,status\n");
     let mut verdict = super::bench::Verdict::default();
     let mut table_rows = Vec::new();
     let mut series: Vec<Series> = Vec::new();
@@ -48,11 +48,12 @@ pub fn run(scene: &Path) -> Result<super::bench::Verdict> {
     for r in &rows {
         let _ = writeln!(
             csv,
-            "{:e},{},{:e},{:e},{:e},{:e},{},{},{},{},{},{}",
+            "{:e},{},{:e},{:e},{:e},{:e},{:e},{},{},{},{},{},{}",
             r.rtol,
             r.starts,
             r.seconds,
             r.per_start_s,
+            r.interval_s,
             r.max_rel_error,
             r.max_z,
             r.identified,
@@ -68,6 +69,7 @@ pub fn run(scene: &Path) -> Result<super::bench::Verdict> {
             r.starts.to_string(),
             format!("{:.3}", r.seconds),
             format!("{:.3}", r.per_start_s),
+            format!("{:.3}", r.interval_s),
             format!("{:.2e}", r.max_rel_error),
             format!("{:.2}", r.max_z),
             format!("{}/{}", r.identified, r.free),
@@ -93,6 +95,7 @@ pub fn run(scene: &Path) -> Result<super::bench::Verdict> {
         "starts",
         "time [s]",
         "per start [s]",
+        "intervals [s]",
         "max |Δθ/θ|",
         "max |Δθ|/σ",
         "identified",
@@ -106,7 +109,7 @@ pub fn run(scene: &Path) -> Result<super::bench::Verdict> {
     page.para(vec![
         text("Scene "),
         code(scene.display().to_string()),
-        text(" simulated at its constants, 1 % contraction and 0.1 % capacitance noise (seed 10); the search starts 20 % above every constant. Time: one whole identification (multi-start, σ re-estimation, polish, assessment) on this machine. Rerun: "),
+        text(" simulated at its constants, 1 % contraction and 0.1 % capacitance noise (seed 10); the search starts 20 % above every constant. Time: one whole identification (multi-start, σ re-estimation, polish, assessment) on this machine; of it, the interval stage (covariance, profile checks and profile intervals) in its own column. Rerun: "),
         code("dea-fit bench identify"),
         text(". All rows: "),
         link("identify.csv", "identify.csv"),

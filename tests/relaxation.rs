@@ -1153,9 +1153,10 @@ fn a_term_the_data_cannot_determine_is_not_identifiable() {
 }
 
 /// A material without an equilibrium modulus (E∞ = 0 in truth): the non-negative
-/// least squares may hold E∞ at 0, the bound its law allows. That is not a failure
-/// of identifiability: E∞ is then judged by its correlations only, its interval is
-/// one-sided from 0 and said so, and the fit is not blocked for it.
+/// least squares hold E∞ at or next to 0, the bound its law allows, its interval
+/// reaching 0. That is not a failure of identifiability: E∞ is then judged by its
+/// correlations only, its interval is one-sided from 0 and said so, and the fit is
+/// not blocked for it.
 #[test]
 fn a_zero_equilibrium_modulus_at_its_bound_is_not_a_failure() {
     let p = Prony::new(0.0, &[(0.3, 100e3), (30.0, 100e3)]).unwrap();
@@ -1169,16 +1170,15 @@ fn a_zero_equilibrium_modulus_at_its_bound_is_not_a_failure() {
     let f = fit(&d, None, Some(2));
     let e_inf = &f.parameters[0];
     assert_eq!(e_inf.name, "E_inf");
-    if e_inf.value == 0.0 {
-        assert_eq!(e_inf.identifiable, Some(true), "{:?}", f.warnings);
-        assert_eq!(e_inf.ci95.unwrap()[0], 0.0);
-        assert!(f
-            .warnings
-            .iter()
-            .any(|w| w.starts_with("E∞ = 0 at its physical bound")));
-        assert!(!f.status.is_blocking(), "{:?}", f.warnings);
-    } else {
-        // held above 0 by the noise: its interval reaches 0, clipped there
-        assert_eq!(e_inf.ci95.unwrap()[0].max(0.0), e_inf.ci95.unwrap()[0]);
-    }
+    // this replicate's E∞ ends next to the bound (0.27 Pa ± 5.4 Pa): its interval
+    // reaches 0, the case under test
+    let [lo, hi] = e_inf.ci95.unwrap();
+    assert!(lo == 0.0 && e_inf.value < hi, "{:?}", f.parameters);
+    assert_eq!(e_inf.identifiable, Some(true), "{:?}", f.warnings);
+    assert_eq!(e_inf.ci95.unwrap()[0], 0.0);
+    assert!(f
+        .warnings
+        .iter()
+        .any(|w| w.starts_with("E∞ = ") && w.contains("at its physical bound 0")));
+    assert!(!f.status.is_blocking(), "{:?}", f.warnings);
 }

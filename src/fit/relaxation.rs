@@ -1624,7 +1624,8 @@ type Findings = Vec<(Status, String)>;
 /// warnings: a search that did not converge, a model not finite at the data, terms
 /// that are negligible, at a bound, outside the sampled window or within a factor
 /// 1.25 of each other, too few points, a parameter that is not identifiable by the
-/// one rule (fit::identifiability; E∞ = 0 at its physical bound is judged by its
+/// one rule (fit::identifiability; E∞ at its physical bound 0, or with an interval
+/// reaching it, is judged by its
 /// correlations only, and said as a one-sided interval); and per parameter whether
 /// it is identifiable.
 fn problems(
@@ -1649,6 +1650,11 @@ fn problems(
         ));
     }
     let e0: f64 = si[..=n].iter().sum();
+    // E∞ at the bound 0 its law allows, or with a 95 % interval that reaches it (the
+    // non-negative least squares hold it at or next to 0): judged by its
+    // correlations only, its interval one-sided
+    let t = unc.t95.unwrap_or(1.96);
+    let at_floor = unc.std_error[0].is_some_and(|sd| si[0] - t * sd <= 0.0);
     let (lo, hi) = (prep.bounds.0.exp(), prep.bounds.1.exp());
     let at_bound: Vec<bool> = (0..n)
         .map(|i| si[1 + n + i] <= lo * 1.0001 || si[1 + n + i] >= hi / 1.0001)
@@ -1720,22 +1726,23 @@ fn problems(
                 ),
             ));
         }
-        if si[0] == 0.0 {
+        if at_floor {
             warnings.push((
                 Status::Warning,
                 format!(
-                    "E∞ = 0 at its physical bound (the non-negative least squares hold it there: the data show no equilibrium modulus); its 95 % interval is one-sided, [0, {}]",
-                    crate::report::format::si(unc.t95.unwrap_or(1.96) * unc.std_error[0].unwrap_or(f64::NAN), "Pa")
+                    "E∞ = {} is at its physical bound 0 within its 95 % interval (the data show no equilibrium modulus); its interval is one-sided, [0, {}]",
+                    crate::report::format::si(si[0], "Pa"),
+                    crate::report::format::si(si[0] + t * unc.std_error[0].unwrap_or(f64::NAN), "Pa")
                 ),
             ));
         }
     }
     // The one rule for "identifiable" (fit::identifiability) for every parameter
-    // (E∞, Eᵢ, τᵢ: none may change sign); E∞ = 0 sits at the bound its law allows
+    // (E∞, Eᵢ, τᵢ: none may change sign); E∞ at or next to the bound 0 its law allows
     // and is judged by its correlations only.
     let names: Vec<String> = param_names(n).into_iter().map(|(name, _)| name).collect();
     let mut floor = vec![false; k];
-    floor[0] = si[0] == 0.0;
+    floor[0] = at_floor;
     let judgement = diagnostics::judge(&names, si, unc, &vec![false; k], &floor);
     if unc.std_error.iter().all(Option::is_some) && m > k + 1 {
         problems.extend(
@@ -1783,7 +1790,7 @@ pub fn auto_rule(settings: &Settings) -> String {
         (None, Criterion::Bic) => format!("{base}, take the fewest within ΔBIC ≤ 2 of the smallest BIC"),
     };
     format!(
-        "{rule}. Identifiable: {} (E∞ = 0, at the bound its law allows, by its correlations only)",
+        "{rule}. Identifiable: {} (E∞ at the bound 0 its law allows, or with an interval reaching it, by its correlations only)",
         super::identifiability::RULE
     )
 }

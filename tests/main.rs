@@ -30,6 +30,7 @@ mod sim;
 mod sim_derivatives;
 mod sim_sensitivities;
 mod sim_stream;
+mod status_travels;
 mod support;
 mod trace;
 mod weibull;

@@ -16,7 +16,7 @@ use serde_json::{json, Value};
 use std::path::Path;
 
 /// The fast damped stack (≈ 300 steps) with its material block replaced.
-fn scene_with(material: &str) -> String {
+pub fn scene_with(material: &str) -> String {
     let text =
         std::fs::read_to_string(repo().join("datasets/scenes/stack_step_5kV_damped.toml")).unwrap();
     let block = "hyperelastic = { preset = \"vhb4910-yeoh\" }\nviscous = { preset = \"seed-table-4.2\" }\nrelative_permittivity = 4.7\n";
@@ -35,7 +35,7 @@ fn unc(name: &str, unit: &str, value: f64, se: Option<f64>, ok: bool) -> ParamUn
 }
 
 /// Stated constants: the seed's VHB4910 Yeoh (C30 held fixed), one arm, Nv, εr.
-fn material() -> IdentifiedMaterial {
+pub fn material() -> IdentifiedMaterial {
     IdentifiedMaterial {
         hyperelastic: HyperelasticPart {
             spec: ModelSpec::new("yeoh", OgdenForm::Seed),
@@ -65,6 +65,7 @@ fn material() -> IdentifiedMaterial {
             unc("arm1.tau", "s", 0.5, None, false),
             unc("eps_r", "1", 4.7, Some(0.1), true),
         ],
+        status: Some("ill_posed".into()),
         provenance: json!({
             "traces": [{ "path": "trace.csv", "sha256": "00" }],
             "scene": { "path": "stack.toml", "sha256": "00" },
@@ -73,7 +74,7 @@ fn material() -> IdentifiedMaterial {
     }
 }
 
-fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
+pub fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, text).unwrap();
     p
@@ -98,6 +99,7 @@ fn an_identified_material_is_read_back_and_drives_a_scene_like_its_constants_inl
     assert_eq!(back.eps_r, m.eps_r);
     assert_eq!(back.uncertainty, m.uncertainty);
     assert_eq!(back.provenance, m.provenance);
+    assert_eq!(back.status, m.status);
     // the file holds τ = η/k: η comes back as k·(η/k), within one rounding each way
     let (v, w) = (back.viscous.unwrap(), m.viscous.unwrap());
     assert_eq!((v.nv_pa_s, v.arms[0].k_pa), (w.nv_pa_s, w.arms[0].k_pa));

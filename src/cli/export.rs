@@ -86,15 +86,7 @@ pub fn run(a: Args) -> Result<i32> {
 fn summary(card: &export::Card) -> String {
     let mut s = format!("{} card for {}\n", card.target.name(), card.material);
     for f in &card.sources {
-        s.push_str(&format!(
-            "source: {} ({}{})\n",
-            f.path,
-            f.kind,
-            f.status
-                .as_ref()
-                .map(|x| format!(", status {x}"))
-                .unwrap_or_default()
-        ));
+        s.push_str(&format!("source: {}\n", f.describe()));
     }
     let rows: Vec<Vec<String>> = card
         .constants

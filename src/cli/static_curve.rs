@@ -8,7 +8,9 @@
 //! `failed` (the search could not look: exit 1). Text output: that line, which of
 //! breakdown and pull-in comes first, the field against breakdown (or that none was
 //! checked), the curve's shape as a table (with the breakdown voltage
-//! V_b(λ) = Eb·h(λ)), the status; `--out` writes the whole curve as CSV; the report
+//! V_b(λ) = Eb·h(λ)), the material's warnings (a stretch outside the range its
+//! constants were fitted over, constants its file calls not identifiable: the same
+//! as `simulate`'s, `Scene::material_warnings`), the status; `--out` writes the whole curve as CSV; the report
 //! (unless `--no-report`) holds the voltage–stretch chart with the pull-in, the
 //! breakdown curve and the table.
 
@@ -25,7 +27,7 @@ pub struct Args {
     /// Scene file.
     scene: PathBuf,
     /// Print JSON (`status`, `message`, `search`, `curve`, `pull_in`, `breakdown`,
-    /// `curve_file`).
+    /// `warnings`, `curve_file`).
     #[arg(long)]
     json: bool,
     /// Write the whole curve as CSV (`voltage_V,stretch,capacitance_F`); a different
@@ -101,6 +103,16 @@ pub fn run(a: Args) -> Result<i32> {
         ),
     };
     let (status, order, check, bd) = against_breakdown(&scene, &p, &c, v_in, status);
+    // The material's warnings for the stretches the scene's input reaches: from the
+    // rest stretch to its static equilibrium under the largest input (or the end
+    // of the stable branch), as `simulate` gives them for a run.
+    let warnings = scene.material_warnings(
+        p.mode,
+        (
+            check.peak.stretch.min(p.lam0),
+            check.peak.stretch.max(p.lam0),
+        ),
+    );
     let bline = line_of(&scene, bd);
     let dir = (!a.no_report).then(|| {
         a.report
@@ -142,6 +154,7 @@ pub fn run(a: Args) -> Result<i32> {
         b["point"] = serde_json::to_value(bd).expect("serialisable");
         b["order"] = order.clone().into();
         v["breakdown"] = b;
+        v["warnings"] = warnings.clone().into();
         v["curve_file"] = a.out.as_ref().map(|o| o.display().to_string()).into();
         v["report"] = page.as_ref().map(|p| p.display().to_string()).into();
         println!(
@@ -163,6 +176,8 @@ pub fn run(a: Args) -> Result<i32> {
         }
         print!("{}", dea_fit::report::format::fit_width(&said));
         print!("{}", static_report::shape_table(&c, bline.as_ref()));
+        let warned: String = warnings.iter().map(|w| format!("warning: {w}\n")).collect();
+        print!("{}", dea_fit::report::format::fit_width(&warned));
         if let Some(out) = &a.out {
             println!("curve: {}", out.display());
         }

@@ -120,9 +120,22 @@ pub struct SourceFile {
     pub path: String,
     /// `hyperelastic fit`, `relaxation fit` or `identified material`.
     pub kind: &'static str,
-    /// The estimator's status (`ok`, `warning`, `ill_posed`, …); None for an
-    /// identified material.
+    /// The estimator's or the identification's status (`ok`, `warning`,
+    /// `ill_posed`, …); None for an identified material written before its status
+    /// was recorded (status unknown).
     pub status: Option<String>,
+}
+
+impl SourceFile {
+    /// "path (kind, status s)", the status `unknown` where the file states none.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} ({}, status {})",
+            self.path,
+            self.kind,
+            self.status.as_deref().unwrap_or("unknown")
+        )
+    }
 }
 
 /// The viscoelastic part, in the form every code's convention is derived from: the
@@ -202,14 +215,10 @@ pub fn read(paths: &[PathBuf]) -> Result<Material> {
             MaterialFile::Relaxation(_) => "relaxation fit",
             MaterialFile::Identified(_) => "identified material",
         };
-        if let Some(s) = status
-            .as_deref()
-            .filter(|s| !matches!(*s, "ok" | "warning"))
-        {
-            warnings.push(format!(
-                "{} has status {s}: its constants are not what the data determine (see the fit's warnings); the card carries them as they are",
-                p.display()
-            ));
+        // the status travels: a blocking status and the constants the file calls
+        // not identifiable (of the parts a card takes)
+        if let Some(d) = file::doubts(p, &["hyperelastic", "viscous"])? {
+            warnings.push(d.sentence("the card carries them as they are"));
         }
         sources.push(SourceFile {
             path: p.display().to_string(),
@@ -513,15 +522,7 @@ pub fn card(m: &Material, target: Target, opts: &Options) -> Result<Card> {
         format!("material: {}", m.name),
     ];
     for s in &m.sources {
-        header.push(format!(
-            "source: {} ({}{})",
-            s.path,
-            s.kind,
-            s.status
-                .as_ref()
-                .map(|x| format!(", status {x}"))
-                .unwrap_or_default()
-        ));
+        header.push(format!("source: {}", s.describe()));
     }
     header.push("units: SI (Pa, s, kg/m^3); stresses nominal in the fit, the card's own measure in the code".into());
     header.push(format!(

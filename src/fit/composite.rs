@@ -359,6 +359,7 @@ pub fn fit_rule(rule: MixingRule, phi: &[f64], eps: &[f64]) -> Option<RuleFit> {
                 ci95: se
                     .zip(unc.t95)
                     .map(|(s, t)| [(p[j] - t * s).exp(), (p[j] + t * s).exp()]),
+                identifiable: None,
             }
         })
         .collect();

@@ -2,6 +2,7 @@
 //! intervals, correlation and condition number, information criteria, the seed's
 //! %RMSE (Eq. 3.28). Drucker stability is [`super::drucker`].
 
+use super::identifiability::{self, Weakness, MAX_CORRELATION, WARN_CORRELATION};
 use super::linear::{RowQr, SmallSvd};
 use nalgebra::DMatrix;
 use statrs::distribution::{ContinuousCDF, StudentsT};
@@ -210,6 +211,113 @@ pub fn information_criteria(rss: f64, n: usize, k: usize) -> (Option<f64>, f64) 
     let aic = base + 2.0 * kf;
     let aicc = (n > k + 1).then(|| aic + 2.0 * kf * (kf + 1.0) / (nf - kf - 1.0));
     (aicc, base + kf * nf.ln())
+}
+
+/// The one rule for "identifiable" ([`identifiability::judge`]) applied to every
+/// parameter of a least-squares fit, with its findings in words.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Judgement {
+    /// Per parameter: why it is not identifiable (None: it is).
+    pub weakness: Vec<Option<Weakness>>,
+    /// One sentence per parameter that is not identifiable for its σ/value or its
+    /// correlation: its name, σ/value against the limit (and whether its interval
+    /// reaches 0) or |ρ| and the partner. A singular information matrix is the
+    /// caller's to say once for the fit (no parameter has a σ then).
+    pub findings: Vec<String>,
+    /// One sentence per pair of identifiable parameters correlated above
+    /// [`WARN_CORRELATION`] (and at most [`MAX_CORRELATION`]): each is determined,
+    /// their marginal intervals are wide.
+    pub warnings: Vec<String>,
+}
+
+impl Judgement {
+    /// Whether parameter `j` is identifiable by the rule.
+    pub fn identifiable(&self, j: usize) -> bool {
+        self.weakness.get(j).is_some_and(Option::is_none)
+    }
+}
+
+/// [`identifiability::judge`] for each parameter `names[j]` = `values[j]` of a fit
+/// with uncertainty `unc` (its σ, correlations and Student-t quantile t; 1.96 where
+/// it has none). `sign_free[j]`: the law lets the parameter take either sign (a
+/// Mooney-Rivlin C01, a Yeoh C20, an Ogden μᵢ or αᵢ), so its 95 % interval θ ± t·σ
+/// must also exclude 0 ([`identifiability::limit`]: σ/|θ| ≤ min(0.5, 1/t)).
+/// `floor[j]`: the parameter sits at a physical bound its law allows (a modulus at
+/// 0 from non-negative least squares), where σ/value is undefined and not a finding:
+/// only its correlations are judged. A bound of a search box is the caller's to
+/// report (the rule's last point).
+pub fn judge(
+    names: &[String],
+    values: &[f64],
+    unc: &Uncertainty,
+    sign_free: &[bool],
+    floor: &[bool],
+) -> Judgement {
+    let k = values.len();
+    let t = unc.t95.unwrap_or(1.96);
+    let rho = |a: usize, b: usize| {
+        unc.correlation
+            .get(a)
+            .and_then(|r| r.get(b).copied().flatten())
+    };
+    let mut findings = Vec::new();
+    let weakness: Vec<Option<Weakness>> = (0..k)
+        .map(|j| {
+            let sd = unc.std_error[j];
+            let rel = match (floor[j], sd) {
+                (true, Some(_)) => Some(0.0),
+                _ => identifiability::rel_sigma(values[j], sd),
+            };
+            let limit = identifiability::limit(sign_free[j], t);
+            let partners = (0..k).filter(|&b| b != j).filter_map(|b| rho(j, b).map(|c| (b, c)));
+            let w = identifiability::judge(rel, limit, partners);
+            match w {
+                Some(Weakness::Loose(_)) if values[j] == 0.0 => findings.push(format!(
+                    "{} is not identifiable from these data: its estimate is 0, which no standard error tells apart from 0",
+                    names[j]
+                )),
+                Some(Weakness::Loose(r)) => findings.push(format!(
+                    "{} is not identifiable from these data: σ/value = {r:.2}, above {limit:.2}{}",
+                    names[j],
+                    if sign_free[j] && r * t >= 1.0 {
+                        " (its 95 % interval includes 0)"
+                    } else {
+                        ""
+                    }
+                )),
+                Some(Weakness::Traded(b, c)) => findings.push(format!(
+                    "{} is not identifiable from these data: |ρ| = {:.4} with {} (above {MAX_CORRELATION}): the data pin down their combination, not each",
+                    names[j],
+                    c.abs(),
+                    names[b]
+                )),
+                Some(Weakness::Singular) | None => {}
+            }
+            w
+        })
+        .collect();
+    let mut warnings = Vec::new();
+    // (a pair with a parameter already found not identifiable is said with it)
+    for a in 0..k {
+        for b in a + 1..k {
+            if weakness[a].is_some() || weakness[b].is_some() {
+                continue;
+            }
+            if let Some(c) =
+                rho(a, b).filter(|c| c.abs() > WARN_CORRELATION && c.abs() <= MAX_CORRELATION)
+            {
+                warnings.push(format!(
+                    "{} and {} are correlated ({c:+.4}, |ρ| above {WARN_CORRELATION}): each is determined, but their intervals are wide beside what either would have alone",
+                    names[a], names[b]
+                ));
+            }
+        }
+    }
+    Judgement {
+        weakness,
+        findings,
+        warnings,
+    }
 }
 
 /// Seed Eq. 3.28: %RMSE = RMSE / (max ŷ − min ŷ)·100, normalised by the reference range.

@@ -11,6 +11,7 @@
 
 use super::diagnostics;
 use super::drucker::{self, DruckerCheck, DRUCKER_RANGE};
+use super::identifiability;
 use super::linear::{constrained_least_squares, RowQr};
 use super::lm::{self, LeastSquares, LmSettings, Termination};
 use super::multistart;
@@ -903,28 +904,22 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
             rmse / y_max
         ));
     }
-    for (info, (v, se)) in params_info.iter().zip(p.iter().zip(&unc.std_error)) {
-        if let Some(se) = se.filter(|se| *se > v.abs() && *v != 0.0) {
-            escalate(Status::IllPosed);
-            warnings.push(format!(
-                "{} is not determined by these data (standard error {} % of its value)",
-                info.name,
-                Fixed(100.0 * se / v.abs(), 0)
-            ));
-        }
+    // The one rule for "identifiable" (fit::identifiability), for every parameter:
+    // a coefficient the law lets take either sign (every linear one: C01, C20, an
+    // Ogden μᵢ; and an Ogden αᵢ) must also have an interval that excludes 0.
+    let names: Vec<String> = params_info.iter().map(|i| i.name.clone()).collect();
+    let sign_free: Vec<bool> = params_info
+        .iter()
+        .map(|i| i.lower < 0.0 && i.upper > 0.0)
+        .collect();
+    let judgement = diagnostics::judge(&names, &p, &unc, &sign_free, &vec![false; k]);
+    for w in &judgement.findings {
+        escalate(Status::IllPosed);
+        warnings.push(w.clone());
     }
-    for a in 0..k {
-        for b in a + 1..k {
-            if let Some(c) = unc.correlation[a][b] {
-                if c.abs() > 0.99 {
-                    escalate(Status::Warning);
-                    warnings.push(format!(
-                        "{} and {} are correlated ({c:+.4}): the data pin down a combination, not each",
-                        params_info[a].name, params_info[b].name
-                    ));
-                }
-            }
-        }
+    for w in &judgement.warnings {
+        escalate(Status::Warning);
+        warnings.push(w.clone());
     }
     // The bounds of the nonlinear parameters (a pass over the data: only when any).
     let nonlinear = params_info.iter().any(|info| !info.linear);
@@ -933,6 +928,7 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
     } else {
         Vec::new()
     };
+    let mut ran_to_bound = vec![false; k];
     for (j, info) in params_info.iter().enumerate() {
         if info.linear {
             continue;
@@ -941,6 +937,7 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         let span = (hi - lo).abs();
         if span.is_finite() && ((p[j] - lo).abs() < 1e-6 * span || (hi - p[j]).abs() < 1e-6 * span)
         {
+            ran_to_bound[j] = true;
             escalate(Status::IllPosed);
             warnings.push(format!(
                 "{} ran to its bound ({}): the data do not determine it (ill-posed)",
@@ -1054,12 +1051,14 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         .iter()
         .zip(&p)
         .zip(&unc.std_error)
-        .map(|((info, &v), se)| Parameter {
+        .enumerate()
+        .map(|(j, ((info, &v), se))| Parameter {
             name: info.name.clone(),
             value: v,
             unit: info.unit.to_string(),
             std_error: *se,
             ci95: se.zip(unc.t95).map(|(s, t)| [v - t * s, v + t * s]),
+            identifiable: Some(judgement.identifiable(j) && !ran_to_bound[j]),
         })
         .collect();
     if let Some(what) = [
@@ -1119,8 +1118,18 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
     })
 }
 
-/// The rule `auto` applies.
+/// The rule `auto` applies ("identifiable": every parameter by
+/// [`identifiability::RULE`], which the selection's rule states after it).
 pub const AUTO_RULE: &str = "among models with at least k + 2 points away from λ = 1 (AICc defined, and at least two degrees of freedom beyond an interpolation of the data) that converged, are identifiable and are Drucker-stable over the data, take the fewest parameters within ΔAICc ≤ 2 of the smallest AICc";
+
+/// [`AUTO_RULE`] with the rule for "identifiable" ([`identifiability::RULE`]; a
+/// parameter the law lets take either sign also with an interval that excludes 0).
+pub fn auto_rule() -> String {
+    format!(
+        "{AUTO_RULE}. Identifiable: {}; a parameter that may take either sign also needs a 95 % interval that excludes 0",
+        identifiability::RULE
+    )
+}
 
 /// ΔAICc below which models count as fitting the data about equally well when their
 /// extrapolations are compared (Burnham & Anderson: ΔAIC > 10 means essentially no support).
@@ -1298,7 +1307,7 @@ pub fn fit_auto(
         }
     }
     out.selection = Some(Selection {
-        rule: AUTO_RULE.into(),
+        rule: auto_rule(),
         reason,
         candidates,
     });

@@ -30,6 +30,11 @@ pub struct Parameter {
     pub std_error: Option<f64>,
     /// 95 % confidence interval (Student t on n − k degrees of freedom).
     pub ci95: Option<[f64; 2]>,
+    /// Whether the data pin the parameter down by the one rule
+    /// ([`identifiability::RULE`]); None where the estimator does not judge it
+    /// (and in files written before it did).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub identifiable: Option<bool>,
 }
 
 /// Outcome of a fit as a whole. `Err` is kept for unusable input; everything else,

@@ -1546,6 +1546,9 @@ struct Assessed {
     problems: Vec<(Status, String)>,
     /// Softer warnings.
     warnings: Vec<(Status, String)>,
+    /// Per parameter ([E∞, E₁…, τ₁…]): whether the data pin it down by the one rule
+    /// (fit::identifiability) and it is not at a bound of the τ search.
+    identifiable: Vec<bool>,
 }
 
 /// Stage 4 for one term count: residual statistics, information criteria and the
@@ -1592,7 +1595,7 @@ fn assess(prep: &Prepared, mut tf: TermFit) -> Assessed {
     };
     let (aicc, bic) = diagnostics::information_criteria(rss, m, k);
 
-    let (problems, warnings) = problems(prep, &tf, &si, &unc, finite, m);
+    let (problems, warnings, identifiable) = problems(prep, &tf, &si, &unc, finite, m);
     Assessed {
         tf,
         si,
@@ -1610,6 +1613,7 @@ fn assess(prep: &Prepared, mut tf: TermFit) -> Assessed {
         bic,
         problems,
         warnings,
+        identifiable,
     }
 }
 
@@ -1619,7 +1623,11 @@ type Findings = Vec<(Status, String)>;
 /// What makes a term fit ineligible for `auto` (and raises its status), and softer
 /// warnings: a search that did not converge, a model not finite at the data, terms
 /// that are negligible, at a bound, outside the sampled window or within a factor
-/// 1.25 of each other, too few points, unidentifiable or ill-determined parameters.
+/// 1.25 of each other, too few points, a parameter that is not identifiable by the
+/// one rule (fit::identifiability; E∞ at its physical bound 0, or with an interval
+/// reaching it, is judged by its
+/// correlations only, and said as a one-sided interval); and per parameter whether
+/// it is identifiable.
 fn problems(
     prep: &Prepared,
     tf: &TermFit,
@@ -1627,7 +1635,7 @@ fn problems(
     unc: &diagnostics::Uncertainty,
     finite: bool,
     m: usize,
-) -> (Findings, Findings) {
+) -> (Findings, Findings, Vec<bool>) {
     let n = tf.n_terms;
     let k = 1 + 2 * n;
     let mut problems = Vec::new();
@@ -1642,7 +1650,15 @@ fn problems(
         ));
     }
     let e0: f64 = si[..=n].iter().sum();
+    // E∞ at the bound 0 its law allows, or with a 95 % interval that reaches it (the
+    // non-negative least squares hold it at or next to 0): judged by its
+    // correlations only, its interval one-sided
+    let t = unc.t95.unwrap_or(1.96);
+    let at_floor = unc.std_error[0].is_some_and(|sd| si[0] - t * sd <= 0.0);
     let (lo, hi) = (prep.bounds.0.exp(), prep.bounds.1.exp());
+    let at_bound: Vec<bool> = (0..n)
+        .map(|i| si[1 + n + i] <= lo * 1.0001 || si[1 + n + i] >= hi / 1.0001)
+        .collect();
     for i in 0..n {
         let (tau, e) = (si[1 + n + i], si[1 + i]);
         let name = format!("τ{} = {}", i + 1, fmt_s(tau));
@@ -1651,7 +1667,7 @@ fn problems(
                 Status::IllPosed,
                 format!("term {} ({name}) is negligible (E{} ≤ 0.1 % of E0): a term too many for these data", i + 1, i + 1),
             ));
-        } else if tau <= lo * 1.0001 || tau >= hi / 1.0001 {
+        } else if at_bound[i] {
             problems.push((
                 Status::IllPosed,
                 format!("{name} ran to its bound: the data do not determine it"),
@@ -1701,22 +1717,6 @@ fn problems(
             ),
         ));
     } else {
-        for i in 0..n {
-            if let Some(sd) = unc.std_error[1 + n + i] {
-                let rel_sd = sd / si[1 + n + i];
-                if rel_sd > 0.5 {
-                    warnings.push((
-                        Status::Warning,
-                        format!(
-                            "τ{} = {} is poorly determined (standard error {:.0} %)",
-                            i + 1,
-                            fmt_s(si[1 + n + i]),
-                            100.0 * rel_sd
-                        ),
-                    ));
-                }
-            }
-        }
         if unc.condition > 1e8 {
             warnings.push((
                 Status::Warning,
@@ -1726,24 +1726,42 @@ fn problems(
                 ),
             ));
         }
-        let names = param_names(n);
-        for a in 0..k {
-            for b in a + 1..k {
-                if let Some(c) = unc.correlation[a][b] {
-                    if c.abs() > 0.995 {
-                        warnings.push((
-                            Status::Warning,
-                            format!(
-                                "{} and {} are correlated ({c:+.4}): the data pin down a combination, not each",
-                                names[a].0, names[b].0
-                            ),
-                        ));
-                    }
-                }
-            }
+        if at_floor {
+            warnings.push((
+                Status::Warning,
+                format!(
+                    "E∞ = {} is at its physical bound 0 within its 95 % interval (the data show no equilibrium modulus); its interval is one-sided, [0, {}]",
+                    crate::report::format::si(si[0], "Pa"),
+                    crate::report::format::si(si[0] + t * unc.std_error[0].unwrap_or(f64::NAN), "Pa")
+                ),
+            ));
         }
     }
-    (problems, warnings)
+    // The one rule for "identifiable" (fit::identifiability) for every parameter
+    // (E∞, Eᵢ, τᵢ: none may change sign); E∞ at or next to the bound 0 its law allows
+    // and is judged by its correlations only.
+    let names: Vec<String> = param_names(n).into_iter().map(|(name, _)| name).collect();
+    let mut floor = vec![false; k];
+    floor[0] = at_floor;
+    let judgement = diagnostics::judge(&names, si, unc, &vec![false; k], &floor);
+    if unc.std_error.iter().all(Option::is_some) && m > k + 1 {
+        problems.extend(
+            judgement
+                .findings
+                .iter()
+                .map(|w| (Status::IllPosed, w.clone())),
+        );
+        warnings.extend(
+            judgement
+                .warnings
+                .iter()
+                .map(|w| (Status::Warning, w.clone())),
+        );
+    }
+    let identifiable = (0..k)
+        .map(|j| judgement.identifiable(j) && !(j > n && at_bound[j - 1 - n]))
+        .collect();
+    (problems, warnings, identifiable)
 }
 
 fn param_names(n: usize) -> Vec<(String, &'static str)> {
@@ -1761,7 +1779,7 @@ fn fmt_s(t: f64) -> String {
 /// The rule `auto` applies.
 pub fn auto_rule(settings: &Settings) -> String {
     let base = "among term counts whose fit converged and whose terms are all identifiable, non-negligible, a factor 1.25 apart and inside the sampled time window";
-    match (settings.tolerance, settings.criterion) {
+    let rule = match (settings.tolerance, settings.criterion) {
         (Some(t), _) => format!(
             "{base}, take the fewest whose relative RMSE is at most {:.3} %",
             100.0 * t
@@ -1770,7 +1788,11 @@ pub fn auto_rule(settings: &Settings) -> String {
             "{base}, take the fewest within ΔAICc ≤ 2 of the smallest AICc (BIC where AICc is undefined)"
         ),
         (None, Criterion::Bic) => format!("{base}, take the fewest within ΔBIC ≤ 2 of the smallest BIC"),
-    }
+    };
+    format!(
+        "{rule}. Identifiable: {} (E∞ at the bound 0 its law allows, or with an interval reaching it, by its correlations only)",
+        super::identifiability::RULE
+    )
 }
 
 /// Fit a relaxation curve. `qlv`: the hyperelastic fit whose uniaxial stress is the
@@ -2105,12 +2127,18 @@ fn report(
         .iter()
         .zip(si)
         .zip(&a.unc.std_error)
-        .map(|(((name, unit), &v), se)| Parameter {
+        .zip(&a.identifiable)
+        .map(|((((name, unit), &v), se), &identifiable)| Parameter {
             name: name.clone(),
             value: v,
             unit: unit.to_string(),
             std_error: *se,
-            ci95: se.zip(a.unc.t95).map(|(s, t)| [v - t * s, v + t * s]),
+            // Every parameter is ≥ 0 by its law: an interval reaching below 0 is
+            // clipped there (it loses no value the parameter can take).
+            ci95: se
+                .zip(a.unc.t95)
+                .map(|(s, t)| [(v - t * s).max(0.0), v + t * s]),
+            identifiable: Some(identifiable),
         })
         .collect();
     let prony: Vec<PronyEntry> = (0..n)

@@ -14,8 +14,10 @@ use crate::sim::{simulate, RunOptions, RunStatus};
 use serde::Serialize;
 
 /// The material file of an identification on `scene` (the scene the traces ran on),
-/// with the stretch range the traces covered (so that a scene using the file warns
-/// when it extrapolates) and `provenance`.
+/// with its status and each constant's identifiability (so that a scene using a
+/// constant the traces did not pin down warns, and `export` reports a blocking
+/// status), the stretch range the traces covered (so that a scene using the file
+/// warns when it extrapolates) and `provenance`.
 pub fn material_file(
     id: &Identification,
     scene: &Scene,
@@ -63,6 +65,7 @@ pub fn material_file(
         eps_r: Some(m.eps_r),
         composite: m.composite,
         uncertainty,
+        status: Some(id.status.to_string()),
         provenance,
     })
 }

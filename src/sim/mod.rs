@@ -1140,18 +1140,12 @@ fn energy_balance(p: &Plant, t_end: f64, y: &[f64]) -> Energy {
     energy
 }
 
-/// Warnings about the model rather than the run: a fit used outside its data's
-/// stretch range, damping that relaxation tests do not determine, an ideal step.
+/// Warnings about the model rather than the run: the material's
+/// ([`Scene::material_warnings`]: a fit used outside its data's stretch range,
+/// constants its file calls not identifiable), damping that relaxation tests do not
+/// determine, an ideal step.
 fn model_warnings(scene: &Scene, p: &Plant, mode: &AxialMode, stretch: (f64, f64)) -> Vec<String> {
-    let mut warnings = Vec::new();
-    if let Some(fit) = &scene.material.fit {
-        for lam in [stretch.0, stretch.1] {
-            if let Some(wr) = fit.range_warning(p.mode, lam) {
-                warnings.push(wr);
-            }
-        }
-        warnings.dedup();
-    }
+    let mut warnings = scene.material_warnings(p.mode, stretch);
     if mode.damping_ratio < 0.05 && mode.dashpot_share < 0.5 {
         warnings.push(format!(
             "the axial mode ({:.0} Hz) is damped only by Maxwell arms far above their relaxation frequencies (ζ = {:.1e}, Q = {:.0}); relaxation tests do not pin this damping down, so ringing after fast inputs depends on a number the data do not determine",

@@ -14,7 +14,7 @@ use crate::material::file::{
     self, expected_params, CompositePermittivity, FittedRanges, HyperelasticPart,
     IdentifiedMaterial, Viscous,
 };
-use crate::material::hyperelastic::{ModelSpec, OgdenForm, StrainEnergy, MODEL_NAMES};
+use crate::material::hyperelastic::{Mode, ModelSpec, OgdenForm, StrainEnergy, MODEL_NAMES};
 use crate::units::{parse_quantity, parse_uncertain, Dimension};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -310,6 +310,11 @@ pub struct Scene {
     /// breakdown fit scaled to the film under field ([`Actuator::film_area`]); None:
     /// the scene states none and no field is checked.
     pub breakdown: Option<Strength>,
+    /// What the material files the scene takes constants from say against them
+    /// (constants they call not identifiable, a blocking status), one sentence per
+    /// file ([`file::doubts`]): said whenever the scene runs
+    /// ([`Scene::material_warnings`]).
+    pub doubts: Vec<String>,
 }
 
 /// The reader's context: the file, its text, and the byte offset of every key and
@@ -321,6 +326,9 @@ struct Ctx<'a> {
     spans: HashMap<String, usize>,
     /// The files referenced so far ([`Scene::files`]).
     files: std::cell::RefCell<Vec<PathBuf>>,
+    /// What the material files read so far say against their constants
+    /// ([`Scene::doubts`]).
+    doubts: std::cell::RefCell<Vec<String>>,
 }
 
 fn collect_spans(prefix: &str, t: &toml::de::DeTable, out: &mut HashMap<String, usize>) {
@@ -585,7 +593,39 @@ impl Ctx<'_> {
     }
 }
 
+impl Ctx<'_> {
+    /// Note what the material file `path` says against the constants of `parts` the
+    /// scene takes from it ([`file::doubts`]).
+    fn doubt(&self, path: &Path, parts: &[&str]) -> Result<()> {
+        if let Some(d) = file::doubts(path, parts)? {
+            self.doubts.borrow_mut().push(d.sentence(
+                "the scene uses them as the file states them, and what depends on them is not determined by data",
+            ));
+        }
+        Ok(())
+    }
+}
+
 impl Scene {
+    /// What a run of the scene says about its material (`simulate` and `static`
+    /// alike): a stretch of the run (its smallest and largest, in the plant's
+    /// `mode`) outside the range the hyperelastic constants were fitted or
+    /// identified over ([`FittedRanges::range_warning`]), and what the material files
+    /// say against the constants the scene takes from them ([`Scene::doubts`]).
+    pub fn material_warnings(&self, mode: Mode, stretch: (f64, f64)) -> Vec<String> {
+        let mut warnings = Vec::new();
+        if let Some(fit) = &self.material.fit {
+            for lam in [stretch.0, stretch.1] {
+                if let Some(wr) = fit.range_warning(mode, lam) {
+                    warnings.push(wr);
+                }
+            }
+            warnings.dedup();
+        }
+        warnings.extend(self.doubts.iter().cloned());
+        warnings
+    }
+
     /// Read and validate a scene file.
     pub fn read(path: &Path) -> Result<Scene> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
@@ -610,6 +650,7 @@ impl Scene {
             text,
             spans,
             files: Default::default(),
+            doubts: Default::default(),
         };
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         c.known(
@@ -667,6 +708,7 @@ impl Scene {
             time,
             files: c.files.take(),
             breakdown,
+            doubts: c.doubts.take(),
         };
         budget::validate(&scene).map_err(|v| c.violation(v))?;
         budget::rest_state(&scene).map_err(|v| c.violation(v))?;
@@ -766,7 +808,10 @@ fn read_hyperelastic(c: &Ctx, h: &toml::Table, dir: &Path) -> Result<Hyperelasti
     }
     if let Some(f) = c.string(h, hs, "fit")? {
         c.one_of(h, hs, &["fit", "parameters"])?;
-        return file::read_hyperelastic(&c.file_ref(dir, &format!("{hs}.fit"), f)?);
+        let path = c.file_ref(dir, &format!("{hs}.fit"), f)?;
+        let part = file::read_hyperelastic(&path)?;
+        c.doubt(&path, &["hyperelastic"])?;
+        return Ok(part);
     }
     let Some(m) = c.string(h, hs, "model")? else {
         return Err(c
@@ -822,7 +867,9 @@ fn read_viscous(c: &Ctx, v: Option<&toml::Table>, dir: &Path) -> Result<Viscous>
     }
     let nv = c.quantity(v, vs, "nv", Dimension::Viscosity)?;
     if let Some(f) = c.string(v, vs, "fit")? {
-        let (arms, stated) = file::read_viscous(&c.file_ref(dir, &format!("{vs}.fit"), f)?)?;
+        let path = c.file_ref(dir, &format!("{vs}.fit"), f)?;
+        let (arms, stated) = file::read_viscous(&path)?;
+        c.doubt(&path, &["viscous"])?;
         if stated.is_some() && nv.is_some() {
             return Err(c
                 .err(
@@ -869,7 +916,9 @@ fn read_identified(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<Option<Identi
     let Some(f) = c.string(t, "material", "identified")? else {
         return Ok(None);
     };
-    let m = IdentifiedMaterial::read(&c.file_ref(dir, "material.identified", f)?)?;
+    let path = c.file_ref(dir, "material.identified", f)?;
+    let m = IdentifiedMaterial::read(&path)?;
+    c.doubt(&path, &["hyperelastic", "viscous", "dielectric"])?;
     for (key, filled) in [
         ("hyperelastic", true),
         ("viscous", m.viscous.is_some()),

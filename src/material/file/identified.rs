@@ -2,8 +2,9 @@
 //! the hyperelastic part, the viscous part (optional), εr (optional; with the
 //! filler mass fraction and the mixing rule it came from, when the scene's εr was a
 //! composite's), each parameter with value, SI unit, standard error and whether the
-//! traces pinned it down, and the provenance of the identification. The format is
-//! in docs/scenes.md ("Fit files as material").
+//! traces pinned it down, the identification's status (absent in files written
+//! before it was recorded: status unknown), and the provenance of the
+//! identification. The format is in docs/scenes.md ("Fit files as material").
 
 use super::composite::{check_mixture, eps_at, CompositePermittivity};
 use super::hyperelastic::PartJson;
@@ -47,6 +48,10 @@ pub struct IdentifiedMaterial {
     /// The free parameters' uncertainty, by name; a parameter of the parts without
     /// an entry was held fixed.
     pub uncertainty: Vec<ParamUncertainty>,
+    /// The identification's status (`ok`, `warning`, `ill_posed`, `not_converged`,
+    /// `not_validated`); None in a file written before it was recorded (status
+    /// unknown).
+    pub status: Option<String>,
     /// Provenance: a JSON object (tool version, trace files with hashes, scene path
     /// and hash, settings).
     pub provenance: serde_json::Value,
@@ -75,6 +80,8 @@ struct RuleJson {
 struct IdentifiedJson {
     schema: String,
     tool_version: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    status: Option<String>,
     #[serde(default)]
     hyperelastic: Option<PartJson>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -86,6 +93,12 @@ struct IdentifiedJson {
 }
 
 impl IdentifiedMaterial {
+    /// The status as outputs say it: the identification's, or `unknown` for a file
+    /// written before it was recorded.
+    pub fn status_text(&self) -> &str {
+        self.status.as_deref().unwrap_or("unknown")
+    }
+
     /// The file text (pretty JSON). Refuses (a settings error) an uncertainty entry
     /// that is not a parameter of the parts with the same unit and value and a
     /// provenance that is not a JSON object; the text is read back before it is
@@ -96,6 +109,7 @@ impl IdentifiedMaterial {
         let j = IdentifiedJson {
             schema: IDENTIFIED_SCHEMA.into(),
             tool_version: env!("CARGO_PKG_VERSION").into(),
+            status: self.status.clone(),
             hyperelastic: Some(self.hyperelastic.to_json(u)?),
             viscous: self.viscous.as_ref().map(|v| v.to_json(u)),
             dielectric: self.eps_r.map(|e| DielectricJson {
@@ -216,6 +230,7 @@ impl IdentifiedMaterial {
             eps_r,
             composite,
             uncertainty,
+            status: j.status,
             provenance: j.provenance,
         })
     }

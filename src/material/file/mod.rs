@@ -126,7 +126,7 @@ pub enum MaterialFile {
 /// The material parts of a hyperelastic fit, a relaxation fit or an identified
 /// material file, each checked as the scene readers check it, and the status the
 /// estimator gave the fit (`ok`, `warning`, `ill_posed`, …; None for an identified
-/// material, which states none). A composite fit holds no mechanical constants and
+/// material written before its status was recorded: status unknown). A composite fit holds no mechanical constants and
 /// is refused.
 pub fn read_material(path: &Path) -> Result<(MaterialFile, Option<String>)> {
     let (text, schema) = read_text(
@@ -150,6 +150,80 @@ pub fn read_material(path: &Path) -> Result<(MaterialFile, Option<String>)> {
         _ => MaterialFile::Identified(IdentifiedMaterial::parse(path, &text)?),
     };
     Ok((part, status))
+}
+
+/// What a material file says against its own constants: the constants the file
+/// calls not identifiable and a blocking status ([`doubts`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Doubts {
+    /// The file, as given.
+    pub file: String,
+    /// The constants the file calls not identifiable (`identifiable: false`).
+    pub names: Vec<String>,
+    /// A blocking status of the file (`ill_posed`, `unstable`, `not_converged`,
+    /// `not_validated`, `failed`).
+    pub status: Option<String>,
+}
+
+impl Doubts {
+    /// The finding in one sentence, ending with what the reader does with the
+    /// constants (`consequence`, e.g. "the card carries them as they are").
+    pub fn sentence(&self, consequence: &str) -> String {
+        let names = match self.names.is_empty() {
+            true => String::new(),
+            false => format!(
+                "it calls {} not identifiable from the data it was fitted to; ",
+                self.names.join(", ")
+            ),
+        };
+        match &self.status {
+            Some(s) => format!(
+                "{} has status {s}: {names}its constants are not all what the data determine (see the file's warnings); {consequence}",
+                self.file
+            ),
+            None => format!("{}: {names}{consequence}", self.file),
+        }
+    }
+}
+
+/// What a reader that takes the `parts` (`hyperelastic`, `viscous`, `dielectric`)
+/// of the material file `path` is to be told: the constants of those parts the file
+/// calls not identifiable (`identifiable: false`, written by `identify` and, per
+/// parameter, by the hyperelastic and relaxation estimators under the one rule of
+/// `fit::identifiability`; a hyperelastic or relaxation fit holds one part, at its
+/// top level) and a blocking status of the file. None when the file states neither
+/// (a file written before they were recorded states nothing: status unknown).
+pub fn doubts(path: &Path, parts: &[&str]) -> Result<Option<Doubts>> {
+    let (text, schema) = read_text(
+        path,
+        &[HYPERELASTIC_SCHEMA, RELAXATION_SCHEMA, IDENTIFIED_SCHEMA],
+        "mechanical",
+    )?;
+    let v: serde_json::Value = typed(path, &text)?;
+    let nodes: Vec<&serde_json::Value> = match schema {
+        IDENTIFIED_SCHEMA => parts.iter().map(|p| &v[*p]).collect(),
+        _ => vec![&v],
+    };
+    let names: Vec<String> = nodes
+        .iter()
+        .flat_map(|n| {
+            serde_json::from_value::<Vec<FileParam>>(n["parameters"].clone()).unwrap_or_default()
+        })
+        // a relaxation fit's E∞ is not a constant its readers take (its arms are)
+        .filter(|p| {
+            p.identifiable == Some(false) && !(schema == RELAXATION_SCHEMA && p.name == "E_inf")
+        })
+        .map(|p| p.name)
+        .collect();
+    let status = v["status"]
+        .as_str()
+        .filter(|s| !matches!(*s, "ok" | "warning"))
+        .map(str::to_string);
+    Ok((!names.is_empty() || status.is_some()).then(|| Doubts {
+        file: path.display().to_string(),
+        names,
+        status,
+    }))
 }
 
 /// One parameter as a material file holds it: name, SI unit and value, and, in an

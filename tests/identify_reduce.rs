@@ -213,11 +213,13 @@ fn the_reduced_model_is_chosen_on_a_small_strain_trace() {
 }
 
 /// An arm of τ = 20 s in a 1 s trace acts as extra stiffness the trace cannot
-/// tell from the modulus: the default run removes it (the round says so with the
-/// slow-arm reason) and answers with μ, nv and εr, all identifiable; the removed
-/// arm is held as dropped with k = 0, and the fit file has no arm.
+/// tell from the modulus. The default run does not remove it: removing an arm
+/// hands its stiffness to the modulus and biases it (measured in
+/// tests/identify_coverage.rs: C10's intervals then held the truth 0 of 17 times),
+/// so the arm stays free, is reported not identifiable with the slow-arm reason,
+/// the run is `ill_posed`, and no reduction round is made for it.
 #[test]
-fn a_slow_arm_beyond_the_trace_is_removed() {
+fn a_slow_arm_beyond_the_trace_is_kept_and_reported() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     write(
@@ -230,33 +232,37 @@ fn a_slow_arm_beyond_the_trace_is_removed() {
         ),
     );
     synth(d, "slow.toml", "t.csv", "2", true);
-    let (j, _) = identify(d, "t.csv", "slow.toml", &[]);
-    let rounds = j["reduction"]["rounds"].as_array().unwrap();
-    assert_eq!(rounds.len(), 1, "{rounds:?}");
-    assert!(rounds[0]["constant"].as_str().unwrap().starts_with("arm1."));
-    assert!(rounds[0]["action"]
-        .as_str()
-        .unwrap()
-        .starts_with("arm 1 removed"));
-    let why = rounds[0]["reason"].as_str().unwrap();
-    assert!(why.contains("slower than the"), "{why}");
-    assert_eq!(names(&j), ["mu", "nv", "eps_r"]);
-    assert!(all_identifiable(&j), "{}", j["parameters"]);
-    let h = held(&j, "arm1.k");
-    assert_eq!(
-        (h["how"].as_str(), h["value"].as_f64()),
-        (Some("dropped"), Some(0.0))
-    );
-    // a removed arm is not a flag: the scene must be edited
-    assert!(j["reduction"].get("flags").is_none());
-    let file: Value =
-        serde_json::from_str(&std::fs::read_to_string(d.join("fit.json")).unwrap()).unwrap();
-    let viscous = file["viscous"]["parameters"].as_array().unwrap();
+    let (j, code) = identify(d, "t.csv", "slow.toml", &[]);
     assert!(
-        viscous
-            .iter()
-            .all(|p| !p["name"].as_str().unwrap().starts_with("arm")),
-        "the fit file has no arm: {file}"
+        j.get("reduction").is_none_or(|r| r.is_null()),
+        "{}",
+        j["reduction"]
+    );
+    assert_eq!(names(&j), ["mu", "arm1.k", "arm1.tau", "nv", "eps_r"]);
+    let weak: Vec<&Value> = j["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|p| p["identifiable"] == false)
+        .collect();
+    assert!(
+        weak.iter()
+            .any(|p| p["name"].as_str().unwrap().starts_with("arm1.")),
+        "{}",
+        j["parameters"]
+    );
+    assert!(
+        weak.iter().any(|p| p["reason"]
+            .as_str()
+            .is_some_and(|r| r.contains("slower than the"))),
+        "{}",
+        j["parameters"]
+    );
+    assert_eq!(j["status"], "ill_posed");
+    assert_eq!(
+        code,
+        Some(0),
+        "not --strict: the status does not change the exit"
     );
 }
 

@@ -83,7 +83,7 @@ pub enum How {
     /// The scene's value: `--fix NAME`, not named in `--free`, or held there by
     /// the reduction (εr that a trace cannot pin down).
     Scene,
-    /// Dropped by the reduction: a term set to 0 or an arm removed.
+    /// Dropped by the reduction: a hyperelastic term set to 0.
     Dropped,
 }
 
@@ -92,7 +92,7 @@ pub enum How {
 pub struct Held {
     /// Name (`C20`, `arm2.k`, `eps_r`).
     pub name: String,
-    /// Its value (SI); 0 for a dropped term or a removed arm's spring.
+    /// Its value (SI); 0 for a dropped term.
     pub value: f64,
     /// SI unit.
     pub unit: String,
@@ -117,7 +117,7 @@ pub fn conditional_on(held: &[Held]) -> Vec<String> {
 pub struct Round {
     /// The constant it dropped (or held, for εr).
     pub constant: String,
-    /// What it did, e.g. `C30 = 0`, `arm 2 removed`, `eps_r held at 4.7`.
+    /// What it did, e.g. `C30 = 0`, `eps_r held at 4.7`.
     pub action: String,
     /// Why: the assessment's reason for that constant in the model before.
     pub reason: String,
@@ -152,7 +152,7 @@ pub struct Reduction {
     /// AICc(reduced) − AICc(full), same σ (None when either is undefined).
     pub delta_aicc: Option<f64>,
     /// The flags that give the reduced model directly (`--fix C20=0,C30=0`), when
-    /// flags can (a removed arm needs the scene edited).
+    /// flags can.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub flags: Option<String>,
     /// Wall-clock seconds of the full fit and every round.
@@ -279,7 +279,7 @@ fn warm(id: &Identification) -> Vec<(String, f64)> {
 /// model first; when it leaves constants not identifiable, the rounds. Returns the
 /// run (the reduced model's identification, with its [`Reduction`] and its held
 /// constants, or the full model's when nothing was reduced) and the experiments
-/// as identified (arms removed from their scenes).
+/// as identified.
 pub fn identify(
     experiments: Vec<Experiment>,
     settings: &Settings,

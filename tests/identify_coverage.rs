@@ -213,12 +213,12 @@ fn run(s: &Scenario, seed: u64, fix: &[String]) -> Outcome {
         ..Settings::default()
     };
     let err = |e: dea_fit::Error| e.to_string();
-    let (run, kept) = match fix.is_empty() {
-        true => reduce::identify(vec![exp], &settings, &|_| Control::default()).map_err(err)?,
-        false => (
-            identify(vec![exp.clone()], &settings).map_err(err)?,
-            vec![exp],
-        ),
+    let run = match fix.is_empty() {
+        true => reduce::identify(std::slice::from_ref(&exp), &settings, &|_| {
+            Control::default()
+        })
+        .map_err(err)?,
+        false => identify(vec![exp.clone()], &settings).map_err(err)?,
     };
     let Ok(id) = run.identified() else {
         return Ok(None);
@@ -230,7 +230,7 @@ fn run(s: &Scenario, seed: u64, fix: &[String]) -> Outcome {
         let arms = &scene.material.viscous.arms;
         arms.iter().map(|a| (a.k_pa, a.eta_pa_s / a.k_pa)).collect()
     };
-    let (arms, fitted) = (pairs(&s.truth), pairs(&kept[0].scene));
+    let (arms, fitted) = (pairs(&s.truth), pairs(&exp.scene));
     let truth_of = |name: &str| -> f64 {
         let arm = name
             .strip_prefix("arm")

@@ -393,8 +393,8 @@ pub fn run(a: Args) -> Result<i32> {
             hyperelastic: false,
         } if a.free.is_none() && a.fix.is_empty() => {
             // the default: the smallest identifiable model
-            let (run, kept) = dea_fit::identify::reduce::identify(exps, &settings, &control)?;
-            (run, kept, None)
+            let run = dea_fit::identify::reduce::identify(&exps, &settings, &control)?;
+            (run, exps, None)
         }
         Choose {
             arms: false,

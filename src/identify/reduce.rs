@@ -278,21 +278,22 @@ fn warm(id: &Identification) -> Vec<(String, f64)> {
 /// Identify with the default model reduction (module documentation): the full
 /// model first; when it leaves constants not identifiable, the rounds. Returns the
 /// run (the reduced model's identification, with its [`Reduction`] and its held
-/// constants, or the full model's when nothing was reduced) and the experiments
-/// as identified.
+/// constants, or the full model's when nothing was reduced). The rounds fix
+/// constants of the same experiments, so `experiments` are also the ones
+/// identified.
 pub fn identify(
-    experiments: Vec<Experiment>,
+    experiments: &[Experiment],
     settings: &Settings,
     control: &(dyn Fn(usize) -> Control + Sync),
-) -> Result<(Run, Vec<Experiment>)> {
+) -> Result<Run> {
     let t0 = Instant::now();
-    let full = match identify_with(experiments.clone(), settings, control)? {
+    let full = match identify_with(experiments.to_vec(), settings, control)? {
         Run::Identified(id) => *id,
-        failed => return Ok((failed, experiments)),
+        failed => return Ok(failed),
     };
     let weak = |id: &Identification| id.parameters.iter().any(|e| !e.identifiable);
     if !weak(&full) || full.status == Status::NotConverged {
-        return Ok((Run::Identified(Box::new(full)), experiments));
+        return Ok(Run::Identified(Box::new(full)));
     }
     // the rounds: the full model's σ, few starts, no checkpoints (those are the
     // full search's), profiles only at the end
@@ -311,19 +312,17 @@ pub fn identify(
         resume: false,
         ..control(i)
     };
-    let mut exps = experiments;
     let mut current = full.clone();
     let mut rounds = Vec::new();
     let mut dropped: Vec<Held> = Vec::new();
     let mut warnings = Vec::new();
     while weak(&current) {
-        let all = params::constants(&exps[0].scene);
-        let model = exps[0].scene.material.spec.name.clone();
+        let all = params::constants(&experiments[0].scene);
+        let model = experiments[0].scene.material.spec.name.clone();
         let Some((step, name, reason)) = next_step(&current, &all, &model) else {
             break;
         };
         let mut next_settings = s.clone();
-        let next_exps = exps.clone();
         let unit_of = |n: &str| {
             all.iter()
                 .find(|c| c.name == n)
@@ -356,7 +355,7 @@ pub fn identify(
             }
         };
         next_settings.warm = warm(&current);
-        let run = identify_with(next_exps.clone(), &next_settings, &round_control);
+        let run = identify_with(experiments.to_vec(), &next_settings, &round_control);
         let id = match run {
             Ok(Run::Identified(id)) => *id,
             Ok(Run::Failed(f)) => {
@@ -400,13 +399,12 @@ pub fn identify(
             aicc: id.aicc,
         });
         s = next_settings;
-        exps = next_exps;
         current = id;
     }
     if rounds.is_empty() {
         let mut full = full;
         full.warnings.extend(warnings);
-        return Ok((Run::Identified(Box::new(full)), exps));
+        return Ok(Run::Identified(Box::new(full)));
     }
     // profiles asked for: of the reduced model's constants, from its optimum
     if !settings.profiles.is_empty() {
@@ -425,7 +423,8 @@ pub fn identify(
             ));
         }
         if !p.profiles.is_empty() {
-            if let Ok(Run::Identified(id)) = identify_with(exps.clone(), &p, &round_control) {
+            if let Ok(Run::Identified(id)) = identify_with(experiments.to_vec(), &p, &round_control)
+            {
                 current = *id;
             }
         }
@@ -482,7 +481,7 @@ pub fn identify(
         flags,
         seconds: t0.elapsed().as_secs_f64(),
     });
-    Ok((Run::Identified(Box::new(id)), exps))
+    Ok(Run::Identified(Box::new(id)))
 }
 
 #[cfg(test)]

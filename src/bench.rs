@@ -507,8 +507,10 @@ pub fn identify_case(
     Ok((exp, truth))
 }
 
-/// Identify every constant of `scene` (from [`identify_case`]) at each rtol and
-/// start count, fastest of `repeats` runs each.
+/// Identify `scene`'s constants (from [`identify_case`]) as the command line does
+/// by default (every constant free, the smallest identifiable model:
+/// [`crate::identify::reduce::identify`]) at each rtol and start count, fastest of
+/// `repeats` runs each.
 pub fn identify_rows(
     scene: &crate::sim::scene::Scene,
     rtols: &[f64],
@@ -516,7 +518,7 @@ pub fn identify_rows(
     repeats: usize,
     progress: &mut dyn FnMut(&IdentifyRow),
 ) -> Result<Vec<IdentifyRow>> {
-    use crate::identify::{identify, params, Run, Settings};
+    use crate::identify::{params, reduce, Run, Settings};
     let (exp, truth) = identify_case(scene)?;
     let all = params::constants(scene);
     let mut rows = Vec::new();
@@ -531,7 +533,9 @@ pub fn identify_rows(
             let mut fastest = None;
             for _ in 0..repeats.max(1) {
                 let t = Instant::now();
-                let id = identify(vec![exp.clone()], &settings)?;
+                let id = reduce::identify(std::slice::from_ref(&exp), &settings, &|_| {
+                    crate::fit::lm::Control::default()
+                })?;
                 let s = t.elapsed().as_secs_f64();
                 if s < best {
                     best = s;

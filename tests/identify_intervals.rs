@@ -448,6 +448,7 @@ fn a_profile_below_the_optimum_says_the_search_missed_it() {
         &context(),
         &[],
         &Settings::default().lm,
+        &|_| false,
     );
     println!("{:?}", a.warnings);
     assert!(

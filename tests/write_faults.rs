@@ -390,12 +390,12 @@ fn output_inside_the_report_folder_is_refused() {
     );
 }
 
-/// A scene whose streamed trajectory is large (10⁶ samples, ≈ 200 MB, ≈ 2 s) so that
-/// a signal reaches the run mid-write.
-fn long_scene(dir: &Path) -> std::path::PathBuf {
+/// A scene whose streamed trajectory is large (`samples`; 10⁶ samples are ≈ 200 MB,
+/// ≈ 2 s) so that a signal reaches the run mid-write.
+fn long_scene(dir: &Path, samples: usize) -> std::path::PathBuf {
     let text = std::fs::read_to_string(repo().join("datasets/scenes/stack_step_3kV.toml"))
         .unwrap()
-        .replace("samples = 2000", "samples = 1000000");
+        .replace("samples = 2000", &format!("samples = {samples}"));
     let p = dir.join("long.toml");
     std::fs::write(&p, text).unwrap();
     p
@@ -404,47 +404,57 @@ fn long_scene(dir: &Path) -> std::path::PathBuf {
 /// SIGINT and SIGTERM in the middle of a streamed `simulate --out`: the run ends by
 /// that signal (a shell reports 130, 143), its temporary file is gone, and neither
 /// the output nor the folders it created (the output's, and the report folder,
-/// empty but for its marker) are left.
+/// empty but for its marker) are left. A run that finished before the signal
+/// reached it (a loaded machine can starve this test's polling thread) tested
+/// nothing: it is repeated with a scene four times as long.
 #[cfg(unix)]
 #[test]
 fn interrupted_simulate_leaves_no_litter() {
     use std::os::unix::process::ExitStatusExt;
     for sig in [libc::SIGINT, libc::SIGTERM] {
-        let d = tempdir();
-        let scene = long_scene(d.path());
-        let mut child = Command::new(env!("CARGO_BIN_EXE_dea-fit"))
-            .arg("simulate")
-            .arg(&scene)
-            .args(["--out", "new/out.csv", "--report", "rep"])
-            .current_dir(d.path())
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("the binary starts");
-        let writing = || {
-            let new = d.path().join("new");
-            litter(&new, "out.csv")
-                .iter()
-                .any(|n| std::fs::metadata(new.join(n)).is_ok_and(|m| m.len() > 0))
-        };
-        let start = std::time::Instant::now();
-        while !writing() {
-            assert!(
-                child.try_wait().unwrap().is_none(),
-                "the run ended before it was interrupted"
+        let mut samples = 1_000_000;
+        loop {
+            let d = tempdir();
+            let scene = long_scene(d.path(), samples);
+            let mut child = Command::new(env!("CARGO_BIN_EXE_dea-fit"))
+                .arg("simulate")
+                .arg(&scene)
+                .args(["--out", "new/out.csv", "--report", "rep"])
+                .current_dir(d.path())
+                .stdout(Stdio::null())
+                .stderr(Stdio::null())
+                .spawn()
+                .expect("the binary starts");
+            let writing = || {
+                let new = d.path().join("new");
+                litter(&new, "out.csv")
+                    .iter()
+                    .any(|n| std::fs::metadata(new.join(n)).is_ok_and(|m| m.len() > 0))
+            };
+            let start = std::time::Instant::now();
+            while !writing() {
+                assert!(
+                    child.try_wait().unwrap().is_none(),
+                    "the run ended before it was interrupted"
+                );
+                assert!(start.elapsed().as_secs() < 60, "no temporary file appeared");
+                std::thread::sleep(std::time::Duration::from_millis(2));
+            }
+            // SAFETY: a signal to the child this test started.
+            unsafe { libc::kill(child.id() as libc::pid_t, sig) };
+            let status = child.wait().unwrap();
+            if status.success() && samples < 16_000_000 {
+                samples *= 4;
+                continue;
+            }
+            assert_eq!(status.signal(), Some(sig), "{status:?}");
+            assert_eq!(
+                names_in(d.path()),
+                vec!["long.toml".to_string()],
+                "signal {sig}"
             );
-            assert!(start.elapsed().as_secs() < 60, "no temporary file appeared");
-            std::thread::sleep(std::time::Duration::from_millis(2));
+            break;
         }
-        // SAFETY: a signal to the child this test started.
-        unsafe { libc::kill(child.id() as libc::pid_t, sig) };
-        let status = child.wait().unwrap();
-        assert_eq!(status.signal(), Some(sig), "{status:?}");
-        assert_eq!(
-            names_in(d.path()),
-            vec!["long.toml".to_string()],
-            "signal {sig}"
-        );
     }
 }
 

@@ -331,7 +331,7 @@ pub fn run(a: Args) -> Result<i32> {
         },
         rtol: a.rtol,
         profiles: a.profiles.clone(),
-        warm: Vec::new(),
+        ..Settings::default()
     };
     settings.check()?;
     // every file this run writes, known before anything runs: none inside the

@@ -65,6 +65,11 @@ pub struct Settings {
     /// then the second start. A name that is not free is ignored; a value outside
     /// its search box is moved onto the box.
     pub warm: Vec<(String, f64)>,
+    /// A model the default reduction ([`reduce`]) may still shrink: when the
+    /// linear assessment of its optimum leaves a constant the reduction drops or
+    /// holds, the profile checks of its intervals are skipped (the fit serves only
+    /// that decision; the model reported is checked).
+    pub reducing: bool,
 }
 
 /// The smallest decrease of ½χ² a search step must promise
@@ -92,6 +97,7 @@ impl Default for Settings {
             rtol: None,
             profiles: Vec::new(),
             warm: Vec::new(),
+            reducing: false,
         }
     }
 }
@@ -353,8 +359,21 @@ pub fn identify_with(
     let ctx = context(&problem, &runs);
     // σ, intervals (Wald, or profile where the linearisation fails), identifiability
     let started = Instant::now();
-    let (assessment, profiles) =
-        profile::assess(&problem, &x, &jac, rss, &ctx, &profiled, &settings.lm);
+    let model = problem.experiments[0].scene.material.spec.name.clone();
+    let converged = matches!(termination, Termination::Converged(_));
+    let unchecked = |e: &[assessment::Estimate]| {
+        settings.reducing && converged && reduce::next_step(e, &all, &model).is_some()
+    };
+    let (assessment, profiles) = profile::assess(
+        &problem,
+        &x,
+        &jac,
+        rss,
+        &ctx,
+        &profiled,
+        &settings.lm,
+        &unchecked,
+    );
     let interval_seconds = started.elapsed().as_secs_f64();
     let experiments = channel_fits(&problem, &given, &r);
     // the scene's geometry tolerances into σ and the intervals (identify::geometry)

@@ -63,6 +63,16 @@ pub const MAX_ROOT_STEPS: usize = 8;
 /// what a converged search can leave.
 pub const LOWER: f64 = 0.01;
 
+/// The smallest decrease of ½χ² a re-fit's step must promise (the search's
+/// [`super::MIN_DECREASE`] = 10⁻³ where that is larger): 0.01, so a re-fitted Δχ²
+/// is within 0.02 of its minimum: 0.5 % of the 95 % level t²·s² ≈ 3.84 (0.25 % in
+/// the distance of an interval's end, against [`ROOT_TOLERANCE`] = 1 %) and 2.5 %
+/// of the [`WALD_TOLERANCE`] band (0.8 at ±2σ). The search's own rule chases the
+/// integration noise of the cost there for nothing: a re-fit from the linear
+/// prediction then ends after its first Jacobian more often (rig trace: 58
+/// sensitivity runs for the checks and intervals of 7 constants before).
+pub const REFIT_DECREASE: f64 = 0.01;
+
 /// A re-fitted constant within this fraction of its bounds' width (search
 /// coordinates) of a bound is held by it (the assessment's test, [`assessment`]).
 const AT_EDGE: f64 = 1e-6;
@@ -91,6 +101,10 @@ pub struct Profile {
 /// ±2σ and replaced by the profile interval where they disagree
 /// ([`WALD_TOLERANCE`]), in parallel; and the grid profiles of the free constants
 /// `profiled`. The warnings of the profiles are in [`Assessment::warnings`].
+/// `unchecked` says, from the linear estimates, when the checks are not wanted (a
+/// model the default reduction shrinks further: [`super::reduce`]); the
+/// assessment is then the linear one.
+#[allow(clippy::too_many_arguments)]
 pub fn assess(
     problem: &Problem,
     x: &[f64],
@@ -99,8 +113,10 @@ pub fn assess(
     ctx: &Context,
     profiled: &[usize],
     settings: &LmSettings,
+    unchecked: &dyn Fn(&[assessment::Estimate]) -> bool,
 ) -> (Assessment, Vec<Profile>) {
     let mut lin = assessment::linear(&problem.free, x, jac, rss, ctx);
+    let check = !unchecked(&lin.assessment.estimates);
     let (n, k) = (jac.nrows(), jac.ncols());
     let s2 = rss / n.saturating_sub(k).max(1) as f64;
     let box_bounds = problem.x_bounds();
@@ -119,11 +135,14 @@ pub fn assess(
         covariance: lin.covariance.clone(),
         s2,
         target: lin.t * lin.t * s2,
-        settings,
+        settings: LmSettings {
+            min_decrease: settings.min_decrease.max(REFIT_DECREASE),
+            ..*settings
+        },
     };
     // the check of every Wald interval, both sides of every constant in parallel
     let sides: Vec<(usize, f64)> = (0..k)
-        .filter(|&j| lin.sigma_x[j].is_some())
+        .filter(|&j| check && lin.sigma_x[j].is_some())
         .flat_map(|j| [(j, -1.0), (j, 1.0)])
         .collect();
     let checks: Vec<(Point, bool, Option<Point>)> = sides
@@ -266,8 +285,8 @@ struct Base<'a> {
     s2: f64,
     /// The 95 % level of Δχ²: t²·s².
     target: f64,
-    /// The re-fits' stopping rules (the search's).
-    settings: &'a LmSettings,
+    /// The re-fits' stopping rules (the search's, [`REFIT_DECREASE`]).
+    settings: LmSettings,
 }
 
 /// One profiled point.
@@ -405,7 +424,7 @@ impl<'a> Profiler<'a> {
             &mut self.problem,
             &project(&self.bounds),
             &self.bounds,
-            self.base.settings,
+            &self.base.settings,
         );
         if r.evaluations <= 1 && !r.cost.is_finite() {
             let mut inside = self.base.box_bounds.clone();
@@ -414,7 +433,7 @@ impl<'a> Profiler<'a> {
                 &mut self.problem,
                 &project(&inside),
                 &self.bounds,
-                self.base.settings,
+                &self.base.settings,
             );
         }
         let delta = match r.cost.is_finite() {

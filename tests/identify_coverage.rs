@@ -170,13 +170,22 @@ fn min_covered(n: usize) -> usize {
 }
 
 /// The fixes the reasons of the constants not identified advise: `NAME=VALUE` where
-/// a reason spells out `--fix NAME=VALUE`, else `NAME` (held at the scene's value).
+/// a reason spells out `--fix NAME=VALUE`, else `NAME` (held at the scene's value)
+/// where it says `fix NAME`. Words such as "the trace fixes only a combination"
+/// advise nothing.
 fn advised_fixes<'a>(estimates: impl Iterator<Item = &'a Estimate>) -> Vec<String> {
     estimates
         .filter(|e| !e.identifiable)
         .filter_map(|e| {
             let reason = e.reason.as_deref()?;
-            if !reason.contains("fix") {
+            let advice = [format!("fix {}", e.name), format!("--fix {}=", e.name)];
+            let names_it = |a: &String| {
+                reason.match_indices(a.as_str()).any(|(i, _)| {
+                    let after = reason[i + a.len()..].chars().next();
+                    a.ends_with('=') || !after.is_some_and(|c| c.is_alphanumeric() || c == '_')
+                })
+            };
+            if !advice.iter().any(names_it) {
                 return None;
             }
             let spelled = reason

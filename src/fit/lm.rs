@@ -294,27 +294,35 @@ pub const TRUSTED_RHO: f64 = 0.5;
 
 /// Iterations over which [`out_of_reach`] measures a search's pace.
 pub const PACE_WINDOW: usize = 5;
-/// Relative margin above the reference cost within which a search is never given
-/// up ([`out_of_reach`]): 1 % of it (for ½χ² of a few thousand residuals, tens of
-/// units: far beyond the difference of two stops in one minimum).
-pub const REACH_MARGIN: f64 = 0.01;
 /// How much faster than its pace over the last [`PACE_WINDOW`] iterations a search
 /// is allowed to close the gap before it is given up ([`out_of_reach`]).
 pub const PACE_ALLOWANCE: f64 = 2.0;
 
+/// The cost another start of a multi-start reached, and the margin above it
+/// within which a search is never given up ([`out_of_reach`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reach {
+    /// The reference cost.
+    pub cost: f64,
+    /// The margin (cost units), beyond the difference of two stops in one
+    /// minimum.
+    pub margin: f64,
+}
+
 /// Why a search whose costs so far are `costs` (the start's, then one per
-/// iteration) cannot come within reach of `reference` in the `left` iterations it
-/// has: its cost lies above reference·(1 + [`REACH_MARGIN`]) + 2·`floor` (the
-/// noise floor, [`LmSettings::min_decrease`]) by a gap that even
-/// [`PACE_ALLOWANCE`] times its mean decrease over the last [`PACE_WINDOW`]
-/// iterations, kept up for all of them, would not close. None while it can.
-pub fn out_of_reach(costs: &[f64], reference: f64, floor: f64, left: usize) -> Option<String> {
+/// iteration) cannot come within reach of `reach` in the `left` iterations it
+/// has: its cost lies above the reference + its margin + 2·`floor` (the noise
+/// floor, [`LmSettings::min_decrease`]) by a gap that even [`PACE_ALLOWANCE`]
+/// times its mean decrease over the last [`PACE_WINDOW`] iterations, kept up for
+/// all of them, would not close. None while it can.
+pub fn out_of_reach(costs: &[f64], reach: Reach, floor: f64, left: usize) -> Option<String> {
     let k = costs.len().checked_sub(1)?;
+    let reference = reach.cost;
     if k < PACE_WINDOW || !reference.is_finite() {
         return None;
     }
     let now = costs[k];
-    let gap = now - (reference + REACH_MARGIN * reference.abs() + 2.0 * floor);
+    let gap = now - (reference + reach.margin + 2.0 * floor);
     let pace = (costs[k - PACE_WINDOW] - now) / PACE_WINDOW as f64;
     (gap > PACE_ALLOWANCE * pace * left as f64).then(|| {
         format!(
@@ -700,7 +708,7 @@ pub type LmState = IterState<Vec<f64>, (), (), (), (), f64>;
 struct LmSolver<'s> {
     lm: &'s mut Lm,
     /// [`Control::reach`].
-    reach: Option<f64>,
+    reach: Option<Reach>,
     stopped: Option<Termination>,
     /// Whether anyone reads the key-value pairs (they cost a few allocations).
     observed: bool,
@@ -731,7 +739,7 @@ impl<P: LeastSquares + ?Sized> Solver<Held<'_, P>, LmState> for LmSolver<'_> {
             return Err(argmin::core::Error::msg("the executor lost the problem"));
         };
         let lm = &mut *self.lm;
-        p.stands_at(lm.cost, self.reach);
+        p.stands_at(lm.cost, self.reach.map(|r| r.cost));
         let stop = lm.step(*p).or_else(|| {
             let left = lm.settings.max_iterations.saturating_sub(lm.iterations);
             out_of_reach(&lm.costs, self.reach?, lm.settings.min_decrease, left)
@@ -816,7 +824,7 @@ pub struct Control {
     /// The cost another start of a multi-start reached: stop with
     /// [`Termination::Abandoned`] once this search cannot come within reach of it
     /// ([`out_of_reach`]).
-    pub reach: Option<f64>,
+    pub reach: Option<Reach>,
 }
 
 /// Minimise ½‖r(p)‖² from `x0` within `bounds`: [`search`] without observers,
@@ -1664,20 +1672,21 @@ mod tests {
         assert!(normal.jacobian.is_empty());
     }
 
-    /// The reach rule by hand: cost 150 against a reference of 100 (margin 1 % +
-    /// 2·floor 0.5 = 2: a gap of 48), falling 1 per iteration over the last 5 with
-    /// 20 left: 2 × 1 × 20 = 40 < 48, given up; with 30 left (60 ≥ 48) not yet;
-    /// within the margin, never; before 5 iterations, never.
+    /// The reach rule by hand: cost 150 against a reference of 100 (margin 1 +
+    /// 2·floor 0.5 = 1.5 above it: a gap of 48.5), falling 1 per iteration over the
+    /// last 5 with 20 left: 2 × 1 × 20 = 40 < 48.5, given up; with 30 left
+    /// (60 ≥ 48.5) not yet; within the margin, never; before 5 iterations, never.
     #[test]
     fn out_of_reach_follows_its_rule() {
         let costs = [160.0, 158.0, 155.0, 154.0, 153.0, 152.0, 151.0, 150.0];
-        assert!(out_of_reach(&costs, 100.0, 0.25, 20).is_some());
-        assert!(out_of_reach(&costs, 100.0, 0.25, 30).is_none());
-        assert!(out_of_reach(&[101.0; 8], 100.0, 0.25, 20).is_none());
-        assert!(out_of_reach(&costs[..5], 100.0, 0.25, 1).is_none());
-        assert!(out_of_reach(&costs, f64::NAN, 0.25, 20).is_none());
+        let reach = |cost| Reach { cost, margin: 1.0 };
+        assert!(out_of_reach(&costs, reach(100.0), 0.25, 20).is_some());
+        assert!(out_of_reach(&costs, reach(100.0), 0.25, 30).is_none());
+        assert!(out_of_reach(&[101.0; 8], reach(100.0), 0.25, 20).is_none());
+        assert!(out_of_reach(&costs[..5], reach(100.0), 0.25, 1).is_none());
+        assert!(out_of_reach(&costs, reach(f64::NAN), 0.25, 20).is_none());
         // a search on a plateau far above: given up
-        assert!(out_of_reach(&[1e6; 6], 100.0, 0.0, 95).is_some());
+        assert!(out_of_reach(&[1e6; 6], reach(100.0), 0.0, 95).is_some());
     }
 
     #[test]

@@ -115,7 +115,7 @@ impl MultiStart {
 /// Search `problem` from every start in `starts`: the first alone, then the
 /// others in parallel (rayon; each gets its own clone of the problem and the
 /// [`Control`] that `control` makes for its index: observers, checkpoint, wall
-/// time), each given up once it cannot come within reach of the first's cost
+/// time), each given up once it cannot come within `margin` of the first's cost
 /// ([`lm::out_of_reach`]). The first is the caller's best guess (for
 /// identification the scene's own constants); racing the others against it, not
 /// against each other, keeps the result independent of the thread count.
@@ -124,13 +124,14 @@ pub fn run<P, C>(
     starts: &[Vec<f64>],
     bounds: &[(f64, f64)],
     settings: &LmSettings,
+    margin: f64,
     control: C,
 ) -> MultiStart
 where
     P: LeastSquares + Clone + Send + Sync,
     C: Fn(usize) -> Control + Sync,
 {
-    let search = |i: usize, x0: &Vec<f64>, reach: Option<f64>| {
+    let search = |i: usize, x0: &Vec<f64>, reach: Option<lm::Reach>| {
         let mut p = problem.clone();
         let mut c = control(i);
         c.reach = reach;
@@ -140,7 +141,11 @@ where
     if let Some(x0) = starts.first() {
         runs.push(search(0, x0, None));
     }
-    let reach = runs.first().map(|r| r.1.cost).filter(|c| c.is_finite());
+    let reach = runs
+        .first()
+        .map(|r| r.1.cost)
+        .filter(|c| c.is_finite())
+        .map(|cost| lm::Reach { cost, margin });
     runs.par_extend(
         starts
             .par_iter()

@@ -559,9 +559,10 @@ fn explain(
         )
     } else if let Some(tau) = slow_arm(c, &partners, ctx) {
         format!(
-            "an arm with τ = {} is slower than the {} trace: within it the arm acts as extra stiffness, traded against the leading modulus; use a longer trace, or remove the arm from the scene (as the default run does)",
+            "an arm with τ = {} is slower than the {} trace: within it the arm acts as extra stiffness, traded against the leading modulus; use a trace at least 3τ long ({}), which resolves the arm. Holding a constant here does not help: the arm stays in the actuator, and an interval conditional on a held value misses wherever that value is off (the default run keeps the arm free, so every other interval accounts for it)",
             si(tau, "s"),
-            si(ctx.span, "s")
+            si(ctx.span, "s"),
+            si(3.0 * tau, "s")
         )
     } else if c.role == Role::Nv {
         "the damping is unresolved: the traces have no motion fast enough for the dashpot nv to show above the noise (fix nv, e.g. --fix nv=0, or add a fast step)".to_string()

@@ -21,7 +21,7 @@ const PER_COMMAND: usize = 6;
 fn tbdata(d: &mut Draft, values: &[(String, f64, &'static str)]) {
     let written: Vec<String> = values
         .iter()
-        .map(|(n, v, u)| num(d.constant(n.clone(), *v, u)))
+        .map(|(n, v, u)| d.field(n.clone(), *v, u))
         .collect();
     for (i, chunk) in written.chunks(PER_COMMAND).enumerate() {
         d.line(format!(
@@ -35,7 +35,7 @@ fn tbdata(d: &mut Draft, values: &[(String, f64, &'static str)]) {
 pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
     d.line("MAT,1");
     if let Some(rho) = opts.density {
-        let rho = num(d.constant("DENS", rho, "kg/m^3"));
+        let rho = d.field("DENS", rho, "kg/m^3");
         d.line(format!("MP,DENS,1,{rho}"));
     }
     let scale = m

@@ -31,8 +31,8 @@ fn unit(u: &str) -> &'static str {
 
 /// One parameter line, recorded as a constant.
 fn param(d: &mut Draft, name: &str, v: f64, u: &'static str, what: &str) {
-    let v = d.constant(name, v, u);
-    d.line(format!("{name} {}{} \"{what}\"", num(v), unit(u)));
+    let v = d.field(name, v, u);
+    d.line(format!("{name} {v}{} \"{what}\"", unit(u)));
 }
 
 pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {

@@ -857,6 +857,7 @@ fn export(paths: &[PathBuf], oracle: &Oracle) -> Verdict {
     }
     let opts = Options {
         density: Some(1000.0),
+        ..Options::default()
     };
     for t in Target::ALL {
         let Ok(card) = export::card(&m, t, &opts) else {

@@ -131,7 +131,7 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
     }
     d.line("\t</material>");
     d.warn(format!(
-        "nearly incompressible: FEBio's uncoupled materials enforce incompressibility by a penalty, k = {} mu0 = {} Pa (--bulk-ratio); the card's stress differs from the incompressible fit's by O(stress/k)",
+        "nearly incompressible: FEBio's uncoupled materials enforce incompressibility by a penalty, k = {} mu0 = {} Pa (the bulk-ratio option of the export); the card's stress differs from the incompressible fit's by O(stress/k)",
         opts.bulk_ratio,
         num(k)
     ));

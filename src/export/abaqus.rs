@@ -86,7 +86,7 @@ pub(super) fn write(m: &Material, target: Target, opts: &Options, d: &mut Draft)
                 .with_hint("check the fit: a rubber has mu0 > 0"));
             }
             let d1 = 2.0 / (opts.bulk_ratio * mu);
-            if !(d1 >= CALCULIX_MIN_D) {
+            if d1 < CALCULIX_MIN_D {
                 return Err(Error::settings(format!(
                     "CalculiX: D1 = 2/(K/mu0 * mu0) = {} 1/Pa (mu0 = {} Pa, K/mu0 = {}) is below 1e-10, which ccx reads as D = 0 and replaces by its compressible default (nu = 0.475)",
                     num(d1), num(mu), opts.bulk_ratio

@@ -1050,7 +1050,7 @@ proptest::proptest! {
             ("neo-hookean", 1), ("mooney-rivlin", 2), ("yeoh", 3), ("gent", 2),
             ("ogden1", 2), ("ogden2", 4), ("ogden3", 6), ("ogden4", 8),
         ][model];
-        let form = if form { OgdenForm::Original } else { OgdenForm::Seed };
+        let form = if form { OgdenForm::Original } else { OgdenForm::Abaqus };
         let hyper = HyperelasticPart { spec: ModelSpec::new(name, form), params: params[..n].to_vec(), ranges: None };
         // moduli and times 10^-10..10^10, positive as a relaxation fit's are
         let pos = |k: u32| 10f64.powf(k as f64 / 100.0 - 10.0);
@@ -1251,4 +1251,48 @@ fn calculix_one_element_gives_the_fit_stress() {
         }
     }
     eprintln!("calculix: worst relative difference {worst:.1e} (tolerance {CCX_RTOL:e})");
+}
+
+/// The Ogden form named by meaning: `--ogden-form abaqus` (2μ/α², the form of
+/// Abaqus and CalculiX) writes `"form": "abaqus"`; `seed`, its old name, is a
+/// hidden alias that gives the same fit, and fit files that say `"seed"` are read
+/// (the Ogden fits of tests/data/export do).
+#[test]
+fn ogden_form_has_a_name_and_the_old_one_still_works() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    let data = repo_path("datasets/treloar/uniaxial.csv");
+    let fit = |form: &str| {
+        let out = format!("{form}.json");
+        let o = run(
+            p,
+            &[
+                "hyperelastic",
+                &data,
+                "--model",
+                "ogden1",
+                "--ogden-form",
+                form,
+                "--no-report",
+                "--out",
+                &out,
+            ],
+        );
+        assert_eq!(o.status.code(), Some(0), "{form}: {}", stderr(&o));
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(p.join(&out)).unwrap()).unwrap();
+        (v["form"].clone(), v["parameters"].clone())
+    };
+    let (form, params) = fit("abaqus");
+    assert_eq!(form, "abaqus");
+    assert_eq!(fit("seed"), (form, params), "the old name is the same form");
+    let help = run(p, &["hyperelastic", "--help"]);
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(help.contains("abaqus") && !help.contains("seed"), "{help}");
+    let old = read_material(Path::new(&d("treloar-ogden3.json")))
+        .unwrap()
+        .0;
+    assert!(
+        matches!(old, MaterialFile::Hyperelastic(h) if h.spec.form == Some(dea_fit::material::hyperelastic::OgdenForm::Abaqus))
+    );
 }

@@ -32,8 +32,8 @@ pub struct Args {
     /// Model name (as for `hyperelastic --model`; synth hyperelastic).
     #[arg(long)]
     model: Option<String>,
-    /// Ogden form of the given parameters.
-    #[arg(long, default_value = "seed")]
+    /// Ogden form of the given parameters: abaqus (2μ/α²) or original (μ/α).
+    #[arg(long, default_value = "abaqus")]
     ogden_form: String,
     /// Parameter NAME=VALUE (moduli with a unit, e.g. C10=69.3kPa; bare numbers SI).
     /// synth relaxation: E_inf, E1…EN (stress units) and tau1…tauN (time units).
@@ -489,12 +489,12 @@ fn hyperelastic(a: Args) -> Result<i32> {
     }
     let noise = relative_noise(&a, "the stress")?;
     let form = match a.ogden_form.as_str() {
-        "seed" => OgdenForm::Seed,
+        // `seed`: the old name of the abaqus form, still accepted
+        "abaqus" | "seed" => OgdenForm::Abaqus,
         "original" => OgdenForm::Original,
         f => {
-            return Err(
-                Error::settings(format!("unknown Ogden form '{f}'")).with_hint("seed or original")
-            )
+            return Err(Error::settings(format!("unknown Ogden form '{f}'"))
+                .with_hint("abaqus or original"))
         }
     };
     let spec = ModelSpec::new(&model_name, form);

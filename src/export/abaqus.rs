@@ -3,9 +3,9 @@
 //! *HYPERELASTIC; the differences below measured with ccx 2.20).
 //!
 //! * `*HYPERELASTIC, NEO HOOKE`: U = C10(Ī1 − 3) + (J − 1)²/D1, C10 = μ/2.
-//! * `MOONEY-RIVLIN`: C10, C01, D1; `YEOH`: C10, C20, C30, D1, D2, D3 (the seed's
+//! * `MOONEY-RIVLIN`: C10, C01, D1; `YEOH`: C10, C20, C30, D1, D2, D3 (El Atrache Ceballos (2021)'s
 //!   polynomial coefficients as they are).
-//! * `OGDEN, N=n`: U = Σ 2μᵢ/αᵢ²(λ̄₁^αᵢ + λ̄₂^αᵢ + λ̄₃^αᵢ − 3), the seed form:
+//! * `OGDEN, N=n`: U = Σ 2μᵢ/αᵢ²(λ̄₁^αᵢ + λ̄₂^αᵢ + λ̄₃^αᵢ − 3), the abaqus form:
 //!   μᵢ, αᵢ as fitted (an original-form fit converted, μ = μ_orig·α/2).
 //! * Dᵢ = 0: incompressible. No Gent model: refused.
 //! * `*VISCOELASTIC, TIME=PRONY`: gᵢ, kᵢ, τᵢ with g_R(t) = 1 − Σ gᵢ(1 − e^(−t/τᵢ))
@@ -138,7 +138,7 @@ pub(super) fn write(m: &Material, target: Target, opts: &Options, d: &mut Draft)
                     .with_hint("fit ogden1..ogden3 for CalculiX (dea-fit hyperelastic --model ogden3), or export to abaqus, ansys, lsdyna, febio or comsol"));
                 }
                 let mut v = Vec::new();
-                for (i, (mu, a)) in ogden_terms(&h, OgdenForm::Seed).into_iter().enumerate() {
+                for (i, (mu, a)) in ogden_terms(&h, OgdenForm::Abaqus).into_iter().enumerate() {
                     v.push((format!("MU{}", i + 1), mu, "Pa"));
                     v.push((format!("ALPHA{}", i + 1), a, "1"));
                 }

@@ -3,7 +3,7 @@
 //! * `TB,HYPER,,,,NEO`: W = μ/2(Ī1 − 3) + (J − 1)²/d; constants μ, d.
 //! * `MOONEY` (NPTS = 2): C10, C01, d; `YEOH` (NPTS = 3): C10, C20, C30, d1..d3.
 //! * `OGDEN` (NPTS = N): W = Σ μᵢ/αᵢ(λ̄₁^αᵢ + λ̄₂^αᵢ + λ̄₃^αᵢ − 3), the original
-//!   form (μ0 = ½Σμᵢαᵢ): a seed-form fit converted, μ = 2μ_seed/α.
+//!   form (μ0 = ½Σμᵢαᵢ): a abaqus-form fit converted, μ = 2μ_abaqus/α.
 //! * `GENT`: W = −μJm/2·ln(1 − (Ī1 − 3)/Jm); μ, Jm, d.
 //! * dᵢ = 0: incompressible (mixed u-P elements).
 //! * `TB,PRONY,,,N,SHEAR`: relative moduli aᵢ = Gᵢ/G0 and τᵢ, G0 the
@@ -83,7 +83,7 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
                 }
                 v.extend((1..=n).map(|i| (format!("d{i}"), 0.0, "1/Pa")));
                 if h0.spec.form != Some(OgdenForm::Original) {
-                    d.note("Ogden: the fit's seed-form mu_i (2mu/alpha^2) converted to ANSYS's original form (mu/alpha): mu_i = 2*mu_seed/alpha_i, exact");
+                    d.note("Ogden: the fit's abaqus-form mu_i (2mu/alpha^2) converted to ANSYS's original form (mu/alpha): mu_i = 2*mu_abaqus/alpha_i, exact");
                 }
                 (format!("TB,HYPER,1,,{n},OGDEN"), v)
             }

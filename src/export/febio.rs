@@ -3,7 +3,7 @@
 //!
 //! * `Mooney-Rivlin`: W = c1(Ĩ1 − 3) + c2(Ĩ2 − 3) + U(J): c1 = C10, c2 = C01;
 //!   Neo-Hookean as c1 = μ/2, c2 = 0.
-//! * `Ogden`: W = Σ cᵢ/mᵢ²(λ̃₁^mᵢ + λ̃₂^mᵢ + λ̃₃^mᵢ − 3) + U(J): the seed form with
+//! * `Ogden`: W = Σ cᵢ/mᵢ²(λ̃₁^mᵢ + λ̃₂^mᵢ + λ̃₃^mᵢ − 3) + U(J): the abaqus form with
 //!   cᵢ = 2μᵢ, mᵢ = αᵢ (at most 6 terms).
 //! * `Gent`: W = −G·Jm/2·ln(1 − (Ĩ1 − 3)/Jm) + U(J): G = μ, Jm.
 //! * Yeoh has no FEBio material of its own: `uncoupled hyperelastic` with the
@@ -118,11 +118,11 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
             param(d, ind, "Jm", p[1], "1");
         }
         _ => {
-            for (i, (mu, a)) in ogden_terms(h, OgdenForm::Seed).into_iter().enumerate() {
+            for (i, (mu, a)) in ogden_terms(h, OgdenForm::Abaqus).into_iter().enumerate() {
                 param(d, ind, &format!("c{}", i + 1), 2.0 * mu, "Pa");
                 param(d, ind, &format!("m{}", i + 1), a, "1");
             }
-            d.note("Ogden: FEBio's W = sum c_i/m_i^2 (...) is the seed form with c_i = 2 mu_i (seed), m_i = alpha_i, exact");
+            d.note("Ogden: FEBio's W = sum c_i/m_i^2 (...) is the abaqus form with c_i = 2 mu_i, m_i = alpha_i, exact");
         }
     }
     param(d, ind, "k", k, "Pa");

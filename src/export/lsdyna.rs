@@ -6,10 +6,10 @@
 //! * MAT_077_H: W = Σ Cpq(Ī1 − 3)^p(Ī2 − 3)^q + bulk term; Neo-Hookean C10 = μ/2,
 //!   Mooney-Rivlin C10, C01, Yeoh C10, C20, C30.
 //! * MAT_077_O: W = Σᵢ Σⱼ μⱼ/αⱼ(λ̄ᵢ^αⱼ − 1) + bulk term, the original Ogden form:
-//!   a seed-form fit converted, μ = 2μ_seed/α.
+//!   a abaqus-form fit converted, μ = 2μ_abaqus/α.
 //! * No Gent: refused. No fully incompressible option: PR from K = `bulk_ratio`·μ0.
 //! * Viscoelasticity: GI, BETAI with g(t) = Σ Gᵢ·e^(−βᵢt) convolved with the strain
-//!   rate and added to the hyperelastic (long-term) stress, as the seed's arms:
+//!   rate and added to the hyperelastic (long-term) stress, as the arms of El Atrache Ceballos (2021):
 //!   Gᵢ = Eᵢ/3 (shear modulus of an incompressible solid), βᵢ = 1/τᵢ; the
 //!   hyperelastic constants are the long-term response, the fit's scaled by E∞/R.
 //!   At most 6 terms.
@@ -117,7 +117,7 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
                 &alphas,
             );
             if h0.spec.form != Some(OgdenForm::Original) {
-                d.note("Ogden: the fit's seed-form mu_i (2mu/alpha^2) converted to LS-DYNA's original form (mu/alpha): mu_i = 2*mu_seed/alpha_i, exact");
+                d.note("Ogden: the fit's abaqus-form mu_i (2mu/alpha^2) converted to LS-DYNA's original form (mu/alpha): mu_i = 2*mu_abaqus/alpha_i, exact");
             }
         }
     }

@@ -156,7 +156,7 @@ enum Family {
     /// stress, as QLV does (Abaqus, ANSYS, FEBio).
     RelaxesStress,
     /// Maxwell branches linear in a strain measure, in parallel with the long-term
-    /// hyperelastic spring, as the seed's arms are (LS-DYNA, COMSOL).
+    /// hyperelastic spring, as the arms of El Atrache Ceballos (2021) are (LS-DYNA, COMSOL).
     StrainArms,
 }
 
@@ -192,7 +192,7 @@ impl SourceFile {
 /// * QLV relaxation fit: σ(t) = ∫ E(t − s)/R dσₑ(s), R = E_ref = 3μ0 of its
 ///   hyperelastic fit; the instantaneous response is (E0/R)·σₑ, the long-term one
 ///   (E∞/R)·σₑ.
-/// * Parallel (the seed's arms, a relaxation fit of the parallel reading or an
+/// * Parallel (the arms of El Atrache Ceballos (2021), a relaxation fit of the parallel reading or an
 ///   identified material): σ = σₑ(λ) + Σ kᵢ·hᵢ with arms linear in the strain,
 ///   R = E∞ = the equilibrium spring (3μ0 of the hyperelastic part when there is
 ///   one), and a Kelvin–Voigt dashpot Nv.
@@ -341,7 +341,7 @@ pub fn read(paths: &[PathBuf]) -> Result<Material> {
                 (None, Some((_, h))) => {
                     let k_inf = 3.0 * mu0(h)?;
                     notes.push(format!(
-                        "the seed's model: the hyperelastic spring (small-strain modulus 3mu0 = {} Pa) in parallel with the relaxation fit's arms; its E_inf = {} Pa (the secant modulus at the held strain) is not used, as in the simulator",
+                        "the model of El Atrache Ceballos (2021): the hyperelastic spring (small-strain modulus 3mu0 = {} Pa) in parallel with the relaxation fit's arms; its E_inf = {} Pa (the secant modulus at the held strain) is not used, as in the simulator",
                         num(k_inf),
                         num(r.long_term_pa)
                     ));
@@ -688,18 +688,18 @@ fn viscous_statements(m: &Material, target: Target, d: &mut Draft) {
                     let list: Vec<String> = rs.iter().map(|x| format!("{x:.3}")).collect();
                     let at: Vec<String> = STRETCHES.iter().map(|l| format!("{l}")).collect();
                     format!(
-                        "; at stretch {} the card's viscous stress is {} times the seed's",
+                        "; at stretch {} the card's viscous stress is {} times that of the arms of El Atrache Ceballos (2021)",
                         at.join("/"),
                         list.join("/")
                     )
                 })
                 .unwrap_or_default();
             d.warn(format!(
-                "approximate at finite strain: the seed's arms are linear in the strain, k_i*(lambda - 1), while {code} relaxes the hyperelastic stress (k_i*P_h(lambda)/E_inf); the small-strain relaxation modulus E(t) is the fit's exactly{by}"
+                "approximate at finite strain: the arms of El Atrache Ceballos (2021) are linear in the strain, k_i*(lambda - 1), while {code} relaxes the hyperelastic stress (k_i*P_h(lambda)/E_inf); the small-strain relaxation modulus E(t) is the fit's exactly{by}"
             ))
         }
         (Family::StrainArms, Formulation::Parallel) => d.warn(format!(
-            "approximate at finite strain: {code}'s Maxwell branches are linear in its own (Green-Lagrange type) strain, the seed's arms in the engineering strain lambda - 1; the small-strain relaxation modulus E(t) is the fit's exactly"
+            "approximate at finite strain: {code}'s Maxwell branches are linear in its own (Green-Lagrange type) strain, the arms of El Atrache Ceballos (2021) in the engineering strain lambda - 1; the small-strain relaxation modulus E(t) is the fit's exactly"
         )),
         (Family::StrainArms, Formulation::Qlv) => d.warn(format!(
             "approximate at finite strain: the fit is QLV (its relaxation scales the hyperelastic stress) while {code} adds strain-linear Maxwell branches to the long-term hyperelastic stress; the small-strain relaxation modulus E(t) is the fit's exactly"
@@ -714,7 +714,7 @@ fn viscous_statements(m: &Material, target: Target, d: &mut Draft) {
 }
 
 /// For a parallel-reading material written as a stress-relaxing card: the card's
-/// viscous overstress over the seed's, P_h(λ)/(E∞·(λ − 1)), at [`STRETCHES`] in
+/// viscous overstress over that of those arms, P_h(λ)/(E∞·(λ − 1)), at [`STRETCHES`] in
 /// uniaxial tension (→ 1 as λ → 1). None if the model has no finite stress there.
 fn stress_proportional_ratios(h: &HyperelasticPart, r: &Relaxation) -> Option<Vec<f64>> {
     let model = h.evaluator().ok()?;
@@ -748,7 +748,7 @@ fn mu0(h: &HyperelasticPart) -> Result<f64> {
     Ok(h.evaluator()?.initial_shear_modulus(&h.params))
 }
 
-/// The Ogden terms (μᵢ, αᵢ) of `h` in `form`: seed (2μ/α², Abaqus, FEBio as c = 2μ)
+/// The Ogden terms (μᵢ, αᵢ) of `h` in `form`: abaqus (2μ/α², Abaqus, FEBio as c = 2μ)
 /// or original (μ/α: ANSYS, LS-DYNA, COMSOL), converted exactly (`Ogden::convert`).
 fn ogden_terms(h: &HyperelasticPart, form: OgdenForm) -> Vec<(f64, f64)> {
     Ogden::convert(&h.params, h.spec.form.unwrap_or_default(), form)

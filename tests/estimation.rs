@@ -131,7 +131,7 @@ fn canonical<T: Copy>(name: &str, v: &[T], alpha: impl Fn(&T) -> f64) -> Vec<T> 
 #[test]
 fn recovers_known_constants_of_every_model_from_clean_data() {
     for (name, truth) in TRUTHS {
-        let spec = ModelSpec::new(name, OgdenForm::Seed);
+        let spec = ModelSpec::new(name, OgdenForm::Abaqus);
         let model = spec.build().unwrap();
         let d = synthetic(model.as_ref(), truth, &ALL3, 0.0, 0.0, 1);
         let f = fit(&d, &spec, &Settings::default()).unwrap();
@@ -162,7 +162,7 @@ fn confidence_intervals_cover_the_truth_at_their_stated_rate() {
     // (2 kPa), 400 replicates: the t-interval is exact for this linear model, so a 95 %
     // interval contains the truth in 95 % of replicates; with 400 draws the binomial
     // standard deviation is 1.1 %, so [0.915, 0.985] is a > 3σ band.
-    let spec = ModelSpec::new("yeoh", OgdenForm::Seed);
+    let spec = ModelSpec::new("yeoh", OgdenForm::Abaqus);
     let model = spec.build().unwrap();
     let truth = [6.93e4, -888.0, 16.7];
     let mut hits = [0usize; 3];
@@ -219,7 +219,7 @@ fn both_ogden_forms_reach_the_same_optimum() {
     let d = treloar_all();
     let seed = fit(
         &d,
-        &ModelSpec::new("ogden3", OgdenForm::Seed),
+        &ModelSpec::new("ogden3", OgdenForm::Abaqus),
         &Settings::default(),
     )
     .unwrap();
@@ -243,7 +243,7 @@ fn ogden3_on_uniaxial_data_alone_is_reported_ill_posed() {
     let d = dataset("datasets/treloar/uniaxial.csv", None);
     let f = fit(
         &d,
-        &ModelSpec::new("ogden3", OgdenForm::Seed),
+        &ModelSpec::new("ogden3", OgdenForm::Abaqus),
         &Settings::default(),
     )
     .unwrap();
@@ -261,7 +261,7 @@ fn ogden3_on_uniaxial_data_alone_is_reported_ill_posed() {
 fn uniaxial_only_mooney_rivlin_extrapolates_badly_to_equibiaxial_and_says_so() {
     let uni = dataset("datasets/treloar/uniaxial.csv", None);
     let eq = dataset("datasets/treloar/equibiaxial.csv", Some(Mode::Equibiaxial));
-    let spec = ModelSpec::new("mooney-rivlin", OgdenForm::Seed);
+    let spec = ModelSpec::new("mooney-rivlin", OgdenForm::Abaqus);
     let f = fit(&uni, &spec, &Settings::default()).unwrap();
     assert!(
         f.warnings.iter().any(|w| w.contains("no equibiaxial data")),
@@ -299,7 +299,7 @@ fn stable_option_enforces_drucker_stability() {
     // Treloar uniaxial-only Mooney-Rivlin has C01 < 0 and loses stability; --stable
     // must return a fit that is stable over 0.1–10 in every mode.
     let d = dataset("datasets/treloar/uniaxial.csv", None);
-    let spec = ModelSpec::new("mooney-rivlin", OgdenForm::Seed);
+    let spec = ModelSpec::new("mooney-rivlin", OgdenForm::Abaqus);
     let free = fit(&d, &spec, &Settings::default()).unwrap();
     assert!(free.drucker.iter().any(|c| !c.stable));
     let stable = fit(
@@ -319,7 +319,7 @@ fn stable_option_enforces_drucker_stability() {
     assert!(stable.rmse_pa >= free.rmse_pa);
     // Where the unconstrained optimum is already stable, the constraint changes nothing.
     let vhb = dataset("datasets/vhb4910/uniaxial.csv", None);
-    let y = ModelSpec::new("yeoh", OgdenForm::Seed);
+    let y = ModelSpec::new("yeoh", OgdenForm::Abaqus);
     let a = fit(&vhb, &y, &Settings::default()).unwrap();
     let b = fit(
         &vhb,
@@ -348,7 +348,7 @@ fn too_few_points_is_an_error_not_a_fit() {
     d.samples.truncate(3);
     let e = fit(
         &d,
-        &ModelSpec::new("ogden2", OgdenForm::Seed),
+        &ModelSpec::new("ogden2", OgdenForm::Abaqus),
         &Settings::default(),
     )
     .unwrap_err();
@@ -381,7 +381,7 @@ fn recovers_known_constants_from_noisy_data_in_every_mode() {
     // terms trade off by design.
     let mut checked = 0;
     for (name, truth) in TRUTHS.into_iter().filter(|(n, _)| *n != "ogden4") {
-        let spec = ModelSpec::new(name, OgdenForm::Seed);
+        let spec = ModelSpec::new(name, OgdenForm::Abaqus);
         let model = spec.build().unwrap();
         for modes in [&ALL3[0..1], &ALL3[1..2], &ALL3[2..3], &ALL3[..]] {
             let d = synthetic(model.as_ref(), truth, modes, 0.01, 0.0, 7);
@@ -491,7 +491,7 @@ fn the_estimator_refuses_data_outside_the_domain_without_the_reader() {
         for model in ["yeoh", "gent", "ogden2"] {
             let e = fit(
                 &d,
-                &ModelSpec::new(model, OgdenForm::Seed),
+                &ModelSpec::new(model, OgdenForm::Abaqus),
                 &Settings::default(),
             )
             .expect_err("outside the domain");
@@ -511,7 +511,7 @@ fn the_estimator_refuses_data_outside_the_domain_without_the_reader() {
         for model in ["yeoh", "gent", "ogden2"] {
             let e = fit(
                 &d,
-                &ModelSpec::new(model, OgdenForm::Seed),
+                &ModelSpec::new(model, OgdenForm::Abaqus),
                 &Settings::default(),
             )
             .expect_err("nothing to fit");
@@ -534,7 +534,7 @@ fn extreme_weights_give_a_finite_fit() {
     for model in ["neo-hookean", "yeoh", "gent", "ogden1"] {
         let f = fit(
             &d,
-            &ModelSpec::new(model, OgdenForm::Seed),
+            &ModelSpec::new(model, OgdenForm::Abaqus),
             &Settings::default(),
         )
         .unwrap();
@@ -574,7 +574,7 @@ fn auto_does_not_choose_a_model_that_interpolates_few_points() {
     // Fitted on its own, Ogden-2 is ill-posed and says that it interpolates.
     let o2 = fit(
         &d,
-        &ModelSpec::new("ogden2", OgdenForm::Seed),
+        &ModelSpec::new("ogden2", OgdenForm::Abaqus),
         &Settings::default(),
     )
     .unwrap();
@@ -597,7 +597,7 @@ fn auto_does_not_choose_a_model_that_interpolates_few_points() {
 /// that good is not a fit of a measurement, and its status says so (warning).
 #[test]
 fn a_fit_below_any_real_noise_is_flagged() {
-    let spec = ModelSpec::new("neo-hookean", OgdenForm::Seed);
+    let spec = ModelSpec::new("neo-hookean", OgdenForm::Abaqus);
     let model = spec.build().unwrap();
     let d = synthetic(model.as_ref(), &[4e5], &ALL3[..1], 0.0, 0.0, 1);
     let f = fit(&d, &spec, &Settings::default()).unwrap();
@@ -624,7 +624,7 @@ fn a_fit_with_the_wrong_parameters_has_no_evaluator() {
     let d = dataset("datasets/vhb4910/uniaxial.csv", None);
     let f = fit(
         &d,
-        &ModelSpec::new("yeoh", OgdenForm::Seed),
+        &ModelSpec::new("yeoh", OgdenForm::Abaqus),
         &Settings::default(),
     )
     .unwrap();
@@ -661,7 +661,7 @@ fn repeated_points_are_fitted_as_their_weighted_means() {
     }
     let few: Vec<(f64, f64, f64)> = pts.iter().map(|&(l, y)| (l, y, n as f64)).collect();
     for model in ["yeoh", "ogden1", "gent"] {
-        let spec = ModelSpec::new(model, OgdenForm::Seed);
+        let spec = ModelSpec::new(model, OgdenForm::Abaqus);
         let a = fit(&by_hand(&many), &spec, &Settings::default()).unwrap();
         let b = fit(&by_hand(&few), &spec, &Settings::default()).unwrap();
         for (x, y) in a.values().iter().zip(b.values()) {
@@ -684,7 +684,7 @@ fn treloar_ogden3_is_not_identifiable_and_auto_does_not_choose_it() {
     let d = treloar_all();
     let f = fit(
         &d,
-        &ModelSpec::new("ogden3", OgdenForm::Seed),
+        &ModelSpec::new("ogden3", OgdenForm::Abaqus),
         &Settings::default(),
     )
     .unwrap();
@@ -732,10 +732,10 @@ fn treloar_ogden3_is_not_identifiable_and_auto_does_not_choose_it() {
 /// old test σ > |C01| alone holds ~68 % and fails it.
 #[test]
 fn mooney_rivlin_on_neo_hookean_data_leaves_c01_not_identifiable() {
-    let nh = ModelSpec::new("neo-hookean", OgdenForm::Seed)
+    let nh = ModelSpec::new("neo-hookean", OgdenForm::Abaqus)
         .build()
         .unwrap();
-    let mr = ModelSpec::new("mooney-rivlin", OgdenForm::Seed);
+    let mr = ModelSpec::new("mooney-rivlin", OgdenForm::Abaqus);
     let n = 60;
     let mut flagged = 0;
     for seed in 0..n {

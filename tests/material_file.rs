@@ -38,7 +38,7 @@ fn unc(name: &str, unit: &str, value: f64, se: Option<f64>, ok: bool) -> ParamUn
 pub fn material() -> IdentifiedMaterial {
     IdentifiedMaterial {
         hyperelastic: HyperelasticPart {
-            spec: ModelSpec::new("yeoh", OgdenForm::Seed),
+            spec: ModelSpec::new("yeoh", OgdenForm::Abaqus),
             params: vec![69.3e3, -888.0, 16.7],
             ranges: Some(FittedRanges {
                 per_mode: vec![StretchRange {

@@ -13,18 +13,18 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 fn cases() -> Vec<(Box<dyn StrainEnergy>, Vec<f64>)> {
     let b = |n: &str, f: OgdenForm| ModelSpec::new(n, f).build().unwrap();
     vec![
-        (b("neo-hookean", OgdenForm::Seed), vec![4e5]),
-        (b("mooney-rivlin", OgdenForm::Seed), vec![1.5e5, 3e4]),
-        (b("yeoh", OgdenForm::Seed), vec![6.93e4, -888.0, 16.7]),
-        (b("gent", OgdenForm::Seed), vec![2e5, 40.0]),
-        (b("ogden1", OgdenForm::Seed), vec![3e5, 1.8]),
-        (b("ogden2", OgdenForm::Seed), vec![3e5, 1.5, 2e3, 5.0]),
+        (b("neo-hookean", OgdenForm::Abaqus), vec![4e5]),
+        (b("mooney-rivlin", OgdenForm::Abaqus), vec![1.5e5, 3e4]),
+        (b("yeoh", OgdenForm::Abaqus), vec![6.93e4, -888.0, 16.7]),
+        (b("gent", OgdenForm::Abaqus), vec![2e5, 40.0]),
+        (b("ogden1", OgdenForm::Abaqus), vec![3e5, 1.8]),
+        (b("ogden2", OgdenForm::Abaqus), vec![3e5, 1.5, 2e3, 5.0]),
         (
-            b("ogden3", OgdenForm::Seed),
+            b("ogden3", OgdenForm::Abaqus),
             vec![3.3e5, 1.9, 3.0, 8.6, 7e3, -2.2],
         ),
         (
-            b("ogden4", OgdenForm::Seed),
+            b("ogden4", OgdenForm::Abaqus),
             vec![3e5, 1.3, 1e3, 5.0, 5e3, -2.0, 10.0, 0.5],
         ),
         (
@@ -165,13 +165,13 @@ fn same_stress(a: &dyn StrainEnergy, pa: &[f64], b: &dyn StrainEnergy, pb: &[f64
 #[test]
 fn models_agree_where_they_coincide() {
     let b = |n: &str, f: OgdenForm| ModelSpec::new(n, f).build().unwrap();
-    let nh = b("neo-hookean", OgdenForm::Seed);
+    let nh = b("neo-hookean", OgdenForm::Abaqus);
     let mu = 4e5;
     // Ogden-1 with α = 2 in the seed form is Neo-Hookean with μ.
     same_stress(
         nh.as_ref(),
         &[mu],
-        b("ogden1", OgdenForm::Seed).as_ref(),
+        b("ogden1", OgdenForm::Abaqus).as_ref(),
         &[mu, 2.0],
         1e-12,
     );
@@ -187,20 +187,20 @@ fn models_agree_where_they_coincide() {
     same_stress(
         nh.as_ref(),
         &[mu],
-        b("mooney-rivlin", OgdenForm::Seed).as_ref(),
+        b("mooney-rivlin", OgdenForm::Abaqus).as_ref(),
         &[mu / 2.0, 0.0],
         1e-12,
     );
     same_stress(
         nh.as_ref(),
         &[mu],
-        b("yeoh", OgdenForm::Seed).as_ref(),
+        b("yeoh", OgdenForm::Abaqus).as_ref(),
         &[mu / 2.0, 0.0, 0.0],
         1e-12,
     );
     // Ogden-2 with α = (2, −2) in Ogden's form is Mooney-Rivlin, C10 = μ1/2, C01 = −μ2/2.
     same_stress(
-        b("mooney-rivlin", OgdenForm::Seed).as_ref(),
+        b("mooney-rivlin", OgdenForm::Abaqus).as_ref(),
         &[1.5e5, 3e4],
         b("ogden2", OgdenForm::Original).as_ref(),
         &[3e5, 2.0, -6e4, -2.0],
@@ -210,21 +210,21 @@ fn models_agree_where_they_coincide() {
     same_stress(
         nh.as_ref(),
         &[mu],
-        b("gent", OgdenForm::Seed).as_ref(),
+        b("gent", OgdenForm::Abaqus).as_ref(),
         &[mu, 1e9],
         1e-7,
     );
     // The two Ogden forms describe the same function after conversion.
     let orig = [6.18e5, 1.3, 1.18e3, 5.0, -9.81e3, -2.0];
-    let seed = Ogden::convert(&orig, OgdenForm::Original, OgdenForm::Seed);
+    let seed = Ogden::convert(&orig, OgdenForm::Original, OgdenForm::Abaqus);
     same_stress(
         b("ogden3", OgdenForm::Original).as_ref(),
         &orig,
-        b("ogden3", OgdenForm::Seed).as_ref(),
+        b("ogden3", OgdenForm::Abaqus).as_ref(),
         &seed,
         1e-12,
     );
-    let back = Ogden::convert(&seed, OgdenForm::Seed, OgdenForm::Original);
+    let back = Ogden::convert(&seed, OgdenForm::Abaqus, OgdenForm::Original);
     for (a, b) in orig.iter().zip(&back) {
         assert!((a - b).abs() <= 1e-12 * a.abs());
     }
@@ -240,11 +240,11 @@ fn published_values() {
     assert!((ogden.initial_shear_modulus(&p) - 0.41446e6).abs() < 50.0);
     // Seed Table 3.2 (Wissler & Mazza 2005, VHB 4910 Yeoh): μ0 = 2·C10 = 0.1386 MPa,
     // Y0 = 6·C10 = 0.416 MPa as the table states.
-    let yeoh = b("yeoh", OgdenForm::Seed);
+    let yeoh = b("yeoh", OgdenForm::Abaqus);
     let q = [0.0693e6, -8.88e-4 * 1e6, 16.7e-6 * 1e6];
     assert!((3.0 * yeoh.initial_shear_modulus(&q) - 0.4158e6).abs() < 1.0);
     // Neo-Hookean uniaxial closed form P = μ(λ − λ⁻²): at λ = 2, P = 1.75μ.
-    let nh = b("neo-hookean", OgdenForm::Seed);
+    let nh = b("neo-hookean", OgdenForm::Abaqus);
     assert!((nh.nominal_stress(&[1.0], Mode::Uniaxial, 2.0) - 1.75).abs() < 1e-15);
     // Equibiaxial P = μ(λ − λ⁻⁵), planar P = μ(λ − λ⁻³).
     assert!((nh.nominal_stress(&[1.0], Mode::Equibiaxial, 2.0) - (2.0 - 1.0 / 32.0)).abs() < 1e-15);
@@ -253,7 +253,7 @@ fn published_values() {
 
 #[test]
 fn drucker_check_finds_the_unstable_range() {
-    let b = |n: &str| ModelSpec::new(n, OgdenForm::Seed).build().unwrap();
+    let b = |n: &str| ModelSpec::new(n, OgdenForm::Abaqus).build().unwrap();
     for (m, p) in cases() {
         // Every case above is stable over 0.1–10 except possibly where the Gent limit
         // is reached (no finite stress there: reported as not stable).
@@ -287,7 +287,7 @@ proptest! {
     #[test]
     fn ogden_jacobian_is_right_for_any_exponent(alpha in -12.0f64..12.0, lam in 0.2f64..6.0, mode in 0usize..3) {
         // Includes exponents near 0, where the seed form switches to its series.
-        let m = Ogden::new(1, OgdenForm::Seed);
+        let m = Ogden::new(1, OgdenForm::Abaqus);
         let p = [1e5, alpha];
         let mode = Mode::ALL[mode];
         let mut row = [0.0; 2];
@@ -304,7 +304,7 @@ proptest! {
 
     #[test]
     fn stress_vanishes_at_unit_stretch_for_random_parameters(c10 in 1e3f64..1e6, c20 in -1e4f64..1e4, c30 in 0.0f64..1e3) {
-        let m = ModelSpec::new("yeoh", OgdenForm::Seed).build().unwrap();
+        let m = ModelSpec::new("yeoh", OgdenForm::Abaqus).build().unwrap();
         for mode in Mode::ALL {
             prop_assert!(m.nominal_stress(&[c10, c20, c30], mode, 1.0).abs() <= 1e-9 * c10);
         }
@@ -316,7 +316,7 @@ proptest! {
 fn random_params(name: &str, draws: &[(bool, f64, f64)]) -> Vec<f64> {
     let modulus =
         |&(neg, mag, _): &(bool, f64, f64)| if neg { -1.0 } else { 1.0 } * 10f64.powf(mag);
-    let k = ModelSpec::new(name, OgdenForm::Seed)
+    let k = ModelSpec::new(name, OgdenForm::Abaqus)
         .build()
         .unwrap()
         .params()
@@ -370,7 +370,7 @@ impl StrainEnergy for Counting<'_> {
 /// result.
 #[test]
 fn drucker_check_evaluates_few_stretches() {
-    let yeoh = ModelSpec::new("yeoh", OgdenForm::Seed).build().unwrap();
+    let yeoh = ModelSpec::new("yeoh", OgdenForm::Abaqus).build().unwrap();
     let mut all = cases();
     all.push((yeoh, vec![1e5, -5e3, 50.0]));
     for (m, p) in &all {
@@ -422,7 +422,7 @@ fn stability_border(m: &dyn StrainEnergy, p: &[f64], j: usize) -> Option<f64> {
 fn certificate_agrees_with_the_dense_sweep() {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
     for name in ["neo-hookean", "mooney-rivlin", "yeoh"] {
-        let m = ModelSpec::new(name, OgdenForm::Seed).build().unwrap();
+        let m = ModelSpec::new(name, OgdenForm::Abaqus).build().unwrap();
         let k = m.params().len();
         for _ in 0..150 {
             let p: Vec<f64> = (0..k)
@@ -482,7 +482,7 @@ proptest! {
         other in 1e-4f64..1.0,
     ) {
         let (name, j) = if yeoh { ("yeoh", 1) } else { ("mooney-rivlin", 1) };
-        let m = ModelSpec::new(name, OgdenForm::Seed).build().unwrap();
+        let m = ModelSpec::new(name, OgdenForm::Abaqus).build().unwrap();
         let mut p = if yeoh { vec![c10, 0.0, other * c10 * 1e-3] } else { vec![c10, 0.0] };
         let Some(border) = stability_border(m.as_ref(), &p, j) else {
             return Ok(());
@@ -506,7 +506,7 @@ proptest! {
         draws in proptest::collection::vec((proptest::bool::ANY, 0.0f64..7.0, -20.0f64..20.0), 8),
     ) {
         let name = dea_fit::material::hyperelastic::MODEL_NAMES[model];
-        let form = if original { OgdenForm::Original } else { OgdenForm::Seed };
+        let form = if original { OgdenForm::Original } else { OgdenForm::Abaqus };
         let m = ModelSpec::new(name, form).build().unwrap();
         let p = random_params(name, &draws);
         prop_assert_eq!(drucker(m.as_ref(), &p), drucker_dense(m.as_ref(), &p), "{} {:?}", name, p);
@@ -522,7 +522,7 @@ proptest! {
         mode in 0usize..3,
     ) {
         let name = dea_fit::material::hyperelastic::MODEL_NAMES[model];
-        let m = ModelSpec::new(name, OgdenForm::Seed).build().unwrap();
+        let m = ModelSpec::new(name, OgdenForm::Abaqus).build().unwrap();
         let p = random_params(name, &draws);
         let mode = Mode::ALL[mode];
         let t = m.tangent(&p, mode, lam);
@@ -584,7 +584,7 @@ fn wrong_length_parameters_give_nan_and_an_error_never_a_panic() {
 /// (data beyond the upper bound, or NaN): `f64::clamp` panicked on them.
 #[test]
 fn gent_bounds_are_never_inverted() {
-    let g = ModelSpec::new("gent", OgdenForm::Seed).build().unwrap();
+    let g = ModelSpec::new("gent", OgdenForm::Abaqus).build().unwrap();
     for x in [0.0, 1e4, 1e6, 1e7, 1e300, f64::INFINITY, f64::NAN] {
         for (lo, hi) in g.bounds(x) {
             assert!(lo <= hi, "max I1 − 3 = {x}: [{lo}, {hi}]");

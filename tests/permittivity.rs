@@ -818,7 +818,7 @@ fn synth_lcr_is_recovered_by_the_reader() {
                 "--stray",
                 "0.3pF",
                 "--sweep",
-                "100Hz:100kHz:4",
+                "100Hz:100kHz:13",
                 "--noise",
                 "0.003",
                 "--pair",

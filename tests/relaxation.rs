@@ -455,7 +455,7 @@ fn qlv_recovers_the_normalised_relaxation_function() {
     let hd = dea_fit::io::tensile::read(path, &Default::default()).unwrap();
     let hf = hyperelastic::fit(
         &hd,
-        &ModelSpec::new("yeoh", OgdenForm::Seed),
+        &ModelSpec::new("yeoh", OgdenForm::Abaqus),
         &Default::default(),
     )
     .unwrap();
@@ -782,7 +782,7 @@ fn measured_vhb_cycle_is_fitted_by_qlv() {
     .unwrap();
     let hf = hyperelastic::fit(
         &eq,
-        &ModelSpec::new("ogden1", OgdenForm::Seed),
+        &ModelSpec::new("ogden1", OgdenForm::Abaqus),
         &Default::default(),
     )
     .unwrap();
@@ -1015,7 +1015,7 @@ fn hyperelastic_band_is_the_propagated_covariance() {
     .unwrap();
     let hf = hyperelastic::fit(
         &hd,
-        &ModelSpec::new("yeoh", OgdenForm::Seed),
+        &ModelSpec::new("yeoh", OgdenForm::Abaqus),
         &Default::default(),
     )
     .unwrap();

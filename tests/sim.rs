@@ -704,7 +704,7 @@ fn a_fit_file_drives_the_stack_and_extrapolation_is_reported() {
     .unwrap();
     let f = fit(
         &d,
-        &ModelSpec::new("yeoh", OgdenForm::Seed),
+        &ModelSpec::new("yeoh", OgdenForm::Abaqus),
         &Settings::default(),
     )
     .unwrap();

@@ -29,7 +29,7 @@ enum What {
     /// against error and time.
     Relaxation,
     /// The simulator: error against run time over tolerances, integrators and
-    /// fidelity levels for the seed's scenes.
+    /// fidelity levels for the scenes of El Atrache Ceballos (2021).
     Simulate(SimArgs),
     /// Every integrator and `auto` on every shipped scene and over damping ratios
     /// 10⁻⁴…10: auto's time as a ratio to the best method's.

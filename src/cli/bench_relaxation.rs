@@ -140,7 +140,7 @@ pub fn run() -> Result<super::bench::Verdict> {
     let tab = table(&header, &rows);
     let mut page = Page::new("Relaxation estimator: terms and method against error and time");
     page.para(vec![
-        text(format!("Data: the seed's Table 3.3 (E0 = 222 kPa) as a step to strain 0.5, 200 log-spaced points over 0.01–1000 s, 1 % relative noise (seed 4910). Time: fastest of {REPS} runs, single fit with the given term count. Rerun: ")),
+        text(format!("Data: El Atrache Ceballos (2021) Table 3.3 (E0 = 222 kPa) as a step to strain 0.5, 200 log-spaced points over 0.01–1000 s, 1 % relative noise (seed 4910). Time: fastest of {REPS} runs, single fit with the given term count. Rerun: ")),
         code("dea-fit bench relaxation"),
         text(". All rows: "),
         link("relaxation.csv", "relaxation.csv"),
@@ -152,7 +152,7 @@ pub fn run() -> Result<super::bench::Verdict> {
     page.table(&header, rows);
     let run = Run::new(
         "bench relaxation",
-        "synthetic: seed Table 3.3",
+        "synthetic: El Atrache Ceballos (2021) Table 3.3",
         "Prony, 1–6 terms",
     );
     let html = page.write(&dir, "relaxation", run)?;

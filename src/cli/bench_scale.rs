@@ -370,7 +370,7 @@ fn write(a: &ScaleArgs, rows: &[Row], slopes: &[Slope]) -> Result<()> {
         "# Time against input size\n\ndea-fit {}; budget {} s and at least {} runs per size. Rerun: `dea-fit bench scale`.\n\n\
          Each estimator is timed at growing row counts (half-decade steps); the slope of ln t against ln n, fitted by least squares, is 1 when the cost grows linearly. \
          *read*: the tensile reader (CSV text in memory → samples); *read+yeoh*: reading and the whole Yeoh fit call; *hyperelastic-auto*: `hyperelastic --model auto` on the samples; \
-         *relaxation-auto*: `relaxation --terms auto`. Tensile data: the Ogden-3 fit of Treloar's three modes, 1 % noise; relaxation: the seed's Table 3.3 series, 1 % noise.\n\n\
+         *relaxation-auto*: `relaxation --terms auto`. Tensile data: the Ogden-3 fit of Treloar's three modes, 1 % noise; relaxation: the Table 3.3 series of El Atrache Ceballos (2021), 1 % noise.\n\n\
          ![scale](scale.svg)\n\n```\n{slope_tab}```\n\nAll rows: [scale.csv](scale.csv), [scale.json](scale.json).\n\n```\n{tab}```\n",
         env!("CARGO_PKG_VERSION"),
         a.budget,

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum To {
     Abaqus,
+    Calculix,
     Ansys,
     Lsdyna,
     Febio,
@@ -35,6 +36,11 @@ pub struct Args {
     /// Mass density, e.g. 960kg/m3 (bare number: kg/m³); LS-DYNA's card needs it.
     #[arg(long)]
     density: Option<String>,
+    /// Bulk-to-shear modulus ratio K/mu0 of the codes without a fully
+    /// incompressible rubber (calculix, lsdyna, febio): the card's stress differs
+    /// from the incompressible fit's by O(stress/K).
+    #[arg(long, default_value_t = export::BULK_RATIO)]
+    bulk_ratio: f64,
     /// Print the card and its constants as JSON on stdout.
     #[arg(long)]
     json: bool,
@@ -49,6 +55,7 @@ pub struct Args {
 pub fn run(a: Args) -> Result<i32> {
     let target = match a.to {
         To::Abaqus => Target::Abaqus,
+        To::Calculix => Target::Calculix,
         To::Ansys => Target::Ansys,
         To::Lsdyna => Target::Lsdyna,
         To::Febio => Target::Febio,
@@ -61,7 +68,17 @@ pub fn run(a: Args) -> Result<i32> {
         .transpose()
         .map_err(|e| Error::settings(format!("--density: {e}")))?;
     let material = export::read(&a.files)?;
-    let card = export::card(&material, target, &Options { density })?;
+    let card = export::card(
+        &material,
+        target,
+        &Options {
+            density,
+            bulk_ratio: a.bulk_ratio,
+        },
+    )?;
+    if target == Target::Calculix {
+        eprintln!("note: CalculiX ignores *VISCOELASTIC: the card holds the hyperelastic (long-term) response only");
+    }
     let out = a.out.clone().unwrap_or_else(|| {
         let stem = a.files[0]
             .file_stem()

@@ -16,7 +16,10 @@ const STARTS: CountRange = CountRange::new(1, 100_000, "multi-start points to us
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum Form {
-    Seed,
+    /// 2μ/α², the form of Abaqus and CalculiX.
+    // `seed`, its old name: a hidden, deprecated alias (old command lines work)
+    #[value(alias = "seed")]
+    Abaqus,
     Original,
 }
 
@@ -41,8 +44,9 @@ pub struct Args {
     /// Model: neo-hookean, mooney-rivlin, yeoh, gent, ogden1..ogden4, or auto.
     #[arg(long, default_value = "auto")]
     model: String,
-    /// Ogden coefficient form: seed (Eq. 2.9, 2μ/α²) or original (Ogden 1972, μ/α).
-    #[arg(long, value_enum, default_value = "seed")]
+    /// Ogden coefficient form: abaqus (El Atrache Ceballos (2021) Eq. 2.9, 2μ/α², the
+    /// form of Abaqus and CalculiX) or original (Ogden 1972, μ/α).
+    #[arg(long, value_enum, default_value = "abaqus")]
     ogden_form: Form,
     /// Residuals: abs (Pa; default, load-cell noise is absolute) or rel.
     #[arg(long, value_enum, default_value = "abs")]
@@ -121,7 +125,7 @@ pub fn run(a: Args) -> Result<i32> {
         },
         stable: a.stable,
         ogden_form: match a.ogden_form {
-            Form::Seed => OgdenForm::Seed,
+            Form::Abaqus => OgdenForm::Abaqus,
             Form::Original => OgdenForm::Original,
         },
         max_starts: a.max_starts,

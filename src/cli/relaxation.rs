@@ -32,7 +32,7 @@ enum MethodArg {
     Grid,
 }
 
-/// Fit a Prony series (and the seed's Kelvin-Maxwell arms) to a relaxation curve:
+/// Fit a Prony series (and the Kelvin-Maxwell arms of El Atrache Ceballos (2021)) to a relaxation curve:
 /// stress or force against time at a held strain.
 #[derive(Debug, clap::Args)]
 pub struct Args {

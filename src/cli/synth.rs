@@ -32,8 +32,8 @@ pub struct Args {
     /// Model name (as for `hyperelastic --model`; synth hyperelastic).
     #[arg(long)]
     model: Option<String>,
-    /// Ogden form of the given parameters.
-    #[arg(long, default_value = "seed")]
+    /// Ogden form of the given parameters: abaqus (2μ/α²) or original (μ/α).
+    #[arg(long, default_value = "abaqus")]
     ogden_form: String,
     /// Parameter NAME=VALUE (moduli with a unit, e.g. C10=69.3kPa; bare numbers SI).
     /// synth relaxation: E_inf, E1…EN (stress units) and tau1…tauN (time units).
@@ -70,8 +70,9 @@ pub struct Args {
     /// thickness (e.g. 300um).
     #[arg(long)]
     thickness: Option<String>,
-    /// synth lcr: log sweep FMIN:FMAX:PER_DECADE (e.g. 100Hz:100kHz:4).
-    #[arg(long, default_value = "100Hz:1MHz:4")]
+    /// synth lcr: log sweep FMIN:FMAX:COUNT, COUNT frequencies log-spaced from
+    /// FMIN to FMAX, both included (e.g. 100Hz:100kHz:13, 4 a decade).
+    #[arg(long, default_value = "100Hz:1MHz:17")]
     sweep: String,
     /// synth lcr: lossless stray capacitance added to every Cp (e.g. 0.3pF).
     #[arg(long, default_value = "0")]
@@ -363,13 +364,32 @@ fn range(
     Ok((a, b, n))
 }
 
+/// Points of `synth lcr --sweep`: a count like every range's third number.
+const SWEEP_POINTS: CountRange = CountRange::new(2, MAX_POINTS, "points of one log sweep");
+
+/// `count` frequencies log-spaced from `f0` to `f1` (Hz), both included, each
+/// rounded to four significant digits as a meter's frequency list prints them.
+/// Refused where the sweep at the density the count makes, rounded up to whole
+/// points a decade, is one `lcr::log_sweep_points` refuses (0 < f0 < f1,
+/// frequencies a meter measures, at most 1000 a decade so that the rounded
+/// frequencies stay distinct).
+fn log_sweep(f0: f64, f1: f64, count: usize) -> std::result::Result<Vec<f64>, String> {
+    let per_decade = (count - 1) as f64 / (f1 / f0).log10();
+    // a float-to-int cast saturates: an absurd density is refused by the check
+    dea_fit::io::lcr::log_sweep_points(f0, f1, per_decade.ceil().max(1.0) as usize)?;
+    Ok(dea_fit::io::relaxation::log_times(f0, f1, count, false)
+        .into_iter()
+        .map(|f| format!("{f:.3e}").parse().unwrap_or(f))
+        .collect())
+}
+
 /// `synth lcr`: a lossy parallel-plate capacitor, εr′ and tan δ flat in frequency,
 /// C0 = ε0·A/d, Cp = εr′·C0·(1 + e₁) + stray, D = tan δ·(1 + e₂) with relative
 /// Gaussian noise, written in the plain-CSV format `dea-fit permittivity` reads,
 /// as the chosen pair, parameters in its `#` lines.
 fn lcr(a: Args) -> Result<i32> {
     use dea_fit::fit::permittivity::Geometry;
-    use dea_fit::io::lcr::{log_frequencies, synthetic_points, write_csv, PER_DECADE};
+    use dea_fit::io::lcr::{synthetic_points, write_csv};
     use dea_fit::material::check::PERMITTIVITY;
     use dea_fit::material::dielectric::Pair;
     use dea_fit::rank::manifest::TAN_DELTA;
@@ -414,15 +434,15 @@ fn lcr(a: Args) -> Result<i32> {
         Error::settings(format!("--pair '{}': unknown pair", a.pair))
             .with_hint("cp-d, cp-rp, cs-d, cs-rs, z-theta, r-x, g-b, …")
     })?;
-    let (f0, f1, per_decade) = range(
+    let (f0, f1, count) = range(
         &a.sweep,
-        ("--sweep", "FMIN:FMAX:PER_DECADE"),
-        PER_DECADE,
+        ("--sweep", "FMIN:FMAX:COUNT"),
+        SWEEP_POINTS,
         |x| parse_quantity(x, Dimension::Frequency).map_err(|e| e.to_string()),
     )?;
-    let freqs = log_frequencies(f0, f1, per_decade).map_err(|e| {
+    let freqs = log_sweep(f0, f1, count).map_err(|e| {
         Error::settings(format!("--sweep '{}': {e}", a.sweep))
-            .with_hint("e.g. --sweep 100Hz:1MHz:4")
+            .with_hint("e.g. --sweep 100Hz:1MHz:17 (4 a decade)")
     })?;
     let normal = Normal::new(0.0, noise).map_err(|e| Error::settings(format!("--noise: {e}")))?;
     let mut rng = ChaCha8Rng::seed_from_u64(a.seed);
@@ -469,12 +489,12 @@ fn hyperelastic(a: Args) -> Result<i32> {
     }
     let noise = relative_noise(&a, "the stress")?;
     let form = match a.ogden_form.as_str() {
-        "seed" => OgdenForm::Seed,
+        // `seed`: the old name of the abaqus form, still accepted
+        "abaqus" | "seed" => OgdenForm::Abaqus,
         "original" => OgdenForm::Original,
         f => {
-            return Err(
-                Error::settings(format!("unknown Ogden form '{f}'")).with_hint("seed or original")
-            )
+            return Err(Error::settings(format!("unknown Ogden form '{f}'"))
+                .with_hint("abaqus or original"))
         }
     };
     let spec = ModelSpec::new(&model_name, form);

@@ -1,9 +1,11 @@
-//! Abaqus keyword cards (Abaqus Keywords Reference: *HYPERELASTIC, *VISCOELASTIC).
+//! Abaqus keyword cards (Abaqus Keywords Reference: *HYPERELASTIC, *VISCOELASTIC),
+//! and the CalculiX cards written in the same keywords (CalculiX User's Manual,
+//! *HYPERELASTIC; the differences below measured with ccx 2.20).
 //!
 //! * `*HYPERELASTIC, NEO HOOKE`: U = C10(Ī1 − 3) + (J − 1)²/D1, C10 = μ/2.
-//! * `MOONEY-RIVLIN`: C10, C01, D1; `YEOH`: C10, C20, C30, D1, D2, D3 (the seed's
+//! * `MOONEY-RIVLIN`: C10, C01, D1; `YEOH`: C10, C20, C30, D1, D2, D3 (El Atrache Ceballos (2021)'s
 //!   polynomial coefficients as they are).
-//! * `OGDEN, N=n`: U = Σ 2μᵢ/αᵢ²(λ̄₁^αᵢ + λ̄₂^αᵢ + λ̄₃^αᵢ − 3), the seed form:
+//! * `OGDEN, N=n`: U = Σ 2μᵢ/αᵢ²(λ̄₁^αᵢ + λ̄₂^αᵢ + λ̄₃^αᵢ − 3), the abaqus form:
 //!   μᵢ, αᵢ as fitted (an original-form fit converted, μ = μ_orig·α/2).
 //! * Dᵢ = 0: incompressible. No Gent model: refused.
 //! * `*VISCOELASTIC, TIME=PRONY`: gᵢ, kᵢ, τᵢ with g_R(t) = 1 − Σ gᵢ(1 − e^(−t/τᵢ))
@@ -11,28 +13,61 @@
 //!   are then the instantaneous response (`MODULI=INSTANTANEOUS`), the fit's scaled
 //!   by E0/R. kᵢ = 0: the volumetric response of an incompressible solid does not
 //!   relax.
+//!
+//! CalculiX:
+//! * D = 0 is not incompressible: ccx replaces a D1 below 10⁻¹⁰ 1/Pa by a
+//!   compressible default (ν = 0.475), which makes a rubber too soft (Neo-Hookean,
+//!   λ = 1.5: 2.7 % uniaxial, 5.0 % equibiaxial).
+//!   The card writes D1 = 2/K with K = `bulk_ratio`·μ0 (U's volumetric term
+//!   (J − 1)²/D1, K = 2/D1), refused where D1 would fall below 10⁻¹⁰; the higher
+//!   Dᵢ (Yeoh, Ogden N ≥ 2) are 1 1/Pa, terms (J − 1)^(2i) negligible, since ccx
+//!   replaces a 0 by its defaults (10⁻¹², 10⁻¹⁸).
+//! * OGDEN takes N ≤ 3; no Gent; no hybrid (C3D8H) elements.
+//! * `*VISCOELASTIC` and `MODULI=` are ignored (a warning in ccx's output): the
+//!   card holds the long-term hyperelastic response, the fit's scaled by E∞/R,
+//!   and no Prony block.
 
 use super::{
     alone_warning, mu0, num, ogden_n, ogden_terms, scaled, Draft, Material, Options, Target,
 };
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::material::hyperelastic::OgdenForm;
 
 /// Values per data line of *HYPERELASTIC.
 const PER_LINE: usize = 8;
 
-pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
+/// The smallest D1 (1/Pa) ccx 2.20 reads as given (measured: 1.0E-10 is kept,
+/// 9.9E-11 replaced by the compressible default).
+const CALCULIX_MIN_D: f64 = 1e-10;
+
+/// Largest number of Ogden terms of CalculiX's *HYPERELASTIC, OGDEN.
+const CALCULIX_MAX_OGDEN: usize = 3;
+
+pub(super) fn write(m: &Material, target: Target, opts: &Options, d: &mut Draft) -> Result<()> {
+    let ccx = target == Target::Calculix;
     d.line(format!("*MATERIAL, NAME={}", m.name));
     if let Some(rho) = opts.density {
         d.line("*DENSITY");
-        let rho = num(d.constant("density", rho, "kg/m^3"));
+        let rho = d.field("density", rho, "kg/m^3");
         d.line(rho);
     }
-    let scale = m
-        .relaxation
-        .as_ref()
-        .map_or(1.0, |r| r.instantaneous_pa() / r.reference_pa);
-    let moduli = if m.relaxation.is_some() {
+    if ccx {
+        d.note("CalculiX ignores *VISCOELASTIC (ccx 2.20: the card image cannot be interpreted): a viscoelastic fit is written as its long-term hyperelastic response only");
+        if m.hyperelastic.is_none() {
+            return Err(Error::settings(
+                "CalculiX has no viscoelastic hyperelastic material (it ignores *VISCOELASTIC): a relaxation fit alone has nothing to write",
+            )
+            .with_hint("export it --to abaqus, ansys or comsol, or give a hyperelastic fit for its long-term response"));
+        }
+    }
+    let scale = m.relaxation.as_ref().map_or(1.0, |r| {
+        if ccx {
+            r.long_term_pa / r.reference_pa
+        } else {
+            r.instantaneous_pa() / r.reference_pa
+        }
+    });
+    let moduli = if m.relaxation.is_some() && !ccx {
         ", MODULI=INSTANTANEOUS"
     } else {
         ""
@@ -40,6 +75,31 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
     if let Some(h0) = &m.hyperelastic {
         let h = scaled(h0, scale)?;
         let p = &h.params;
+        let mu = mu0(&h)?;
+        // D1, and the higher D_i, of the card (docs at the top)
+        let (d1, dn) = if ccx {
+            if !(mu > 0.0 && mu.is_finite()) {
+                return Err(Error::settings(format!(
+                    "CalculiX: the small-strain shear modulus mu0 = {} Pa gives no bulk modulus K = (K/mu0)*mu0 > 0 for D1 = 2/K",
+                    num(mu)
+                ))
+                .with_hint("check the fit: a rubber has mu0 > 0"));
+            }
+            let d1 = 2.0 / (opts.bulk_ratio * mu);
+            if d1 < CALCULIX_MIN_D {
+                return Err(Error::settings(format!(
+                    "CalculiX: D1 = 2/(K/mu0 * mu0) = {} 1/Pa (mu0 = {} Pa, K/mu0 = {}) is below 1e-10, which ccx reads as D = 0 and replaces by its compressible default (nu = 0.475)",
+                    num(d1), num(mu), opts.bulk_ratio
+                ))
+                .with_hint(format!(
+                    "give --bulk-ratio {} or less",
+                    (2.0 / (CALCULIX_MIN_D * mu)).floor()
+                )));
+            }
+            (d1, 1.0)
+        } else {
+            (0.0, 0.0)
+        };
         let (keyword, values): (String, Vec<(String, f64, &'static str)>) = match h
             .spec
             .name
@@ -47,14 +107,14 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
         {
             "neo-hookean" => (
                 "NEO HOOKE".into(),
-                vec![("C10".into(), p[0] / 2.0, "Pa"), ("D1".into(), 0.0, "1/Pa")],
+                vec![("C10".into(), p[0] / 2.0, "Pa"), ("D1".into(), d1, "1/Pa")],
             ),
             "mooney-rivlin" => (
                 "MOONEY-RIVLIN".into(),
                 vec![
                     ("C10".into(), p[0], "Pa"),
                     ("C01".into(), p[1], "Pa"),
-                    ("D1".into(), 0.0, "1/Pa"),
+                    ("D1".into(), d1, "1/Pa"),
                 ],
             ),
             "yeoh" => (
@@ -63,28 +123,28 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
                     ("C10".into(), p[0], "Pa"),
                     ("C20".into(), p[1], "Pa"),
                     ("C30".into(), p[2], "Pa"),
-                    ("D1".into(), 0.0, "1/Pa"),
-                    ("D2".into(), 0.0, "1/Pa"),
-                    ("D3".into(), 0.0, "1/Pa"),
+                    ("D1".into(), d1, "1/Pa"),
+                    ("D2".into(), dn, "1/Pa"),
+                    ("D3".into(), dn, "1/Pa"),
                 ],
             ),
-            "gent" => {
-                return Err(super::no_model(
-                    Target::Abaqus,
-                    "Gent",
-                    "ansys, febio or comsol",
-                ))
-            }
+            "gent" => return Err(super::no_model(target, "Gent", "ansys, febio or comsol")),
             name => {
                 let n = ogden_n(name).expect("a known model");
+                if ccx && n > CALCULIX_MAX_OGDEN {
+                    return Err(Error::settings(format!(
+                        "CalculiX's OGDEN takes N = 1, 2 or 3 terms: a {n}-term Ogden fit cannot be written for it"
+                    ))
+                    .with_hint("fit ogden1..ogden3 for CalculiX (dea-fit hyperelastic --model ogden3), or export to abaqus, ansys, lsdyna, febio or comsol"));
+                }
                 let mut v = Vec::new();
-                for (i, (mu, a)) in ogden_terms(&h, OgdenForm::Seed).into_iter().enumerate() {
+                for (i, (mu, a)) in ogden_terms(&h, OgdenForm::Abaqus).into_iter().enumerate() {
                     v.push((format!("MU{}", i + 1), mu, "Pa"));
                     v.push((format!("ALPHA{}", i + 1), a, "1"));
                 }
-                v.extend((1..=n).map(|i| (format!("D{i}"), 0.0, "1/Pa")));
+                v.extend((1..=n).map(|i| (format!("D{i}"), if i == 1 { d1 } else { dn }, "1/Pa")));
                 if h0.spec.form == Some(OgdenForm::Original) {
-                    d.note("Ogden: the fit's original-form mu_i (mu/alpha) converted to Abaqus's form (2mu/alpha^2): mu_i = mu_orig*alpha_i/2, exact");
+                    d.note(format!("Ogden: the fit's original-form mu_i (mu/alpha) converted to {}'s form (2mu/alpha^2): mu_i = mu_orig*alpha_i/2, exact", target.title()));
                 }
                 (format!("OGDEN, N={n}"), v)
             }
@@ -92,33 +152,49 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
         d.line(format!("*HYPERELASTIC, {keyword}{moduli}"));
         let written: Vec<String> = values
             .into_iter()
-            .map(|(name, v, unit)| num(d.constant(name, v, unit)))
+            .map(|(name, v, unit)| d.field(name, v, unit))
             .collect();
         for chunk in written.chunks(PER_LINE) {
             d.line(chunk.join(", "));
         }
-        d.note(format!(
-            "D = 0: incompressible (Abaqus/Standard, hybrid elements; Abaqus/Explicit needs D > 0); small-strain shear modulus mu0 = {} Pa",
-            num(mu0(&h)?)
-        ));
-        if scale != 1.0 {
+        if ccx {
+            d.warn(format!(
+                "nearly incompressible: CalculiX has no incompressible rubber (D = 0 is replaced by a compressible default, nu = 0.475) and no hybrid elements; D1 = 2/K with K = {} mu0 = {} Pa (--bulk-ratio), higher D_i = 1 1/Pa (negligible); the card's stress differs from the incompressible fit's by O(stress/K)",
+                opts.bulk_ratio,
+                num(opts.bulk_ratio * mu)
+            ));
+            d.note(format!("small-strain shear modulus mu0 = {} Pa", num(mu)));
+        } else {
+            d.note(format!(
+                "D = 0: incompressible (Abaqus/Standard, hybrid elements; Abaqus/Explicit needs D > 0); small-strain shear modulus mu0 = {} Pa",
+                num(mu)
+            ));
+        }
+        if let Some(r) = m.relaxation.as_ref().filter(|_| ccx) {
+            d.warn(format!(
+                "CalculiX ignores *VISCOELASTIC: the {} relaxation terms are not written; the hyperelastic constants are the long-term response, the fit's x E_inf/R = {} (the instantaneous response would be x E0/R = {})",
+                r.terms.len(),
+                num(scale),
+                num(r.instantaneous_pa() / r.reference_pa)
+            ));
+        } else if scale != 1.0 {
             d.note(format!(
                 "hyperelastic constants = the fit's x E0/R = {}: the instantaneous response, as Abaqus takes it with a Prony series",
                 num(scale)
             ));
         }
     }
-    if let Some(r) = &m.relaxation {
+    if let Some(r) = m.relaxation.as_ref().filter(|_| !ccx) {
         if m.hyperelastic.is_none() {
             d.warn(alone_warning(r, false));
         }
         let e0 = r.instantaneous_pa();
         d.line("*VISCOELASTIC, TIME=PRONY");
         for (i, &(tau, e)) in r.terms.iter().enumerate() {
-            let g = d.constant(format!("g{}", i + 1), e / e0, "1");
-            let k = d.constant(format!("k{}", i + 1), 0.0, "1");
-            let t = d.constant(format!("tau{}", i + 1), tau, "s");
-            d.line(format!("{}, {}, {}", num(g), num(k), num(t)));
+            let g = d.field(format!("g{}", i + 1), e / e0, "1");
+            let k = d.field(format!("k{}", i + 1), 0.0, "1");
+            let t = d.field(format!("tau{}", i + 1), tau, "s");
+            d.line(format!("{g}, {k}, {t}"));
         }
         d.note(format!(
             "Prony g_i = E_i/E0 relative to the instantaneous modulus E0 = {} Pa (g_inf = {}); k_i = 0: no volumetric relaxation (incompressible)",

@@ -3,7 +3,7 @@
 //! * `TB,HYPER,,,,NEO`: W = μ/2(Ī1 − 3) + (J − 1)²/d; constants μ, d.
 //! * `MOONEY` (NPTS = 2): C10, C01, d; `YEOH` (NPTS = 3): C10, C20, C30, d1..d3.
 //! * `OGDEN` (NPTS = N): W = Σ μᵢ/αᵢ(λ̄₁^αᵢ + λ̄₂^αᵢ + λ̄₃^αᵢ − 3), the original
-//!   form (μ0 = ½Σμᵢαᵢ): a seed-form fit converted, μ = 2μ_seed/α.
+//!   form (μ0 = ½Σμᵢαᵢ): a abaqus-form fit converted, μ = 2μ_abaqus/α.
 //! * `GENT`: W = −μJm/2·ln(1 − (Ī1 − 3)/Jm); μ, Jm, d.
 //! * dᵢ = 0: incompressible (mixed u-P elements).
 //! * `TB,PRONY,,,N,SHEAR`: relative moduli aᵢ = Gᵢ/G0 and τᵢ, G0 the
@@ -21,7 +21,7 @@ const PER_COMMAND: usize = 6;
 fn tbdata(d: &mut Draft, values: &[(String, f64, &'static str)]) {
     let written: Vec<String> = values
         .iter()
-        .map(|(n, v, u)| num(d.constant(n.clone(), *v, u)))
+        .map(|(n, v, u)| d.field(n.clone(), *v, u))
         .collect();
     for (i, chunk) in written.chunks(PER_COMMAND).enumerate() {
         d.line(format!(
@@ -35,7 +35,7 @@ fn tbdata(d: &mut Draft, values: &[(String, f64, &'static str)]) {
 pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
     d.line("MAT,1");
     if let Some(rho) = opts.density {
-        let rho = num(d.constant("DENS", rho, "kg/m^3"));
+        let rho = d.field("DENS", rho, "kg/m^3");
         d.line(format!("MP,DENS,1,{rho}"));
     }
     let scale = m
@@ -83,7 +83,7 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
                 }
                 v.extend((1..=n).map(|i| (format!("d{i}"), 0.0, "1/Pa")));
                 if h0.spec.form != Some(OgdenForm::Original) {
-                    d.note("Ogden: the fit's seed-form mu_i (2mu/alpha^2) converted to ANSYS's original form (mu/alpha): mu_i = 2*mu_seed/alpha_i, exact");
+                    d.note("Ogden: the fit's abaqus-form mu_i (2mu/alpha^2) converted to ANSYS's original form (mu/alpha): mu_i = 2*mu_abaqus/alpha_i, exact");
                 }
                 (format!("TB,HYPER,1,,{n},OGDEN"), v)
             }

@@ -7,12 +7,12 @@
 //! * Neo-Hookean: Ws = μ/2(Ī1 − 3), `mu`; Mooney-Rivlin, two parameters: `C10`,
 //!   `C01`; Yeoh: `c1`, `c2`, `c3` (= C10, C20, C30); Gent: Ws = −μJm/2·ln(1 −
 //!   (Ī1 − 3)/Jm), `mu`, `Jm`.
-//! * Ogden: Ws = Σ μp/αp(λ̄₁^αp + λ̄₂^αp + λ̄₃^αp − 3), the original form: a seed-form
-//!   fit converted, μ = 2μ_seed/α.
+//! * Ogden: Ws = Σ μp/αp(λ̄₁^αp + λ̄₂^αp + λ̄₃^αp − 3), the original form: an abaqus-form
+//!   fit converted, μ = 2μ_abaqus/α.
 //! * Compressibility: Incompressible material.
 //! * Viscoelasticity, generalized Maxwell: branches with shear modulus `Gm` and
 //!   relaxation time `taum` in parallel with the hyperelastic (long-term) material,
-//!   as the seed's arms: Gm = Em/3; the hyperelastic constants are the long-term
+//!   as the arms of El Atrache Ceballos (2021): Gm = Em/3; the hyperelastic constants are the long-term
 //!   response, the fit's scaled by E∞/R.
 
 use super::{alone_warning, mu0, num, ogden_n, ogden_terms, scaled, Draft, Material, Options};
@@ -31,8 +31,8 @@ fn unit(u: &str) -> &'static str {
 
 /// One parameter line, recorded as a constant.
 fn param(d: &mut Draft, name: &str, v: f64, u: &'static str, what: &str) {
-    let v = d.constant(name, v, u);
-    d.line(format!("{name} {}{} \"{what}\"", num(v), unit(u)));
+    let v = d.field(name, v, u);
+    d.line(format!("{name} {v}{} \"{what}\"", unit(u)));
 }
 
 pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
@@ -83,7 +83,7 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
                     );
                 }
                 if h0.spec.form != Some(OgdenForm::Original) {
-                    d.note("Ogden: the fit's seed-form mu_i (2mu/alpha^2) converted to COMSOL's form (mu/alpha): mu_i = 2*mu_seed/alpha_i, exact");
+                    d.note("Ogden: the fit's abaqus-form mu_i (2mu/alpha^2) converted to COMSOL's form (mu/alpha): mu_i = 2*mu_abaqus/alpha_i, exact");
                 }
             }
         }

@@ -3,12 +3,12 @@
 //!
 //! * `Mooney-Rivlin`: W = c1(Ĩ1 − 3) + c2(Ĩ2 − 3) + U(J): c1 = C10, c2 = C01;
 //!   Neo-Hookean as c1 = μ/2, c2 = 0.
-//! * `Ogden`: W = Σ cᵢ/mᵢ²(λ̃₁^mᵢ + λ̃₂^mᵢ + λ̃₃^mᵢ − 3) + U(J): the seed form with
+//! * `Ogden`: W = Σ cᵢ/mᵢ²(λ̃₁^mᵢ + λ̃₂^mᵢ + λ̃₃^mᵢ − 3) + U(J): the abaqus form with
 //!   cᵢ = 2μᵢ, mᵢ = αᵢ (at most 6 terms).
 //! * `Gent`: W = −G·Jm/2·ln(1 − (Ĩ1 − 3)/Jm) + U(J): G = μ, Jm.
 //! * Yeoh has no FEBio material of its own: `uncoupled hyperelastic` with the
 //!   energy W(I1, I2) written out (FEBio 4).
-//! * `k`: bulk modulus of the uncoupled penalty, K = 1000·μ0 (no fully
+//! * `k`: bulk modulus of the uncoupled penalty, K = `bulk_ratio`·μ0 (no fully
 //!   incompressible option).
 //! * `uncoupled viscoelastic`: S = g0·Sₑ + Σ gᵢ·Hᵢ with Hᵢ the hereditary integral of
 //!   the elastic stress Sₑ with kernel e^(−t/τᵢ): G(t) = g0 + Σ gᵢ·e^(−t/τᵢ) scales
@@ -16,8 +16,8 @@
 //!   material, g0 = E∞/R, gᵢ = Eᵢ/R (at most 6 terms).
 
 use super::{
-    mu0, needs_hyperelastic, num, ogden_terms, too_many_terms, Draft, Material, Options, Target,
-    BULK_RATIO,
+    mu0, needs_hyperelastic, num, ogden_terms, plain, too_many_terms, Draft, Material, Options,
+    Target,
 };
 use crate::error::Result;
 use crate::material::hyperelastic::OgdenForm;
@@ -42,12 +42,8 @@ pub(super) fn document(header: &[String], body: &str) -> String {
 
 /// `<name>value</name>` at `indent` tabs, the value recorded as a constant.
 fn param(d: &mut Draft, indent: usize, name: &str, v: f64, unit: &'static str) {
-    let v = d.constant(name, v, unit);
-    d.line(format!(
-        "{}<{name}>{}</{name}>",
-        "\t".repeat(indent),
-        num(v)
-    ));
+    let v = d.field(name, v, unit);
+    d.line(format!("{}<{name}>{v}</{name}>", "\t".repeat(indent)));
 }
 
 pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
@@ -61,7 +57,7 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
     }
     let h = h0;
     let p = &h.params;
-    let k = BULK_RATIO * mu0(h)?;
+    let k = opts.bulk_ratio * mu0(h)?;
     let (ty, elastic_indent) = match &m.relaxation {
         Some(_) => ("uncoupled viscoelastic", 3),
         None => ("", 2),
@@ -108,13 +104,12 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
             for (n, v) in ["C10", "C20", "C30"].iter().zip(p) {
                 d.constant(*n, *v, "Pa");
             }
-            // FEBio's expression parser takes plain decimals: `{}` never writes an exponent
             d.line(format!(
                 "{}<W>({})*(I1-3)+({})*(I1-3)^2+({})*(I1-3)^3</W>",
                 "\t".repeat(ind),
-                p[0],
-                p[1],
-                p[2]
+                plain(p[0]),
+                plain(p[1]),
+                plain(p[2])
             ));
             d.note("Yeoh as FEBio 4's 'uncoupled hyperelastic' with W = C10(I1-3) + C20(I1-3)^2 + C30(I1-3)^3 written out");
         }
@@ -123,11 +118,11 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
             param(d, ind, "Jm", p[1], "1");
         }
         _ => {
-            for (i, (mu, a)) in ogden_terms(h, OgdenForm::Seed).into_iter().enumerate() {
+            for (i, (mu, a)) in ogden_terms(h, OgdenForm::Abaqus).into_iter().enumerate() {
                 param(d, ind, &format!("c{}", i + 1), 2.0 * mu, "Pa");
                 param(d, ind, &format!("m{}", i + 1), a, "1");
             }
-            d.note("Ogden: FEBio's W = sum c_i/m_i^2 (...) is the seed form with c_i = 2 mu_i (seed), m_i = alpha_i, exact");
+            d.note("Ogden: FEBio's W = sum c_i/m_i^2 (...) is the abaqus form with c_i = 2 mu_i, m_i = alpha_i, exact");
         }
     }
     param(d, ind, "k", k, "Pa");
@@ -136,7 +131,8 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
     }
     d.line("\t</material>");
     d.warn(format!(
-        "nearly incompressible: FEBio's uncoupled materials enforce incompressibility by a penalty, k = {BULK_RATIO} mu0 = {} Pa; the card's stress differs from the incompressible fit's by O(stress/k)",
+        "nearly incompressible: FEBio's uncoupled materials enforce incompressibility by a penalty, k = {} mu0 = {} Pa (the bulk-ratio option of the export); the card's stress differs from the incompressible fit's by O(stress/k)",
+        opts.bulk_ratio,
         num(k)
     ));
     Ok(())

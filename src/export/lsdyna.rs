@@ -1,48 +1,28 @@
 //! LS-DYNA keyword cards (Keyword User's Manual, Vol. II: *MAT_HYPERELASTIC_RUBBER,
 //! MAT_077_H, and *MAT_OGDEN_RUBBER, MAT_077_O), in long format (`*KEYWORD LONG=Y`,
-//! 20-character fields: 13 or more significant digits, so the card holds the fit's
-//! values to 5·10⁻¹⁴).
+//! 20-character fields, numbers in at most 19: 12 or more significant digits, so the
+//! card holds the fit's values to 5·10⁻¹², [`super::precision`]).
 //!
 //! * MAT_077_H: W = Σ Cpq(Ī1 − 3)^p(Ī2 − 3)^q + bulk term; Neo-Hookean C10 = μ/2,
 //!   Mooney-Rivlin C10, C01, Yeoh C10, C20, C30.
 //! * MAT_077_O: W = Σᵢ Σⱼ μⱼ/αⱼ(λ̄ᵢ^αⱼ − 1) + bulk term, the original Ogden form:
-//!   a seed-form fit converted, μ = 2μ_seed/α.
-//! * No Gent: refused. No fully incompressible option: PR from K = 1000·μ0.
+//!   a abaqus-form fit converted, μ = 2μ_abaqus/α.
+//! * No Gent: refused. No fully incompressible option: PR from K = `bulk_ratio`·μ0.
 //! * Viscoelasticity: GI, BETAI with g(t) = Σ Gᵢ·e^(−βᵢt) convolved with the strain
-//!   rate and added to the hyperelastic (long-term) stress, as the seed's arms:
+//!   rate and added to the hyperelastic (long-term) stress, as the arms of El Atrache Ceballos (2021):
 //!   Gᵢ = Eᵢ/3 (shear modulus of an incompressible solid), βᵢ = 1/τᵢ; the
 //!   hyperelastic constants are the long-term response, the fit's scaled by E∞/R.
 //!   At most 6 terms.
 
 use super::{
     mu0, needs_hyperelastic, num, ogden_n, ogden_terms, scaled, too_many_terms, Draft, Material,
-    Options, Target, BULK_RATIO,
+    Options, Target, LSDYNA_WIDTH as WIDTH,
 };
 use crate::error::{Error, Result};
 use crate::material::hyperelastic::OgdenForm;
 
-/// Width of a long-format field.
-const WIDTH: usize = 20;
-
 /// Viscoelastic cards MAT_077 takes.
 const MAX_TERMS: usize = 6;
-
-/// `v` right-aligned in a 20-character field, at most 19 characters long so that a
-/// space separates fields for the reader's eye: the shortest round-trip form when it
-/// fits, else 13 significant digits or more (relative rounding ≤ 5·10⁻¹⁴).
-fn field(v: f64) -> String {
-    let s = num(v);
-    let s = if s.len() < WIDTH {
-        s
-    } else {
-        (1..=16)
-            .rev()
-            .map(|p| format!("{v:.p$E}"))
-            .find(|s| s.len() < WIDTH)
-            .expect("a 2-digit mantissa fits")
-    };
-    format!("{s:>WIDTH$}")
-}
 
 /// A card of fields, with a `$#` line naming them above.
 fn card(d: &mut Draft, names: &[&str], values: &[String]) {
@@ -72,8 +52,9 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
         .map_or(1.0, |r| r.long_term_pa / r.reference_pa);
     let h = scaled(h0, scale)?;
     let mu = mu0(&h)?;
-    // ν of K = BULK_RATIO·μ0: ν = (3K − 2μ)/(2(3K + μ))
-    let pr = (3.0 * BULK_RATIO - 2.0) / (2.0 * (3.0 * BULK_RATIO + 1.0));
+    // ν of K = bulk_ratio·μ0: ν = (3K − 2μ)/(2(3K + μ))
+    let k = opts.bulk_ratio;
+    let pr = (3.0 * k - 2.0) / (2.0 * (3.0 * k + 1.0));
     let p = &h.params;
     let ogden = ogden_n(&h.spec.name);
     let keyword = match (h.spec.name.as_str(), ogden) {
@@ -91,9 +72,9 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
     d.line(&m.name);
     let first = [
         format!("{:>WIDTH$}", 1),
-        field(d.constant("RO", rho, "kg/m^3")),
-        field(d.constant("PR", pr, "1")),
-        field(0.0),
+        d.field("RO", rho, "kg/m^3"),
+        d.field("PR", pr, "1"),
+        Target::Lsdyna.field(0.0),
     ];
     card(d, &["mid", "ro", "pr", "n"], &first);
     match ogden {
@@ -107,7 +88,7 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
             let values: Vec<String> = names
                 .iter()
                 .zip(c)
-                .map(|(n, v)| field(d.constant(*n, v, "Pa")))
+                .map(|(n, v)| d.field(*n, v, "Pa"))
                 .collect();
             card(d, &["c10", "c01", "c11", "c20", "c02", "c30"], &values);
         }
@@ -116,7 +97,7 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
             let mus: Vec<String> = terms
                 .iter()
                 .enumerate()
-                .map(|(i, t)| field(d.constant(format!("MU{}", i + 1), t.0, "Pa")))
+                .map(|(i, t)| d.field(format!("MU{}", i + 1), t.0, "Pa"))
                 .collect();
             let names: Vec<String> = (1..=terms.len()).map(|i| format!("mu{i}")).collect();
             card(
@@ -127,7 +108,7 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
             let alphas: Vec<String> = terms
                 .iter()
                 .enumerate()
-                .map(|(i, t)| field(d.constant(format!("ALPHA{}", i + 1), t.1, "1")))
+                .map(|(i, t)| d.field(format!("ALPHA{}", i + 1), t.1, "1"))
                 .collect();
             let names: Vec<String> = (1..=terms.len()).map(|i| format!("alpha{i}")).collect();
             card(
@@ -136,14 +117,14 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
                 &alphas,
             );
             if h0.spec.form != Some(OgdenForm::Original) {
-                d.note("Ogden: the fit's seed-form mu_i (2mu/alpha^2) converted to LS-DYNA's original form (mu/alpha): mu_i = 2*mu_seed/alpha_i, exact");
+                d.note("Ogden: the fit's abaqus-form mu_i (2mu/alpha^2) converted to LS-DYNA's original form (mu/alpha): mu_i = 2*mu_abaqus/alpha_i, exact");
             }
         }
     }
     if let Some(r) = &m.relaxation {
         for (i, &(tau, e)) in r.terms.iter().enumerate() {
-            let g = field(d.constant(format!("GI{}", i + 1), e / 3.0, "Pa"));
-            let b = field(d.constant(format!("BETAI{}", i + 1), 1.0 / tau, "1/s"));
+            let g = d.field(format!("GI{}", i + 1), e / 3.0, "Pa");
+            let b = d.field(format!("BETAI{}", i + 1), 1.0 / tau, "1/s");
             card(d, &["gi", "betai"], &[g, b]);
         }
         d.note("viscoelastic G_i = E_i/3 (shear modulus of an incompressible solid), BETA_i = 1/tau_i; the hyperelastic constants are the long-term response");
@@ -155,9 +136,9 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
         }
     }
     d.warn(format!(
-        "nearly incompressible: LS-DYNA has no incompressible rubber, PR = {} (K = {BULK_RATIO} mu0 = {} Pa); the card's stress differs from the incompressible fit's by O(stress/K)",
+        "nearly incompressible: LS-DYNA has no incompressible rubber, PR = {} (K = {k} mu0 = {} Pa, --bulk-ratio); the card's stress differs from the incompressible fit's by O(stress/K)",
         num(pr),
-        num(BULK_RATIO * mu)
+        num(k * mu)
     ));
     Ok(())
 }

@@ -1,10 +1,12 @@
 //! Material cards for finite-element codes (`dea-fit export`): the constants of a
 //! hyperelastic fit, a relaxation fit or an identified material, written in the
-//! convention of Abaqus, ANSYS Mechanical APDL, LS-DYNA, FEBio or COMSOL. Each code
-//! is one module; this one reads the material ([`read`]), puts the viscoelastic
-//! part in the one form every convention is derived from ([`Relaxation`]), and
-//! assembles the card with its header: source files, units, what was converted and
-//! how, and a warning wherever the card is not the fit's model exactly.
+//! convention of Abaqus, CalculiX, ANSYS Mechanical APDL, LS-DYNA, FEBio or COMSOL.
+//! Each code is one module (CalculiX shares Abaqus's); this one reads the material
+//! ([`read`]), puts the viscoelastic part in the one form every convention is
+//! derived from ([`Relaxation`]), writes every number within the width the code
+//! reads ([`Target::field`]), and assembles the card with its header: source files,
+//! units, what was converted and how, and a warning wherever the card is not the
+//! fit's model exactly.
 //! Conventions, derivations and their sources: docs/export.md.
 
 mod abaqus;
@@ -24,11 +26,33 @@ use std::path::{Path, PathBuf};
 /// Schema tag of the `--json` output.
 pub const SCHEMA: &str = "dea-fit/export/1";
 
-/// Bulk-to-shear modulus ratio K/μ0 of the cards of codes without a fully
-/// incompressible rubber (LS-DYNA, FEBio): ν = 0.4995, the volume change in uniaxial
-/// tension is ≈ σ/(3K), so the stress differs from the incompressible fit's by
-/// O(σ/K) ≈ 0.1 % per unit of σ/μ0.
+/// Default bulk-to-shear modulus ratio K/μ0 (`--bulk-ratio`) of the cards of codes
+/// without a fully incompressible rubber (LS-DYNA, FEBio, CalculiX): ν = 0.4995,
+/// the volume change in uniaxial tension is ≈ σ/(3K), so the stress differs from
+/// the incompressible fit's by O(σ/K) ≈ 0.1 % per unit of σ/μ0 (CalculiX, one
+/// element at λ = 1.5, Neo-Hookean: 0.06 % uniaxial, 0.12 % equibiaxial, 0.09 %
+/// planar, measured with ccx 2.20).
 pub const BULK_RATIO: f64 = 1000.0;
+
+/// Width of a floating-point field of an Abaqus data line: "a maximum of 20
+/// spaces including the sign, decimal point, and any exponential notation"
+/// (Abaqus Analysis User's Guide, "Input syntax rules"); CalculiX reads 20
+/// characters a field and refuses a longer number (ccx 2.20 stops at
+/// `-1.4184493597207666E3`, 21 characters).
+pub const ABAQUS_WIDTH: usize = 20;
+
+/// Width of a field of LS-DYNA's long format (`*KEYWORD LONG=Y`, Oasys PRIMER
+/// manual, "Format"); the number takes at most one character less, so that a blank
+/// separates it from the field before it.
+pub const LSDYNA_WIDTH: usize = 20;
+
+/// The relative rounding of [`within`] at `width` characters: the worst case keeps
+/// width − 7 significant digits (a sign, one digit, the point and `E-ddd` take 8
+/// characters), so |written − v| ≤ 5·10^−(width − 7)·|v|: 5·10⁻¹³ in 20 characters
+/// (Abaqus, CalculiX), 5·10⁻¹² in 19 (LS-DYNA).
+pub fn precision(width: usize) -> f64 {
+    5.0 * 10f64.powi(7 - width as i32)
+}
 
 /// The stretches at which a finite-strain approximation is quantified (and the
 /// read-back tests evaluate the cards).
@@ -40,6 +64,9 @@ pub const STRETCHES: [f64; 4] = [1.1, 1.5, 2.0, 3.0];
 pub enum Target {
     /// Abaqus (Standard; keyword input `.inp`).
     Abaqus,
+    /// CalculiX (`ccx`, Abaqus keyword input `.inp`): a nearly incompressible card
+    /// ready for its elements, no viscoelasticity.
+    Calculix,
     /// ANSYS Mechanical APDL (commands `.mac`).
     Ansys,
     /// LS-DYNA (keyword input `.k`, long format).
@@ -52,8 +79,9 @@ pub enum Target {
 
 impl Target {
     /// Every target, in the order of `--help`.
-    pub const ALL: [Target; 5] = [
+    pub const ALL: [Target; 6] = [
         Target::Abaqus,
+        Target::Calculix,
         Target::Ansys,
         Target::Lsdyna,
         Target::Febio,
@@ -64,6 +92,7 @@ impl Target {
     pub fn name(self) -> &'static str {
         match self {
             Target::Abaqus => "abaqus",
+            Target::Calculix => "calculix",
             Target::Ansys => "ansys",
             Target::Lsdyna => "lsdyna",
             Target::Febio => "febio",
@@ -75,6 +104,7 @@ impl Target {
     pub fn title(self) -> &'static str {
         match self {
             Target::Abaqus => "Abaqus",
+            Target::Calculix => "CalculiX",
             Target::Ansys => "ANSYS Mechanical APDL",
             Target::Lsdyna => "LS-DYNA",
             Target::Febio => "FEBio",
@@ -85,7 +115,7 @@ impl Target {
     /// File extension of the card.
     pub fn extension(self) -> &'static str {
         match self {
-            Target::Abaqus => "inp",
+            Target::Abaqus | Target::Calculix => "inp",
             Target::Ansys => "mac",
             Target::Lsdyna => "k",
             Target::Febio => "feb",
@@ -93,11 +123,28 @@ impl Target {
         }
     }
 
-    /// How the code's viscoelasticity acts on the hyperelastic stress.
-    fn family(self) -> Family {
+    /// How the code's viscoelasticity acts on the hyperelastic stress; None for a
+    /// code without viscoelastic hyperelasticity (CalculiX).
+    fn family(self) -> Option<Family> {
         match self {
-            Target::Abaqus | Target::Ansys | Target::Febio => Family::RelaxesStress,
-            Target::Lsdyna | Target::Comsol => Family::StrainArms,
+            Target::Abaqus | Target::Ansys | Target::Febio => Some(Family::RelaxesStress),
+            Target::Lsdyna | Target::Comsol => Some(Family::StrainArms),
+            Target::Calculix => None,
+        }
+    }
+
+    /// A number as the code reads it, by the code's width rule: Abaqus and
+    /// CalculiX at most [`ABAQUS_WIDTH`] characters ([`within`]); LS-DYNA
+    /// right-aligned in a [`LSDYNA_WIDTH`]-character column, at most one character
+    /// less; ANSYS (free-format fields "as wide as the number of characters
+    /// specified", Command Reference §1.3.2), FEBio (XML text read as a double) and
+    /// COMSOL (a parameter expression) read any width: the shortest decimal that
+    /// reads back as the same f64 ([`num`], at most 24 characters).
+    pub fn field(self, v: f64) -> String {
+        match self {
+            Target::Abaqus | Target::Calculix => within(v, ABAQUS_WIDTH),
+            Target::Lsdyna => format!("{:>LSDYNA_WIDTH$}", within(v, LSDYNA_WIDTH - 1)),
+            Target::Ansys | Target::Febio | Target::Comsol => num(v),
         }
     }
 }
@@ -109,7 +156,7 @@ enum Family {
     /// stress, as QLV does (Abaqus, ANSYS, FEBio).
     RelaxesStress,
     /// Maxwell branches linear in a strain measure, in parallel with the long-term
-    /// hyperelastic spring, as the seed's arms are (LS-DYNA, COMSOL).
+    /// hyperelastic spring, as the arms of El Atrache Ceballos (2021) are (LS-DYNA, COMSOL).
     StrainArms,
 }
 
@@ -145,7 +192,7 @@ impl SourceFile {
 /// * QLV relaxation fit: σ(t) = ∫ E(t − s)/R dσₑ(s), R = E_ref = 3μ0 of its
 ///   hyperelastic fit; the instantaneous response is (E0/R)·σₑ, the long-term one
 ///   (E∞/R)·σₑ.
-/// * Parallel (the seed's arms, a relaxation fit of the parallel reading or an
+/// * Parallel (the arms of El Atrache Ceballos (2021), a relaxation fit of the parallel reading or an
 ///   identified material): σ = σₑ(λ) + Σ kᵢ·hᵢ with arms linear in the strain,
 ///   R = E∞ = the equilibrium spring (3μ0 of the hyperelastic part when there is
 ///   one), and a Kelvin–Voigt dashpot Nv.
@@ -294,7 +341,7 @@ pub fn read(paths: &[PathBuf]) -> Result<Material> {
                 (None, Some((_, h))) => {
                     let k_inf = 3.0 * mu0(h)?;
                     notes.push(format!(
-                        "the seed's model: the hyperelastic spring (small-strain modulus 3mu0 = {} Pa) in parallel with the relaxation fit's arms; its E_inf = {} Pa (the secant modulus at the held strain) is not used, as in the simulator",
+                        "the model of El Atrache Ceballos (2021): the hyperelastic spring (small-strain modulus 3mu0 = {} Pa) in parallel with the relaxation fit's arms; its E_inf = {} Pa (the secant modulus at the held strain) is not used, as in the simulator",
                         num(k_inf),
                         num(r.long_term_pa)
                     ));
@@ -388,11 +435,23 @@ fn sanitize(stem: &str) -> String {
 }
 
 /// Settings of a card.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Options {
     /// Mass density (kg/m³), written where the card has a place for it (LS-DYNA
     /// needs it).
     pub density: Option<f64>,
+    /// Bulk-to-shear modulus ratio K/μ0 of the codes without a fully
+    /// incompressible rubber (LS-DYNA, FEBio, CalculiX); default [`BULK_RATIO`].
+    pub bulk_ratio: f64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            density: None,
+            bulk_ratio: BULK_RATIO,
+        }
+    }
 }
 
 /// One constant as the card holds it, in the code's convention (SI).
@@ -445,6 +504,8 @@ impl Card {
 /// The card being written by a code's module.
 #[derive(Debug, Default)]
 struct Draft {
+    /// The code, whose width rule [`Draft::field`] writes numbers by.
+    target: Option<Target>,
     body: String,
     constants: Vec<Constant>,
     warnings: Vec<String>,
@@ -466,6 +527,12 @@ impl Draft {
         });
         value
     }
+    /// Record a constant of the card; returns it written by the code's width rule
+    /// ([`Target::field`]).
+    fn field(&mut self, name: impl Into<String>, value: f64, unit: &'static str) -> String {
+        let v = self.constant(name, value, unit);
+        self.target.expect("a card's code").field(v)
+    }
     fn warn(&mut self, s: impl Into<String>) {
         self.warnings.push(s.into());
     }
@@ -483,9 +550,19 @@ pub fn card(m: &Material, target: Target, opts: &Options) -> Result<Card> {
             .check("--density", rho)
             .map_err(|v| Error::settings(v.msg).with_hint(v.hint))?;
     }
-    let mut d = Draft::default();
+    if !(opts.bulk_ratio.is_finite() && opts.bulk_ratio >= 1.0) {
+        return Err(Error::settings(format!(
+            "--bulk-ratio {}: expected a bulk-to-shear modulus ratio K/mu0 >= 1 (nearly incompressible rubber: 1000 or more)",
+            opts.bulk_ratio
+        ))
+        .with_hint(format!("leave it out for K/mu0 = {BULK_RATIO}")));
+    }
+    let mut d = Draft {
+        target: Some(target),
+        ..Draft::default()
+    };
     match target {
-        Target::Abaqus => abaqus::write(m, opts, &mut d)?,
+        Target::Abaqus | Target::Calculix => abaqus::write(m, target, opts, &mut d)?,
         Target::Ansys => ansys::write(m, opts, &mut d)?,
         Target::Lsdyna => lsdyna::write(m, opts, &mut d)?,
         Target::Febio => febio::write(m, opts, &mut d)?,
@@ -539,7 +616,7 @@ pub fn card(m: &Material, target: Target, opts: &Options) -> Result<Card> {
         Target::Febio => febio::document(&header, &d.body),
         _ => {
             let prefix = match target {
-                Target::Abaqus => "** ",
+                Target::Abaqus | Target::Calculix => "** ",
                 Target::Ansys => "! ",
                 Target::Lsdyna => "$ ",
                 _ => "# ",
@@ -595,7 +672,10 @@ fn wrap(s: &str, width: usize) -> Vec<String> {
 fn viscous_statements(m: &Material, target: Target, d: &mut Draft) {
     let Some(r) = &m.relaxation else { return };
     let code = target.title();
-    match (target.family(), r.formulation) {
+    let Some(family) = target.family() else {
+        return;
+    };
+    match (family, r.formulation) {
         (Family::RelaxesStress, Formulation::Qlv) => d.note(format!(
             "the fit is quasi-linear viscoelastic (QLV) and {code} relaxes the hyperelastic stress the same way: exact for a held stretch (the relaxation test); for a stretch that varies while it relaxes, {code} convolves its own stress measure where the fit convolves the nominal stress"
         )),
@@ -608,18 +688,18 @@ fn viscous_statements(m: &Material, target: Target, d: &mut Draft) {
                     let list: Vec<String> = rs.iter().map(|x| format!("{x:.3}")).collect();
                     let at: Vec<String> = STRETCHES.iter().map(|l| format!("{l}")).collect();
                     format!(
-                        "; at stretch {} the card's viscous stress is {} times the seed's",
+                        "; at stretch {} the card's viscous stress is {} times that of the arms of El Atrache Ceballos (2021)",
                         at.join("/"),
                         list.join("/")
                     )
                 })
                 .unwrap_or_default();
             d.warn(format!(
-                "approximate at finite strain: the seed's arms are linear in the strain, k_i*(lambda - 1), while {code} relaxes the hyperelastic stress (k_i*P_h(lambda)/E_inf); the small-strain relaxation modulus E(t) is the fit's exactly{by}"
+                "approximate at finite strain: the arms of El Atrache Ceballos (2021) are linear in the strain, k_i*(lambda - 1), while {code} relaxes the hyperelastic stress (k_i*P_h(lambda)/E_inf); the small-strain relaxation modulus E(t) is the fit's exactly{by}"
             ))
         }
         (Family::StrainArms, Formulation::Parallel) => d.warn(format!(
-            "approximate at finite strain: {code}'s Maxwell branches are linear in its own (Green-Lagrange type) strain, the seed's arms in the engineering strain lambda - 1; the small-strain relaxation modulus E(t) is the fit's exactly"
+            "approximate at finite strain: {code}'s Maxwell branches are linear in its own (Green-Lagrange type) strain, the arms of El Atrache Ceballos (2021) in the engineering strain lambda - 1; the small-strain relaxation modulus E(t) is the fit's exactly"
         )),
         (Family::StrainArms, Formulation::Qlv) => d.warn(format!(
             "approximate at finite strain: the fit is QLV (its relaxation scales the hyperelastic stress) while {code} adds strain-linear Maxwell branches to the long-term hyperelastic stress; the small-strain relaxation modulus E(t) is the fit's exactly"
@@ -634,7 +714,7 @@ fn viscous_statements(m: &Material, target: Target, d: &mut Draft) {
 }
 
 /// For a parallel-reading material written as a stress-relaxing card: the card's
-/// viscous overstress over the seed's, P_h(λ)/(E∞·(λ − 1)), at [`STRETCHES`] in
+/// viscous overstress over that of those arms, P_h(λ)/(E∞·(λ − 1)), at [`STRETCHES`] in
 /// uniaxial tension (→ 1 as λ → 1). None if the model has no finite stress there.
 fn stress_proportional_ratios(h: &HyperelasticPart, r: &Relaxation) -> Option<Vec<f64>> {
     let model = h.evaluator().ok()?;
@@ -668,7 +748,7 @@ fn mu0(h: &HyperelasticPart) -> Result<f64> {
     Ok(h.evaluator()?.initial_shear_modulus(&h.params))
 }
 
-/// The Ogden terms (μᵢ, αᵢ) of `h` in `form`: seed (2μ/α², Abaqus, FEBio as c = 2μ)
+/// The Ogden terms (μᵢ, αᵢ) of `h` in `form`: abaqus (2μ/α², Abaqus, FEBio as c = 2μ)
 /// or original (μ/α: ANSYS, LS-DYNA, COMSOL), converted exactly (`Ogden::convert`).
 fn ogden_terms(h: &HyperelasticPart, form: OgdenForm) -> Vec<(f64, f64)> {
     Ogden::convert(&h.params, h.spec.form.unwrap_or_default(), form)
@@ -715,14 +795,37 @@ fn too_many_terms(target: Target, n: usize, max: usize) -> Error {
     ))
 }
 
-/// A number as the cards write it: the shortest decimal that reads back as the
-/// same f64 (`{:E}`), so that a card holds the fit's values exactly.
+/// A number in any width (ANSYS, FEBio, COMSOL, and the cards' comments): the
+/// shortest decimal that reads back as the same f64 (`{:E}`, at most 24
+/// characters), so that the card holds the fit's value exactly.
 pub fn num(v: f64) -> String {
     if v == 0.0 {
         "0".into()
     } else {
         format!("{v:E}")
     }
+}
+
+/// A number in at most `width` characters (`width` ≥ 10): the shortest round-trip
+/// form ([`num`]) when it fits, else the most significant digits that fit, rounded
+/// to within [`precision`]`(width)` relative.
+pub fn within(v: f64, width: usize) -> String {
+    let s = num(v);
+    if s.len() <= width {
+        return s;
+    }
+    (0..=16)
+        .rev()
+        .map(|p| format!("{v:.p$E}"))
+        .find(|s| s.len() <= width)
+        .expect("a 1-digit mantissa fits in 10 characters")
+}
+
+/// A number as a plain decimal without an exponent (`{}`, the shortest that reads
+/// back as the same f64): FEBio's expression parser (the energy of `uncoupled
+/// hyperelastic`) takes no exponent.
+fn plain(v: f64) -> String {
+    format!("{v}")
 }
 
 /// What a relaxation-only card needs the user to add, for the codes that can hold

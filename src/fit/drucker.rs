@@ -675,7 +675,7 @@ mod tests {
     }
 
     fn model(name: &str) -> Box<dyn StrainEnergy> {
-        ModelSpec::new(name, OgdenForm::Seed).build().unwrap()
+        ModelSpec::new(name, OgdenForm::Abaqus).build().unwrap()
     }
 
     /// The certificate decides the fitted VHB 4910 Yeoh in every mode without the

@@ -83,7 +83,7 @@ impl Default for Settings {
         Settings {
             residual: Residual::Abs,
             stable: false,
-            ogden_form: OgdenForm::Seed,
+            ogden_form: OgdenForm::Abaqus,
             max_iterations: 200,
             ftol: 1e-12,
             max_starts: None,

@@ -603,7 +603,7 @@ mod tests {
         let logs: Vec<f64> = stretch.iter().map(|l| l.ln()).collect();
         let nan = vec![f64::NAN; 12];
         for name in MODEL_NAMES {
-            let m = ModelSpec::new(name, OgdenForm::Seed).build().unwrap();
+            let m = ModelSpec::new(name, OgdenForm::Abaqus).build().unwrap();
             let k = m.params().len();
             // Linear coefficients of mixed sign; exponents and Gent limits of 40.
             let p: Vec<f64> = (0..k)

@@ -204,7 +204,7 @@ fn hyperelastic_names(scene: &crate::sim::scene::Scene) -> Result<Vec<String>> {
     };
     add(&scene.material.spec)?;
     for m in HYPERELASTIC_MODELS {
-        add(&ModelSpec::new(m, OgdenForm::Seed))?;
+        add(&ModelSpec::new(m, OgdenForm::Abaqus))?;
     }
     Ok(names)
 }
@@ -265,7 +265,7 @@ fn candidates(experiments: &[Experiment], choose: Choose, x: f64) -> Vec<Materia
             out.push(Material {
                 spec: match same {
                     true => m.spec.clone(),
-                    false => ModelSpec::new(name, OgdenForm::Seed),
+                    false => ModelSpec::new(name, OgdenForm::Abaqus),
                 },
                 params: model_start(scene, name, x),
                 arms: match choose.arms {

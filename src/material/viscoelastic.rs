@@ -730,7 +730,7 @@ pub fn preset(name: &str) -> Result<Preset> {
             let prony = Prony::from_normalized(TABLE_4_2_REFERENCE, &TABLE_3_3)?;
             Ok(Preset {
                 name: "seed-table-3.3",
-                source: "seed Table 3.3 (Wissler & Mazza 2007, VHB 4910): normalised Prony pairs (τᵢ, gᵢ); the table's 'MPa' on gᵢ is read as a fraction of E0 = 0.222 MPa (the multiplier of Table 4.2)",
+                source: "El Atrache Ceballos (2021) Table 3.3 (Wissler & Mazza 2007, VHB 4910): normalised Prony pairs (τᵢ, gᵢ); the table's 'MPa' on gᵢ is read as a fraction of E0 = 0.222 MPa (the multiplier of Table 4.2)",
                 formulation: Formulation::Qlv,
                 reference_modulus: TABLE_4_2_REFERENCE,
                 kelvin_maxwell: prony.to_kelvin_maxwell(),
@@ -748,7 +748,7 @@ pub fn preset(name: &str) -> Result<Preset> {
             };
             Ok(Preset {
                 name: "seed-table-4.2",
-                source: "seed Table 4.2 (hand-tuned by the seed's author): Maxwell arms kⱼ, nⱼ and Nv = 1875 Pa·s in the parallel model; equilibrium spring = Yeoh small-strain modulus 6·C10",
+                source: "El Atrache Ceballos (2021) Table 4.2 (hand-tuned by its author): Maxwell arms kⱼ, nⱼ and Nv = 1875 Pa·s in the parallel model; equilibrium spring = Yeoh small-strain modulus 6·C10",
                 formulation: Formulation::Parallel,
                 reference_modulus: 6.0 * TABLE_4_2_C10,
                 prony: km.to_prony()?,

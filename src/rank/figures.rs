@@ -321,7 +321,7 @@ pub fn electrode_area(a: &Actuator) -> (f64, String, f64) {
     let how = match a {
         Actuator::Stack(s) => format!("{} layers × π·r0²", s.layers),
         Actuator::Helix(h) => format!(
-            "{} elements × A_e (seed Eq. 4.12)",
+            "{} elements × A_e (El Atrache Ceballos (2021) Eq. 4.12)",
             h.periods * h.per_period
         ),
     };
@@ -343,7 +343,7 @@ fn weakest(p: &[Provenance]) -> Provenance {
 }
 
 /// The catalogue figures of candidate `c` computed from its properties: β = εr/Y
-/// and Fm = 3ε0·εr·Eb²/Y (Sommer-Larsen & Larsen 2004, seed §2.6), with their
+/// and Fm = 3ε0·εr·Eb²/Y (Sommer-Larsen & Larsen 2004, El Atrache Ceballos (2021) §2.6), with their
 /// first-order standard errors in closed form from the properties' (independent):
 /// (u_β/β)² = (u_ε/εr)² + (u_Y/Y)², (u_Fm/Fm)² = (u_ε/εr)² + (2u_Eb/Eb)² + (u_Y/Y)².
 pub fn catalogue(c: &Candidate) -> (Figure, Figure) {
@@ -377,7 +377,7 @@ pub fn catalogue(c: &Candidate) -> (Figure, Figure) {
         f,
         "1",
         weakest(&[cat, c.breakdown.provenance]),
-        "3ε0·εr·Eb²/Y (Sommer-Larsen & Larsen 2004, seed §2.6)",
+        "3ε0·εr·Eb²/Y (Sommer-Larsen & Larsen 2004, El Atrache Ceballos (2021) §2.6)",
     )
     .with_std_error(combine(&[re, rb, ry]).map(|r| r * f));
     (beta, fm)

@@ -599,13 +599,13 @@ impl Ctx<'_> {
             return match p.as_str() {
                 "vhb4910-yeoh" => Ok(Stated {
                     value: HyperelasticPart {
-                        spec: ModelSpec::new("yeoh", OgdenForm::Seed),
+                        spec: ModelSpec::new("yeoh", OgdenForm::Abaqus),
                         params: presets::VHB4910_YEOH_PA.to_vec(),
                         ranges: None,
                     },
                     std_error: None,
                     provenance: Provenance::Fitted,
-                    source: "preset vhb4910-yeoh (seed Table 3.2, Wissler & Mazza 2005)".into(),
+                    source: "preset vhb4910-yeoh (El Atrache Ceballos (2021) Table 3.2, Wissler & Mazza 2005)".into(),
                     warnings: Vec::new(),
                 }),
                 o => Err(self.unknown(&span, &format!("{key}.preset"), o, &["vhb4910-yeoh"])),
@@ -628,7 +628,7 @@ impl Ctx<'_> {
         if !MODEL_NAMES.contains(&m) {
             return Err(self.unknown(&span, &format!("{key}.model"), m, &MODEL_NAMES));
         }
-        let spec = ModelSpec::new(m, OgdenForm::Seed);
+        let spec = ModelSpec::new(m, OgdenForm::Abaqus);
         let model = spec.build()?;
         let given = s.parameters.as_ref();
         let names: Vec<&str> = model.params().iter().map(|p| p.name.as_str()).collect();

@@ -219,7 +219,7 @@ fn page(fit: &HyperelasticFit, charts: impl FnOnce(&mut Page) -> Result<()>) -> 
         si(fit.rmse_pa, "Pa"),
     ));
     page.text(format!(
-        "R² {}  %RMSE (seed Eq. 3.28) {}  AICc {}  BIC {:.2}",
+        "R² {}  %RMSE (El Atrache Ceballos (2021) Eq. 3.28) {}  AICc {}  BIC {:.2}",
         r2(fit),
         fit.rmse_pct
             .map(|v| format!("{v:.3} %"))

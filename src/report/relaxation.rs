@@ -282,7 +282,7 @@ fn page(fit: &RelaxationFit, charts: impl FnOnce(&mut Page) -> Result<()>) -> Re
         })
         .collect();
     page.table(&["τ ± σ", "E = k ± σ", "g", "n = k·τ"], rows);
-    page.text("σ: standard error; k, n: the seed's Maxwell arm (spring k = E, dashpot n = E·τ).");
+    page.text("σ: standard error; k, n: the Maxwell arm of El Atrache Ceballos (2021) (spring k = E, dashpot n = E·τ).");
     page.text(format!(
         "E∞ {}  E0 {}  g∞ {:.4}",
         si(fit.long_term_modulus_pa, "Pa"),

@@ -118,7 +118,7 @@ pub const FRACTION: Domain = d(
     0.0,
     1.0,
     true,
-    "f in m_eff = m_load + f·m_actuator is a share (seed Eq. 3.10: ½)",
+    "f in m_eff = m_load + f·m_actuator is a share (El Atrache Ceballos (2021) Eq. 3.10: ½)",
 );
 /// Input and set-point voltages.
 pub const VOLTAGE: Domain = d(
@@ -226,7 +226,7 @@ pub const GAIN: Domain = d(
     1e-12,
     1e12,
     true,
-    "gains are volts per unit contraction (seed-like loops: 1e5–1e7); 1e12 saturates at any error",
+    "gains are volts per unit contraction (loops like El Atrache Ceballos (2021)'s: 1e5–1e7); 1e12 saturates at any error",
 );
 /// Time constants (derivative filter, supply rise time).
 pub const TIME_CONSTANT: Domain = d("time constant", "s", 1e-9, 1e4, false, "1 ns to hours");

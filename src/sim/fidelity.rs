@@ -167,14 +167,14 @@ pub fn choose(scene: &Scene) -> Result<Fidelity> {
                 "scene '{}': load.effective_mass_fraction: the actuator has no moving mass (load.mass = 0 and load.effective_mass_fraction = 0): its equation of motion cannot be integrated (dynamic fidelity, closed loop)",
                 scene.name
             ))
-            .with_hint("give load.effective_mass_fraction > 0 (the seed's ½) or a load.mass"));
+            .with_hint("give load.effective_mass_fraction > 0 (El Atrache Ceballos (2021): ½) or a load.mass"));
         }
         if lumped.nv <= 0.0 && t_in == 0.0 {
             return Err(Error::settings(format!(
                 "scene '{}': load.effective_mass_fraction: the actuator has no moving mass (load.mass = 0 and load.effective_mass_fraction = 0), so it is quasi-static, and without a Kelvin-Voigt dashpot it cannot follow a jump of the terminal voltage (ideal source, step input)",
                 scene.name
             ))
-            .with_hint("give load.effective_mass_fraction > 0 (the seed's ½), source.rise_time, or material.viscous.nv > 0"));
+            .with_hint("give load.effective_mass_fraction > 0 (El Atrache Ceballos (2021): ½), source.rise_time, or material.viscous.nv > 0"));
         }
     }
     let (inertia, reason) = match scene.time.fidelity {

@@ -766,7 +766,7 @@ fn read_actuator(c: &Ctx, t: &toml::Table) -> Result<(Actuator, Vec<Tolerance>)>
                 Some(o) => {
                     return Err(c
                         .unknown_name("actuator.lateral", o, &["planar", "free"])
-                        .with_hint("use planar (seed Eq. 4.18) or free"))
+                        .with_hint("use planar (El Atrache Ceballos (2021) Eq. 4.18) or free"))
                 }
             };
             let [o, i, z] = Length::HELIX;
@@ -799,7 +799,7 @@ fn read_hyperelastic(c: &Ctx, h: &toml::Table, dir: &Path) -> Result<Hyperelasti
         c.one_of(h, hs, &["preset", "parameters"])?;
         return match p {
             "vhb4910-yeoh" => Ok(HyperelasticPart {
-                spec: ModelSpec::new("yeoh", OgdenForm::Seed),
+                spec: ModelSpec::new("yeoh", OgdenForm::Abaqus),
                 params: presets::VHB4910_YEOH_PA.to_vec(),
                 ranges: None,
             }),
@@ -821,7 +821,7 @@ fn read_hyperelastic(c: &Ctx, h: &toml::Table, dir: &Path) -> Result<Hyperelasti
     if !MODEL_NAMES.contains(&m) {
         return Err(c.unknown_name(&format!("{hs}.model"), m, &MODEL_NAMES));
     }
-    let model = ModelSpec::new(m, OgdenForm::Seed).build()?;
+    let model = ModelSpec::new(m, OgdenForm::Abaqus).build()?;
     let ps = format!("{hs}.parameters");
     let pt = match h.get("parameters") {
         Some(toml::Value::Table(x)) => x,
@@ -846,7 +846,7 @@ fn read_hyperelastic(c: &Ctx, h: &toml::Table, dir: &Path) -> Result<Hyperelasti
         })?);
     }
     Ok(HyperelasticPart {
-        spec: ModelSpec::new(m, OgdenForm::Seed),
+        spec: ModelSpec::new(m, OgdenForm::Abaqus),
         params: vals,
         ranges: None,
     })

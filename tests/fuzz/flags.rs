@@ -31,7 +31,7 @@ enum Kind {
     Stress,
     /// START:STOP:COUNT of plain numbers.
     Range,
-    /// FMIN:FMAX:PER_DECADE with frequency units.
+    /// FMIN:FMAX:COUNT with frequency units.
     Sweep,
 }
 
@@ -139,7 +139,7 @@ const COMMANDS: [Cmd; 8] = [
             ("--tan-delta", Kind::Number, "0.005"),
             ("--diameter", Kind::Length, "30mm"),
             ("--thickness", Kind::Length, "1mm"),
-            ("--sweep", Kind::Sweep, "100Hz:1MHz:4"),
+            ("--sweep", Kind::Sweep, "100Hz:1MHz:17"),
             ("--stray", Kind::Capacitance, "0.3pF"),
             ("--noise", Kind::Number, "0.001"),
         ],
@@ -151,7 +151,7 @@ const COMMANDS: [Cmd; 8] = [
             ("--tan-delta", Kind::Number, "0.01"),
             ("--area", Kind::Area, "14.39cm2"),
             ("--thickness", Kind::Length, "2.2mm"),
-            ("--sweep", Kind::Sweep, "20Hz:2MHz:10"),
+            ("--sweep", Kind::Sweep, "20Hz:2MHz:51"),
         ],
     },
     Cmd {

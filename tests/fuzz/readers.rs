@@ -317,7 +317,7 @@ fn hyperelastic_by_name(v: &Value) -> Result<Option<Vec<f64>>, String> {
     let (Some(model), Some(params)) = (v["model"].as_str(), v["parameters"].as_array()) else {
         return Ok(None);
     };
-    let form = serde_json::from_value(v["form"].clone()).unwrap_or(OgdenForm::Seed);
+    let form = serde_json::from_value(v["form"].clone()).unwrap_or(OgdenForm::Abaqus);
     let Ok(m) = ModelSpec::new(model, form).build() else {
         return Err("unknown model".into());
     };
@@ -857,6 +857,7 @@ fn export(paths: &[PathBuf], oracle: &Oracle) -> Verdict {
     }
     let opts = Options {
         density: Some(1000.0),
+        ..Options::default()
     };
     for t in Target::ALL {
         let Ok(card) = export::card(&m, t, &opts) else {

@@ -322,9 +322,12 @@ impl StrainEnergy for WithoutCoefficients {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum OgdenForm {
-    /// Seed Eq. 2.9: W = Σ 2μi/αi² (λ1^αi + λ2^αi + λ3^αi − 3); μ0 = Σμi (FE codes' form).
+    /// El Atrache Ceballos (2021) Eq. 2.9: W = Σ 2μi/αi² (λ1^αi + λ2^αi + λ3^αi − 3);
+    /// μ0 = Σμi, the form of Abaqus and CalculiX (`abaqus`; `seed`, its old name, is
+    /// still read).
     #[default]
-    Seed,
+    #[serde(alias = "seed")]
+    Abaqus,
     /// Ogden (1972): W = Σ μi/αi (λ1^αi + λ2^αi + λ3^αi − 3); μ0 = ½Σμiαi.
     Original,
 }
@@ -333,7 +336,7 @@ impl std::fmt::Display for OgdenForm {
     /// The name the flag (`--ogden-form`) and the fit file use.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
-            OgdenForm::Seed => "seed",
+            OgdenForm::Abaqus => "abaqus",
             OgdenForm::Original => "original",
         })
     }

@@ -61,8 +61,8 @@ impl Ogden {
         for t in q.chunks_exact_mut(2) {
             let (mu, alpha) = (t[0], t[1]);
             t[0] = match (from, to) {
-                (OgdenForm::Seed, OgdenForm::Original) => 2.0 * mu / alpha,
-                (OgdenForm::Original, OgdenForm::Seed) => mu * alpha / 2.0,
+                (OgdenForm::Abaqus, OgdenForm::Original) => 2.0 * mu / alpha,
+                (OgdenForm::Original, OgdenForm::Abaqus) => mu * alpha / 2.0,
                 _ => mu,
             };
         }
@@ -80,7 +80,7 @@ impl Ogden {
     fn basis<const L: usize>(&self, alpha: f64, x: &Lanes<L>) -> ([f64; L], [f64; L]) {
         let (mut v, mut dv) = ([0.0; L], [0.0; L]);
         match self.form {
-            OgdenForm::Seed if alpha.abs() < 1e-6 => {
+            OgdenForm::Abaqus if alpha.abs() < 1e-6 => {
                 for i in 0..L {
                     // Series of 2(e^{αa} − e^{αb})/α about α = 0.
                     let (a, b) = (x.a[i], x.b[i]);
@@ -89,7 +89,7 @@ impl Ogden {
                     dv[i] = 2.0 * (d2 / 2.0 + alpha * d3 / 3.0);
                 }
             }
-            OgdenForm::Seed => {
+            OgdenForm::Abaqus => {
                 for i in 0..L {
                     let (ea, eb) = x.exps(alpha, i);
                     v[i] = 2.0 * (ea - eb) / alpha;
@@ -171,7 +171,7 @@ impl Ogden {
     #[inline]
     fn dg(&self, mu: f64, alpha: f64, lam: f64) -> f64 {
         let k = match self.form {
-            OgdenForm::Seed => 2.0,
+            OgdenForm::Abaqus => 2.0,
             OgdenForm::Original => alpha,
         };
         k * mu * lam.powf(alpha - 1.0)
@@ -299,8 +299,8 @@ impl StrainEnergy for Ogden {
         for t in self.terms(p)? {
             let (mu, alpha) = (t[0], t[1]);
             let k = match self.form {
-                OgdenForm::Seed if alpha.abs() < 1e-6 => return None,
-                OgdenForm::Seed => 2.0 / alpha,
+                OgdenForm::Abaqus if alpha.abs() < 1e-6 => return None,
+                OgdenForm::Abaqus => 2.0 / alpha,
                 OgdenForm::Original => 1.0,
             };
             terms.push((mu * k * (alpha - 1.0), alpha - 2.0));
@@ -358,7 +358,7 @@ impl StrainEnergy for Ogden {
         };
         terms
             .map(|t| match self.form {
-                OgdenForm::Seed => t[0],
+                OgdenForm::Abaqus => t[0],
                 OgdenForm::Original => 0.5 * t[0] * t[1],
             })
             .sum()
@@ -412,11 +412,11 @@ mod tests {
     fn cases() -> Vec<(Ogden, Vec<f64>)> {
         vec![
             (
-                Ogden::new(3, OgdenForm::Seed),
+                Ogden::new(3, OgdenForm::Abaqus),
                 vec![3.4e5, 1.92, 3.1, 8.62, 7.3e3, -2.16],
             ),
             (
-                Ogden::new(4, OgdenForm::Seed),
+                Ogden::new(4, OgdenForm::Abaqus),
                 vec![3e5, 1.3, 1e3, 4e-7, 5e3, -20.0, 1e-3, 20.0],
             ),
             (
@@ -479,7 +479,7 @@ mod tests {
                 let (mut want, mut scale, mut tol) = (0.0, 0.0, 0.0);
                 for t in p.chunks_exact(2).filter(|t| t[1].abs() >= 1e-6) {
                     let k = match m.form {
-                        OgdenForm::Seed => 2.0 * t[0] / t[1],
+                        OgdenForm::Abaqus => 2.0 * t[0] / t[1],
                         OgdenForm::Original => t[0],
                     };
                     let (x, y) = (lam.powf(t[1]), l3.powf(t[1]));

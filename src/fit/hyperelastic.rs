@@ -859,8 +859,11 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
             };
             let lack_of_fit = runs_test(in_mode().map(|(s, (p, y))| (s.stretch, p - y)).collect())
                 .map(|runs| {
-                    let noise_pa =
-                        noise_sigma(&in_mode().map(|(s, (_, y))| (s.stretch, *y)).collect::<Vec<_>>());
+                    let noise_pa = noise_sigma(
+                        &in_mode()
+                            .map(|(s, (_, y))| (s.stretch, *y))
+                            .collect::<Vec<_>>(),
+                    );
                     LackOfFit {
                         runs,
                         noise_pa,
@@ -1541,9 +1544,11 @@ pub struct LackOfFit {
 /// the unloading branch starts there.
 fn branches(samples: &[Sample], group: &[usize]) -> Option<usize> {
     let lam = |i: usize| samples[group[i]].stretch;
-    let (lo, hi) = group.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &i| {
-        (a.min(samples[i].stretch), b.max(samples[i].stretch))
-    });
+    let (lo, hi) = group
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &i| {
+            (a.min(samples[i].stretch), b.max(samples[i].stretch))
+        });
     let top = (0..group.len()).find(|&i| lam(i) == hi)?;
     let tol = REVERSAL * (hi - lo);
     (tol > 0.0 && (top + 1..group.len()).any(|i| lam(i) < hi - tol)).then_some(top)
@@ -1682,8 +1687,8 @@ pub fn prepare(data: &Dataset, sanity: &Sanity) -> Result<Dataset> {
             let mut shift = 0.0;
             if let Some(offset) = offset_at_one(&curve) {
                 let sigma = noise_sigma(&curve);
-                let big = offset.abs() > 1e-6 * scale
-                    && sigma.is_none_or(|s| offset.abs() > SIGMAS * s);
+                let big =
+                    offset.abs() > 1e-6 * scale && sigma.is_none_or(|s| offset.abs() > SIGMAS * s);
                 if big {
                     let against = match sigma {
                         Some(s) if s > 0.0 => format!(

@@ -176,7 +176,9 @@ pub fn read_with(path: &Path, opts: &RelaxationOptions, map: &ColumnMap) -> Resu
     let export = Table::read_export(path, &|fields| {
         let roles: Vec<String> = fields.iter().map(|f| role_of(f, map).0).collect();
         roles.iter().any(|r| r == "time")
-            && roles.iter().any(|r| ["stress", "nominal_stress", "force"].contains(&r.as_str()))
+            && roles
+                .iter()
+                .any(|r| ["stress", "nominal_stress", "force"].contains(&r.as_str()))
     })?;
     let mut data = from_table_with(&export.table, opts, map)?;
     let read = std::mem::take(&mut data.source.notes);
@@ -275,8 +277,10 @@ pub fn from_table_with(
     let (tc, tf) = match time {
         Some((c, Col::Time(f))) => (c, f),
         _ => {
-            return Err(Error::input(hline, "no time column")
-                .with_hint(missing("name one column time_s, time_ms or time_min", &unused)))
+            return Err(Error::input(hline, "no time column").with_hint(missing(
+                "name one column time_s, time_ms or time_min",
+                &unused,
+            )))
         }
     };
     let (sc, sf) = match stress {

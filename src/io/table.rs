@@ -474,8 +474,7 @@ impl ColumnMap {
         self.entries
             .iter()
             .find(|(_, c, _)| {
-                c.eq_ignore_ascii_case(h.trim())
-                    || c.to_lowercase().replace(' ', "_") == name
+                c.eq_ignore_ascii_case(h.trim()) || c.to_lowercase().replace(' ', "_") == name
             })
             .map(|(r, _, u)| (r.as_str(), u.as_deref()))
     }
@@ -487,7 +486,10 @@ impl ColumnMap {
             if !table.header.iter().any(mapped) {
                 return Err(Error::input(
                     Location::line(&table.path, table.header_line),
-                    format!("{} maps {role} to '{column}', which is not a column", self.origin),
+                    format!(
+                        "{} maps {role} to '{column}', which is not a column",
+                        self.origin
+                    ),
                 )
                 .with_hint(format!("the header's columns: {}", table.header.join(", "))));
             }
@@ -509,9 +511,18 @@ pub fn vendor_role(name: &str) -> Option<&'static str> {
         "strain" | "tensile_strain" | "nominal_strain" | "engineering_strain" | "dehnung"
         | "nominelle_dehnung" => "strain",
         "strain_pct" | "strain_percent" => "strain_pct",
-        "displacement" | "extension" | "elongation" | "crosshead" | "crosshead_displacement"
-        | "crosshead_travel" | "stroke" | "standard_travel" | "grip_to_grip_separation"
-        | "traverse" | "standardweg" | "traversenweg" => "displacement",
+        "displacement"
+        | "extension"
+        | "elongation"
+        | "crosshead"
+        | "crosshead_displacement"
+        | "crosshead_travel"
+        | "stroke"
+        | "standard_travel"
+        | "grip_to_grip_separation"
+        | "traverse"
+        | "standardweg"
+        | "traversenweg" => "displacement",
         "nominal_stress" | "engineering_stress" | "tensile_stress" | "stress" | "spannung" => {
             "stress"
         }

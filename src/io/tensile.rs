@@ -273,8 +273,8 @@ pub fn from_table_with(table: &Table, opts: &TensileOptions, map: &ColumnMap) ->
     let hloc = |c: usize| Location::at(path, table.header_line, c + 1);
     // Every deformation and stress column: (column, reading or None when it lacks
     // the gauge length or area, named by the map).
-    let mut kins: Vec<(usize, Option<Kin>, bool)> = Vec::new();
-    let mut stresses: Vec<(usize, Option<Stress>, bool)> = Vec::new();
+    let mut kins: Vec<Candidate<Kin>> = Vec::new();
+    let mut stresses: Vec<Candidate<Stress>> = Vec::new();
     let mut weight_col = None;
     let mut mode_col = None;
     let mut unused = Vec::new();
@@ -317,11 +317,12 @@ pub fn from_table_with(table: &Table, opts: &TensileOptions, map: &ColumnMap) ->
             .with_hint("pass --gauge-length, e.g. --gauge-length 80mm"));
         }
         return Err(
-            Error::input(Location::line(path, table.header_line), "no stretch column")
-                .with_hint(missing_hint(
+            Error::input(Location::line(path, table.header_line), "no stretch column").with_hint(
+                missing_hint(
                     "name one column stretch, strain, strain_pct or displacement_mm",
                     &unused,
-                )),
+                ),
+            ),
         );
     };
     let pick_stress = stresses
@@ -340,11 +341,12 @@ pub fn from_table_with(table: &Table, opts: &TensileOptions, map: &ColumnMap) ->
             .with_hint("pass --area, e.g. --area 22mm2"));
         }
         return Err(
-            Error::input(Location::line(path, table.header_line), "no stress column")
-                .with_hint(missing_hint(
+            Error::input(Location::line(path, table.header_line), "no stress column").with_hint(
+                missing_hint(
                     "name one column nominal_stress_<Pa|kPa|MPa>, true_stress_<unit> or force_N",
                     &unused,
-                )),
+                ),
+            ),
         );
     };
     let mut conversions = Vec::new();
@@ -367,7 +369,9 @@ pub fn from_table_with(table: &Table, opts: &TensileOptions, map: &ColumnMap) ->
     }
     for (others, used, what, missing) in [
         (
-            kins.iter().map(|k| (k.0, k.1.is_some())).collect::<Vec<_>>(),
+            kins.iter()
+                .map(|k| (k.0, k.1.is_some()))
+                .collect::<Vec<_>>(),
             kc,
             "deformation",
             "--gauge-length",
@@ -542,13 +546,7 @@ pub fn from_table_with(table: &Table, opts: &TensileOptions, map: &ColumnMap) ->
             .map(&read_row)
             .collect::<Result<Vec<_>>>()?,
     };
-    let warnings = disagreements(
-        table,
-        &samples,
-        (kc, &kins),
-        (sc, &stresses),
-        opts,
-    );
+    let warnings = disagreements(table, &samples, (kc, &kins), (sc, &stresses), opts);
     // The modes present and the stretch range, in one pass.
     let mut present = [false; 3];
     let (lo, hi) = samples
@@ -577,6 +575,10 @@ pub fn from_table_with(table: &Table, opts: &TensileOptions, map: &ColumnMap) ->
         }],
     })
 }
+
+/// A deformation or stress column: its index, its reading (None when it lacks the
+/// gauge length or area) and whether `--columns` named it.
+type Candidate<T> = (usize, Option<T>, bool);
 
 /// The stretch a deformation column's value `x` gives.
 fn stretch_of(kin: Kin, x: f64) -> f64 {
@@ -621,8 +623,8 @@ fn scale_between(a: &[f64], b: &[f64]) -> f64 {
 fn disagreements(
     table: &Table,
     samples: &[Sample],
-    (kc, kins): (usize, &[(usize, Option<Kin>, bool)]),
-    (sc, stresses): (usize, &[(usize, Option<Stress>, bool)]),
+    (kc, kins): (usize, &[Candidate<Kin>]),
+    (sc, stresses): (usize, &[Candidate<Stress>]),
     opts: &TensileOptions,
 ) -> Vec<String> {
     let mut out = Vec::new();

@@ -1124,6 +1124,71 @@ mod tests {
         assert!(e.to_string().contains(&format!("t.csv:{}:2", a + 1)), "{e}");
     }
 
+    /// An export: the preamble is skipped with its lines counted (a `#` directive in
+    /// it kept), the units row read into the header, line numbers those of the file;
+    /// without a header the export is read as a plain table; CR-only ends work too.
+    #[test]
+    fn exports_skip_their_preamble_and_read_their_units_row() {
+        let is_header = |f: &[&str]| f.contains(&"Load");
+        let text = "\"Sample\",\"A\"\n# mode: planar\n\"Width\",\"10\",\"mm\"\n\n\"Time\",\"Extension\",\"Load\"\n\"(s)\",\"(mm)\",\"(N)\"\n\"0.5\",\"1.0\",\"2.0\"\n";
+        for text in [text.to_string(), text.replace('\n', "\r")] {
+            let e = Table::parse_export(Path::new("e.csv"), text.as_bytes(), &is_header).unwrap();
+            let t = &e.table;
+            assert_eq!(t.header, ["Time [s]", "Extension [mm]", "Load [N]"]);
+            assert_eq!((t.header_line, t.rows.len(), t.rows[0].line), (5, 1, 7));
+            assert_eq!(
+                t.directives,
+                [(2, "mode".to_string(), "planar".to_string())]
+            );
+            assert_eq!(
+                e.notes,
+                [
+                    "2 preamble lines before the header on line 5 skipped",
+                    "units row on line 6 read into the header: Time [s], Extension [mm], Load [N]"
+                ]
+            );
+            assert_eq!(t.sha256, super::super::sha256_hex(text.as_bytes()));
+        }
+        // No line names the columns: the first line is the header, and the hint of the
+        // field-count error is not "a decimal comma?".
+        let e = Table::parse_export(Path::new("e.csv"), text.as_bytes(), &|_| false).unwrap_err();
+        let e = e.to_string();
+        assert!(
+            e.contains("e.csv:3:3") && e.contains("is the header the real one?"),
+            "{e}"
+        );
+        // A value with a prefix (`1k`) is not a unit; a units row without data rows is
+        // an error.
+        let t = Table::parse(Path::new("u.csv"), b"f,c\n1k,2p\n").unwrap();
+        let mut t2 = t.clone();
+        assert!(t2.units_row().unwrap().is_none());
+        let mut u = Table::parse(Path::new("u.csv"), b"f,c\n(Hz),(F)\n").unwrap();
+        assert!(u
+            .units_row()
+            .unwrap_err()
+            .to_string()
+            .contains("no data rows"));
+    }
+
+    /// `--columns`: roles, units, quotes in a file, and its errors.
+    #[test]
+    fn column_maps_parse_and_find_their_columns() {
+        let roles = ["stretch", "force"];
+        let m = ColumnMap::parse("stretch=Extension:mm, force = Load", &roles).unwrap();
+        assert_eq!(m.find("Extension [mm]"), Some(("stretch", Some("mm"))));
+        assert_eq!(m.find("load"), Some(("force", None)));
+        assert_eq!(m.find("Time"), None);
+        for (bad, want) in [
+            ("stretch", "expected ROLE=COLUMN[:UNIT]"),
+            ("strain=x", "unknown role 'strain'"),
+            ("stretch=a,stretch=b", "role 'stretch' given twice"),
+            ("force=", "names no column"),
+        ] {
+            let e = ColumnMap::parse(bad, &roles).unwrap_err().to_string();
+            assert!(e.contains(want), "{bad}: {e}");
+        }
+    }
+
     #[test]
     fn rows_and_fields_are_located() {
         let text = "# mode: planar\nstretch;stress_kPa\n\n1,5; 2\n ; \n\"3;0\";\"4\"\"\"\n";

@@ -184,6 +184,14 @@ pub struct Source {
     /// Conversions applied on reading (e.g. true → nominal stress).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub conversions: Vec<String>,
+    /// What the reader did beyond reading (preamble skipped, units row read, columns
+    /// not used, which of two deformation columns was used).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
+    /// What the reader found wrong without refusing the file (two deformation or
+    /// stress columns that disagree): each makes the fit's status a warning.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<String>,
 }
 
 /// Samples of one or several files.

@@ -74,6 +74,8 @@ fn synthetic(
             stretch_max: 5.0,
             columns: vec![],
             conversions: vec![],
+            notes: vec![],
+            warnings: vec![],
         }],
     }
 }
@@ -463,6 +465,8 @@ fn by_hand(points: &[(f64, f64, f64)]) -> Dataset {
             stretch_max: 3.0,
             columns: vec![],
             conversions: vec![],
+            notes: vec![],
+            warnings: vec![],
         }],
     }
 }

@@ -32,6 +32,7 @@ mod sim_sensitivities;
 mod sim_stream;
 mod status_travels;
 mod support;
+mod tensile_input;
 mod trace;
 mod weibull;
 mod write_faults;

@@ -3,8 +3,9 @@
 use super::Output;
 use clap::ValueEnum;
 use dea_fit::data::Dataset;
-use dea_fit::fit::hyperelastic::{self, HyperelasticFit, Settings};
+use dea_fit::fit::hyperelastic::{self, Branch, HyperelasticFit, Sanity, Settings};
 use dea_fit::fit::problem::Residual;
+use dea_fit::io::table::ColumnMap;
 use dea_fit::io::tensile::{self, TensileOptions};
 use dea_fit::material::hyperelastic::{Mode, ModelSpec, OgdenForm};
 use dea_fit::units::{parse_quantity, CountRange, Dimension};
@@ -21,6 +22,13 @@ enum Form {
     #[value(alias = "seed")]
     Abaqus,
     Original,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum BranchArg {
+    Loading,
+    Unloading,
+    All,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -60,6 +68,25 @@ pub struct Args {
     /// Gauge length for displacement columns, e.g. 80mm (bare number: m).
     #[arg(long)]
     gauge_length: Option<String>,
+    /// Name the columns of a testing machine's export: ROLE=COLUMN[:UNIT],… (roles
+    /// stretch, strain, displacement, force, stress, true_stress, weight, mode,
+    /// time), e.g. stretch=Extension:mm,force=Load:N; or a file of ROLE = COLUMN[:UNIT]
+    /// lines.
+    #[arg(long, value_name = "MAP")]
+    columns: Option<String>,
+    /// Of a record whose stretch reverses (a load–unload cycle), fit this branch
+    /// (default loading, with a warning that says so).
+    #[arg(long, value_enum)]
+    branch: Option<BranchArg>,
+    /// Cut a curve that ends in a break (a final stress drop) after its peak.
+    #[arg(long)]
+    until_break: bool,
+    /// Remove the stress at λ = 1 (a preload offset) from each curve.
+    #[arg(long)]
+    zero_offset: bool,
+    /// Fit only the points with a stretch in MIN:MAX, e.g. 1:3.
+    #[arg(long, value_name = "MIN:MAX")]
+    stretch_range: Option<String>,
     #[command(flatten)]
     output: Output,
     /// Use at most N multi-start points (default: all).
@@ -90,6 +117,12 @@ fn load(a: &Args) -> Result<Dataset> {
             "dea-fit hyperelastic tension.csv [--equibiaxial bulge.csv] [--planar shear.csv]",
         ));
     }
+    let map = a
+        .columns
+        .as_deref()
+        .map(|m| ColumnMap::parse(m, tensile::ROLES))
+        .transpose()?
+        .unwrap_or_default();
     let mut data = Dataset::default();
     let groups = [
         (&a.files, None),
@@ -103,10 +136,45 @@ fn load(a: &Args) -> Result<Dataset> {
                 gauge_length,
                 mode,
             };
-            data.extend(tensile::read(f, &opts)?);
+            data.extend(tensile::read_with(f, &opts, &map)?);
         }
     }
-    Ok(data)
+    hyperelastic::prepare(&data, &sanity(a)?)
+}
+
+/// The sanity options of the data (`--branch`, `--until-break`, `--zero-offset`,
+/// `--stretch-range`).
+fn sanity(a: &Args) -> Result<Sanity> {
+    let stretch_range = a
+        .stretch_range
+        .as_deref()
+        .map(|r| {
+            let bad = || {
+                Error::settings(format!(
+                    "--stretch-range: expected MIN:MAX (two stretches, MIN < MAX), found '{r}'"
+                ))
+                .with_hint("e.g. --stretch-range 1:3")
+            };
+            let (lo, hi) = r.split_once(':').ok_or_else(bad)?;
+            let lo: f64 = lo.trim().parse().map_err(|_| bad())?;
+            let hi: f64 = hi.trim().parse().map_err(|_| bad())?;
+            if lo.is_finite() && hi.is_finite() && lo < hi {
+                Ok((lo, hi))
+            } else {
+                Err(bad())
+            }
+        })
+        .transpose()?;
+    Ok(Sanity {
+        branch: a.branch.map(|b| match b {
+            BranchArg::Loading => Branch::Loading,
+            BranchArg::Unloading => Branch::Unloading,
+            BranchArg::All => Branch::All,
+        }),
+        until_break: a.until_break,
+        zero_offset: a.zero_offset,
+        stretch_range,
+    })
 }
 
 fn run_name(a: &Args, model: &str) -> String {

@@ -7,6 +7,7 @@ use dea_fit::fit::relaxation::{
     self, Criterion, FileRef, Loading, Method, QlvInput, RelaxationFit, Settings,
 };
 use dea_fit::io::relaxation::{self as reader, RelaxationOptions};
+use dea_fit::io::table::ColumnMap;
 use dea_fit::material::viscoelastic::{preset, Preset};
 use dea_fit::report::format::{si, table};
 use dea_fit::units::{parse_quantity, Dimension};
@@ -51,6 +52,11 @@ pub struct Args {
     /// Reference cross-section for force columns, e.g. 22mm2 (bare number: m²).
     #[arg(long)]
     area: Option<String>,
+    /// Name the columns of a testing machine's export: ROLE=COLUMN[:UNIT],… (roles
+    /// time, stress, force, strain, stretch), e.g. time=Time:s,force=Load:N; or a
+    /// file of ROLE = COLUMN[:UNIT] lines.
+    #[arg(long, value_name = "MAP")]
+    columns: Option<String>,
     /// Hyperelastic fit file: fit the QLV relaxation function whose instantaneous
     /// response is this fit's uniaxial stress.
     #[arg(long, value_name = "FIT")]
@@ -185,7 +191,13 @@ pub fn run(a: Args) -> Result<i32> {
         }
         (None, None) => None,
     };
-    let data = reader::read(&file, &RelaxationOptions { area })?;
+    let map = a
+        .columns
+        .as_deref()
+        .map(|m| ColumnMap::parse(m, reader::ROLES))
+        .transpose()?
+        .unwrap_or_default();
+    let data = reader::read_with(&file, &RelaxationOptions { area }, &map)?;
     let qlv = a.hyperelastic.as_deref().map(load_qlv).transpose()?;
     let loading = Loading { strain, ramp_time };
     let fit = relaxation::fit(&data, &loading, qlv.as_ref(), &settings)?;

@@ -147,6 +147,10 @@ pub struct ModeStats {
     /// Coefficient of determination of this mode (None when its stresses do not
     /// vary, e.g. one point: R² is undefined).
     pub r2: Option<f64>,
+    /// The lack-of-fit test of the mode's residuals (None with fewer than
+    /// [`RUNS_MIN`] residuals of either sign).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lack_of_fit: Option<LackOfFit>,
 }
 
 /// A model prediction in a mode the data does not cover.
@@ -847,6 +851,26 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
                     .map(|(_, (&p, &y))| (p, y)),
             );
             let (lo, hi) = data.stretch_range(m).expect("mode present");
+            let in_mode = || {
+                data.samples
+                    .iter()
+                    .zip(pred.iter().zip(y))
+                    .filter(move |(s, _)| s.mode == m)
+            };
+            let lack_of_fit = runs_test(in_mode().map(|(s, (p, y))| (s.stretch, p - y)).collect())
+                .map(|runs| {
+                    let noise_pa = noise_sigma(
+                        &in_mode()
+                            .map(|(s, (_, y))| (s.stretch, *y))
+                            .collect::<Vec<_>>(),
+                    );
+                    LackOfFit {
+                        runs,
+                        noise_pa,
+                        lacks_fit: runs.p < RUNS_ALPHA
+                            && noise_pa.is_none_or(|s| rm > LACK_OF_FIT_RATIO * s),
+                    }
+                });
             ModeStats {
                 mode: m,
                 points,
@@ -854,9 +878,47 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
                 stretch_max: hi,
                 rmse_pa: rm,
                 r2: r2m,
+                lack_of_fit,
             }
         })
         .collect();
+    // What the reader and the sanity checks found ([`prepare`]).
+    for source in &data.sources {
+        let name = std::path::Path::new(&source.path)
+            .file_name()
+            .map_or_else(|| source.path.clone(), |n| n.to_string_lossy().into_owned());
+        warnings.extend(source.notes.iter().map(|n| format!("{name}: {n}")));
+        for w in &source.warnings {
+            escalate(Status::Warning);
+            warnings.push(format!("{name}: {w}"));
+        }
+    }
+    // Lack of fit: structured residuals well above the noise.
+    for s in &per_mode {
+        let Some(l) = s.lack_of_fit.filter(|l| l.lacks_fit) else {
+            continue;
+        };
+        escalate(Status::Warning);
+        let noise = match l.noise_pa {
+            Some(n) => format!(
+                ", and the RMSE {} Pa is {:.1} times the noise σ = {} Pa of the data",
+                Fixed(s.rmse_pa, 4),
+                s.rmse_pa / n.max(f64::MIN_POSITIVE),
+                Fixed(n, 3)
+            ),
+            None => String::new(),
+        };
+        warnings.push(format!(
+            "lack of fit in {}: the residuals keep their sign over long stretches of the curve (runs test: {} runs where {:.1} are expected of noise, z = {:.2}, p = {:.1e}){noise}; {} misses the shape of the data (R² {}): a break, a load–unload cycle, a preload, or a model too simple?",
+            s.mode,
+            l.runs.runs,
+            l.runs.expected_runs,
+            l.runs.z,
+            l.runs.p,
+            model.name(),
+            s.r2.map_or("n/a".into(), |v| format!("{v:.4}"))
+        ));
+    }
 
     // Convergence.
     if let Some(w) = est.termination.shortfall() {
@@ -1312,4 +1374,353 @@ pub fn fit_auto(
         candidates,
     });
     Ok((out, fits))
+}
+
+// ---------------------------------------------------------------------------------
+// Data sanity: breaks, load–unload cycles, preload offsets, a stretch window, and
+// the lack-of-fit test of the residuals.
+// ---------------------------------------------------------------------------------
+
+/// Which part of a record whose stretch reverses (a load–unload cycle) is fitted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Branch {
+    /// From the start to the largest stretch (default).
+    #[default]
+    Loading,
+    /// From the largest stretch to the end.
+    Unloading,
+    /// Every point.
+    All,
+}
+
+impl std::fmt::Display for Branch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Branch::Loading => "loading",
+            Branch::Unloading => "unloading",
+            Branch::All => "all",
+        })
+    }
+}
+
+/// What to do with a curve that is not one clean loading curve (`dea-fit
+/// hyperelastic --branch --until-break --zero-offset --stretch-range`).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Sanity {
+    /// The branch to fit of a record whose stretch reverses; None: the loading
+    /// branch, and a warning says so.
+    pub branch: Option<Branch>,
+    /// Cut a curve that ends in a break after its peak stress.
+    pub until_break: bool,
+    /// Remove the stress at λ = 1 (a preload) from each curve.
+    pub zero_offset: bool,
+    /// Fit only the points with a stretch in this closed range.
+    pub stretch_range: Option<(f64, f64)>,
+}
+
+/// A drop of the stress after its peak that counts as a break: more than this
+/// fraction of the peak stress (and more than [`SIGMAS`] noise σ), with the stretch
+/// still increasing. An elastomer's loading curve rises monotonically (Drucker
+/// stability of the material); a rupture drops it to near zero within a few samples.
+pub const BREAK_DROP: f64 = 0.1;
+
+/// Multiples of the noise σ a preload offset or a break drop must exceed to be
+/// reported: beyond 3σ a Gaussian reading lies with probability 0.3 %.
+pub const SIGMAS: f64 = 3.0;
+
+/// A reversal of the stretch smaller than this fraction of the record's stretch
+/// span is jitter of the crosshead reading, not an unloading branch.
+pub const REVERSAL: f64 = 0.01;
+
+/// Points within this stretch of λ = 1 estimate the stress there (a preload
+/// offset) by a straight line when no point lies at λ = 1: 2 % strain is where
+/// every model's stress is linear in λ − 1 to within about 3 % (the quadratic term
+/// of the uniaxial Neo-Hookean stress is −3/2·(λ − 1)² against 3·(λ − 1)).
+pub const OFFSET_WINDOW: f64 = 0.02;
+
+/// The noise standard deviation of y(x) estimated without a model from the local
+/// second differences of the points sorted by x (Gasser, Sroka & Jennen-Steinmetz,
+/// "Residual variance and residual pattern in nonlinear regression", Biometrika 73,
+/// 1986): for each interior point the pseudo-residual
+/// eᵢ = aᵢ·yᵢ₋₁ + bᵢ·yᵢ₊₁ − yᵢ, aᵢ = (xᵢ₊₁ − xᵢ)/(xᵢ₊₁ − xᵢ₋₁), bᵢ = 1 − aᵢ,
+/// and σ² = Σ eᵢ²/(aᵢ² + bᵢ² + 1) / (n − 2). A smooth curve's second difference is
+/// small against the noise when the points are dense; None for fewer than 3 points
+/// with distinct neighbours.
+pub fn noise_sigma(points: &[(f64, f64)]) -> Option<f64> {
+    let mut p = points.to_vec();
+    p.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let (mut sum, mut count) = (0.0, 0usize);
+    for w in p.windows(3) {
+        let ((x0, y0), (x1, y1), (x2, y2)) = (w[0], w[1], w[2]);
+        if x2 <= x0 {
+            continue;
+        }
+        let a = (x2 - x1) / (x2 - x0);
+        let b = 1.0 - a;
+        let e = a * y0 + b * y2 - y1;
+        sum += e * e / (a * a + b * b + 1.0);
+        count += 1;
+    }
+    (count > 0).then(|| (sum / count as f64).sqrt())
+}
+
+/// The Wald–Wolfowitz runs test of the signs of residuals in stretch order (zeros
+/// dropped): the number of runs R, its expectation under independent signs
+/// E = 2·n₊·n₋/n + 1, variance V = 2·n₊·n₋·(2·n₊·n₋ − n)/(n²·(n − 1)), z = (R − E)/√V
+/// and the one-sided p = Φ(z) of so few runs (Wald & Wolfowitz, Ann. Math. Stat. 11,
+/// 1940). Too few runs mean residuals that keep their sign over stretches of the
+/// curve: the model misses its shape. None below [`RUNS_MIN`] signs of either kind
+/// (the normal approximation needs them).
+pub fn runs_test(mut residuals: Vec<(f64, f64)>) -> Option<RunsTest> {
+    residuals.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let signs: Vec<bool> = residuals
+        .iter()
+        .filter(|r| r.1 != 0.0)
+        .map(|r| r.1 > 0.0)
+        .collect();
+    let pos = signs.iter().filter(|s| **s).count() as f64;
+    let neg = signs.len() as f64 - pos;
+    if pos < RUNS_MIN || neg < RUNS_MIN {
+        return None;
+    }
+    let n = pos + neg;
+    let runs = 1 + signs.windows(2).filter(|w| w[0] != w[1]).count();
+    let expected = 2.0 * pos * neg / n + 1.0;
+    let var = 2.0 * pos * neg * (2.0 * pos * neg - n) / (n * n * (n - 1.0));
+    let z = (runs as f64 - expected) / var.sqrt();
+    let p = 0.5 * statrs::function::erf::erfc(-z / std::f64::consts::SQRT_2);
+    Some(RunsTest {
+        runs,
+        expected_runs: expected,
+        z,
+        p,
+    })
+}
+
+/// Fewest residuals of each sign for the runs test's normal approximation (Wald &
+/// Wolfowitz 1940; tables of the exact distribution stop at 20 of each, and the
+/// approximation is within 0.01 in p from about 10).
+pub const RUNS_MIN: f64 = 10.0;
+
+/// The one-sided p below which the runs test rejects independent residual signs.
+pub const RUNS_ALPHA: f64 = 1e-3;
+
+/// The RMSE over the model-free noise σ ([`noise_sigma`]) above which structured
+/// residuals matter: a model error twice the noise (four times its variance) is a
+/// misfit a reader sees in the residual chart; below it, dense data show a runs
+/// test's rejection for a deviation smaller than the noise.
+pub const LACK_OF_FIT_RATIO: f64 = 2.0;
+
+/// The runs test of one mode's residuals.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RunsTest {
+    /// Runs of equal sign in stretch order.
+    pub runs: usize,
+    /// Runs expected of independent signs.
+    pub expected_runs: f64,
+    /// Standard score of the runs.
+    pub z: f64,
+    /// One-sided p of so few runs.
+    pub p: f64,
+}
+
+/// The lack-of-fit test of one mode: the runs test and the RMSE against the noise.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct LackOfFit {
+    /// The runs test of the residual signs.
+    pub runs: RunsTest,
+    /// The model-free noise σ of the mode's data (Pa), when it has one.
+    #[serde(rename = "noise_Pa")]
+    pub noise_pa: Option<f64>,
+    /// Whether the fit lacks fit: p < [`RUNS_ALPHA`] and RMSE >
+    /// [`LACK_OF_FIT_RATIO`]·σ (or no σ).
+    pub lacks_fit: bool,
+}
+
+/// The position in `group` (sample indices of one file and mode, in file order) of
+/// the largest stretch, when the stretch reverses after it by more than
+/// [`REVERSAL`] of its span (a load–unload cycle): the loading branch ends there,
+/// the unloading branch starts there.
+fn branches(samples: &[Sample], group: &[usize]) -> Option<usize> {
+    let lam = |i: usize| samples[group[i]].stretch;
+    let (lo, hi) = group
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &i| {
+            (a.min(samples[i].stretch), b.max(samples[i].stretch))
+        });
+    let top = (0..group.len()).find(|&i| lam(i) == hi)?;
+    let tol = REVERSAL * (hi - lo);
+    (tol > 0.0 && (top + 1..group.len()).any(|i| lam(i) < hi - tol)).then_some(top)
+}
+
+/// The stress at λ = 1 of a curve (`pts` (stretch, stress) of one file and mode):
+/// the mean of its points at λ = 1, else the straight line through its points within
+/// [`OFFSET_WINDOW`] of it (at least two with distinct stretches), at λ = 1; None when
+/// neither exists.
+fn offset_at_one(pts: &[(f64, f64)]) -> Option<f64> {
+    let at: Vec<f64> = pts
+        .iter()
+        .filter(|p| (p.0 - 1.0).abs() <= crate::data::REFERENCE_TOL)
+        .map(|p| p.1)
+        .collect();
+    if !at.is_empty() {
+        return Some(at.iter().sum::<f64>() / at.len() as f64);
+    }
+    let near: Vec<(f64, f64)> = pts
+        .iter()
+        .copied()
+        .filter(|p| (p.0 - 1.0).abs() <= OFFSET_WINDOW)
+        .collect();
+    let n = near.len() as f64;
+    let (mx, my) = near
+        .iter()
+        .fold((0.0, 0.0), |(a, b), p| (a + p.0 / n, b + p.1 / n));
+    let sxx: f64 = near.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    if near.len() < 2 || sxx <= 0.0 {
+        return None;
+    }
+    let sxy: f64 = near.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    Some(my + sxy / sxx * (1.0 - mx))
+}
+
+/// The data to fit after the sanity checks of each file and mode, in this order: the
+/// stretch window (`--stretch-range`), the branch of a load–unload cycle
+/// (`--branch`), a break at the end (`--until-break`) and a preload offset
+/// (`--zero-offset`). Each finding is a warning with its numbers in the file's
+/// [`Source::warnings`] (which make the fit's status a warning), or, when the option
+/// that acts on it was given, a note of what was done in [`Source::notes`].
+pub fn prepare(data: &Dataset, sanity: &Sanity) -> Result<Dataset> {
+    if let Some((lo, hi)) = sanity.stretch_range {
+        if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+            return Err(Error::settings(format!(
+                "--stretch-range: expected MIN:MAX with MIN < MAX, found {lo}:{hi}"
+            )));
+        }
+    }
+    let mut out = Dataset {
+        samples: Vec::with_capacity(data.samples.len()),
+        sources: data.sources.clone(),
+    };
+    for f in 0..data.sources.len() {
+        for m in Mode::ALL {
+            let mut group: Vec<usize> = (0..data.samples.len())
+                .filter(|&i| data.samples[i].source == f && data.samples[i].mode == m)
+                .collect();
+            if group.is_empty() {
+                continue;
+            }
+            let (notes, warnings) = {
+                let s = &mut out.sources[f];
+                (&mut s.notes, &mut s.warnings)
+            };
+            let at = |i: usize| &data.samples[i];
+            if let Some((lo, hi)) = sanity.stretch_range {
+                let before = group.len();
+                group.retain(|&i| (lo..=hi).contains(&at(i).stretch));
+                if group.len() < before {
+                    notes.push(format!(
+                        "{m}: {} of {before} points outside --stretch-range {lo}:{hi} not fitted",
+                        before - group.len()
+                    ));
+                }
+            }
+            if let Some(top) = branches(&data.samples, &group) {
+                let branch = sanity.branch.unwrap_or_default();
+                let (load, unload) = (top + 1, group.len() - top);
+                let peak = at(group[top]);
+                let what = format!(
+                    "{m}: the stretch reverses at λ = {:.4} (line {}): a load–unload cycle of {load} loading and {unload} unloading points",
+                    peak.stretch, peak.line
+                );
+                match branch {
+                    Branch::Loading => group.truncate(top + 1),
+                    Branch::Unloading => {
+                        group.drain(..top);
+                    }
+                    Branch::All => {}
+                }
+                match sanity.branch {
+                    None => warnings.push(format!(
+                        "{what}; the loading branch was fitted (--branch loading|unloading|all)"
+                    )),
+                    Some(b) => notes.push(format!("{what}; --branch {b} fitted")),
+                }
+            }
+            let pts = |g: &[usize]| -> Vec<(f64, f64)> {
+                g.iter().map(|&i| (at(i).stretch, at(i).stress)).collect()
+            };
+            let sigma = noise_sigma(&pts(&group));
+            // A break: the stress falls after its peak while the stretch goes on.
+            if sanity.branch.unwrap_or_default() != Branch::Unloading && group.len() >= 3 {
+                let top = (0..group.len())
+                    .max_by(|&a, &b| at(group[a]).stress.total_cmp(&at(group[b]).stress))
+                    .expect("non-empty");
+                let (peak, last) = (at(group[top]), at(*group.last().expect("non-empty")));
+                let drop = peak.stress - last.stress;
+                let floor = BREAK_DROP * peak.stress.abs() + SIGMAS * sigma.unwrap_or(0.0);
+                if top + 1 < group.len() && last.stretch >= peak.stretch && drop > floor {
+                    let what = format!(
+                        "{m}: the curve ends in a break: the stress falls from {} Pa at λ = {:.4} (line {}) to {} Pa at λ = {:.4} (line {}), {:.0} % of the peak, over the last {} points",
+                        Fixed(peak.stress, 4),
+                        peak.stretch,
+                        peak.line,
+                        Fixed(last.stress, 4),
+                        last.stretch,
+                        last.line,
+                        100.0 * drop / peak.stress.abs(),
+                        group.len() - top - 1
+                    );
+                    if sanity.until_break {
+                        notes.push(format!("{what}; cut after the peak (--until-break)"));
+                        group.truncate(top + 1);
+                    } else {
+                        warnings.push(format!(
+                            "{what}; they were fitted (--until-break cuts them)"
+                        ));
+                    }
+                }
+            }
+            // A preload offset: stress at λ = 1, against the noise.
+            let curve = pts(&group);
+            let scale = curve.iter().fold(0.0f64, |a, p| a.max(p.1.abs()));
+            let mut shift = 0.0;
+            if let Some(offset) = offset_at_one(&curve) {
+                let sigma = noise_sigma(&curve);
+                let big =
+                    offset.abs() > 1e-6 * scale && sigma.is_none_or(|s| offset.abs() > SIGMAS * s);
+                if big {
+                    let against = match sigma {
+                        Some(s) if s > 0.0 => format!(
+                            "{:.1} times the noise σ = {} Pa",
+                            offset.abs() / s,
+                            Fixed(s, 3)
+                        ),
+                        _ => "the noise σ is unknown".into(),
+                    };
+                    let what = format!(
+                        "{m}: the stress at λ = 1 is {} Pa ({:.2} % of the largest stress; {against}): a preload or a load cell not zeroed",
+                        Fixed(offset, 4),
+                        100.0 * offset.abs() / scale.max(f64::MIN_POSITIVE)
+                    );
+                    if sanity.zero_offset {
+                        notes.push(format!("{what}; removed from every point (--zero-offset)"));
+                        shift = offset;
+                    } else {
+                        warnings.push(format!(
+                            "{what}; it biases the fit (--zero-offset removes it)"
+                        ));
+                    }
+                }
+            }
+            out.samples.extend(group.iter().map(|&i| Sample {
+                stress: at(i).stress - shift,
+                ..*at(i)
+            }));
+        }
+    }
+    // Back to file order within each file (the modes were taken one after another).
+    out.samples
+        .sort_by_key(|s| (s.source, s.line, s.mode as usize));
+    Ok(out)
 }

@@ -378,23 +378,25 @@ fn read_csv(
     mut notes: Vec<String>,
 ) -> Result<Sweep> {
     // The header is the first line naming a frequency column; anything before it
-    // (instrument preamble) is skipped.
-    let delim = |l: &str| {
-        if l.contains('\t') {
-            '\t'
-        } else if l.contains(';') {
-            ';'
-        } else {
-            ','
-        }
-    };
-    let header_idx = (first..lines.len()).find(|&i| {
-        let l = lines[i];
+    // (instrument preamble) is skipped ([`Table::parse_export`]).
+    let is_freq = |f: &str| Kind::of(&split_header(f).0) == Some(Kind::Freq);
+    let names_freq = |l: &&str| {
         !l.trim_start().starts_with('#')
-            && l.split(delim(l))
-                .any(|f| Kind::of(&split_header(f).0) == Some(Kind::Freq))
-    });
-    let Some(header_idx) = header_idx else {
+            && l.split([',', ';', '\t'])
+                .any(|f| is_freq(f.trim().trim_matches('"')))
+    };
+    let export = lines[first..]
+        .iter()
+        .any(names_freq)
+        .then(|| {
+            let text = lines.join("\n");
+            Table::parse_export(path, text.as_bytes(), &|fields: &[&str]| {
+                fields.iter().any(|f| is_freq(f))
+            })
+        })
+        .transpose()?
+        .filter(|e| e.table.header.iter().any(|h| is_freq(h)));
+    let Some(export) = export else {
         return Err(Error::input(
             Location::line(path, first + 1),
             format!("no frequency column: found '{}'", lines[first].trim()),
@@ -403,22 +405,8 @@ fn read_csv(
             "name the columns, e.g. 'freq_Hz,Cp_pF,D' or 'Frequency(Hz), R(Ohm)-data, X(Ohm)-data'",
         ));
     };
-    let skipped = (first..header_idx)
-        .filter(|&i| !lines[i].trim().is_empty() && !lines[i].trim_start().starts_with('#'))
-        .count();
-    if skipped > 0 {
-        notes.push(format!(
-            "{skipped} preamble line(s) before the header on line {} were skipped",
-            header_idx + 1
-        ));
-    }
-    let kept: String = lines
-        .iter()
-        .enumerate()
-        .map(|(i, l)| if i >= header_idx { *l } else { "" })
-        .collect::<Vec<_>>()
-        .join("\n");
-    let table = Table::parse(path, kept.as_bytes())?;
+    let table = export.table;
+    notes.extend(export.notes);
     let hloc = |c: usize| Location::at(path, table.header_line, c + 1);
 
     let mut cols: Vec<(Kind, Column, Option<String>)> = Vec::new();

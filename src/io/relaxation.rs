@@ -7,7 +7,7 @@
 //! (`strain`, `strain_pct` or `stretch`). Times must start at ≥ 0 (the start of
 //! loading) and increase strictly.
 
-use super::table::{column_unit, split_header, Table};
+use super::table::{column_unit, normalise, split_header, vendor_role, ColumnMap, Table};
 use crate::data::{STRESS_MAX, STRETCH_RANGE};
 use crate::error::{Error, Location, Result};
 use crate::material::viscoelastic::{History, Prony, Schedule};
@@ -33,6 +33,10 @@ pub struct RelaxationSource {
     /// Conversions applied on reading (e.g. force → stress).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub conversions: Vec<String>,
+    /// What the reader did beyond reading (preamble skipped, units row read, columns
+    /// not used).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
 }
 
 /// A relaxation curve in SI: nominal stress against time, with the recorded strain
@@ -139,21 +143,72 @@ enum Col {
     Stretch,
 }
 
+/// The roles `--columns` may give a relaxation file's columns.
+pub const ROLES: &[&str] = &["time", "stress", "force", "strain", "stretch"];
+
 /// Read one relaxation file.
 pub fn read(path: &Path, opts: &RelaxationOptions) -> Result<RelaxationData> {
-    from_table(&Table::read(path)?, opts)
+    read_with(path, opts, &ColumnMap::default())
+}
+
+/// The role and unit of header field `h`: from `map` when it names the column, else
+/// from its name (as dea-fit or a testing-machine program writes it).
+fn role_of(h: &str, map: &ColumnMap) -> (String, Option<String>) {
+    let (name, unit) = split_header(h, COLUMNS);
+    match map.find(h) {
+        Some((role, u)) => (role.to_string(), u.map(str::to_string).or(unit)),
+        None => {
+            let role = match vendor_role(&normalise(&name)) {
+                Some("strain_pct") => return ("strain".into(), Some("%".into())),
+                Some(r) => r.to_string(),
+                None => name,
+            };
+            (role, unit)
+        }
+    }
+}
+
+/// Read one relaxation file, a testing machine's export included: a preamble above
+/// the header and a units row under it ([`Table::parse_export`]; the header is the
+/// first line naming a time and a stress or force column), the columns named by
+/// `map` (`--columns`) or by the names testing-machine programs write.
+pub fn read_with(path: &Path, opts: &RelaxationOptions, map: &ColumnMap) -> Result<RelaxationData> {
+    let export = Table::read_export(path, &|fields| {
+        let roles: Vec<String> = fields.iter().map(|f| role_of(f, map).0).collect();
+        roles.iter().any(|r| r == "time")
+            && roles
+                .iter()
+                .any(|r| ["stress", "nominal_stress", "force"].contains(&r.as_str()))
+    })?;
+    let mut data = from_table_with(&export.table, opts, map)?;
+    let read = std::mem::take(&mut data.source.notes);
+    data.source.notes = export.notes;
+    data.source.notes.extend(read);
+    Ok(data)
 }
 
 /// Interpret a parsed table as a relaxation curve.
 pub fn from_table(table: &Table, opts: &RelaxationOptions) -> Result<RelaxationData> {
+    from_table_with(table, opts, &ColumnMap::default())
+}
+
+/// Interpret a parsed table as a relaxation curve, the columns named by `map` or
+/// their names ([`read_with`]).
+pub fn from_table_with(
+    table: &Table,
+    opts: &RelaxationOptions,
+    map: &ColumnMap,
+) -> Result<RelaxationData> {
     let path = &table.path;
+    map.check(table)?;
     let hloc = |c: usize| Location::at(path, table.header_line, c + 1);
     let mut time = None;
     let mut stress = None;
     let mut load = None;
     let mut conversions = Vec::new();
+    let mut unused = Vec::new();
     for (c, h) in table.header.iter().enumerate() {
-        let (name, u) = split_header(h, COLUMNS);
+        let (name, u) = role_of(h, map);
         let col = match name.as_str() {
             "time" => Col::Time(column_unit(table, c, u.as_deref(), Dimension::Time)?),
             "stress" | "nominal_stress" | "engineering_stress" => {
@@ -190,7 +245,13 @@ pub fn from_table(table: &Table, opts: &RelaxationOptions) -> Result<RelaxationD
             .with_hint(
                 "convert to nominal stress (force / reference area) or give force_N with --area",
             )),
-            _ => return Err(table.unknown_column(c, ACCEPTED, "time_s,stress_kPa")),
+            _ if h.trim().is_empty() || h.trim().parse::<f64>().is_ok() => {
+                return Err(table.unknown_column(c, ACCEPTED, "time_s,stress_kPa"))
+            }
+            _ => {
+                unused.push(h.clone());
+                continue;
+            }
         };
         let slot = match col {
             Col::Time(_) => &mut time,
@@ -216,15 +277,19 @@ pub fn from_table(table: &Table, opts: &RelaxationOptions) -> Result<RelaxationD
     let (tc, tf) = match time {
         Some((c, Col::Time(f))) => (c, f),
         _ => {
-            return Err(Error::input(hline, "no time column")
-                .with_hint("name one column time_s, time_ms or time_min"))
+            return Err(Error::input(hline, "no time column").with_hint(missing(
+                "name one column time_s, time_ms or time_min",
+                &unused,
+            )))
         }
     };
     let (sc, sf) = match stress {
         Some((c, Col::Stress(f))) => (c, f),
         _ => {
-            return Err(Error::input(hline, "no stress column")
-                .with_hint("name one column stress_<Pa|kPa|MPa> or force_N (with --area)"))
+            return Err(Error::input(hline, "no stress column").with_hint(missing(
+                "name one column stress_<Pa|kPa|MPa> or force_N (with --area)",
+                &unused,
+            )))
         }
     };
     let mut t = Vec::with_capacity(table.rows.len());
@@ -337,12 +402,29 @@ pub fn from_table(table: &Table, opts: &RelaxationOptions) -> Result<RelaxationD
             time_max_s: *t.last().expect("non-empty"),
             columns: table.header.clone(),
             conversions,
+            notes: if unused.is_empty() {
+                Vec::new()
+            } else {
+                vec![format!("columns not used: {}", unused.join(", "))]
+            },
         },
         time: t,
         stress: y,
         strain: load.map(|_| eps),
         line,
     })
+}
+
+/// The hint for a missing column: `what`, and the columns that were not used.
+fn missing(what: &str, unused: &[String]) -> String {
+    if unused.is_empty() {
+        what.to_string()
+    } else {
+        format!(
+            "{what}, or name it with --columns (e.g. --columns time=Time:s,force=Load:N); not recognised: {}",
+            unused.join(", ")
+        )
+    }
 }
 
 /// A synthetic relaxation test: known Prony constants, loading, sampling and noise.

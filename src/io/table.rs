@@ -189,6 +189,95 @@ impl Table {
         })
     }
 
+    /// Read a testing-machine or instrument export ([`Table::parse_export`]).
+    pub fn read_export(path: &Path, is_header: &dyn Fn(&[&str]) -> bool) -> Result<Export> {
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        Self::parse_export(path, &bytes, is_header)
+    }
+
+    /// Split an export whose header may sit below a preamble of metadata lines and
+    /// may have a row of units under it. The header is the first line (after `#`
+    /// comments and blank lines) whose fields `is_header` accepts; the other lines
+    /// above it (an instrument's or test program's metadata) are skipped, every line
+    /// keeping its number. A file in which no line before the first all-numeric one is
+    /// accepted is read as a plain table (its first line the header), so that the
+    /// caller's header errors apply. A units row right under the header
+    /// (`"(s)","(mm)","(N)"`, `[mm]`, `mm`: no field a number) is read into the
+    /// header: `Extension` over `(mm)` becomes `Extension [mm]`. The notes say what
+    /// was skipped and read.
+    pub fn parse_export(
+        path: &Path,
+        bytes: &[u8],
+        is_header: &dyn Fn(&[&str]) -> bool,
+    ) -> Result<Export> {
+        let mut notes = Vec::new();
+        let found = decode(path, bytes)
+            .ok()
+            .and_then(|text| preamble(text, is_header));
+        let mut table = match found {
+            Some((line, skipped, kept)) => {
+                notes.push(format!(
+                    "{skipped} preamble line{} before the header on line {line} skipped",
+                    if skipped == 1 { "" } else { "s" }
+                ));
+                let (sha256, table) = rayon::join(
+                    || super::sha256_hex(bytes),
+                    || Self::split(path, kept.as_bytes()),
+                );
+                table.map(|t| Table { sha256, ..t })?
+            }
+            None => Self::parse(path, bytes)?,
+        };
+        notes.extend(table.units_row()?);
+        Ok(Export { table, notes })
+    }
+
+    /// Read a units row under the header into the header (see
+    /// [`Table::parse_export`]) and drop it from the rows; the note saying so, or
+    /// None when the first row is not a units row.
+    fn units_row(&mut self) -> Result<Option<String>> {
+        let Some(&row) = self.rows.first() else {
+            return Ok(None);
+        };
+        let fields: Vec<String> = (0..self.header.len())
+            .map(|c| self.field(&row, c).to_string())
+            .collect();
+        // A unit holds no digit unless bracketed (`(mm2)`): `1k` or `15.7p` is a value.
+        let is_unit = |f: &str| {
+            let bracketed = f.starts_with(['(', '[']) && f.ends_with([')', ']']);
+            f.is_empty()
+                || (f.chars().count() <= UNIT_CHARS
+                    && (bracketed || !f.bytes().any(|b| b.is_ascii_digit())))
+        };
+        if fields.iter().all(|f| f.is_empty()) || !fields.iter().all(|f| is_unit(f)) {
+            return Ok(None);
+        }
+        if self.rows.len() == 1 {
+            return Err(Error::input(
+                Location::line(&self.path, row.line),
+                "the file has a header and a units row but no data rows",
+            )
+            .with_hint("add one line per measured point below the units row"));
+        }
+        let mut read = Vec::new();
+        for (h, f) in self.header.iter_mut().zip(&fields) {
+            let unit = f
+                .trim_start_matches(['(', '['])
+                .trim_end_matches([')', ']'])
+                .trim();
+            if !unit.is_empty() {
+                *h = format!("{h} [{unit}]");
+                read.push(h.clone());
+            }
+        }
+        self.rows.remove(0);
+        Ok(Some(format!(
+            "units row on line {} read into the header: {}",
+            row.line,
+            read.join(", ")
+        )))
+    }
+
     /// The trimmed text of `row`'s field in column `col` (0-based).
     pub fn field(&self, row: &Row, col: usize) -> &str {
         let part = &self.parts[row.part as usize];
@@ -299,6 +388,231 @@ fn plain_decimal(bytes: &[u8]) -> Option<f64> {
     let k = point.map_or(0, |i| digits.len() - 1 - i);
     let v = m as f64 / POW10[k];
     Some(if negative { -v } else { v })
+}
+
+/// A table read by [`Table::parse_export`] and what was done to find its header.
+#[derive(Debug, Clone)]
+pub struct Export {
+    /// The table (header as read, units row merged into it).
+    pub table: Table,
+    /// Preamble lines skipped, units row read.
+    pub notes: Vec<String>,
+}
+
+/// `--columns`: which header column holds which quantity, with an optional unit
+/// that overrides the header's.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ColumnMap {
+    /// (role, column as given, unit), in the order given.
+    pub entries: Vec<(String, String, Option<String>)>,
+    /// Where the map came from: `--columns` or the mapping file.
+    pub origin: String,
+}
+
+impl ColumnMap {
+    /// Parse `ROLE=COLUMN[:UNIT],…` or, when `spec` is an existing file, that file:
+    /// one `ROLE = COLUMN[:UNIT]` per line (the value may be quoted, so a TOML table
+    /// of strings reads; `#` comments and blank lines are skipped). `roles` are the
+    /// roles the reader knows; each may be given once.
+    pub fn parse(spec: &str, roles: &[&str]) -> Result<ColumnMap> {
+        let path = Path::new(spec);
+        let (text, origin, sep) = if path.is_file() {
+            let t = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+            (t, path.display().to_string(), '\n')
+        } else {
+            (spec.to_string(), "--columns".to_string(), ',')
+        };
+        let mut map = ColumnMap {
+            entries: Vec::new(),
+            origin: origin.clone(),
+        };
+        for (i, item) in text.split(sep).enumerate() {
+            let item = item.trim();
+            if item.is_empty() || item.starts_with('#') {
+                continue;
+            }
+            let at = |msg: String| -> Error {
+                if sep == '\n' {
+                    Error::input(Location::line(Path::new(&origin), i + 1), msg)
+                } else {
+                    Error::settings(format!("--columns: {msg}"))
+                }
+            };
+            let example = "stretch=Extension:mm,force=Load:N";
+            let Some((role, value)) = item.split_once('=') else {
+                return Err(at(format!("expected ROLE=COLUMN[:UNIT], found '{item}'"))
+                    .with_hint(format!("e.g. {example}")));
+            };
+            let role = role.trim().to_ascii_lowercase();
+            if !roles.contains(&role.as_str()) {
+                return Err(at(format!("unknown role '{role}'"))
+                    .with_hint(format!("roles: {}", roles.join(", "))));
+            }
+            if map.entries.iter().any(|e| e.0 == role) {
+                return Err(at(format!("role '{role}' given twice")));
+            }
+            let value = value.trim().trim_matches('"').trim();
+            let (column, unit) = match value.rsplit_once(':') {
+                Some((c, u)) if !u.trim().is_empty() && !u.contains(' ') => {
+                    (c.trim(), Some(u.trim().to_string()))
+                }
+                _ => (value, None),
+            };
+            if column.is_empty() {
+                return Err(at(format!("role '{role}' names no column"))
+                    .with_hint(format!("e.g. {example}")));
+            }
+            map.entries.push((role, column.to_string(), unit));
+        }
+        Ok(map)
+    }
+
+    /// The role and unit the map gives header field `h`: an entry whose column is
+    /// `h` as written, or `h` without its unit (`Load` names `Load [N]`), in any case.
+    pub fn find(&self, h: &str) -> Option<(&str, Option<&str>)> {
+        let name = split_header(h, &[]).0;
+        self.entries
+            .iter()
+            .find(|(_, c, _)| {
+                c.eq_ignore_ascii_case(h.trim()) || c.to_lowercase().replace(' ', "_") == name
+            })
+            .map(|(r, _, u)| (r.as_str(), u.as_deref()))
+    }
+
+    /// Every mapped column is in `table`'s header, or an error at the header.
+    pub fn check(&self, table: &Table) -> Result<()> {
+        for (role, column, _) in &self.entries {
+            let mapped = |h: &String| self.find(h).is_some_and(|(r, _)| r == role);
+            if !table.header.iter().any(mapped) {
+                return Err(Error::input(
+                    Location::line(&table.path, table.header_line),
+                    format!(
+                        "{} maps {role} to '{column}', which is not a column",
+                        self.origin
+                    ),
+                )
+                .with_hint(format!("the header's columns: {}", table.header.join(", "))));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The role of a column name as dea-fit or a testing-machine program writes it
+/// (Instron Bluehill: `Extension`, `Load`, `Tensile strain (Extension)`, `Tensile
+/// stress`; ZwickRoell testXpert: `Standard force`, `Standard travel`, `Strain`,
+/// `Nominal strain`, `Grip to grip separation`; Shimadzu Trapezium: `Force`,
+/// `Stroke`, `Strain`; German exports: `Standardkraft`, `Dehnung`, `Standardweg`).
+/// `name` is lower-case with runs of other characters than letters and digits as
+/// `_`; `strain_pct` is its own role (a percentage whatever the unit).
+pub fn vendor_role(name: &str) -> Option<&'static str> {
+    Some(match name {
+        "stretch" | "lambda" | "stretch_ratio" => "stretch",
+        "strain" | "tensile_strain" | "nominal_strain" | "engineering_strain" | "dehnung"
+        | "nominelle_dehnung" => "strain",
+        "strain_pct" | "strain_percent" => "strain_pct",
+        "displacement"
+        | "extension"
+        | "elongation"
+        | "crosshead"
+        | "crosshead_displacement"
+        | "crosshead_travel"
+        | "stroke"
+        | "standard_travel"
+        | "grip_to_grip_separation"
+        | "traverse"
+        | "standardweg"
+        | "traversenweg" => "displacement",
+        "nominal_stress" | "engineering_stress" | "tensile_stress" | "stress" | "spannung" => {
+            "stress"
+        }
+        "true_stress" | "cauchy_stress" => "true_stress",
+        "force" | "load" | "standard_force" | "test_force" | "kraft" | "standardkraft" => "force",
+        "weight" => "weight",
+        "mode" => "mode",
+        "time" | "test_time" | "elapsed_time" | "zeit" | "testzeit" | "pruefzeit" => "time",
+        n if n.starts_with("tensile_strain_") => "strain",
+        n if n.starts_with("tensile_stress_") => "stress",
+        _ => return None,
+    })
+}
+
+/// `name` lower-case, each run of characters other than ASCII letters and digits
+/// one `_`, none at the ends.
+pub fn normalise(name: &str) -> String {
+    let mut out = String::with_capacity(name.len());
+    for ch in name.chars() {
+        if ch.is_ascii_alphanumeric() {
+            out.push(ch.to_ascii_lowercase());
+        } else if !out.ends_with('_') && !out.is_empty() {
+            out.push('_');
+        }
+    }
+    out.trim_end_matches('_').to_string()
+}
+
+/// The longest field of a units row (`(mm/mm)`, `[N/mm²]`): longer text is a data
+/// or name field, not a unit.
+const UNIT_CHARS: usize = 16;
+
+/// Lines of metadata above an export's header searched for it: instrument and test
+/// program preambles hold a few dozen lines.
+const PREAMBLE_LINES: usize = 500;
+
+/// The header line of an export below a preamble (1-based), the number of preamble
+/// lines and the text with those lines blanked (`#` comments kept, every line
+/// keeping its number); None when the first content line is the header or no line
+/// before the first all-numeric one is one `is_header` accepts.
+fn preamble(text: &str, is_header: &dyn Fn(&[&str]) -> bool) -> Option<(usize, usize, String)> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let end = if memchr::memchr(b'\n', text.as_bytes()).is_some() {
+        b'\n'
+    } else {
+        b'\r'
+    };
+    let mut skipped = 0;
+    for (i, raw) in split_bytes(text, end).enumerate().take(PREAMBLE_LINES) {
+        let t = raw.strip_suffix('\r').unwrap_or(raw).trim();
+        if t.is_empty() || t.starts_with('#') {
+            continue;
+        }
+        let mut splitter = Splitter::new(delimiter_of(t));
+        let (mut cells, mut ends) = (String::new(), Vec::new());
+        splitter.split(t, &mut cells, &mut ends);
+        let mut start = 0;
+        let fields: Vec<&str> = ends
+            .iter()
+            .map(|&e| {
+                let f = &cells[start..e];
+                start = e;
+                f
+            })
+            .collect();
+        if fields.iter().all(|f| f.is_empty()) {
+            continue;
+        }
+        if is_header(&fields) {
+            if skipped == 0 {
+                return None;
+            }
+            let mut kept = String::with_capacity(text.len());
+            for (j, line) in split_bytes(text, end).enumerate() {
+                if j > 0 {
+                    kept.push(char::from(end));
+                }
+                if j >= i || line.trim_start().starts_with('#') {
+                    kept.push_str(line);
+                }
+            }
+            return Some((i + 1, skipped, kept));
+        }
+        let number = |f: &&str| parse_f64(f.replace(',', ".").as_bytes()).is_some();
+        if fields.iter().filter(|f| !f.is_empty()).all(number) {
+            return None;
+        }
+        skipped += 1;
+    }
+    None
 }
 
 /// The separator of the first content line: tab, else `;`, else `,`.
@@ -546,9 +860,19 @@ fn field_count_hint(line: &str, delimiter: u8, too_many: bool) -> &'static str {
     });
     match (other, too_many) {
         (Some(_), false) => "this line uses another separator than the header: use one separator (',', ';' or tab) throughout",
-        (_, true) if delimiter == b',' => "a decimal comma in a comma-separated file? use '.' for decimals or ';' as the separator",
+        (_, true) if delimiter == b',' && decimal_comma(line) => "a decimal comma in a comma-separated file? use '.' for decimals or ';' as the separator",
+        (_, true) => "is the header the real one? lines of metadata above an export's header are skipped only when the header names the columns the command reads (see its --columns)",
         _ => "every data line needs one value per header column",
     }
+}
+
+/// Whether a line reads as numbers written with a decimal comma: no point, and a
+/// digit on both sides of some comma.
+fn decimal_comma(line: &str) -> bool {
+    let b = line.as_bytes();
+    !line.contains('.')
+        && (1..b.len().saturating_sub(1))
+            .any(|i| b[i] == b',' && b[i - 1].is_ascii_digit() && b[i + 1].is_ascii_digit())
 }
 
 /// Split a header like `nominal_stress_kPa`, `stress [kPa]` or `time (s)` into a
@@ -556,7 +880,13 @@ fn field_count_hint(line: &str, delimiter: u8, too_many: bool) -> &'static str {
 /// suffix (`force_N`, but not `forces` or `timestamp`).
 pub fn split_header(h: &str, names: &[&str]) -> (String, Option<String>) {
     let h = h.trim();
-    if let Some(open) = h.find(['[', '(']) {
+    // The unit is the last bracketed group (`Tensile strain (Extension) [%]`), else
+    // whatever follows the first bracket.
+    let last = h
+        .ends_with([')', ']'])
+        .then(|| h.rfind(['[', '(']))
+        .flatten();
+    if let Some(open) = last.or_else(|| h.find(['[', '('])) {
         let name = h[..open].trim().trim_end_matches('_');
         let unit = h[open + 1..].trim_end_matches([']', ')']).trim();
         return (
@@ -792,6 +1122,71 @@ mod tests {
         let bad = lines.join("\n");
         let e = Table::parse(Path::new("t.csv"), bad.as_bytes()).unwrap_err();
         assert!(e.to_string().contains(&format!("t.csv:{}:2", a + 1)), "{e}");
+    }
+
+    /// An export: the preamble is skipped with its lines counted (a `#` directive in
+    /// it kept), the units row read into the header, line numbers those of the file;
+    /// without a header the export is read as a plain table; CR-only ends work too.
+    #[test]
+    fn exports_skip_their_preamble_and_read_their_units_row() {
+        let is_header = |f: &[&str]| f.contains(&"Load");
+        let text = "\"Sample\",\"A\"\n# mode: planar\n\"Width\",\"10\",\"mm\"\n\n\"Time\",\"Extension\",\"Load\"\n\"(s)\",\"(mm)\",\"(N)\"\n\"0.5\",\"1.0\",\"2.0\"\n";
+        for text in [text.to_string(), text.replace('\n', "\r")] {
+            let e = Table::parse_export(Path::new("e.csv"), text.as_bytes(), &is_header).unwrap();
+            let t = &e.table;
+            assert_eq!(t.header, ["Time [s]", "Extension [mm]", "Load [N]"]);
+            assert_eq!((t.header_line, t.rows.len(), t.rows[0].line), (5, 1, 7));
+            assert_eq!(
+                t.directives,
+                [(2, "mode".to_string(), "planar".to_string())]
+            );
+            assert_eq!(
+                e.notes,
+                [
+                    "2 preamble lines before the header on line 5 skipped",
+                    "units row on line 6 read into the header: Time [s], Extension [mm], Load [N]"
+                ]
+            );
+            assert_eq!(t.sha256, super::super::sha256_hex(text.as_bytes()));
+        }
+        // No line names the columns: the first line is the header, and the hint of the
+        // field-count error is not "a decimal comma?".
+        let e = Table::parse_export(Path::new("e.csv"), text.as_bytes(), &|_| false).unwrap_err();
+        let e = e.to_string();
+        assert!(
+            e.contains("e.csv:3:3") && e.contains("is the header the real one?"),
+            "{e}"
+        );
+        // A value with a prefix (`1k`) is not a unit; a units row without data rows is
+        // an error.
+        let t = Table::parse(Path::new("u.csv"), b"f,c\n1k,2p\n").unwrap();
+        let mut t2 = t.clone();
+        assert!(t2.units_row().unwrap().is_none());
+        let mut u = Table::parse(Path::new("u.csv"), b"f,c\n(Hz),(F)\n").unwrap();
+        assert!(u
+            .units_row()
+            .unwrap_err()
+            .to_string()
+            .contains("no data rows"));
+    }
+
+    /// `--columns`: roles, units, quotes in a file, and its errors.
+    #[test]
+    fn column_maps_parse_and_find_their_columns() {
+        let roles = ["stretch", "force"];
+        let m = ColumnMap::parse("stretch=Extension:mm, force = Load", &roles).unwrap();
+        assert_eq!(m.find("Extension [mm]"), Some(("stretch", Some("mm"))));
+        assert_eq!(m.find("load"), Some(("force", None)));
+        assert_eq!(m.find("Time"), None);
+        for (bad, want) in [
+            ("stretch", "expected ROLE=COLUMN[:UNIT]"),
+            ("strain=x", "unknown role 'strain'"),
+            ("stretch=a,stretch=b", "role 'stretch' given twice"),
+            ("force=", "names no column"),
+        ] {
+            let e = ColumnMap::parse(bad, &roles).unwrap_err().to_string();
+            assert!(e.contains(want), "{bad}: {e}");
+        }
     }
 
     #[test]

@@ -235,6 +235,30 @@ fn page(fit: &HyperelasticFit, charts: impl FnOnce(&mut Page) -> Result<()>) -> 
             d.mode, d.stretch_min, d.stretch_max
         ),
     }));
+    let tested: Vec<String> = fit
+        .per_mode
+        .iter()
+        .filter_map(|s| {
+            let l = s.lack_of_fit?;
+            Some(format!(
+                "{}: {} runs where {:.1} are expected of noise (z = {:.2}, p = {:.1e}){}{}",
+                s.mode,
+                l.runs.runs,
+                l.runs.expected_runs,
+                l.runs.z,
+                l.runs.p,
+                l.noise_pa
+                    .filter(|n| *n > 0.0)
+                    .map(|n| format!(", RMSE {:.1} × the noise σ", s.rmse_pa / n))
+                    .unwrap_or_default(),
+                if l.lacks_fit { ": lack of fit" } else { "" }
+            ))
+        })
+        .collect();
+    if !tested.is_empty() {
+        page.heading("Lack of fit (runs test of the residual signs)");
+        page.bullets(tested);
+    }
     super::warnings_and_solver(&mut page, &fit.warnings, &fit.solver);
     Ok(page)
 }

@@ -192,11 +192,16 @@ const EXPORT_DIR: &str = "tests/data/export";
 pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
     let paths: Vec<String> = match r {
         Reader::Merge => return super::merge::seeds(),
-        Reader::Tensile => ["datasets/treloar", "datasets/vhb4910", "tests/data/ok"]
-            .iter()
-            .flat_map(|d| dir(d))
-            .filter(|p| !p.ends_with("relaxation.csv") && !p.ends_with(".md"))
-            .collect(),
+        Reader::Tensile => [
+            "datasets/treloar",
+            "datasets/vhb4910",
+            "datasets/tensile_exports",
+            "tests/data/ok",
+        ]
+        .iter()
+        .flat_map(|d| dir(d))
+        .filter(|p| !p.ends_with("relaxation.csv") && !p.ends_with(".md"))
+        .collect(),
         Reader::Relaxation => vec!["datasets/vhb4910/relaxation.csv".into()],
         Reader::Breakdown => dir("datasets/breakdown")
             .into_iter()
@@ -685,6 +690,15 @@ pub fn run(r: Reader, case: &Case, dir: &Path) -> Verdict {
                 mode: None,
             };
             let Ok(data) = tensile::read(&path, &opts) else {
+                return Verdict::Refused;
+            };
+            // The sanity checks with every option that changes the points.
+            let sanity = hyperelastic::Sanity {
+                until_break: true,
+                zero_offset: true,
+                ..Default::default()
+            };
+            let Ok(data) = hyperelastic::prepare(&data, &sanity) else {
                 return Verdict::Refused;
             };
             let settings = hyperelastic::Settings {

@@ -517,11 +517,10 @@ fn explain(
                 explain(free, j, cause, None, weakest, ctx)
             ),
             None => format!(
-                "{how}: the value the trace wants lies outside the range searched ({} to {}, set around the scene's {}); start the scene nearer it, or fix {}",
+                "{how}: the value the trace wants lies outside the range searched ({} to {}, set around the scene's {}); start the scene nearer it (holding it at the scene's value would contradict the trace)",
                 si(c.bounds.0, c.unit),
                 si(c.bounds.1, c.unit),
                 si(c.start, c.unit),
-                c.name
             ),
         };
     }
@@ -565,7 +564,7 @@ fn explain(
             si(3.0 * tau, "s")
         )
     } else if c.role == Role::Nv {
-        "the damping is unresolved: the traces have no motion fast enough for the dashpot nv to show above the noise (fix nv, e.g. --fix nv=0, or add a fast step)".to_string()
+        "the damping is unresolved: the traces have no motion fast enough for the dashpot nv to show above the noise; add a fast step, or state a damping measured elsewhere with --fix. Holding it at a guess (0, or the scene's value) biases the arms wherever the guess is off, so the default run keeps it free and every other interval accounts for it".to_string()
     } else if partners.is_empty() {
         "the trace does not pin it down".to_string()
     } else {

@@ -88,11 +88,14 @@ struct Study {
     refused: Vec<String>,
     /// The fixes applied, with how many replicates applied each.
     fixes: BTreeMap<String, usize>,
+    /// Each interval that missed: seed, constant, estimate, interval, its kind,
+    /// the truth (printed: what a next change has to explain).
+    misses: Vec<String>,
 }
 
 impl Study {
     /// Count the estimates (each with its true value) of one replicate.
-    fn add(&mut self, estimates: &[(Estimate, f64)]) {
+    fn add(&mut self, seed: u64, estimates: &[(Estimate, f64)]) {
         for (e, truth) in estimates {
             let t = self.constants.entry(e.name.clone()).or_default();
             if !e.identifiable {
@@ -102,6 +105,11 @@ impl Study {
             t.called += 1;
             if ci[0] <= *truth && *truth <= ci[1] {
                 t.covered += 1;
+            } else {
+                self.misses.push(format!(
+                    "seed {seed}: {} = {:.5e} in [{:.5e}, {:.5e}] ({:?}), truth {:.5e}",
+                    e.name, e.value, ci[0], ci[1], e.interval, truth
+                ));
             }
         }
     }
@@ -131,6 +139,9 @@ impl Study {
         );
         if !self.fixes.is_empty() {
             println!("  fixes applied: {:?}", self.fixes);
+        }
+        for m in &self.misses {
+            println!("  missed: {m}");
         }
         // 92 % over all: covered ≥ 0.92·called, in integers.
         if 100 * covered < 92 * called {
@@ -296,10 +307,10 @@ fn study(s: &Scenario) {
         })
         .collect();
     let (mut default, mut advised) = (Study::default(), Study::default());
-    for (d, fixes, f) in &results {
+    for (seed, (d, fixes, f)) in (1000..).zip(&results) {
         for (study, outcome) in [(&mut default, d), (&mut advised, f)] {
             match outcome {
-                Ok(Some(e)) => study.add(e),
+                Ok(Some(e)) => study.add(seed, e),
                 Ok(None) => study.failed += 1,
                 Err(why) if !study.refused.contains(why) => study.refused.push(why.clone()),
                 Err(_) => {}

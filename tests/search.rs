@@ -329,9 +329,15 @@ fn a_multi_start_counts_the_starts_that_reach_the_best_minimum() {
     let mut starts = latin_hypercube(&bounds, 12, 7).unwrap();
     starts.push(vec![-1.0]);
     let settings = LmSettings::default();
-    let ms = multistart::run(&TwoMinima, &starts, &bounds, &settings, |_| {
-        Control::default()
-    });
+    // no racing (an infinite margin): every start runs as it would alone
+    let ms = multistart::run(
+        &TwoMinima,
+        &starts,
+        &bounds,
+        &settings,
+        f64::INFINITY,
+        |_| Control::default(),
+    );
     // Parallel runs are the sequential ones, start by start.
     for (x0, res) in &ms.runs {
         assert_same(res, &lm::minimize(&mut TwoMinima, x0, &bounds, &settings));
@@ -364,11 +370,10 @@ fn the_progress_bar_counts_the_finished_starts() {
     let bar = indicatif::ProgressBar::hidden();
     bar.set_length(3);
     let starts = vec![vec![-1.2, 1.0]; 3];
-    let ms = multistart::run(&Rosen, &starts, &[FREE; 2], &LmSettings::default(), |i| {
-        Control {
-            observers: vec![Box::new(Progress::new(&bar, i))],
-            ..Control::default()
-        }
+    let settings = LmSettings::default();
+    let ms = multistart::run(&Rosen, &starts, &[FREE; 2], &settings, 0.0, |i| Control {
+        observers: vec![Box::new(Progress::new(&bar, i))],
+        ..Control::default()
     });
     assert_eq!(bar.position(), 3);
     assert_eq!(ms.at_best, 3);
@@ -414,7 +419,7 @@ fn starts_out_of_reach_of_the_first_are_abandoned() {
             .build()
             .unwrap()
             .install(|| {
-                multistart::run(&Creeping, &starts, &bounds, &settings, |_| {
+                multistart::run(&Creeping, &starts, &bounds, &settings, 0.0, |_| {
                     Control::default()
                 })
             })

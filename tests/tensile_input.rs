@@ -34,7 +34,7 @@ fn opts() -> TensileOptions {
 fn yeoh(data: &Dataset) -> HyperelasticFit {
     hyperelastic::fit(
         data,
-        &ModelSpec::new("yeoh", OgdenForm::Seed),
+        &ModelSpec::new("yeoh", OgdenForm::Abaqus),
         &Settings::default(),
     )
     .expect("a yeoh fit")
@@ -347,7 +347,7 @@ fn two_deformation_columns_that_disagree_are_a_warning() {
 /// A synthetic uniaxial Yeoh curve (VHB constants) with Gaussian noise σ = `noise`
 /// Pa at `stretches`, as (stretch, stress Pa).
 fn curve(stretches: &[f64], noise: f64, seed: u64) -> Vec<(f64, f64)> {
-    let model = ModelSpec::new("yeoh", OgdenForm::Seed).build().unwrap();
+    let model = ModelSpec::new("yeoh", OgdenForm::Abaqus).build().unwrap();
     let p = [6.93e4, -8.88e2, 1.67e1];
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let n = rand_distr::Normal::new(0.0, noise).unwrap();
@@ -602,7 +602,7 @@ fn the_runs_test_flags_structured_residuals_only() {
     // Neo-Hookean cannot follow VHB's stiffening to λ = 5.
     let nh = hyperelastic::fit(
         &data,
-        &ModelSpec::new("neo-hookean", OgdenForm::Seed),
+        &ModelSpec::new("neo-hookean", OgdenForm::Abaqus),
         &Settings::default(),
     )
     .unwrap();

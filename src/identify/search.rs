@@ -44,7 +44,14 @@ pub fn run_all(
     control: impl Fn(usize) -> Control + Sync,
 ) -> MultiStart {
     let margin = reach_margin(problem.free.len());
-    multistart::run(problem, starts, &problem.x_bounds(), settings, margin, control)
+    multistart::run(
+        problem,
+        starts,
+        &problem.x_bounds(),
+        settings,
+        margin,
+        control,
+    )
 }
 
 /// The margin in ½χ² above the first start's cost within which a start is never

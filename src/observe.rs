@@ -134,7 +134,8 @@ impl Meter {
             Show::Lines | Show::Off => ProgressDrawTarget::hidden(),
         };
         // a meter dropped unfinished (an error) clears its bar too
-        let bar = ProgressBar::with_draw_target(total, target).with_finish(ProgressFinish::AndClear);
+        let bar =
+            ProgressBar::with_draw_target(total, target).with_finish(ProgressFinish::AndClear);
         let template = match total {
             Some(_) => format!("{{bar:30}} {{pos}}/{{len}} {unit} {{elapsed}} {{msg}}"),
             None => format!("{{spinner}} {what} {{elapsed}} {{msg}}"),
@@ -196,8 +197,8 @@ impl Meter {
     }
 }
 
-/// One heartbeat line: `progress: identify, 25 s: 3/9 starts; start 2: iteration
-/// 7, cost 1.2340e-3`.
+/// One heartbeat line: `progress: identify, 25.0 s: 3/20 searches; start 2 of a
+/// search of 7 constants: iteration 7, cost 1.2340e-3`.
 fn heartbeat(bar: &ProgressBar, what: &str, unit: &str) -> String {
     let count = match bar.length() {
         Some(n) => format!("{}/{n} {unit}", bar.position()),

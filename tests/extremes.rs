@@ -3,7 +3,7 @@
 //! part 2). One place takes them (`sim::Extremes`); the summary, the report and the
 //! run index use it.
 
-use dea_fit::sim::{simulate, scene::Scene, RunOptions, RunStatus};
+use dea_fit::sim::{scene::Scene, simulate, RunOptions, RunStatus};
 use std::path::Path;
 
 fn scene(text: &str) -> Scene {
@@ -61,8 +61,11 @@ fn a_power_peak_between_samples_is_reported() {
     let c = 8.854_187_812_8e-12 * 4.0 * std::f64::consts::PI * 5e-3 * 5e-3 / 1e-3;
     let r = TAU / c;
     let exact = V0 * V0 / (4.0 * r);
-    let coarse = simulate(&rc_scene("span = \"50 ms\"\nsamples = 5"), &RunOptions::default())
-        .expect("runs");
+    let coarse = simulate(
+        &rc_scene("span = \"50 ms\"\nsamples = 5"),
+        &RunOptions::default(),
+    )
+    .expect("runs");
     assert_eq!(coarse.integrator.status, RunStatus::Completed);
     let x = coarse.extremes();
     let at_samples = coarse.extremes_at_samples();
@@ -83,7 +86,10 @@ fn a_power_peak_between_samples_is_reported() {
     )
     .expect("runs");
     let resolved = fine.extremes_at_samples().power_max_w;
-    assert!((resolved / exact - 1.0).abs() < 1e-3, "{resolved} vs {exact}");
+    assert!(
+        (resolved / exact - 1.0).abs() < 1e-3,
+        "{resolved} vs {exact}"
+    );
     assert!((x.power_max_w / resolved - 1.0).abs() < 0.01);
     // Never below what the samples show, for every quantity.
     assert!(x.stretch_min <= at_samples.stretch_min && x.stretch_max >= at_samples.stretch_max);
@@ -116,7 +122,10 @@ fn the_shipped_step_reports_its_resolved_power_peak() {
     assert!(o.extremes_at_samples().power_max_w < 0.5 * resolved);
     // The stroke: the charts' envelope (min/max of the length per output interval,
     // from the same accepted steps) and the reported maximum agree exactly.
-    let env = o.envelope.as_ref().expect("the 5 ms samples alias the ringing");
+    let env = o
+        .envelope
+        .as_ref()
+        .expect("the 5 ms samples alias the ringing");
     let shortest = env
         .iter()
         .map(|i| i.length_m.lo)
@@ -129,8 +138,11 @@ fn the_shipped_step_reports_its_resolved_power_peak() {
 /// samples': the page says what they are over.
 #[test]
 fn the_report_and_run_index_give_the_whole_run() {
-    let o = simulate(&rc_scene("span = \"50 ms\"\nsamples = 5"), &RunOptions::default())
-        .expect("runs");
+    let o = simulate(
+        &rc_scene("span = \"50 ms\"\nsamples = 5"),
+        &RunOptions::default(),
+    )
+    .expect("runs");
     let root = tempfile::tempdir().expect("a temporary directory");
     let dir = root.path().join("sim-rc");
     let check = dea_fit::sim::breakdown::check(None, o.extremes().field, "the largest field");

@@ -23,7 +23,14 @@ fn a_heartbeat_shows_on_a_stderr_that_is_not_a_terminal() {
     let dir = tempfile::tempdir().expect("a temporary directory");
     let scene = super::support::repo().join("datasets/scenes/stack_step_5kV.toml");
     let scene = scene.display().to_string();
-    let args = ["simulate", &scene, "--no-report", "--json", "--rtol", "1e-9"];
+    let args = [
+        "simulate",
+        &scene,
+        "--no-report",
+        "--json",
+        "--rtol",
+        "1e-9",
+    ];
     let o = dea_fit(
         dir.path(),
         &args,
@@ -98,7 +105,10 @@ fn an_identification_stopped_by_max_time_says_how_to_resume() {
         .expect("the command line")
         .trim();
     assert!(line.ends_with("--resume"), "{line}");
-    assert!(line.contains("--checkpoint ck") && line.contains(&trace), "{line}");
+    assert!(
+        line.contains("--checkpoint ck") && line.contains(&trace),
+        "{line}"
+    );
     // the line, as a shell reads it (plain words here), resumes the search
     let words: Vec<&str> = line.split(' ').skip(1).collect();
     assert_eq!(&words[..args.len()], &args[..]);

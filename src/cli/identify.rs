@@ -577,9 +577,33 @@ mod tests {
         let starts = 2;
         let planned = planned_searches(starts, both);
         assert_eq!(planned, 4 * 5 * 2);
-        assert_eq!(planned_searches(8, Choose { arms: false, hyperelastic: true }), 32);
-        assert_eq!(planned_searches(8, Choose { arms: false, hyperelastic: false }), 8);
-        let meter = Meter::shown(Show::Off, Duration::from_secs(5), "identify", "searches", Some(planned));
+        assert_eq!(
+            planned_searches(
+                8,
+                Choose {
+                    arms: false,
+                    hyperelastic: true
+                }
+            ),
+            32
+        );
+        assert_eq!(
+            planned_searches(
+                8,
+                Choose {
+                    arms: false,
+                    hyperelastic: false
+                }
+            ),
+            8
+        );
+        let meter = Meter::shown(
+            Show::Off,
+            Duration::from_secs(5),
+            "identify",
+            "searches",
+            Some(planned),
+        );
         let s = Searches::new(meter);
         // every candidate: its starts, then a polish
         let ran = 20 * (starts as u64 + 1);

@@ -1212,8 +1212,7 @@ impl Extremes {
         self.current_max_a = self.current_max_a.max(x.current_a.abs());
         self.power_max_w = self.power_max_w.max(x.power_w);
         self.leakage_max_w = self.leakage_max_w.max(x.leakage_w);
-        self.field
-            .widen(a, Some(x.time_s), x.voltage_v, x.stretch);
+        self.field.widen(a, Some(x.time_s), x.voltage_v, x.stretch);
     }
 
     /// Widen by the extremes of another part of the same run.

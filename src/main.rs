@@ -88,7 +88,12 @@ fn clean_up_on_signals() {
         let mut sig: libc::c_int = 0;
         // SAFETY: `set` and `sig` are valid for the call.
         if unsafe { libc::sigwait(&set, &mut sig) } == 0 {
-            dea_fit::io::write::remove_litter(|| end_by(sig));
+            dea_fit::io::write::remove_litter(|| {
+                // what the run says when interrupted (a checkpointed search: how to
+                // resume it)
+                dea_fit::observe::interrupted();
+                end_by(sig)
+            });
         }
     });
 }

@@ -52,7 +52,7 @@ fn with_samples(s: &Scene, span: f64, n: usize) -> Scene {
 
 fn stroke_svg(o: &Outcome) -> String {
     let dir = tempfile::tempdir().unwrap();
-    let check = dea_fit::sim::breakdown::check(None, o.peak_field, "the largest field");
+    let check = dea_fit::sim::breakdown::check(None, o.extremes().field, "the largest field");
     dea_fit::report::simulation::write(o, "scene.toml", dir.path(), "completed", &check).unwrap();
     std::fs::read_to_string(dir.path().join("stroke.svg")).unwrap()
 }

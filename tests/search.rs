@@ -3,7 +3,7 @@
 
 use dea_fit::fit::lm::{self, Checkpoint, Control, LeastSquares, LmSettings, Termination};
 use dea_fit::fit::multistart::{self, latin_hypercube, starts_at_best};
-use dea_fit::observe::{Progress, Trace};
+use dea_fit::observe::{Meter, Searches, Show, Trace};
 use nalgebra::{DMatrix, DVector};
 use std::time::Duration;
 
@@ -367,17 +367,24 @@ fn a_multi_start_counts_the_starts_that_reach_the_best_minimum() {
 
 #[test]
 fn the_progress_bar_counts_the_finished_starts() {
-    let bar = indicatif::ProgressBar::hidden();
-    bar.set_length(3);
+    let meter = Meter::shown(
+        Show::Off,
+        std::time::Duration::from_secs(5),
+        "test",
+        "searches",
+        Some(3),
+    );
+    let searches = Searches::new(meter);
     let starts = vec![vec![-1.2, 1.0]; 3];
     let settings = LmSettings::default();
     let ms = multistart::run(&Rosen, &starts, &[FREE; 2], &settings, 0.0, |i| Control {
-        observers: vec![Box::new(Progress::new(&bar, i))],
+        observers: vec![Box::new(searches.observer(i))],
         ..Control::default()
     });
-    assert_eq!(bar.position(), 3);
+    assert_eq!(searches.meter().position(), (3, Some(3)));
     assert_eq!(ms.at_best, 3);
-    assert!(bar.message().contains("cost"), "{}", bar.message());
+    let msg = searches.meter().message();
+    assert!(msg.contains("cost"), "{msg}");
 }
 
 /// [`TwoMinima`] with a Jacobian ten times too large for p < 0: from there the

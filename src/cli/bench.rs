@@ -4,7 +4,6 @@
 use dea_fit::bench::{self, Budget, HyperPlan};
 use dea_fit::report;
 use dea_fit::{Error, Result};
-use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 
 /// Measure speed against accuracy.
@@ -147,12 +146,9 @@ impl Verdict {
     }
 }
 
-pub fn progress_bar(len: usize) -> ProgressBar {
-    let bar = ProgressBar::new(len as u64);
-    if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} {elapsed} {msg}") {
-        bar.set_style(style);
-    }
-    bar
+/// The progress of `bench <what>` over `len` cases ([`dea_fit::observe::Meter`]).
+pub fn progress_bar(what: &str, len: usize) -> dea_fit::observe::Meter {
+    dea_fit::observe::Meter::new(&format!("bench {what}"), "cases", Some(len as u64))
 }
 
 fn hyperelastic(a: HyperArgs) -> Result<Verdict> {
@@ -166,7 +162,7 @@ fn hyperelastic(a: HyperArgs) -> Result<Verdict> {
     }
     let data = bench::shipped_datasets(&a.data_dir)?;
     let plan = HyperPlan::standard(data, budget)?;
-    let bar = progress_bar(plan.cases.len());
+    let bar = progress_bar("hyperelastic", plan.cases.len());
     let rows = plan.run(&mut |r| {
         bar.set_message(format!(
             "{} {} {} {}",
@@ -174,7 +170,7 @@ fn hyperelastic(a: HyperArgs) -> Result<Verdict> {
         ));
         bar.inc(1);
     });
-    bar.finish_and_clear();
+    bar.finish();
     let rows = rows?;
     let note = format!(
         "dea-fit {}; budget {} s and at least {} runs per case; {} cases. Rerun: dea-fit bench hyperelastic.",

@@ -20,7 +20,7 @@ pub fn run(scene: &Path) -> Result<super::bench::Verdict> {
     let s = Scene::read(scene)?;
     let rtols = [1e-4, 1e-6];
     let starts = [1, 8];
-    let bar = super::bench::progress_bar(rtols.len() * starts.len());
+    let bar = super::bench::progress_bar("identify", rtols.len() * starts.len());
     let rows = identify_rows(&s, &rtols, &starts, 1, &mut |r| {
         bar.set_message(format!(
             "rtol {:e}, {} starts: {:.3} s",
@@ -28,7 +28,7 @@ pub fn run(scene: &Path) -> Result<super::bench::Verdict> {
         ));
         bar.inc(1);
     })?;
-    bar.finish_and_clear();
+    bar.finish();
     let mut csv = String::from("rtol,starts,seconds,per_start_s,interval_s,max_rel_error,max_z,identified,free,starts_at_best,iterations,simulator_runs,status\n");
     let mut verdict = super::bench::Verdict::default();
     let mut table_rows = Vec::new();

@@ -89,7 +89,7 @@ pub fn run(dir: &Path) -> Result<super::bench::Verdict> {
     md.push_str(&"---|".repeat(Method::ALL.len() + 2));
     md.push('\n');
     let mut verdict = super::bench::Verdict::default();
-    let bar = super::bench::progress_bar(scenes.len());
+    let bar = super::bench::progress_bar("integrators", scenes.len());
     for s in &scenes {
         bar.set_message(s.name.clone());
         let zeta = fidelity::axial_mode(&dea_fit::sim::full_plant(s)?).damping_ratio;
@@ -148,7 +148,7 @@ pub fn run(dir: &Path) -> Result<super::bench::Verdict> {
         println!("    {why}");
         bar.inc(1);
     }
-    bar.finish_and_clear();
+    bar.finish();
     atomic_write(&out_dir.join("results.csv"), csv.as_bytes())?;
     let page = out_dir.join("index.md");
     atomic_write(&page, md.as_bytes())?;

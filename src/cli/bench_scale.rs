@@ -223,7 +223,7 @@ pub fn run(a: &ScaleArgs) -> Result<Verdict> {
 
     let read_sizes = sizes(a.min_rows, a.max_rows);
     let fit_sizes = sizes(a.min_rows, a.max_fit_rows);
-    let bar = progress_bar(2 * read_sizes.len() + 2 * fit_sizes.len());
+    let bar = progress_bar("scale", 2 * read_sizes.len() + 2 * fit_sizes.len());
     let settings = Settings::default();
     let yeoh = ModelSpec::new("yeoh", Default::default());
     let mut verdict = Verdict::default();
@@ -265,7 +265,7 @@ pub fn run(a: &ScaleArgs) -> Result<Verdict> {
         verdict.add(format!("relaxation auto {n} rows"), fit.status);
         push("relaxation-auto", n, t);
     }
-    bar.finish_and_clear();
+    bar.finish();
 
     let names = ["read", "read+yeoh", "hyperelastic-auto", "relaxation-auto"];
     let slopes: Vec<Slope> = names

@@ -38,6 +38,7 @@ pub fn run(dir: &Path) -> Result<super::bench::Verdict> {
         String::from("scene,method,fidelity,rtol,run_time_s,steps,status,max_error_rel_stroke\n");
     // A failed run has no trajectory to compare: it is counted, and the bench exits 1.
     let mut verdict = super::bench::Verdict::default();
+    let bar = super::bench::progress_bar("simulate", SCENES.len() * 6 * 6);
     for name in SCENES {
         let mut scene = Scene::read(&dir.join(format!("{name}.toml")))?;
         scene.time.samples = (1..=200)
@@ -74,6 +75,7 @@ pub fn run(dir: &Path) -> Result<super::bench::Verdict> {
             s.time.fidelity = fid;
             let mut pts = Vec::new();
             for rtol in [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8] {
+                bar.set_message(format!("{name} {method} rtol {rtol:e}"));
                 let (o, t) = timed(
                     &s,
                     &RunOptions {
@@ -94,6 +96,7 @@ pub fn run(dir: &Path) -> Result<super::bench::Verdict> {
                     "{name},{method},{},{rtol:e},{t:e},{},{},{err:e}",
                     o.fidelity.model, o.integrator.stats.steps, o.integrator.status
                 );
+                bar.inc(1);
                 let case = format!("{name} {method} rtol {rtol:e}");
                 match o.integrator.status {
                     RunStatus::Failed => {
@@ -128,6 +131,7 @@ pub fn run(dir: &Path) -> Result<super::bench::Verdict> {
         }
         .write_svg(&out_dir.join(format!("{name}.svg")))?;
     }
+    bar.finish();
     let path = out_dir.join("results.csv");
     atomic_write(&path, csv.as_bytes())?;
     print!("{csv}");

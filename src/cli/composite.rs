@@ -3,7 +3,6 @@
 //! `--generate` writes the synthetic exports a manifest's `[synthetic]` table
 //! describes.
 
-use super::permittivity::progress;
 use dea_fit::fit::composite::{self, check_claim, Basis};
 use dea_fit::io::manifest;
 use dea_fit::report::permittivity::{composite_summary, write_composite};
@@ -78,9 +77,9 @@ pub fn run(a: Args) -> Result<i32> {
         }
         return Ok(0);
     }
-    let bar = progress(m.samples.len());
+    let bar = dea_fit::observe::Meter::new("composite", "samples", Some(m.samples.len() as u64));
     let mut fit = composite::fit_series(&m, &|| bar.inc(1))?;
-    bar.finish_and_clear();
+    bar.finish();
     for c in &a.claim {
         let (inc, frac, basis) = parse_claim(c)?;
         fit.claims

@@ -199,6 +199,11 @@ pub fn run(a: Args) -> Result<i32> {
         max_starts: a.max_starts,
         ..Settings::default()
     };
+    let meter = dea_fit::observe::Meter::new("hyperelastic", "", None);
+    meter.set_message(match a.model.as_str() {
+        "auto" => "fitting every model (auto)".to_string(),
+        m => format!("fitting {m}"),
+    });
     let fit = if a.model == "auto" {
         hyperelastic::fit_auto(&data, &settings)?.0
     } else {
@@ -208,6 +213,7 @@ pub fn run(a: Args) -> Result<i32> {
             &settings,
         )?
     };
+    meter.finish();
     let name = run_name(&a, &fit.model);
     a.output.deliver(
         &name,

@@ -7,11 +7,11 @@ use dea_fit::identify::failure::Failure;
 use dea_fit::identify::material::{material_file, validate, Validation};
 use dea_fit::identify::noise::Sigma;
 use dea_fit::identify::problem::{ChannelKind, Experiment};
-use dea_fit::identify::selection::{select, Candidate, Choose};
+use dea_fit::identify::selection::{select, Candidate, Choose, HYPERELASTIC_MODELS, MAX_ARMS};
 use dea_fit::identify::{identify_with, Identification, Run, Settings};
 use dea_fit::io::trace;
 use dea_fit::io::write::AtomicFile;
-use dea_fit::observe::{Progress, Trace as TraceFile};
+use dea_fit::observe::{Meter, Searches, Trace as TraceFile};
 use dea_fit::sim::scene::Scene;
 use dea_fit::units::{parse_quantity, CountRange};
 use dea_fit::{Error, Result};
@@ -283,6 +283,48 @@ fn stem(p: &Path) -> String {
         .unwrap_or_else(|| "trace".into())
 }
 
+/// The searches an identification plans: `starts` per candidate, every model tried
+/// by `--hyperelastic auto` ([`HYPERELASTIC_MODELS`]) with every number of arms
+/// tried by `--arms auto` (0 to [`MAX_ARMS`]), one candidate without either. The
+/// polish of a start's optimum, the rounds of the model reduction and a re-fit for
+/// profiles come on top, as they begin ([`Searches`]).
+fn planned_searches(starts: usize, choose: Choose) -> u64 {
+    let models = match choose.hyperelastic {
+        true => HYPERELASTIC_MODELS.len(),
+        false => 1,
+    };
+    let arms = match choose.arms {
+        true => MAX_ARMS + 1,
+        false => 1,
+    };
+    (models * arms * starts) as u64
+}
+
+/// How to resume a search checkpointed in `file` (`FILE.0` … `FILE.starts`): this
+/// command line with `--resume`.
+fn resume_hint(file: &Path, starts: usize) -> String {
+    let mut words: Vec<String> = std::env::args().collect();
+    if !words.iter().any(|w| w == "--resume") {
+        words.push("--resume".into());
+    }
+    let line: Vec<String> = words.iter().map(|w| shell_word(w)).collect();
+    format!(
+        "the search is checkpointed in {0}.0 … {0}.{starts}; to go on from there, run\n  {1}",
+        file.display(),
+        line.join(" ")
+    )
+}
+
+/// `w` as a POSIX shell reads it back: as it is when made of plain characters,
+/// else in single quotes.
+fn shell_word(w: &str) -> String {
+    let plain = |c: char| c.is_ascii_alphanumeric() || "_-./:=,@%+".contains(c);
+    match !w.is_empty() && w.chars().all(plain) {
+        true => w.to_string(),
+        false => format!("'{}'", w.replace('\'', r"'\''")),
+    }
+}
+
 /// Run the subcommand.
 pub fn run(a: Args) -> Result<i32> {
     let choose = Choose {
@@ -363,12 +405,16 @@ pub fn run(a: Args) -> Result<i32> {
     // run ends (a run refused later leaves the file there as it was)
     let trace_out = a.trace.as_deref().map(TraceOut::create).transpose()?;
     let trace_file = trace_out.as_ref().map(TraceOut::trace);
-    let bar = (!a.output.json).then(|| Progress::bar(a.starts + 1));
+    let searches = Searches::new(Meter::new(
+        "identify",
+        "searches",
+        Some(planned_searches(a.starts, choose)),
+    ));
+    let resume = a.checkpoint.as_ref().map(|f| resume_hint(f, a.starts));
+    dea_fit::observe::on_interrupt(resume.clone());
     let control = |i: usize| {
         let mut c = Control::default();
-        if let Some(b) = &bar {
-            c.observers.push(Box::new(Progress::new(b, i)));
-        }
+        c.observers.push(Box::new(searches.observer(i)));
         if let Some(t) = &trace_file {
             c.observers.push(Box::new(t.observer(i)));
         }
@@ -408,8 +454,10 @@ pub fn run(a: Args) -> Result<i32> {
             (Run::Identified(Box::new(id)), kept, Some(comparison))
         }
     };
-    if let Some(b) = &bar {
-        b.finish_and_clear();
+    searches.meter().finish();
+    dea_fit::observe::on_interrupt(None);
+    if let (Some(hint), true) = (&resume, searches.timed_out()) {
+        eprintln!("note: a search stopped at its --max-time limit; {hint}");
     }
     drop(trace_file);
     if let Some(t) = trace_out {
@@ -508,4 +556,77 @@ fn failed(f: &Failure, json: bool) -> i32 {
         print!("{}", dea_fit::report::identify::failure_summary(f));
     }
     1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use dea_fit::observe::Show;
+    use std::time::Duration;
+
+    /// The count of `--arms auto --hyperelastic auto` (issue 35: the bar read "36/9
+    /// starts"): the total plans every candidate's starts, and the searches past it
+    /// (each candidate's polish) raise it as they begin, so the count never passes
+    /// its total and ends at the number that ran.
+    #[test]
+    fn the_search_count_never_passes_its_total() {
+        let both = Choose {
+            arms: true,
+            hyperelastic: true,
+        };
+        let starts = 2;
+        let planned = planned_searches(starts, both);
+        assert_eq!(planned, 4 * 5 * 2);
+        assert_eq!(
+            planned_searches(
+                8,
+                Choose {
+                    arms: false,
+                    hyperelastic: true
+                }
+            ),
+            32
+        );
+        assert_eq!(
+            planned_searches(
+                8,
+                Choose {
+                    arms: false,
+                    hyperelastic: false
+                }
+            ),
+            8
+        );
+        let meter = Meter::shown(
+            Show::Off,
+            Duration::from_secs(5),
+            "identify",
+            "searches",
+            Some(planned),
+        );
+        let s = Searches::new(meter);
+        // every candidate: its starts, then a polish
+        let ran = 20 * (starts as u64 + 1);
+        for _ in 0..ran {
+            s.begin();
+            let (pos, len) = s.meter().position();
+            assert!(pos < len.unwrap(), "{pos}/{len:?}");
+            s.end(false);
+            let (pos, len) = s.meter().position();
+            assert!(pos <= len.unwrap(), "{pos}/{len:?}");
+        }
+        assert_eq!(s.meter().position(), (ran, Some(ran)));
+        assert!(!s.timed_out());
+        s.begin();
+        s.end(true);
+        assert!(s.timed_out());
+    }
+
+    #[test]
+    fn resume_words_read_back() {
+        assert_eq!(shell_word("--resume"), "--resume");
+        assert_eq!(shell_word("a b"), "'a b'");
+        assert_eq!(shell_word("it's"), r"'it'\''s'");
+        assert_eq!(shell_word(""), "''");
+    }
 }

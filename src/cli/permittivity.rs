@@ -9,7 +9,6 @@ use dea_fit::material::dielectric::Pair;
 use dea_fit::report::permittivity::{summary, write_samples};
 use dea_fit::units::{parse_quantity, parse_uncertain, Dimension, Quantity};
 use dea_fit::{Error, Result};
-use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 
 /// Edge (fringe-field) correction.
@@ -110,15 +109,6 @@ pub fn lcr_settings(
     Ok((LcrOptions { pair, frequencies }, settings))
 }
 
-/// A progress bar on stderr (hidden when stderr is not a terminal).
-pub fn progress(n: usize) -> ProgressBar {
-    let bar = ProgressBar::new(n as u64);
-    if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} files {elapsed}") {
-        bar.set_style(style);
-    }
-    bar
-}
-
 /// Run the subcommand.
 pub fn run(a: Args) -> Result<i32> {
     if a.files.is_empty() {
@@ -160,9 +150,9 @@ pub fn run(a: Args) -> Result<i32> {
             return Err(Error::settings(e.clone()));
         }
     }
-    let bar = progress(inputs.len());
+    let bar = dea_fit::observe::Meter::new("permittivity", "files", Some(inputs.len() as u64));
     let run = permittivity::analyse_batch(&inputs, &opts, &settings, &|| bar.inc(1))?;
-    bar.finish_and_clear();
+    bar.finish();
     let json = serde_json::to_string_pretty(&run).expect("a result serialises");
     // A file that could not be used is a refused input: exit 2, and (like every
     // refusal) nothing is written; the other files' results are still printed.

@@ -12,7 +12,6 @@ use dea_fit::rank::report;
 use dea_fit::rank::shard::{self, RunInfo, ShardFile, SlurmJob};
 use dea_fit::rank::sweep::{self, Points, Shard, Sweep};
 use dea_fit::{Error, Result};
-use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 
 /// Rank fillers and composites by what they buy an actuator.
@@ -190,17 +189,6 @@ impl Present {
     }
 }
 
-/// A progress bar over `n` candidate evaluations (hidden when stderr is not a terminal).
-fn progress(n: usize) -> ProgressBar {
-    let bar = ProgressBar::new(n as u64);
-    if let Ok(style) =
-        ProgressStyle::with_template("{bar:40} {pos}/{len} candidates {elapsed} ({per_sec})")
-    {
-        bar.set_style(style);
-    }
-    bar
-}
-
 /// Run the subcommand.
 pub fn run(a: Args) -> Result<i32> {
     if let Some(Sub::Merge(m)) = a.merge {
@@ -258,9 +246,9 @@ pub fn run(a: Args) -> Result<i32> {
         );
         return Ok(0);
     }
-    let bar = progress(points.count(shard));
+    let bar = dea_fit::observe::Meter::new("rank", "candidates", Some(points.count(shard) as u64));
     let evals = sweep::run_all(&d, &points, shard, &|| bar.inc(1))?;
-    bar.finish_and_clear();
+    bar.finish();
     match (shard, &a.out) {
         (Some(s), Some(out)) => {
             let failed = evals

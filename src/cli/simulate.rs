@@ -55,6 +55,10 @@ pub struct Args {
     strict: bool,
 }
 
+/// What the summary's `extremes` are taken over (`extremes_at_output_samples`:
+/// the same at the output samples only, what the trajectory shows).
+const EXTREMES_OVER: &str = "every accepted step of the integration and every output sample";
+
 /// Most samples the charts draw (the report's memory and SVG size stay bounded).
 const CHARTED: usize = 4000;
 
@@ -90,7 +94,13 @@ pub fn run(a: Args) -> Result<i32> {
     // Opened at the first sample, after the scene passed the guard: a refusal (of the
     // scene, or of the report directory) writes nothing.
     let mut writer: Option<TrajectoryCsv<AtomicFile>> = None;
+    let meter = dea_fit::observe::Meter::new(
+        &format!("simulate {}", scene.name),
+        "samples",
+        Some(scene.time.samples.len() as u64 + 1),
+    );
     let mut sink = |row: &sim::Row| -> Result<()> {
+        meter.inc(1);
         let Some(path) = &csv else { return Ok(()) };
         if writer.is_none() {
             if !a.no_report {
@@ -114,6 +124,7 @@ pub fn run(a: Args) -> Result<i32> {
         Some(&mut sink),
     )?;
     let run_time = t.elapsed().as_secs_f64();
+    meter.finish();
     if let Some(w) = writer {
         let file = w.into_inner();
         match a.out {
@@ -121,9 +132,10 @@ pub fn run(a: Args) -> Result<i32> {
             None => file.commit()?,
         }
     }
+    let x = o.extremes();
     let check = breakdown::check(
         scene.breakdown.as_ref(),
-        o.peak_field,
+        x.field,
         "the largest true field E = V/h(λ) over the run (every accepted step)",
     );
     // A film that breaks down ends the run whatever came after (a pull-in too).
@@ -143,8 +155,8 @@ pub fn run(a: Args) -> Result<i32> {
             "checked": check.checked,
             "field_max_V_per_m": check.peak.field,
             "at": check.peak,
-            "taken_over": "every accepted step of the integration and every output sample",
-            "field_max_at_samples_V_per_m": o.peak_field_sampled.field,
+            "taken_over": EXTREMES_OVER,
+            "field_max_at_samples_V_per_m": o.extremes_at_samples().field.field,
             "breakdown_V_per_m": check.breakdown,
             "breakdown_std_error_V_per_m": check.std_error,
             "origin": check.origin,
@@ -164,7 +176,9 @@ pub fn run(a: Args) -> Result<i32> {
             "length_m": s.length_m, "stroke_m": o.rest_length_m - s.length_m,
             "capacitance_F": s.capacitance_f, "current_A": s.current_a, "power_W": s.power_w,
         })),
-        "extremes": o.extremes(),
+        "extremes": x,
+        "extremes_taken_over": EXTREMES_OVER,
+        "extremes_at_output_samples": o.extremes_at_samples(),
         "rest": { "stretch": o.rest_stretch, "length_m": o.rest_length_m },
         "energy": o.energy,
         "tracking_rmse_pct": o.tracking_rmse_pct,
@@ -179,15 +193,16 @@ pub fn run(a: Args) -> Result<i32> {
             serde_json::to_string_pretty(&summary).expect("serialisable")
         );
     } else {
-        let x = o.extremes();
         let head = format!(
-            "{}: {} ({}), {} steps, stretch {:.5}…{:.5}, {} event(s); {:.3} ms; trajectory {}\n",
+            "{}: {} ({}), {} steps, stretch {:.5}…{:.5}, max power {}, max current {}, {} event(s) (extremes over every accepted step); {:.3} ms; trajectory {}\n",
             o.scene,
             o.fidelity.model,
             o.integrator.message,
             o.integrator.stats.steps,
             x.stretch_min,
             x.stretch_max,
+            dea_fit::report::format::si(x.power_max_w, "W"),
+            dea_fit::report::format::si(x.current_max_a, "A"),
             o.events.len(),
             run_time * 1e3,
             csv.as_ref()

@@ -20,7 +20,7 @@
 //!   actuator held at its rest length (for a stack εr·ε0·(V/z)²·A, the Maxwell
 //!   pressure on the electrode area).
 //! * **response time**: 10–90 % of the contraction a step to V reaches at the end
-//!   of the step window, from a damped run of the simulator (`sim::trajectory`,
+//!   of the step window, from a damped run of the simulator (`sim::simulate`,
 //!   the scene's source, the candidate's viscous arms and dashpot), read between
 //!   samples by linear interpolation.
 //! * **electrical energy in** per cycle, W = ½C(λd)V² + ∫ from λ0 to λd of
@@ -676,25 +676,23 @@ fn step_response(scene: &mut Scene, vd: f64, eb: f64, static_stroke: f64, src: &
         }],
     };
     let none = |why: String| Figure::none("s", Provenance::Predicted, src, why);
-    let tr = match sim::trajectory(scene, &RunOptions::default()) {
+    // a whole run, for its extremes over every accepted step (a field peak between
+    // samples is in them)
+    let tr = match sim::simulate(scene, &RunOptions::default()) {
         Ok(t) => t,
         Err(err) => return none(format!("failed: the simulator refused the step: {err}")),
     };
-    match tr.status {
+    match tr.integrator.status {
         RunStatus::Completed => {}
         RunStatus::PullIn => {
             return none(
                 "pulls in during the step (its dynamic overshoot passes the pull-in)".into(),
             )
         }
-        RunStatus::Failed => return none(format!("failed: {}", tr.message)),
+        RunStatus::Failed => return none(format!("failed: {}", tr.integrator.message)),
     }
     let lam0 = tr.rest_stretch;
-    let a = &scene.actuator;
-    let mut peak_field: f64 = 0.0;
-    for s in &tr.samples {
-        peak_field = peak_field.max(s.voltage_v / a.gap(s.stretch));
-    }
+    let peak_field = tr.extremes().field.field;
     if peak_field >= eb {
         return none(format!(
             "the field reaches Eb during the step ({} at its peak)",

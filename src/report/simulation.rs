@@ -310,10 +310,11 @@ pub fn write(
         i.message
     ))]);
     facts.push(vec![text(format!(
-        "stretch {:.6} … {:.6} (rest {:.6}); max current {}, max power {} (leakage up to {})",
+        "over every accepted step of the integration: stretch {:.6} … {:.6} (rest {:.6}); max stroke {}, max current {}, max power {} (leakage up to {})",
         x.stretch_min,
         x.stretch_max,
         o.rest_stretch,
+        si(x.stroke_max_m, "m"),
         si(x.current_max_a, "A"),
         si(x.power_max_w, "W"),
         si(x.leakage_max_w, "W")
@@ -395,21 +396,8 @@ pub fn write(
         };
         page.chart(dir, "sensitivities.svg", "sensitivities", &chart)?;
     }
-    // The shortest length: over the samples, or, where they were decimated, over
-    // the bands of those skipped.
-    let shortest = match (&o.envelope, o.decimation) {
-        (Some(env), k) if k > 1 => env
-            .iter()
-            .map(|i| i.length_m.lo)
-            .fold(f64::INFINITY, f64::min),
-        _ => o
-            .samples
-            .iter()
-            .map(|s| s.length_m)
-            .fold(f64::INFINITY, f64::min),
-    };
     let run = Run::new("simulate", input, o.fidelity.model.to_string()).headline(vec![
-        format!("max stroke {}", si(o.rest_length_m - shortest, "m")),
+        format!("max stroke {}", si(x.stroke_max_m, "m")),
         format!("max power {}", si(x.power_max_w, "W")),
         format!("{} event(s)", o.events.len()),
         match check.margin {

@@ -314,7 +314,9 @@ impl Waveform {
     /// right value at its start or the left limit at its end (2·v(midpoint) −
     /// v(start), exact on a linear piece). Other waveforms are sampled at the kinks
     /// and densely in between (20 001 evaluations: a tenth of a 100 Hz triangle's
-    /// run when it was sampled too).
+    /// run when it was sampled too), and the largest sample is refined by
+    /// golden-section search between its neighbours (a sine sampled 20 times a
+    /// period shows its peak 1.2 % low; refined, to 10⁻¹² of the step).
     pub fn max_abs(&self, t0: f64, t1: f64) -> f64 {
         let v = |t: f64| self.eval(t).0;
         let linear = |t: &Term| {
@@ -336,17 +338,48 @@ impl Waveform {
                 .fold(v(t1).abs(), f64::max);
         }
         let n = 20_000;
-        (0..=n)
-            .map(|i| t0 + (t1 - t0) * i as f64 / n as f64)
-            .chain(self.kinks(t0, t1))
-            .map(|t| self.eval(t).0.abs())
-            .fold(0.0, f64::max)
+        let dt = (t1 - t0) / n as f64;
+        let grid = |i: usize| t0 + dt * i as f64;
+        let (best, top) = (0..=n)
+            .map(|i| (i, v(grid(i)).abs()))
+            .fold((0, 0.0), |b, x| if x.1 > b.1 { x } else { b });
+        let (a, b) = (grid(best.saturating_sub(1)), grid((best + 1).min(n)));
+        let refined = crate::sim::static_curve::golden_max(&|t| v(t).abs(), a, b, 1e-12 * dt);
+        self.kinks(t0, t1)
+            .into_iter()
+            .chain([refined])
+            .map(|t| v(t).abs())
+            .fold(top, f64::max)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A sine sampled 20 times a period with its peaks halfway between samples
+    /// (phase π/20 at 100 Hz over 10 s, the 20 001-point grid every 0.5 ms) shows
+    /// them 1.2 % low (cos(π/20)); the refined largest value is the amplitude to
+    /// 10⁻⁹ (golden section to 10⁻¹² of the step leaves (10⁻¹²)² of it).
+    #[test]
+    fn a_sine_peak_between_samples_is_found() {
+        let w = Waveform {
+            terms: vec![Term::Sine {
+                start: 0.0,
+                amplitude: 1000.0,
+                frequency: 100.0,
+                phase: 0.05 * std::f64::consts::PI,
+                offset: 0.0,
+                cycles: None,
+            }],
+        };
+        let sampled = (0..=20_000)
+            .map(|i| w.eval(10.0 * i as f64 / 20_000.0).0.abs())
+            .fold(0.0, f64::max);
+        assert!(sampled < 0.99 * 1000.0, "{sampled}");
+        let got = w.max_abs(0.0, 10.0);
+        assert!((got - 1000.0).abs() <= 1e-9 * 1000.0, "{got}");
+    }
 
     /// The integer-conversion floor is `f64::floor` bit for bit on [0, ∞): at and
     /// around integers, at 2⁵² and beyond, and on a sweep of fractions.

@@ -174,17 +174,13 @@ pub struct Outcome {
     /// when the samples do not resolve the motion or were decimated ([`sampling`]).
     #[serde(skip)]
     pub envelope: Option<Vec<sampling::Interval>>,
-    /// Extremes over every sample.
+    /// Extremes over the whole integration: every output sample and every accepted
+    /// step ([`Outcome::extremes`]).
     #[serde(skip)]
     extremes: Extremes,
-    /// The largest true field in a layer, E = V/h(λ) (`Actuator::field`), over
-    /// every output sample and every accepted step of the integration: a peak
-    /// between samples is in it.
+    /// The same over the output samples only ([`Outcome::extremes_at_samples`]).
     #[serde(skip)]
-    pub peak_field: breakdown::FieldPeak,
-    /// The same over the output samples only (what a trajectory shows).
-    #[serde(skip)]
-    pub peak_field_sampled: breakdown::FieldPeak,
+    extremes_sampled: Extremes,
     /// Forward sensitivities at the samples, if asked for ([`RunOptions::sensitivities`]).
     #[serde(skip)]
     pub sensitivities: Option<Sensitivities>,
@@ -706,11 +702,11 @@ struct Recorder<'s, 'k> {
 
 /// What a [`Recorder`] gathered over every sample.
 struct Recorded {
+    /// Over the output samples ([`Outcome::extremes_at_samples`]); after the run,
+    /// [`integrate`] keeps the union with the accepted steps' in `extremes`.
+    sampled: Extremes,
+    /// Over the samples and the accepted steps ([`Outcome::extremes`]).
     extremes: Extremes,
-    /// The largest field over the samples ([`Outcome::peak_field_sampled`]).
-    field: breakdown::FieldPeak,
-    /// The largest field over the samples and accepted steps ([`Outcome::peak_field`]).
-    field_steps: breakdown::FieldPeak,
     /// Σ (contraction − reference)², the reference's range (closed loop).
     tracking: (f64, f64, f64),
     first_bad: Option<Sample>,
@@ -743,13 +739,7 @@ impl Recorder<'_, '_> {
             }
         }
         let d = &mut self.done;
-        let e = &mut d.extremes;
-        e.stretch_min = e.stretch_min.min(x.stretch);
-        e.stretch_max = e.stretch_max.max(x.stretch);
-        e.current_max_a = e.current_max_a.max(x.current_a.abs());
-        e.power_max_w = e.power_max_w.max(x.power_w);
-        e.leakage_max_w = e.leakage_max_w.max(x.leakage_w);
-        d.field.widen(&p.actuator, Some(t), x.voltage_v, x.stretch);
+        d.sampled.add(&p.actuator, self.rest_length_m, &x);
         if p.control.is_some() {
             let (ss, lo, hi) = &mut d.tracking;
             *ss += (1.0 - x.length_m / self.rest_length_m - x.reference).powi(2);
@@ -818,9 +808,9 @@ fn integrate<'s, 'k>(
     let mut y = p.initial_state();
     let mut stats = Stats::default();
     let wants_steps = env.as_ref().is_some_and(|e| e.wants_steps());
-    // A run with a report (an envelope) also keeps the largest field at every
-    // accepted step; a bare trajectory (identification's inner loop) does not.
-    let track_field = env.is_some();
+    // A run with a report (an envelope) also takes its extremes at every accepted
+    // step; a bare trajectory (identification's inner loop) does not.
+    let track_steps = env.is_some();
     let kept = (scene.time.samples.len() + 2).div_ceil(every) + 1;
     let mut rec = Recorder {
         every,
@@ -834,16 +824,9 @@ fn integrate<'s, 'k>(
         rest_length_m: p.length(p.lam0),
         sink,
         done: Recorded {
-            extremes: Extremes {
-                stretch_min: f64::INFINITY,
-                stretch_max: f64::NEG_INFINITY,
-                current_max_a: 0.0,
-                power_max_w: f64::NEG_INFINITY,
-                leakage_max_w: 0.0,
-            },
+            sampled: Extremes::NONE,
+            extremes: Extremes::NONE,
             tracking: (0.0, f64::INFINITY, f64::NEG_INFINITY),
-            field: breakdown::FieldPeak::NONE,
-            field_steps: breakdown::FieldPeak::NONE,
             first_bad: None,
             envelope: (None, None),
             sink_error: None,
@@ -880,19 +863,21 @@ fn integrate<'s, 'k>(
     let last_sample = std::cell::Cell::new(0.0);
     // The end of the last accepted step (where auto's BDF hands over).
     let last_step = std::cell::Cell::new(0.0);
-    let step_field = std::cell::Cell::new(breakdown::FieldPeak::NONE);
+    // The extremes over the accepted steps.
+    let step_extremes = std::cell::Cell::new(Extremes::NONE);
+    let rest_length_m = p.length(p.lam0);
     let mut step = |t: f64, y: &[f64]| {
         last_step.set(t);
-        if track_field {
-            let mut f = step_field.get();
-            f.widen(&p.actuator, Some(t), p.voltage(t, y), y[0]);
-            step_field.set(f);
+        if !track_steps {
+            return;
         }
+        let x = sample(p, t, y);
+        let mut e = step_extremes.get();
+        e.add(&p.actuator, rest_length_m, &x);
+        step_extremes.set(e);
         if wants_steps && t > last_sample.get() {
-            // a sample's length, current and power (see `sample`)
-            let e = p.output(t, y);
             let mut i = steps.get();
-            i.widen(p.length(y[0]), e.current, e.voltage * e.current);
+            i.add(&x);
             steps.set(i);
         }
     };
@@ -1009,10 +994,8 @@ fn integrate<'s, 'k>(
         }
     };
     let (samples, sens, count, mut record) = rec.finish();
-    record.field_steps = match step_field.get() {
-        f if f.field > record.field.field => f,
-        _ => record.field,
-    };
+    record.extremes = record.sampled;
+    record.extremes.union(&step_extremes.get());
     // A finite state can still give a non-finite output (a stretch outside the
     // model's domain): such a run has no result either.
     let (status, message) = match &record.first_bad {
@@ -1090,8 +1073,7 @@ fn summarise(scene: &Scene, run: Prepared, ran: Integrated) -> Outcome {
         decimation: ran.decimation,
         envelope,
         extremes: x,
-        peak_field: rec.field_steps,
-        peak_field_sampled: rec.field,
+        extremes_sampled: rec.sampled,
         sensitivities: tr.sensitivities,
     }
 }
@@ -1166,20 +1148,34 @@ pub fn full_plant(scene: &Scene) -> crate::Result<Plant> {
 }
 
 impl Outcome {
-    /// Largest and smallest values over every sample: (stretch min, stretch max,
-    /// |current| max, power max, leakage max).
+    /// The run's extremes over the whole integration: every output sample and every
+    /// accepted step of the integrator, so a peak between samples (a fast source
+    /// rise, ringing) is in them. What every command reports.
     pub fn extremes(&self) -> Extremes {
         self.extremes
     }
+
+    /// The same over the output samples only: what the trajectory CSV shows, never
+    /// more than [`Outcome::extremes`].
+    pub fn extremes_at_samples(&self) -> Extremes {
+        self.extremes_sampled
+    }
 }
 
-/// Extreme sampled values.
+/// Extremes of a run: the one place that takes them ([`Extremes::add`]), at the
+/// output samples and, for a run with a report, at every accepted step of the
+/// integrator. Between accepted steps the solution is the integrator's
+/// interpolant, accurate to the step's tolerance; a peak inside a step is missed by
+/// at most the change of the quantity over that step.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Extremes {
     /// Smallest stretch.
     pub stretch_min: f64,
     /// Largest stretch.
     pub stretch_max: f64,
+    /// Largest stroke, the rest length minus the length (m).
+    #[serde(rename = "stroke_max_m")]
+    pub stroke_max_m: f64,
     /// Largest |current| (A).
     #[serde(rename = "current_max_A")]
     pub current_max_a: f64,
@@ -1189,4 +1185,46 @@ pub struct Extremes {
     /// Largest leakage power (W).
     #[serde(rename = "leakage_max_W")]
     pub leakage_max_w: f64,
+    /// Largest true field in a layer, E = V/h(λ) (`Actuator::field`), and where.
+    #[serde(rename = "field_max")]
+    pub field: breakdown::FieldPeak,
+}
+
+impl Extremes {
+    /// Nothing seen yet.
+    pub const NONE: Extremes = Extremes {
+        stretch_min: f64::INFINITY,
+        stretch_max: f64::NEG_INFINITY,
+        stroke_max_m: f64::NEG_INFINITY,
+        current_max_a: 0.0,
+        power_max_w: f64::NEG_INFINITY,
+        leakage_max_w: 0.0,
+        field: breakdown::FieldPeak::NONE,
+    };
+
+    /// Widen by the values of `x` (a sample, or the state of an accepted step as a
+    /// sample) of actuator `a` with rest length `rest_length_m`. Non-finite values
+    /// are left out (`f64::max` and `min` skip NaN).
+    pub fn add(&mut self, a: &Actuator, rest_length_m: f64, x: &Sample) {
+        self.stretch_min = self.stretch_min.min(x.stretch);
+        self.stretch_max = self.stretch_max.max(x.stretch);
+        self.stroke_max_m = self.stroke_max_m.max(rest_length_m - x.length_m);
+        self.current_max_a = self.current_max_a.max(x.current_a.abs());
+        self.power_max_w = self.power_max_w.max(x.power_w);
+        self.leakage_max_w = self.leakage_max_w.max(x.leakage_w);
+        self.field.widen(a, Some(x.time_s), x.voltage_v, x.stretch);
+    }
+
+    /// Widen by the extremes of another part of the same run.
+    fn union(&mut self, o: &Extremes) {
+        self.stretch_min = self.stretch_min.min(o.stretch_min);
+        self.stretch_max = self.stretch_max.max(o.stretch_max);
+        self.stroke_max_m = self.stroke_max_m.max(o.stroke_max_m);
+        self.current_max_a = self.current_max_a.max(o.current_max_a);
+        self.power_max_w = self.power_max_w.max(o.power_max_w);
+        self.leakage_max_w = self.leakage_max_w.max(o.leakage_max_w);
+        if o.field.field > self.field.field {
+            self.field = o.field;
+        }
+    }
 }

@@ -61,18 +61,12 @@ impl Interval {
         power_w: Band::EMPTY,
     };
 
-    /// Widen by a sample's values.
+    /// Widen by a sample's values (an output sample, or the state of an accepted
+    /// step as a sample).
     pub fn add(&mut self, s: &Sample) {
-        self.widen(s.length_m, s.current_a, s.power_w);
-    }
-
-    /// Widen by a length (m), a current (A) and a power (W): the charted values of
-    /// a state (what [`Interval::add`] takes from a sample, without the rest of
-    /// the sample; the integrator's accepted steps).
-    pub fn widen(&mut self, length_m: f64, current_a: f64, power_w: f64) {
-        self.length_m.add(length_m);
-        self.current_a.add(current_a);
-        self.power_w.add(power_w);
+        self.length_m.add(s.length_m);
+        self.current_a.add(s.current_a);
+        self.power_w.add(s.power_w);
     }
 
     fn union(&mut self, o: &Interval) {

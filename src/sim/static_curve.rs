@@ -68,6 +68,27 @@ pub const POINTS: CountRange = CountRange::new(
     "points of the static curve; the peak is refined to 1e-10 in λ whatever the grid",
 );
 
+/// Where `f` is largest on [a, b], by golden-section search to within `tol` (or
+/// to the resolution of the numbers there, whichever is coarser): exact for an `f`
+/// with one maximum there (Kiefer 1953; the bracket shrinks by (√5 − 1)/2 per
+/// evaluation).
+pub fn golden_max(f: &dyn Fn(f64) -> f64, mut a: f64, mut b: f64, tol: f64) -> f64 {
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    let tol = tol.max(4.0 * f64::EPSILON * a.abs().max(b.abs()));
+    let mut c = b - g * (b - a);
+    let mut d = a + g * (b - a);
+    while (b - a).abs() > tol {
+        if f(c) > f(d) {
+            b = d;
+        } else {
+            a = c;
+        }
+        c = b - g * (b - a);
+        d = a + g * (b - a);
+    }
+    0.5 * (a + b)
+}
+
 /// The curve on `n` (at least [`MIN_POINTS`]) points from the rest stretch down to
 /// `stretch_min`, and the peak refined by golden-section search to 1e-10 in λ. The
 /// curve is unimodal for every shipped model; a grid maximum at the thinnest point
@@ -113,20 +134,8 @@ pub fn static_curve(p: &Plant, n: usize, stretch_min: f64) -> StaticCurve {
         }
         _ => None,
     };
-    let pull_in = bracket.map(|(mut a, mut b)| {
-        let g = 0.5 * (5f64.sqrt() - 1.0);
-        let mut c = b - g * (b - a);
-        let mut d = a + g * (b - a);
-        while (b - a).abs() > 1e-10 {
-            if f(c) > f(d) {
-                b = d;
-            } else {
-                a = c;
-            }
-            c = b - g * (b - a);
-            d = a + g * (b - a);
-        }
-        let l = 0.5 * (a + b);
+    let pull_in = bracket.map(|(a, b)| {
+        let l = golden_max(&f, a, b, 1e-10);
         Point {
             stretch: l,
             voltage_v: f(l),

@@ -242,6 +242,7 @@ impl Searches {
         Progress {
             searches: self.clone(),
             start,
+            label: String::new(),
         }
     }
 
@@ -275,6 +276,16 @@ impl Searches {
 pub struct Progress {
     searches: Searches,
     start: usize,
+    /// The search's label ([`crate::fit::lm::Control::label`]) and ": ", or empty.
+    label: String,
+}
+
+/// The label of a search from its key-value pairs, followed by ": " (empty
+/// without one).
+fn label(kv: &KV) -> String {
+    kv.get("label")
+        .and_then(|v| v.get_string())
+        .map_or_else(String::new, |l| format!("{l}: "))
 }
 
 impl Observe<LmState> for Progress {
@@ -282,11 +293,13 @@ impl Observe<LmState> for Progress {
         &mut self,
         _name: &str,
         state: &LmState,
-        _kv: &KV,
+        kv: &KV,
     ) -> std::result::Result<(), argmin::core::Error> {
         self.searches.begin();
+        self.label = label(kv);
         self.searches.meter.set_message(format!(
-            "start {} of a search of {} constants",
+            "{}start {} of a search of {} constants",
+            self.label,
             self.start,
             state.get_param().map_or(0, |x| x.len())
         ));
@@ -300,7 +313,8 @@ impl Observe<LmState> for Progress {
     ) -> std::result::Result<(), argmin::core::Error> {
         let it = count(kv, "iteration").unwrap_or(0);
         self.searches.meter.set_message(format!(
-            "start {} of a search of {} constants: iteration {it}, cost {:.4e}",
+            "{}start {} of a search of {} constants: iteration {it}, cost {:.4e}",
+            self.label,
             self.start,
             state.get_param().map_or(0, |x| x.len()),
             state.get_cost()

@@ -449,3 +449,34 @@ fn starts_out_of_reach_of_the_first_are_abandoned() {
         assert_same(&a.1, &b.1);
     }
 }
+
+/// A search's label (`Control::label`: the candidate of `identify --hyperelastic
+/// auto`, a reduction round) reaches its progress line.
+#[test]
+fn the_progress_line_names_what_is_searched() {
+    let meter = Meter::shown(
+        Show::Off,
+        std::time::Duration::from_secs(5),
+        "test",
+        "searches",
+        Some(1),
+    );
+    let searches = Searches::new(meter);
+    let mut control = Control {
+        observers: vec![Box::new(searches.observer(0))],
+        label: Some("candidate yeoh, 2 arm(s)".into()),
+        ..Control::default()
+    };
+    lm::search(
+        &mut Rosen,
+        &[-1.2, 1.0],
+        &[FREE; 2],
+        &LmSettings::default(),
+        &mut control,
+    );
+    let msg = searches.meter().message();
+    assert!(
+        msg.starts_with("candidate yeoh, 2 arm(s): start 0"),
+        "{msg}"
+    );
+}

@@ -709,6 +709,8 @@ struct LmSolver<'s> {
     lm: &'s mut Lm,
     /// [`Control::reach`].
     reach: Option<Reach>,
+    /// [`Control::label`].
+    label: Option<String>,
     stopped: Option<Termination>,
     /// Whether anyone reads the key-value pairs (they cost a few allocations).
     observed: bool,
@@ -716,6 +718,17 @@ struct LmSolver<'s> {
 
 /// The problem as argmin holds it.
 struct Held<'p, P: ?Sized>(&'p mut P);
+
+impl LmSolver<'_> {
+    /// What the observers are told: the search's pairs and its label.
+    fn kv(&self) -> KV {
+        let mut kv = self.lm.kv();
+        if let Some(l) = &self.label {
+            kv.insert("label", l.clone().into());
+        }
+        kv
+    }
+}
 
 impl<P: LeastSquares + ?Sized> Solver<Held<'_, P>, LmState> for LmSolver<'_> {
     fn name(&self) -> &str {
@@ -727,7 +740,7 @@ impl<P: LeastSquares + ?Sized> Solver<Held<'_, P>, LmState> for LmSolver<'_> {
         _problem: &mut Problem<Held<'_, P>>,
         state: LmState,
     ) -> Result<(LmState, Option<KV>), argmin::core::Error> {
-        Ok((state, self.observed.then(|| self.lm.kv())))
+        Ok((state, self.observed.then(|| self.kv())))
     }
 
     fn next_iter(
@@ -754,7 +767,7 @@ impl<P: LeastSquares + ?Sized> Solver<Held<'_, P>, LmState> for LmSolver<'_> {
             Some(t) => state.terminate_with(TerminationReason::SolverExit(t.to_string())),
         };
         self.stopped = stop;
-        Ok((state, self.observed.then(|| self.lm.kv())))
+        Ok((state, self.observed.then(|| self.kv())))
     }
 }
 
@@ -825,6 +838,9 @@ pub struct Control {
     /// [`Termination::Abandoned`] once this search cannot come within reach of it
     /// ([`out_of_reach`]).
     pub reach: Option<Reach>,
+    /// What the search is of, for its observers (the key `label` of their
+    /// key-value pairs): a candidate model, a reduction round.
+    pub label: Option<String>,
 }
 
 /// Minimise ½‖r(p)‖² from `x0` within `bounds`: [`search`] without observers,
@@ -876,6 +892,7 @@ pub fn search<P: LeastSquares + ?Sized>(
         LmSolver {
             lm: &mut lm,
             reach: control.reach,
+            label: control.label.clone(),
             stopped: None,
             observed: !control.observers.is_empty(),
         },

@@ -370,7 +370,11 @@ pub fn identify(
             }
         };
         next_settings.warm = warm(&current);
-        let run = identify_with(experiments.to_vec(), &next_settings, &round_control);
+        let label = format!("reduction round {}: {action}", rounds.len() + 1);
+        let run = identify_with(experiments.to_vec(), &next_settings, &|i| Control {
+            label: Some(label.clone()),
+            ..round_control(i)
+        });
         let id = match run {
             Ok(Run::Identified(id)) => *id,
             Ok(Run::Failed(f)) => {

@@ -354,10 +354,14 @@ pub fn select(
     let mats = candidates(&experiments, choose, x);
     let run = |c: &Material, s: &Settings| -> Result<Fitted> {
         let exps = with_material(&experiments, c)?;
+        let label = format!("candidate {}, {} arm(s)", c.spec.name, c.arms.len());
         let id = identified(identify_with(
             exps.clone(),
             &settings_for(s, c, choose)?,
-            control,
+            &|i| Control {
+                label: Some(label.clone()),
+                ..control(i)
+            },
         )?)?;
         Ok((id, exps))
     };

@@ -405,6 +405,7 @@ impl<'a> Profiler<'a> {
             .iter()
             .min_by(|a, b| (a.at - v).abs().total_cmp(&(b.at - v).abs()))
             .expect("the optimum is a point");
+        let from = near.others.clone();
         let predicted: Vec<f64> = near
             .others
             .iter()
@@ -435,6 +436,28 @@ impl<'a> Profiler<'a> {
                 &self.bounds,
                 &self.base.settings,
             );
+        }
+        if !r.cost.is_finite() {
+            // the linear prediction can carry a weak constant (an arm as slow as
+            // the trace: its σ is huge) to where the model does not run; the
+            // nearest profiled point's others, unmoved, ran one step before. Only
+            // when the model fails from there too is the value excluded (slow-arm
+            // study: three arm1.τ intervals 0.3–4 % wide, from failed re-fits
+            // taken as Δχ² = ∞, missed the truth)
+            let unmoved: Vec<f64> = from
+                .iter()
+                .zip(&self.bounds)
+                .map(|(&o, &b)| lm::project(o, b))
+                .collect();
+            let again = lm::minimize(
+                &mut self.problem,
+                &unmoved,
+                &self.bounds,
+                &self.base.settings,
+            );
+            if again.cost.is_finite() {
+                r = again;
+            }
         }
         let delta = match r.cost.is_finite() {
             true => 2.0 * (r.cost - self.base.cost),

@@ -116,8 +116,8 @@ pub struct FractionPoint {
     pub volume_fraction: f64,
     /// Measured εr.
     pub eps_r: f64,
-    /// Its standard uncertainty.
-    pub eps_r_std: f64,
+    /// Its standard uncertainty (None, null: no tolerance stated, unknown).
+    pub eps_r_std: Option<f64>,
 }
 
 /// The rules fitted at one frequency, best first.

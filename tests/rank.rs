@@ -226,7 +226,10 @@ fn the_first_limit_on_the_way_up_names_the_state() {
     let ev = evaluate(&d, &Sweep::default());
     let (weak, strong) = (&ev[0].evaluation, &ev[1].evaluation);
     let (b, p) = (weak.breakdown.unwrap(), weak.pull_in.unwrap());
-    assert!(b.voltage_v < p.voltage_v && p.voltage_v < 2500.0, "{b:?} {p:?}");
+    assert!(
+        b.voltage_v < p.voltage_v && p.voltage_v < 2500.0,
+        "{b:?} {p:?}"
+    );
     assert_eq!(weak.state, State::Breakdown, "{}", weak.state_note);
     assert!(
         weak.state_note.contains("breaks down on the way up")
@@ -254,14 +257,33 @@ fn unranked_candidates_are_summarised() {
     design(dir.path(), &m);
     let o = run(
         dir.path(),
-        &["rank", "design.toml", "--no-report", "--sweep", "voltage=2200V:3kV:15"],
+        &[
+            "rank",
+            "design.toml",
+            "--no-report",
+            "--sweep",
+            "voltage=2200V:3kV:15",
+        ],
     );
     assert_eq!(o.status.code(), Some(1), "nothing ranked: failed");
-    let t = text(&o);
-    assert!(t.contains("30 candidate(s): 15 past pull-in, 15 past breakdown."), "{t}");
-    assert!(t.contains("- weak: 15 past breakdown (2.2000 kV – 3.0000 kV); first at 2.2000 kV"), "{t}");
-    assert!(t.contains("- strong: 15 past pull-in (2.2000 kV – 3.0000 kV)"), "{t}");
-    assert!(t.contains("the first limit on the way up is breakdown of weak at"), "{t}");
+    // the terminal wraps at 100 columns, continuation lines indented by two
+    let t = text(&o).replace("\n  ", " ");
+    assert!(
+        t.contains("30 candidate(s): 15 past pull-in, 15 past breakdown."),
+        "{t}"
+    );
+    assert!(
+        t.contains("- weak: 15 past breakdown (2.2000 kV – 3.0000 kV); first at 2.2000 kV"),
+        "{t}"
+    );
+    assert!(
+        t.contains("- strong: 15 past pull-in (2.2000 kV – 3.0000 kV)"),
+        "{t}"
+    );
+    assert!(
+        t.contains("the first limit on the way up is breakdown of weak at"),
+        "{t}"
+    );
     let mut lines: Vec<&str> = t.lines().filter(|l| l.starts_with("- ")).collect();
     let n = lines.len();
     lines.sort();
@@ -818,9 +840,13 @@ fn shipped_design_ranks() {
     let li = find("BJB TC-5005 + BaTiO3 (lichtenecker) 20 vol%");
     assert_eq!(li["state"], "breakdown", "{li}");
     let why = li["not_ranked"].as_str().unwrap();
-    assert!(li["rank"].is_null() && why.contains("breaks down on the way up"), "{why}");
     assert!(
-        li["breakdown"]["voltage_V"].as_f64().unwrap() < li["pull_in"]["voltage_V"].as_f64().unwrap()
+        li["rank"].is_null() && why.contains("breaks down on the way up"),
+        "{why}"
+    );
+    assert!(
+        li["breakdown"]["voltage_V"].as_f64().unwrap()
+            < li["pull_in"]["voltage_V"].as_f64().unwrap()
     );
     // The fitted composite's εr and the fitted modulus at 20 wt% are marked so.
     let sb = find("Sylgard 184 + BaTiO3 20 wt%");
@@ -1207,24 +1233,43 @@ fn candidates_without_std_errors_within_the_tolerance_are_not_told_apart() {
     assert_eq!(r.order, [2, 1, 0]);
     assert!(ev.iter().all(|e| e.static_stroke.std_error.is_none()));
     for w in r.order.windows(2) {
-        let (a, b) = (value(&ev[w[0]].static_stroke), value(&ev[w[1]].static_stroke));
+        let (a, b) = (
+            value(&ev[w[0]].static_stroke),
+            value(&ev[w[1]].static_stroke),
+        );
         let x = r.apart[w[1]].expect("compared by the tolerance");
         assert_eq!(x.by, ranking::Compared::Tolerance);
-        assert_eq!(x.apart, (a - b).abs() > ranking::TOLERANCE * a.abs().max(b.abs()));
+        assert_eq!(
+            x.apart,
+            (a - b).abs() > ranking::TOLERANCE * a.abs().max(b.abs())
+        );
     }
     assert!(r.apart[1].unwrap().apart, "B is 10 % below C");
     assert!(!r.apart[0].unwrap().apart, "A is within 1 % of B");
     std::fs::write(dir.path().join("design.toml"), &m).unwrap();
     let o = run(
         dir.path(),
-        &["rank", "design.toml", "--no-report", "--json", "--csv", "r.csv"],
+        &[
+            "rank",
+            "design.toml",
+            "--no-report",
+            "--json",
+            "--csv",
+            "r.csv",
+        ],
     );
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
     let flags: Vec<_> = v["candidates"]
         .as_array()
         .unwrap()
         .iter()
-        .map(|c| (c["name"].clone(), c["apart_from_above"].clone(), c["apart_by"].clone()))
+        .map(|c| {
+            (
+                c["name"].clone(),
+                c["apart_from_above"].clone(),
+                c["apart_by"].clone(),
+            )
+        })
         .collect();
     assert_eq!(
         flags,
@@ -1235,8 +1280,16 @@ fn candidates_without_std_errors_within_the_tolerance_are_not_told_apart() {
         ]
     );
     let csv = std::fs::read_to_string(dir.path().join("r.csv")).unwrap();
-    assert!(csv.lines().next().unwrap().ends_with("apart_from_above,apart_by"));
-    assert!(csv.lines().any(|l| l.starts_with("0,A,") && l.ends_with(",false,tolerance")), "{csv}");
+    assert!(csv
+        .lines()
+        .next()
+        .unwrap()
+        .ends_with("apart_from_above,apart_by"));
+    assert!(
+        csv.lines()
+            .any(|l| l.starts_with("0,A,") && l.ends_with(",false,tolerance")),
+        "{csv}"
+    );
     let o = run(dir.path(), &["rank", "design.toml", "--no-report"]);
     let t = text(&o);
     assert!(t.contains("\n3≈ "), "{t}");
@@ -1302,7 +1355,12 @@ fn the_matrix_alone_is_ranked_once() {
         ev.iter().find(|e| e.name == repeats[0].1).unwrap(),
     );
     assert_ne!(a.eps_r.value, b.eps_r.value);
-    let named = |n: &str| r.order.iter().filter(|&&i| ev[i].name == n && r.ranks[i].is_some()).count();
+    let named = |n: &str| {
+        r.order
+            .iter()
+            .filter(|&&i| ev[i].name == n && r.ranks[i].is_some())
+            .count()
+    };
     assert_eq!(named(repeats[0].0) + named(repeats[0].1), 1);
     let repeats = &repeats[1..];
     let i = ev.iter().position(|e| e.name == repeats[0].0).unwrap();

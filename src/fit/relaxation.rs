@@ -2541,12 +2541,21 @@ mod tests {
     #[test]
     fn qlv_g0_below_one_says_the_data_disagree() {
         let low = qlv_consistency(0.771, 0.3).expect("a warning");
-        assert!(low.contains("disagree") && low.contains("G(0) = 0.771"), "{low}");
+        assert!(
+            low.contains("disagree") && low.contains("G(0) = 0.771"),
+            "{low}"
+        );
         assert!(!low.contains("finite rate"), "{low}");
         let high = qlv_consistency(1.4, 0.5).expect("a warning");
-        assert!(high.contains("finite rate") && !high.contains("disagree"), "{high}");
+        assert!(
+            high.contains("finite rate") && !high.contains("disagree"),
+            "{high}"
+        );
         let relaxed = qlv_consistency(1.3, 1.25).expect("a warning");
-        assert!(relaxed.contains("G(∞) = 1.250") && relaxed.contains("disagree"), "{relaxed}");
+        assert!(
+            relaxed.contains("G(∞) = 1.250") && relaxed.contains("disagree"),
+            "{relaxed}"
+        );
         assert_eq!(qlv_consistency(1.05, 0.5), None);
         assert_eq!(qlv_consistency(0.95, 0.5), None);
     }

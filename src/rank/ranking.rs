@@ -420,7 +420,9 @@ pub fn rank(evals: &[Evaluation], by: Objective, pareto: [Objective; 2]) -> Rank
             &evals[a],
             &evals[b],
             by,
-            apart[b].filter(|x| x.by == Compared::StdError).map(|x| x.apart),
+            apart[b]
+                .filter(|x| x.by == Compared::StdError)
+                .map(|x| x.apart),
         ),
         _ => None,
     };

@@ -305,7 +305,10 @@ fn unranked(page: &mut Page, evals: &[Evaluated], r: &Ranking, top: usize) {
                 };
                 let volts = span(
                     si(fold(f64::min, &v), "V"),
-                    si(fold(f64::max, &|e| e.voltage.value.unwrap_or(f64::NEG_INFINITY)), "V"),
+                    si(
+                        fold(f64::max, &|e| e.voltage.value.unwrap_or(f64::NEG_INFINITY)),
+                        "V",
+                    ),
                 );
                 let loadings = match first.filler {
                     None => String::new(),

@@ -33,9 +33,11 @@ fn freq_charts(samples: &[SamplePermittivity], page: &mut Page, dir: &Path) -> R
     // εr′ ± σ where the geometry's tolerances give one
     let mut eps_series: Vec<Series> = series(&|p| p.eps_r);
     for (i, s) in drawn.iter().enumerate() {
-        let bars = error_bars(s.points.iter().map(|p| {
-            (p.freq_hz, p.eps_r, p.eps_r_std.unwrap_or(f64::NAN))
-        }));
+        let bars = error_bars(
+            s.points
+                .iter()
+                .map(|p| (p.freq_hz, p.eps_r, p.eps_r_std.unwrap_or(f64::NAN))),
+        );
         if !bars.is_empty() {
             eps_series.push(Series {
                 label: format!("{} ± σ", s.name),
@@ -57,7 +59,11 @@ fn freq_charts(samples: &[SamplePermittivity], page: &mut Page, dir: &Path) -> R
     // tan δ from 0: a flat loss with ±0.7 % noise on an axis hugging the data
     // reads as peaks; from 0 the noise shows as what it is
     let mut tan_series: Vec<Series> = series(&|p| p.tan_delta);
-    let first_f = drawn.iter().flat_map(|s| s.points.first()).map(|p| p.freq_hz).next();
+    let first_f = drawn
+        .iter()
+        .flat_map(|s| s.points.first())
+        .map(|p| p.freq_hz)
+        .next();
     tan_series.extend(first_f.map(|f| Series {
         label: String::new(),
         points: vec![(f, 0.0)],
@@ -331,7 +337,9 @@ fn mixing_chart(rf: &FrequencyFit) -> Chart {
         .data
         .iter()
         .map(|d| d.volume_fraction)
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
     if lo < hi {
         series.insert(
             0,

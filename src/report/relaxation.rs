@@ -129,9 +129,11 @@ pub fn write(
             },
             Series {
                 label: "± σ of the terms' moduli".into(),
-                points: error_bars(fit.prony.iter().map(|p| {
-                    (p.tau_s, p.modulus_pa, p.modulus_std_pa.unwrap_or(f64::NAN))
-                })),
+                points: error_bars(
+                    fit.prony
+                        .iter()
+                        .map(|p| (p.tau_s, p.modulus_pa, p.modulus_std_pa.unwrap_or(f64::NAN))),
+                ),
                 color: 1,
                 style: Style::ErrorBars,
             },

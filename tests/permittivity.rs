@@ -894,3 +894,32 @@ fn synth_lcr_is_recovered_by_the_reader() {
         }
     }
 }
+
+/// `composite` writes its fit file by default, like every estimator:
+/// `fits/<folder>-<manifest>-composite.json` (the name scenes refer to as
+/// `fits/x-composite.json`) and the report beside it, and says where.
+#[test]
+fn composite_writes_a_fit_file_by_default() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = root().join("datasets/composites/sylgard_batio3.toml");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_dea-fit"))
+        .current_dir(dir.path())
+        .args(["composite", m.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    let fit = dir.path().join("fits/composites-sylgard_batio3-composite.json");
+    assert!(fit.is_file(), "{stdout}");
+    assert!(
+        stdout.contains("fit: fits/composites-sylgard_batio3-composite.json"),
+        "{stdout}"
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&fit).unwrap()).unwrap();
+    assert!(v["fits"].is_array(), "a composite fit");
+    assert!(dir
+        .path()
+        .join("reports/composites-sylgard_batio3-composite/index.html")
+        .is_file());
+}

@@ -909,7 +909,9 @@ fn composite_writes_a_fit_file_by_default() {
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert_eq!(out.status.code(), Some(0), "{stdout}");
-    let fit = dir.path().join("fits/composites-sylgard_batio3-composite.json");
+    let fit = dir
+        .path()
+        .join("fits/composites-sylgard_batio3-composite.json");
     assert!(fit.is_file(), "{stdout}");
     assert!(
         stdout.contains("fit: fits/composites-sylgard_batio3-composite.json"),

@@ -63,7 +63,7 @@ fn bench(c: &mut Criterion) {
         .map(|&p| FractionPoint {
             volume_fraction: p,
             eps_r: MixingRule::Bruggeman.eval(2.72, 150.0, p, 3.0),
-            eps_r_std: 0.0,
+            eps_r_std: None,
         })
         .collect();
     c.bench_function("fit 6 mixing rules at one frequency (7 samples)", |b| {

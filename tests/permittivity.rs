@@ -267,8 +267,8 @@ fn formats_round_trip_to_the_generating_permittivity() {
             assert!((pt.conductivity - w * EPS0 * pt.eps_loss).abs() < 1e-12 * pt.conductivity);
             // Thickness ±0.05 mm of 2.2 mm (area exact): σ(εr)/εr = 0.05/2.2.
             assert!(
-                (pt.eps_r_std / pt.eps_r - 0.05 / 2.2).abs() < 1e-6,
-                "{}",
+                (pt.eps_r_std.expect("a σ") / pt.eps_r - 0.05 / 2.2).abs() < 1e-6,
+                "{:?}",
                 pt.eps_r_std
             );
         }
@@ -354,7 +354,7 @@ fn stray_and_edge_corrections() {
     let run = |edge| {
         let st = Settings {
             stray: Some(stray),
-            stray_std: 0.05e-12,
+            stray_std: Some(0.05e-12),
             edge,
         };
         analyse(&s, "s", &g, &st, "test").unwrap()
@@ -383,7 +383,7 @@ fn stray_and_edge_corrections() {
     // The stray tolerance adds σ = 0.05 pF / C0 in quadrature to the geometry's.
     let geo = none.points[0].eps_r * 0.05 / 2.2;
     let want = (geo * geo + (0.05e-12 / c0).powi(2)).sqrt();
-    assert!((none.points[0].eps_r_std - want).abs() < 1e-6 * want);
+    assert!((none.points[0].eps_r_std.expect("a σ") - want).abs() < 1e-6 * want);
 }
 
 /// Sanity checks: D > 1, εr < 1, partially inductive sweeps.
@@ -549,7 +549,7 @@ fn rule_fits_recover_known_parameters() {
             .map(|(&p, &e)| composite::FractionPoint {
                 volume_fraction: p,
                 eps_r: e,
-                eps_r_std: 0.0,
+                eps_r_std: None,
             })
             .collect(),
     );
@@ -714,6 +714,32 @@ fn cli_permittivity_json_and_refusal() {
     }
     assert!((p["eps_r"].as_f64().unwrap() - 2.72).abs() < 0.03);
     assert!(v["warnings"].is_array());
+    // the stray stated without a tolerance: its σ is unknown, null (never 0)
+    assert_eq!(s["corrections"]["stray_F"].as_f64(), Some(0.3e-12), "{s}");
+    let (code, out, err) = cli(&[
+        "permittivity",
+        s00.to_str().unwrap(),
+        "--diameter",
+        "42.80mm",
+        "--thickness",
+        "2.2mm",
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let s = &v["samples"][0];
+    // no tolerance anywhere: every σ is unknown, null, never 0
+    for (what, x) in [
+        ("area", &s["geometry"]["area_std_m2"]),
+        ("thickness", &s["geometry"]["thickness_std_m"]),
+        ("eps_r", &s["points"][0]["eps_r_std"]),
+    ] {
+        assert!(x.is_null(), "{what}: {x} in {s}");
+    }
+    assert!(
+        !out.contains("_std\": 0.0") && !out.contains("_std_m2\": 0.0"),
+        "{out}"
+    );
     let real = shipped("lcr_samples/E4990A-example1.csv");
     let (code, _, err) = cli(&[
         "permittivity",
@@ -867,4 +893,35 @@ fn synth_lcr_is_recovered_by_the_reader() {
             );
         }
     }
+}
+
+/// `composite` writes its fit file by default, like every estimator:
+/// `fits/<folder>-<manifest>-composite.json` (the name scenes refer to as
+/// `fits/x-composite.json`) and the report beside it, and says where.
+#[test]
+fn composite_writes_a_fit_file_by_default() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = root().join("datasets/composites/sylgard_batio3.toml");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_dea-fit"))
+        .current_dir(dir.path())
+        .args(["composite", m.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    let fit = dir
+        .path()
+        .join("fits/composites-sylgard_batio3-composite.json");
+    assert!(fit.is_file(), "{stdout}");
+    assert!(
+        stdout.contains("fit: fits/composites-sylgard_batio3-composite.json"),
+        "{stdout}"
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&fit).unwrap()).unwrap();
+    assert!(v["fits"].is_array(), "a composite fit");
+    assert!(dir
+        .path()
+        .join("reports/composites-sylgard_batio3-composite/index.html")
+        .is_file());
 }

@@ -807,7 +807,11 @@ fn measured_vhb_cycle_is_fitted_by_qlv() {
         f.loading
     );
     assert_eq!(f.status, Status::Warning, "{:?}", f.warnings);
-    assert!(f.warnings.iter().any(|w| w.contains("G(0) = 3.")));
+    assert!(
+        f.warnings.iter().any(|w| w.contains("G(0) = 3.")),
+        "{:#?}",
+        f.warnings
+    );
     let forced = relaxation::fit(
         &d,
         &Loading::default(),

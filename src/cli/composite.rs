@@ -21,18 +21,11 @@ pub struct Args {
     /// Write the synthetic exports of the manifest's [synthetic] table and exit.
     #[arg(long)]
     generate: bool,
-    /// Write the fit (JSON) to this file.
-    #[arg(long)]
-    out: Option<PathBuf>,
-    /// Write a report (SVG + index.md) into this directory.
-    #[arg(long)]
-    report: Option<PathBuf>,
-    /// Print the fit as JSON.
-    #[arg(long)]
-    json: bool,
-    /// Exit 1 when the series' status is blocking.
-    #[arg(long)]
-    strict: bool,
+    /// The fit file (default fits/<folder>-<manifest>-composite.json, as every
+    /// estimator writes one), the report (default reports/<same name>/), --json,
+    /// --strict (exit 1 when the series' status is blocking).
+    #[command(flatten)]
+    output: super::Output,
 }
 
 /// Parse `400%@37.5%`, `400%@37.5wt%`, `400%@0.375vol`.
@@ -69,7 +62,6 @@ pub fn parse_claim(s: &str) -> Result<(f64, f64, Option<Basis>)> {
 /// Run the subcommand.
 pub fn run(a: Args) -> Result<i32> {
     let m = manifest::read(&a.manifest)?;
-    super::refuse_in_report(a.report.as_deref(), &[("--out", a.out.as_deref())])?;
     if a.generate {
         for (path, text) in composite::synthesize(&m)? {
             super::write_noted(&path, text.as_bytes())?;
@@ -86,24 +78,13 @@ pub fn run(a: Args) -> Result<i32> {
             .push(check_claim(frac, inc, basis, &fit.matrix, &fit.filler)?);
     }
     let json = serde_json::to_string_pretty(&fit).expect("a fit serialises");
-    if let Some(d) = &a.report {
-        super::claim_dir(d)?;
-    }
-    if let Some(out) = &a.out {
-        super::write_fit_noted(out, json.as_bytes(), |old| old == json)?;
-    }
-    let page = a
-        .report
-        .as_ref()
-        .map(|d| write_composite(&fit, d))
-        .transpose()?;
-    if a.json {
-        println!("{json}");
-    } else {
-        print!("{}", composite_summary(&fit)?);
-        if let Some(p) = page {
-            println!("report: {}", p.display());
-        }
-    }
-    Ok(fit.status.exit_code(a.strict))
+    let name = format!("{}-composite", super::data_name(&a.manifest, "composite"));
+    a.output.deliver(
+        &name,
+        &fit,
+        fit.status,
+        |old| old == json,
+        || composite_summary(&fit),
+        |dir| write_composite(&fit, dir),
+    )
 }

@@ -113,7 +113,7 @@ pub struct Output {
     /// Print the fit as JSON on stdout (the fit file's object).
     #[arg(long)]
     pub json: bool,
-    /// Exit with status 1 when the fit is ill-posed, unstable or not converged
+    /// Exit with status 1 when the fit's status is ill_posed, unstable or not_converged
     /// (`warning` never blocks).
     #[arg(long)]
     strict: bool,

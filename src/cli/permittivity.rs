@@ -98,7 +98,7 @@ pub fn lcr_settings(
     let stray = quantity("--stray", stray, Dimension::Capacitance)?;
     let settings = Settings {
         stray: stray.map(|q| q.value),
-        stray_std: stray.and_then(|q| q.tolerance).unwrap_or(0.0),
+        stray_std: stray.and_then(|q| q.tolerance),
         edge: match edge {
             Edge::None => EdgeCorrection::None,
             Edge::Air => EdgeCorrection::Air,

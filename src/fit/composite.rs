@@ -116,8 +116,8 @@ pub struct FractionPoint {
     pub volume_fraction: f64,
     /// Measured εr.
     pub eps_r: f64,
-    /// Its standard uncertainty.
-    pub eps_r_std: f64,
+    /// Its standard uncertainty (None, null: no tolerance stated, unknown).
+    pub eps_r_std: Option<f64>,
 }
 
 /// The rules fitted at one frequency, best first.
@@ -732,7 +732,7 @@ pub fn fit_series(m: &Manifest, on_done: &(dyn Fn() + Sync)) -> Result<Composite
     if !fits.is_empty() && unusable == fits.len() {
         status = worst(status, Status::IllPosed);
         warnings.push(format!(
-            "no mixing rule is usable at any of the {} frequencies (every fit is ill-posed or did not converge): the series does not determine the rules' constants",
+            "no mixing rule is usable at any of the {} frequencies (every fit is ill_posed or not_converged): the series does not determine the rules' constants",
             fits.len()
         ));
     } else if unusable > 0 {

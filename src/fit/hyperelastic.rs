@@ -1002,7 +1002,7 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
             ran_to_bound[j] = true;
             escalate(Status::IllPosed);
             warnings.push(format!(
-                "{} ran to its bound ({}): the data do not determine it (ill-posed)",
+                "{} ran to its bound ({}): the data do not determine it (ill_posed)",
                 info.name,
                 Fixed(p[j], 4)
             ));
@@ -1258,7 +1258,7 @@ pub fn fit_auto(
         return Err(Error::settings(format!(
             "{n}{why} are too few to choose a model: the simplest (neo-hookean, 1 parameter) needs 3 away from λ = 1"
         ))
-        .with_hint("add data, or name a model with --model (its fit is then marked ill-posed)"));
+        .with_hint("add data, or name a model with --model (its fit is then marked ill_posed)"));
     }
     // Every model in `counted` has n ≥ m ≥ k + 2 points, so its AICc is defined.
     let aicc = |f: &HyperelasticFit| f.aicc.unwrap_or(f64::INFINITY);

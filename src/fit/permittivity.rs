@@ -29,15 +29,16 @@ pub struct Geometry {
     /// Electrode (plate) area A (m²).
     #[serde(rename = "area_m2")]
     pub area: f64,
-    /// Standard uncertainty of A (m²).
+    /// Standard uncertainty of A (m²); None (null) when no tolerance was stated:
+    /// unknown, never 0.
     #[serde(rename = "area_std_m2")]
-    pub area_std: f64,
+    pub area_std: Option<f64>,
     /// Coupon thickness d (m).
     #[serde(rename = "thickness_m")]
     pub thickness: f64,
     /// Standard uncertainty of d (m).
     #[serde(rename = "thickness_std_m")]
-    pub thickness_std: f64,
+    pub thickness_std: Option<f64>,
 }
 
 impl Geometry {
@@ -73,10 +74,10 @@ impl Geometry {
             }
         }
         let (area, area_std) = match (area, diameter) {
-            (Some(a), None) => (a.value, a.tolerance.unwrap_or(0.0)),
+            (Some(a), None) => (a.value, a.tolerance),
             (None, Some(d)) => (
                 PI * d.value * d.value / 4.0,
-                PI * d.value * d.tolerance.unwrap_or(0.0) / 2.0,
+                d.tolerance.map(|t| PI * d.value * t / 2.0),
             ),
             (Some(_), Some(_)) => {
                 return Err(Error::settings("both an area and a diameter were given")
@@ -96,7 +97,7 @@ impl Geometry {
             area,
             area_std,
             thickness: thickness.value,
-            thickness_std: thickness.tolerance.unwrap_or(0.0),
+            thickness_std: thickness.tolerance,
         };
         if !(g.area > 0.0 && g.thickness > 0.0) {
             return Err(Error::settings(format!(
@@ -152,9 +153,10 @@ pub struct Settings {
     /// Open-fixture (stray) capacitance subtracted from Cp (F); default none.
     #[serde(rename = "stray_F")]
     pub stray: Option<f64>,
-    /// Standard uncertainty of the stray capacitance (F); default 0.
+    /// Standard uncertainty of the stray capacitance (F); None (null) when none
+    /// was stated: unknown, never 0.
     #[serde(rename = "stray_std_F")]
-    pub stray_std: f64,
+    pub stray_std: Option<f64>,
     /// Edge correction; default none.
     pub edge: EdgeCorrection,
 }
@@ -163,10 +165,10 @@ impl Settings {
     /// Reject settings that cannot work.
     pub fn check(&self) -> Result<()> {
         let s = self.stray.unwrap_or(0.0);
-        if !(s >= 0.0 && s.is_finite() && self.stray_std >= 0.0) {
+        let sd = self.stray_std.unwrap_or(0.0);
+        if !(s >= 0.0 && s.is_finite() && sd >= 0.0) {
             return Err(Error::settings(format!(
-                "the stray capacitance must be ≥ 0 F, found {s} ± {} F",
-                self.stray_std
+                "the stray capacitance must be ≥ 0 F, found {s} ± {sd} F"
             )));
         }
         Ok(())
@@ -181,8 +183,9 @@ pub struct PermittivityPoint {
     pub freq_hz: f64,
     /// Relative permittivity ε′ (after the corrections in use).
     pub eps_r: f64,
-    /// Standard uncertainty of ε′ from the geometry and stray tolerances.
-    pub eps_r_std: f64,
+    /// Standard uncertainty of ε′ from the geometry and stray tolerances stated;
+    /// None (null) when none was stated: unknown, never 0.
+    pub eps_r_std: Option<f64>,
     /// Loss factor ε″.
     pub eps_loss: f64,
     /// Loss tangent tan δ = ε″/ε′.
@@ -420,12 +423,11 @@ pub fn analyse(
             )
             .with_hint("check the unit prefixes of the capacitance or impedance columns and the geometry"));
         }
-        // Linear propagation of the independent tolerances (central differences).
-        let mut var = 0.0;
+        // Linear propagation of the independent tolerances stated (central
+        // differences); none stated: unknown.
+        let mut var = None;
         for (k, sd) in [(0, geom.area_std), (1, geom.thickness_std), (2, stray_std)] {
-            if sd <= 0.0 {
-                continue;
-            }
+            let Some(sd) = sd else { continue };
             let (mut gp, mut gm, mut sp, mut sm) = (*geom, *geom, stray, stray);
             let h = match k {
                 0 => {
@@ -448,7 +450,7 @@ pub fn analyse(
                 }
             };
             let deriv = (f(&gp, sp).0 - f(&gm, sm).0) / (2.0 * h);
-            var += (deriv * sd).powi(2);
+            *var.get_or_insert(0.0) += (deriv * sd).powi(2);
         }
         if eps < 1.0 {
             below_one.push((p.freq, eps));
@@ -459,7 +461,7 @@ pub fn analyse(
         points.push(PermittivityPoint {
             freq_hz: p.freq,
             eps_r: eps,
-            eps_r_std: var.sqrt(),
+            eps_r_std: var.map(f64::sqrt),
             eps_loss: loss,
             tan_delta: loss / eps,
             conductivity: ac_conductivity(loss, omega),
@@ -539,8 +541,8 @@ pub fn analyse(
         )),
     }
     if let Some(s) = settings.stray {
-        let value = if stray_std > 0.0 {
-            crate::report::format::si_pm(s, Some(stray_std), "F")
+        let value = if stray_std.is_some() {
+            crate::report::format::si_pm(s, stray_std, "F")
         } else {
             format!("{} (no tolerance)", crate::report::format::si(s, "F"))
         };

@@ -2089,18 +2089,38 @@ fn verdict(
     let mut qlv_info = prep.qlv.clone();
     if let Some(q) = &mut qlv_info {
         q.instantaneous_scale = e0 / prep.unit;
-        if (q.instantaneous_scale - 1.0).abs() > 0.1 {
+        if let Some(w) = qlv_consistency(q.instantaneous_scale) {
             escalate(Status::Warning);
-            warnings.push(format!(
-                "the hyperelastic fit is not the instantaneous response of these data: the relaxation starts at G(0) = {:.3} × its stress (a tensile test at a finite rate lies between the instantaneous and the long-term response); the instantaneous response is G(0) times the hyperelastic stress",
-                q.instantaneous_scale
-            ));
+            warnings.push(w);
         }
     }
     Verdict {
         status,
         warnings,
         qlv: qlv_info,
+    }
+}
+
+/// What QLV's G(0) (`g0`, the relaxation's start over the hyperelastic stress)
+/// says about the two data sets, beyond 10 % of agreement. A tensile test at a
+/// finite rate lies between the relaxed and the instantaneous response: its stress
+/// is s × the instantaneous one with s ≤ 1, so consistent data have G(0) = 1/s ≥ 1
+/// (the finite-rate case, said as such when G(0) > 1.1). G(0) < 1 no rate
+/// explains: the tensile and the relaxation data disagree (another specimen or
+/// material, strain measure, units, a preload), and the warning says so. (The
+/// relaxed end G(∞) is not judged: E∞ is an extrapolation of the data's window.)
+fn qlv_consistency(g0: f64) -> Option<String> {
+    const TOL: f64 = 0.1;
+    if g0 < 1.0 - TOL {
+        Some(format!(
+            "the tensile and the relaxation data disagree: the relaxation starts at G(0) = {g0:.3} × the hyperelastic stress, below it, while a tensile test at any rate lies at or below the instantaneous response (G(0) ≥ 1); check that both are of one material and specimen, the strain measure, the units and a preload; the instantaneous response is taken as G(0) times the hyperelastic stress"
+        ))
+    } else if g0 > 1.0 + TOL {
+        Some(format!(
+            "the hyperelastic fit is not the instantaneous response of these data: the relaxation starts at G(0) = {g0:.3} × its stress (a tensile test at a finite rate lies between the instantaneous and the long-term response); the instantaneous response is G(0) times the hyperelastic stress"
+        ))
+    } else {
+        None
     }
 }
 
@@ -2508,5 +2528,25 @@ mod tests {
             let b = cost(&fit_terms(&prep, &full, n, &settings).unwrap());
             assert!((a - b).abs() <= 1e-5 * b, "{n} terms: {a} vs {b}");
         }
+    }
+
+    /// QLV's G(0) below 1 (the relaxation starting below the tensile stress) says the
+    /// two data sets disagree, never the finite-rate explanation, which needs
+    /// G(0) ≥ 1; G(0) above 1 is the finite-rate case; within 10 % nothing is said.
+    #[test]
+    fn qlv_g0_below_one_says_the_data_disagree() {
+        let low = qlv_consistency(0.771).expect("a warning");
+        assert!(
+            low.contains("disagree") && low.contains("G(0) = 0.771"),
+            "{low}"
+        );
+        assert!(!low.contains("finite rate"), "{low}");
+        let high = qlv_consistency(1.4).expect("a warning");
+        assert!(
+            high.contains("finite rate") && !high.contains("disagree"),
+            "{high}"
+        );
+        assert_eq!(qlv_consistency(1.05), None);
+        assert_eq!(qlv_consistency(0.95), None);
     }
 }

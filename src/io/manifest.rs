@@ -313,7 +313,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Manifest> {
     };
     let settings = Settings {
         stray: stray.map(|s| s.value),
-        stray_std: stray.and_then(|s| s.tolerance).unwrap_or(0.0),
+        stray_std: stray.and_then(|s| s.tolerance),
         edge,
     };
     let mut lcr = LcrOptions::default();

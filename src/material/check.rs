@@ -248,6 +248,27 @@ pub fn check_hyperelastic(
         .map(|_| ())
 }
 
+/// The hint for serde's refusal of a name it does not know ("unknown field `voltag`,
+/// expected one of `voltage`, `frequency`", "unknown variant …", "expected `a` or
+/// `b`"): the near miss among the names it expected ([`did_you_mean`]) and the
+/// list, "did you mean 'voltage'? known: voltage, frequency". None for any other
+/// message.
+pub fn unknown_name_hint(message: &str) -> Option<String> {
+    let rest = ["unknown field `", "unknown variant `"]
+        .iter()
+        .find_map(|p| message.find(p).map(|i| &message[i + p.len()..]))?;
+    let (found, rest) = rest.split_once('`')?;
+    let known: Vec<&str> = rest.split('`').skip(1).step_by(2).collect();
+    if known.is_empty() {
+        return None;
+    }
+    let list = known.join(", ");
+    Some(match did_you_mean(found, &known) {
+        Some(m) => format!("did you mean '{m}'? known: {list}"),
+        None => format!("known: {list}"),
+    })
+}
+
 /// The known name closest to `word` if it is a near miss (edit distance ≤ 2, and
 /// less than half the word): `presett` → `preset`.
 pub fn did_you_mean<'k>(word: &str, known: &[&'k str]) -> Option<&'k str> {

@@ -11,7 +11,9 @@
 //!   curve, `sim::static_curve`) there is none: the candidate is `pull_in` and not
 //!   ranked on stroke. Where the true field V/g(λ) at that equilibrium reaches the
 //!   breakdown field Eb (g the electrode gap: z0·λ for a stack layer, z0·λ·sin α
-//!   for a helix element), the candidate is `breakdown`.
+//!   for a helix element), the candidate is `breakdown`; so is a drive past the
+//!   pull-in whose rise meets Eb first on the stable branch (the limit it meets
+//!   first names the state).
 //! * **largest stroke** before pull-in or breakdown, whichever comes first along the
 //!   stable branch of the static curve (the field rises monotonically along it), and
 //!   which one it was (`range` when neither happens down to λ = [`STRETCH_MIN`]: the
@@ -68,9 +70,11 @@ pub const SMALL_MARGIN: f64 = 0.1;
 pub enum State {
     /// A stable static equilibrium below the breakdown field.
     Ok,
-    /// The drive is at or above the pull-in voltage.
+    /// The drive is at or above the pull-in voltage, and the field stays below the
+    /// breakdown field on the way up to it.
     PullIn,
-    /// The field at the static equilibrium reaches the breakdown field.
+    /// The field at the static equilibrium reaches the breakdown field, or, with
+    /// the drive past the pull-in, the field reaches it first on the way up.
     Breakdown,
     /// The candidate could not be evaluated (no rest state, a refused or failed run).
     Failed,
@@ -585,10 +589,26 @@ pub fn evaluate(
     };
     // Pulled in, or no equilibrium, or broken down at the static stroke: the
     // static and dynamic figures have no value, and the reason is the state's note.
+    // A drive past the pull-in that meets the breakdown field first on the way up
+    // (on the stable branch, below the drive) is labelled by that limit: breakdown.
+    let bd_below = e.breakdown.filter(|b| b.voltage_v <= vd);
     let lam_d = lam_d
-        .map_err(|why| match why.starts_with("pulled in") {
-            true => (State::PullIn, why),
-            false => (State::Failed, why),
+        .map_err(|why| match (why.starts_with("pulled in"), bd_below) {
+            (true, Some(b)) => (
+                State::Breakdown,
+                format!(
+                    "breaks down on the way up: the field reaches Eb = {} at {}, below the drive {}{}",
+                    si(eb, "V/m"),
+                    si(b.voltage_v, "V"),
+                    si(vd, "V"),
+                    pull.map_or(String::new(), |q| format!(
+                        ", before the pull-in at {}",
+                        si(q.voltage_v, "V")
+                    ))
+                ),
+            ),
+            (true, None) => (State::PullIn, why),
+            (false, _) => (State::Failed, why),
         })
         .and_then(|l| {
             let field_d = vd / a.gap(l);

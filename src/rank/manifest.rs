@@ -807,11 +807,15 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
     };
     let spec: Spec = toml::from_str(text).map_err(|e| {
         let msg = e.message().trim().to_string();
+        let hint = match crate::material::check::unknown_name_hint(&msg) {
+            Some(h) => format!("{h} (the design manifest format: docs/rank.md)"),
+            None => "see the design manifest format in docs/rank.md".into(),
+        };
         match e.span() {
             Some(s) => cx.err(&s, msg),
             None => Error::input(Location::file(path), msg),
         }
-        .with_hint("see the design manifest format in docs/rank.md")
+        .with_hint(hint)
     })?;
 
     // The actuator.

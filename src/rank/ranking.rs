@@ -256,15 +256,15 @@ pub struct Ranking {
     /// Rank (1-based) of each evaluation by index in `evals` (None: unranked).
     pub ranks: Vec<Option<usize>>,
     /// For each evaluation (by index in `evals`), the earlier evaluation it repeats:
-    /// the matrix alone, the 0 % point of several series of one matrix, gives the
-    /// same candidate in each. A repeat is neither ranked nor on the Pareto front
-    /// (it stays in its series' best loading), and goes last in `order`.
+    /// the matrix alone, the 0 % point of several series of one matrix, is the
+    /// same candidate in each (at one drive). A repeat is neither ranked nor on the
+    /// Pareto front (it stays in its series' best loading and curve), and goes
+    /// last in `order`.
     pub same_as: Vec<Option<usize>>,
     /// Whether each ranked evaluation (by index in `evals`) can be told apart from
-    /// the one ranked just above it: the difference of their objectives exceeds
-    /// [`APART`] standard errors of the difference. None for the first, and where
-    /// either objective has no standard error.
-    pub apart: Vec<Option<bool>>,
+    /// the one ranked just above it, and how that was judged ([`Apart`]). None for
+    /// the first (and for the unranked).
+    pub apart: Vec<Option<Apart>>,
     /// The lead of the first over the second, where it rests on inputs without a
     /// standard error (None: fewer than two ranked, or every input has one).
     pub lead: Option<Lead>,
@@ -282,15 +282,70 @@ pub struct Ranking {
 /// be told apart: 2, about 95 % two-sided for a normal difference.
 pub const APART: f64 = 2.0;
 
+/// How far apart (relative to the larger magnitude) two objectives must be to be
+/// told apart when either has no standard error: 1 %. A value stated without ±
+/// is known to the digits it is written with (2.72, 250 kPa, 0.01: 0.2–5 % in the
+/// last digit), a predicted modulus rests on a stiffening rule, and the response
+/// time is read between the samples of its window (0.5 % of the window at 200
+/// samples): a difference below 1 % is below what such inputs tell.
+pub const TOLERANCE: f64 = 0.01;
+
+/// How two neighbours of the ranking were compared.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Compared {
+    /// Both objectives have a standard error: apart when they differ by more than
+    /// [`APART`] standard errors of the difference.
+    StdError,
+    /// Either has none: apart when they differ by more than [`TOLERANCE`] of the
+    /// larger magnitude.
+    Tolerance,
+}
+
+impl std::fmt::Display for Compared {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Compared::StdError => "std_error",
+            Compared::Tolerance => "tolerance",
+        })
+    }
+}
+
+/// Whether a ranked candidate is told apart from the one ranked just above it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Apart {
+    /// Told apart.
+    pub apart: bool,
+    /// How it was judged.
+    pub by: Compared,
+}
+
+/// Whether objectives `a` and `b` (with their standard errors, where known) are
+/// told apart: by [`APART`] standard errors of the difference when both have
+/// one, else by [`TOLERANCE`] of the larger magnitude.
+pub fn told_apart(a: f64, b: f64, sa: Option<f64>, sb: Option<f64>) -> Apart {
+    match (sa, sb) {
+        (Some(sa), Some(sb)) => Apart {
+            apart: (a - b).abs() > APART * sa.hypot(sb),
+            by: Compared::StdError,
+        },
+        _ => Apart {
+            apart: (a - b).abs() > TOLERANCE * a.abs().max(b.abs()),
+            by: Compared::Tolerance,
+        },
+    }
+}
+
 /// Whether `b` repeats `a`: the same matrix alone (both at loading 0) at the same
-/// drive, in the same state, with every figure the same.
+/// drive. It is one material whatever the series: where the series' models give
+/// it different values (a composite fit's own εm against the matrix's stated εr),
+/// the first series' stands, and the repeat's listing says how much the other
+/// differs.
 fn repeats(a: &Evaluation, b: &Evaluation) -> bool {
-    let values = |e: &Evaluation| e.clone().figures_mut().map(|(_, f)| f.value);
     a.matrix == b.matrix
         && a.loading == 0.0
         && b.loading == 0.0
-        && a.state == b.state
-        && values(a) == values(b)
+        && a.voltage.value.map(f64::to_bits) == b.voltage.value.map(f64::to_bits)
 }
 
 /// Rank `evals` (in run order) by `by`, with the Pareto front over `pareto`.
@@ -320,11 +375,8 @@ pub fn rank(evals: &[Evaluation], by: Objective, pareto: [Objective; 2]) -> Rank
     let mut apart = vec![None; evals.len()];
     for w in ranked.windows(2) {
         let (a, b) = (&evals[w[0].0], &evals[w[1].0]);
-        let (va, vb) = (by.value(a), by.value(b));
-        apart[w[1].0] = match (va, vb, by.std_error(a), by.std_error(b)) {
-            (Some(va), Some(vb), Some(sa), Some(sb)) => {
-                Some((va - vb).abs() > APART * sa.hypot(sb))
-            }
+        apart[w[1].0] = match (by.value(a), by.value(b)) {
+            (Some(va), Some(vb)) => Some(told_apart(va, vb, by.std_error(a), by.std_error(b))),
             _ => None,
         };
     }
@@ -351,6 +403,9 @@ pub fn rank(evals: &[Evaluation], by: Objective, pareto: [Objective; 2]) -> Rank
             f.state_note
         ));
     }
+    if ranked.is_empty() {
+        warnings.extend(lowest_limit(evals, by));
+    }
     let status = if ranked.is_empty() {
         Status::Failed
     } else if !failed.is_empty() {
@@ -361,7 +416,14 @@ pub fn rank(evals: &[Evaluation], by: Objective, pareto: [Objective; 2]) -> Rank
         Status::Ok
     };
     let lead = match ranked[..] {
-        [(a, _), (b, _), ..] => lead(&evals[a], &evals[b], by, apart[b]),
+        [(a, _), (b, _), ..] => lead(
+            &evals[a],
+            &evals[b],
+            by,
+            apart[b]
+                .filter(|x| x.by == Compared::StdError)
+                .map(|x| x.apart),
+        ),
         _ => None,
     };
     Ranking {
@@ -376,6 +438,26 @@ pub fn rank(evals: &[Evaluation], by: Objective, pareto: [Objective; 2]) -> Rank
         status,
         warnings,
     }
+}
+
+/// When nothing is ranked: the lowest voltage at which a candidate meets its first
+/// limit (breakdown or pull-in on the way up), to drive below.
+fn lowest_limit(evals: &[Evaluation], by: Objective) -> Option<String> {
+    let (v, e, what) = evals
+        .iter()
+        .flat_map(|e| {
+            [(e.breakdown, "breakdown"), (e.pull_in, "pull-in")]
+                .into_iter()
+                .filter_map(move |(p, what)| p.map(|p| (p.voltage_v, e, what)))
+        })
+        .filter(|x| x.0.is_finite())
+        .min_by(|a, b| a.0.total_cmp(&b.0))?;
+    Some(format!(
+        "no candidate has a value of {} at its drive; the first limit on the way up is {what} of {} at {}: drive below it (e.g. --sweep voltage with a range under it)",
+        by.name(),
+        e.name,
+        crate::report::format::si(v, "V")
+    ))
 }
 
 /// A warning for each kind of margin (to breakdown, to pull-in) that some

@@ -4,8 +4,9 @@
 //! Each is a pure function of the run's identity, its evaluations and the ranking,
 //! so a merged sweep writes the same bytes as a single run.
 
-use super::figures::{Evaluated, Evaluation};
-use super::ranking::{Objective, Ranking, APART};
+use super::candidate::loading_label;
+use super::figures::{Evaluated, Evaluation, State};
+use super::ranking::{Compared, Objective, Ranking, APART, TOLERANCE};
 use super::shard::RunInfo;
 use super::short;
 use super::Figure;
@@ -83,6 +84,8 @@ struct Row<'a> {
     #[serde(skip_serializing_if = "Option::is_none")]
     apart_from_above: Option<bool>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    apart_by: Option<Compared>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     same_as: Option<&'a str>,
     #[serde(skip_serializing_if = "Option::is_none")]
     not_ranked: Option<String>,
@@ -102,7 +105,8 @@ pub fn json(info: &RunInfo, evals: &[Evaluated], r: &Ranking) -> String {
                 rank: r.ranks[i],
                 objective: v,
                 objective_std_error: v.and(r.by.std_error(e)),
-                apart_from_above: r.apart[i],
+                apart_from_above: r.apart[i].map(|a| a.apart),
+                apart_by: r.apart[i].map(|a| a.by),
                 same_as: r.same_as[i].map(|j| evals[j].evaluation.name.as_str()),
                 not_ranked: match r.same_as[i] {
                     Some(j) => Some(format!(
@@ -160,7 +164,7 @@ fn leaders(page: &mut Page, evals: &[Evaluated], r: &Ranking, top: usize) {
         .enumerate()
         .map(|(k, &i)| {
             let e = &evals[i].evaluation;
-            let close = r.apart[i] == Some(false);
+            let close = r.apart[i].is_some_and(|a| !a.apart);
             let mut row = vec![
                 r.ranks[i].map_or("—".into(), |x| match close {
                     true => format!("{x}≈"),
@@ -224,8 +228,9 @@ fn leaders(page: &mut Page, evals: &[Evaluated], r: &Ranking, top: usize) {
     ));
     if r.apart[..].iter().any(|a| a.is_some()) {
         page.text(format!(
-            "σ: first-order standard error from the fit files' standard errors and the ± written in the manifest (values stated without ± count as exact); n≈: cannot be told apart from the candidate above (within {} σ of their difference).",
-            APART
+            "σ: first-order standard error from the fit files' standard errors and the ± written in the manifest (values stated without ± count as exact); n≈: cannot be told apart from the candidate above (within {} σ of their difference, or, where either has no σ, within {} % of the larger).",
+            APART,
+            short(100.0 * TOLERANCE)
         ));
     }
     if let Some(l) = &r.lead {
@@ -250,8 +255,11 @@ fn leaders(page: &mut Page, evals: &[Evaluated], r: &Ranking, top: usize) {
     }
 }
 
-/// The candidates not ranked (each with why, the first `top`), and those that
-/// repeat another (the matrix alone in several series).
+/// The candidates not ranked, summarised: how many past pull-in, past breakdown,
+/// not evaluated or without a value of the objective, then one line per series and
+/// state (the first `top`) with the count, the loadings and drive levels and the
+/// reason at the first; and those that repeat another (the matrix alone in several
+/// series), one line per pair.
 fn unranked(page: &mut Page, evals: &[Evaluated], r: &Ranking, top: usize) {
     let ranked = r.ranks.iter().filter(|x| x.is_some()).count();
     let (repeats, rest): (Vec<usize>, Vec<usize>) = r.order[ranked..]
@@ -260,32 +268,136 @@ fn unranked(page: &mut Page, evals: &[Evaluated], r: &Ranking, top: usize) {
     let unranked: Vec<&Evaluation> = rest.iter().map(|&i| &evals[i].evaluation).collect();
     if !unranked.is_empty() {
         page.heading(format!("Not ranked on {}", r.by.name()));
-        page.text(format!("{} candidate(s):", unranked.len()));
+        page.text(format!(
+            "{} candidate(s): {}.",
+            unranked.len(),
+            not_ranked_counts(&unranked, r.by)
+        ));
+        // one line per series and state: how many, their loadings and drive
+        // levels, and the reason at the first (the lowest drive, then loading)
+        let mut groups: Vec<(&str, State, Vec<&Evaluation>)> = Vec::new();
+        for e in &unranked {
+            match groups
+                .iter_mut()
+                .find(|g| g.0 == e.series.as_str() && g.1 == e.state)
+            {
+                Some(g) => g.2.push(e),
+                None => groups.push((&e.series, e.state, vec![e])),
+            }
+        }
         let shown = if top == 0 { usize::MAX } else { top };
-        let mut items: Vec<String> = unranked
+        let span = |lo: String, hi: String| match lo == hi {
+            true => lo,
+            false => format!("{lo} – {hi}"),
+        };
+        let mut items: Vec<String> = groups
             .iter()
             .take(shown)
-            .map(|e| {
+            .map(|(series, state, es)| {
+                let v = |e: &Evaluation| e.voltage.value.unwrap_or(f64::INFINITY);
+                let first = es
+                    .iter()
+                    .min_by(|a, b| v(a).total_cmp(&v(b)).then(a.loading.total_cmp(&b.loading)))
+                    .copied()
+                    .unwrap_or(es[0]);
+                let fold = |f: fn(f64, f64) -> f64, x: &dyn Fn(&Evaluation) -> f64| {
+                    es.iter().map(|e| x(e)).reduce(f).unwrap_or(f64::NAN)
+                };
+                let volts = span(
+                    si(fold(f64::min, &v), "V"),
+                    si(
+                        fold(f64::max, &|e| e.voltage.value.unwrap_or(f64::NEG_INFINITY)),
+                        "V",
+                    ),
+                );
+                let loadings = match first.filler {
+                    None => String::new(),
+                    Some(_) => format!(
+                        "{}, ",
+                        span(
+                            loading_label(fold(f64::min, &|e| e.loading), first.basis),
+                            loading_label(fold(f64::max, &|e| e.loading), first.basis)
+                        )
+                    ),
+                };
+                let at = fmt_fig(&first.voltage, |x| si(x, "V"));
+                let at = match first.filler {
+                    None => format!("at {at}"),
+                    Some(_) => format!("{} at {at}", loading_label(first.loading, first.basis)),
+                };
                 format!(
-                    "{} at {}: {}",
-                    e.name,
-                    fmt_fig(&e.voltage, |v| si(v, "V")),
-                    r.by.why_not(e)
+                    "{series}: {} {} ({loadings}{volts}); first {at}: {}",
+                    es.len(),
+                    state_words(*state, r.by),
+                    r.by.why_not(first)
                 )
             })
             .collect();
-        if unranked.len() > shown {
-            items.push(format!("… {} more", unranked.len() - shown));
+        if groups.len() > shown {
+            items.push(format!(
+                "… {} more series and state(s) (--top 0 lists all)",
+                groups.len() - shown
+            ));
         }
         page.bullets(items);
     }
-    page.bullets(repeats.iter().map(|&i| {
-        let first = r.same_as[i].map_or("", |j| evals[j].evaluation.name.as_str());
+    let mut pairs: Vec<(usize, usize, usize)> = Vec::new();
+    for &i in &repeats {
+        let j = r.same_as[i].unwrap_or(i);
+        let (a, b) = (&evals[i].evaluation.name, &evals[j].evaluation.name);
+        match pairs
+            .iter_mut()
+            .find(|p| &evals[p.0].evaluation.name == a && &evals[p.1].evaluation.name == b)
+        {
+            Some(p) => p.2 += 1,
+            None => pairs.push((i, j, 1)),
+        }
+    }
+    page.bullets(pairs.iter().map(|&(i, j, n)| {
+        let (a, b) = (&evals[i].evaluation, &evals[j].evaluation);
+        // the series' models may give the one material other values: say how much
+        let differs = match (r.by.value(a), r.by.value(b)) {
+            (Some(x), Some(y)) if x != y => format!(
+                "; its series' model gives {} {} against {}",
+                r.by.name(),
+                fmt_objective(r.by, x),
+                fmt_objective(r.by, y)
+            ),
+            _ => String::new(),
+        };
         format!(
-            "{}: the matrix alone, the same candidate as {first} (listed once)",
-            evals[i].evaluation.name
+            "{}: the matrix alone, the same candidate as {} (listed once){}{differs}",
+            a.name,
+            b.name,
+            match n {
+                1 => String::new(),
+                n => format!(", at {n} drive levels"),
+            }
         )
     }));
+}
+
+/// What keeps candidates in `state` off a ranking by `by`, in words.
+fn state_words(state: State, by: Objective) -> String {
+    match state {
+        State::PullIn => "past pull-in".into(),
+        State::Breakdown => "past breakdown".into(),
+        State::Failed => "not evaluated".into(),
+        State::Ok => format!("no {} value", by.name()),
+    }
+}
+
+/// The count of unranked candidates per reason: "1967 past pull-in, 507 past
+/// breakdown".
+fn not_ranked_counts(unranked: &[&Evaluation], by: Objective) -> String {
+    [State::PullIn, State::Breakdown, State::Failed, State::Ok]
+        .into_iter()
+        .filter_map(|s| {
+            let n = unranked.iter().filter(|e| e.state == s).count();
+            (n > 0).then(|| format!("{n} {}", state_words(s, by)))
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// Every evaluation as CSV, in run order, with rank and objective.
@@ -330,6 +442,7 @@ pub fn csv(evals: &[Evaluated], r: &Ranking) -> String {
         "objective",
         "objective_std_error",
         "apart_from_above",
+        "apart_by",
     ]);
     for (i, ev) in evals.iter().enumerate() {
         let e = &ev.evaluation;
@@ -370,7 +483,8 @@ pub fn csv(evals: &[Evaluated], r: &Ranking) -> String {
             r.ranks[i].map_or(String::new(), |x| x.to_string()),
             r.by.value(e).map_or(String::new(), |v| v.to_string()),
             r.by.std_error(e).map_or(String::new(), |v| v.to_string()),
-            r.apart[i].map_or(String::new(), |a| a.to_string()),
+            r.apart[i].map_or(String::new(), |a| a.apart.to_string()),
+            r.apart[i].map_or(String::new(), |a| a.by.to_string()),
         ]);
     }
     String::from_utf8(w.into_inner().expect("a CSV in memory")).expect("UTF-8 CSV")

@@ -374,3 +374,51 @@ pub fn write_hyperelastic(rows: &[HyperRow], note: &str, dir: &Path) -> Result<P
     let run = Run::new("bench hyperelastic", inputs.join(", "), "every model").headline(short);
     page.write(dir, "hyperelastic", run)
 }
+
+#[cfg(test)]
+mod tests {
+    /// One spelling of each status everywhere: no string literal of the sources
+    /// (messages, help, bench pages, the run index) spells a fit's status another
+    /// way than its `Display` does (`ill_posed`, `not_converged`, `not_validated`,
+    /// `pull_in`): never "ill-posed", "ill posed", "not converged", "pull-in state".
+    #[test]
+    fn statuses_have_one_spelling() {
+        let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+        let mut stack = vec![src];
+        let mut found = Vec::new();
+        while let Some(d) = stack.pop() {
+            for e in std::fs::read_dir(&d).unwrap().flatten() {
+                let p = e.path();
+                if p.is_dir() {
+                    stack.push(p);
+                    continue;
+                }
+                if p.extension().is_none_or(|x| x != "rs") {
+                    continue;
+                }
+                let text = std::fs::read_to_string(&p).unwrap();
+                for (n, line) in text.lines().enumerate() {
+                    let code = line.trim_start();
+                    if code.starts_with("//") {
+                        continue;
+                    }
+                    // inside a string literal: after a quote
+                    let Some(q) = code.find('"') else { continue };
+                    let lit = code[q..].to_lowercase();
+                    // spelt in pieces, so that this line does not match itself
+                    for bad in [
+                        concat!("ill", "-posed"),
+                        concat!("ill", " posed"),
+                        concat!("not", " converged"),
+                        concat!("not", "-converged"),
+                    ] {
+                        if lit.contains(bad) {
+                            found.push(format!("{}:{}: {bad}", p.display(), n + 1));
+                        }
+                    }
+                }
+            }
+        }
+        assert!(found.is_empty(), "{found:#?}");
+    }
+}

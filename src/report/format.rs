@@ -193,15 +193,10 @@ pub fn sig(v: f64, n: usize) -> String {
     format!("{v:.decimals$}")
 }
 
-/// A standard deviation for a `±` column: "—" when it is zero, which is what every
-/// propagation gives when no tolerance was given (a printed `± 0.0000` would claim
-/// an exact value).
-pub fn tolerance(std: f64, fmt: impl Fn(f64) -> String) -> String {
-    if std == 0.0 {
-        "—".into()
-    } else {
-        fmt(std)
-    }
+/// A standard deviation for a `±` column: "—" when it is unknown (no tolerance was
+/// given: a printed `± 0.0000` would claim an exact value).
+pub fn tolerance(std: Option<f64>, fmt: impl Fn(f64) -> String) -> String {
+    std.map_or("—".into(), fmt)
 }
 
 /// A table column of values in `unit` with one SI prefix for all (the largest
@@ -579,8 +574,8 @@ mod tests {
 
     #[test]
     fn tolerance_without_one_is_a_dash() {
-        assert_eq!(tolerance(0.0, |v| format!("{v:.4}")), "—");
-        assert_eq!(tolerance(0.0123, |v| format!("{v:.4}")), "0.0123");
+        assert_eq!(tolerance(None, |v| format!("{v:.4}")), "—");
+        assert_eq!(tolerance(Some(0.0123), |v| format!("{v:.4}")), "0.0123");
     }
 
     /// `Fixed` writes what `format!("{x:.n$}")` writes, character for character: on

@@ -33,7 +33,11 @@ fn freq_charts(samples: &[SamplePermittivity], page: &mut Page, dir: &Path) -> R
     // εr′ ± σ where the geometry's tolerances give one
     let mut eps_series: Vec<Series> = series(&|p| p.eps_r);
     for (i, s) in drawn.iter().enumerate() {
-        let bars = error_bars(s.points.iter().map(|p| (p.freq_hz, p.eps_r, p.eps_r_std)));
+        let bars = error_bars(
+            s.points
+                .iter()
+                .map(|p| (p.freq_hz, p.eps_r, p.eps_r_std.unwrap_or(f64::NAN))),
+        );
         if !bars.is_empty() {
             eps_series.push(Series {
                 label: format!("{} ± σ", s.name),
@@ -52,11 +56,25 @@ fn freq_charts(samples: &[SamplePermittivity], page: &mut Page, dir: &Path) -> R
         x_unit: None,
         y_unit: None,
     };
+    // tan δ from 0: a flat loss with ±0.7 % noise on an axis hugging the data
+    // reads as peaks; from 0 the noise shows as what it is
+    let mut tan_series: Vec<Series> = series(&|p| p.tan_delta);
+    let first_f = drawn
+        .iter()
+        .flat_map(|s| s.points.first())
+        .map(|p| p.freq_hz)
+        .next();
+    tan_series.extend(first_f.map(|f| Series {
+        label: String::new(),
+        points: vec![(f, 0.0)],
+        color: 0,
+        style: Style::Anchor,
+    }));
     let tan = Chart {
         title: "Loss tangent".into(),
         x_label: "frequency (Hz)".into(),
-        y_label: "tan δ".into(),
-        series: series(&|p| p.tan_delta),
+        y_label: "tan δ (axis from 0)".into(),
+        series: tan_series,
         log_x: true,
         x_unit: None,
         y_unit: None,
@@ -136,13 +154,13 @@ fn samples_section(samples: &[SamplePermittivity], decades: bool, page: &mut Pag
                 s.provenance.format,
                 s.provenance.pair.name(),
                 // an SI prefix on m² would read as (mm)², so the area takes a power of ten
-                if g.area_std > 0.0 {
-                    format!("{} m²", si_pm(g.area, Some(g.area_std), "1"))
+                if g.area_std.is_some() {
+                    format!("{} m²", si_pm(g.area, g.area_std, "1"))
                 } else {
                     format!("{:.4e} m² (no tolerance)", g.area)
                 },
-                if g.thickness_std > 0.0 {
-                    si_pm(g.thickness, Some(g.thickness_std), "m")
+                if g.thickness_std.is_some() {
+                    si_pm(g.thickness, g.thickness_std, "m")
                 } else {
                     format!("{} (no tolerance)", si(g.thickness, "m"))
                 },
@@ -312,6 +330,26 @@ fn mixing_chart(rf: &FrequencyFit) -> Chart {
                 Style::Line
             },
         });
+    }
+    // the rules' curves run beyond the measured fractions: shade the range the
+    // data support
+    let (lo, hi) = rf
+        .data
+        .iter()
+        .map(|d| d.volume_fraction)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
+    if lo < hi {
+        series.insert(
+            0,
+            Series {
+                label: "fractions measured (beyond: extrapolated)".into(),
+                points: vec![(lo, 0.0), (hi, 0.0)],
+                color: 8,
+                style: Style::Span,
+            },
+        );
     }
     Chart {
         title: format!(

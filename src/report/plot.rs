@@ -35,10 +35,24 @@ pub enum Style {
     /// Error bars: the points come in pairs (x, lo), (x, hi), each pair drawn as a
     /// vertical bar with caps ([`error_bars`]).
     ErrorBars,
+    /// Stems: each point a vertical line from y = 0 to it with a marker on top (a
+    /// discrete spectrum); the y axis includes 0.
+    Stems,
+    /// A shaded span of x: from the smallest to the largest x of the points, the
+    /// plot's whole height, light, behind every other series (the range the data
+    /// support on a curve drawn beyond it); its y values are not used.
+    Span,
+    /// Points the axes must include, not drawn and not in the legend: (x, 0) to
+    /// start an axis at 0, where its data's noise would otherwise fill the plot
+    /// and read as peaks.
+    Anchor,
 }
 
 /// The legend of a fit's confidence band ([`Style::Band`] around a fitted curve).
 pub const BAND_LABEL: &str = "±1σ confidence band of the fit (parameter covariance)";
+
+/// Opacity of a [`Style::Span`]'s fill: light enough that the curves over it read.
+const SPAN_ALPHA: f64 = 0.12;
 
 /// The `y_unit` of a Weibull probability-paper axis: y is ln(−ln(1 − F)), its ticks
 /// sit at round shares F (0.1 % … 99.9 %) and read in % (IEEE Std 930-2004 §6.1).
@@ -325,10 +339,34 @@ fn log_tick_label(v: f64) -> String {
     }
 }
 
-/// Legend text size (px) and the width of one of its characters, an upper estimate
-/// for sans-serif text (the SVG backend cannot measure text).
+/// Legend text size (px).
 const LEGEND_FONT: u32 = 14;
-const LEGEND_CHAR_PX: u32 = 7;
+/// Where a legend line's text starts in the legend column (px; the key before it),
+/// and the room kept free right of the longest line.
+const LEGEND_TEXT_X: u32 = 40;
+const LEGEND_RIGHT_PX: u32 = 16;
+
+/// The width (em) of `c` in sans-serif text, an upper estimate of the advance
+/// widths of DejaVu Sans (the widest common sans-serif, and Chromium's default on
+/// Linux; the SVG backend cannot measure text, and the browser picks the font):
+/// narrow glyphs and space 0.42 (DejaVu: i 0.278, t 0.392, r 0.411, space 0.318),
+/// lower case and digits 0.66 (n 0.634, digits 0.636), m, w and the widest
+/// symbols 1.0 (m 0.974, W 0.989, % 0.950), anything else 0.84 (upper case:
+/// D 0.770, O 0.787; ± and × 0.838; Greek letters about 0.6).
+fn char_em(c: char) -> f64 {
+    match c {
+        'i' | 'l' | 'j' | 't' | 'f' | 'r' | '.' | ',' | ':' | ';' | '\'' | '|' | '!' | '('
+        | ')' | '[' | ']' | ' ' => 0.42,
+        'm' | 'w' | 'M' | 'W' | '%' | '@' | '—' | '…' | '≤' | '≥' | '∞' => 1.0,
+        c if c.is_ascii_lowercase() || c.is_ascii_digit() => 0.66,
+        _ => 0.84,
+    }
+}
+
+/// The width (px) of `text` in the legend's font: [`char_em`] summed.
+fn legend_text_px(text: &str) -> u32 {
+    (text.chars().map(char_em).sum::<f64>() * LEGEND_FONT as f64).ceil() as u32
+}
 /// Legend labels wrap at this many characters.
 const LEGEND_CHARS: usize = 40;
 /// Height of one legend line (px).
@@ -371,18 +409,18 @@ impl Chart {
         let entries: Vec<LegendEntry> = self
             .series
             .iter()
-            .filter(|s| !s.label.trim().is_empty())
+            .filter(|s| !s.label.trim().is_empty() && s.style != Style::Anchor)
             .map(|s| (s, super::format::wrap(&s.label, LEGEND_CHARS)))
             .collect();
-        let chars = entries
+        let text_px = entries
             .iter()
-            .flat_map(|(_, l)| l.iter().map(|l| l.chars().count()))
+            .flat_map(|(_, l)| l.iter().map(|l| legend_text_px(l)))
             .max();
-        let Some(chars) = chars else {
+        let Some(text_px) = text_px else {
             return (entries, (0, 0));
         };
         let lines: usize = entries.iter().map(|(_, l)| l.len()).sum();
-        let width = 50 + LEGEND_CHAR_PX * chars as u32;
+        let width = LEGEND_TEXT_X + text_px + LEGEND_RIGHT_PX;
         let height = LEGEND_LINE_PX * lines as u32 + 6 * entries.len() as u32;
         (entries, (width, height))
     }
@@ -399,7 +437,16 @@ impl Chart {
         let plot_area = plot_area.shrink((0, 0), PLOT_SIZE);
         let all = || self.series.iter().flat_map(|s| s.points.iter());
         let (x0, x1) = range(all().map(|p| p.0), self.log_x);
-        let (y0, y1) = range(all().map(|p| p.1), false);
+        // a span's y is not data; stems stand on 0
+        let ys = self
+            .series
+            .iter()
+            .filter(|s| s.style != Style::Span)
+            .flat_map(|s| {
+                let zero = (s.style == Style::Stems && !s.points.is_empty()).then_some(0.0);
+                s.points.iter().map(|p| p.1).chain(zero)
+            });
+        let (y0, y1) = range(ys, false);
         let (fx, x_desc) = axis_scale(&self.x_label, self.x_unit.as_deref(), (x0, x1));
         let (fy, y_desc) = axis_scale(&self.y_label, self.y_unit.as_deref(), (y0, y1));
         let paper = self.y_unit.as_deref() == Some(PROBABILITY_PAPER);
@@ -427,7 +474,9 @@ impl Chart {
                     })
                     .light_line_style(RGBColor(235, 235, 235))
                     .draw()?;
-                for s in &self.series {
+                // spans first, behind the data
+                let spans = self.series.iter().filter(|s| s.style == Style::Span);
+                for s in spans.chain(self.series.iter().filter(|s| s.style != Style::Span)) {
                     let c = color(s.color);
                     let pts = s
                         .points
@@ -478,6 +527,26 @@ impl Chart {
                                 c.stroke_width(2),
                             ))?;
                         }
+                        Style::Stems => {
+                            let pts: Vec<(f64, f64)> = pts.collect();
+                            chart.draw_series(pts.iter().map(|&(x, y)| {
+                                PathElement::new(vec![(x, 0.0), (x, y)], c.stroke_width(2))
+                            }))?;
+                            chart
+                                .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))?;
+                        }
+                        Style::Span => {
+                            let xs: Vec<f64> = pts.map(|p| p.0).collect();
+                            let lo = xs.iter().copied().fold(f64::INFINITY, f64::min);
+                            let hi = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                            if lo < hi {
+                                chart.draw_series(std::iter::once(Rectangle::new(
+                                    [(lo.max(x0), y0), (hi.min(x1), y1)],
+                                    c.mix(SPAN_ALPHA).filled(),
+                                )))?;
+                            }
+                        }
+                        Style::Anchor => {}
                     }
                 }
             }};
@@ -511,7 +580,10 @@ impl Chart {
             for (k, line) in lines.iter().enumerate() {
                 legend_area.draw(&Text::new(
                     line.as_str(),
-                    (40, y + 2 + (k as u32 * LEGEND_LINE_PX) as i32),
+                    (
+                        LEGEND_TEXT_X as i32,
+                        y + 2 + (k as u32 * LEGEND_LINE_PX) as i32,
+                    ),
                     ("sans-serif", LEGEND_FONT).into_font(),
                 ))?;
             }
@@ -559,6 +631,18 @@ fn legend_key<DB: DrawingBackend>(
             c.stroke_width(1),
             8,
         )),
+        Style::Stems => {
+            area.draw(&PathElement::new(
+                vec![(x + 12, y + 7), (x + 12, y - 3)],
+                c.stroke_width(2),
+            ))?;
+            area.draw(&Circle::new((x + 12, y - 3), 4, c.filled()))
+        }
+        Style::Span => area.draw(&Rectangle::new(
+            [(x, y - 7), (x + 24, y + 7)],
+            c.mix(SPAN_ALPHA).filled(),
+        )),
+        Style::Anchor => Ok(()),
     }
 }
 
@@ -657,6 +741,198 @@ mod tests {
             root.present().unwrap();
         }
         assert_eq!(svg.matches("<polyline").count(), 3, "{svg}");
+    }
+
+    /// Every legend line lies inside the picture: its start plus its width in
+    /// DejaVu Sans (the widest common sans-serif, Chromium's default on Linux; the
+    /// advance widths of the characters used, from the font's metrics) is within the
+    /// SVG's width, for the power chart's long band label (once clipped at the right
+    /// edge), wide capitals and symbols; and the width estimate is at least DejaVu's
+    /// for every character of those labels.
+    #[test]
+    fn legend_lines_lie_within_the_picture() {
+        // DejaVu Sans advance widths (em), from DejaVuSans.ttf's hmtx (2048 units/em)
+        let dejavu = |c: char| -> f64 {
+            match c {
+                ' ' => 0.3179,
+                'i' | 'l' | 'j' => 0.278,
+                't' => 0.392,
+                'r' => 0.411,
+                'f' => 0.352,
+                '.' | ',' | ':' => 0.3179,
+                '(' | ')' => 0.390,
+                '/' => 0.337,
+                'm' => 0.974,
+                'w' => 0.818,
+                'M' => 0.863,
+                'W' => 0.989,
+                '%' => 0.950,
+                '·' => 0.3179,
+                '±' | '×' => 0.838,
+                'σ' => 0.634,
+                c if c.is_ascii_digit() => 0.636,
+                c if c.is_ascii_lowercase() => 0.635,
+                c if c.is_ascii_uppercase() => 0.787,
+                _ => 0.838,
+            }
+        };
+        let labels = [
+            "total V·I: min/max per output interval (samples alias the ringing)",
+            "MMMMMMMMMMMMMMMMMMMM WWWWWWWWWWWWWWWWWWW",
+            "mmmmmmmmmmmmmmmmmmmm wwwwwwwwwwwwwwwwwwww",
+            "±1σ × 100 % OOOOOOOO DDDDDDDD QQQQQQQQ",
+        ];
+        for label in labels {
+            for c in label.chars() {
+                assert!(
+                    char_em(c) >= dejavu(c),
+                    "'{c}': {} < {}",
+                    char_em(c),
+                    dejavu(c)
+                );
+            }
+            let chart = Chart {
+                title: "power".into(),
+                x_label: "time (s)".into(),
+                y_label: "power".into(),
+                series: vec![
+                    Series {
+                        label: label.into(),
+                        points: band(&[0.0, 1.0], &[0.0, 0.0], &[1.0, 2.0]),
+                        color: 3,
+                        style: Style::Band,
+                    },
+                    Series {
+                        label: "leakage".into(),
+                        points: vec![(0.0, 0.0), (1.0, 0.1)],
+                        color: 4,
+                        style: Style::Dashed,
+                    },
+                ],
+                log_x: false,
+                x_unit: None,
+                y_unit: Some("W".into()),
+            };
+            let svg = chart.svg(Path::new("power.svg")).unwrap();
+            let doc = scraper::Html::parse_document(&svg);
+            let root = doc
+                .select(&scraper::Selector::parse("svg").unwrap())
+                .next()
+                .unwrap();
+            let width: f64 = root.value().attr("width").unwrap().parse().unwrap();
+            let mut lines = 0;
+            for t in doc.select(&scraper::Selector::parse("text").unwrap()) {
+                let x: f64 = t.value().attr("x").unwrap().parse().unwrap();
+                let text: String = t.text().collect::<String>().trim().to_string();
+                if x < PLOT_SIZE.0 as f64 {
+                    continue;
+                }
+                lines += 1;
+                let w: f64 = text.chars().map(dejavu).sum::<f64>() * LEGEND_FONT as f64;
+                assert!(x + w <= width, "'{text}' ends at {} > {width}", x + w);
+            }
+            assert!(lines >= 2, "{label}: {lines} legend lines");
+        }
+    }
+
+    /// Stems stand on 0 (the y axis includes it), one line and one marker per
+    /// point; a span is one filled rectangle drawn before the data (behind them),
+    /// and its y values do not stretch the axis; an anchor draws nothing, has no
+    /// legend entry, and puts its point inside the axis.
+    #[test]
+    fn stems_spans_and_anchors() {
+        let (y0, y1) = {
+            let chart = Chart {
+                title: "t".into(),
+                x_label: "x".into(),
+                y_label: "y".into(),
+                series: vec![
+                    Series {
+                        label: "supported".into(),
+                        points: vec![(2.0, 1e9), (3.0, -1e9)],
+                        color: 8,
+                        style: Style::Span,
+                    },
+                    Series {
+                        label: "stems".into(),
+                        points: vec![(1.0, 5.0), (2.0, 7.0), (4.0, 6.0)],
+                        color: 0,
+                        style: Style::Stems,
+                    },
+                ],
+                log_x: false,
+                x_unit: None,
+                y_unit: None,
+            };
+            let svg = chart.svg(Path::new("s.svg")).unwrap();
+            // three stems (a line each) and three markers, one span rectangle
+            assert!(svg.matches("<polyline").count() >= 3, "{svg}");
+            assert!(svg.matches("<circle").count() > 3, "{svg}");
+            let rect = svg.find("opacity=\"0.12\"").expect("the span's fill");
+            let stem = svg.find("<circle").unwrap();
+            assert!(rect < stem, "the span is drawn behind the stems");
+            // the y axis: from 0 (stems), not stretched to ±1e9 by the span
+            let labels = texts(&svg);
+            (
+                labels.contains(&"0".to_string()),
+                labels.iter().any(|l| l.contains("e8") || l.contains("e9")),
+            )
+        };
+        assert!(y0, "the stems' axis shows 0");
+        assert!(!y1, "the span's y values stretched the axis");
+        let flat = |anchor: bool| {
+            let mut series = vec![Series {
+                label: "tan δ".into(),
+                points: (0..20)
+                    .map(|k| {
+                        (
+                            10.0 + k as f64,
+                            0.05 * (1.0 + 0.007 * ((k % 3) as f64 - 1.0)),
+                        )
+                    })
+                    .collect(),
+                color: 0,
+                style: Style::Line,
+            }];
+            if anchor {
+                series.push(Series {
+                    label: "from 0".into(),
+                    points: vec![(10.0, 0.0)],
+                    color: 0,
+                    style: Style::Anchor,
+                });
+            }
+            Chart {
+                title: "t".into(),
+                x_label: "x".into(),
+                y_label: "y".into(),
+                series,
+                log_x: false,
+                x_unit: None,
+                y_unit: None,
+            }
+            .svg(Path::new("a.svg"))
+            .unwrap()
+        };
+        let (plain, anchored) = (texts(&flat(false)), texts(&flat(true)));
+        let zero = "0".to_string();
+        assert!(
+            !plain.contains(&zero),
+            "without an anchor the axis hugs the data"
+        );
+        assert!(anchored.contains(&zero), "the anchored axis starts at 0");
+        assert!(
+            !anchored.contains(&"from 0".to_string()),
+            "an anchor has no legend entry"
+        );
+    }
+
+    /// The texts of an SVG, trimmed.
+    fn texts(svg: &str) -> Vec<String> {
+        scraper::Html::parse_document(svg)
+            .select(&scraper::Selector::parse("text").unwrap())
+            .map(|t| t.text().collect::<String>().trim().to_string())
+            .collect()
     }
 
     /// Neighbouring ticks read differently at every scale (an axis of 10⁻⁷ once

@@ -5,7 +5,7 @@
 
 use super::format::{si, si_pm};
 use super::page::{code, text, Page};
-use super::plot::{band, Chart, Series, Style, BAND_LABEL};
+use super::plot::{band, error_bars, Chart, Series, Style, BAND_LABEL};
 use super::runs::Run;
 use crate::error::Result;
 use crate::fit::problem::{Residual, REL_FLOOR};
@@ -102,26 +102,40 @@ pub fn write(
         x_unit: None,
         y_unit: None,
     };
+    // A discrete spectrum: the fitted terms as stems with their ±σ, the grid
+    // stage's nonzero moduli as points (a line between grid points would draw a
+    // continuous spectrum the NNLS never found).
     let spectrum_chart = Chart {
         title: "relaxation spectrum".into(),
         x_label: "relaxation time τ (s)".into(),
         y_label: "modulus".into(),
         series: vec![
             Series {
-                label: "grid NNLS spectrum (stage 1)".into(),
+                label: "grid NNLS spectrum (stage 1, nonzero moduli)".into(),
                 points: fit
                     .spectrum
                     .iter()
+                    .filter(|p| p.modulus_pa > 0.0)
                     .map(|p| (p.tau_s, p.modulus_pa))
                     .collect(),
                 color: 2,
-                style: Style::Line,
+                style: Style::Points,
             },
             Series {
                 label: "fitted Prony terms".into(),
                 points: fit.prony.iter().map(|p| (p.tau_s, p.modulus_pa)).collect(),
                 color: 1,
-                style: Style::Points,
+                style: Style::Stems,
+            },
+            Series {
+                label: "± σ of the terms' moduli".into(),
+                points: error_bars(
+                    fit.prony
+                        .iter()
+                        .map(|p| (p.tau_s, p.modulus_pa, p.modulus_std_pa.unwrap_or(f64::NAN))),
+                ),
+                color: 1,
+                style: Style::ErrorBars,
             },
         ],
         log_x: true,
@@ -137,11 +151,23 @@ pub fn write(
         .map(|i| lo * (hi / lo).powf(i as f64 / 120.0))
         .collect();
     let sl: Vec<(f64, f64)> = omegas.iter().map(|&w| prony.storage_loss(w)).collect();
+    // The data's time window [t1, tn] probes ω from 1/tn to 1/t1; the curves run a
+    // decade beyond on each side: shade what the data support.
     let dynamic_chart = Chart {
         title: "storage and loss moduli (from the fit)".into(),
         x_label: "angular frequency ω (rad/s)".into(),
         y_label: "modulus".into(),
         series: vec![
+            Series {
+                label: "ω the data's times support, 1/t_max – 1/t_min (beyond: extrapolated)"
+                    .into(),
+                points: vec![
+                    (1.0 / fit.time_window_s[1], 0.0),
+                    (1.0 / fit.time_window_s[0], 0.0),
+                ],
+                color: 8,
+                style: Style::Span,
+            },
             Series {
                 label: "storage E'".into(),
                 points: omegas.iter().zip(&sl).map(|(w, s)| (*w, s.0)).collect(),

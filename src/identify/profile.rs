@@ -73,6 +73,14 @@ pub const LOWER: f64 = 0.01;
 /// sensitivity runs for the checks and intervals of 7 constants before).
 pub const REFIT_DECREASE: f64 = 0.01;
 
+/// A profile point whose re-fit rose above this multiple of the 95 % level (or
+/// failed) is re-fitted again from the nearest profiled point's values unmoved,
+/// and the lower of the two is the profile's: a rise that steep next to a point
+/// below the level is more often a re-fit that lost the valley (a weak constant
+/// carried far by the linear prediction) than the trace. Points just above the
+/// level, the ordinary ends of a bracket, keep one start.
+pub const SECOND_START: f64 = 2.0;
+
 /// A re-fitted constant within this fraction of its bounds' width (search
 /// coordinates) of a bound is held by it (the assessment's test, [`assessment`]).
 const AT_EDGE: f64 = 1e-6;
@@ -437,13 +445,14 @@ impl<'a> Profiler<'a> {
                 &self.base.settings,
             );
         }
-        if !r.cost.is_finite() {
+        let rise = 2.0 * (r.cost - self.base.cost);
+        if rise.is_nan() || rise >= SECOND_START * self.base.target {
             // the linear prediction can carry a weak constant (an arm as slow as
-            // the trace: its σ is huge) to where the model does not run; the
-            // nearest profiled point's others, unmoved, ran one step before. Only
-            // when the model fails from there too is the value excluded (slow-arm
-            // study: three arm1.τ intervals 0.3–4 % wide, from failed re-fits
-            // taken as Δχ² = ∞, missed the truth)
+            // the trace: its σ is huge) to where the model does not run, or into
+            // another valley; the nearest profiled point's others, unmoved, are a
+            // second start, and the lower re-fit is the profile's (slow-arm
+            // study: three arm1.τ intervals 0.3–4 % wide, whose one-start
+            // re-fits rose far above the level or failed, missed the truth)
             let unmoved: Vec<f64> = from
                 .iter()
                 .zip(&self.bounds)
@@ -455,7 +464,7 @@ impl<'a> Profiler<'a> {
                 &self.bounds,
                 &self.base.settings,
             );
-            if again.cost.is_finite() {
+            if again.cost < r.cost || !r.cost.is_finite() {
                 r = again;
             }
         }

@@ -653,6 +653,23 @@ fn relaxation_exports_read_as_the_tidy_file() {
             .any(|n| n == "columns not used: Temperature [C]"),
         "{notes:?}"
     );
+    // the fit says what the reader did, and is not a warning for it
+    let loading = dea_fit::fit::relaxation::Loading {
+        strain: Some(0.3),
+        ramp_time: None,
+    };
+    let settings = dea_fit::fit::relaxation::Settings::default();
+    let from_export = dea_fit::fit::relaxation::fit(&got, &loading, None, &settings).unwrap();
+    let from_tidy = dea_fit::fit::relaxation::fit(&tidy, &loading, None, &settings).unwrap();
+    assert!(
+        from_export
+            .warnings
+            .iter()
+            .any(|w| w == "relax.csv: 2 preamble lines before the header on line 4 skipped"),
+        "{:?}",
+        from_export.warnings
+    );
+    assert_eq!(from_export.status, from_tidy.status);
     // --columns names an unknown time column.
     let renamed = text.replace("\"Time\"", "\"Zeitachse\"");
     std::fs::write(&path, renamed).unwrap();

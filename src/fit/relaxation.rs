@@ -2048,6 +2048,15 @@ fn verdict(
         escalate(Status::Warning);
         warnings.push(w);
     }
+    // what the reader did beyond reading (a preamble skipped, a units row read,
+    // columns not used): said, as for tensile files, not a warning of the fit
+    let name = std::path::Path::new(&data.source.path)
+        .file_name()
+        .map_or_else(
+            || data.source.path.clone(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+    warnings.extend(data.source.notes.iter().map(|n| format!("{name}: {n}")));
     if let Some(w) = unresolved {
         escalate(Status::IllPosed);
         warnings.push(w);

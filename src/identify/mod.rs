@@ -361,8 +361,9 @@ pub fn identify_with(
     let started = Instant::now();
     let model = problem.experiments[0].scene.material.spec.name.clone();
     let converged = matches!(termination, Termination::Converged(_));
+    // not at an optimum: no interval is reported (below), so none is checked
     let unchecked = |e: &[assessment::Estimate]| {
-        settings.reducing && converged && reduce::next_step(e, &all, &model).is_some()
+        !converged || (settings.reducing && reduce::next_step(e, &all, &model).is_some())
     };
     let (assessment, profiles) = profile::assess(
         &problem,
@@ -403,6 +404,9 @@ pub fn identify_with(
         &assessment,
         &warnings,
     );
+    if status == Status::NotConverged {
+        warnings.push(not_at_optimum(&mut assessment, &termination));
+    }
     let (aicc, bic) = information_criteria(rss, n, k);
     let held = reduce::held(&all, &problem.free, &stated, &theta);
     Ok(Run::Identified(Box::new(Identification {
@@ -457,6 +461,37 @@ fn refuse_foreign_checkpoints(
         })?;
     }
     Ok(())
+}
+
+/// A run that did not reach an optimum reports no constant identifiable: σ and the
+/// intervals are the curvature and profile about the point where the search
+/// stopped, which is not the estimate the trace supports (slow-arm study,
+/// tests/identify_coverage.rs: two replicates whose search stopped at the
+/// iteration limit with Yeoh's C20 and C30 on their search bounds gave the fast
+/// arm's modulus 95 % intervals 3–4 σ wide of the truth). Each estimate keeps its
+/// value and its σ for orientation, with the reason (and what the assessment said
+/// at the point where the search stopped); the one warning returned says what to
+/// do.
+fn not_at_optimum(assessment: &mut Assessment, termination: &Termination) -> String {
+    let why = match termination {
+        Termination::Converged(_) => {
+            "the integration error moves the optimum by more than its standard errors".to_string()
+        }
+        t => format!("the search did not converge ({t})"),
+    };
+    let reason = format!(
+        "{why}: the estimate is not an optimum, so its σ and interval describe where the search stopped, not what the trace supports"
+    );
+    for e in assessment.estimates.iter_mut() {
+        e.identifiable = false;
+        e.reason = Some(match e.reason.take() {
+            Some(there) => format!("{reason} (there: {there})"),
+            None => reason.clone(),
+        });
+    }
+    format!(
+        "no constant is reported identifiable: {why}; rerun with more iterations (--max-iterations), more starts (--starts), a finer integration (--rtol) or a scene nearer the answer"
+    )
 }
 
 /// The status of an identification: `not_converged` when the search did not

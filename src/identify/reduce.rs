@@ -18,7 +18,9 @@
 //!    rounds dropped C30, C20, the arm and nv to a model 880 AICc worse);
 //! 2. the highest higher-order hyperelastic term, set to 0: Yeoh C30, then C20;
 //!    Mooney-Rivlin C01 (leaving neo-Hookean); an Ogden pair beyond the first
-//!    (μk = 0, its αk then acts on nothing and is held where it was);
+//!    (μk = 0, its αk then acts on nothing and is held where it was); Gent's Jm,
+//!    set to its largest value [`JM_MAX`] (the neo-Hookean limit, to (I1 − 3)/2Jm
+//!    relative);
 //!
 //! Not dropped: a Maxwell arm or the dashpot nv that the trace does not pin down.
 //! Removing them was tried and measured (tests/identify_coverage.rs): an arm as
@@ -35,8 +37,8 @@
 //! there (not one that drifted there along a direction the trace does not pin
 //! down) is not dropped: the box is wrong, not the model; the run stays
 //! `ill_posed` and its reason says to start the scene nearer.
-//! A constant of none of these kinds (the leading modulus traded against another,
-//! Gent's Jm) is left as it is: the reduction stops when nothing it may drop is
+//! A constant of none of these kinds (the leading modulus traded against another)
+//! is left as it is: the reduction stops when nothing it may drop is
 //! not identifiable, and the status then says `ill_posed`. Each round refits from
 //! [`REFIT_STARTS`] starts, the previous optimum and the scene's values, with the
 //! full model's noise σ (so that χ² and AICc compare across the rounds), and
@@ -63,6 +65,7 @@ use super::{identify_with, Identification, Run, Settings};
 use crate::error::Result;
 use crate::fit::lm::Control;
 use crate::fit::Status;
+use crate::material::hyperelastic::gent::JM_MAX;
 use crate::report::format::si;
 use serde::Serialize;
 use std::time::Instant;
@@ -89,7 +92,8 @@ pub enum How {
     /// The scene's value: `--fix NAME`, not named in `--free`, or held there by
     /// the reduction (εr that a trace cannot pin down).
     Scene,
-    /// Dropped by the reduction: a hyperelastic term set to 0.
+    /// Dropped by the reduction: a hyperelastic term set to 0 (Gent's Jm to its
+    /// neo-Hookean limit [`JM_MAX`]).
     Dropped,
 }
 
@@ -98,7 +102,7 @@ pub enum How {
 pub struct Held {
     /// Name (`C20`, `arm2.k`, `eps_r`).
     pub name: String,
-    /// Its value (SI); 0 for a dropped term.
+    /// Its value (SI); 0 for a dropped term ([`JM_MAX`] for Gent's Jm).
     pub value: f64,
     /// SI unit.
     pub unit: String,
@@ -186,16 +190,19 @@ pub fn held(all: &[Constant], free: &[Constant], stated: &[usize], theta: &[f64]
 /// The `--fix` list that drops the higher-order term `c` of `free` and every
 /// higher one of the same model (`C20=0,C30=0`; an Ogden pair's μ at 0 with its α
 /// held at the scene's value): the advice for a term the trace cannot see, which
-/// is what the default run does to it. None for a term that 0 does not drop
-/// (Gent's Jm, the leading Ogden pair's α).
+/// is what the default run does to it; Gent's Jm at [`JM_MAX`] (`Jm=1e6`). None
+/// for a term that nothing drops (the leading Ogden pair's α).
 pub fn drop_advice(free: &[Constant], c: &Constant) -> Option<String> {
     let ogden = c.name.starts_with("alpha") || c.name.starts_with("mu");
     let from = match ogden {
         true => c.index / 2 * 2,
         false => c.index,
     };
-    if c.role != Role::HigherOrder || c.name == "Jm" || (ogden && from == 0) {
+    if c.role != Role::HigherOrder || (ogden && from == 0) {
         return None;
+    }
+    if c.name == JM {
+        return Some(format!("{JM}={JM_MAX:e}"));
     }
     let list: Vec<String> = free
         .iter()
@@ -207,6 +214,9 @@ pub fn drop_advice(free: &[Constant], c: &Constant) -> Option<String> {
         .collect();
     Some(list.join(","))
 }
+
+/// Gent's limiting-chain parameter.
+const JM: &str = "Jm";
 
 /// What one round does.
 #[derive(Debug, Clone, PartialEq)]
@@ -261,7 +271,7 @@ pub(super) fn next_step(
     let ogden = model.starts_with("ogden");
     let higher = weak
         .iter()
-        .filter(|c| c.role == Role::HigherOrder && (!ogden || c.index >= 2) && c.name != "Jm")
+        .filter(|c| c.role == Role::HigherOrder && (!ogden || c.index >= 2))
         .max_by_key(|c| c.index);
     higher.map(|c| {
         let step = match ogden {
@@ -272,6 +282,7 @@ pub(super) fn next_step(
                 let a = value(&alpha);
                 Step::Zero(vec![(mu, 0.0), (alpha, a)])
             }
+            false if c.name == JM => Step::Zero(vec![(c.name.clone(), JM_MAX)]),
             false => Step::Zero(vec![(c.name.clone(), 0.0)]),
         };
         (step, c.name.clone(), reason(&c.name))
@@ -331,7 +342,9 @@ pub fn identify(
     let mut rounds = Vec::new();
     let mut dropped: Vec<Held> = Vec::new();
     let mut warnings = Vec::new();
-    while weak(&current) {
+    // a refit that did not converge reports nothing identifiable (its estimates
+    // are not an optimum, [`super::Identification`]): the reduction stops there
+    while weak(&current) && current.status != Status::NotConverged {
         let all = params::constants(&experiments[0].scene);
         let model = experiments[0].scene.material.spec.name.clone();
         let Some((step, name, reason)) = next_step(&current.parameters, &all, &model) else {

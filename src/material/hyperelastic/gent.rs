@@ -6,6 +6,13 @@ use super::loadcase::{InvariantDerivs, Mode};
 use super::powers::{Laurent, LaurentKinematics, PowerSum, TangentPowers};
 use super::{ParamInfo, StrainEnergy};
 
+/// The largest Jm the model takes (its parameter bound): the neo-Hookean limit in
+/// practice, since W = −μJm/2·ln(1 − (I1 − 3)/Jm), expanded in (I1 − 3)/Jm,
+/// departs from the neo-Hookean μ(I1 − 3)/2 by (I1 − 3)/(2Jm) relative: 10⁻⁶ at
+/// a stretch of 2. The model reduction of identification drops a Jm the
+/// trace cannot see to this value (`identify::reduce`).
+pub const JM_MAX: f64 = 1e6;
+
 /// The Gent model, parameters `mu` (Pa) and `Jm` (dimensionless).
 #[derive(Debug, Clone)]
 pub struct Gent {
@@ -28,7 +35,7 @@ impl Gent {
                     name: "Jm".into(),
                     unit: "1",
                     lower: 1e-3,
-                    upper: 1e6,
+                    upper: JM_MAX,
                     linear: false,
                 },
             ],

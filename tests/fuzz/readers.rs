@@ -169,7 +169,7 @@ const FIT_HOST: &str = "datasets/scenes/stack_step_5kV_damped.toml";
 const TRACE_HOST_DIR: &str = "datasets/identify";
 
 /// The host scene's material block, which a material file's case replaces.
-const HOST_MATERIAL: &str = "hyperelastic = { preset = \"vhb4910-yeoh\" }\nviscous = { preset = \"seed-table-4.2\" }\nrelative_permittivity = 4.7\n";
+const HOST_MATERIAL: &str = "hyperelastic = { preset = \"vhb4910-yeoh\" }\nviscous = { preset = \"elatrache2021-table-4.2\" }\nrelative_permittivity = 4.7\n";
 
 /// [`FIT_HOST`] with its material block replaced by `material`.
 fn host(material: &str) -> Vec<u8> {

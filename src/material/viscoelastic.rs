@@ -1,11 +1,11 @@
 //! Linear viscoelasticity: Prony series, Kelvin-Maxwell arms, their conversions,
-//! the seed's presets, and the predictions a fit or a simulator needs (relaxation
+//! El Atrache Ceballos (2021)'s presets, and the predictions a fit or a simulator needs (relaxation
 //! modulus, response to a strain history, creep compliance, storage/loss moduli).
 //!
 //! # Equations
 //! * Prony series (relaxation modulus): E(t) = E∞ + Σ Eᵢ·exp(−t/τᵢ); instantaneous
 //!   modulus E0 = E∞ + Σ Eᵢ; normalised fractions gᵢ = Eᵢ/E0, g∞ = E∞/E0.
-//! * Seed's generalized Kelvin-Maxwell rheology (Eq. 3.14–3.16): an equilibrium spring
+//! * El Atrache Ceballos (2021)'s generalized Kelvin-Maxwell rheology (Eq. 3.14–3.16): an equilibrium spring
 //!   in parallel with a Kelvin-Voigt dashpot Nv and N Maxwell arms (spring kⱼ in series
 //!   with dashpot nⱼ), dσⱼ/dt = kⱼ·dε/dt − σⱼ/τⱼ with τⱼ = nⱼ/kⱼ. Its relaxation
 //!   modulus is the Prony series with Eⱼ = kⱼ, τⱼ = nⱼ/kⱼ, E∞ = the equilibrium spring,
@@ -36,7 +36,7 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Formulation {
-    /// The seed's parallel lumped model (Eq. 3.14–3.16): Maxwell arms driven by the
+    /// El Atrache Ceballos (2021)'s parallel lumped model (Eq. 3.14–3.16): Maxwell arms driven by the
     /// strain, in parallel with the equilibrium spring. In the small-strain reading
     /// σ(t) = ∫E(t − s)dε(s) and E∞ is the equilibrium (secant) modulus at the tested
     /// strain; at large strain the simulator puts the hyperelastic spring in its place.
@@ -152,7 +152,7 @@ impl Prony {
         creep(self.e_inf, &self.terms, 0.0)
     }
 
-    /// The seed's Kelvin-Maxwell arms of this series (kⱼ = Eⱼ, nⱼ = Eⱼ·τⱼ, equilibrium
+    /// El Atrache Ceballos (2021)'s Kelvin-Maxwell arms of this series (kⱼ = Eⱼ, nⱼ = Eⱼ·τⱼ, equilibrium
     /// spring E∞, Nv = 0: a relaxation curve cannot see a Kelvin-Voigt dashpot).
     pub fn to_kelvin_maxwell(&self) -> KelvinMaxwell {
         KelvinMaxwell {
@@ -184,7 +184,7 @@ impl Prony {
     }
 }
 
-/// One Maxwell arm of the seed's rheology: spring k (Pa) in series with dashpot n (Pa·s).
+/// One Maxwell arm of El Atrache Ceballos (2021)'s rheology: spring k (Pa) in series with dashpot n (Pa·s).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct MaxwellArm {
     /// Spring constant kⱼ (Pa).
@@ -193,16 +193,16 @@ pub struct MaxwellArm {
     pub n: f64,
 }
 
-/// The seed's generalized Kelvin-Maxwell model (Eq. 3.14–3.16, Table 4.2), linear part:
+/// El Atrache Ceballos (2021)'s generalized Kelvin-Maxwell model (Eq. 3.14–3.16, Table 4.2), linear part:
 /// equilibrium spring, Kelvin-Voigt dashpot Nv and Maxwell arms.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct KelvinMaxwell {
     /// Equilibrium spring (Pa): the small-strain modulus of the hyperelastic spring in
-    /// the seed's model, E∞ of the Prony series.
+    /// El Atrache Ceballos (2021)'s model, E∞ of the Prony series.
     pub k_inf: f64,
     /// Maxwell arms.
     pub arms: Vec<MaxwellArm>,
-    /// Kelvin-Voigt dashpot Nv (Pa·s) in parallel with the spring (seed Eq. 3.14).
+    /// Kelvin-Voigt dashpot Nv (Pa·s) in parallel with the spring (El Atrache Ceballos (2021) Eq. 3.14).
     pub n_v: f64,
 }
 

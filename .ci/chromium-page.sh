@@ -2,7 +2,8 @@
 # One report page rendered by a real browser (docs/reports.md): installs Debian's
 # headless chromium (about 1 min 40 s for apt-get update + install on the 2-core CI
 # machine, measured; nothing when it is already installed), then runs the test that
-# the default `cargo test` counts as ignored. A missing browser fails it.
+# the default `cargo test` counts as ignored, and opens one page of every kind the
+# tool writes (.ci/report-pages.sh, about 30 s). A missing browser fails it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if ! command -v chromium >/dev/null; then
@@ -16,3 +17,4 @@ if ! command -v chromium >/dev/null; then
     echo "chromium-page: installed chromium in $(( $(date +%s) - t0 )) s"
 fi
 cargo test --release page_renders_in_chromium -- --ignored
+.ci/report-pages.sh

@@ -19,7 +19,7 @@ use std::time::Duration;
 
 fn bench(c: &mut Criterion) {
     let syn = Synthetic {
-        prony: preset("seed-table-3.3").unwrap().prony,
+        prony: preset("elatrache2021-table-3.3").unwrap().prony,
         strain: 0.5,
         ramp_time: None,
         times: log_times(0.01, 1000.0, 200, false),

@@ -238,7 +238,10 @@ fn one_arm_stack(viscous: &str, rise: &str) -> Scene {
         super::support::repo().join("datasets/scenes/stack_step_5kV_damped.toml"),
     )
     .unwrap()
-    .replace("viscous = { preset = \"seed-table-4.2\" }", viscous)
+    .replace(
+        "viscous = { preset = \"elatrache2021-table-4.2\" }",
+        viscous,
+    )
     .replace("rise_time = \"1 ms\"", rise)
     .replace("span = \"10 s\"", "span = \"1 s\"")
     .replace("samples = 2000", "samples = 300");
@@ -550,7 +553,7 @@ fn intervals_cover_the_truth_at_their_rate_for_a_helix() {
         std::fs::read_to_string(super::support::repo().join("datasets/scenes/hdea_step_10N.toml"))
             .unwrap()
             .replace(
-                "viscous = { preset = \"seed-table-4.2\" }",
+                "viscous = { preset = \"elatrache2021-table-4.2\" }",
                 "viscous = { nv = \"1875 Pa s\", arms = [ { k = \"50 kPa\", tau = \"0.2 s\" } ] }",
             )
             .replace("rise_time = \"1 ms\"", "rise_time = \"50 ms\"")

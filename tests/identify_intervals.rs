@@ -22,7 +22,10 @@ fn stack(viscous: &str, rise: &str) -> Scene {
         super::support::repo().join("datasets/scenes/stack_step_5kV_damped.toml"),
     )
     .unwrap()
-    .replace("viscous = { preset = \"seed-table-4.2\" }", viscous)
+    .replace(
+        "viscous = { preset = \"elatrache2021-table-4.2\" }",
+        viscous,
+    )
     .replace("rise_time = \"1 ms\"", rise)
     .replace("span = \"10 s\"", "span = \"1 s\"")
     .replace("samples = 2000", "samples = 300");

@@ -279,7 +279,7 @@ fn a_contraction_only_trace_holds_eps_r_and_says_the_intervals_are_conditional()
     )
     .unwrap()
     .replace(
-        "viscous = { preset = \"seed-table-4.2\" }",
+        "viscous = { preset = \"elatrache2021-table-4.2\" }",
         r#"viscous = { nv = "1875 Pa s", arms = [ { k = "50 kPa", tau = "0.2 s" } ] }"#,
     )
     .replace("span = \"10 s\"", "span = \"1 s\"")

@@ -19,7 +19,7 @@ use std::path::Path;
 pub fn scene_with(material: &str) -> String {
     let text =
         std::fs::read_to_string(repo().join("datasets/scenes/stack_step_5kV_damped.toml")).unwrap();
-    let block = "hyperelastic = { preset = \"vhb4910-yeoh\" }\nviscous = { preset = \"seed-table-4.2\" }\nrelative_permittivity = 4.7\n";
+    let block = "hyperelastic = { preset = \"vhb4910-yeoh\" }\nviscous = { preset = \"elatrache2021-table-4.2\" }\nrelative_permittivity = 4.7\n";
     assert!(text.contains(block), "the scene's material block changed");
     text.replace(block, material)
 }

@@ -1165,7 +1165,8 @@ fn a_state_change_within_one_sigma_is_detected_below_too() {
 /// Two candidates are told apart when their objectives differ by more than 2σ of
 /// the difference: the same fitted matrix at εr 3.0 and 3.0001 (0.003 %, far
 /// inside the 0.36 % σ of μ) cannot be, at εr 3.3 it can; the JSON says which, and
-/// the flag is exactly the stated rule for every adjacent pair.
+/// the flag is exactly the stated rule for every adjacent pair (here each group's
+/// first is the one above).
 #[test]
 fn candidates_within_their_standard_errors_are_not_told_apart() {
     let dir = tempfile::tempdir().unwrap();
@@ -1293,7 +1294,188 @@ fn candidates_without_std_errors_within_the_tolerance_are_not_told_apart() {
     let o = run(dir.path(), &["rank", "design.toml", "--no-report"]);
     let t = text(&o);
     assert!(t.contains("\n3≈ "), "{t}");
-    assert!(t.contains("within 1 % of the larger"), "{t}");
+    assert!(
+        t.replace("\n  ", " ").contains("within 1 % of the larger"),
+        "{t}"
+    );
+}
+
+/// Tie groups are anchored at their first: six candidates 0.4 % apart in εr (each
+/// stroke within 1 % of the one above, 2 % from first to last) are not one long
+/// tie as a rule on neighbours would make them, but groups that each span at most
+/// the tolerance, every member judged against its group's first; the JSON carries
+/// the groups, `tie_group` and the tolerance, the table's note the groups shown.
+/// `--tie-tolerance` sets the tolerance (0: nothing ties; 5 %: one group), and is
+/// checked and refused with a shard.
+#[test]
+fn tie_groups_are_anchored_at_their_first_and_the_tolerance_is_an_option() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut m = head("voltage = \"400 V\"");
+    let names = ["A", "B", "C", "D", "E", "F"];
+    for (k, name) in names.iter().enumerate() {
+        m.push_str(&matrix(
+            name,
+            3.0 * (1.0 + 0.004 * k as f64),
+            100.0,
+            "300 V/um",
+        ));
+    }
+    for name in names {
+        m.push_str(&format!("[[series]]\nmatrix = \"{name}\"\n"));
+    }
+    let d = design(dir.path(), &m);
+    let (ev, r) = by_stroke(&d);
+    assert_eq!(r.order, [5, 4, 3, 2, 1, 0]);
+    let v: Vec<f64> = r
+        .order
+        .iter()
+        .map(|&i| value(&ev[i].static_stroke))
+        .collect();
+    let within = |a: f64, b: f64| (a - b).abs() <= ranking::TOLERANCE * a.abs().max(b.abs());
+    // a rule on neighbours would tie them all: every neighbour is within 1 %
+    assert!(v.windows(2).all(|w| within(w[0], w[1])), "{v:?}");
+    assert!(!within(v[0], v[5]), "{v:?}");
+    // each ranked candidate against the first of the group above it
+    let mut first = 0;
+    for k in 1..v.len() {
+        let x = r.apart[r.order[k]].expect("compared");
+        assert_eq!(x.by, ranking::Compared::Tolerance);
+        assert_eq!(x.apart, !within(v[first], v[k]), "rank {}: {v:?}", k + 1);
+        if x.apart {
+            first = k;
+        }
+    }
+    assert!(r.ties.len() >= 2, "{:?}", r.ties);
+    for g in &r.ties {
+        assert!(
+            within(v[g[0] - 1], v[g[1] - 1]),
+            "{g:?} spans more than 1 %"
+        );
+    }
+    assert_eq!(r.ties.first().unwrap()[0], 1);
+    assert_eq!(r.ties.last().unwrap()[1], 6);
+    std::fs::write(dir.path().join("design.toml"), &m).unwrap();
+    let json = |extra: &[&str]| -> serde_json::Value {
+        let mut args = vec!["rank", "design.toml", "--no-report", "--json"];
+        args.extend(extra);
+        let o = run(dir.path(), &args);
+        assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+        serde_json::from_slice(&o.stdout).expect("JSON")
+    };
+    let j = json(&[]);
+    assert_eq!(j["ties"]["tolerance"], 0.01);
+    assert_eq!(j["ties"]["std_errors"], 2.0);
+    let groups: Vec<[usize; 2]> = r.ties.iter().copied().filter(|g| g[1] > g[0]).collect();
+    assert_eq!(j["ties"]["groups"], serde_json::json!(groups));
+    for (k, c) in j["candidates"].as_array().unwrap().iter().enumerate() {
+        let g = r
+            .ties
+            .iter()
+            .find(|g| (g[0]..=g[1]).contains(&(k + 1)))
+            .unwrap();
+        assert_eq!(c["tie_group"], g[0], "{c}");
+    }
+    let o = run(dir.path(), &["rank", "design.toml", "--no-report"]);
+    let t = text(&o);
+    let shown: Vec<String> = groups
+        .iter()
+        .map(|g| format!("{}–{}", g[0], g[1]))
+        .collect();
+    assert!(
+        t.replace("\n  ", " ")
+            .contains(&format!("ties among these (ranks): {}.", shown.join(", "))),
+        "{t}"
+    );
+    // --tie-tolerance 0: nothing ties; 5 %: one group; the note says which
+    let j = json(&["--tie-tolerance", "0"]);
+    assert_eq!(j["ties"]["groups"], serde_json::json!([]));
+    assert_eq!(j["ties"]["tolerance"], 0.0);
+    let j = json(&["--tie-tolerance", "5%"]);
+    assert_eq!(j["ties"]["groups"], serde_json::json!([[1, 6]]));
+    let o = run(
+        dir.path(),
+        &[
+            "rank",
+            "design.toml",
+            "--no-report",
+            "--tie-tolerance",
+            "0.05",
+        ],
+    );
+    assert!(
+        text(&o)
+            .replace("\n  ", " ")
+            .contains("within 5 % of the larger"),
+        "{}",
+        text(&o)
+    );
+    for bad in ["1.5", "-1%", "x"] {
+        let o = run(
+            dir.path(),
+            &["rank", "design.toml", "--no-report", "--tie-tolerance", bad],
+        );
+        assert_eq!(o.status.code(), Some(2), "{bad}: {}", text(&o));
+        assert!(text(&o).contains("--tie-tolerance"), "{}", text(&o));
+    }
+    let o = run(
+        dir.path(),
+        &[
+            "rank",
+            "design.toml",
+            "--shard",
+            "0/2",
+            "--out",
+            "s.json",
+            "--tie-tolerance",
+            "2%",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("--tie-tolerance"), "{}", text(&o));
+}
+
+/// The JSON counts the candidates not ranked per reason, the same counts the text
+/// summarises ("1 past pull-in, 1 past breakdown"): one pulled in, one broken down
+/// at the drive, one ranked, and the matrix alone heading a second series (the
+/// same candidate).
+#[test]
+fn the_json_counts_the_unranked_per_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = format!(
+        "{}{}{}{}[[series]]\nmatrix = \"soft\"\n[[series]]\nmatrix = \"weak\"\n[[series]]\nmatrix = \"stiff\"\n[[series]]\nmatrix = \"stiff\"\nname = \"stiff again\"\n",
+        head("voltage = \"2500 V\""),
+        matrix("soft", 3.0, 100.0, "300 V/um"),
+        matrix("weak", 3.0, 400.0, "5 V/um"),
+        matrix("stiff", 3.0, 400.0, "300 V/um")
+    );
+    let d = design(dir.path(), &m);
+    let (ev, r) = by_stroke(&d);
+    let states: Vec<State> = ev.iter().map(|e| e.state).collect();
+    assert_eq!(states[..3], [State::PullIn, State::Breakdown, State::Ok]);
+    let want = ranking::NotRanked {
+        past_pull_in: 1,
+        past_breakdown: 1,
+        not_evaluated: 0,
+        no_value: 0,
+        same_candidate: 1,
+    };
+    assert_eq!(r.not_ranked, want);
+    std::fs::write(dir.path().join("design.toml"), &m).unwrap();
+    let o = run(
+        dir.path(),
+        &["rank", "design.toml", "--no-report", "--json"],
+    );
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    assert_eq!(
+        j["not_ranked"],
+        serde_json::json!({"past_pull_in": 1, "past_breakdown": 1, "not_evaluated": 0, "no_value": 0, "same_candidate": 1})
+    );
+    let o = run(dir.path(), &["rank", "design.toml", "--no-report"]);
+    assert!(
+        text(&o).contains("2 candidate(s): 1 past pull-in, 1 past breakdown."),
+        "{}",
+        text(&o)
+    );
 }
 
 /// The design hash (which shards of one sweep must share) covers the files the

@@ -202,7 +202,7 @@ fn a_relaxation_fit_drives_the_viscous_arms_like_the_same_arms_inline() {
         .replace("samples = 2000", "samples = 40000");
     let with = |viscous: &str| {
         let text = base.replace(
-            "viscous = { preset = \"seed-table-3.3\" }",
+            "viscous = { preset = \"elatrache2021-table-3.3\" }",
             &format!("viscous = {viscous}"),
         );
         assert!(text.contains(viscous));

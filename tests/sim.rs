@@ -198,7 +198,7 @@ fn helix_reduces_to_a_stack_as_alpha_goes_to_half_pi() {
 
 fn energy_residual(source: &str, input: &str) -> (f64, f64) {
     let s = scene(&seed_stack(
-        "{ preset = \"seed-table-4.2\" }",
+        "{ preset = \"elatrache2021-table-4.2\" }",
         &format!("{source}\n{input}"),
         "span = \"0.2 s\"\nrtol = 1e-9\nfidelity = \"dynamic\"",
     ));
@@ -241,7 +241,7 @@ fn energy_balances_over_a_cycle() {
 
 fn smooth_scene() -> Scene {
     scene(&seed_stack(
-        "{ preset = \"seed-table-3.3\" }",
+        "{ preset = \"elatrache2021-table-3.3\" }",
         "[[input]]\nkind = \"sine\"\namplitude = \"3 kV\"\nfrequency = \"200 Hz\"\nphase_rad = 0.0\ncycles = 1",
         "span = \"5 ms\"\nsamples = 1\nfidelity = \"dynamic\"",
     ))
@@ -372,7 +372,7 @@ fn quasi_static_agrees_for_slow_inputs_and_not_near_resonance() {
 #[test]
 fn auto_fidelity_lumps_frozen_arms_and_reports_its_error() {
     let s = scene(&seed_stack(
-        "{ preset = \"seed-table-3.3\" }",
+        "{ preset = \"elatrache2021-table-3.3\" }",
         "[[input]]\nkind = \"triangle\"\namplitude = \"5 kV\"\nfrequency = \"100 Hz\"\ncycles = 5",
         "span = \"50 ms\"\nsamples = 200",
     ));
@@ -391,7 +391,7 @@ fn auto_fidelity_lumps_frozen_arms_and_reports_its_error() {
     assert!(o.fidelity.estimated_error > 0.0 && o.fidelity.estimated_error < 2e-4);
     // the lumped run agrees with the full model to about that error
     let full = scene(&seed_stack(
-        "{ preset = \"seed-table-3.3\" }",
+        "{ preset = \"elatrache2021-table-3.3\" }",
         "[[input]]\nkind = \"triangle\"\namplitude = \"5 kV\"\nfrequency = \"100 Hz\"\ncycles = 5",
         "span = \"50 ms\"\nsamples = 200\nfidelity = \"dynamic\"",
     ));
@@ -458,7 +458,7 @@ fn seed_scenes_run_and_are_deterministic_in_parallel() {
 #[test]
 fn scene_errors_name_the_place_and_the_fix() {
     let bad = seed_stack(
-        "{ preset = \"seed-table-3.3\" }",
+        "{ preset = \"elatrache2021-table-3.3\" }",
         "[[input]]\nkind = \"step\"\namplitude = \"5 kQ\"",
         "span = \"1 s\"",
     );
@@ -484,7 +484,7 @@ fn scene_errors_name_the_place_and_the_fix() {
         .err()
         .unwrap()
         .to_string();
-    assert!(e.contains("hint: known: seed-table-3.3"), "{e}");
+    assert!(e.contains("hint: known: elatrache2021-table-3.3"), "{e}");
     // quasi-static without a dashpot is a constraint: it cannot follow an ideal jump
     let bad = seed_stack(
         "{ preset = \"elastic\" }",
@@ -712,7 +712,7 @@ fn a_fit_file_drives_the_stack_and_extrapolation_is_reported() {
     let path = dir.path().join("yeoh.json");
     std::fs::write(&path, serde_json::to_string(&f).unwrap()).unwrap();
     let text = seed_stack(
-        "{ preset = \"seed-table-4.2\" }",
+        "{ preset = \"elatrache2021-table-4.2\" }",
         "[[input]]\nkind = \"ramp\"\nstart = 0\nend = \"50 ms\"\nto = \"5 kV\"",
         "span = \"0.1 s\"",
     )
@@ -730,7 +730,7 @@ fn a_fit_file_drives_the_stack_and_extrapolation_is_reported() {
     );
     // the same constants inline give the same trajectory
     let inline = seed_stack(
-        "{ preset = \"seed-table-4.2\" }",
+        "{ preset = \"elatrache2021-table-4.2\" }",
         "[[input]]\nkind = \"ramp\"\nstart = 0\nend = \"50 ms\"\nto = \"5 kV\"",
         "span = \"0.1 s\"",
     )

@@ -32,8 +32,8 @@ fn scene(text: &str) -> Scene {
 const YEOH: &str = r#"{ preset = "vhb4910-yeoh" }"#;
 const OGDEN2: &str = r#"{ model = "ogden2", parameters = { mu1 = "60 kPa", alpha1 = 1.8, mu2 = "-2 kPa", alpha2 = -2.5 } }"#;
 const GENT: &str = r#"{ model = "gent", parameters = { mu = "70 kPa", Jm = 40 } }"#;
-const TABLE_3_3: &str = r#"{ preset = "seed-table-3.3" }"#;
-const TABLE_4_2: &str = r#"{ preset = "seed-table-4.2" }"#;
+const TABLE_3_3: &str = r#"{ preset = "elatrache2021-table-3.3" }"#;
+const TABLE_4_2: &str = r#"{ preset = "elatrache2021-table-4.2" }"#;
 const RISE: &str = "[source]\nrise_time = \"1 ms\"";
 const RES: &str = "[source]\nresistance_ohm = 1e7";
 const SINE: &str = "[[input]]\nkind = \"sine\"\namplitude = \"1.5 kV\"\noffset = \"1.5 kV\"\nfrequency = \"2 Hz\"\nphase_rad = -1.5707963267948966";

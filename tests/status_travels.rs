@@ -68,7 +68,7 @@ fn a_scene_using_a_constant_its_file_calls_not_identifiable_warns_when_it_runs()
     let cases = [
         ("identified = \"id.json\"\n", "C20, arm1.tau"),
         (
-            "hyperelastic = { fit = \"id.json\" }\nviscous = { preset = \"seed-table-4.2\" }\nrelative_permittivity = 4.7\n",
+            "hyperelastic = { fit = \"id.json\" }\nviscous = { preset = \"elatrache2021-table-4.2\" }\nrelative_permittivity = 4.7\n",
             "C20",
         ),
         (
@@ -85,7 +85,7 @@ fn a_scene_using_a_constant_its_file_calls_not_identifiable_warns_when_it_runs()
         assert_eq!(said.len(), 1, "{material}: {:?}", o.warnings);
     }
     // constants from presets and inline: nothing to say
-    let plain = s("hyperelastic = { preset = \"vhb4910-yeoh\" }\nviscous = { preset = \"seed-table-4.2\" }\nrelative_permittivity = 4.7\n");
+    let plain = s("hyperelastic = { preset = \"vhb4910-yeoh\" }\nviscous = { preset = \"elatrache2021-table-4.2\" }\nrelative_permittivity = 4.7\n");
     assert!(plain.doubts.is_empty());
 }
 

@@ -27,7 +27,7 @@ const REPS: usize = 15;
 pub fn run() -> Result<super::bench::Verdict> {
     let mut verdict = super::bench::Verdict::default();
     let mut status = Status::Ok;
-    let truth = preset("seed-table-3.3")?.prony;
+    let truth = preset("elatrache2021-table-3.3")?.prony;
     let syn = Synthetic {
         prony: truth.clone(),
         strain: 0.5,

@@ -173,7 +173,7 @@ impl Tensile {
 
 fn relaxation_data(rows: usize) -> Result<RelaxationData> {
     let syn = Synthetic {
-        prony: preset("seed-table-3.3")?.prony,
+        prony: preset("elatrache2021-table-3.3")?.prony,
         strain: 0.5,
         ramp_time: None,
         times: log_times(0.01, 1000.0, rows, false),

@@ -77,6 +77,11 @@ struct Present {
     /// The two objectives of the Pareto front (default stroke,speed).
     #[arg(long, value_name = "A,B")]
     pareto: Option<String>,
+    /// Relative tolerance within which two candidates without a standard error
+    /// cannot be told apart (a tie), as a fraction or percentage (default 1%; 0:
+    /// only equal values tie). With standard errors: 2σ of the difference.
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+    tie_tolerance: Option<String>,
     /// Rows of the printed table and the report's table (0: all; default 20).
     #[arg(long)]
     top: Option<usize>,
@@ -103,9 +108,14 @@ const PARETO: &str = "stroke,speed";
 const TOP: usize = 20;
 
 impl Present {
-    /// The objective and the Pareto pair, checked before any work.
-    fn objectives(&self) -> Result<(Objective, [Objective; 2])> {
+    /// The objective, the Pareto pair and the tie tolerance, checked before any
+    /// work.
+    fn objectives(&self) -> Result<(Objective, [Objective; 2], f64)> {
         let by = Objective::parse(self.by.as_deref().unwrap_or("stroke"))?;
+        let tie = self
+            .tie_tolerance
+            .as_deref()
+            .map_or(Ok(ranking::TOLERANCE), ranking::parse_tie_tolerance)?;
         let pareto = self.pareto.as_deref().unwrap_or(PARETO);
         let pair: Vec<&str> = pareto.split(',').collect();
         let [a, b] = pair[..] else {
@@ -118,7 +128,7 @@ impl Present {
         if a == b {
             return Err(Error::settings("--pareto: the two objectives must differ"));
         }
-        Ok((by, [a, b]))
+        Ok((by, [a, b], tie))
     }
 
     /// Rows of the tables.
@@ -133,6 +143,7 @@ impl Present {
         let given: Vec<&str> = [
             (self.by.is_some(), "--by"),
             (self.pareto.is_some(), "--pareto"),
+            (self.tie_tolerance.is_some(), "--tie-tolerance"),
             (self.top.is_some(), "--top"),
             (self.json, "--json"),
             (self.csv.is_some(), "--csv"),
@@ -167,6 +178,9 @@ impl Present {
         }
         if let Some(p) = &self.pareto {
             w.extend(["--pareto".into(), p.clone()]);
+        }
+        if let Some(t) = &self.tie_tolerance {
+            w.extend(["--tie-tolerance".into(), t.clone()]);
         }
         if let Some(t) = self.top {
             w.extend(["--top".into(), t.to_string()]);
@@ -279,9 +293,9 @@ pub fn run(a: Args) -> Result<i32> {
 /// Rank the evaluations of a run and write what was asked: the table or JSON on
 /// stdout, the CSV, the report.
 fn present(info: &RunInfo, evals: &[Evaluated], p: &Present) -> Result<i32> {
-    let (by, pair) = p.objectives()?;
+    let (by, pair, tie) = p.objectives()?;
     let list: Vec<_> = evals.iter().map(|e| e.evaluation.clone()).collect();
-    let r = ranking::rank(&list, by, pair);
+    let r = ranking::rank_with(&list, by, pair, tie);
     let dir = (!p.no_report).then(|| {
         p.report.clone().unwrap_or_else(|| {
             let slug: String = info

@@ -84,7 +84,7 @@ pub struct Args {
     #[arg(long, default_value_t = 6)]
     grid_per_decade: usize,
     /// Print a preset's constants and predictions instead of fitting
-    /// (seed-table-3.3, seed-table-4.2).
+    /// (elatrache2021-table-3.3, elatrache2021-table-4.2).
     #[arg(long, value_name = "NAME")]
     preset: Option<String>,
     #[command(flatten)]
@@ -177,8 +177,9 @@ pub fn run(a: Args) -> Result<i32> {
         return Ok(0);
     }
     let Some(file) = a.file.clone() else {
-        return Err(Error::settings("no data file given")
-            .with_hint("dea-fit relaxation test.csv --strain 0.5   (or --preset seed-table-3.3)"));
+        return Err(Error::settings("no data file given").with_hint(
+            "dea-fit relaxation test.csv --strain 0.5   (or --preset elatrache2021-table-3.3)",
+        ));
     };
     let settings = settings(&a)?;
     let area = quantity("--area", a.area.as_deref(), Dimension::Area)?;

@@ -40,7 +40,7 @@ pub struct Args {
     #[arg(long = "param", value_name = "NAME=VALUE")]
     params: Vec<String>,
     /// synth relaxation: a published Prony series in place of --param
-    /// (seed-table-3.3, seed-table-4.2).
+    /// (elatrache2021-table-3.3, elatrache2021-table-4.2).
     #[arg(long)]
     preset: Option<String>,
     /// synth relaxation: the held engineering strain.
@@ -241,7 +241,7 @@ fn relaxation(a: Args) -> Result<i32> {
         }
         (None, true) => {
             return Err(Error::settings("synth relaxation needs the series").with_hint(
-                "--preset seed-table-3.3, or --param E_inf=43kPa --param E1=106kPa --param tau1=0.15s …",
+                "--preset elatrache2021-table-3.3, or --param E_inf=43kPa --param E1=106kPa --param tau1=0.15s …",
             ))
         }
     };

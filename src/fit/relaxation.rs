@@ -2458,7 +2458,7 @@ mod tests {
         use crate::io::table::Table;
         use crate::material::viscoelastic::preset;
         let csv = Synthetic {
-            prony: preset("seed-table-3.3").unwrap().prony,
+            prony: preset("elatrache2021-table-3.3").unwrap().prony,
             strain: 0.5,
             ramp_time: None,
             times: log_times(0.01, 1000.0, points, false),

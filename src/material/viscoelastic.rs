@@ -1,11 +1,11 @@
 //! Linear viscoelasticity: Prony series, Kelvin-Maxwell arms, their conversions,
-//! the seed's presets, and the predictions a fit or a simulator needs (relaxation
+//! El Atrache Ceballos (2021)'s presets, and the predictions a fit or a simulator needs (relaxation
 //! modulus, response to a strain history, creep compliance, storage/loss moduli).
 //!
 //! # Equations
 //! * Prony series (relaxation modulus): E(t) = E∞ + Σ Eᵢ·exp(−t/τᵢ); instantaneous
 //!   modulus E0 = E∞ + Σ Eᵢ; normalised fractions gᵢ = Eᵢ/E0, g∞ = E∞/E0.
-//! * Seed's generalized Kelvin-Maxwell rheology (Eq. 3.14–3.16): an equilibrium spring
+//! * El Atrache Ceballos (2021)'s generalized Kelvin-Maxwell rheology (Eq. 3.14–3.16): an equilibrium spring
 //!   in parallel with a Kelvin-Voigt dashpot Nv and N Maxwell arms (spring kⱼ in series
 //!   with dashpot nⱼ), dσⱼ/dt = kⱼ·dε/dt − σⱼ/τⱼ with τⱼ = nⱼ/kⱼ. Its relaxation
 //!   modulus is the Prony series with Eⱼ = kⱼ, τⱼ = nⱼ/kⱼ, E∞ = the equilibrium spring,
@@ -36,7 +36,7 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Formulation {
-    /// The seed's parallel lumped model (Eq. 3.14–3.16): Maxwell arms driven by the
+    /// El Atrache Ceballos (2021)'s parallel lumped model (Eq. 3.14–3.16): Maxwell arms driven by the
     /// strain, in parallel with the equilibrium spring. In the small-strain reading
     /// σ(t) = ∫E(t − s)dε(s) and E∞ is the equilibrium (secant) modulus at the tested
     /// strain; at large strain the simulator puts the hyperelastic spring in its place.
@@ -152,7 +152,7 @@ impl Prony {
         creep(self.e_inf, &self.terms, 0.0)
     }
 
-    /// The seed's Kelvin-Maxwell arms of this series (kⱼ = Eⱼ, nⱼ = Eⱼ·τⱼ, equilibrium
+    /// El Atrache Ceballos (2021)'s Kelvin-Maxwell arms of this series (kⱼ = Eⱼ, nⱼ = Eⱼ·τⱼ, equilibrium
     /// spring E∞, Nv = 0: a relaxation curve cannot see a Kelvin-Voigt dashpot).
     pub fn to_kelvin_maxwell(&self) -> KelvinMaxwell {
         KelvinMaxwell {
@@ -184,7 +184,7 @@ impl Prony {
     }
 }
 
-/// One Maxwell arm of the seed's rheology: spring k (Pa) in series with dashpot n (Pa·s).
+/// One Maxwell arm of El Atrache Ceballos (2021)'s rheology: spring k (Pa) in series with dashpot n (Pa·s).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct MaxwellArm {
     /// Spring constant kⱼ (Pa).
@@ -193,16 +193,16 @@ pub struct MaxwellArm {
     pub n: f64,
 }
 
-/// The seed's generalized Kelvin-Maxwell model (Eq. 3.14–3.16, Table 4.2), linear part:
+/// El Atrache Ceballos (2021)'s generalized Kelvin-Maxwell model (Eq. 3.14–3.16, Table 4.2), linear part:
 /// equilibrium spring, Kelvin-Voigt dashpot Nv and Maxwell arms.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct KelvinMaxwell {
     /// Equilibrium spring (Pa): the small-strain modulus of the hyperelastic spring in
-    /// the seed's model, E∞ of the Prony series.
+    /// El Atrache Ceballos (2021)'s model, E∞ of the Prony series.
     pub k_inf: f64,
     /// Maxwell arms.
     pub arms: Vec<MaxwellArm>,
-    /// Kelvin-Voigt dashpot Nv (Pa·s) in parallel with the spring (seed Eq. 3.14).
+    /// Kelvin-Voigt dashpot Nv (Pa·s) in parallel with the spring (El Atrache Ceballos (2021) Eq. 3.14).
     pub n_v: f64,
 }
 
@@ -672,7 +672,7 @@ impl Interval {
 /// A named set of published viscoelastic constants.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Preset {
-    /// Name (`seed-table-3.3`, `seed-table-4.2`).
+    /// Name (`elatrache2021-table-3.3`, `elatrache2021-table-4.2`).
     pub name: &'static str,
     /// Where the numbers come from and how they are read.
     pub source: &'static str,
@@ -687,8 +687,48 @@ pub struct Preset {
     pub kelvin_maxwell: KelvinMaxwell,
 }
 
-/// Names accepted by [`preset`].
-pub const PRESET_NAMES: [&str; 2] = ["seed-table-3.3", "seed-table-4.2"];
+/// Names accepted by [`preset`]: the dissertation's author and year and its table
+/// (El Atrache Ceballos (2021)).
+pub const PRESET_NAMES: [&str; 2] = ["elatrache2021-table-3.3", "elatrache2021-table-4.2"];
+
+/// Former names of the presets, (old, new): still accepted by [`preset`], which
+/// says once per run that the name changed (the word "seed" is kept for random
+/// seeds; issue 35, section 6).
+pub const FORMER_PRESET_NAMES: [(&str, &str); 2] = [
+    ("seed-table-3.3", PRESET_NAMES[0]),
+    ("seed-table-4.2", PRESET_NAMES[1]),
+];
+
+/// The current name of preset `name` and, when `name` is a former name
+/// ([`FORMER_PRESET_NAMES`]), the note that says so; any other name is returned
+/// as it is, with no note.
+pub fn current_preset_name(name: &str) -> (&str, Option<String>) {
+    match FORMER_PRESET_NAMES.iter().find(|(old, _)| *old == name) {
+        Some((old, new)) => (
+            new,
+            Some(format!(
+                "viscoelastic preset '{old}' is now called '{new}' (El Atrache Ceballos (2021)); the old name still works but is deprecated: use '{new}'"
+            )),
+        ),
+        None => (name, None),
+    }
+}
+
+/// Print the note of a former preset name on stderr, once per name and run (a
+/// rank manifest or a search may resolve the same name many times).
+fn note_former_name(name: &str) {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    static SAID: [AtomicBool; FORMER_PRESET_NAMES.len()] =
+        [AtomicBool::new(false), AtomicBool::new(false)];
+    let Some(i) = FORMER_PRESET_NAMES.iter().position(|(old, _)| *old == name) else {
+        return;
+    };
+    if let (_, Some(note)) = current_preset_name(name) {
+        if !SAID[i].swap(true, Ordering::Relaxed) {
+            eprintln!("note: {note}");
+        }
+    }
+}
 
 /// Table 3.3 relaxation times τᵢ (s) and fractions gᵢ (Wissler & Mazza 2007, VHB 4910).
 pub const TABLE_3_3: [(f64, f64); 4] = [
@@ -698,11 +738,11 @@ pub const TABLE_3_3: [(f64, f64); 4] = [
     (215.85, 0.0492),
 ];
 
-/// The reference modulus of the seed's Table 4.2: its kⱼ equal gⱼ × 0.222 MPa for all
+/// The reference modulus of El Atrache Ceballos (2021) Table 4.2: its kⱼ equal gⱼ × 0.222 MPa for all
 /// four arms (≈ Y0 = 220 kPa of Table 3.4).
 pub const TABLE_4_2_REFERENCE: f64 = 0.222e6;
 
-/// Table 4.2 Maxwell arms (kⱼ Pa, nⱼ Pa·s), tuned by hand by the seed's author.
+/// Table 4.2 Maxwell arms (kⱼ Pa, nⱼ Pa·s), tuned by hand by the dissertation's author.
 pub const TABLE_4_2_ARMS: [(f64, f64); 4] = [
     (0.106116e6, 0.033966e6),
     (0.045510e6, 0.103008e6),
@@ -713,23 +753,27 @@ pub const TABLE_4_2_ARMS: [(f64, f64); 4] = [
 /// Table 4.2 Kelvin-Voigt dashpot Nv = 1875e-6 MPa·s.
 pub const TABLE_4_2_NV: f64 = 1875.0;
 
-/// Table 4.2 (= Table 3.2) Yeoh C10 (Pa); the seed's equilibrium spring has the
+/// Table 4.2 (= Table 3.2) Yeoh C10 (Pa); the dissertation's equilibrium spring has the
 /// small-strain Young's modulus 6·C10.
 pub const TABLE_4_2_C10: f64 = 0.0693e6;
 
 /// A named preset:
-/// * `seed-table-3.3`: Table 3.3's normalised Prony pairs in the QLV reading, with the
+/// * `elatrache2021-table-3.3`: Table 3.3's normalised Prony pairs in the QLV reading, with the
 ///   reference E0 = 0.222 MPa that Table 4.2 multiplies them by; g∞ = 1 − Σgᵢ = 0.1951;
 ///   Nv = 0 as the table says.
-/// * `seed-table-4.2`: Table 4.2's arms and Nv in the seed's parallel model, with the
+/// * `elatrache2021-table-4.2`: Table 4.2's arms and Nv in the dissertation's parallel model, with the
 ///   Yeoh spring's small-strain modulus 6·C10 = 415.8 kPa as the equilibrium spring.
 ///   Its τⱼ = nⱼ/kⱼ (0.32, 2.26, 440, 4386 s) are not Table 3.3's.
+///
+/// A former name ([`FORMER_PRESET_NAMES`]) gives the same preset, under its new
+/// name, with a note on stderr.
 pub fn preset(name: &str) -> Result<Preset> {
-    match name {
-        "seed-table-3.3" => {
+    note_former_name(name);
+    match current_preset_name(name).0 {
+        "elatrache2021-table-3.3" => {
             let prony = Prony::from_normalized(TABLE_4_2_REFERENCE, &TABLE_3_3)?;
             Ok(Preset {
-                name: "seed-table-3.3",
+                name: "elatrache2021-table-3.3",
                 source: "El Atrache Ceballos (2021) Table 3.3 (Wissler & Mazza 2007, VHB 4910): normalised Prony pairs (τᵢ, gᵢ); the table's 'MPa' on gᵢ is read as a fraction of E0 = 0.222 MPa (the multiplier of Table 4.2)",
                 formulation: Formulation::Qlv,
                 reference_modulus: TABLE_4_2_REFERENCE,
@@ -737,7 +781,7 @@ pub fn preset(name: &str) -> Result<Preset> {
                 prony,
             })
         }
-        "seed-table-4.2" => {
+        "elatrache2021-table-4.2" => {
             let km = KelvinMaxwell {
                 k_inf: 6.0 * TABLE_4_2_C10,
                 arms: TABLE_4_2_ARMS
@@ -747,7 +791,7 @@ pub fn preset(name: &str) -> Result<Preset> {
                 n_v: TABLE_4_2_NV,
             };
             Ok(Preset {
-                name: "seed-table-4.2",
+                name: "elatrache2021-table-4.2",
                 source: "El Atrache Ceballos (2021) Table 4.2 (hand-tuned by its author): Maxwell arms kⱼ, nⱼ and Nv = 1875 Pa·s in the parallel model; equilibrium spring = Yeoh small-strain modulus 6·C10",
                 formulation: Formulation::Parallel,
                 reference_modulus: 6.0 * TABLE_4_2_C10,

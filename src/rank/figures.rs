@@ -2,7 +2,7 @@
 //! simulator predicts on the design's actuator.
 //!
 //! Catalogue (SI): εr; Y = 3μ0; β = εr/Y; the Sommer-Larsen & Larsen figure of merit
-//! Fm = 3ε0εrEb²/Y (seed §2.6); tan δ at the drive frequency.
+//! Fm = 3ε0εrEb²/Y (El Atrache Ceballos (2021) §2.6); tan δ at the drive frequency.
 //!
 //! On the actuator (the design's scene with the candidate's constants; stroke is
 //! the contraction 1 − λ/λ0 of the loaded rest length, λ the thickness stretch):
@@ -320,7 +320,7 @@ pub fn step_scene(d: &Design) -> Scene {
 /// fit is scaled to (weakest link: a breakdown anywhere under field fails the
 /// actuator, so the whole active area counts), the same film the scene's own
 /// check uses (`Actuator::film_area`, `Actuator::gap`). A stack: nd·π·r0²; a
-/// helix: Np·Ne electrode areas of one element at λ = 1 (seed Eq. 4.12).
+/// helix: Np·Ne electrode areas of one element at λ = 1 (El Atrache Ceballos (2021) Eq. 4.12).
 pub fn electrode_area(a: &Actuator) -> (f64, String, f64) {
     let how = match a {
         Actuator::Stack(s) => format!("{} layers × π·r0²", s.layers),

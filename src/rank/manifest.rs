@@ -13,7 +13,7 @@
 //! step_samples = 200
 //! [[matrix]]
 //! name = "Sylgard 184"
-//! source = "seed Table 5.1"              # cited in every number's provenance
+//! source = "El Atrache Ceballos (2021) Table 5.1"   # cited in every number's provenance
 //! density = "1.03 g/cm3"
 //! eps_r = 2.72
 //! tan_delta = 0.0012
@@ -692,7 +692,7 @@ impl Ctx<'_> {
         if n > 1 || (n == 0 && s.nv.is_none()) || (s.preset.is_some() && s.nv.is_some()) {
             return Err(self
                 .err(&span, format!("{key} takes one of preset, fit (with an optional nv), or arms and nv"))
-                .with_hint("e.g. { preset = \"seed-table-4.2\" } or { nv = \"10 Pa s\", arms = [ { k = \"50 kPa\", tau = \"20 ms\" } ] }"));
+                .with_hint("e.g. { preset = \"elatrache2021-table-4.2\" } or { nv = \"10 Pa s\", arms = [ { k = \"50 kPa\", tau = \"20 ms\" } ] }"));
         }
         let nv = match &s.nv {
             Some(q) => Some(self.checked(
@@ -710,7 +710,10 @@ impl Ctx<'_> {
                     value,
                     std_error: None,
                     provenance: Provenance::Fitted,
-                    source: format!("preset {p}"),
+                    source: format!(
+                        "preset {}",
+                        crate::material::viscoelastic::current_preset_name(p).0
+                    ),
                     warnings: Vec::new(),
                 })
                 .ok_or_else(|| self.unknown(&span, &format!("{key}.preset"), p, &names));

@@ -4,7 +4,18 @@
 //! A candidate is ranked on an objective only where the objective has a value: one
 //! past pull-in or breakdown at the drive has no static stroke, no response and no
 //! energy figures, and is listed after the ranked ones with the reason — never
-//! ranked on the numbers of a state it cannot reach. Ties keep the run's order.
+//! ranked on the numbers of a state it cannot reach. Equal values keep the run's
+//! order.
+//!
+//! Ties: the ranking is cut into groups of candidates that cannot be told apart.
+//! A group starts at the best candidate not yet in one; the next ones join it while
+//! they cannot be told apart from that first ([`told_apart`]: by [`APART`]
+//! standard errors of the difference, or where either has none by the tie
+//! tolerance, [`TOLERANCE`] by default, `--tie-tolerance`). Each member is compared
+//! with the group's first, not with its neighbour: in a dense sweep neighbours
+//! differ by less than any tolerance, and a chain of neighbour comparisons would
+//! call a whole slow drift one tie; anchored at its first, a group spans at most
+//! the tolerance, so the groups themselves are a ranking.
 
 use super::figures::{Evaluation, State, SMALL_MARGIN};
 use super::Figure;
@@ -262,9 +273,18 @@ pub struct Ranking {
     /// last in `order`.
     pub same_as: Vec<Option<usize>>,
     /// Whether each ranked evaluation (by index in `evals`) can be told apart from
-    /// the one ranked just above it, and how that was judged ([`Apart`]). None for
-    /// the first (and for the unranked).
+    /// the first of the tie group above it (then it starts a group of its own), and
+    /// how that was judged ([`Apart`]). None for the first (and for the unranked).
     pub apart: Vec<Option<Apart>>,
+    /// The tie groups, best first: the ranks (1-based, inclusive) of each group's
+    /// first and last member (a candidate told apart from both neighbours is a
+    /// group of one).
+    pub ties: Vec<[usize; 2]>,
+    /// The relative tolerance ties were judged by where a standard error is
+    /// missing ([`TOLERANCE`] unless `--tie-tolerance` says otherwise).
+    pub tie_tolerance: f64,
+    /// The count of candidates not ranked, per reason.
+    pub not_ranked: NotRanked,
     /// The lead of the first over the second, where it rests on inputs without a
     /// standard error (None: fewer than two ranked, or every input has one).
     pub lead: Option<Lead>,
@@ -283,7 +303,8 @@ pub struct Ranking {
 pub const APART: f64 = 2.0;
 
 /// How far apart (relative to the larger magnitude) two objectives must be to be
-/// told apart when either has no standard error: 1 %. A value stated without ±
+/// told apart when either has no standard error, unless `--tie-tolerance` says
+/// otherwise: 1 %. A value stated without ±
 /// is known to the digits it is written with (2.72, 250 kPa, 0.01: 0.2–5 % in the
 /// last digit), a predicted modulus rests on a stiffening rule, and the response
 /// time is read between the samples of its window (0.5 % of the window at 200
@@ -322,17 +343,71 @@ pub struct Apart {
 
 /// Whether objectives `a` and `b` (with their standard errors, where known) are
 /// told apart: by [`APART`] standard errors of the difference when both have
-/// one, else by [`TOLERANCE`] of the larger magnitude.
-pub fn told_apart(a: f64, b: f64, sa: Option<f64>, sb: Option<f64>) -> Apart {
+/// one, else by the relative `tolerance` of the larger magnitude.
+pub fn told_apart(a: f64, b: f64, sa: Option<f64>, sb: Option<f64>, tolerance: f64) -> Apart {
     match (sa, sb) {
         (Some(sa), Some(sb)) => Apart {
             apart: (a - b).abs() > APART * sa.hypot(sb),
             by: Compared::StdError,
         },
         _ => Apart {
-            apart: (a - b).abs() > TOLERANCE * a.abs().max(b.abs()),
+            apart: (a - b).abs() > tolerance * a.abs().max(b.abs()),
             by: Compared::Tolerance,
         },
+    }
+}
+
+/// Read a `--tie-tolerance`: a relative tolerance in [0, 1), as a fraction or a
+/// percentage (`0.01`, `1%`; 0: only equal values tie).
+pub fn parse_tie_tolerance(text: &str) -> Result<f64> {
+    let bad = |why: String| {
+        Error::settings(format!("--tie-tolerance {text}: {why}"))
+            .with_hint("e.g. --tie-tolerance 1% (the default) or 0 (only equal values tie)")
+    };
+    let t = crate::units::parse_quantity(text, crate::units::Dimension::Fraction).map_err(bad)?;
+    match (0.0..1.0).contains(&t) {
+        true => Ok(t),
+        false => Err(bad(
+            "expected a relative tolerance from 0 to below 1 (100 %)".into(),
+        )),
+    }
+}
+
+/// How many candidates are not ranked, per reason (those of the text summary's
+/// "1967 past pull-in, 507 past breakdown").
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct NotRanked {
+    /// Past pull-in at the drive.
+    pub past_pull_in: usize,
+    /// Past breakdown at the drive (or on the way up).
+    pub past_breakdown: usize,
+    /// Could not be evaluated.
+    pub not_evaluated: usize,
+    /// Evaluated, but without a value of the objective.
+    pub no_value: usize,
+    /// The same candidate as an earlier one (the matrix alone in several series),
+    /// listed once.
+    pub same_candidate: usize,
+}
+
+impl NotRanked {
+    /// The count of the unranked candidates in `state` (repeats aside).
+    pub fn of(&self, state: State) -> usize {
+        match state {
+            State::PullIn => self.past_pull_in,
+            State::Breakdown => self.past_breakdown,
+            State::Failed => self.not_evaluated,
+            State::Ok => self.no_value,
+        }
+    }
+
+    fn add(&mut self, state: State) {
+        *match state {
+            State::PullIn => &mut self.past_pull_in,
+            State::Breakdown => &mut self.past_breakdown,
+            State::Failed => &mut self.not_evaluated,
+            State::Ok => &mut self.no_value,
+        } += 1;
     }
 }
 
@@ -348,8 +423,19 @@ fn repeats(a: &Evaluation, b: &Evaluation) -> bool {
         && a.voltage.value.map(f64::to_bits) == b.voltage.value.map(f64::to_bits)
 }
 
-/// Rank `evals` (in run order) by `by`, with the Pareto front over `pareto`.
+/// Rank `evals` (in run order) by `by`, with the Pareto front over `pareto`, ties
+/// judged by [`TOLERANCE`] where a standard error is missing.
 pub fn rank(evals: &[Evaluation], by: Objective, pareto: [Objective; 2]) -> Ranking {
+    rank_with(evals, by, pareto, TOLERANCE)
+}
+
+/// [`rank`] with the relative tie tolerance `tie_tolerance` (`--tie-tolerance`).
+pub fn rank_with(
+    evals: &[Evaluation],
+    by: Objective,
+    pareto: [Objective; 2],
+    tie_tolerance: f64,
+) -> Ranking {
     // only the loading-0 points can repeat one another: compare those alone
     let zero: Vec<usize> = (0..evals.len())
         .filter(|&i| evals[i].loading == 0.0)
@@ -372,13 +458,34 @@ pub fn rank(evals: &[Evaluation], by: Objective, pareto: [Objective; 2]) -> Rank
     for (r, (i, _)) in ranked.iter().enumerate() {
         ranks[*i] = Some(r + 1);
     }
+    // tie groups: each member against the group's first (the module's notes)
     let mut apart = vec![None; evals.len()];
-    for w in ranked.windows(2) {
-        let (a, b) = (&evals[w[0].0], &evals[w[1].0]);
-        apart[w[1].0] = match (by.value(a), by.value(b)) {
-            (Some(va), Some(vb)) => Some(told_apart(va, vb, by.std_error(a), by.std_error(b))),
-            _ => None,
-        };
+    let mut ties: Vec<[usize; 2]> = Vec::new();
+    for (r, &(i, _)) in ranked.iter().enumerate() {
+        let b = &evals[i];
+        let joined = ties.last_mut().and_then(|g| {
+            let a = &evals[ranked[g[0] - 1].0];
+            let x = told_apart(
+                by.value(a)?,
+                by.value(b)?,
+                by.std_error(a),
+                by.std_error(b),
+                tie_tolerance,
+            );
+            apart[i] = Some(x);
+            (!x.apart).then(|| g[1] = r + 1)
+        });
+        if joined.is_none() {
+            ties.push([r + 1, r + 1]);
+        }
+    }
+    let mut not_ranked = NotRanked::default();
+    for (i, e) in evals.iter().enumerate() {
+        match (same_as[i], ranks[i]) {
+            (Some(_), _) => not_ranked.same_candidate += 1,
+            (None, None) => not_ranked.add(e.state),
+            (None, Some(_)) => {}
+        }
     }
     let order: Vec<usize> = ranked
         .iter()
@@ -434,6 +541,9 @@ pub fn rank(evals: &[Evaluation], by: Objective, pareto: [Objective; 2]) -> Rank
         order,
         ranks,
         apart,
+        ties,
+        tie_tolerance,
+        not_ranked,
         same_as,
         status,
         warnings,

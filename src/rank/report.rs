@@ -6,7 +6,7 @@
 
 use super::candidate::loading_label;
 use super::figures::{Evaluated, Evaluation, State};
-use super::ranking::{Compared, Objective, Ranking, APART, TOLERANCE};
+use super::ranking::{Compared, NotRanked, Objective, Ranking, APART};
 use super::shard::RunInfo;
 use super::short;
 use super::Figure;
@@ -68,6 +68,10 @@ struct Output<'a> {
     by: Objective,
     status: super::ranking::Status,
     warnings: &'a [String],
+    /// How many candidates are not ranked, per reason.
+    not_ranked: NotRanked,
+    /// The tie groups and the rule they were made by.
+    ties: Ties,
     candidates: Vec<Row<'a>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     lead: Option<&'a super::ranking::Lead>,
@@ -75,9 +79,23 @@ struct Output<'a> {
     best_loading: &'a [super::ranking::BestLoading],
 }
 
+/// The tie groups of the JSON: the rule and the groups of more than one.
+#[derive(Serialize)]
+struct Ties {
+    /// Standard errors of the difference that tell two apart (where both have one).
+    std_errors: f64,
+    /// The relative tolerance that tells two apart where either has none.
+    tolerance: f64,
+    /// The groups of more than one candidate: ranks of the first and the last.
+    groups: Vec<[usize; 2]>,
+}
+
 #[derive(Serialize)]
 struct Row<'a> {
     rank: Option<usize>,
+    /// The rank of the first of its tie group (its own rank when it ties with none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    tie_group: Option<usize>,
     objective: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     objective_std_error: Option<f64>,
@@ -103,6 +121,7 @@ pub fn json(info: &RunInfo, evals: &[Evaluated], r: &Ranking) -> String {
             let v = r.by.value(e);
             Row {
                 rank: r.ranks[i],
+                tie_group: r.ranks[i].and_then(|k| group_of(r, k)).map(|g| g[0]),
                 objective: v,
                 objective_std_error: v.and(r.by.std_error(e)),
                 apart_from_above: r.apart[i].map(|a| a.apart),
@@ -125,12 +144,23 @@ pub fn json(info: &RunInfo, evals: &[Evaluated], r: &Ranking) -> String {
         by: r.by,
         status: r.status,
         warnings: &r.warnings,
+        not_ranked: r.not_ranked,
+        ties: Ties {
+            std_errors: APART,
+            tolerance: r.tie_tolerance,
+            groups: r.ties.iter().copied().filter(|g| g[1] > g[0]).collect(),
+        },
         candidates,
         lead: r.lead.as_ref(),
         pareto: &r.pareto,
         best_loading: &r.best,
     };
     serde_json::to_string_pretty(&out).expect("the ranking serialises")
+}
+
+/// The tie group (ranks of its first and last) of the candidate ranked `k`.
+fn group_of(r: &Ranking, k: usize) -> Option<[usize; 2]> {
+    r.ties.iter().copied().find(|g| (g[0]..=g[1]).contains(&k))
 }
 
 /// The leaders table: the first `top` ranked candidates (all with 0), columns with
@@ -227,10 +257,21 @@ fn leaders(page: &mut Page, evals: &[Evaluated], r: &Ranking, top: usize) {
         short(100.0 * super::figures::SMALL_MARGIN)
     ));
     if r.apart[..].iter().any(|a| a.is_some()) {
+        // the tie groups of more than one among the rows shown
+        let shown: Vec<String> = r
+            .ties
+            .iter()
+            .filter(|g| g[1] > g[0] && g[0] <= shown_n)
+            .map(|g| format!("{}–{}", g[0], g[1]))
+            .collect();
         page.text(format!(
-            "σ: first-order standard error from the fit files' standard errors and the ± written in the manifest (values stated without ± count as exact); n≈: cannot be told apart from the candidate above (within {} σ of their difference, or, where either has no σ, within {} % of the larger).",
+            "σ: first-order standard error from the fit files' standard errors and the ± written in the manifest (values stated without ± count as exact); n≈: cannot be told apart from the first of its tie group, the nearest rank above without ≈ (within {} σ of their difference, or, where either has no σ, within {} % of the larger: --tie-tolerance); ties {}.",
             APART,
-            short(100.0 * TOLERANCE)
+            short(100.0 * r.tie_tolerance),
+            match shown.is_empty() {
+                true => "among these: none".to_string(),
+                false => format!("among these (ranks): {}", shown.join(", ")),
+            }
         ));
     }
     if let Some(l) = &r.lead {
@@ -271,7 +312,7 @@ fn unranked(page: &mut Page, evals: &[Evaluated], r: &Ranking, top: usize) {
         page.text(format!(
             "{} candidate(s): {}.",
             unranked.len(),
-            not_ranked_counts(&unranked, r.by)
+            not_ranked_counts(&r.not_ranked, r.by)
         ));
         // one line per series and state: how many, their loadings and drive
         // levels, and the reason at the first (the lowest drive, then loading)
@@ -388,12 +429,12 @@ fn state_words(state: State, by: Objective) -> String {
 }
 
 /// The count of unranked candidates per reason: "1967 past pull-in, 507 past
-/// breakdown".
-fn not_ranked_counts(unranked: &[&Evaluation], by: Objective) -> String {
+/// breakdown" (the JSON's `not_ranked`, in words).
+fn not_ranked_counts(counts: &NotRanked, by: Objective) -> String {
     [State::PullIn, State::Breakdown, State::Failed, State::Ok]
         .into_iter()
         .filter_map(|s| {
-            let n = unranked.iter().filter(|e| e.state == s).count();
+            let n = counts.of(s);
             (n > 0).then(|| format!("{n} {}", state_words(s, by)))
         })
         .collect::<Vec<_>>()

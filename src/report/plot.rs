@@ -339,8 +339,16 @@ fn log_tick_label(v: f64) -> String {
     }
 }
 
-/// Legend text size (px).
+/// Legend text size (px as drawn).
 const LEGEND_FONT: u32 = 14;
+/// Tick labels and axis descriptions (px as drawn): plotters' default, 12 given,
+/// is drawn at 9.7 px ([`SVG_FONT`]), small once a 1000–1300 px chart shrinks to
+/// the width of a page.
+const AXIS_FONT: f64 = 13.0;
+/// plotters' SVG backend writes `font-size` as the size it is given divided by
+/// 1.24 (plotters-svg `svg.rs`): a size in px as drawn is given to it times this,
+/// so that the legend is drawn at the size its column is measured for.
+const SVG_FONT: f64 = 1.24;
 /// Where a legend line's text starts in the legend column (px; the key before it),
 /// and the room kept free right of the longest line.
 const LEGEND_TEXT_X: u32 = 40;
@@ -452,7 +460,7 @@ impl Chart {
         let paper = self.y_unit.as_deref() == Some(PROBABILITY_PAPER);
         let mut builder = ChartBuilder::on(&plot_area);
         builder
-            .caption(&self.title, ("sans-serif", 22))
+            .caption(&self.title, ("sans-serif", 18.0 * SVG_FONT))
             .margin(15)
             .x_label_area_size(45)
             .y_label_area_size(80);
@@ -472,6 +480,8 @@ impl Chart {
                         true => log_tick_label(*v * fx),
                         false => tick_label(*v * fx, x0 * fx, x1 * fx),
                     })
+                    .label_style(("sans-serif", AXIS_FONT * SVG_FONT))
+                    .axis_desc_style(("sans-serif", AXIS_FONT * SVG_FONT))
                     .light_line_style(RGBColor(235, 235, 235))
                     .draw()?;
                 // spans first, behind the data
@@ -584,7 +594,7 @@ impl Chart {
                         LEGEND_TEXT_X as i32,
                         y + 2 + (k as u32 * LEGEND_LINE_PX) as i32,
                     ),
-                    ("sans-serif", LEGEND_FONT).into_font(),
+                    ("sans-serif", f64::from(LEGEND_FONT) * SVG_FONT).into_font(),
                 ))?;
             }
             y += (LEGEND_LINE_PX * lines.len() as u32 + 6) as i32;

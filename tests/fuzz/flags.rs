@@ -159,7 +159,7 @@ const COMMANDS: [Cmd; 8] = [
             "synth",
             "relaxation",
             "--preset",
-            "seed-table-3.3",
+            "elatrache2021-table-3.3",
             "--out",
             "out.csv",
         ],

@@ -264,7 +264,11 @@ const UNITS: [&str; 17] = [
 const KINDS: [&str; 9] = [
     "stack", "helix", "step", "ramp", "triangle", "sine", "csv", "pid", "free",
 ];
-const PRESETS: [&str; 3] = ["vhb4910-yeoh", "seed-table-3.3", "seed-table-4.2"];
+const PRESETS: [&str; 3] = [
+    "vhb4910-yeoh",
+    "elatrache2021-table-3.3",
+    "elatrache2021-table-4.2",
+];
 /// Keys no table of a scene knows, some of them plausible.
 const UNKNOWN_KEYS: [&str; 5] = ["colour", "presett", "damping", "spann", "fit_file"];
 

@@ -26,7 +26,8 @@
 //! the τ without pulling E′ off.
 //!
 //! **Kramers–Kronig check.** A Prony series is causal, so its E′ and E″ are
-//! Kramers–Kronig consistent by construction. The check fits E′ alone (same search),
+//! Kramers–Kronig consistent by construction. The check fits E′ alone (the same
+//! search, at the term count of the joint fit),
 //! predicts E″ from that series, and lists the frequency ranges where the measured E″
 //! differs from the prediction by more than [`KK_TOLERANCE`] plus three times the
 //! storage fit's relative RMS residual (the noise): there the two measured moduli
@@ -143,7 +144,11 @@ pub struct KkDisagreement {
     pub worst_ratio: f64,
 }
 
-/// A frequency-domain Prony fit.
+/// A frequency-domain Prony fit. The σ of every parameter is from the pooled
+/// variance of the weighted residuals (both row kinds together); the loss rows'
+/// weighted noise is smaller than the storage rows' (module docs, "Weighting"), so
+/// σ of a parameter set by E′ alone (E∞ at the lowest frequencies) may be low by
+/// up to √2.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FrequencyFit {
     /// Overall status.
@@ -334,17 +339,17 @@ fn setup(data: &ComplexModulus, loss_weight: f64) -> Setup<FrequencyKernels> {
     Setup::new(Problem::new(kern, y, w, smax), window, 1.0)
 }
 
-/// The Prony core on a setup: grid, every count, assessment, choice. Returns the
-/// chosen count's assessment, the grid, the selection and the notes of the choice.
-fn estimate(
-    setup: &mut Setup<FrequencyKernels>,
-    search: &Search,
-) -> Result<(
-    Assessed<FrequencyKernels>,
-    Grid,
-    Option<Selection>,
-    Vec<String>,
-)> {
+/// What the Prony core gives for one setup: the chosen count's assessment, the
+/// grid, the selection (auto only) and the notes of the choice.
+struct Estimate {
+    chosen: Assessed<FrequencyKernels>,
+    grid: Grid,
+    selection: Option<Selection>,
+    notes: Vec<String>,
+}
+
+/// The Prony core on a setup: grid, every count, assessment, choice.
+fn estimate(setup: &mut Setup<FrequencyKernels>, search: &Search) -> Result<Estimate> {
     let m = setup.prob.len();
     let counts = select::term_counts(search, m)?;
     let grid = grid::grid_stage(setup, search.grid_per_decade)?;
@@ -352,12 +357,12 @@ fn estimate(
     let mut assessed = assess::assess_all(setup, fits);
     let mut notes = Vec::new();
     let choice = select::choose(&assessed, search, &mut notes);
-    Ok((
-        assessed.swap_remove(choice.index),
+    Ok(Estimate {
+        chosen: assessed.swap_remove(choice.index),
         grid,
-        choice.selection,
+        selection: choice.selection,
         notes,
-    ))
+    })
 }
 
 /// Fit a Prony series to the complex modulus `data` (module docs: model,
@@ -367,9 +372,14 @@ pub fn fit(data: &ComplexModulus, settings: &FrequencySettings) -> Result<Freque
     check(data)?;
     let t0 = Instant::now();
     let mut setup = setup(data, settings.loss_weight);
-    let (a, grid, selection, notes) = estimate(&mut setup, &settings.search)?;
+    let Estimate {
+        chosen: a,
+        grid,
+        selection,
+        notes,
+    } = estimate(&mut setup, &settings.search)?;
     let kk = match settings.kramers_kronig && settings.loss_weight > 0.0 {
-        true => kramers_kronig(data, &settings.search)?,
+        true => kramers_kronig(data, &settings.search, a.tf.n_terms)?,
         false => Vec::new(),
     };
     let seconds = t0.elapsed().as_secs_f64();
@@ -525,9 +535,18 @@ fn verdict(
 /// The Kramers–Kronig check (module docs): E″ of a series fitted to E′ alone
 /// against the measured E″, sorted by ω; ranges of two or more consecutive points
 /// beyond [`KK_TOLERANCE`] + 3 × the storage fit's relative RMS residual.
-fn kramers_kronig(data: &ComplexModulus, search: &Search) -> Result<Vec<KkDisagreement>> {
+fn kramers_kronig(
+    data: &ComplexModulus,
+    search: &Search,
+    terms: usize,
+) -> Result<Vec<KkDisagreement>> {
     let mut storage_only = setup(data, 0.0);
-    let (a, ..) = estimate(&mut storage_only, search)?;
+    let search = Search {
+        terms: Some(terms),
+        ..*search
+    };
+    let a = estimate(&mut storage_only, &search)?.chosen;
+
     let n = a.tf.n_terms;
     let terms: Vec<(f64, f64)> = (0..n).map(|i| (a.si[1 + n + i], a.si[1 + i])).collect();
     let prony = Prony::new(a.si[0], &terms)?;
@@ -555,6 +574,7 @@ fn kramers_kronig(data: &ComplexModulus, search: &Search) -> Result<Vec<KkDisagr
         let w = data.omega_rad_s[k];
         let implied = prony.storage_loss(w).1;
         let ratio = data.loss_pa[k] / implied;
+
         match implied > 0.0 && (ratio - 1.0).abs() > limit {
             true => run.push((w, ratio)),
             false => close(&mut run),

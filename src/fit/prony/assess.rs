@@ -64,14 +64,18 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
     let unc = diagnostics::uncertainty(&jac, rss);
     let mut pred = vec![0.0; m];
     prob.model(&tf.p, &mut pred);
-    let y = &prob.y;
+    let y: &[f64] = &prob.y;
     let nf = m as f64;
     let mean = y.iter().sum::<f64>() / nf;
     let ss_res: f64 = pred.iter().zip(y).map(|(p, y)| (p - y).powi(2)).sum();
     let ss_tot: f64 = y.iter().map(|v| (v - mean).powi(2)).sum();
     // Against zero stress (all moduli 0, which every series contains), in the fit's
     // own weighting.
-    let null: f64 = y.iter().zip(&prob.w).map(|(y, w)| (y * w).powi(2)).sum();
+    let null: f64 = y
+        .iter()
+        .zip(prob.w.iter())
+        .map(|(y, w)| (y * w).powi(2))
+        .sum();
     let lag1 = if rss > 0.0 {
         r.iter()
             .zip(r.iter().skip(1))

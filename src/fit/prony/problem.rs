@@ -5,21 +5,24 @@
 use super::Kernels;
 use crate::fit::lm::LeastSquares;
 use nalgebra::{DMatrix, DVector};
+use std::sync::Arc;
 
 /// The fitting problem: p = [e∞, e₁…e_N, ln τ₁…ln τ_N] in scaled units (observation =
 /// S·(e∞·x + Σ eᵢ·hᵢ)), residuals rₖ = wₖ·(model − yₖ).
 #[derive(Debug, Clone)]
 pub struct Problem<K: Kernels> {
-    /// The domain's rows: inputs and kernels.
-    pub kern: K,
+    /// The domain's rows: inputs and kernels. The rows, data and weights are
+    /// shared (not copied) by the clones that fit each term count: at 10⁶ points
+    /// they are tens of MB a copy.
+    pub kern: Arc<K>,
     /// The data yₖ.
-    pub y: Vec<f64>,
+    pub y: Arc<[f64]>,
     /// The residual weights wₖ.
-    pub w: Vec<f64>,
+    pub w: Arc<[f64]>,
     /// The scale S of the moduli.
     pub scale: f64,
     /// wₖ·S: the factor of every column of the design (and of the Jacobian).
-    ws: Vec<f64>,
+    ws: Arc<[f64]>,
     /// Number of Prony terms N.
     pub n_terms: usize,
     /// The terms' kernels and their τ-derivatives of the last evaluation, one block
@@ -42,9 +45,9 @@ impl<K: Kernels> Problem<K> {
     pub fn new(kern: K, y: Vec<f64>, w: Vec<f64>, scale: f64) -> Problem<K> {
         let ws = w.iter().map(|w| w * scale).collect();
         Problem {
-            kern,
-            y,
-            w,
+            kern: Arc::new(kern),
+            y: y.into(),
+            w: w.into(),
             scale,
             ws,
             n_terms: 0,
@@ -142,14 +145,27 @@ impl<K: Kernels> Problem<K> {
         self.kernel_derivatives = derivatives;
     }
 
+    /// Free the kept kernels (n·m values, and as many derivatives): a term fit
+    /// waiting for its assessment keeps nothing of the data's size; the
+    /// assessment computes them again, the same bits ([`Problem::kernels_at_log_taus`]).
+    pub(crate) fn release_kernels(&mut self) {
+        self.h = Vec::new();
+        self.dh = Vec::new();
+        self.kernel_taus.clear();
+        self.kernel_derivatives = false;
+    }
+
     /// The weighted data w·y: the right-hand side of the moduli's least squares.
     pub(crate) fn targets(&self) -> DVector<f64> {
-        DVector::from_iterator(self.len(), self.y.iter().zip(&self.w).map(|(y, w)| y * w))
+        DVector::from_iterator(
+            self.len(),
+            self.y.iter().zip(self.w.iter()).map(|(y, w)| y * w),
+        )
     }
 
     /// The design's first column, w·S·x (the E∞ term), into `out`.
     pub(crate) fn input_column(&self, out: &mut [f64]) {
-        for ((o, x), ws) in out.iter_mut().zip(self.kern.input()).zip(&self.ws) {
+        for ((o, x), ws) in out.iter_mut().zip(self.kern.input()).zip(self.ws.iter()) {
             *o = x * ws;
         }
     }
@@ -160,13 +176,13 @@ impl<K: Kernels> Problem<K> {
     pub(crate) fn design_columns(&self, out: &mut [f64], dout: Option<&mut [f64]>) {
         let m = self.len();
         for (i, a) in out.chunks_exact_mut(m).enumerate() {
-            for ((a, ws), h) in a.iter_mut().zip(&self.ws).zip(&self.h[i * m..]) {
+            for ((a, ws), h) in a.iter_mut().zip(self.ws.iter()).zip(&self.h[i * m..]) {
                 *a = h * ws;
             }
         }
         if let Some(d) = dout {
             for ((i, a), tau) in d.chunks_exact_mut(m).enumerate().zip(&self.taus) {
-                for ((a, ws), dh) in a.iter_mut().zip(&self.ws).zip(&self.dh[i * m..]) {
+                for ((a, ws), dh) in a.iter_mut().zip(self.ws.iter()).zip(&self.dh[i * m..]) {
                     *a = dh * (ws * tau);
                 }
             }
@@ -185,11 +201,11 @@ impl<K: Kernels> Problem<K> {
         let m = self.len();
         self.kern.kernels(taus, out, dout.as_deref_mut());
         for (i, &tau) in taus.iter().enumerate() {
-            for (a, ws) in out[i * m..(i + 1) * m].iter_mut().zip(&self.ws) {
+            for (a, ws) in out[i * m..(i + 1) * m].iter_mut().zip(self.ws.iter()) {
                 *a *= ws;
             }
             if let Some(d) = dout.as_deref_mut() {
-                for (a, ws) in d[i * m..(i + 1) * m].iter_mut().zip(&self.ws) {
+                for (a, ws) in d[i * m..(i + 1) * m].iter_mut().zip(self.ws.iter()) {
                     *a *= ws * tau;
                 }
             }
@@ -209,7 +225,7 @@ impl<K: Kernels> LeastSquares for Problem<K> {
         self.kernels_at(p, jac.is_some());
         let r = r.as_mut_slice();
         self.combine(p, r);
-        for ((rk, w), y) in r.iter_mut().zip(&self.w).zip(&self.y) {
+        for ((rk, w), y) in r.iter_mut().zip(self.w.iter()).zip(self.y.iter()) {
             *rk = w * (s * *rk - y);
         }
         let finite = |v: &[f64]| v.iter().all(|v| v.is_finite());
@@ -222,10 +238,14 @@ impl<K: Kernels> LeastSquares for Problem<K> {
         for i in 0..n {
             let (e, tau) = (p[1 + i], self.taus[i]);
             let (h, dh) = (&self.h[i * m..(i + 1) * m], &self.dh[i * m..(i + 1) * m]);
-            for ((j, ws), h) in je[i * m..(i + 1) * m].iter_mut().zip(&self.ws).zip(h) {
+            for ((j, ws), h) in je[i * m..(i + 1) * m].iter_mut().zip(self.ws.iter()).zip(h) {
                 *j = ws * h;
             }
-            for ((j, ws), dh) in jt[i * m..(i + 1) * m].iter_mut().zip(&self.ws).zip(dh) {
+            for ((j, ws), dh) in jt[i * m..(i + 1) * m]
+                .iter_mut()
+                .zip(self.ws.iter())
+                .zip(dh)
+            {
                 *j = ws * e * tau * dh;
             }
         }

@@ -27,8 +27,8 @@ pub struct TermFit<K: Kernels> {
     pub starts: usize,
     /// Starts whose search ended at the best cost.
     pub at_best: usize,
-    /// The count's problem, holding the kernels of its last evaluation (the
-    /// assessment's evaluation at `p` takes them when they are `p`'s).
+    /// The count's problem (its kernels released: the fits of every count wait
+    /// for their assessment together).
     pub problem: Problem<K>,
 }
 
@@ -163,6 +163,7 @@ fn refine<K: Kernels>(
     };
     let mut p = polish.x;
     sort_terms(&mut p, n);
+    prob.release_kernels();
     TermFit {
         n_terms: n,
         p,

@@ -4,7 +4,7 @@
 use super::refine::TermFit;
 use super::{fmt_s, param_names, Kernels, Setup};
 use crate::fit::lm::LeastSquares;
-use crate::fit::{diagnostics, Status};
+use crate::fit::{diagnostics, Parameter, Status};
 use nalgebra::{DMatrix, DVector};
 
 /// Diagnostics of one term fit: statistics, uncertainty in SI, problems found.
@@ -37,6 +37,30 @@ pub struct Assessed<K: Kernels> {
     /// Per parameter ([E∞, E₁…, τ₁…]): whether the data pin it down by the one rule
     /// (fit::identifiability) and it is not at a bound of the τ search.
     pub identifiable: Vec<bool>,
+}
+
+impl<K: Kernels> Assessed<K> {
+    /// The SI parameters (E_inf, E1…, tau1…) with σ, 95 % interval and whether
+    /// each is identifiable. Every parameter is ≥ 0 by its law: an interval reaching
+    /// below 0 is clipped there (it loses no value the parameter can take).
+    pub fn parameters(&self) -> Vec<Parameter> {
+        param_names(self.tf.n_terms)
+            .into_iter()
+            .zip(&self.si)
+            .zip(&self.unc.std_error)
+            .zip(&self.identifiable)
+            .map(|((((name, unit), &v), se), &identifiable)| Parameter {
+                name,
+                value: v,
+                unit: unit.to_string(),
+                std_error: *se,
+                ci95: se
+                    .zip(self.unc.t95)
+                    .map(|(s, t)| [(v - t * s).max(0.0), v + t * s]),
+                identifiable: Some(identifiable),
+            })
+            .collect()
+    }
 }
 
 /// Stage 4 for one term count: residual statistics, information criteria and the
@@ -112,45 +136,17 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
 /// Findings about a fit, each with the status it raises.
 type Findings = Vec<(Status, String)>;
 
-/// What makes a term fit ineligible for `auto` (and raises its status), and softer
-/// warnings: a search that did not converge, a model not finite at the data, terms
-/// that are negligible, at a bound, outside the sampled window or within a factor
-/// 1.25 of each other, too few points, a parameter that is not identifiable by the
-/// one rule (fit::identifiability; E∞ at its physical bound 0, or with an interval
-/// reaching it, is judged by its
-/// correlations only, and said as a one-sided interval); and per parameter whether
-/// it is identifiable.
-fn problems<K: Kernels>(
+/// The terms' problems into `problems`: negligible, at a bound of the τ search
+/// (`at_bound`), outside the window the data support, within a factor 1.25 of the
+/// next.
+fn term_problems<K: Kernels>(
     setup: &Setup<K>,
-    tf: &TermFit<K>,
     si: &[f64],
-    unc: &diagnostics::Uncertainty,
-    finite: bool,
-    m: usize,
-) -> (Findings, Findings, Vec<bool>) {
-    let n = tf.n_terms;
-    let k = 1 + 2 * n;
-    let mut problems = Vec::new();
-    let mut warnings = Vec::new();
-    if let Some(w) = tf.termination.shortfall() {
-        problems.push((Status::NotConverged, w));
-    }
-    if !finite {
-        problems.push((
-            Status::NotConverged,
-            "the model is not finite at some data points".into(),
-        ));
-    }
+    n: usize,
+    at_bound: &[bool],
+    problems: &mut Findings,
+) {
     let e0: f64 = si[..=n].iter().sum();
-    // E∞ at the bound 0 its law allows, or with a 95 % interval that reaches it (the
-    // non-negative least squares hold it at or next to 0): judged by its
-    // correlations only, its interval one-sided
-    let t = unc.t95.unwrap_or(1.96);
-    let at_floor = unc.std_error[0].is_some_and(|sd| si[0] - t * sd <= 0.0);
-    let (lo, hi) = (setup.bounds.0.exp(), setup.bounds.1.exp());
-    let at_bound: Vec<bool> = (0..n)
-        .map(|i| si[1 + n + i] <= lo * 1.0001 || si[1 + n + i] >= hi / 1.0001)
-        .collect();
     for i in 0..n {
         let (tau, e) = (si[1 + n + i], si[1 + i]);
         let name = format!("τ{} = {}", i + 1, fmt_s(tau));
@@ -184,6 +180,47 @@ fn problems<K: Kernels>(
             ));
         }
     }
+}
+
+/// What makes a term fit ineligible for `auto` (and raises its status), and softer
+/// warnings: a search that did not converge, a model not finite at the data, terms
+/// that are negligible, at a bound, outside the sampled window or within a factor
+/// 1.25 of each other, too few points, a parameter that is not identifiable by the
+/// one rule (fit::identifiability; E∞ at its physical bound 0, or with an interval
+/// reaching it, is judged by its
+/// correlations only, and said as a one-sided interval); and per parameter whether
+/// it is identifiable.
+fn problems<K: Kernels>(
+    setup: &Setup<K>,
+    tf: &TermFit<K>,
+    si: &[f64],
+    unc: &diagnostics::Uncertainty,
+    finite: bool,
+    m: usize,
+) -> (Findings, Findings, Vec<bool>) {
+    let n = tf.n_terms;
+    let k = 1 + 2 * n;
+    let mut problems = Vec::new();
+    let mut warnings = Vec::new();
+    if let Some(w) = tf.termination.shortfall() {
+        problems.push((Status::NotConverged, w));
+    }
+    if !finite {
+        problems.push((
+            Status::NotConverged,
+            "the model is not finite at some data points".into(),
+        ));
+    }
+    // E∞ at the bound 0 its law allows, or with a 95 % interval that reaches it (the
+    // non-negative least squares hold it at or next to 0): judged by its
+    // correlations only, its interval one-sided
+    let t = unc.t95.unwrap_or(1.96);
+    let at_floor = unc.std_error[0].is_some_and(|sd| si[0] - t * sd <= 0.0);
+    let (lo, hi) = (setup.bounds.0.exp(), setup.bounds.1.exp());
+    let at_bound: Vec<bool> = (0..n)
+        .map(|i| si[1 + n + i] <= lo * 1.0001 || si[1 + n + i] >= hi / 1.0001)
+        .collect();
+    term_problems(setup, si, n, &at_bound, &mut problems);
     if m <= k + 1 {
         problems.push((
             Status::IllPosed,

@@ -38,7 +38,7 @@ use super::assess::{self, Assessed};
 use super::grid::{self, Grid};
 use super::problem::Problem;
 use super::select::{self, Selection};
-use super::{fmt_s, param_names, refine, Kernels, Search, Setup};
+use super::{fmt_s, refine, Kernels, Search, Setup};
 use crate::error::{Error, Result};
 use crate::fit::problem::REL_FLOOR;
 use crate::fit::{Parameter, SolverReport, Status};
@@ -402,22 +402,7 @@ fn record(
 ) -> FrequencyFit {
     let n = a.tf.n_terms;
     let (si, se) = (&a.si, &a.unc.std_error);
-    let parameters: Vec<Parameter> = param_names(n)
-        .into_iter()
-        .zip(si)
-        .zip(se)
-        .zip(&a.identifiable)
-        .map(|((((name, unit), &v), se), &identifiable)| Parameter {
-            name,
-            value: v,
-            unit: unit.to_string(),
-            std_error: *se,
-            ci95: se
-                .zip(a.unc.t95)
-                .map(|(s, t)| [(v - t * s).max(0.0), v + t * s]),
-            identifiable: Some(identifiable),
-        })
-        .collect();
+    let parameters = a.parameters();
     let window = setup.window;
     let terms = (0..n)
         .map(|i| FrequencyTerm {

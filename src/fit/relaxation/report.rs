@@ -11,8 +11,8 @@ use crate::fit::prony::assess::Assessed;
 use crate::fit::prony::grid::Grid;
 use crate::fit::prony::refine::START_POINTS;
 use crate::fit::prony::select::{self, Choice};
-use crate::fit::prony::{fmt_s, param_names, Search};
-use crate::fit::{Parameter, SolverReport, Status};
+use crate::fit::prony::{fmt_s, Search};
+use crate::fit::{SolverReport, Status};
 use crate::io::relaxation::RelaxationData;
 
 /// What the record of a fit is made from, besides the chosen count.
@@ -197,25 +197,7 @@ pub(super) fn report(
     let solver_iterations = a.tf.iterations + grid.2;
     let si = &a.si;
     let e0: f64 = si[..=n].iter().sum();
-    let names = param_names(n);
-    let parameters: Vec<Parameter> = names
-        .iter()
-        .zip(si)
-        .zip(&a.unc.std_error)
-        .zip(&a.identifiable)
-        .map(|((((name, unit), &v), se), &identifiable)| Parameter {
-            name: name.clone(),
-            value: v,
-            unit: unit.to_string(),
-            std_error: *se,
-            // Every parameter is ≥ 0 by its law: an interval reaching below 0 is
-            // clipped there (it loses no value the parameter can take).
-            ci95: se
-                .zip(a.unc.t95)
-                .map(|(s, t)| [(v - t * s).max(0.0), v + t * s]),
-            identifiable: Some(identifiable),
-        })
-        .collect();
+    let parameters = a.parameters();
     let prony: Vec<PronyEntry> = (0..n)
         .map(|i| PronyEntry {
             tau_s: si[1 + n + i],

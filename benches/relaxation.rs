@@ -3,7 +3,12 @@
 //! a 4-term fit (refined and grid-only), the automatic term count, and the exact
 //! hereditary recursion against the naive closed form per point; the grid NNLS stage
 //! (200 points × 37 columns: E∞ and 36 τ at 6 per decade) by Lawson–Hanson against
-//! the Clarabel QP it replaced, in the same run.
+//! the Clarabel QP it replaced, in the same run. And the frequency-domain Prony fit
+//! (`fit::prony::frequency`) of a DMA master curve the size of issue 36's "Speed"
+//! target: 21 isotherms × 10 points (0.01–100 Hz each, shifted a decade apart:
+//! 210 points over 24 decades) of a 12-term series with E∞ > 0, 1 % noise; a
+//! 30-term fit on the grid (NNLS at 30 τ from the grid spectrum) and the automatic
+//! choice (up to 12 terms, refined).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use dea_fit::fit::linear::constrained_least_squares;
@@ -116,5 +121,60 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+fn frequency(c: &mut Criterion) {
+    use dea_fit::fit::prony::frequency::{fit, ComplexModulus, FrequencySettings};
+    use dea_fit::fit::prony::{Method as PronyMethod, Search};
+    use dea_fit::material::viscoelastic::Prony;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+    let terms: Vec<(f64, f64)> = (0..12)
+        .map(|i| (1e-12 * 100f64.powi(i), 1e6 * 0.7f64.powi(i)))
+        .collect();
+    let truth = Prony::new(1e5, &terms).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(36);
+    let noise = Normal::new(0.0, 0.01).unwrap();
+    let (mut omega, mut storage, mut loss) = (Vec::new(), Vec::new(), Vec::new());
+    for iso in 0..21 {
+        for k in 0..10 {
+            let hz = 0.01 * 10f64.powf(4.0 * k as f64 / 9.0) * 10f64.powi(iso - 10);
+            let w = 2.0 * std::f64::consts::PI * hz;
+            let (e1, e2) = truth.storage_loss(w);
+            omega.push(w);
+            storage.push(e1 * (1.0 + noise.sample(&mut rng)));
+            loss.push(e2 * (1.0 + noise.sample(&mut rng)));
+        }
+    }
+    let data = ComplexModulus {
+        omega_rad_s: &omega,
+        storage_pa: &storage,
+        loss_pa: &loss,
+    };
+    let grid30 = FrequencySettings {
+        search: Search {
+            terms: Some(30),
+            method: PronyMethod::Grid,
+            ..Search::default()
+        },
+        ..FrequencySettings::default()
+    };
+    let auto = FrequencySettings {
+        search: Search {
+            max_terms: 12,
+            ..Search::default()
+        },
+        ..FrequencySettings::default()
+    };
+    let mut g = c.benchmark_group("prony_frequency");
+    g.measurement_time(Duration::from_secs(3));
+    g.sample_size(10);
+    g.bench_function("master_210_points_30_terms_grid", |b| {
+        b.iter(|| fit(black_box(&data), &grid30).unwrap())
+    });
+    g.bench_function("master_210_points_auto_12", |b| {
+        b.iter(|| fit(black_box(&data), &auto).unwrap())
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench, frequency);
 criterion_main!(benches);

@@ -127,6 +127,8 @@ fn bench_scale_writes_rows_slopes_and_chart() {
         "300",
         "--max-fit-rows",
         "90",
+        "--max-relaxation-rows",
+        "90",
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let stdout = String::from_utf8_lossy(&o.stdout);

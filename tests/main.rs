@@ -23,6 +23,7 @@ mod models;
 mod numeric_input;
 mod permittivity;
 mod progress;
+mod prony_frequency;
 mod rank;
 mod relaxation;
 mod sampling;

@@ -45,6 +45,10 @@ pub struct ScaleArgs {
     /// `relaxation --terms auto`).
     #[arg(long, default_value_t = 100_000, value_parser = |s: &str| ROWS.parse(s))]
     max_fit_rows: usize,
+    /// Most rows fitted by `relaxation --terms auto` (its scaling to 10⁶ points is
+    /// the point: issue 36, "Speed").
+    #[arg(long, default_value_t = 1_000_000, value_parser = |s: &str| ROWS.parse(s))]
+    max_relaxation_rows: usize,
     /// Seconds spent repeating each size (at least --min-repeats runs).
     #[arg(long, default_value_t = 0.5)]
     budget: f64,
@@ -190,12 +194,16 @@ fn relaxation_data(rows: usize) -> Result<RelaxationData> {
 
 /// Run the benchmark.
 pub fn run(a: &ScaleArgs) -> Result<Verdict> {
-    if a.min_rows < 10 || a.max_rows <= a.min_rows || a.max_fit_rows <= a.min_rows {
+    if a.min_rows < 10
+        || a.max_rows <= a.min_rows
+        || a.max_fit_rows <= a.min_rows
+        || a.max_relaxation_rows <= a.min_rows
+    {
         return Err(Error::settings(format!(
-            "rows: expected 10 ≤ --min-rows ({}) < --max-rows ({}) and --max-fit-rows ({})",
-            a.min_rows, a.max_rows, a.max_fit_rows
+            "rows: expected 10 ≤ --min-rows ({}) < --max-rows ({}), --max-fit-rows ({}) and --max-relaxation-rows ({})",
+            a.min_rows, a.max_rows, a.max_fit_rows, a.max_relaxation_rows
         ))
-        .with_hint("e.g. --min-rows 1000 --max-rows 1000000 --max-fit-rows 100000"));
+        .with_hint("e.g. --min-rows 1000 --max-rows 1000000 --max-fit-rows 100000 --max-relaxation-rows 1000000"));
     }
     let budget = Budget {
         min_repeats: a.min_repeats,
@@ -223,7 +231,11 @@ pub fn run(a: &ScaleArgs) -> Result<Verdict> {
 
     let read_sizes = sizes(a.min_rows, a.max_rows);
     let fit_sizes = sizes(a.min_rows, a.max_fit_rows);
-    let bar = progress_bar("scale", 2 * read_sizes.len() + 2 * fit_sizes.len());
+    let relaxation_sizes = sizes(a.min_rows, a.max_relaxation_rows);
+    let bar = progress_bar(
+        "scale",
+        2 * read_sizes.len() + fit_sizes.len() + relaxation_sizes.len(),
+    );
     let settings = Settings::default();
     let yeoh = ModelSpec::new("yeoh", Default::default());
     let mut verdict = Verdict::default();
@@ -255,6 +267,8 @@ pub fn run(a: &ScaleArgs) -> Result<Verdict> {
         let (t, (fit, _)) = measure(&budget, || hyperelastic::fit_auto(&data, &settings))?;
         verdict.add(format!("hyperelastic auto {n} rows"), fit.status);
         push("hyperelastic-auto", n, t);
+    }
+    for &n in &relaxation_sizes {
         let data = relaxation_data(n)?;
         let loading = Loading {
             strain: Some(0.5),

@@ -12,6 +12,7 @@ pub mod multistart;
 pub mod nnls;
 pub mod permittivity;
 pub mod problem;
+pub mod prony;
 pub mod relaxation;
 pub mod weibull;
 

@@ -1,0 +1,289 @@
+//! Stage 4: what a term fit is worth: statistics, information criteria, the σ of
+//! every SI parameter, and the problems that keep `auto` from taking it.
+
+use super::refine::TermFit;
+use super::{fmt_s, param_names, Kernels, Setup};
+use crate::fit::lm::LeastSquares;
+use crate::fit::{diagnostics, Parameter, Status};
+use nalgebra::{DMatrix, DVector};
+
+/// Diagnostics of one term fit: statistics, uncertainty in SI, problems found.
+pub struct Assessed<K: Kernels> {
+    /// The term fit.
+    pub tf: TermFit<K>,
+    /// SI parameters: [E∞, E₁…, τ₁…].
+    pub si: Vec<f64>,
+    /// Their uncertainty.
+    pub unc: diagnostics::Uncertainty,
+    /// RMSE of the unweighted residuals (Pa).
+    pub rmse: f64,
+    /// RMS of the weighted (scaled) residuals.
+    pub rel_rmse: f64,
+    /// Fraction of the data explained, 1 − ‖r‖²/‖w·y‖², against zero stress.
+    pub explained: f64,
+    /// Lag-1 autocorrelation of the scaled residuals in time order: ≈ 0 (±1/√n) for
+    /// noise, near 1 for a misfit the model leaves systematically.
+    pub lag1: f64,
+    /// R² of the unweighted residuals.
+    pub r2: f64,
+    /// AICc (None when n ≤ k + 1).
+    pub aicc: Option<f64>,
+    /// BIC.
+    pub bic: f64,
+    /// Problems that make the count ineligible for auto (and raise the status).
+    pub problems: Vec<(Status, String)>,
+    /// Softer warnings.
+    pub warnings: Vec<(Status, String)>,
+    /// Per parameter ([E∞, E₁…, τ₁…]): whether the data pin it down by the one rule
+    /// (fit::identifiability) and it is not at a bound of the τ search.
+    pub identifiable: Vec<bool>,
+}
+
+impl<K: Kernels> Assessed<K> {
+    /// The SI parameters (E_inf, E1…, tau1…) with σ, 95 % interval and whether
+    /// each is identifiable. Every parameter is ≥ 0 by its law: an interval reaching
+    /// below 0 is clipped there (it loses no value the parameter can take).
+    pub fn parameters(&self) -> Vec<Parameter> {
+        param_names(self.tf.n_terms)
+            .into_iter()
+            .zip(&self.si)
+            .zip(&self.unc.std_error)
+            .zip(&self.identifiable)
+            .map(|((((name, unit), &v), se), &identifiable)| Parameter {
+                name,
+                value: v,
+                unit: unit.to_string(),
+                std_error: *se,
+                ci95: se
+                    .zip(self.unc.t95)
+                    .map(|(s, t)| [(v - t * s).max(0.0), v + t * s]),
+                identifiable: Some(identifiable),
+            })
+            .collect()
+    }
+}
+
+/// Stage 4 for one term count: residual statistics, information criteria and the
+/// uncertainty of the SI parameters, and the [`problems`] found.
+pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
+    let prob = &mut tf.problem;
+    let n = tf.n_terms;
+    let m = prob.len();
+    let k = 1 + 2 * n;
+    let mut r = DVector::zeros(m);
+    let mut jac = DMatrix::zeros(m, k);
+    let finite = prob.eval(&tf.p, &mut r, Some(&mut jac));
+    let rss = r.norm_squared();
+    let s = prob.scale * setup.unit;
+    let mut si = vec![tf.p[0] * s];
+    si.extend((0..n).map(|i| tf.p[1 + i] * s));
+    si.extend((0..n).map(|i| tf.p[1 + n + i].exp()));
+    // Jacobian with respect to the SI parameters.
+    for c in 0..=n {
+        jac.column_mut(c).scale_mut(1.0 / s);
+    }
+    for i in 0..n {
+        jac.column_mut(1 + n + i).scale_mut(1.0 / si[1 + n + i]);
+    }
+    let unc = diagnostics::uncertainty(&jac, rss);
+    let mut pred = vec![0.0; m];
+    prob.model(&tf.p, &mut pred);
+    let y: &[f64] = &prob.y;
+    let nf = m as f64;
+    let mean = y.iter().sum::<f64>() / nf;
+    let ss_res: f64 = pred.iter().zip(y).map(|(p, y)| (p - y).powi(2)).sum();
+    let ss_tot: f64 = y.iter().map(|v| (v - mean).powi(2)).sum();
+    // Against zero stress (all moduli 0, which every series contains), in the fit's
+    // own weighting.
+    let null: f64 = y
+        .iter()
+        .zip(prob.w.iter())
+        .map(|(y, w)| (y * w).powi(2))
+        .sum();
+    let lag1 = if rss > 0.0 {
+        r.iter()
+            .zip(r.iter().skip(1))
+            .map(|(a, b)| a * b)
+            .sum::<f64>()
+            / rss
+    } else {
+        0.0
+    };
+    let (aicc, bic) = diagnostics::information_criteria(rss, m, k);
+
+    let (problems, warnings, identifiable) = problems(setup, &tf, &si, &unc, finite, m);
+    Assessed {
+        tf,
+        si,
+        unc,
+        rmse: (ss_res / nf).sqrt(),
+        rel_rmse: (rss / nf).sqrt(),
+        explained: 1.0 - rss / null,
+        lag1,
+        r2: if ss_tot > 0.0 {
+            1.0 - ss_res / ss_tot
+        } else {
+            f64::NAN
+        },
+        aicc,
+        bic,
+        problems,
+        warnings,
+        identifiable,
+    }
+}
+
+/// Findings about a fit, each with the status it raises.
+type Findings = Vec<(Status, String)>;
+
+/// The terms' problems into `problems`: negligible, at a bound of the τ search
+/// (`at_bound`), outside the window the data support, within a factor 1.25 of the
+/// next.
+fn term_problems<K: Kernels>(
+    setup: &Setup<K>,
+    si: &[f64],
+    n: usize,
+    at_bound: &[bool],
+    problems: &mut Findings,
+) {
+    let e0: f64 = si[..=n].iter().sum();
+    for i in 0..n {
+        let (tau, e) = (si[1 + n + i], si[1 + i]);
+        let name = format!("τ{} = {}", i + 1, fmt_s(tau));
+        if e <= 1e-3 * e0 {
+            problems.push((
+                Status::IllPosed,
+                format!("term {} ({name}) is negligible (E{} ≤ 0.1 % of E0): a term too many for these data", i + 1, i + 1),
+            ));
+        } else if at_bound[i] {
+            problems.push((
+                Status::IllPosed,
+                format!("{name} ran to its bound: the data do not determine it"),
+            ));
+        } else if tau < setup.window.0 || tau > setup.window.1 {
+            problems.push((
+                Status::IllPosed,
+                K::outside_window(&name, tau < setup.window.0, setup.window),
+            ));
+        }
+    }
+    for i in 1..n {
+        let ratio = si[1 + n + i] / si[n + i];
+        if ratio < 1.25 {
+            problems.push((
+                Status::IllPosed,
+                format!(
+                    "τ{} and τ{} are within a factor {ratio:.2}: two terms describe one relaxation",
+                    i,
+                    i + 1
+                ),
+            ));
+        }
+    }
+}
+
+/// What makes a term fit ineligible for `auto` (and raises its status), and softer
+/// warnings: a search that did not converge, a model not finite at the data, terms
+/// that are negligible, at a bound, outside the sampled window or within a factor
+/// 1.25 of each other, too few points, a parameter that is not identifiable by the
+/// one rule (fit::identifiability; E∞ at its physical bound 0, or with an interval
+/// reaching it, is judged by its
+/// correlations only, and said as a one-sided interval); and per parameter whether
+/// it is identifiable.
+fn problems<K: Kernels>(
+    setup: &Setup<K>,
+    tf: &TermFit<K>,
+    si: &[f64],
+    unc: &diagnostics::Uncertainty,
+    finite: bool,
+    m: usize,
+) -> (Findings, Findings, Vec<bool>) {
+    let n = tf.n_terms;
+    let k = 1 + 2 * n;
+    let mut problems = Vec::new();
+    let mut warnings = Vec::new();
+    if let Some(w) = tf.termination.shortfall() {
+        problems.push((Status::NotConverged, w));
+    }
+    if !finite {
+        problems.push((
+            Status::NotConverged,
+            "the model is not finite at some data points".into(),
+        ));
+    }
+    // E∞ at the bound 0 its law allows, or with a 95 % interval that reaches it (the
+    // non-negative least squares hold it at or next to 0): judged by its
+    // correlations only, its interval one-sided
+    let t = unc.t95.unwrap_or(1.96);
+    let at_floor = unc.std_error[0].is_some_and(|sd| si[0] - t * sd <= 0.0);
+    let (lo, hi) = (setup.bounds.0.exp(), setup.bounds.1.exp());
+    let at_bound: Vec<bool> = (0..n)
+        .map(|i| si[1 + n + i] <= lo * 1.0001 || si[1 + n + i] >= hi / 1.0001)
+        .collect();
+    term_problems(setup, si, n, &at_bound, &mut problems);
+    if m <= k + 1 {
+        problems.push((
+            Status::IllPosed,
+            format!("{m} points for {k} parameters: no degrees of freedom left"),
+        ));
+    } else if unc.std_error.iter().any(Option::is_none) {
+        problems.push((
+            Status::IllPosed,
+            format!(
+                "parameters not identifiable from these data (condition number {:.2e})",
+                unc.condition
+            ),
+        ));
+    } else {
+        if unc.condition > 1e8 {
+            warnings.push((
+                Status::Warning,
+                format!(
+                    "ill-conditioned: condition number {:.2e}; the parameters are poorly determined individually",
+                    unc.condition
+                ),
+            ));
+        }
+        if at_floor {
+            warnings.push((
+                Status::Warning,
+                format!(
+                    "E∞ = {} is at its physical bound 0 within its 95 % interval (the data show no equilibrium modulus); its interval is one-sided, [0, {}]",
+                    crate::report::format::si(si[0], "Pa"),
+                    crate::report::format::si(si[0] + t * unc.std_error[0].unwrap_or(f64::NAN), "Pa")
+                ),
+            ));
+        }
+    }
+    // The one rule for "identifiable" (fit::identifiability) for every parameter
+    // (E∞, Eᵢ, τᵢ: none may change sign); E∞ at or next to the bound 0 its law allows
+    // and is judged by its correlations only.
+    let names: Vec<String> = param_names(n).into_iter().map(|(name, _)| name).collect();
+    let mut floor = vec![false; k];
+    floor[0] = at_floor;
+    let judgement = diagnostics::judge(&names, si, unc, &vec![false; k], &floor);
+    if unc.std_error.iter().all(Option::is_some) && m > k + 1 {
+        problems.extend(
+            judgement
+                .findings
+                .iter()
+                .map(|w| (Status::IllPosed, w.clone())),
+        );
+        warnings.extend(
+            judgement
+                .warnings
+                .iter()
+                .map(|w| (Status::Warning, w.clone())),
+        );
+    }
+    let identifiable = (0..k)
+        .map(|j| judgement.identifiable(j) && !(j > n && at_bound[j - 1 - n]))
+        .collect();
+    (problems, warnings, identifiable)
+}
+
+/// [`assess`] of every term fit, in parallel.
+pub fn assess_all<K: Kernels>(setup: &Setup<K>, fits: Vec<TermFit<K>>) -> Vec<Assessed<K>> {
+    use rayon::prelude::*;
+    fits.into_par_iter().map(|f| assess(setup, f)).collect()
+}

@@ -1,0 +1,270 @@
+//! Variable projection of the Prony problem: the search over ln τ alone, the
+//! moduli by non-negative least squares at each τ.
+
+use super::problem::Problem;
+use super::Kernels;
+use crate::fit::lm::LeastSquares;
+use crate::fit::nnls::{dot, NnlsWork};
+use nalgebra::{DMatrix, DVector};
+
+/// Variable projection of a [`Problem`] (Golub & Pereyra 1973, with Kaufman's 1975
+/// Jacobian): the search runs over θ = ln τ only. At each θ the moduli c = (e∞, eᵢ)
+/// are the non-negative least-squares solution of A(θ)·c ≈ b ([`NnlsWork`], started
+/// from the last solution's positive set), with A = [w·S·x, w·S·h(τ₁), …] and b = w·y,
+/// so r(θ) = A·c − b are the residuals of [`Problem`] at the best moduli for these τ.
+/// Kaufman's Jacobian is ∂r/∂θᵢ ≈ Jᵢ = cᵢ·P⊥·∂aᵢ/∂θᵢ, with P⊥ the projector off the
+/// columns whose modulus is positive (a term at zero modulus moves nothing); its
+/// gradient Jᵀr is the exact gradient of ½‖r(θ)‖², since r ⟂ those columns.
+/// The amplitudes no longer lie in the search, so neither does the long valley
+/// between a modulus and its τ that a joint search walks along.
+///
+/// The search only uses the Jacobian's normal equations, and those follow from the
+/// Gram products of the columns ([`Projected::gram`], one pass over the data):
+/// (JᵀJ)ᵢⱼ = cᵢ·cⱼ·(dᵢ·dⱼ − (A_Pᵀdᵢ)ᵀ(A_PᵀA_P)⁻¹(A_Pᵀdⱼ)) with dᵢ = ∂aᵢ/∂θᵢ and A_P
+/// the positive columns, and (Jᵀr)ᵢ = cᵢ·dᵢ·r ([`LeastSquares::forms_normal_equations`]),
+/// so no m × N Jacobian is formed or projected.
+pub struct Projected<'p, K: Kernels> {
+    prob: &'p mut Problem<K>,
+    /// The columns A(θ) of the last evaluation (the first, w·S·x, fixed).
+    pub(crate) a: DMatrix<f64>,
+    /// dᵢ = ∂aᵢ/∂ln τᵢ = w·S·τᵢ·∂h/∂τ(τᵢ), filled when a Jacobian is asked for.
+    pub(crate) da: DMatrix<f64>,
+    b: DVector<f64>,
+    /// The Gram products of the columns [A | b | ∂A] of the last evaluation (the ∂A
+    /// rows and columns only when it was asked for a Jacobian).
+    gram: DMatrix<f64>,
+    /// The moduli's normal equations AᵀA and Aᵀb of the last evaluation (copied from
+    /// `gram` for [`NnlsWork::solve`]).
+    ata: DMatrix<f64>,
+    atb: DVector<f64>,
+    /// The moduli of the last evaluation.
+    pub(crate) c: DVector<f64>,
+    /// Which of them are positive: the next solve's start.
+    pub(crate) positive: Vec<bool>,
+    /// The moduli's NNLS work space (no allocation a solve).
+    work: NnlsWork,
+    /// x·x and b·x of the fixed first column x = w·S·x and b = w·y, summed over
+    /// the blocks of [`Projected::gram`] as it sums them: the same at every θ.
+    fixed: [f64; 2],
+    /// θ of the last evaluation, whose Gram products of [A | b] `gram` holds.
+    theta: Vec<f64>,
+    /// θ, JᵀJ and Jᵀr of the last evaluation asked for a Jacobian.
+    normal: Option<(Vec<f64>, DMatrix<f64>, DVector<f64>)>,
+}
+
+/// Rows of a block of [`Projected::gram`]: the columns of a block (at most 2·12 + 2
+/// of 4 kB) stay in the level-2 cache while all their products are taken; a curve
+/// of at most this many points (every shipped one, and the starts' subsample) takes
+/// each product in one piece, as [`nnls`] does.
+pub(crate) const GRAM_ROWS: usize = 512;
+
+/// a·b as [`Projected::gram`] sums it: [`dot`] of each block of [`GRAM_ROWS`]
+/// rows added in order to 0.
+fn blocked_dot(a: &[f64], b: &[f64]) -> f64 {
+    a.chunks(GRAM_ROWS)
+        .zip(b.chunks(GRAM_ROWS))
+        .fold(0.0, |g, (a, b)| g + dot(a, b))
+}
+
+impl<'p, K: Kernels> Projected<'p, K> {
+    /// The projection of `prob` (its term count set).
+    pub fn new(prob: &'p mut Problem<K>) -> Projected<'p, K> {
+        let (m, n) = (prob.len(), prob.n_terms);
+        let mut a = DMatrix::zeros(m, 1 + n);
+        prob.input_column(a.column_mut(0).as_mut_slice());
+        let b = prob.targets();
+        let x = &a.as_slice()[..m];
+        let fixed = [blocked_dot(x, x), blocked_dot(b.as_slice(), x)];
+        Projected {
+            prob,
+            a,
+            da: DMatrix::zeros(m, n),
+            b,
+            gram: DMatrix::zeros(2 + 2 * n, 2 + 2 * n),
+            ata: DMatrix::zeros(1 + n, 1 + n),
+            atb: DVector::zeros(1 + n),
+            c: DVector::zeros(1 + n),
+            positive: vec![false; 1 + n],
+            work: NnlsWork::new(1 + n),
+            fixed,
+            theta: Vec::with_capacity(n),
+            normal: None,
+        }
+    }
+
+    /// The moduli at θ into `c` (a failed solve leaves them as they were), as
+    /// [`LeastSquares::eval`] without a Jacobian would set them, counted as an
+    /// evaluation: from the Gram products of the last evaluation when it was at θ
+    /// (the same products, so the same bits), else from the kernels at θ with their
+    /// derivatives, which the joint problem's first evaluation at the same τ then
+    /// takes ([`Problem::kernels_at_log_taus`]).
+    pub fn moduli_at(&mut self, theta: &[f64]) {
+        self.prob.evaluations += 1;
+        if self.theta != theta {
+            let m = self.prob.len();
+            self.prob.kernels_at_log_taus(theta, true);
+            self.prob
+                .design_columns(&mut self.a.as_mut_slice()[m..], None);
+            self.gram(false);
+            self.theta.clear();
+            self.theta.extend_from_slice(theta);
+        }
+        self.solve_moduli();
+    }
+
+    /// The moduli's NNLS on the Gram products of the last evaluation, started from
+    /// the positive set of the one before, into `c` and `positive`; false (both
+    /// unchanged) when it fails.
+    fn solve_moduli(&mut self) -> bool {
+        let n = self.a.ncols() - 1;
+        for j in 0..=n {
+            for i in 0..=n {
+                self.ata[(i, j)] = self.gram[(i, j)];
+            }
+            self.atb[j] = self.gram[(j, 1 + n)];
+        }
+        let solved = self.work.solve(
+            self.ata.as_slice(),
+            self.atb.as_slice(),
+            Some(&self.positive),
+        );
+        if solved.is_err() {
+            return false;
+        }
+        self.c.copy_from_slice(self.work.x());
+        for (f, &v) in self.positive.iter_mut().zip(self.c.iter()) {
+            *f = v > 0.0;
+        }
+        true
+    }
+
+    /// The parameters of [`Problem`] at θ: [e∞, eᵢ…, ln τᵢ…], the moduli those of the
+    /// last evaluation (which must have been at θ).
+    pub fn joint(&self, theta: &[f64]) -> Vec<f64> {
+        self.c.iter().chain(theta).copied().collect()
+    }
+
+    /// The Gram products kᵢ·kⱼ of the columns k = [A | b | ∂A] (∂A when
+    /// `derivatives`; b·b and b·∂A, which nothing uses, left at 0) into the leading
+    /// block of `gram`, in one pass over the rows:
+    /// blocks of [`GRAM_ROWS`] rows, every product of a block while its columns are
+    /// in the cache (column by column, each product of a 10⁵-point curve would read
+    /// two 0.8 MB columns from memory). The two products of the fixed columns alone
+    /// are `fixed`'s.
+    fn gram(&mut self, derivatives: bool) {
+        let (m, n) = (self.a.nrows(), self.a.ncols() - 1);
+        let k = n + 2 + if derivatives { n } else { 0 };
+        let (a, b, da) = (self.a.as_slice(), self.b.as_slice(), self.da.as_slice());
+        let col = |i: usize| match i {
+            _ if i <= n => &a[i * m..(i + 1) * m],
+            _ if i == n + 1 => b,
+            _ => &da[(i - n - 2) * m..(i - n - 1) * m],
+        };
+        let g = self.gram.as_mut_slice();
+        let size = 2 + 2 * n;
+        g.fill(0.0);
+        for lo in (0..m).step_by(GRAM_ROWS) {
+            let hi = (lo + GRAM_ROWS).min(m);
+            for j in 0..k {
+                let cj = &col(j)[lo..hi];
+                // b·b and b·∂A are not used (Jᵀr is taken from the residuals);
+                // x·x and b·x are `fixed`.
+                let fixed = |i: usize| i == 0 && (j == 0 || j == n + 1);
+                for i in (0..=j).filter(|&i| i != n + 1 && !fixed(i)) {
+                    g[j * size + i] += dot(&col(i)[lo..hi], cj);
+                }
+            }
+        }
+        g[0] = self.fixed[0];
+        g[(n + 1) * size] = self.fixed[1];
+        for j in 0..k {
+            for i in 0..j {
+                g[i * size + j] = g[j * size + i];
+            }
+        }
+    }
+
+    /// Kaufman's JᵀJ and Jᵀr (type notes) from the Gram products, moduli and
+    /// residuals of the last evaluation; None where the positive columns' Gram
+    /// matrix is singular.
+    fn normal_from_gram(&self, r: &DVector<f64>) -> Option<(DMatrix<f64>, DVector<f64>)> {
+        let (m, n) = (self.a.nrows(), self.a.ncols() - 1);
+        let gram = &self.gram;
+        let pos: Vec<usize> = (0..=n).filter(|&j| self.c[j] > 0.0).collect();
+        // (A_PᵀA_P)⁻¹ through the Cholesky factor of the unit-diagonal scaling
+        // (as the NNLS solve factors it), u = L⁻¹·A_Pᵀ∂A scaled alike.
+        let s: Vec<f64> = pos.iter().map(|&j| 1.0 / gram[(j, j)].sqrt()).collect();
+        let gp = DMatrix::from_fn(pos.len(), pos.len(), |p, q| {
+            gram[(pos[p], pos[q])] * s[p] * s[q]
+        });
+        let mut u = DMatrix::from_fn(pos.len(), n, |p, i| gram[(pos[p], n + 2 + i)] * s[p]);
+        if !pos.is_empty() && !gp.cholesky()?.l_dirty().solve_lower_triangular_mut(&mut u) {
+            return None;
+        }
+        let jtj = DMatrix::from_fn(n, n, |i, j| {
+            let dd = gram[(n + 2 + i, n + 2 + j)];
+            self.c[1 + i] * self.c[1 + j] * (dd - u.column(i).dot(&u.column(j)))
+        });
+        let jtr = DVector::from_fn(n, |i, _| {
+            self.c[1 + i] * dot(&self.da.as_slice()[i * m..(i + 1) * m], r.as_slice())
+        });
+        Some((jtj, jtr))
+    }
+}
+
+impl<K: Kernels> LeastSquares for Projected<'_, K> {
+    fn dims(&self) -> (usize, usize) {
+        (self.prob.len(), self.prob.n_terms)
+    }
+    /// Asked for a Jacobian (any matrix: see [`LeastSquares::forms_normal_equations`]),
+    /// it forms the normal equations instead.
+    fn eval(
+        &mut self,
+        theta: &[f64],
+        r: &mut DVector<f64>,
+        jac: Option<&mut DMatrix<f64>>,
+    ) -> bool {
+        let p = &mut *self.prob;
+        p.evaluations += 1;
+        let m = p.len();
+        let derivatives = jac.is_some();
+        p.kernels_at_log_taus(theta, derivatives);
+        p.design_columns(
+            &mut self.a.as_mut_slice()[m..],
+            derivatives.then_some(self.da.as_mut_slice()),
+        );
+        self.gram(derivatives);
+        self.theta.clear();
+        self.theta.extend_from_slice(theta);
+        if !self.solve_moduli() {
+            return false;
+        }
+        r.as_mut_slice().copy_from_slice(self.b.as_slice());
+        r.gemv(1.0, &self.a, &self.c, -1.0);
+        if !r.as_slice().iter().all(|v| v.is_finite()) {
+            return false;
+        }
+        if !derivatives {
+            return true;
+        }
+        match self.normal_from_gram(r) {
+            Some((jtj, jtr)) if jtj.iter().chain(jtr.iter()).all(|v| v.is_finite()) => {
+                self.normal = Some((theta.to_vec(), jtj, jtr));
+                true
+            }
+            _ => false,
+        }
+    }
+    fn jacobian_with_trial(&self) -> bool {
+        true
+    }
+    fn forms_normal_equations(&self) -> bool {
+        true
+    }
+    fn normal_equations(&self, p: &[f64]) -> Option<(DMatrix<f64>, DVector<f64>)> {
+        match &self.normal {
+            Some((at, jtj, jtr)) if at.as_slice() == p => Some((jtj.clone(), jtr.clone())),
+            _ => None,
+        }
+    }
+}

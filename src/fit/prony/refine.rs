@@ -1,0 +1,221 @@
+//! Stage 3: each term count's search from its starts, variable projection then a
+//! joint polish.
+
+use super::grid::{nnls_at, Grid};
+use super::problem::Problem;
+use super::projection::Projected;
+use super::starts::starts;
+use super::{Kernels, Method, Search, Setup};
+use crate::error::Result;
+use crate::fit::lm::{self, LmResult, LmSettings, Termination};
+use rayon::prelude::*;
+
+/// A fit at one term count.
+#[derive(Debug, Clone)]
+pub struct TermFit<K: Kernels> {
+    /// Number of terms N.
+    pub n_terms: usize,
+    /// Scaled parameters, terms sorted by τ.
+    pub p: Vec<f64>,
+    /// LM iterations (summed over the searches).
+    pub iterations: usize,
+    /// Evaluations (summed over the searches).
+    pub evaluations: usize,
+    /// Why the last search stopped.
+    pub termination: Termination,
+    /// Starts searched.
+    pub starts: usize,
+    /// Starts whose search ended at the best cost.
+    pub at_best: usize,
+    /// The count's problem (its kernels released: the fits of every count wait
+    /// for their assessment together).
+    pub problem: Problem<K>,
+}
+
+/// Stage 2 and 3 for every term count of `counts`, in parallel.
+pub fn fit_counts<K: Kernels>(
+    setup: &Setup<K>,
+    grid: &Grid,
+    counts: &[usize],
+    settings: &Search,
+) -> Result<Vec<TermFit<K>>> {
+    counts
+        .par_iter()
+        .map(|&nt| fit_terms(setup, grid, nt, settings))
+        .collect()
+}
+
+/// Stage 2 for one term count: the [`starts`], then either the moduli at the first
+/// start's τ (the grid method) or [`refine`].
+pub fn fit_terms<K: Kernels>(
+    setup: &Setup<K>,
+    grid: &Grid,
+    n: usize,
+    settings: &Search,
+) -> Result<TermFit<K>> {
+    let mut prob = setup.prob.clone();
+    prob.n_terms = n;
+    prob.evaluations = 0;
+    let starts = starts(setup.window, grid, n, settings.max_starts);
+    if settings.method == Method::Grid {
+        let ts: Vec<f64> = starts[0].iter().map(|l| l.exp()).collect();
+        let (e, it) = nnls_at(&mut prob, &ts)?;
+        let mut p = e;
+        p.extend(ts.iter().map(|t| t.ln()));
+        return Ok(TermFit {
+            n_terms: n,
+            p,
+            iterations: it,
+            evaluations: prob.evaluations,
+            termination: Termination::Converged("exact (NNLS at fixed τ)"),
+            starts: 1,
+            at_best: 1,
+            problem: prob,
+        });
+    }
+    Ok(refine(prob, &starts, setup.bounds, settings))
+}
+
+/// Sort the terms of a scaled parameter vector by τ.
+fn sort_terms(p: &mut [f64], n: usize) {
+    let mut idx: Vec<usize> = (0..n).collect();
+    idx.sort_by(|&a, &b| p[1 + n + a].total_cmp(&p[1 + n + b]));
+    let old = p.to_vec();
+    for (new, &o) in idx.iter().enumerate() {
+        p[1 + new] = old[1 + o];
+        p[1 + n + new] = old[1 + n + o];
+    }
+}
+
+/// Stage 3 for one term count: from each start, variable projection over ln τ
+/// ([`Projected`]) on a subsample of at most [`START_POINTS`] points (all the data
+/// when there are no more); the best end carried through subsamples ten times larger
+/// to all the data, each search starting next to its optimum and stopping at the
+/// noise floor of the level before ([`NOISE_FLOOR`]); then one LM search over
+/// all 2N + 1 parameters of [`Problem`] from the projection's optimum and its moduli,
+/// a point of the joint problem's own valley floor: it takes an iteration or two and
+/// makes the optimum the joint problem's to the solver's tolerances.
+fn refine<K: Kernels>(
+    mut prob: Problem<K>,
+    starts: &[Vec<f64>],
+    ln_tau: (f64, f64),
+    settings: &Search,
+) -> TermFit<K> {
+    let n = prob.n_terms;
+    let lms = LmSettings {
+        max_iterations: settings.max_iterations,
+        ftol: settings.ftol,
+        ..LmSettings::default()
+    };
+    let bounds = vec![ln_tau; n];
+    let mut iterations = 0;
+    let mut evaluations = 0;
+    let mut tail = lms;
+    let (r, joint, at_best) = match prob.subsample(START_POINTS) {
+        // Every point: the starts' projection is the last one; the moduli at the end
+        // come from a cold start, as a fresh projection's would.
+        None => {
+            let mut vp = Projected::new(&mut prob);
+            let (r, at_best) = best_start(&mut vp, starts, &bounds, &lms, &mut iterations);
+            vp.positive.fill(false);
+            vp.c.fill(0.0);
+            vp.moduli_at(&r.x);
+            let joint = vp.joint(&r.x);
+            (r, joint, at_best)
+        }
+        Some(mut sub) => {
+            let (mut r, at_best) = {
+                let mut vp = Projected::new(&mut sub);
+                best_start(&mut vp, starts, &bounds, &lms, &mut iterations)
+            };
+            evaluations = sub.evaluations;
+            // Past the starts, the searches stop at the noise floor of the level before.
+            let floor = |cost: f64, m: usize| match cost.is_finite() {
+                true => NOISE_FLOOR * 2.0 * cost / (m - (2 * n + 1)) as f64,
+                false => 0.0,
+            };
+            tail.min_decrease = floor(r.cost, sub.len());
+            let mut count = 10 * START_POINTS;
+            while let Some(mut level) = prob.subsample(count) {
+                r = lm::minimize(&mut Projected::new(&mut level), &r.x, &bounds, &tail);
+                iterations += r.iterations;
+                evaluations += level.evaluations;
+                tail.min_decrease = floor(r.cost, level.len());
+                count *= 10;
+            }
+            let mut vp = Projected::new(&mut prob);
+            r = lm::minimize(&mut vp, &r.x, &bounds, &tail);
+            iterations += r.iterations;
+            // The moduli at the end (the search's last evaluation may have been a
+            // rejected trial).
+            vp.moduli_at(&r.x);
+            let joint = vp.joint(&r.x);
+            (r, joint, at_best)
+        }
+    };
+    let mut joint_bounds = vec![(0.0, f64::INFINITY); 1 + n];
+    joint_bounds.extend(bounds);
+    let polish = lm::minimize(&mut prob, &joint, &joint_bounds, &tail);
+    iterations += polish.iterations;
+    let termination = match r.termination {
+        Termination::Converged(_) => polish.termination,
+        t => t,
+    };
+    let mut p = polish.x;
+    sort_terms(&mut p, n);
+    prob.release_kernels();
+    TermFit {
+        n_terms: n,
+        p,
+        iterations,
+        evaluations: prob.evaluations + evaluations,
+        termination,
+        starts: starts.len(),
+        at_best,
+        problem: prob,
+    }
+}
+
+/// The projection's search from each start (their iterations added to
+/// `iterations`): the end of lowest cost (the first of them; the first start's when
+/// none is finite), and how many ends are within 10⁻⁶ of its cost.
+fn best_start<K: Kernels>(
+    vp: &mut Projected<K>,
+    starts: &[Vec<f64>],
+    bounds: &[(f64, f64)],
+    lms: &LmSettings,
+    iterations: &mut usize,
+) -> (LmResult, usize) {
+    let mut results: Vec<LmResult> = starts
+        .iter()
+        .map(|s| lm::minimize(vp, s, bounds, lms))
+        .collect();
+    *iterations += results.iter().map(|r| r.iterations).sum::<usize>();
+    let best = results
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.cost.is_finite())
+        .min_by(|a, b| a.1.cost.total_cmp(&b.1.cost))
+        .map(|(i, _)| i)
+        .unwrap_or(0);
+    let bc = results[best].cost;
+    let at_best = results
+        .iter()
+        .filter(|r| (r.cost - bc).abs() <= 1e-6 * bc.max(f64::MIN_POSITIVE))
+        .count();
+    (results.swap_remove(best), at_best)
+}
+
+/// Points on which the multi-start search of a term count runs: a longer curve is
+/// subsampled evenly ([`Problem::subsample`]) and only the best start is carried to all
+/// the data. Every shipped curve has fewer points, so its fits search all of it.
+pub const START_POINTS: usize = 400;
+
+/// The noise floor of the searches that carry the best start of a longer curve to
+/// all its points ([`LmSettings::min_decrease`]), as a fraction of the residual
+/// variance s² = ‖r‖²/(m − 2N − 1) of the level before: they stop when even the
+/// Gauss-Newton step would lower ½‖r‖²/s² (half the χ²) by less than 10⁻³, where no
+/// estimate can move by more than about √(2·10⁻³) ≈ 0.045 standard errors, instead
+/// of walking the flat valleys of a term count the data do not support. The searches
+/// of a curve of at most [`START_POINTS`] points (every shipped one) have no floor.
+const NOISE_FLOOR: f64 = 1e-3;

@@ -84,6 +84,8 @@ pub struct PairShift {
 struct Curves {
     x: Vec<f64>,
     y: Vec<Vec<f64>>,
+    /// PCHIP slopes of each channel at the points.
+    m: Vec<Vec<f64>>,
     moves: Vec<bool>,
 }
 
@@ -101,19 +103,49 @@ fn curves(iso: &Isotherm, on: ShiftOn) -> Curves {
         ShiftOn::TanDelta => (vec![tan], vec![false]),
         ShiftOn::Both => (vec![l(&iso.storage), l(&iso.loss)], vec![true, true]),
     };
-    Curves {
-        x: iso.log_omega(),
-        y,
-        moves,
-    }
+    let x = iso.log_omega();
+    let m = y.iter().map(|c| pchip_slopes(&x, c)).collect();
+    Curves { x, y, m, moves }
 }
 
-/// The linear interpolant of (xs, ys) at x within [xs₀, xsₙ]: value and slope.
-fn interp(xs: &[f64], ys: &[f64], x: f64) -> (f64, f64) {
+/// The slopes of the monotone piecewise-cubic Hermite interpolant (PCHIP) of
+/// (xs, ys) at its nodes: the weighted harmonic mean of the neighbouring secants, 0
+/// where they differ in sign (Fritsch & Carlson, SIAM J. Numer. Anal. 17, 238, 1980;
+/// the weights of Fritsch & Butland 1984), the secant at the ends.
+fn pchip_slopes(xs: &[f64], ys: &[f64]) -> Vec<f64> {
+    let n = xs.len();
+    let h: Vec<f64> = xs.windows(2).map(|w| w[1] - w[0]).collect();
+    let d: Vec<f64> = (0..n - 1).map(|k| (ys[k + 1] - ys[k]) / h[k]).collect();
+    (0..n)
+        .map(|k| {
+            if k == 0 {
+                d[0]
+            } else if k == n - 1 {
+                d[n - 2]
+            } else if d[k - 1] * d[k] <= 0.0 {
+                0.0
+            } else {
+                let (w1, w2) = (2.0 * h[k] + h[k - 1], h[k] + 2.0 * h[k - 1]);
+                (w1 + w2) / (w1 / d[k - 1] + w2 / d[k])
+            }
+        })
+        .collect()
+}
+
+/// The PCHIP interpolant of (xs, ys) with node slopes `m` at x within [xs₀, xsₙ]:
+/// value and slope. A log–log isotherm is curved between points 0.4 decades apart;
+/// a straight line between them would put its curvature into the residual scatter
+/// and so into σ.
+fn interp(xs: &[f64], ys: &[f64], m: &[f64], x: f64) -> (f64, f64) {
     let k = xs.partition_point(|&v| v <= x).clamp(1, xs.len() - 1);
-    let (x0, x1, y0, y1) = (xs[k - 1], xs[k], ys[k - 1], ys[k]);
-    let slope = (y1 - y0) / (x1 - x0);
-    (y0 + slope * (x - x0), slope)
+    let (x0, x1) = (xs[k - 1], xs[k]);
+    let h = x1 - x0;
+    let t = (x - x0) / h;
+    let (y0, y1, m0, m1) = (ys[k - 1], ys[k], m[k - 1] * h, m[k] * h);
+    let (t2, t3) = (t * t, t * t * t);
+    let y = (2.0 * t3 - 3.0 * t2 + 1.0) * y0 + (t3 - 2.0 * t2 + t) * m0 + (-2.0 * t3 + 3.0 * t2) * y1 + (t3 - t2) * m1;
+    let dy = (6.0 * t2 - 6.0 * t) * y0 + (3.0 * t2 - 4.0 * t + 1.0) * m0 + (-6.0 * t2 + 6.0 * t) * y1 + (3.0 * t2 - 2.0 * t) * m1;
+    (y, dy / h)
 }
 
 /// The residuals at relative shift d (vertical v), with their derivatives by d and
@@ -142,7 +174,7 @@ fn mismatch(c: &Curves, w: &Curves, d: f64, v: f64) -> Mismatch {
         }
         m.counts.0 += 1;
         for (ch, &moves) in c.moves.iter().enumerate() {
-            let (wy, slope) = interp(&w.x, &w.y[ch], x + d);
+            let (wy, slope) = interp(&w.x, &w.y[ch], &w.m[ch], x + d);
             let s = if moves { -1.0 } else { 0.0 };
             m.r.push(c.y[ch][i] + s * v - wy);
             m.dd.push(-slope);
@@ -159,7 +191,7 @@ fn mismatch(c: &Curves, w: &Curves, d: f64, v: f64) -> Mismatch {
         }
         m.counts.1 += 1;
         for (ch, &moves) in w.moves.iter().enumerate() {
-            let (cy, slope) = interp(&c.x, &c.y[ch], x - d);
+            let (cy, slope) = interp(&c.x, &c.y[ch], &c.m[ch], x - d);
             let s = if moves { 1.0 } else { 0.0 };
             m.r.push(w.y[ch][i] - (cy - if moves { v } else { 0.0 }));
             m.dd.push(slope);

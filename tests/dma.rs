@@ -19,11 +19,13 @@ const C0: f64 = 273.15;
 
 /// The VHB-like series of datasets/dma (E∞ and ten terms a decade apart).
 fn vhb_prony() -> Prony {
-    let terms: Vec<(f64, f64)> = [200e6, 100e6, 30e6, 10e6, 3e6, 1e6, 0.4e6, 0.2e6, 0.1e6, 0.05e6]
-        .iter()
-        .enumerate()
-        .map(|(i, &e)| (10f64.powi(i as i32 - 8), e))
-        .collect();
+    let terms: Vec<(f64, f64)> = [
+        200e6, 100e6, 30e6, 10e6, 3e6, 1e6, 0.4e6, 0.2e6, 0.1e6, 0.05e6,
+    ]
+    .iter()
+    .enumerate()
+    .map(|(i, &e)| (10f64.powi(i as i32 - 8), e))
+    .collect();
     Prony::new(0.08e6, &terms).unwrap()
 }
 
@@ -69,26 +71,38 @@ fn wlf25() -> Law {
 fn pair_shift_sigma_covers_the_truth() {
     let dir = tempdir();
     let law = wlf25();
-    for (noise, on) in [(0.003, ShiftOn::Storage), (0.01, ShiftOn::Storage), (0.03, ShiftOn::Storage), (0.01, ShiftOn::Both)] {
-    let (mut inside, mut total) = (0, 0);
-    let mut z2 = 0.0;
-    for seed in 0..15 {
-        let d = data(&synthetic(law, -20.0, 80.0, 5.0, noise, seed), dir.path());
-        for w in d.isotherms.windows(2) {
-            let p = shift::pair(&w[0], &w[1], on, false).unwrap();
-            let truth = law.log_at(p.cold_k) - law.log_at(p.warm_k);
-            let z = (p.log_shift - truth) / p.std_error;
-            z2 += z * z;
-            inside += usize::from(z.abs() <= 1.96);
-            total += 1;
+    for (noise, on) in [
+        (0.003, ShiftOn::Storage),
+        (0.01, ShiftOn::Storage),
+        (0.03, ShiftOn::Storage),
+        (0.01, ShiftOn::Both),
+    ] {
+        let (mut inside, mut total) = (0, 0);
+        let mut z2 = 0.0;
+        for seed in 0..15 {
+            let d = data(&synthetic(law, -20.0, 80.0, 5.0, noise, seed), dir.path());
+            for w in d.isotherms.windows(2) {
+                let p = shift::pair(&w[0], &w[1], on, false).unwrap();
+                let truth = law.log_at(p.cold_k) - law.log_at(p.warm_k);
+                let z = (p.log_shift - truth) / p.std_error;
+                z2 += z * z;
+                inside += usize::from(z.abs() <= 1.96);
+                total += 1;
+            }
         }
-    }
-    let coverage = inside as f64 / total as f64;
-    eprintln!("noise {noise} on {}: coverage {coverage:.3} over {total} pairs, rms z {:.3}", on.name(), (z2 / total as f64).sqrt());
-    // below ≈ 1 % noise the interpolation's error between points 0.44 decades
-    // apart is most of the residual scatter, and σ is conservative
-    let top = if noise < 0.01 { 1.0 } else { 0.99 };
-    assert!((0.90..=top).contains(&coverage), "noise {noise}: coverage {coverage}");
+        let coverage = inside as f64 / total as f64;
+        eprintln!(
+            "noise {noise} on {}: coverage {coverage:.3} over {total} pairs, rms z {:.3}",
+            on.name(),
+            (z2 / total as f64).sqrt()
+        );
+        // below ≈ 1 % noise the interpolation's error between points 0.44 decades
+        // apart is most of the residual scatter, and σ is conservative
+        let top = if noise < 0.01 { 1.0 } else { 0.99 };
+        assert!(
+            (0.90..=top).contains(&coverage),
+            "noise {noise}: coverage {coverage}"
+        );
     }
 }
 
@@ -108,7 +122,10 @@ fn settings(mode: ShiftMode, tr_c: f64) -> Settings {
 fn wlf_constants_recovered_within_their_sigma() {
     let dir = tempdir();
     for seed in 0..5 {
-        let d = data(&synthetic(wlf25(), -20.0, 80.0, 5.0, 0.01, seed), dir.path());
+        let d = data(
+            &synthetic(wlf25(), -20.0, 80.0, 5.0, 0.01, seed),
+            dir.path(),
+        );
         let f = fit::fit(&d, &settings(ShiftMode::Law(LawKind::Wlf), 25.0)).unwrap();
         let m = f.shift_model.as_ref().unwrap();
         let (c1, c2) = (m.law.c1.unwrap(), m.law.c2.unwrap());
@@ -136,7 +153,9 @@ fn arrhenius_on_wlf_shifts_warns() {
     let m = f.shift_model.as_ref().unwrap();
     assert!(m.rms_decades > 0.25, "rms {}", m.rms_decades);
     assert!(
-        f.warnings.iter().any(|w| w.starts_with("Arrhenius fits the free shifts poorly")),
+        f.warnings
+            .iter()
+            .any(|w| w.starts_with("Arrhenius fits the free shifts poorly")),
         "{:?}",
         f.warnings
     );
@@ -169,7 +188,9 @@ fn wlf_on_a_kinked_law_warns() {
 #[test]
 fn non_monotonic_shifts_are_explained() {
     let dir = tempdir();
-    let text = synthetic(wlf25(), -10.0, 30.0, 5.0, 0.01, 6).csv(&[]).unwrap();
+    let text = synthetic(wlf25(), -10.0, 30.0, 5.0, 0.01, 6)
+        .csv(&[])
+        .unwrap();
     let swapped: String = text
         .lines()
         .map(|l| {
@@ -191,7 +212,11 @@ fn non_monotonic_shifts_are_explained() {
         .filter(|w| w.starts_with("shifts are not monotonic"))
         .collect();
     assert!(!w.is_empty(), "{:?}", f.warnings);
-    assert!(w.iter().any(|w| w.contains("0 °C") && w.contains("5 °C") && w.contains("cross")), "{w:?}");
+    assert!(
+        w.iter()
+            .any(|w| w.contains("0 °C") && w.contains("5 °C") && w.contains("cross")),
+        "{w:?}"
+    );
 }
 
 /// A reference temperature between isotherms (27.5 °C, isotherms every 5 °C): every
@@ -216,4 +241,187 @@ fn reference_between_isotherms() {
         );
     }
     assert!(!f.warnings.iter().any(|w| w.contains("outside")));
+}
+
+/// Bad files: each refused with exit status 2 at its file, line and column.
+#[test]
+fn bad_files_are_located() {
+    let dir = tempdir();
+    let cases = [
+        (
+            "negative.csv",
+            "frequency_Hz,storage_modulus_MPa,loss_modulus_MPa\n0.1,1,0.2\n1,-2,0.3\n",
+            "negative.csv:3:2: storage modulus must be in (0",
+        ),
+        (
+            "repeated.csv",
+            "# temperature: 25 C\nfrequency_Hz,storage_modulus_MPa,loss_modulus_MPa\n0.1,1,0.2\n1,2,0.3\n1,2.1,0.3\n",
+            "repeated.csv:5:1: frequency repeats line 4",
+        ),
+        (
+            "unordered.csv",
+            "temperature_C,frequency_Hz,storage_modulus_MPa,tan_delta\n25,0.1,1,0.2\n25,1,2,0.3\n25,0.5,2.1,0.3\n",
+            "unordered.csv:4:2: frequencies of the isotherm at 25 °C go up until line 3",
+        ),
+        (
+            "no_unit.csv",
+            "frequency,storage_modulus_MPa,loss_modulus_MPa\n0.1,1,0.2\n1,2,0.3\n",
+            "no_unit.csv:1:1: column 'frequency' has no unit",
+        ),
+        (
+            "not_finite.csv",
+            "frequency_Hz,storage_modulus_MPa,loss_modulus_MPa\n0.1,1,0.2\n1,inf,0.3\n",
+            "not_finite.csv:3:2:",
+        ),
+        (
+            "back.csv",
+            "temperature_C,frequency_Hz,storage_modulus_MPa,loss_modulus_MPa\n0,1,2,1\n0,10,3,1\n20,1,1,1\n20,10,2,1\n0,100,4,1\n",
+            "back.csv:6: temperature 0 °C comes back",
+        ),
+    ];
+    for (name, text, want) in cases {
+        std::fs::write(dir.path().join(name), text).unwrap();
+        let o = run(
+            dir.path(),
+            &["dma", name, "--reference-temperature", "25C", "--no-report"],
+        );
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+        assert!(err.contains(want), "{name}: {err}");
+    }
+}
+
+/// An instrument's export (preamble, units row, extra columns, both E″ and tan δ,
+/// sweeps from high to low frequency) with a negative Celsius reference written
+/// with `=` and without: read, shifted, JSON with the documented keys.
+#[test]
+fn export_with_negative_celsius_reference() {
+    let dir = tempdir();
+    let text = "Instrument: DMA 850\nSample: VHB\n\nTemperature,Frequency,Storage Modulus,Loss Modulus,Tan Delta,Strain amplitude\n(°C),(Hz),(MPa),(MPa),(),(%)\n0,100,10,5,0.5,1\n0,10,5,2,0.4,1\n0,1,2,0.8,0.4,1\n0,0.1,1,0.3,0.3,1\n20,100,4,1.5,0.4,1\n20,10,2,0.7,0.3,1\n20,1,1,0.3,0.3,1\n20,0.1,0.6,0.15,0.25,1\n";
+    std::fs::write(dir.path().join("export.csv"), text).unwrap();
+    for flag in [
+        vec!["--reference-temperature=-5C"],
+        vec!["--reference-temperature", "-5C"],
+    ] {
+        let mut args = vec![
+            "dma",
+            "export.csv",
+            "--no-report",
+            "--json",
+            "--out",
+            "f.json",
+        ];
+        args.extend(flag);
+        let o = run_ok(dir.path(), &args);
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert!((v["reference_temperature_K"].as_f64().unwrap() - 268.15).abs() < 1e-9);
+        let sf = v["shift_factors"].as_array().unwrap();
+        assert_eq!(sf.len(), 2);
+        for s in sf {
+            assert!(
+                s["temperature_K"].is_number()
+                    && s["log10_aT"].is_number()
+                    && s["std_error"].is_number()
+            );
+        }
+        assert_eq!(v["fit_file"], "f.json");
+        assert!(v["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|w| w.as_str().unwrap().contains("columns not used: Tan Delta")));
+    }
+}
+
+/// A master curve (no temperature; frequencies may repeat) is read as it is: no
+/// shifts, its points sorted by frequency.
+#[test]
+fn master_curve_is_read_as_is() {
+    let dir = tempdir();
+    let text = "omega_rad_s,storage_modulus_kPa,loss_modulus_kPa\n1e-18,100,10\n1e-3,200,50\n1e-3,201,51\n1e12,9e5,1e5\n10,900,300\n";
+    std::fs::write(dir.path().join("master.csv"), text).unwrap();
+    let o = run_ok(
+        dir.path(),
+        &[
+            "dma",
+            "master.csv",
+            "--terms",
+            "auto",
+            "--no-report",
+            "--json",
+            "--out",
+            "m.json",
+        ],
+    );
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["shift_factors"].as_array().unwrap().len(), 0);
+    let m = v["master_curve"].as_array().unwrap();
+    assert_eq!(m.len(), 5);
+    assert_eq!(m[4]["reduced_omega_rad_s"].as_f64(), Some(1e12));
+    assert!(v["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|w| w.as_str().unwrap().contains("sorted by frequency")));
+}
+
+/// `synth dma` is deterministic by seed: the shipped dataset is what its README's
+/// command makes, byte for byte.
+#[test]
+fn shipped_dataset_is_its_command() {
+    let dir = tempdir();
+    let readme = std::fs::read_to_string(repo().join("datasets/dma/README.md")).unwrap();
+    let cmd = readme
+        .lines()
+        .find(|l| l.starts_with("dea-fit synth dma"))
+        .expect("the README gives the command");
+    let args: Vec<&str> = cmd.split_whitespace().skip(1).collect();
+    let out = dir.path().join("x.csv");
+    let mut a: Vec<&str> = args
+        .iter()
+        .copied()
+        .filter(|x| !x.starts_with("--out"))
+        .collect();
+    let shipped = args
+        .iter()
+        .find_map(|x| x.strip_prefix("--out="))
+        .expect("--out=FILE");
+    a.extend(["--out", out.to_str().unwrap()]);
+    run_ok(&repo(), &a);
+    let made = std::fs::read(&out).unwrap();
+    assert_eq!(made, std::fs::read(repo().join(shipped)).unwrap());
+}
+
+/// The summary of `dea-fit dma datasets/dma/vhb_like_isotherms.csv
+/// --reference-temperature 25C --shift wlf` is golden (text; the shifts are found on
+/// a fixed grid and refined to 1e-6 decade, so only the last printed digit could
+/// move with the platform's rounding).
+#[test]
+fn golden_vhb_like_wlf() {
+    let dir = tempdir();
+    let out = dir.path().join("f.json");
+    let o = run_ok(
+        &repo(),
+        &[
+            "dma",
+            "datasets/dma/vhb_like_isotherms.csv",
+            "--reference-temperature",
+            "25C",
+            "--shift",
+            "wlf",
+            "--no-report",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    );
+    let text: String = String::from_utf8_lossy(&o.stdout)
+        .lines()
+        .map(|l| match l.starts_with("fit: ") {
+            true => "fit: <out>\n".to_string(),
+            false => format!("{l}\n"),
+        })
+        .collect();
+    golden("dma-vhb_like-wlf.txt", &text, |want| {
+        (want != text).then(|| "the text differs".to_string())
+    });
 }

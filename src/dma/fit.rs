@@ -160,6 +160,7 @@ pub fn fit(data: &DmaData, settings: &Settings) -> Result<DmaFit> {
         .iter()
         .flat_map(|s| s.notes.iter().map(move |n| format!("{}: {n}", s.path)))
         .collect();
+    let notes = warnings.len();
     if settings.vertical && settings.on == ShiftOn::TanDelta {
         return Err(Error::settings(
             "--vertical-shift cannot be found from tan δ, which a vertical shift leaves unchanged",
@@ -195,7 +196,8 @@ pub fn fit(data: &DmaData, settings: &Settings) -> Result<DmaFit> {
         .map(|p| p.reduced_omega_rad_s)
         .fold(0.0, f64::max);
     let prony = prony_step(&master, settings, &mut warnings);
-    let status = if warnings.is_empty() {
+    // what the reader did is said, and does not make the result a warning
+    let status = if warnings.len() == notes {
         Status::Ok
     } else {
         Status::Warning

@@ -220,8 +220,9 @@ pub fn from_table(table: &Table, map: &ColumnMap) -> Result<(Vec<Isotherm>, DmaS
     let path = &table.path;
     map.check(table)?;
     let hloc = |c: usize| Location::at(path, table.header_line, c + 1);
-    let (mut freq, mut storage, mut loss, mut temp) = (None, None, None, None);
-    let mut unused = Vec::new();
+    let slots: [Option<(usize, Col)>; 4] = [None; 4];
+    let [mut freq, mut storage, mut loss, mut temp] = slots;
+    let mut unused: Vec<String> = Vec::new();
     let mut notes = Vec::new();
     for (c, h) in table.header.iter().enumerate() {
         let (role, u) = role_of(h, map);
@@ -243,6 +244,19 @@ pub fn from_table(table: &Table, map: &ColumnMap) -> Result<(Vec<Isotherm>, DmaS
             Col::Loss(_) | Col::TanDelta => &mut loss,
             Col::Temperature(_) => &mut temp,
         };
+        // an export with both E″ and tan δ: E″ is read, tan δ (E″/E′) not used
+        match (*slot, col) {
+            (Some((_, Col::Loss(_))), Col::TanDelta) => {
+                unused.push(h.clone());
+                continue;
+            }
+            (Some((c0, Col::TanDelta)), Col::Loss(_)) => {
+                unused.push(table.header[c0].clone());
+                *slot = Some((c, col));
+                continue;
+            }
+            _ => {}
+        }
         if let Some((c0, _)) = *slot {
             return Err(Error::input(
                 hloc(c),

@@ -51,6 +51,7 @@ pub fn parse(text: &str) -> Result<f64, String> {
         .unwrap_or(0);
     let (num, unit) = t.split_at(split);
     let v: f64 = num
+        .trim()
         .parse()
         .map_err(|_| format!("expected a temperature such as 25C, -5C or 298.15K, found '{t}'"))?;
     let scale = match unit.trim() {
@@ -97,6 +98,7 @@ mod tests {
         assert!(close(parse("25C").unwrap(), 298.15));
         assert!(close(parse("-5C").unwrap(), 268.15));
         assert!(close(parse("-5 °C").unwrap(), 268.15));
+        assert!(close(parse("25 C").unwrap(), 298.15));
         assert!(close(parse("298.15 K").unwrap(), 298.15));
         assert!(close(parse("2.5e1C").unwrap(), 298.15));
         assert!(parse("25").unwrap_err().contains("no unit"));

@@ -391,8 +391,8 @@ fn law_warnings(f: &LawFit, temps: &[f64], warnings: &mut Vec<String>) {
         ));
     }
     if f.c2_at_bound {
-        warnings.push(format!(
-            "WLF C2 ran to its bound: the shifts are straight in T over these isotherms and do not determine C2 (Arrhenius, --shift arrhenius, needs one constant)"
-        ));
+        warnings.push(
+            "WLF C2 ran to its bound: the shifts are straight in T over these isotherms and do not determine C2 (Arrhenius, --shift arrhenius, needs one constant)".to_string(),
+        );
     }
 }

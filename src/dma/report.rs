@@ -7,7 +7,7 @@ use super::fit::DmaFit;
 use super::temperature::{celsius, CELSIUS_ZERO_K};
 use super::DmaData;
 use crate::error::Result;
-use crate::report::format::{sig, table};
+use crate::report::format::{sig, table, wrap};
 use crate::report::page::{Page, Tone};
 use crate::report::plot::{error_bars, Chart, Series, Style};
 use crate::report::runs::Run;
@@ -80,17 +80,17 @@ pub fn summary(f: &DmaFit) -> String {
     let points = f.master_curve.len();
     match f.reference_temperature_k {
         Some(t) if !f.shift_factors.is_empty() => s.push_str(&format!(
-            "dma: {} isotherms ({} … {}), {points} points, shifts on {}{}, reference {}\n",
+            "dma: {} isotherms ({} … {}), {points} points, reference {}; shifts on {}{}\n",
             f.shift_factors.len(),
             celsius(f.shift_factors[0].temperature_k),
             celsius(f.shift_factors[f.shift_factors.len() - 1].temperature_k),
+            celsius(t),
             f.shift_on.name(),
             if f.vertical_shift {
-                " with a vertical shift"
+                " (+ vertical)"
             } else {
                 ""
-            },
-            celsius(t)
+            }
         )),
         _ => s.push_str(&format!(
             "dma: a master curve of {points} points (no shifts)\n"
@@ -105,8 +105,10 @@ pub fn summary(f: &DmaFit) -> String {
         s.push_str(&table(&header(f), &rows(f)));
     }
     if let Some(l) = law_line(f) {
-        s.push_str(&l);
-        s.push('\n');
+        for l in wrap(&l, 100) {
+            s.push_str(&l);
+            s.push('\n');
+        }
     }
     let [lo, hi] = f.reduced_omega_range_rad_s;
     s.push_str(&format!(
@@ -126,7 +128,11 @@ pub fn summary(f: &DmaFit) -> String {
     if !f.warnings.is_empty() {
         s.push_str("warnings:\n");
         for w in &f.warnings {
-            s.push_str(&format!("  - {w}\n"));
+            for (i, l) in wrap(w, 96).iter().enumerate() {
+                s.push_str(if i == 0 { "  - " } else { "    " });
+                s.push_str(l);
+                s.push('\n');
+            }
         }
     }
     s

@@ -16,6 +16,7 @@
 
 pub mod bench;
 pub mod data;
+pub mod dma;
 pub mod error;
 pub mod export;
 pub mod fit;

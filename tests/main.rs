@@ -6,6 +6,7 @@ mod breakdown;
 mod cli;
 mod completions;
 mod datasets;
+mod dma;
 mod estimation;
 mod exit_status;
 mod export;

@@ -10,6 +10,7 @@ mod bench_simulate;
 mod breakdown;
 mod completions;
 mod composite;
+mod dma;
 mod export;
 mod hyperelastic;
 mod identify;
@@ -46,6 +47,8 @@ enum Command {
     Identify(identify::Args),
     /// Fit Prony / Kelvin-Maxwell constants to a stress-relaxation curve.
     Relaxation(relaxation::Args),
+    /// DMA isotherms → time–temperature shifts (free, WLF, Arrhenius) → master curve.
+    Dma(dma::Args),
     /// Generate synthetic test data from known constants (with noise and seed).
     Synth(Box<synth::Args>),
     /// Simulate an actuator scene: trajectory CSV, charts, summary.
@@ -69,6 +72,7 @@ pub fn run(cli: Cli) -> Result<i32> {
     match cli.command {
         Command::Hyperelastic(a) => hyperelastic::run(a),
         Command::Relaxation(a) => relaxation::run(a),
+        Command::Dma(a) => dma::run(a),
         Command::Identify(a) => identify::run(a),
         Command::Synth(a) => synth::run(*a),
         Command::Permittivity(a) => permittivity::run(a),

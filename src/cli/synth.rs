@@ -4,7 +4,8 @@
 //! (the `io::lcr` plain-CSV format); `dea-fit synth trace SCENE`: an actuator trace
 //! simulated from a scene (the `io::trace` format); `dea-fit synth breakdown`: a
 //! breakdown series from a Weibull law with a thickness spread and a rig limit (the
-//! `io::breakdown` format). Gaussian noise from a seeded
+//! `io::breakdown` format); `dea-fit synth dma`: DMA isotherms from a Prony series and
+//! a WLF or Arrhenius shift law (the `dma::read` format). Gaussian noise from a seeded
 //! generator; the generating command and parameters are written into the file's
 //! comment lines. Each prints a `status:` line (`--strict`: a blocking status exits 1).
 
@@ -116,6 +117,26 @@ pub struct Args {
     /// scene's samples over its span.
     #[arg(long)]
     irregular: bool,
+    /// synth dma: the reference temperature of the Prony series and the shift law,
+    /// e.g. 25C or 298.15K.
+    #[arg(long, allow_hyphen_values = true)]
+    reference_temperature: Option<String>,
+    /// synth dma: WLF constants C1,C2 (C2 in K), e.g. 8.86,101.6.
+    #[arg(long, value_name = "C1,C2")]
+    wlf: Option<String>,
+    /// synth dma: Arrhenius activation energy in J/mol (or with kJ/mol), e.g. 200kJ/mol.
+    #[arg(long, value_name = "EA")]
+    arrhenius: Option<String>,
+    /// synth dma: isotherm temperatures START:STOP:COUNT, evenly spaced, e.g. -20C:80C:21.
+    #[arg(long, allow_hyphen_values = true)]
+    temperatures: Option<String>,
+    /// synth dma: frequencies of each sweep FMIN:FMAX:COUNT, log-spaced.
+    #[arg(long, default_value = "0.01Hz:100Hz:10")]
+    frequencies: String,
+    /// synth dma: a vertical shift bT = ρ(T)·T/(ρ₀·Tr) with ρ(T)/ρ₀ = 1 − α_V (T − Tr),
+    /// α_V this volumetric expansion (1/K), e.g. 6e-4.
+    #[arg(long, value_name = "ALPHA_V")]
+    volume_expansion: Option<f64>,
     /// Exit with status 1 on a blocking status (unstable model, pull-in).
     #[arg(long)]
     strict: bool,
@@ -138,9 +159,10 @@ pub fn run(a: Args) -> Result<i32> {
         "lcr" => lcr(a),
         "trace" => trace(a),
         "breakdown" => breakdown(a),
+        "dma" => dma(a),
         w => Err(
             Error::settings(format!("cannot synthesise '{w}'")).with_hint(
-                "use: dea-fit synth hyperelastic, relaxation, lcr, breakdown, or trace SCENE",
+                "use: dea-fit synth hyperelastic, relaxation, lcr, breakdown, dma, or trace SCENE",
             ),
         ),
     }
@@ -203,6 +225,11 @@ fn refuse_unused(a: &Args, used: &[&str]) -> Result<()> {
         ("--n", a.n.is_some()),
         ("--limit", a.limit.is_some()),
         ("--thickness-spread", a.thickness_spread.is_some()),
+        ("--reference-temperature", a.reference_temperature.is_some()),
+        ("--wlf", a.wlf.is_some()),
+        ("--arrhenius", a.arrhenius.is_some()),
+        ("--temperatures", a.temperatures.is_some()),
+        ("--volume-expansion", a.volume_expansion.is_some()),
     ];
     match given.iter().find(|(f, set)| *set && !used.contains(f)) {
         Some((f, _)) => Err(Error::settings(format!("synth {} takes no {f}", a.what))
@@ -282,6 +309,150 @@ fn relaxation(a: Args) -> Result<i32> {
     println!("status: ok");
     Ok(0)
 }
+
+/// `synth dma`: isotherms of a Prony series at the reference temperature shifted by a
+/// WLF or Arrhenius law (and a vertical shift), with relative noise: the file
+/// `dea-fit dma` reads, parameters in its `#` lines (`dma::synth`).
+fn dma(a: Args) -> Result<i32> {
+    use dea_fit::dma::law::Law;
+    use dea_fit::dma::synth::Synthetic;
+    use dea_fit::dma::temperature;
+    refuse_unused(
+        &a,
+        &[
+            "--param",
+            "--reference-temperature",
+            "--wlf",
+            "--arrhenius",
+            "--temperatures",
+            "--volume-expansion",
+        ],
+    )?;
+    let noise = relative_noise(&a, "each modulus")?;
+    let prony = prony_from_params(&a.params)?;
+    if prony.terms.is_empty() {
+        return Err(Error::settings("synth dma needs a Prony series")
+            .with_hint("--param E_inf=0.1MPa --param E1=1MPa --param tau1=1e-3s …"));
+    }
+    let temp = |flag: &str, t: &str| {
+        temperature::parse(t).map_err(|e| Error::settings(format!("{flag}: {e}")))
+    };
+    let tr = temp(
+        "--reference-temperature",
+        a.reference_temperature.as_deref().ok_or_else(|| {
+            Error::settings("synth dma needs --reference-temperature")
+                .with_hint("e.g. --reference-temperature 25C")
+        })?,
+    )?;
+    let law = match (&a.wlf, &a.arrhenius) {
+        (Some(w), None) => {
+            let c: Vec<f64> = w
+                .split(',')
+                .map(|x| x.trim().parse::<f64>())
+                .collect::<std::result::Result<_, _>>()
+                .map_err(|_| {
+                    Error::settings(format!("--wlf '{w}': expected C1,C2, e.g. 8.86,101.6"))
+                })?;
+            match c.as_slice() {
+                [c1, c2] if c1.is_finite() && c2.is_finite() && *c2 > 0.0 => Law::wlf(tr, *c1, *c2),
+                _ => {
+                    return Err(Error::settings(format!(
+                        "--wlf '{w}': expected C1,C2 with C2 > 0 (K), e.g. 8.86,101.6"
+                    )))
+                }
+            }
+        }
+        (None, Some(e)) => {
+            let e = e.trim();
+            let ea = match e.strip_suffix("kJ/mol") {
+                Some(k) => k.trim().parse::<f64>().map(|v| v * 1e3),
+                None => e.strip_suffix("J/mol").unwrap_or(e).trim().parse::<f64>(),
+            }
+            .ok()
+            .filter(|v| v.is_finite() && *v > 0.0)
+            .ok_or_else(|| {
+                Error::settings(format!(
+                    "--arrhenius '{e}': expected an activation energy > 0, e.g. 200kJ/mol"
+                ))
+            })?;
+            Law::arrhenius(tr, ea)
+        }
+        _ => {
+            return Err(Error::settings(
+                "synth dma needs one shift law: --wlf C1,C2 or --arrhenius EA",
+            )
+            .with_hint("e.g. --wlf 8.86,101.6"))
+        }
+    };
+    let spec = a.temperatures.as_deref().ok_or_else(|| {
+        Error::settings("synth dma needs --temperatures START:STOP:COUNT")
+            .with_hint("e.g. --temperatures -20C:80C:21")
+    })?;
+    let (t0, t1, n) = range(
+        spec,
+        ("--temperatures", "START:STOP:COUNT"),
+        TEMPERATURES,
+        temperature::parse,
+    )?;
+    if !(t1 > t0 || n == 1) {
+        return Err(Error::settings(format!(
+            "--temperatures '{spec}': expected START < STOP"
+        )));
+    }
+    let temperatures_k: Vec<f64> = (0..n)
+        .map(|i| t0 + (t1 - t0) * i as f64 / (n.max(2) - 1) as f64)
+        .collect();
+    if let Some(t) = temperatures_k.iter().find(|t| law.log_at(**t).is_nan()) {
+        return Err(Error::settings(format!(
+            "WLF is undefined at {} (at or below its Vogel temperature Tr − C2)",
+            temperature::celsius(*t)
+        )));
+    }
+    let (f0, f1, count) = range(
+        &a.frequencies,
+        ("--frequencies", "FMIN:FMAX:COUNT"),
+        SWEEP_POINTS,
+        |x| parse_quantity(x, Dimension::Frequency),
+    )?;
+    if !(f0 > 0.0 && f1 > f0) {
+        return Err(Error::settings(format!(
+            "--frequencies '{}': expected 0 < FMIN < FMAX",
+            a.frequencies
+        )));
+    }
+    if let Some(av) = a.volume_expansion {
+        if !(av.is_finite() && av.abs() < 1e-2) {
+            return Err(Error::settings(format!(
+                "--volume-expansion {av}: expected a volumetric expansion in 1/K, |α_V| < 0.01"
+            )));
+        }
+    }
+    let synthetic = Synthetic {
+        prony,
+        law,
+        vertical: a.volume_expansion,
+        temperatures_k,
+        frequencies_hz: dea_fit::io::relaxation::log_times(f0, f1, count, false),
+        noise,
+        seed: a.seed,
+    };
+    let head = format!(
+        "synthetic data made by dea-fit {} (dea-fit synth dma)",
+        env!("CARGO_PKG_VERSION")
+    );
+    let command = format!("command: {}", command_line());
+    let text = synthetic.csv(&[&head, &command])?;
+    super::write_noted(&a.out, text.as_bytes())?;
+    eprintln!(
+        "wrote {} ({n} isotherms of {count} points)",
+        a.out.display()
+    );
+    println!("status: ok");
+    Ok(0)
+}
+
+/// Isotherms of `synth dma --temperatures`.
+const TEMPERATURES: CountRange = CountRange::new(1, 1000, "isotherms of one synthetic DMA sweep");
 
 /// A Prony series from `--param E_inf=… E1=… tau1=…` (every index from 1 to N once).
 fn prony_from_params(params: &[String]) -> Result<dea_fit::material::viscoelastic::Prony> {

@@ -51,10 +51,12 @@ pub enum Reader {
     /// A breakdown series (`io::breakdown`), fitted, its fit file written and read
     /// back by the core's reader.
     Breakdown,
+    /// DMA isotherms (`dma::read`), shifted (free and WLF) onto a master curve.
+    Dma,
 }
 
 impl Reader {
-    pub const ALL: [Reader; 15] = [
+    pub const ALL: [Reader; 16] = [
         Reader::Tensile,
         Reader::Relaxation,
         Reader::Lcr,
@@ -70,6 +72,7 @@ impl Reader {
         Reader::Generate,
         Reader::Flags,
         Reader::Breakdown,
+        Reader::Dma,
     ];
 
     pub fn name(self) -> &'static str {
@@ -89,6 +92,7 @@ impl Reader {
             Reader::Generate => "generate",
             Reader::Flags => "flags",
             Reader::Breakdown => "breakdown",
+            Reader::Dma => "dma",
         }
     }
 
@@ -203,6 +207,10 @@ pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
         .filter(|p| !p.ends_with("relaxation.csv") && !p.ends_with(".md"))
         .collect(),
         Reader::Relaxation => vec!["datasets/vhb4910/relaxation.csv".into()],
+        Reader::Dma => dir("datasets/dma")
+            .into_iter()
+            .filter(|p| p.ends_with(".csv"))
+            .collect(),
         Reader::Breakdown => dir("datasets/breakdown")
             .into_iter()
             .filter(|p| p.ends_with(".csv"))
@@ -543,6 +551,7 @@ pub fn replay(r: Reader, case: &Case, dir: &Path) -> String {
         ),
         Reader::Relaxation => format!("dea-fit relaxation {f} --strain 0.5 --max-terms 3 {out}"),
         Reader::Breakdown => format!("dea-fit breakdown {f} {out}"),
+        Reader::Dma => format!("dea-fit dma {f} --reference-temperature 25C --shift wlf {out}"),
         Reader::Lcr => format!("dea-fit permittivity {f} --diameter 42.8mm --thickness 2.2mm"),
         Reader::Manifest => format!("dea-fit composite {f}"),
         Reader::Scene | Reader::Fit | Reader::Identified => format!(
@@ -607,6 +616,47 @@ fn check_fit(
         Some((class, detail)) => Verdict::Failed { class, detail },
         None => Verdict::Accepted,
     }
+}
+
+/// A DMA case: read, shifted free and with WLF at 25 °C. A usable status with a
+/// non-finite shift, σ or master-curve point is a failure.
+fn dma(path: &Path) -> Verdict {
+    use dea_fit::dma::fit::{self, Settings, ShiftMode};
+    let Ok(data) = dea_fit::dma::read::read_all(&[path], &Default::default()) else {
+        return Verdict::Refused;
+    };
+    for mode in [
+        ShiftMode::Free,
+        ShiftMode::Law(dea_fit::dma::law::LawKind::Wlf),
+    ] {
+        let settings = Settings {
+            mode,
+            reference_k: Some(298.15),
+            ..Settings::default()
+        };
+        let Ok(f) = fit::fit(&data, &settings) else {
+            continue;
+        };
+        let out = finite(
+            "shift factor",
+            f.shift_factors
+                .iter()
+                .flat_map(|s| [s.log10_at, s.std_error]),
+        )
+        .and(finite(
+            "master curve",
+            f.master_curve
+                .iter()
+                .flat_map(|p| [p.reduced_omega_rad_s, p.storage_pa, p.loss_pa]),
+        ));
+        if let Err(detail) = out {
+            return Verdict::Failed {
+                class: format!("dma: status {} with a non-finite output", f.status),
+                detail,
+            };
+        }
+    }
+    Verdict::Accepted
 }
 
 /// A breakdown case: read, fitted (maximum likelihood), its fit file's object made,
@@ -750,6 +800,7 @@ pub fn run(r: Reader, case: &Case, dir: &Path) -> Verdict {
             check_fit("permittivity", s.status, Some(0.0), out)
         }
         Reader::Breakdown => breakdown(&path, dir),
+        Reader::Dma => dma(&path),
         Reader::Manifest => {
             let Ok(m) = manifest::read(&path) else {
                 return Verdict::Refused;

@@ -1,0 +1,427 @@
+//! `dea-fit dma`: the reader's located errors, `synth dma`, the shifts' standard
+//! errors against the truth on synthetic replicates, WLF recovery, law and
+//! monotonicity warnings, a reference temperature between isotherms, the command line
+//! (negative Celsius, a master curve, JSON) and its golden summary.
+
+use crate::cli::golden;
+use crate::support::{repo, run, run_ok};
+use dea_fit::dma::fit::{self, Settings, ShiftMode};
+use dea_fit::dma::law::{Law, LawKind};
+use dea_fit::dma::read;
+use dea_fit::dma::shift::{self, ShiftOn};
+use dea_fit::dma::synth::Synthetic;
+use dea_fit::dma::DmaData;
+use dea_fit::io::table::ColumnMap;
+use dea_fit::material::viscoelastic::Prony;
+use std::path::Path;
+
+const C0: f64 = 273.15;
+
+/// The VHB-like series of datasets/dma (E∞ and ten terms a decade apart).
+fn vhb_prony() -> Prony {
+    let terms: Vec<(f64, f64)> = [
+        200e6, 100e6, 30e6, 10e6, 3e6, 1e6, 0.4e6, 0.2e6, 0.1e6, 0.05e6,
+    ]
+    .iter()
+    .enumerate()
+    .map(|(i, &e)| (10f64.powi(i as i32 - 8), e))
+    .collect();
+    Prony::new(0.08e6, &terms).unwrap()
+}
+
+/// Isotherms every `step` °C from `t0` to `t1` °C, 10 points 0.01–100 Hz.
+fn synthetic(law: Law, t0: f64, t1: f64, step: f64, noise: f64, seed: u64) -> Synthetic {
+    let n = ((t1 - t0) / step).round() as usize + 1;
+    Synthetic {
+        prony: vhb_prony(),
+        law,
+        vertical: None,
+        temperatures_k: (0..n).map(|i| C0 + t0 + step * i as f64).collect(),
+        frequencies_hz: dea_fit::io::relaxation::log_times(0.01, 100.0, 10, false),
+        noise,
+        seed,
+    }
+}
+
+fn read_text(dir: &Path, name: &str, text: &str) -> DmaData {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    read::read_all(&[&p], &ColumnMap::default()).unwrap()
+}
+
+fn data(s: &Synthetic, dir: &Path) -> DmaData {
+    read_text(dir, "iso.csv", &s.csv(&[]).unwrap())
+}
+
+fn tempdir() -> tempfile::TempDir {
+    tempfile::tempdir().expect("tempdir")
+}
+
+fn wlf25() -> Law {
+    Law::wlf(C0 + 25.0, 8.06, 111.6)
+}
+
+/// The pair shifts' ±1.96σ hold the true shift (the law's difference between the
+/// two temperatures) about 95 % of the time: 15 replicates × 20 pairs at each of
+/// 0.3 %, 1 % and 3 % noise, on E′ and on E′ with E″. Binomial: 300 pairs at
+/// p = 0.95 have σ = 1.3 %, so coverage within 90–99 % passes (pairs within a
+/// replicate share isotherms, hence the wide band); at 0.3 % noise σ may be larger
+/// than the scatter (conservative), never smaller.
+#[test]
+fn pair_shift_sigma_covers_the_truth() {
+    let dir = tempdir();
+    let law = wlf25();
+    for (noise, on) in [
+        (0.003, ShiftOn::Storage),
+        (0.01, ShiftOn::Storage),
+        (0.03, ShiftOn::Storage),
+        (0.01, ShiftOn::Both),
+    ] {
+        let (mut inside, mut total) = (0, 0);
+        let mut z2 = 0.0;
+        for seed in 0..15 {
+            let d = data(&synthetic(law, -20.0, 80.0, 5.0, noise, seed), dir.path());
+            for w in d.isotherms.windows(2) {
+                let p = shift::pair(&w[0], &w[1], on, false).unwrap();
+                let truth = law.log_at(p.cold_k) - law.log_at(p.warm_k);
+                let z = (p.log_shift - truth) / p.std_error;
+                z2 += z * z;
+                inside += usize::from(z.abs() <= 1.96);
+                total += 1;
+            }
+        }
+        let coverage = inside as f64 / total as f64;
+        eprintln!(
+            "noise {noise} on {}: coverage {coverage:.3} over {total} pairs, rms z {:.3}",
+            on.name(),
+            (z2 / total as f64).sqrt()
+        );
+        // below ≈ 1 % noise the interpolation's error between points 0.44 decades
+        // apart is most of the residual scatter, and σ is conservative
+        let top = if noise < 0.01 { 1.0 } else { 0.99 };
+        assert!(
+            (0.90..=top).contains(&coverage),
+            "noise {noise}: coverage {coverage}"
+        );
+    }
+}
+
+fn settings(mode: ShiftMode, tr_c: f64) -> Settings {
+    Settings {
+        mode,
+        reference_k: Some(C0 + tr_c),
+        ..Settings::default()
+    }
+}
+
+/// WLF C1 and C2 from the free shifts of `synth dma` isotherms (21 from −20 to 80 °C,
+/// 1 % noise) hold the generating 8.06 and 111.6 K within 3σ on each of 5 seeds (C1
+/// and C2 are strongly correlated: their σ come from the pair shifts' σ, checked
+/// above), and the law fits its own data without a warning.
+#[test]
+fn wlf_constants_recovered_within_their_sigma() {
+    let dir = tempdir();
+    for seed in 0..5 {
+        let d = data(
+            &synthetic(wlf25(), -20.0, 80.0, 5.0, 0.01, seed),
+            dir.path(),
+        );
+        let f = fit::fit(&d, &settings(ShiftMode::Law(LawKind::Wlf), 25.0)).unwrap();
+        let m = f.shift_model.as_ref().unwrap();
+        let (c1, c2) = (m.law.c1.unwrap(), m.law.c2.unwrap());
+        let (s1, s2) = (m.c1_std_error.unwrap(), m.c2_std_error.unwrap());
+        assert!((c1 - 8.06).abs() < 3.0 * s1, "seed {seed}: C1 {c1} ± {s1}");
+        assert!((c2 - 111.6).abs() < 3.0 * s2, "seed {seed}: C2 {c2} ± {s2}");
+        assert!(m.rms_decades < 0.05, "rms {}", m.rms_decades);
+        assert!(
+            !f.warnings.iter().any(|w| w.contains("WLF")),
+            "{:?}",
+            f.warnings
+        );
+    }
+}
+
+/// Arrhenius fitted to shifts made by WLF near the glass transition (the universal
+/// constants C1 = 17.44, C2 = 51.6 K at Tr = Tg = −35 °C, isotherms −30 … 70 °C)
+/// misses them by decades: the warning names the law.
+#[test]
+fn arrhenius_on_wlf_shifts_warns() {
+    let dir = tempdir();
+    let law = Law::wlf(C0 - 35.0, 17.44, 51.6);
+    let d = data(&synthetic(law, -30.0, 70.0, 5.0, 0.01, 3), dir.path());
+    let f = fit::fit(&d, &settings(ShiftMode::Law(LawKind::Arrhenius), 25.0)).unwrap();
+    let m = f.shift_model.as_ref().unwrap();
+    assert!(m.rms_decades > 0.25, "rms {}", m.rms_decades);
+    assert!(
+        f.warnings
+            .iter()
+            .any(|w| w.starts_with("Arrhenius fits the free shifts poorly")),
+        "{:?}",
+        f.warnings
+    );
+    assert_eq!(f.status, dea_fit::fit::Status::Warning);
+}
+
+/// A kinked law (Arrhenius with Ea = 250 kJ/mol below 30 °C, 60 kJ/mol above, both
+/// referred to 30 °C, one file each): WLF cannot follow the kink and the tool says
+/// it misses the shifts by more than their uncertainty.
+#[test]
+fn wlf_on_a_kinked_law_warns() {
+    let dir = tempdir();
+    let cold = synthetic(Law::arrhenius(C0 + 30.0, 250e3), -10.0, 30.0, 5.0, 0.01, 4);
+    let hot = synthetic(Law::arrhenius(C0 + 30.0, 60e3), 35.0, 80.0, 5.0, 0.01, 5);
+    let (a, b) = (dir.path().join("cold.csv"), dir.path().join("hot.csv"));
+    std::fs::write(&a, cold.csv(&[]).unwrap()).unwrap();
+    std::fs::write(&b, hot.csv(&[]).unwrap()).unwrap();
+    let d = read::read_all(&[&a, &b], &ColumnMap::default()).unwrap();
+    let f = fit::fit(&d, &settings(ShiftMode::Law(LawKind::Wlf), 30.0)).unwrap();
+    assert!(
+        f.warnings.iter().any(|w| w.starts_with("WLF ")),
+        "{:?}",
+        f.shift_model
+    );
+}
+
+/// Two isotherms' temperatures swapped in the file (the 0 °C sweep labelled 5 °C and
+/// the other way): the shift between them turns negative and the warning names
+/// both temperatures and says why.
+#[test]
+fn non_monotonic_shifts_are_explained() {
+    let dir = tempdir();
+    let text = synthetic(wlf25(), -10.0, 30.0, 5.0, 0.01, 6)
+        .csv(&[])
+        .unwrap();
+    let swapped: String = text
+        .lines()
+        .map(|l| {
+            if let Some(r) = l.strip_prefix("0,") {
+                format!("5,{r}\n")
+            } else if let Some(r) = l.strip_prefix("5,") {
+                format!("0,{r}\n")
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    // the swapped blocks are out of temperature order in the file: fine, one block each
+    let d = read_text(dir.path(), "swapped.csv", &swapped);
+    let f = fit::fit(&d, &settings(ShiftMode::Free, 25.0)).unwrap();
+    let w: Vec<&String> = f
+        .warnings
+        .iter()
+        .filter(|w| w.starts_with("shifts are not monotonic"))
+        .collect();
+    assert!(!w.is_empty(), "{:?}", f.warnings);
+    assert!(
+        w.iter()
+            .any(|w| w.contains("0 °C") && w.contains("5 °C") && w.contains("cross")),
+        "{w:?}"
+    );
+}
+
+/// A reference temperature between isotherms (27.5 °C, isotherms every 5 °C): every
+/// free shift holds the law's log aT(T) relative to 27.5 °C within 3σ plus 0.01
+/// decade (the linear interpolation in T between 25 and 30 °C is off by < 0.003
+/// decade for this law).
+#[test]
+fn reference_between_isotherms() {
+    let dir = tempdir();
+    let law = wlf25();
+    let d = data(&synthetic(law, -20.0, 80.0, 5.0, 0.01, 7), dir.path());
+    let f = fit::fit(&d, &settings(ShiftMode::Free, 27.5)).unwrap();
+    let tr = C0 + 27.5;
+    for s in &f.shift_factors {
+        let truth = law.log_at(s.temperature_k) - law.log_at(tr);
+        assert!(
+            (s.log10_at - truth).abs() < 3.0 * s.std_error + 0.01,
+            "{}: {} vs {truth} ± {}",
+            s.temperature_k,
+            s.log10_at,
+            s.std_error
+        );
+    }
+    assert!(!f.warnings.iter().any(|w| w.contains("outside")));
+}
+
+/// Bad files: each refused with exit status 2 at its file, line and column.
+#[test]
+fn bad_files_are_located() {
+    let dir = tempdir();
+    let cases = [
+        (
+            "negative.csv",
+            "frequency_Hz,storage_modulus_MPa,loss_modulus_MPa\n0.1,1,0.2\n1,-2,0.3\n",
+            "negative.csv:3:2: storage modulus must be in (0",
+        ),
+        (
+            "repeated.csv",
+            "# temperature: 25 C\nfrequency_Hz,storage_modulus_MPa,loss_modulus_MPa\n0.1,1,0.2\n1,2,0.3\n1,2.1,0.3\n",
+            "repeated.csv:5:1: frequency repeats line 4",
+        ),
+        (
+            "unordered.csv",
+            "temperature_C,frequency_Hz,storage_modulus_MPa,tan_delta\n25,0.1,1,0.2\n25,1,2,0.3\n25,0.5,2.1,0.3\n",
+            "unordered.csv:4:2: frequencies of the isotherm at 25 °C go up until line 3",
+        ),
+        (
+            "no_unit.csv",
+            "frequency,storage_modulus_MPa,loss_modulus_MPa\n0.1,1,0.2\n1,2,0.3\n",
+            "no_unit.csv:1:1: column 'frequency' has no unit",
+        ),
+        (
+            "not_finite.csv",
+            "frequency_Hz,storage_modulus_MPa,loss_modulus_MPa\n0.1,1,0.2\n1,inf,0.3\n",
+            "not_finite.csv:3:2:",
+        ),
+        (
+            "back.csv",
+            "temperature_C,frequency_Hz,storage_modulus_MPa,loss_modulus_MPa\n0,1,2,1\n0,10,3,1\n20,1,1,1\n20,10,2,1\n0,100,4,1\n",
+            "back.csv:6: temperature 0 °C comes back",
+        ),
+    ];
+    for (name, text, want) in cases {
+        std::fs::write(dir.path().join(name), text).unwrap();
+        let o = run(
+            dir.path(),
+            &["dma", name, "--reference-temperature", "25C", "--no-report"],
+        );
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+        assert!(err.contains(want), "{name}: {err}");
+    }
+}
+
+/// An instrument's export (preamble, units row, extra columns, both E″ and tan δ,
+/// sweeps from high to low frequency) with a negative Celsius reference written
+/// with `=` and without: read, shifted, JSON with the documented keys.
+#[test]
+fn export_with_negative_celsius_reference() {
+    let dir = tempdir();
+    let text = "Instrument: DMA 850\nSample: VHB\n\nTemperature,Frequency,Storage Modulus,Loss Modulus,Tan Delta,Strain amplitude\n(°C),(Hz),(MPa),(MPa),(),(%)\n0,100,10,5,0.5,1\n0,10,5,2,0.4,1\n0,1,2,0.8,0.4,1\n0,0.1,1,0.3,0.3,1\n20,100,4,1.5,0.4,1\n20,10,2,0.7,0.3,1\n20,1,1,0.3,0.3,1\n20,0.1,0.6,0.15,0.25,1\n";
+    std::fs::write(dir.path().join("export.csv"), text).unwrap();
+    for flag in [
+        vec!["--reference-temperature=-5C"],
+        vec!["--reference-temperature", "-5C"],
+    ] {
+        let mut args = vec![
+            "dma",
+            "export.csv",
+            "--no-report",
+            "--json",
+            "--out",
+            "f.json",
+        ];
+        args.extend(flag);
+        let o = run_ok(dir.path(), &args);
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert!((v["reference_temperature_K"].as_f64().unwrap() - 268.15).abs() < 1e-9);
+        let sf = v["shift_factors"].as_array().unwrap();
+        assert_eq!(sf.len(), 2);
+        for s in sf {
+            assert!(
+                s["temperature_K"].is_number()
+                    && s["log10_aT"].is_number()
+                    && s["std_error"].is_number()
+            );
+        }
+        assert_eq!(v["fit_file"], "f.json");
+        assert!(v["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|w| w.as_str().unwrap().contains("columns not used: Tan Delta")));
+    }
+}
+
+/// A master curve (no temperature; frequencies may repeat) is read as it is: no
+/// shifts, its points sorted by frequency.
+#[test]
+fn master_curve_is_read_as_is() {
+    let dir = tempdir();
+    let text = "omega_rad_s,storage_modulus_kPa,loss_modulus_kPa\n1e-18,100,10\n1e-3,200,50\n1e-3,201,51\n1e12,9e5,1e5\n10,900,300\n";
+    std::fs::write(dir.path().join("master.csv"), text).unwrap();
+    let o = run_ok(
+        dir.path(),
+        &[
+            "dma",
+            "master.csv",
+            "--terms",
+            "auto",
+            "--no-report",
+            "--json",
+            "--out",
+            "m.json",
+        ],
+    );
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["shift_factors"].as_array().unwrap().len(), 0);
+    let m = v["master_curve"].as_array().unwrap();
+    assert_eq!(m.len(), 5);
+    assert_eq!(m[4]["reduced_omega_rad_s"].as_f64(), Some(1e12));
+    assert!(v["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|w| w.as_str().unwrap().contains("sorted by frequency")));
+}
+
+/// `synth dma` is deterministic by seed: the shipped dataset is what its README's
+/// command makes, byte for byte.
+#[test]
+fn shipped_dataset_is_its_command() {
+    let dir = tempdir();
+    let readme = std::fs::read_to_string(repo().join("datasets/dma/README.md")).unwrap();
+    let cmd = readme
+        .lines()
+        .find(|l| l.starts_with("dea-fit synth dma"))
+        .expect("the README gives the command");
+    let args: Vec<&str> = cmd.split_whitespace().skip(1).collect();
+    let out = dir.path().join("x.csv");
+    let mut a: Vec<&str> = args
+        .iter()
+        .copied()
+        .filter(|x| !x.starts_with("--out"))
+        .collect();
+    let shipped = args
+        .iter()
+        .find_map(|x| x.strip_prefix("--out="))
+        .expect("--out=FILE");
+    a.extend(["--out", out.to_str().unwrap()]);
+    run_ok(&repo(), &a);
+    let made = std::fs::read(&out).unwrap();
+    assert_eq!(made, std::fs::read(repo().join(shipped)).unwrap());
+}
+
+/// The summary of `dea-fit dma datasets/dma/vhb_like_isotherms.csv
+/// --reference-temperature 25C --shift wlf` is golden (text; the shifts are found on
+/// a fixed grid and refined to 1e-6 decade, so only the last printed digit could
+/// move with the platform's rounding).
+#[test]
+fn golden_vhb_like_wlf() {
+    let dir = tempdir();
+    let out = dir.path().join("f.json");
+    let o = run_ok(
+        &repo(),
+        &[
+            "dma",
+            "datasets/dma/vhb_like_isotherms.csv",
+            "--reference-temperature",
+            "25C",
+            "--shift",
+            "wlf",
+            "--no-report",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    );
+    let text: String = String::from_utf8_lossy(&o.stdout)
+        .lines()
+        .map(|l| match l.starts_with("fit: ") {
+            true => "fit: <out>\n".to_string(),
+            false => format!("{l}\n"),
+        })
+        .collect();
+    golden("dma-vhb_like-wlf.txt", &text, |want| {
+        (want != text).then(|| "the text differs".to_string())
+    });
+}

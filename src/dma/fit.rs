@@ -234,7 +234,7 @@ fn prony_step(
     warnings: &mut Vec<String>,
 ) -> Option<PronyOut> {
     let _ = (master, settings.terms);
-    warnings.push("no Prony series: the frequency-domain Prony fit (src/fit/prony/frequency.rs) is not in this build; the shifts and the master curve are complete".into());
+    warnings.push("no Prony series: this version of `dma` ends at the shifts and the master curve (the Prony fit of the master curve is not wired to it yet)".into());
     None
 }
 

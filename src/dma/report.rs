@@ -272,8 +272,7 @@ pub fn write(f: &DmaFit, data: &DmaData, dir: &Path) -> Result<PathBuf> {
     page.text(match &f.prony {
         Some(p) => format!("E∞ {} Pa, {} terms", sig(p.e_inf, 4), p.terms.len()),
         None => {
-            "not fitted: the frequency-domain Prony fit is not in this build (see the warnings)"
-                .into()
+            "not fitted: this version of `dma` ends at the master curve (see the warnings)".into()
         }
     });
     let files: Vec<String> = f.files.iter().map(|s| s.path.clone()).collect();

@@ -12,7 +12,7 @@ use dea_fit::report::breakdown::{result, summary, write, BreakdownResult};
 use dea_fit::units::{parse_quantity, Dimension};
 use dea_fit::{Error, Result};
 use serde::Serialize;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Estimator.
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -140,15 +140,7 @@ pub fn run(a: Args) -> Result<i32> {
     let settings = settings(&a);
     let o = &a.output;
     let name = format!("{}-breakdown", super::data_name(&a.files[0], "series"));
-    let out = o
-        .out
-        .clone()
-        .unwrap_or_else(|| Path::new("fits").join(format!("{name}.json")));
-    let dir = (!o.no_report).then(|| {
-        o.report
-            .clone()
-            .unwrap_or_else(|| Path::new("reports").join(&name))
-    });
+    let (out, dir) = o.paths(&name);
     super::refuse_in_report(dir.as_deref(), &[("--out", Some(&out))])?;
     let series = a
         .files

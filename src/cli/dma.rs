@@ -127,15 +127,7 @@ pub fn run(a: Args) -> Result<i32> {
         .unwrap_or_default();
     let o = &a.output;
     let name = format!("{}-dma", super::data_name(&a.files[0], "dma"));
-    let out = o
-        .out
-        .clone()
-        .unwrap_or_else(|| Path::new("fits").join(format!("{name}.json")));
-    let dir = (!o.no_report).then(|| {
-        o.report
-            .clone()
-            .unwrap_or_else(|| Path::new("reports").join(&name))
-    });
+    let (out, dir) = o.paths(&name);
     super::refuse_in_report(dir.as_deref(), &[("--out", Some(&out))])?;
     let paths: Vec<&Path> = a.files.iter().map(PathBuf::as_path).collect();
     let data = read::read_all(&paths, &map)?;

@@ -379,17 +379,7 @@ pub fn run(a: Args) -> Result<i32> {
     // every file this run writes, known before anything runs: none inside the
     // report folder
     let name = format!("{}-identified", stem(&a.traces[0]));
-    let out = a
-        .output
-        .out
-        .clone()
-        .unwrap_or_else(|| Path::new("fits").join(format!("{name}.json")));
-    let dir = (!a.output.no_report).then(|| {
-        a.output
-            .report
-            .clone()
-            .unwrap_or_else(|| Path::new("reports").join(&name))
-    });
+    let (out, dir) = a.output.paths(&name);
     super::refuse_in_report(
         dir.as_deref(),
         &[

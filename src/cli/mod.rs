@@ -124,6 +124,22 @@ pub struct Output {
 }
 
 impl Output {
+    /// The fit file and report directory of a run named `name`: `--out` or
+    /// fits/<name>.json, and `--report` or reports/<name>/ unless `--no-report`.
+    pub fn paths(&self, name: &str) -> (std::path::PathBuf, Option<std::path::PathBuf>) {
+        use std::path::Path;
+        let out = self
+            .out
+            .clone()
+            .unwrap_or_else(|| Path::new("fits").join(format!("{name}.json")));
+        let dir = (!self.no_report).then(|| {
+            self.report
+                .clone()
+                .unwrap_or_else(|| Path::new("reports").join(name))
+        });
+        (out, dir)
+    }
+
     /// The common end of every fitting command: take the report directory, write the
     /// fit file (keeping an older, different fit aside, `same` tells them apart), the
     /// report, then print the summary with where both went, or the JSON; returns the
@@ -137,17 +153,8 @@ impl Output {
         summary: impl FnOnce() -> Result<String>,
         report: impl FnOnce(&std::path::Path) -> Result<std::path::PathBuf>,
     ) -> Result<i32> {
-        use std::path::Path;
-        let out = self
-            .out
-            .clone()
-            .unwrap_or_else(|| Path::new("fits").join(format!("{name}.json")));
+        let (out, dir) = self.paths(name);
         let json = serde_json::to_string_pretty(fit).expect("a fit serialises");
-        let dir = (!self.no_report).then(|| {
-            self.report
-                .clone()
-                .unwrap_or_else(|| Path::new("reports").join(name))
-        });
         refuse_in_report(dir.as_deref(), &[("--out", Some(&out))])?;
         if let Some(d) = &dir {
             claim_dir(d)?;

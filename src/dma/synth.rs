@@ -48,17 +48,11 @@ impl Synthetic {
         for p in preamble {
             let _ = writeln!(s, "# {p}");
         }
-        let terms: Vec<String> = self
-            .prony
-            .terms
-            .iter()
-            .map(|t| format!("({:e} s, {:e} Pa)", t.tau, t.modulus))
-            .collect();
         let _ = writeln!(
             s,
             "# prony at the reference temperature: E_inf = {:e} Pa; (tau, E) = {}",
             self.prony.e_inf,
-            terms.join(", ")
+            self.prony.terms_text()
         );
         let l = &self.law;
         let _ = writeln!(

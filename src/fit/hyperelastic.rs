@@ -832,11 +832,6 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
     let (aicc, bic) = diagnostics::information_criteria(rss, n, k);
     let mut warnings = est.notes.clone();
     let mut status = Status::Ok;
-    let mut escalate = |s: Status| {
-        if status == Status::Ok || (status == Status::Warning && s != Status::Warning) {
-            status = s;
-        }
-    };
 
     // Per-mode statistics and fitted ranges.
     let per_mode: Vec<ModeStats> = data
@@ -889,7 +884,7 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
             .map_or_else(|| source.path.clone(), |n| n.to_string_lossy().into_owned());
         warnings.extend(source.notes.iter().map(|n| format!("{name}: {n}")));
         for w in &source.warnings {
-            escalate(Status::Warning);
+            status.escalate(Status::Warning);
             warnings.push(format!("{name}: {w}"));
         }
     }
@@ -898,7 +893,7 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         let Some(l) = s.lack_of_fit.filter(|l| l.lacks_fit) else {
             continue;
         };
-        escalate(Status::Warning);
+        status.escalate(Status::Warning);
         let noise = match l.noise_pa {
             Some(n) => format!(
                 ", and the RMSE {} Pa is {:.1} times the noise σ = {} Pa of the data",
@@ -922,35 +917,35 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
 
     // Convergence.
     if let Some(w) = est.termination.shortfall() {
-        escalate(Status::NotConverged);
+        status.escalate(Status::NotConverged);
         warnings.push(w);
     }
     if !finite {
-        escalate(Status::NotConverged);
+        status.escalate(Status::NotConverged);
         warnings.push("the model gives no finite stress at some data points".into());
     }
 
     // Identifiability.
     let params_info = model.params();
     if unc.std_error.iter().any(Option::is_none) && n > k {
-        escalate(Status::IllPosed);
+        status.escalate(Status::IllPosed);
         warnings.push(format!(
             "parameters not identifiable from these data (condition number {:.2e}); fewer parameters or more modes are needed",
             unc.condition
         ));
     } else if unc.condition > 1e6 {
-        escalate(Status::Warning);
+        status.escalate(Status::Warning);
         warnings.push(format!(
             "ill-conditioned: condition number {:.2e}; the parameters are poorly determined individually",
             unc.condition
         ));
     }
     if let Some(w) = r2.and_then(diagnostics::worse_than_mean) {
-        escalate(Status::IllPosed);
+        status.escalate(Status::IllPosed);
         warnings.push(w);
     }
     if data.informative_points() <= k {
-        escalate(Status::IllPosed);
+        status.escalate(Status::IllPosed);
         let (n, why) = points_phrase(data);
         warnings.push(format!(
             "{n} for {k} parameters{why}: no degrees of freedom left for uncertainty, and the model may pass through every point"
@@ -960,7 +955,7 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
     // (synthetic, smoothed) or the model interpolates them.
     let y_max = y.iter().map(|v| v.abs()).fold(0.0, f64::max);
     if rmse < TOO_GOOD * y_max {
-        escalate(Status::Warning);
+        status.escalate(Status::Warning);
         warnings.push(format!(
             "the model reproduces the data to {:.1e} of the largest stress, far below the noise of any real test: the data are model-generated (synthetic or smoothed) or the model interpolates them, and the standard errors do not measure a test's scatter",
             rmse / y_max
@@ -976,11 +971,11 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         .collect();
     let judgement = diagnostics::judge(&names, &p, &unc, &sign_free, &vec![false; k]);
     for w in &judgement.findings {
-        escalate(Status::IllPosed);
+        status.escalate(Status::IllPosed);
         warnings.push(w.clone());
     }
     for w in &judgement.warnings {
-        escalate(Status::Warning);
+        status.escalate(Status::Warning);
         warnings.push(w.clone());
     }
     // The bounds of the nonlinear parameters (a pass over the data: only when any).
@@ -1000,7 +995,7 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         if span.is_finite() && ((p[j] - lo).abs() < 1e-6 * span || (hi - p[j]).abs() < 1e-6 * span)
         {
             ran_to_bound[j] = true;
-            escalate(Status::IllPosed);
+            status.escalate(Status::IllPosed);
             warnings.push(format!(
                 "{} ran to its bound ({}): the data do not determine it (ill_posed)",
                 info.name,
@@ -1013,7 +1008,7 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
         let largest = largest_contributions(model, &p, data);
         for (info, contrib) in params_info.iter().zip(&largest) {
             if info.linear && *contrib < 1e-3 * y_max {
-                escalate(Status::IllPosed);
+                status.escalate(Status::IllPosed);
                 warnings.push(format!(
                     "{} is negligible (its term contributes < 0.1 % of the largest stress): a term too many for these data",
                     info.name
@@ -1039,14 +1034,14 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
             .map(|[a, b]| format!("{}–{}", Fixed(*a, 3), Fixed(*b, 3)))
             .collect();
         if in_data {
-            escalate(Status::Unstable);
+            status.escalate(Status::Unstable);
             warnings.push(format!(
                 "Drucker-unstable in {} within the data's stretch range (dP/dλ ≤ 0 at {})",
                 d.mode,
                 ranges.join(", ")
             ));
         } else {
-            escalate(Status::Warning);
+            status.escalate(Status::Warning);
             warnings.push(format!(
                 "Drucker-unstable in {} at stretch {} (outside the data; checked {}–{}); stable for {}–{}",
                 d.mode,
@@ -1076,7 +1071,7 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
             let stress_pa = model.nominal_stress(&p, m, l);
             if !stress_pa.is_finite() {
                 // Beyond the model's extensibility limit (Gent): no stress to list.
-                escalate(Status::Warning);
+                status.escalate(Status::Warning);
                 warnings.push(format!(
                     "{} gives no finite {m} stress from λ = {} on (beyond its extensibility limit): the fitted limit lies inside the {m} range of interest",
                     model.name(),
@@ -1092,7 +1087,7 @@ pub fn fit(data: &Dataset, spec: &ModelSpec, settings: &Settings) -> Result<Hype
             });
         }
         if m == Mode::Equibiaxial {
-            escalate(Status::Warning);
+            status.escalate(Status::Warning);
             let mut w = String::from(
                 "no equibiaxial data: equibiaxial stress (the state of a compressed stack layer) is extrapolated",
             );

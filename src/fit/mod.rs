@@ -91,6 +91,14 @@ impl Status {
         )
     }
 
+    /// Raise this status by a finding of status `s`: a warning replaces `ok`, and
+    /// the first blocking status found stays (later ones do not replace it).
+    pub fn escalate(&mut self, s: Status) {
+        if *self == Status::Ok || (*self == Status::Warning && s != Status::Warning) {
+            *self = s;
+        }
+    }
+
     /// The exit status of a command that ends with this status: 1 for a blocking
     /// status under `--strict`, else 0 (README, "Exit status and statuses").
     pub fn exit_code(self, strict: bool) -> i32 {

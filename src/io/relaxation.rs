@@ -474,17 +474,11 @@ impl Synthetic {
         for p in preamble {
             let _ = writeln!(s, "# {p}");
         }
-        let terms: Vec<String> = self
-            .prony
-            .terms
-            .iter()
-            .map(|t| format!("({:e} s, {:e} Pa)", t.tau, t.modulus))
-            .collect();
         let _ = writeln!(
             s,
             "# prony (small-strain reading, Pa per unit strain): E_inf = {:e} Pa; (tau, E) = {}",
             self.prony.e_inf,
-            terms.join(", ")
+            self.prony.terms_text()
         );
         let _ = writeln!(
             s,

@@ -86,6 +86,17 @@ fn check_finite_nonneg(v: f64, what: &str) -> Result<()> {
 }
 
 impl Prony {
+    /// The terms as written into generated files' `#` lines: `(τ s, E Pa), …` in
+    /// full precision (`{:e}`).
+    pub fn terms_text(&self) -> String {
+        let terms: Vec<String> = self
+            .terms
+            .iter()
+            .map(|t| format!("({:e} s, {:e} Pa)", t.tau, t.modulus))
+            .collect();
+        terms.join(", ")
+    }
+
     /// A checked series from E∞ and (τ, E) pairs (τ > 0, E ≥ 0, E∞ ≥ 0); terms are
     /// sorted by τ.
     pub fn new(e_inf: f64, terms: &[(f64, f64)]) -> Result<Prony> {

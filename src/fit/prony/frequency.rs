@@ -493,22 +493,17 @@ fn verdict(
     kk: &[KkDisagreement],
 ) -> (Status, Vec<String>) {
     let mut status = Status::Ok;
-    let mut escalate = |s: Status| {
-        if status == Status::Ok || (status == Status::Warning && s != Status::Warning) {
-            status = s;
-        }
-    };
     let mut warnings = Vec::new();
     for w in notes {
-        escalate(Status::Warning);
+        status.escalate(Status::Warning);
         warnings.push(w);
     }
     for (s, w) in a.problems.iter().chain(&a.warnings) {
-        escalate(*s);
+        status.escalate(*s);
         warnings.push(w.clone());
     }
     for d in kk {
-        escalate(Status::Warning);
+        status.escalate(Status::Warning);
         warnings.push(format!(
             "Kramers–Kronig: over ω = {:.4e}…{:.4e} rad/s ({} points) the measured E″ is up to {:.2} × the E″ that the measured E′ implies; E′ and E″ there are not of one linear viscoelastic material (temperature drift, compliance correction, a misplaced isotherm): the fit follows E′",
             d.omega_rad_s[0], d.omega_rad_s[1], d.points, d.worst_ratio

@@ -82,14 +82,9 @@ pub(super) fn verdict(
 ) -> Verdict {
     let (n, m) = (a.tf.n_terms, data.time.len());
     let mut status = Status::Ok;
-    let mut escalate = |s: Status| {
-        if status == Status::Ok || (status == Status::Warning && s != Status::Warning) {
-            status = s;
-        }
-    };
     let mut warnings = Vec::new();
     for w in notes {
-        escalate(Status::Warning);
+        status.escalate(Status::Warning);
         warnings.push(w);
     }
     // what the reader did beyond reading (a preamble skipped, a units row read,
@@ -102,19 +97,19 @@ pub(super) fn verdict(
         );
     warnings.extend(data.source.notes.iter().map(|n| format!("{name}: {n}")));
     if let Some(w) = unresolved {
-        escalate(Status::IllPosed);
+        status.escalate(Status::IllPosed);
         warnings.push(w);
     }
     for (s, w) in a.problems.iter().chain(&a.warnings) {
-        escalate(*s);
+        status.escalate(*s);
         warnings.push(w.clone());
     }
     if let Some(w) = diagnostics::worse_than_mean(a.r2) {
-        escalate(Status::IllPosed);
+        status.escalate(Status::IllPosed);
         warnings.push(w);
     }
     if a.explained <= EXPLAINS_NOTHING {
-        escalate(Status::IllPosed);
+        status.escalate(Status::IllPosed);
         warnings.push(format!(
             "the fit explains nothing: it leaves {:.0} % of the data's weighted sum of squares (relative RMSE {:.3} %, R² {:.3}), where zero stress leaves 100 %; check the stress column (its sign and unit), the loading and --residual",
             100.0 * (1.0 - a.explained),
@@ -130,7 +125,7 @@ pub(super) fn verdict(
             .expect("non-empty");
         if peak > 0 && y[peak].abs() > 1.05 * y[0].abs() && data.time[peak] < 0.2 * data.time[m - 1]
         {
-            escalate(Status::Warning);
+            status.escalate(Status::Warning);
             warnings.push(format!(
                 "the stress rises until t = {} although the loading is taken as an ideal step: give the ramp (--ramp-time) or a strain column, or the fit puts spurious stiff short-τ terms on the ramp",
                 fmt_s(data.time[peak])
@@ -143,7 +138,7 @@ pub(super) fn verdict(
     if let Some(q) = &mut qlv_info {
         q.instantaneous_scale = e0 / prep.setup.unit;
         if let Some(w) = qlv_consistency(q.instantaneous_scale) {
-            escalate(Status::Warning);
+            status.escalate(Status::Warning);
             warnings.push(w);
         }
     }

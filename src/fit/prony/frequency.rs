@@ -379,7 +379,15 @@ pub fn fit(data: &ComplexModulus, settings: &FrequencySettings) -> Result<Freque
         notes,
     } = estimate(&mut setup, &settings.search)?;
     let kk = match settings.kramers_kronig && settings.loss_weight > 0.0 {
-        true => kramers_kronig(data, &settings.search, a.tf.n_terms)?,
+        // E′ alone with as many terms as the search could take: the check needs E′
+        // followed closely, not terms that are each identifiable (with the chosen
+        // count, 7 on a 12-decade synthetic master curve whose E′ it left 1.5 %
+        // rms off at 1 % noise, four ranges of consistent data were flagged)
+        true => kramers_kronig(
+            data,
+            &settings.search,
+            a.tf.n_terms.max(settings.search.max_terms),
+        )?,
         false => Vec::new(),
     };
     let seconds = t0.elapsed().as_secs_f64();

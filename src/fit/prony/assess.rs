@@ -136,24 +136,31 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
 /// Findings about a fit, each with the status it raises.
 type Findings = Vec<(Status, String)>;
 
-/// The terms' problems into `problems`: negligible, at a bound of the τ search
-/// (`at_bound`), outside the window the data support, within a factor 1.25 of the
-/// next.
+/// Largest weighted change a term may make to every row and still be negligible:
+/// 0.1 % where the residuals are relative.
+pub const NEGLIGIBLE_REACH: f64 = 1e-3;
+
+/// The terms' problems into `problems`: negligible (a `reach`
+/// ([`crate::fit::prony::problem::Problem::reach`]) of at most
+/// [`NEGLIGIBLE_REACH`]: judged row by row, not against E0, since a master curve's
+/// modulus spans decades and a term of 0.02 % of the glassy E0 may carry the whole
+/// rubbery plateau's relaxation), at a bound of the τ search (`at_bound`), outside
+/// the window the data support, within a factor 1.25 of the next.
 fn term_problems<K: Kernels>(
     setup: &Setup<K>,
     si: &[f64],
-    n: usize,
+    reach: &[f64],
     at_bound: &[bool],
     problems: &mut Findings,
 ) {
-    let e0: f64 = si[..=n].iter().sum();
+    let n = reach.len();
     for i in 0..n {
-        let (tau, e) = (si[1 + n + i], si[1 + i]);
+        let tau = si[1 + n + i];
         let name = format!("τ{} = {}", i + 1, fmt_s(tau));
-        if e <= 1e-3 * e0 {
+        if reach[i] <= NEGLIGIBLE_REACH {
             problems.push((
                 Status::IllPosed,
-                format!("term {} ({name}) is negligible (E{} ≤ 0.1 % of E0): a term too many for these data", i + 1, i + 1),
+                format!("term {} ({name}) is negligible (it changes the fitted curve by at most 0.1 % anywhere in the data): a term too many for these data", i + 1),
             ));
         } else if at_bound[i] {
             problems.push((
@@ -220,7 +227,13 @@ fn problems<K: Kernels>(
     let at_bound: Vec<bool> = (0..n)
         .map(|i| si[1 + n + i] <= lo * 1.0001 || si[1 + n + i] >= hi / 1.0001)
         .collect();
-    term_problems(setup, si, n, &at_bound, &mut problems);
+    term_problems(
+        setup,
+        si,
+        &tf.problem.reach(&tf.p),
+        &at_bound,
+        &mut problems,
+    );
     if m <= k + 1 {
         problems.push((
             Status::IllPosed,

@@ -1,8 +1,10 @@
 //! The summary and report of `dea-fit dma`: the master curve (data coloured by
 //! temperature), the shift factors with ±1.96σ bars and the fitted law, and the
 //! shift table; the Prony series fitted to the master curve (its E′ and E″ over
-//! the master curve, its terms with σ, identifiability and support). Not yet drawn:
-//! the residuals and E(t) over the supported window.
+//! the master curve, its terms with σ, identifiability and support), its residuals
+//! against reduced frequency, and the relaxation modulus E(t) and creep compliance
+//! J(t) it gives, drawn a decade beyond the τ range the master curve supports with
+//! that range shaded.
 
 use super::fit::DmaFit;
 use super::temperature::{celsius, CELSIUS_ZERO_K};
@@ -256,6 +258,105 @@ fn master_chart(f: &DmaFit, data: &DmaData) -> Chart {
     }
 }
 
+/// The Prony fit's relative residuals at every master-curve point: E′ against E′,
+/// E″ against |E*| (the fit's own weighting, [`crate::fit::prony::frequency`]), in %.
+fn residual_chart(f: &DmaFit) -> Chart {
+    let prony = f.prony.fit.prony().ok();
+    let residuals = |loss: bool| -> Vec<(f64, f64)> {
+        let Some(prony) = &prony else {
+            return Vec::new();
+        };
+        f.master_curve
+            .iter()
+            .map(|p| {
+                let (s, l) = prony.storage_loss(p.reduced_omega_rad_s);
+                let r = match loss {
+                    false => (s - p.storage_pa) / p.storage_pa,
+                    true => (l - p.loss_pa) / p.storage_pa.hypot(p.loss_pa),
+                };
+                (p.reduced_omega_rad_s, 100.0 * r)
+            })
+            .collect()
+    };
+    Chart {
+        title: "residuals of the Prony fit".into(),
+        x_label: "reduced angular frequency aT·ω (rad/s)".into(),
+        y_label: "fit − data (%)".into(),
+        series: vec![
+            Series {
+                label: "E′ (of E′)".into(),
+                points: residuals(false),
+                color: 0,
+                style: Style::Points,
+            },
+            Series {
+                label: "E″ (of |E*|)".into(),
+                points: residuals(true),
+                color: 1,
+                style: Style::OpenPoints,
+            },
+        ],
+        log_x: true,
+        x_unit: None,
+        y_unit: None,
+    }
+}
+
+/// E(t) and J(t) of the Prony series (log10, Pa and 1/Pa) on 200 times from a
+/// decade below to a decade above the τ range the master curve supports, that range
+/// shaded: beyond it the curves are the series' extrapolation, not the data's.
+fn time_chart(f: &DmaFit) -> Chart {
+    let [a, b] = f.prony.fit.supported_tau_s;
+    let (lo, hi) = (a / 10.0, b * 10.0);
+    let n = 200;
+    let times: Vec<f64> = (0..n)
+        .map(|i| lo * (hi / lo).powf(i as f64 / (n - 1) as f64))
+        .collect();
+    let (modulus, compliance) = match f.prony.fit.prony() {
+        Ok(p) => (
+            interconvert::relaxation_modulus(&p, &times),
+            interconvert::creep_compliance(&p, &times),
+        ),
+        Err(_) => (Vec::new(), Vec::new()),
+    };
+    let curve = |v: &[f64], invert: bool| -> Vec<(f64, f64)> {
+        times
+            .iter()
+            .zip(v)
+            .filter(|p| *p.1 > 0.0)
+            .map(|(&t, &v)| (t, if invert { -v.log10() } else { v.log10() }))
+            .collect()
+    };
+    Chart {
+        title: "relaxation modulus and creep compliance at the reference temperature".into(),
+        x_label: "time t (s)".into(),
+        y_label: "log10 E(t) (Pa), log10 1/J(t) (Pa)".into(),
+        series: vec![
+            Series {
+                label: "τ range the master curve supports".into(),
+                points: vec![(a, 0.0), (b, 0.0)],
+                color: 2,
+                style: Style::Span,
+            },
+            Series {
+                label: "E(t)".into(),
+                points: curve(&modulus, false),
+                color: 0,
+                style: Style::Line,
+            },
+            Series {
+                label: "1/J(t) (creep compliance, inverted)".into(),
+                points: curve(&compliance, true),
+                color: 1,
+                style: Style::Dashed,
+            },
+        ],
+        log_x: true,
+        x_unit: None,
+        y_unit: None,
+    }
+}
+
 /// The shift factors with ±1.96σ bars, and the law over the isotherms' range.
 fn shift_chart(f: &DmaFit) -> Chart {
     let c = |k: f64| k - CELSIUS_ZERO_K;
@@ -342,6 +443,18 @@ pub fn write(f: &DmaFit, data: &DmaData, dir: &Path) -> Result<PathBuf> {
     }
     page.heading("Prony series");
     page.text(prony_line(f));
+    page.chart(
+        dir,
+        "residuals.svg",
+        "relative residuals of the Prony fit",
+        &residual_chart(f),
+    )?;
+    page.chart(
+        dir,
+        "time.svg",
+        "E(t) and J(t) over the supported τ range",
+        &time_chart(f),
+    )?;
     page.table(
         &[
             "term",

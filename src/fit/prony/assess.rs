@@ -85,7 +85,10 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
     for i in 0..n {
         jac.column_mut(1 + n + i).scale_mut(1.0 / si[1 + n + i]);
     }
-    let unc = diagnostics::uncertainty(&jac, rss);
+    let unc = match prob.kern.noise_groups() {
+        Some(groups) => grouped_uncertainty(&mut r.clone(), &mut jac.clone(), &groups, rss),
+        None => diagnostics::uncertainty(&jac, rss),
+    };
     let mut pred = vec![0.0; m];
     prob.model(&tf.p, &mut pred);
     let y: &[f64] = &prob.y;
@@ -131,6 +134,42 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
         warnings,
         identifiable,
     }
+}
+
+/// The uncertainty with a residual variance per noise group: each group's rows
+/// of `r` and `jac` scaled by 1/s_g, s_g² = RSS_g/(m_g − k·m_g/m) (the degrees of
+/// freedom shared in proportion to the rows), so that cov = (Σ_g J_gᵀJ_g/s_g²)⁻¹,
+/// the weighted least-squares covariance with each group's own variance (Seber &
+/// Wild, *Nonlinear Regression*, 1989, §2.1.4). One pooled variance (`rss`) where a
+/// group has no degrees of freedom or no residual.
+fn grouped_uncertainty(
+    r: &mut DVector<f64>,
+    jac: &mut DMatrix<f64>,
+    groups: &[usize],
+    rss: f64,
+) -> diagnostics::Uncertainty {
+    let (m, k) = (jac.nrows(), jac.ncols());
+    let count = groups.iter().copied().max().map_or(0, |g| g + 1);
+    let mut sum = vec![0.0; count];
+    let mut rows = vec![0usize; count];
+    for (g, v) in groups.iter().zip(r.iter()) {
+        sum[*g] += v * v;
+        rows[*g] += 1;
+    }
+    let s: Vec<f64> = (0..count)
+        .map(|g| {
+            let dof = rows[g] as f64 * (1.0 - k as f64 / m as f64);
+            (sum[g] / dof).sqrt()
+        })
+        .collect();
+    if s.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+        return diagnostics::uncertainty(jac, rss);
+    }
+    for (row, g) in groups.iter().enumerate() {
+        r[row] /= s[*g];
+        jac.row_mut(row).scale_mut(1.0 / s[*g]);
+    }
+    diagnostics::uncertainty(jac, r.norm_squared())
 }
 
 /// Findings about a fit, each with the status it raises.

@@ -1,12 +1,16 @@
 //! The summary and report of `dea-fit dma`: the master curve (data coloured by
 //! temperature), the shift factors with ±1.96σ bars and the fitted law, and the
-//! shift table; the Prony fit's curves (fit, residuals, E(t) over the supported
-//! window) join them once the Prony step is wired (`fit::prony_step`).
+//! shift table; the Prony series fitted to the master curve (its E′ and E″ over
+//! the master curve, its terms with σ, identifiability and support), its residuals
+//! against reduced frequency, and the relaxation modulus E(t) and creep compliance
+//! J(t) it gives, drawn a decade beyond the τ range the master curve supports with
+//! that range shaded.
 
 use super::fit::DmaFit;
 use super::temperature::{celsius, CELSIUS_ZERO_K};
 use super::DmaData;
 use crate::error::Result;
+use crate::fit::prony::interconvert;
 use crate::report::format::{sig, table, wrap};
 use crate::report::page::{Page, Tone};
 use crate::report::plot::{error_bars, Chart, Series, Style};
@@ -117,14 +121,8 @@ pub fn summary(f: &DmaFit) -> String {
         sig(hi, 3),
         (hi / lo).log10()
     ));
-    match &f.prony {
-        Some(p) => s.push_str(&format!(
-            "prony: E∞ {} Pa, {} terms\n",
-            sig(p.e_inf, 4),
-            p.terms.len()
-        )),
-        None => s.push_str("prony: not fitted\n"),
-    }
+    s.push_str(&prony_line(f));
+    s.push('\n');
     if !f.warnings.is_empty() {
         s.push_str("warnings:\n");
         for w in &f.warnings {
@@ -139,6 +137,68 @@ pub fn summary(f: &DmaFit) -> String {
 }
 
 /// The master curve chart: log E′ and log E″ against reduced ω, one colour per isotherm.
+/// The Prony series in one line: E∞, the terms, the τ range the master curve
+/// supports, the fit's relative RMS of E′ and E″.
+fn prony_line(f: &DmaFit) -> String {
+    let p = &f.prony;
+    let [a, b] = p.fit.supported_tau_s;
+    format!(
+        "prony: E∞ {} Pa, {} terms (τ supported {} … {} s); rms E′ {:.2} %, E″ {:.2} % of |E*|",
+        sig(p.e_inf, 4),
+        p.terms.len(),
+        sig(a, 3),
+        sig(b, 3),
+        100.0 * p.fit.rel_rmse_storage,
+        100.0 * p.fit.rel_rmse_loss
+    )
+}
+
+/// The Prony terms with their σ, identifiability and support.
+fn prony_rows(f: &DmaFit) -> Vec<Vec<String>> {
+    let opt = |v: Option<f64>| v.map_or_else(|| "—".to_string(), |v| sig(v, 3));
+    f.prony
+        .fit
+        .terms
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            vec![
+                (i + 1).to_string(),
+                sig(t.modulus_pa, 4),
+                opt(t.modulus_std_pa),
+                sig(t.tau_s, 4),
+                opt(t.tau_std_s),
+                t.identifiable.to_string(),
+                t.supported.to_string(),
+            ]
+        })
+        .collect()
+}
+
+/// E′ and E″ of the fitted Prony series on 200 reduced frequencies over the
+/// master curve's range (log10 Pa); empty when the series cannot be built.
+fn prony_curves(f: &DmaFit) -> [Vec<(f64, f64)>; 2] {
+    let Ok(prony) = f.prony.fit.prony() else {
+        return [Vec::new(), Vec::new()];
+    };
+    let [lo, hi] = f.reduced_omega_range_rad_s;
+    let n = 200;
+    let omega: Vec<f64> = (0..n)
+        .map(|i| lo * (hi / lo).powf(i as f64 / (n - 1) as f64))
+        .collect();
+    let e = interconvert::complex_modulus(&prony, &omega);
+    let curve = |k: usize| -> Vec<(f64, f64)> {
+        omega
+            .iter()
+            .zip(&e)
+            .map(|(&w, v)| (w, [v.0, v.1][k]))
+            .filter(|p| p.1 > 0.0)
+            .map(|(w, v)| (w, v.log10()))
+            .collect()
+    };
+    [curve(0), curve(1)]
+}
+
 fn master_chart(f: &DmaFit, data: &DmaData) -> Chart {
     let mut series = Vec::new();
     for (j, iso) in data.isotherms.iter().enumerate() {
@@ -170,6 +230,20 @@ fn master_chart(f: &DmaFit, data: &DmaData) -> Chart {
             style: Style::OpenPoints,
         });
     }
+    let [storage, loss] = prony_curves(f);
+    let colors = data.isotherms.len();
+    series.push(Series {
+        label: "E′ Prony fit".into(),
+        points: storage,
+        color: colors,
+        style: Style::Line,
+    });
+    series.push(Series {
+        label: "E″ Prony fit".into(),
+        points: loss,
+        color: colors,
+        style: Style::Dashed,
+    });
     Chart {
         title: match f.reference_temperature_k {
             Some(t) => format!("master curve at {} (E′ filled, E″ open)", celsius(t)),
@@ -178,6 +252,105 @@ fn master_chart(f: &DmaFit, data: &DmaData) -> Chart {
         x_label: "reduced angular frequency aT·ω (rad/s)".into(),
         y_label: "log10 modulus (Pa)".into(),
         series,
+        log_x: true,
+        x_unit: None,
+        y_unit: None,
+    }
+}
+
+/// The Prony fit's relative residuals at every master-curve point: E′ against E′,
+/// E″ against |E*| (the fit's own weighting, [`crate::fit::prony::frequency`]), in %.
+fn residual_chart(f: &DmaFit) -> Chart {
+    let prony = f.prony.fit.prony().ok();
+    let residuals = |loss: bool| -> Vec<(f64, f64)> {
+        let Some(prony) = &prony else {
+            return Vec::new();
+        };
+        f.master_curve
+            .iter()
+            .map(|p| {
+                let (s, l) = prony.storage_loss(p.reduced_omega_rad_s);
+                let r = match loss {
+                    false => (s - p.storage_pa) / p.storage_pa,
+                    true => (l - p.loss_pa) / p.storage_pa.hypot(p.loss_pa),
+                };
+                (p.reduced_omega_rad_s, 100.0 * r)
+            })
+            .collect()
+    };
+    Chart {
+        title: "residuals of the Prony fit".into(),
+        x_label: "reduced angular frequency aT·ω (rad/s)".into(),
+        y_label: "fit − data (%)".into(),
+        series: vec![
+            Series {
+                label: "E′ (of E′)".into(),
+                points: residuals(false),
+                color: 0,
+                style: Style::Points,
+            },
+            Series {
+                label: "E″ (of |E*|)".into(),
+                points: residuals(true),
+                color: 1,
+                style: Style::OpenPoints,
+            },
+        ],
+        log_x: true,
+        x_unit: None,
+        y_unit: None,
+    }
+}
+
+/// E(t) and J(t) of the Prony series (log10, Pa and 1/Pa) on 200 times from a
+/// decade below to a decade above the τ range the master curve supports, that range
+/// shaded: beyond it the curves are the series' extrapolation, not the data's.
+fn time_chart(f: &DmaFit) -> Chart {
+    let [a, b] = f.prony.fit.supported_tau_s;
+    let (lo, hi) = (a / 10.0, b * 10.0);
+    let n = 200;
+    let times: Vec<f64> = (0..n)
+        .map(|i| lo * (hi / lo).powf(i as f64 / (n - 1) as f64))
+        .collect();
+    let (modulus, compliance) = match f.prony.fit.prony() {
+        Ok(p) => (
+            interconvert::relaxation_modulus(&p, &times),
+            interconvert::creep_compliance(&p, &times),
+        ),
+        Err(_) => (Vec::new(), Vec::new()),
+    };
+    let curve = |v: &[f64], invert: bool| -> Vec<(f64, f64)> {
+        times
+            .iter()
+            .zip(v)
+            .filter(|p| *p.1 > 0.0)
+            .map(|(&t, &v)| (t, if invert { -v.log10() } else { v.log10() }))
+            .collect()
+    };
+    Chart {
+        title: "relaxation modulus and creep compliance at the reference temperature".into(),
+        x_label: "time t (s)".into(),
+        y_label: "log10 E(t) (Pa), log10 1/J(t) (Pa)".into(),
+        series: vec![
+            Series {
+                label: "τ range the master curve supports".into(),
+                points: vec![(a, 0.0), (b, 0.0)],
+                color: 2,
+                style: Style::Span,
+            },
+            Series {
+                label: "E(t)".into(),
+                points: curve(&modulus, false),
+                color: 0,
+                style: Style::Line,
+            },
+            Series {
+                label: "1/J(t) (creep compliance, inverted)".into(),
+                points: curve(&compliance, true),
+                color: 1,
+                style: Style::Dashed,
+            },
+        ],
         log_x: true,
         x_unit: None,
         y_unit: None,
@@ -269,12 +442,31 @@ pub fn write(f: &DmaFit, data: &DmaData, dir: &Path) -> Result<PathBuf> {
         page.table(&header(f), rows(f));
     }
     page.heading("Prony series");
-    page.text(match &f.prony {
-        Some(p) => format!("E∞ {} Pa, {} terms", sig(p.e_inf, 4), p.terms.len()),
-        None => {
-            "not fitted: this version of `dma` ends at the master curve (see the warnings)".into()
-        }
-    });
+    page.text(prony_line(f));
+    page.chart(
+        dir,
+        "residuals.svg",
+        "relative residuals of the Prony fit",
+        &residual_chart(f),
+    )?;
+    page.chart(
+        dir,
+        "time.svg",
+        "E(t) and J(t) over the supported τ range",
+        &time_chart(f),
+    )?;
+    page.table(
+        &[
+            "term",
+            "E (Pa)",
+            "σ(E) (Pa)",
+            "τ (s)",
+            "σ(τ) (s)",
+            "identifiable",
+            "τ supported",
+        ],
+        prony_rows(f),
+    );
     let files: Vec<String> = f.files.iter().map(|s| s.path.clone()).collect();
     let mut headline = vec![format!("{} isotherms", f.shift_factors.len())];
     if let Some(m) = &f.shift_model {

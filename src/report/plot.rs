@@ -329,7 +329,8 @@ fn tick_label(v: f64, lo: f64, hi: f64) -> String {
 }
 
 /// The label of a tick at `v` on a logarithmic axis: the shortest decimal that
-/// reads it exactly ("0.01", "200", "1e+06" from 10⁶ on).
+/// reads it to six significant digits ("0.01", "200", "1e6" from 10⁶ on, "1e-7"
+/// for the 1.0000000000000001e-7 a tick's arithmetic gives).
 fn log_tick_label(v: f64) -> String {
     if !v.is_finite() || v <= 0.0 {
         return format!("{v}");
@@ -339,7 +340,10 @@ fn log_tick_label(v: f64) -> String {
         let s = format!("{v:.6}");
         s.trim_end_matches('0').trim_end_matches('.').to_string()
     } else {
-        format!("{v:e}")
+        let s = format!("{v:.5e}");
+        let (mantissa, exponent) = s.split_once('e').expect("an exponent");
+        let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+        format!("{mantissa}e{exponent}")
     }
 }
 
@@ -1035,10 +1039,25 @@ mod tests {
     #[test]
     fn log_tick_labels_are_exact() {
         use super::log_tick_label;
-        let got: Vec<String> = [0.01, 0.2, 1.0, 30.0, 1000.0, 1e6]
-            .iter()
-            .map(|&v| log_tick_label(v))
-            .collect();
-        assert_eq!(got, ["0.01", "0.2", "1", "30", "1000", "1e6"]);
+        // 1e-7 as a tick's arithmetic reaches it (10^-7 by powf); 2e-9 and 3e12
+        // outside the plain-decimal range
+        let got: Vec<String> = [
+            0.01,
+            0.2,
+            1.0,
+            30.0,
+            1000.0,
+            1e6,
+            1.0000000000000001e-7,
+            2e-9,
+            3e12,
+        ]
+        .iter()
+        .map(|&v| log_tick_label(v))
+        .collect();
+        assert_eq!(
+            got,
+            ["0.01", "0.2", "1", "30", "1000", "1e6", "1e-7", "2e-9", "3e12"]
+        );
     }
 }

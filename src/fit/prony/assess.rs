@@ -85,7 +85,10 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
     for i in 0..n {
         jac.column_mut(1 + n + i).scale_mut(1.0 / si[1 + n + i]);
     }
-    let unc = diagnostics::uncertainty(&jac, rss);
+    let unc = match prob.kern.noise_groups() {
+        Some(groups) => grouped_uncertainty(&mut r.clone(), &mut jac.clone(), &groups, rss),
+        None => diagnostics::uncertainty(&jac, rss),
+    };
     let mut pred = vec![0.0; m];
     prob.model(&tf.p, &mut pred);
     let y: &[f64] = &prob.y;
@@ -133,27 +136,70 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
     }
 }
 
+/// The uncertainty with a residual variance per noise group: each group's rows
+/// of `r` and `jac` scaled by 1/s_g, s_g² = RSS_g/(m_g − k·m_g/m) (the degrees of
+/// freedom shared in proportion to the rows), so that cov = (Σ_g J_gᵀJ_g/s_g²)⁻¹,
+/// the weighted least-squares covariance with each group's own variance (Seber &
+/// Wild, *Nonlinear Regression*, 1989, §2.1.4). One pooled variance (`rss`) where a
+/// group has no degrees of freedom or no residual.
+fn grouped_uncertainty(
+    r: &mut DVector<f64>,
+    jac: &mut DMatrix<f64>,
+    groups: &[usize],
+    rss: f64,
+) -> diagnostics::Uncertainty {
+    let (m, k) = (jac.nrows(), jac.ncols());
+    let count = groups.iter().copied().max().map_or(0, |g| g + 1);
+    let mut sum = vec![0.0; count];
+    let mut rows = vec![0usize; count];
+    for (g, v) in groups.iter().zip(r.iter()) {
+        sum[*g] += v * v;
+        rows[*g] += 1;
+    }
+    let s: Vec<f64> = (0..count)
+        .map(|g| {
+            let dof = rows[g] as f64 * (1.0 - k as f64 / m as f64);
+            (sum[g] / dof).sqrt()
+        })
+        .collect();
+    if s.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+        return diagnostics::uncertainty(jac, rss);
+    }
+    for (row, g) in groups.iter().enumerate() {
+        r[row] /= s[*g];
+        jac.row_mut(row).scale_mut(1.0 / s[*g]);
+    }
+    diagnostics::uncertainty(jac, r.norm_squared())
+}
+
 /// Findings about a fit, each with the status it raises.
 type Findings = Vec<(Status, String)>;
 
-/// The terms' problems into `problems`: negligible, at a bound of the τ search
-/// (`at_bound`), outside the window the data support, within a factor 1.25 of the
-/// next.
+/// Largest weighted change a term may make to every row and still be negligible:
+/// 0.1 % where the residuals are relative.
+pub const NEGLIGIBLE_REACH: f64 = 1e-3;
+
+/// The terms' problems into `problems`: negligible (a `reach`
+/// ([`crate::fit::prony::problem::Problem::reach`]) of at most
+/// [`NEGLIGIBLE_REACH`]: judged row by row, not against E0, since a master curve's
+/// modulus spans decades and a term of 0.02 % of the glassy E0 may carry the whole
+/// rubbery plateau's relaxation), at a bound of the τ search (`at_bound`), outside
+/// the window the data support, within a factor 1.25 of the next.
 fn term_problems<K: Kernels>(
     setup: &Setup<K>,
     si: &[f64],
-    n: usize,
+    reach: &[f64],
     at_bound: &[bool],
     problems: &mut Findings,
 ) {
-    let e0: f64 = si[..=n].iter().sum();
+    let n = reach.len();
     for i in 0..n {
-        let (tau, e) = (si[1 + n + i], si[1 + i]);
+        let tau = si[1 + n + i];
         let name = format!("τ{} = {}", i + 1, fmt_s(tau));
-        if e <= 1e-3 * e0 {
+        if reach[i] <= NEGLIGIBLE_REACH {
             problems.push((
                 Status::IllPosed,
-                format!("term {} ({name}) is negligible (E{} ≤ 0.1 % of E0): a term too many for these data", i + 1, i + 1),
+                format!("term {} ({name}) is negligible (it changes the fitted curve by at most 0.1 % anywhere in the data): a term too many for these data", i + 1),
             ));
         } else if at_bound[i] {
             problems.push((
@@ -220,7 +266,13 @@ fn problems<K: Kernels>(
     let at_bound: Vec<bool> = (0..n)
         .map(|i| si[1 + n + i] <= lo * 1.0001 || si[1 + n + i] >= hi / 1.0001)
         .collect();
-    term_problems(setup, si, n, &at_bound, &mut problems);
+    term_problems(
+        setup,
+        si,
+        &tf.problem.reach(&tf.p),
+        &at_bound,
+        &mut problems,
+    );
     if m <= k + 1 {
         problems.push((
             Status::IllPosed,

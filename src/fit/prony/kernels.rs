@@ -28,6 +28,13 @@ pub trait Kernels: Clone + Send + Sync {
     /// `dh` if given, the same layout.
     fn kernels(&self, taus: &[f64], h: &mut [f64], dh: Option<&mut [f64]>);
 
+    /// Each row's noise group, where the rows are of kinds whose weighted residuals
+    /// have different variances (a DMA fit's storage and loss rows): the
+    /// assessment estimates a variance per group. None (the default): one variance.
+    fn noise_groups(&self) -> Option<Vec<usize>> {
+        None
+    }
+
     /// The same domain on the rows `idx` (increasing); None where that cannot be
     /// built.
     fn subsample(&self, idx: &[usize]) -> Option<Self>;

@@ -100,6 +100,23 @@ impl<K: Kernels> Problem<K> {
         }
     }
 
+    /// Each term's reach: the largest weighted change it makes to any row,
+    /// maxₖ wₖ·|Eᵢ·hₖ(τᵢ)| (a relative change where the weights are relative), from
+    /// the kernels of the last evaluation (which must have been at `p`).
+    pub fn reach(&self, p: &[f64]) -> Vec<f64> {
+        let m = self.len();
+        p[1..=self.n_terms]
+            .iter()
+            .zip(self.h.chunks_exact(m))
+            .map(|(e, h)| {
+                h.iter()
+                    .zip(self.ws.iter())
+                    .map(|(h, ws)| (ws * e * h).abs())
+                    .fold(0.0, f64::max)
+            })
+            .collect()
+    }
+
     /// e∞·x + Σ eᵢ·hᵢ at every point into `out` (the model over S), from the
     /// kernels of the last evaluation.
     fn combine(&self, p: &[f64], out: &mut [f64]) {

@@ -242,9 +242,10 @@ fn trs(r: &Relaxation, d: &mut Draft) {
                     let e0 = d.field("E0", law.activation_energy.unwrap_or(f64::NAN), "J/mol");
                     d.line(format!("{t0}, {e0}"));
                     d.line("** model data for ARRHENIUS (once per model; it ends the material definition)");
-                    let r = d.field("R", GAS_CONSTANT, "J/(mol K)");
+                    // model data, not a constant of the material
                     d.line(format!(
-                        "*PHYSICAL CONSTANTS, ABSOLUTE ZERO=0., UNIVERSAL GAS CONSTANT={r}"
+                        "*PHYSICAL CONSTANTS, ABSOLUTE ZERO=0., UNIVERSAL GAS CONSTANT={}",
+                        Target::Abaqus.field(GAS_CONSTANT)
                     ));
                 }
             }

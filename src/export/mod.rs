@@ -15,8 +15,8 @@ mod comsol;
 mod febio;
 mod lsdyna;
 
-use crate::error::{Error, Location, Result};
 use crate::dma::law::LawKind;
+use crate::error::{Error, Location, Result};
 use crate::material::file::{self, HyperelasticPart, MaterialFile};
 use crate::material::hyperelastic::ogden::Ogden;
 use crate::material::hyperelastic::{Mode, OgdenForm};

@@ -14,8 +14,8 @@ use crate::material::file::{
     self, expected_params, CompositePermittivity, FittedRanges, HyperelasticPart,
     IdentifiedMaterial, Viscous,
 };
-use crate::material::viscoelastic::TimeTemperature;
 use crate::material::hyperelastic::{Mode, ModelSpec, OgdenForm, StrainEnergy, MODEL_NAMES};
+use crate::material::viscoelastic::TimeTemperature;
 use crate::units::{parse_quantity, parse_uncertain, Dimension};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -942,8 +942,10 @@ fn at_temperature(
     let Some(text) = c.string(t, "material", "temperature")? else {
         return Ok(viscous);
     };
-    let k = crate::dma::temperature::parse(text)
-        .map_err(|e| c.err(key, e).with_hint("e.g. temperature = \"40 C\" or \"313.15 K\""))?;
+    let k = crate::dma::temperature::parse(text).map_err(|e| {
+        c.err(key, e)
+            .with_hint("e.g. temperature = \"40 C\" or \"313.15 K\"")
+    })?;
     let shift = shift.ok_or_else(|| {
         c.err(
             key,
@@ -960,7 +962,9 @@ fn at_temperature(
         ))
     })?;
     if let Some(w) = &at.warning {
-        c.doubts.borrow_mut().push(format!("{} {key}: {w}", c.loc(key)));
+        c.doubts
+            .borrow_mut()
+            .push(format!("{} {key}: {w}", c.loc(key)));
     }
     // an arm faster than the simulator's plausible times (ARM_TIME, 1 ns) at T is
     // its own low-rate limit, a dashpot η = k·τ (stress k·τ·dλ/dt for rates ≪ 1/τ,

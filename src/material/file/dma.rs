@@ -163,7 +163,11 @@ fn shift(path: &Path, f: &DmaJson) -> Result<Option<TimeTemperature>> {
         crate::dma::temperature::check(s.temperature_k)
             .map_err(|e| err(path, &format!("{at}.temperature_K"), e))?;
         if !s.log10_at.is_finite() || s.log10_bt.is_some_and(|b| !b.is_finite()) {
-            return Err(err(path, &at, "log10_aT and log10_bT must be finite numbers"));
+            return Err(err(
+                path,
+                &at,
+                "log10_aT and log10_bT must be finite numbers",
+            ));
         }
         if measured
             .last()

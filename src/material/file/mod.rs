@@ -111,9 +111,7 @@ pub fn read_viscous(path: &Path) -> Result<(Vec<Arm>, Option<f64>)> {
 
 /// [`read_viscous`], with the time–temperature shift of a DMA fit (None for the
 /// other files, and for a DMA fit of a master curve without temperatures).
-pub fn read_viscous_shift(
-    path: &Path,
-) -> Result<(Vec<Arm>, Option<f64>, Option<TimeTemperature>)> {
+pub fn read_viscous_shift(path: &Path) -> Result<(Vec<Arm>, Option<f64>, Option<TimeTemperature>)> {
     let (text, schema) = read_text(
         path,
         &[RELAXATION_SCHEMA, DMA_SCHEMA, IDENTIFIED_SCHEMA],

@@ -68,8 +68,14 @@ fn trajectory(s: &Scene) -> Vec<[f64; 4]> {
         .collect()
 }
 
+/// A Prony term (τ in s, E in Pa).
+type Term = (f64, f64);
+
+/// An edit of a fit file's JSON.
+type Edit = Box<dyn Fn(&mut Value)>;
+
 /// The fit's terms (τ, E) of nonzero modulus, in file order.
-fn terms(v: &Value) -> Vec<(f64, f64)> {
+fn terms(v: &Value) -> Vec<Term> {
     v["prony"]["terms"]
         .as_array()
         .unwrap()
@@ -174,7 +180,7 @@ fn relaxation_times_scale_by_exactly_at() {
         let s = scene(f, "temperature = \"40 C\"");
         let at = 10f64.powf(log_at);
         // arms faster than 1 ns at 40 °C are folded into the dashpot (k·τ·aT)
-        let (want, fast): (Vec<(f64, f64)>, Vec<(f64, f64)>) =
+        let (want, fast): (Vec<Term>, Vec<Term>) =
             terms(v).into_iter().partition(|(tau, _)| tau * at >= 1e-9);
         assert_eq!(s.material.viscous.arms.len(), want.len(), "{f}");
         for (a, (tau, e)) in s.material.viscous.arms.iter().zip(&want) {
@@ -313,7 +319,7 @@ fn temperature_errors_are_located() {
 fn a_malformed_dma_fit_is_refused_at_its_key() {
     let dir = tempfile::tempdir().unwrap();
     let base = json(DMA_WLF);
-    let cases: Vec<(&str, Box<dyn Fn(&mut Value)>, &str)> = vec![
+    let cases: Vec<(&str, Edit, &str)> = vec![
         (
             "term",
             Box::new(|v| v["prony"]["terms"][3]["tau"] = 1.5.into()),
@@ -350,7 +356,7 @@ fn a_malformed_dma_fit_is_refused_at_its_key() {
         edit(&mut v);
         let p: PathBuf = dir.path().join(format!("{name}.json"));
         std::fs::write(&p, serde_json::to_string_pretty(&v).unwrap()).unwrap();
-        let e = read_material(&p).err().expect(name).to_string();
+        let e = read_material(&p).expect_err(name).to_string();
         assert!(
             e.contains(&p.display().to_string()) && e.contains(want),
             "{name}: {e}"

@@ -1128,4 +1128,50 @@ mod tests {
         }
         assert!((s.input()[20] - 2.0).abs() < 1e-15 && (s.input()[5] - 1.0).abs() < 1e-12);
     }
+
+    /// Free shifts with a vertical shift: log10 aT and log10 bT linear in T between
+    /// the measured temperatures, exactly 0 at Tr, extrapolated outside with a
+    /// warning; an arm's k times bT and η times aT·bT. WLF: its formula, and an
+    /// error at the singularity C2 + T − Tr ≤ 0.
+    #[test]
+    fn time_temperature_shift() {
+        let m = |t: f64, a: f64, b: f64| MeasuredShift {
+            temperature_k: t,
+            log10_at: a,
+            log10_bt: Some(b),
+        };
+        let free = TimeTemperature {
+            reference_k: 300.0,
+            law: None,
+            measured: vec![
+                m(290.0, 1.0, 0.02),
+                m(310.0, -1.0, -0.02),
+                m(320.0, -1.5, -0.03),
+            ],
+        };
+        let s = free.at(305.0).unwrap();
+        assert!((s.log10_at + 0.5).abs() < 1e-15 && (s.log10_bt + 0.01).abs() < 1e-15);
+        assert!(s.warning.is_none());
+        let s0 = free.at(300.0).unwrap();
+        assert_eq!((s0.log10_at, s0.log10_bt), (0.0, 0.0));
+        let arm = crate::material::file::Arm {
+            k_pa: 1e5,
+            eta_pa_s: 2e5,
+        };
+        assert_eq!(s0.arm(&arm), arm);
+        let a = s.arm(&arm);
+        assert!((a.k_pa / (1e5 * 10f64.powf(-0.01)) - 1.0).abs() < 1e-15);
+        assert!((a.eta_pa_s / (2e5 * 10f64.powf(-0.51)) - 1.0).abs() < 1e-15);
+        // beyond 320 K: the last two, extrapolated
+        let hot = free.at(330.0).unwrap();
+        assert!((hot.log10_at + 2.0).abs() < 1e-12, "{}", hot.log10_at);
+        assert!(hot.warning.unwrap().contains("outside"));
+        let wlf = TimeTemperature {
+            law: Some(crate::dma::law::Law::wlf(300.0, 8.0, 100.0)),
+            ..free
+        };
+        let w = wlf.at(320.0).unwrap();
+        assert!((w.log10_at + 8.0 * 20.0 / 120.0).abs() < 1e-15);
+        assert!(wlf.at(200.0).unwrap_err().contains("WLF singularity"));
+    }
 }

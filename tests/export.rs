@@ -49,8 +49,25 @@ fn cases() -> Vec<(&'static str, Vec<String>)> {
             vec![d("vhb4910-yeoh.json"), d("vhb4910-relaxation-qlv.json")],
         ),
         ("identified", vec![IDENTIFIED.to_string()]),
+        // DMA fits (tests/data/dma: the shipped isotherms, --terms 14): a
+        // relaxation-kind file with its shift law
+        ("dma-wlf", vec![DMA_WLF.to_string()]),
+        ("dma-arrhenius", vec![DMA_ARRHENIUS.to_string()]),
+        ("dma-free", vec![DMA_FREE.to_string()]),
+        (
+            "yeoh-dma-wlf",
+            vec![d("vhb4910-yeoh.json"), DMA_WLF.to_string()],
+        ),
     ]
 }
+
+/// The Yeoh fit of the golden cards.
+pub(crate) const YEOH: &str = "tests/data/export/vhb4910-yeoh.json";
+
+/// The DMA fits of tests/data/dma (README there).
+pub(crate) const DMA_WLF: &str = "tests/data/dma/vhb_like-wlf.json";
+pub(crate) const DMA_ARRHENIUS: &str = "tests/data/dma/vhb_like-arrhenius.json";
+pub(crate) const DMA_FREE: &str = "tests/data/dma/vhb_like-free.json";
 
 /// The cards a code cannot hold: (case, target, what the refusal says).
 fn refused(case: &str, t: Target) -> Option<&'static str> {
@@ -58,10 +75,17 @@ fn refused(case: &str, t: Target) -> Option<&'static str> {
         ("gent", Target::Abaqus | Target::Calculix | Target::Lsdyna) => {
             Some("has no Gent strain energy")
         }
-        ("prony" | "prony-qlv", Target::Lsdyna | Target::Febio) => {
-            Some("a relaxation fit alone cannot be written")
+        (
+            "prony" | "prony-qlv" | "dma-wlf" | "dma-arrhenius" | "dma-free",
+            Target::Lsdyna | Target::Febio,
+        ) => Some("a relaxation fit alone cannot be written"),
+        ("prony" | "prony-qlv" | "dma-wlf" | "dma-arrhenius" | "dma-free", Target::Calculix) => {
+            Some("a relaxation fit alone has nothing")
         }
-        ("prony" | "prony-qlv", Target::Calculix) => Some("a relaxation fit alone has nothing"),
+        // the DMA fit's 12 terms
+        ("yeoh-dma-wlf", Target::Lsdyna | Target::Febio) => {
+            Some("takes at most 6 viscoelastic terms")
+        }
         _ => None,
     }
 }
@@ -249,6 +273,8 @@ fn parse_ansys(text: &str) -> Parsed {
             ("PRONY", "SHEAR") => {
                 p.visco = Some(Visco::Relative(c.chunks(2).map(|x| (x[0], x[1])).collect()))
             }
+            // a DMA fit's shift law: read back in tests/dma_scene.rs
+            ("SHIFT", "WLF" | "TN") => {}
             other => panic!("unknown table {other:?}"),
         }
     };
@@ -630,7 +656,7 @@ fn cards_read_back_give_the_fit_stress() {
     }
     assert_eq!(
         checked,
-        11 * 6 - 9,
+        15 * 6 - 20,
         "every card that is written was read back"
     );
 }
@@ -1061,6 +1087,7 @@ proptest::proptest! {
             reference_pa: pos(terms[0].1),
             nv_pa_s: 0.0,
             qlv_model: None,
+            shift: None,
         });
         let m = export::Material {
             name: "m".into(),

@@ -7,6 +7,7 @@ mod cli;
 mod completions;
 mod datasets;
 mod dma;
+mod dma_scene;
 mod estimation;
 mod exit_status;
 mod export;

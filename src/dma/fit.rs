@@ -11,9 +11,9 @@ use crate::fit::Status;
 use serde::{Deserialize, Serialize};
 
 /// Schema tag of a DMA run's file: shifts, shift law, master curve and its Prony
-/// series. Scenes, QLV and `export` read relaxation fits
-/// ([`crate::material::file::RELAXATION_SCHEMA`]), not this file yet.
-pub const SCHEMA: &str = "dea-fit/dma/1";
+/// series. It is a relaxation-kind material file: scenes and `export` read it
+/// ([`crate::material::file::DMA_SCHEMA`]).
+pub const SCHEMA: &str = crate::material::file::DMA_SCHEMA;
 
 /// Which shifts build the master curve.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

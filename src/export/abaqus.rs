@@ -13,6 +13,7 @@
 //!   are then the instantaneous response (`MODULI=INSTANTANEOUS`), the fit's scaled
 //!   by E0/R. kᵢ = 0: the volumetric response of an incompressible solid does not
 //!   relax.
+//! * `*TRS` after it for a DMA fit's shift law ([`trs`]).
 //!
 //! CalculiX:
 //! * D = 0 is not incompressible: ccx replaces a D1 below 10⁻¹⁰ 1/Pa by a
@@ -28,8 +29,10 @@
 //!   and no Prony block.
 
 use super::{
-    alone_warning, mu0, num, ogden_n, ogden_terms, scaled, Draft, Material, Options, Target,
+    alone_warning, mu0, num, ogden_n, ogden_terms, scaled, Draft, Material, Options, Relaxation,
+    Target, Trs,
 };
+use crate::dma::law::{LawKind, GAS_CONSTANT};
 use crate::error::{Error, Result};
 use crate::material::hyperelastic::OgdenForm;
 
@@ -201,6 +204,55 @@ pub(super) fn write(m: &Material, target: Target, opts: &Options, d: &mut Draft)
             num(e0),
             num(r.long_term_pa / e0)
         ));
+        trs(r, d);
+    }
+    if let Some(r) = m.relaxation.as_ref().filter(|_| ccx) {
+        super::trs(r, "CalculiX (it ignores *VISCOELASTIC)", |_| false, d);
     }
     Ok(())
+}
+
+/// The time–temperature shift of a DMA fit after its Prony series (Abaqus
+/// Keywords Reference, *TRS; Abaqus Analysis User's Guide, "Time domain
+/// viscoelasticity", thermorheologically simple temperature effects):
+/// * `*TRS, DEFINITION=WLF`, data line θ0, C1, C2 with
+///   log10 A = −C1(θ − θ0)/(C2 + θ − θ0), A the factor of the relaxation times
+///   (reduced time dτ/dt = 1/A), the fit's aT and constants as they are;
+/// * `*TRS, DEFINITION=ARRHENIUS`, data line θ0, E0 with
+///   ln A = E0/R·(1/(θ − θZ) − 1/(θ0 − θZ)): E0 = Ea, and the model's
+///   `*PHYSICAL CONSTANTS, ABSOLUTE ZERO=0, UNIVERSAL GAS CONSTANT=R` (in K), which
+///   Abaqus needs for it (model data: it ends the material definition);
+/// * free shifts: no card (DEFINITION=USER needs a user subroutine), a comment.
+///
+/// Temperatures in K (a comment line in the card says so).
+fn trs(r: &Relaxation, d: &mut Draft) {
+    match super::trs(r, "Abaqus", |_| true, d) {
+        Some(Trs::Law(law)) => {
+            d.line("** time-temperature shift of the DMA fit; temperatures in K (theta0 = Tr)");
+            let t0 = d.field("theta0", law.reference_temperature_k, "K");
+            match law.kind {
+                LawKind::Wlf => {
+                    d.line("*TRS, DEFINITION=WLF");
+                    let c1 = d.field("C1", law.c1.unwrap_or(f64::NAN), "1");
+                    let c2 = d.field("C2", law.c2.unwrap_or(f64::NAN), "K");
+                    d.line(format!("{t0}, {c1}, {c2}"));
+                }
+                LawKind::Arrhenius => {
+                    d.line("*TRS, DEFINITION=ARRHENIUS");
+                    let e0 = d.field("E0", law.activation_energy.unwrap_or(f64::NAN), "J/mol");
+                    d.line(format!("{t0}, {e0}"));
+                    d.line("** model data for ARRHENIUS (once per model; it ends the material definition)");
+                    // model data, not a constant of the material
+                    d.line(format!(
+                        "*PHYSICAL CONSTANTS, ABSOLUTE ZERO=0., UNIVERSAL GAS CONSTANT={}",
+                        Target::Abaqus.field(GAS_CONSTANT)
+                    ));
+                }
+            }
+        }
+        Some(Trs::Free) => d.line(
+            "** no *TRS: the DMA fit's shifts are free, tabulated in its shift_factors (DEFINITION=USER would need a user subroutine): the card is the material at Tr",
+        ),
+        None => {}
+    }
 }

@@ -9,8 +9,13 @@
 //! * `TB,PRONY,,,N,SHEAR`: relative moduli aᵢ = Gᵢ/G0 and τᵢ, G0 the
 //!   instantaneous modulus; the hyperelastic constants are the instantaneous
 //!   response, the fit's scaled by E0/R.
+//! * `TB,SHIFT` after it for a DMA fit's shift law ([`shift`]).
 
-use super::{alone_warning, mu0, num, ogden_n, ogden_terms, scaled, Draft, Material, Options};
+use super::{
+    alone_warning, mu0, num, ogden_n, ogden_terms, scaled, Draft, Material, Options, Relaxation,
+    Trs,
+};
+use crate::dma::law::{LawKind, GAS_CONSTANT};
 use crate::error::Result;
 use crate::material::hyperelastic::OgdenForm;
 
@@ -118,6 +123,51 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
             num(e0),
             num(r.long_term_pa / e0)
         ));
+        shift(r, d);
     }
     Ok(())
+}
+
+/// The time–temperature shift of a DMA fit (Mechanical APDL Material Reference,
+/// Viscoelasticity: Shift Function, `TB,SHIFT`), whose shift A multiplies the time
+/// (reduced time dξ/dt = A(T), so A = 1/aT):
+/// * `TB,SHIFT,1,,3,WLF`: constants Tr, C1, C2 with
+///   log10 A = C1(T − Tr)/(C2 + T − Tr): the fit's C1, C2 as they are;
+/// * `TB,SHIFT,1,,2,TN` (Tool–Narayanaswamy without fictive temperature, the
+///   Arrhenius form): constants Tr, H/R with A = exp(H/R·(1/Tr − 1/T)): H = Ea;
+/// * free shifts: no TB,SHIFT (USER needs a user subroutine), a comment.
+///
+/// Temperatures in K.
+fn shift(r: &Relaxation, d: &mut Draft) {
+    match super::trs(r, "ANSYS", |_| true, d) {
+        Some(Trs::Law(law)) => {
+            d.line("! time-temperature shift of the DMA fit; temperatures in K");
+            let v = match law.kind {
+                LawKind::Wlf => {
+                    d.line("TB,SHIFT,1,,3,WLF");
+                    vec![
+                        ("Tr".to_string(), law.reference_temperature_k, "K"),
+                        ("C1".into(), law.c1.unwrap_or(f64::NAN), "1"),
+                        ("C2".into(), law.c2.unwrap_or(f64::NAN), "K"),
+                    ]
+                }
+                LawKind::Arrhenius => {
+                    d.line("TB,SHIFT,1,,2,TN");
+                    vec![
+                        ("Tr".to_string(), law.reference_temperature_k, "K"),
+                        (
+                            "H/R".into(),
+                            law.activation_energy.unwrap_or(f64::NAN) / GAS_CONSTANT,
+                            "K",
+                        ),
+                    ]
+                }
+            };
+            tbdata(d, &v);
+        }
+        Some(Trs::Free) => d.line(
+            "! no TB,SHIFT: the DMA fit's shifts are free, tabulated in its shift_factors (USER would need a user subroutine): the card is the material at Tr",
+        ),
+        None => {}
+    }
 }

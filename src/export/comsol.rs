@@ -15,7 +15,11 @@
 //!   as the arms of El Atrache Ceballos (2021): Gm = Em/3; the hyperelastic constants are the long-term
 //!   response, the fit's scaled by E∞/R.
 
-use super::{alone_warning, mu0, num, ogden_n, ogden_terms, scaled, Draft, Material, Options};
+use super::{
+    alone_warning, mu0, num, ogden_n, ogden_terms, scaled, Draft, Material, Options, Relaxation,
+    Trs,
+};
+use crate::dma::law::LawKind;
 use crate::error::Result;
 use crate::material::hyperelastic::OgdenForm;
 
@@ -25,7 +29,42 @@ fn unit(u: &str) -> &'static str {
         "Pa" => "[Pa]",
         "s" => "[s]",
         "kg/m^3" => "[kg/m^3]",
+        "K" => "[K]",
+        "J/mol" => "[J/mol]",
         _ => "",
+    }
+}
+
+/// The time–temperature shift of a DMA fit as the Viscoelasticity subnode's Shift
+/// function takes it (Structural Mechanics Module User's Guide, Viscoelasticity,
+/// Shift function): Williams–Landel–Ferry with Tref, C1, C2
+/// (log10 aT = −C1(T − Tref)/(C2 + T − Tref), the relaxation times multiplied by
+/// aT), or Arrhenius with Tref and the activation energy Q
+/// (ln aT = Q/R·(1/T − 1/Tref)); free shifts: none, a comment. Temperatures in K
+/// (COMSOL converts a parameter given with its unit).
+fn shift(r: &Relaxation, d: &mut Draft) {
+    match super::trs(r, "COMSOL", |_| true, d) {
+        Some(Trs::Law(law)) => {
+            let what = |s: &str| format!("Viscoelasticity, Shift function {}: {s}", law.kind.label());
+            param(d, "T_ref", law.reference_temperature_k, "K", &what("reference temperature Tref"));
+            match law.kind {
+                LawKind::Wlf => {
+                    param(d, "C1_WLF", law.c1.unwrap_or(f64::NAN), "1", &what("C1"));
+                    param(d, "C2_WLF", law.c2.unwrap_or(f64::NAN), "K", &what("C2"));
+                }
+                LawKind::Arrhenius => param(
+                    d,
+                    "Q_act",
+                    law.activation_energy.unwrap_or(f64::NAN),
+                    "J/mol",
+                    &what("activation energy Q"),
+                ),
+            }
+        }
+        Some(Trs::Free) => d.line(
+            "# no shift function: the DMA fit's shifts are free, tabulated in its shift_factors: the parameters are the material at Tr",
+        ),
+        None => {}
     }
 }
 
@@ -125,6 +164,7 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
             );
         }
         d.note("generalized Maxwell branches G_m = E_m/3 (shear modulus of an incompressible solid) in parallel with the long-term hyperelastic material");
+        shift(r, d);
     }
     if let Some(rho) = opts.density {
         param(d, "rho", rho, "kg/m^3", "Density");

@@ -126,8 +126,10 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
         }
     }
     param(d, ind, "k", k, "Pa");
-    if m.relaxation.is_some() {
+    if let Some(r) = &m.relaxation {
         d.line("\t\t</elastic>");
+        // `uncoupled viscoelastic` takes no temperature shift
+        super::trs(r, "FEBio (uncoupled viscoelastic)", |_| false, d);
     }
     d.line("\t</material>");
     d.warn(format!(

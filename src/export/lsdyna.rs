@@ -128,6 +128,8 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
             card(d, &["gi", "betai"], &[g, b]);
         }
         d.note("viscoelastic G_i = E_i/3 (shear modulus of an incompressible solid), BETA_i = 1/tau_i; the hyperelastic constants are the long-term response");
+        // MAT_077's viscoelastic cards take no temperature shift
+        super::trs(r, "LS-DYNA (MAT_077)", |_| false, d);
         if scale != 1.0 {
             d.note(format!(
                 "hyperelastic constants = the fit's x E_inf/R = {}: the long-term response of the QLV fit",

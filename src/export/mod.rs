@@ -15,11 +15,12 @@ mod comsol;
 mod febio;
 mod lsdyna;
 
+use crate::dma::law::LawKind;
 use crate::error::{Error, Location, Result};
 use crate::material::file::{self, HyperelasticPart, MaterialFile};
 use crate::material::hyperelastic::ogden::Ogden;
 use crate::material::hyperelastic::{Mode, OgdenForm};
-use crate::material::viscoelastic::Formulation;
+use crate::material::viscoelastic::{Formulation, TimeTemperature};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -165,7 +166,7 @@ enum Family {
 pub struct SourceFile {
     /// Path as given.
     pub path: String,
-    /// `hyperelastic fit`, `relaxation fit` or `identified material`.
+    /// `hyperelastic fit`, `relaxation fit`, `DMA fit` or `identified material`.
     pub kind: &'static str,
     /// The estimator's or the identification's status (`ok`, `warning`,
     /// `ill_posed`, …); None for an identified material written before its status
@@ -210,6 +211,9 @@ pub struct Relaxation {
     pub nv_pa_s: f64,
     /// The hyperelastic model a QLV fit relaxes (for messages).
     pub qlv_model: Option<String>,
+    /// The time–temperature shift of a DMA fit: the codes that have one write it
+    /// after the Prony series ([`trs`]); None for the other fits.
+    pub shift: Option<TimeTemperature>,
 }
 
 impl Relaxation {
@@ -259,6 +263,7 @@ pub fn read(paths: &[PathBuf]) -> Result<Material> {
         let (part, status) = file::read_material(p)?;
         let kind = match &part {
             MaterialFile::Hyperelastic(_) => "hyperelastic fit",
+            MaterialFile::Relaxation(r) if r.schema == file::DMA_SCHEMA => "DMA fit",
             MaterialFile::Relaxation(_) => "relaxation fit",
             MaterialFile::Identified(_) => "identified material",
         };
@@ -336,6 +341,7 @@ pub fn read(paths: &[PathBuf]) -> Result<Material> {
                         reference_pa: q.reference_modulus_pa,
                         nv_pa_s: 0.0,
                         qlv_model: Some(q.hyperelastic_model.clone()),
+                        shift: r.shift.clone(),
                     })
                 }
                 (None, Some((_, h))) => {
@@ -352,6 +358,7 @@ pub fn read(paths: &[PathBuf]) -> Result<Material> {
                         reference_pa: k_inf,
                         nv_pa_s: 0.0,
                         qlv_model: None,
+                        shift: r.shift.clone(),
                     })
                 }
                 (None, None) => Some(Relaxation {
@@ -361,6 +368,7 @@ pub fn read(paths: &[PathBuf]) -> Result<Material> {
                     reference_pa: r.long_term_pa,
                     nv_pa_s: 0.0,
                     qlv_model: None,
+                    shift: r.shift.clone(),
                 }),
             }
         }
@@ -381,6 +389,7 @@ pub fn read(paths: &[PathBuf]) -> Result<Material> {
                 reference_pa: k_inf,
                 nv_pa_s: v.nv_pa_s,
                 qlv_model: None,
+                shift: None,
             })
         }
         (None, None) => None,
@@ -852,4 +861,48 @@ fn alone_warning(r: &Relaxation, long_term: bool) -> String {
         ),
     };
     format!("no hyperelastic part: this card holds the viscoelastic block only; combine it with {what} (dea-fit export HYPER.json RELAX.json writes both consistently)")
+}
+
+/// How a code holds the time–temperature shift of a DMA fit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Trs {
+    /// The code takes this law (WLF or Arrhenius): the card writes it.
+    Law(crate::dma::law::Law),
+    /// The fit's shifts are free (tabulated in the fit file): no card; a warning.
+    Free,
+}
+
+/// The shift law of `r` a card is to write (None without one, or where the code has
+/// none), with the notes and warnings every code shares: the temperature unit of the
+/// card (K), and for free shifts that no shift is written. `has` says whether the
+/// code has a card for the law's kind; where it has none the card is the material
+/// at Tr, said as a warning naming the code.
+fn trs(r: &Relaxation, code: &str, has: impl Fn(LawKind) -> bool, d: &mut Draft) -> Option<Trs> {
+    let s = r.shift.as_ref()?;
+    let tr = s.reference_k;
+    match s.law {
+        Some(law) if has(law.kind) => {
+            d.note(format!(
+                "time-temperature shift: the DMA fit's {} law at Tr = {} K, written for {code}; temperatures in the card are in K (the model's temperatures must be in K too; for a model in degC subtract 273.15 from Tr, C1 and C2 are unchanged)",
+                law.kind.label(),
+                num(tr)
+            ));
+            Some(Trs::Law(law))
+        }
+        Some(law) => {
+            d.warn(format!(
+                "{code} has no {} time-temperature shift for this material: the card is the material at the DMA fit's reference temperature {} K only",
+                law.kind.label(),
+                num(tr)
+            ));
+            None
+        }
+        None => {
+            d.warn(format!(
+                "the DMA fit's shifts are free (no law): they are tabulated in the fit file's shift_factors, and no time-temperature shift is written for {code} (a user-subroutine shift is not portable); the card is the material at Tr = {} K (fit a law with dea-fit dma --shift wlf|arrhenius to get one)",
+                num(tr)
+            ));
+            Some(Trs::Free)
+        }
+    }
 }

@@ -817,6 +817,146 @@ pub fn preset(name: &str) -> Result<Preset> {
     }
 }
 
+/// One isotherm's measured shift in a DMA fit file: its temperature (K), its free
+/// log10 aT referred to Tr and, with a vertical shift, log10 bT.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MeasuredShift {
+    /// The isotherm's temperature (K).
+    pub temperature_k: f64,
+    /// Free log10 aT (reduced frequency = aT·ω).
+    pub log10_at: f64,
+    /// log10 bT (the isotherm's moduli are bT times the master curve's); None
+    /// without a vertical shift.
+    pub log10_bt: Option<f64>,
+}
+
+/// The time–temperature superposition of a DMA fit (`dea-fit dma`): its Prony
+/// series holds at the reference temperature Tr, and at T
+///
+///   E(t; T) = bT · [E∞ + Σ Eᵢ·exp(−t/(aT·τᵢ))],
+///
+/// i.e. every relaxation time is τᵢ(T) = aT(T)·τᵢ(Tr) and every modulus bT(T)·Eᵢ
+/// (Ferry, *Viscoelastic Properties of Polymers*, 3rd ed., Wiley 1980, ch. 11,
+/// eq. 11-9 for the horizontal shift, the vertical factor of §11.B). aT is the
+/// horizontal shift of the fit file (reduced frequency = aT·ω): at a higher
+/// temperature aT < 1 and the material relaxes faster.
+///
+/// * WLF (Williams, Landel & Ferry, J. Am. Chem. Soc. 77, 3701, 1955; Ferry eq.
+///   11-26 at Tr): log10 aT = −C1 (T − Tr)/(C2 + T − Tr), defined for C2 + T − Tr > 0;
+/// * Arrhenius: log10 aT = Ea/(R ln 10)·(1/T − 1/Tr);
+/// * free shifts: log10 aT (and log10 bT) linear in T between the measured
+///   temperatures (linear, not PCHIP: it never overshoots the measured shifts and
+///   stays monotonic where they are), extrapolated from the nearest two outside.
+///
+/// With a law the vertical shift, when the fit has one, is the free log10 bT
+/// interpolated the same way (a law is fitted to the horizontal shifts only).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TimeTemperature {
+    /// Tr (K).
+    pub reference_k: f64,
+    /// The fitted law; None: the free shifts.
+    pub law: Option<crate::dma::law::Law>,
+    /// The measured shifts, coldest first (at least two).
+    pub measured: Vec<MeasuredShift>,
+}
+
+/// The shift at one temperature ([`TimeTemperature::at`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShiftAt {
+    /// log10 aT.
+    pub log10_at: f64,
+    /// log10 bT (0 without a vertical shift).
+    pub log10_bt: f64,
+    /// The temperature lies outside the measured ones: the shift is extrapolated.
+    pub warning: Option<String>,
+}
+
+impl ShiftAt {
+    /// A Maxwell arm (kⱼ, ηⱼ = kⱼ·τⱼ) at the temperature: kⱼ·bT, τⱼ·aT, so
+    /// ηⱼ·aT·bT. At Tr (aT = bT = 1) the arm is returned unchanged, bit for bit.
+    pub fn arm(&self, a: &crate::material::file::Arm) -> crate::material::file::Arm {
+        let (at, bt) = (10f64.powf(self.log10_at), 10f64.powf(self.log10_bt));
+        crate::material::file::Arm {
+            k_pa: a.k_pa * bt,
+            eta_pa_s: a.eta_pa_s * at * bt,
+        }
+    }
+}
+
+impl TimeTemperature {
+    /// The measured temperatures, lowest and highest (K).
+    pub fn measured_range(&self) -> (f64, f64) {
+        let t = |m: Option<&MeasuredShift>| m.map_or(f64::NAN, |m| m.temperature_k);
+        (t(self.measured.first()), t(self.measured.last()))
+    }
+
+    /// The shift at `t` (K): Err with the reason at or below the WLF singularity
+    /// (C2 + T − Tr ≤ 0, where aT is infinite); a warning with the numbers outside
+    /// the measured temperatures.
+    pub fn at(&self, t: f64) -> std::result::Result<ShiftAt, String> {
+        use crate::dma::temperature::celsius;
+        let tr = self.reference_k;
+        let log10_at = match &self.law {
+            Some(law) => {
+                if let (Some(c1), Some(c2)) = (law.c1, law.c2) {
+                    if c2 + t - tr <= 0.0 {
+                        return Err(format!(
+                            "{} is at or below the WLF singularity Tr − C2 = {} (C1 = {c1:.4}, C2 = {c2:.4} K, Tr = {}): aT is infinite there, the material is glassy and WLF does not hold",
+                            celsius(t),
+                            celsius(tr - c2),
+                            celsius(tr)
+                        ));
+                    }
+                }
+                law.log_at(t)
+            }
+            // aT(Tr) = bT(Tr) = 1 by definition, whatever the interpolation's rounding
+            None if t == tr => 0.0,
+            None => self.interpolated(t, |m| Some(m.log10_at)),
+        };
+        let log10_bt = match self.measured.iter().any(|m| m.log10_bt.is_some()) {
+            true if t != tr => self.interpolated(t, |m| m.log10_bt),
+            _ => 0.0,
+        };
+        let (lo, hi) = self.measured_range();
+        let warning = (t < lo || t > hi).then(|| {
+            let how = match &self.law {
+                Some(l) => format!("by the {} law", l.kind.label()),
+                None => "from the nearest two measured shifts".to_string(),
+            };
+            format!(
+                "temperature {} is outside the DMA fit's measured temperatures {} … {}: aT = 10^{log10_at:.3} is extrapolated {how}, and the Prony series is assumed to hold there",
+                celsius(t),
+                celsius(lo),
+                celsius(hi)
+            )
+        });
+        Ok(ShiftAt {
+            log10_at,
+            log10_bt,
+            warning,
+        })
+    }
+
+    /// `y` of the measured shifts (0 where None) linear in T at `t`, extrapolated
+    /// from the nearest two outside.
+    fn interpolated(&self, t: f64, y: impl Fn(&MeasuredShift) -> Option<f64>) -> f64 {
+        let m = &self.measured;
+        let n = m.len();
+        if n < 2 {
+            return m.first().and_then(&y).unwrap_or(0.0);
+        }
+        let j = m
+            .iter()
+            .position(|p| p.temperature_k > t)
+            .unwrap_or(n - 1)
+            .clamp(1, n - 1);
+        let (a, b) = (&m[j - 1], &m[j]);
+        let (ya, yb) = (y(a).unwrap_or(0.0), y(b).unwrap_or(0.0));
+        ya + (yb - ya) * (t - a.temperature_k) / (b.temperature_k - a.temperature_k)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -998,5 +1138,51 @@ mod tests {
             assert!((v - exact).abs() < 1e-12, "{t} {v} {exact}");
         }
         assert!((s.input()[20] - 2.0).abs() < 1e-15 && (s.input()[5] - 1.0).abs() < 1e-12);
+    }
+
+    /// Free shifts with a vertical shift: log10 aT and log10 bT linear in T between
+    /// the measured temperatures, exactly 0 at Tr, extrapolated outside with a
+    /// warning; an arm's k times bT and η times aT·bT. WLF: its formula, and an
+    /// error at the singularity C2 + T − Tr ≤ 0.
+    #[test]
+    fn time_temperature_shift() {
+        let m = |t: f64, a: f64, b: f64| MeasuredShift {
+            temperature_k: t,
+            log10_at: a,
+            log10_bt: Some(b),
+        };
+        let free = TimeTemperature {
+            reference_k: 300.0,
+            law: None,
+            measured: vec![
+                m(290.0, 1.0, 0.02),
+                m(310.0, -1.0, -0.02),
+                m(320.0, -1.5, -0.03),
+            ],
+        };
+        let s = free.at(305.0).unwrap();
+        assert!((s.log10_at + 0.5).abs() < 1e-15 && (s.log10_bt + 0.01).abs() < 1e-15);
+        assert!(s.warning.is_none());
+        let s0 = free.at(300.0).unwrap();
+        assert_eq!((s0.log10_at, s0.log10_bt), (0.0, 0.0));
+        let arm = crate::material::file::Arm {
+            k_pa: 1e5,
+            eta_pa_s: 2e5,
+        };
+        assert_eq!(s0.arm(&arm), arm);
+        let a = s.arm(&arm);
+        assert!((a.k_pa / (1e5 * 10f64.powf(-0.01)) - 1.0).abs() < 1e-15);
+        assert!((a.eta_pa_s / (2e5 * 10f64.powf(-0.51)) - 1.0).abs() < 1e-15);
+        // beyond 320 K: the last two, extrapolated
+        let hot = free.at(330.0).unwrap();
+        assert!((hot.log10_at + 2.0).abs() < 1e-12, "{}", hot.log10_at);
+        assert!(hot.warning.unwrap().contains("outside"));
+        let wlf = TimeTemperature {
+            law: Some(crate::dma::law::Law::wlf(300.0, 8.0, 100.0)),
+            ..free
+        };
+        let w = wlf.at(320.0).unwrap();
+        assert!((w.log10_at + 8.0 * 20.0 / 120.0).abs() < 1e-15);
+        assert!(wlf.at(200.0).unwrap_err().contains("WLF singularity"));
     }
 }

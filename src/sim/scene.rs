@@ -8,13 +8,14 @@ use super::integrate::Method;
 use super::presets;
 use crate::error::{Error, Location, Result};
 use crate::material::breakdown::Strength;
-use crate::material::check::{did_you_mean, Domain, Violation, MASS_FRACTION};
+use crate::material::check::{did_you_mean, Domain, Violation, ARM_TIME, MASS_FRACTION};
 use crate::material::dielectric::MixingRule;
 use crate::material::file::{
     self, expected_params, CompositePermittivity, FittedRanges, HyperelasticPart,
     IdentifiedMaterial, Viscous,
 };
 use crate::material::hyperelastic::{Mode, ModelSpec, OgdenForm, StrainEnergy, MODEL_NAMES};
+use crate::material::viscoelastic::TimeTemperature;
 use crate::units::{parse_quantity, parse_uncertain, Dimension};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -312,7 +313,8 @@ pub struct Scene {
     pub breakdown: Option<Strength>,
     /// What the material files the scene takes constants from say against them
     /// (constants they call not identifiable, a blocking status), one sentence per
-    /// file ([`file::doubts`]): said whenever the scene runs
+    /// file ([`file::doubts`]), and a `material.temperature` outside the measured
+    /// temperatures of its DMA fit: said whenever the scene runs
     /// ([`Scene::material_warnings`]).
     pub doubts: Vec<String>,
 }
@@ -852,10 +854,16 @@ fn read_hyperelastic(c: &Ctx, h: &toml::Table, dir: &Path) -> Result<Hyperelasti
     })
 }
 
-fn read_viscous(c: &Ctx, v: Option<&toml::Table>, dir: &Path) -> Result<Viscous> {
+/// `material.viscous`, and the time–temperature shift of a DMA fit given as its
+/// `fit` (None otherwise).
+fn read_viscous(
+    c: &Ctx,
+    v: Option<&toml::Table>,
+    dir: &Path,
+) -> Result<(Viscous, Option<TimeTemperature>)> {
     let vs = "material.viscous";
     let Some(v) = v else {
-        return Ok(presets::viscous("elastic").expect("preset exists"));
+        return Ok((presets::viscous("elastic").expect("preset exists"), None));
     };
     c.known(v, vs, &["preset", "fit", "nv", "arms"])?;
     c.one_of(v, vs, &["preset", "fit", "arms"])?;
@@ -863,12 +871,13 @@ fn read_viscous(c: &Ctx, v: Option<&toml::Table>, dir: &Path) -> Result<Viscous>
         c.one_of(v, vs, &["preset", "nv"])?;
         let names = presets::viscous_preset_names();
         return presets::viscous(p)
+            .map(|v| (v, None))
             .ok_or_else(|| c.unknown_name(&format!("{vs}.preset"), p, &names));
     }
     let nv = c.quantity(v, vs, "nv", Dimension::Viscosity)?;
     if let Some(f) = c.string(v, vs, "fit")? {
         let path = c.file_ref(dir, &format!("{vs}.fit"), f)?;
-        let (arms, stated) = file::read_viscous(&path)?;
+        let (arms, stated, shift) = file::read_viscous_shift(&path)?;
         c.doubt(&path, &["viscous"])?;
         if stated.is_some() && nv.is_some() {
             return Err(c
@@ -878,10 +887,13 @@ fn read_viscous(c: &Ctx, v: Option<&toml::Table>, dir: &Path) -> Result<Viscous>
                 )
                 .with_hint("an identified material states its dashpot: drop nv here"));
         }
-        return Ok(Viscous {
-            nv_pa_s: stated.or(nv).unwrap_or(0.0),
-            arms,
-        });
+        return Ok((
+            Viscous {
+                nv_pa_s: stated.or(nv).unwrap_or(0.0),
+                arms,
+            },
+            shift,
+        ));
     }
     let mut arms = Vec::new();
     if let Some(a) = v.get("arms") {
@@ -904,10 +916,89 @@ fn read_viscous(c: &Ctx, v: Option<&toml::Table>, dir: &Path) -> Result<Viscous>
             });
         }
     }
-    Ok(Viscous {
-        nv_pa_s: nv.unwrap_or(0.0),
-        arms,
-    })
+    Ok((
+        Viscous {
+            nv_pa_s: nv.unwrap_or(0.0),
+            arms,
+        },
+        None,
+    ))
+}
+
+/// `material.temperature` (`"40 C"`, `"-5 C"`, `"313.15 K"`): the viscous part at
+/// that temperature, by the time–temperature shift of its DMA fit
+/// ([`TimeTemperature`]: every Maxwell arm's τⱼ times aT(T), its kⱼ times bT(T));
+/// the hyperelastic part and a stated Kelvin–Voigt dashpot are as given. An arm
+/// faster than 1 ns at T is folded into the dashpot, said as a warning. Outside
+/// the fit's measured temperatures: a warning ([`Scene::doubts`]); at or below the
+/// WLF singularity, or with a viscous part that has no shift: a located error.
+fn at_temperature(
+    c: &Ctx,
+    t: &toml::Table,
+    viscous: Viscous,
+    shift: Option<&TimeTemperature>,
+) -> Result<Viscous> {
+    let key = "material.temperature";
+    let Some(text) = c.string(t, "material", "temperature")? else {
+        return Ok(viscous);
+    };
+    let k = crate::dma::temperature::parse(text).map_err(|e| {
+        c.err(key, e)
+            .with_hint("e.g. temperature = \"40 C\" or \"313.15 K\"")
+    })?;
+    let shift = shift.ok_or_else(|| {
+        c.err(
+            key,
+            "the material has no time–temperature shift: only a DMA fit's viscous part can be taken to another temperature",
+        )
+        .with_hint("give material.viscous = { fit = \"fits/x-dma.json\" } from dea-fit dma with isotherms (a shift law or free shifts), or drop temperature")
+    })?;
+    let at = shift.at(k).map_err(|e| {
+        c.err(key, e).with_hint(format!(
+            "give a temperature above {} or fit another law (dea-fit dma --shift arrhenius|free)",
+            crate::dma::temperature::celsius(
+                shift.reference_k - shift.law.and_then(|l| l.c2).unwrap_or(0.0)
+            )
+        ))
+    })?;
+    if let Some(w) = &at.warning {
+        c.doubts
+            .borrow_mut()
+            .push(format!("{} {key}: {w}", c.loc(key)));
+    }
+    // an arm faster than the simulator's plausible times (ARM_TIME, 1 ns) at T is
+    // its own low-rate limit, a dashpot η = k·τ (stress k·τ·dλ/dt for rates ≪ 1/τ,
+    // E″ = ωη, E′ → 0): folded into Nv; one slower than ARM_TIME's 30 000 years is
+    // refused
+    let (mut nv, mut arms, mut folded) = (viscous.nv_pa_s, Vec::new(), 0);
+    for a in viscous.arms.iter().map(|a| at.arm(a)) {
+        let tau = a.eta_pa_s / a.k_pa;
+        if tau < ARM_TIME.min {
+            nv += a.eta_pa_s;
+            folded += 1;
+        } else if tau > ARM_TIME.max {
+            return Err(c
+                .err(
+                    key,
+                    format!(
+                        "at {text} an arm's relaxation time is {tau:.3e} s (aT = 10^{:.2}), beyond the {} s the simulator takes: the material is glassy there",
+                        at.log10_at, ARM_TIME.max
+                    ),
+                )
+                .with_hint("simulate at a higher temperature"));
+        } else {
+            arms.push(a);
+        }
+    }
+    if folded > 0 {
+        c.doubts.borrow_mut().push(format!(
+            "{} {key}: at {text} {folded} of the DMA fit's arms relax faster than {:e} s (aT = 10^{:.3}): each is taken as its low-rate limit, a dashpot k*tau, added to Nv (now {nv:.4e} Pa s)",
+            c.loc(key),
+            ARM_TIME.min,
+            at.log10_at
+        ));
+    }
+    Ok(Viscous { nv_pa_s: nv, arms })
 }
 
 /// The material file of `material.identified`, after refusing the scene keys it
@@ -1065,6 +1156,7 @@ fn read_material(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<(Material, Opti
             "resistivity_ohm_m",
             "actuator_mass",
             "breakdown",
+            "temperature",
         ],
     )?;
     let identified = read_identified(c, t, dir)?;
@@ -1082,10 +1174,11 @@ fn read_material(c: &Ctx, t: &toml::Table, dir: &Path) -> Result<(Material, Opti
             (read_hyperelastic(c, h, dir)?, None, None)
         }
     };
-    let viscous = match viscous {
-        Some(v) => v,
+    let (viscous, shift) = match viscous {
+        Some(v) => (v, None),
         None => read_viscous(c, c.opt_table(t, "viscous")?, dir)?,
     };
+    let viscous = at_temperature(c, t, viscous, shift.as_ref())?;
     let (eps_r, composite) = match eps_r {
         Some(e) => e,
         None => read_permittivity(c, t, dir)?,

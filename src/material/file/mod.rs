@@ -6,6 +6,9 @@
 //!   holds a [`HyperelasticPart`];
 //! - a relaxation fit (`dea-fit relaxation --out`, [`RELAXATION_SCHEMA`]) holds the
 //!   Maxwell arms of a [`Viscous`] part (its own model has no Kelvin–Voigt dashpot);
+//! - a DMA fit (`dea-fit dma --out`, [`DMA_SCHEMA`]) is a relaxation fit too: its
+//!   Prony series read into the same [`RelaxationPart`], with the time–temperature
+//!   shift it was built with ([`crate::material::viscoelastic::TimeTemperature`]);
 //! - an identified material (`dea-fit identify`, [`IDENTIFIED_SCHEMA`]) holds all
 //!   of them and εr (and the filler mass fraction it came from, when the scene's εr
 //!   was a composite's mixing rule), each parameter with its uncertainty
@@ -21,6 +24,7 @@
 
 mod breakdown;
 mod composite;
+mod dma;
 mod hyperelastic;
 mod identified;
 mod spread;
@@ -35,6 +39,7 @@ pub use viscous::{Arm, QlvReference, RelaxationPart, Viscous};
 
 use crate::error::{Error, Location, Result};
 use crate::material::check::{did_you_mean, Violation};
+use crate::material::viscoelastic::TimeTemperature;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -42,6 +47,9 @@ use std::path::Path;
 pub const HYPERELASTIC_SCHEMA: &str = "dea-fit/hyperelastic-fit/1";
 /// Schema tag of relaxation fit files.
 pub const RELAXATION_SCHEMA: &str = "dea-fit/relaxation-fit/1";
+/// Schema tag of DMA fit files (`dea-fit dma`): shifts, shift law, master curve
+/// and its Prony series.
+pub const DMA_SCHEMA: &str = "dea-fit/dma/1";
 /// Schema tag of identified material files.
 pub const IDENTIFIED_SCHEMA: &str = "dea-fit/identified/1";
 /// Schema tag of composite fit files.
@@ -91,22 +99,43 @@ pub fn read_hyperelastic_spread(path: &Path) -> Result<(HyperelasticPart, Spread
     Ok((part, spread))
 }
 
-/// Read the viscous part of a relaxation fit or an identified material file: the
-/// Maxwell arms, and the Kelvin–Voigt dashpot Nv (Pa·s) when the file states it
-/// (an identified file does, a relaxation fit does not). A file without a viscous
-/// part is refused.
+/// Read the viscous part of a relaxation fit, a DMA fit or an identified material
+/// file: the Maxwell arms, and the Kelvin–Voigt dashpot Nv (Pa·s) when the file
+/// states it (an identified file does, a relaxation or DMA fit does not), at the
+/// reference temperature of a DMA fit ([`read_viscous_shift`] gives its shift). A
+/// file without a viscous part is refused.
 pub fn read_viscous(path: &Path) -> Result<(Vec<Arm>, Option<f64>)> {
-    let (text, schema) = read_text(path, &[RELAXATION_SCHEMA, IDENTIFIED_SCHEMA], "viscous")?;
+    let (arms, nv, _) = read_viscous_shift(path)?;
+    Ok((arms, nv))
+}
+
+/// [`read_viscous`], with the time–temperature shift of a DMA fit (None for the
+/// other files, and for a DMA fit of a master curve without temperatures).
+pub fn read_viscous_shift(path: &Path) -> Result<(Vec<Arm>, Option<f64>, Option<TimeTemperature>)> {
+    let (text, schema) = read_text(
+        path,
+        &[RELAXATION_SCHEMA, DMA_SCHEMA, IDENTIFIED_SCHEMA],
+        "viscous",
+    )?;
     match schema {
-        RELAXATION_SCHEMA => Ok((
-            viscous::relaxation_part(path, &typed(path, &text)?)?.arms,
-            None,
-        )),
+        RELAXATION_SCHEMA | DMA_SCHEMA => {
+            let r = relaxation_kind(path, &text, schema)?;
+            Ok((r.arms, None, r.shift))
+        }
         _ => match IdentifiedMaterial::parse(path, &text)?.viscous {
-            Some(v) => Ok((v.arms, Some(v.nv_pa_s))),
+            Some(v) => Ok((v.arms, Some(v.nv_pa_s), None)),
             None => Err(err(path, "viscous", "missing: this identified material has no viscous part")
                 .with_hint("give the scene's material.viscous another way (preset, arms) or identify with arms")),
         },
+    }
+}
+
+/// The Prony series of a relaxation-kind file (a relaxation fit or a DMA fit), by
+/// its schema tag.
+fn relaxation_kind(path: &Path, text: &str, schema: &str) -> Result<RelaxationPart> {
+    match schema {
+        DMA_SCHEMA => dma::dma_part(path, &typed(path, text)?),
+        _ => viscous::relaxation_part(path, &typed(path, text)?),
     }
 }
 
@@ -117,23 +146,27 @@ pub fn read_viscous(path: &Path) -> Result<(Vec<Arm>, Option<f64>)> {
 pub enum MaterialFile {
     /// A hyperelastic fit (`dea-fit hyperelastic`).
     Hyperelastic(HyperelasticPart),
-    /// A relaxation fit (`dea-fit relaxation`).
+    /// A relaxation fit (`dea-fit relaxation`) or a DMA fit (`dea-fit dma`).
     Relaxation(RelaxationPart),
     /// An identified material (`dea-fit identify`).
     Identified(IdentifiedMaterial),
 }
 
-/// The material parts of a hyperelastic fit, a relaxation fit or an identified
+/// The schema tags of the files with mechanical constants.
+const MECHANICAL: &[&str] = &[
+    HYPERELASTIC_SCHEMA,
+    RELAXATION_SCHEMA,
+    DMA_SCHEMA,
+    IDENTIFIED_SCHEMA,
+];
+
+/// The material parts of a hyperelastic fit, a relaxation or DMA fit or an identified
 /// material file, each checked as the scene readers check it, and the status the
 /// estimator gave the fit (`ok`, `warning`, `ill_posed`, …; None for an identified
 /// material written before its status was recorded: status unknown). A composite fit holds no mechanical constants and
 /// is refused.
 pub fn read_material(path: &Path) -> Result<(MaterialFile, Option<String>)> {
-    let (text, schema) = read_text(
-        path,
-        &[HYPERELASTIC_SCHEMA, RELAXATION_SCHEMA, IDENTIFIED_SCHEMA],
-        "mechanical",
-    )?;
+    let (text, schema) = read_text(path, MECHANICAL, "mechanical")?;
     #[derive(Deserialize)]
     struct StatusJson {
         #[serde(default)]
@@ -144,8 +177,8 @@ pub fn read_material(path: &Path) -> Result<(MaterialFile, Option<String>)> {
         HYPERELASTIC_SCHEMA => {
             MaterialFile::Hyperelastic(HyperelasticPart::from_json(path, "", &typed(path, &text)?)?)
         }
-        RELAXATION_SCHEMA => {
-            MaterialFile::Relaxation(viscous::relaxation_part(path, &typed(path, &text)?)?)
+        RELAXATION_SCHEMA | DMA_SCHEMA => {
+            MaterialFile::Relaxation(relaxation_kind(path, &text, schema)?)
         }
         _ => MaterialFile::Identified(IdentifiedMaterial::parse(path, &text)?),
     };
@@ -194,14 +227,12 @@ impl Doubts {
 /// top level) and a blocking status of the file. None when the file states neither
 /// (a file written before they were recorded states nothing: status unknown).
 pub fn doubts(path: &Path, parts: &[&str]) -> Result<Option<Doubts>> {
-    let (text, schema) = read_text(
-        path,
-        &[HYPERELASTIC_SCHEMA, RELAXATION_SCHEMA, IDENTIFIED_SCHEMA],
-        "mechanical",
-    )?;
+    let (text, schema) = read_text(path, MECHANICAL, "mechanical")?;
     let v: serde_json::Value = typed(path, &text)?;
     let nodes: Vec<&serde_json::Value> = match schema {
         IDENTIFIED_SCHEMA => parts.iter().map(|p| &v[*p]).collect(),
+        // a DMA fit's Prony parameters are those of its frequency-domain fit
+        DMA_SCHEMA => vec![&v["prony"]["fit"]],
         _ => vec![&v],
     };
     let names: Vec<String> = nodes
@@ -209,9 +240,10 @@ pub fn doubts(path: &Path, parts: &[&str]) -> Result<Option<Doubts>> {
         .flat_map(|n| {
             serde_json::from_value::<Vec<FileParam>>(n["parameters"].clone()).unwrap_or_default()
         })
-        // a relaxation fit's E∞ is not a constant its readers take (its arms are)
+        // a relaxation (or DMA) fit's E∞ is not a constant its readers take (its arms are)
         .filter(|p| {
-            p.identifiable == Some(false) && !(schema == RELAXATION_SCHEMA && p.name == "E_inf")
+            p.identifiable == Some(false)
+                && !(matches!(schema, RELAXATION_SCHEMA | DMA_SCHEMA) && p.name == "E_inf")
         })
         .map(|p| p.name)
         .collect();
@@ -300,6 +332,9 @@ fn read_text(path: &Path, accepted: &[&'static str], what: &str) -> Result<(Stri
                     RELAXATION_SCHEMA => {
                         "this is a relaxation fit: use it as material.viscous = { fit = ... }"
                     }
+                    DMA_SCHEMA => {
+                        "this is a DMA fit: use it as material.viscous = { fit = ... } (with material.temperature = \"40 C\" to shift it)"
+                    }
                     HYPERELASTIC_SCHEMA => {
                         "this is a hyperelastic fit: use it as material.hyperelastic = { fit = ... }"
                     }
@@ -309,7 +344,7 @@ fn read_text(path: &Path, accepted: &[&'static str], what: &str) -> Result<(Stri
                     BREAKDOWN_SCHEMA => {
                         "this is a breakdown fit: use it as material.breakdown = { fit = ... }"
                     }
-                    _ => "write it with dea-fit hyperelastic --out, relaxation --out, composite --out, breakdown --out or identify",
+                    _ => "write it with dea-fit hyperelastic --out, relaxation --out, dma --out, composite --out, breakdown --out or identify",
                 };
                 Err(err(path, "schema", format!("expected {want}, found \"{s}\"")).with_hint(hint))
             }

@@ -5,7 +5,7 @@
 use super::{by_name, err, join, violation, FileParam, ParamUncertainty};
 use crate::error::Result;
 use crate::material::check::{ARM_MODULUS, ARM_TIME, DASHPOT, MODULUS, SHEAR_MODULUS};
-use crate::material::viscoelastic::Formulation;
+use crate::material::viscoelastic::{Formulation, TimeTemperature};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -152,7 +152,7 @@ pub struct QlvReference {
     pub instantaneous_scale: f64,
 }
 
-/// The material part of a relaxation fit: the Prony series E(t) = E∞ + Σ Eᵢ·e^(−t/τᵢ)
+/// The material part of a relaxation fit or a DMA fit: the Prony series E(t) = E∞ + Σ Eᵢ·e^(−t/τᵢ)
 /// (its terms as the seed's Maxwell arms kⱼ = Eⱼ, ηⱼ = Eⱼ·τⱼ) and the formulation
 /// it belongs to (`material::viscoelastic::Formulation`).
 #[derive(Debug, Clone, PartialEq)]
@@ -166,6 +166,12 @@ pub struct RelaxationPart {
     pub formulation: Formulation,
     /// The hyperelastic reference of a QLV fit (None for a parallel fit).
     pub qlv: Option<QlvReference>,
+    /// The time–temperature shift of a DMA fit (None for a relaxation fit, and
+    /// for a DMA fit of a master curve given without temperatures).
+    pub shift: Option<TimeTemperature>,
+    /// The schema of the file it was read from ([`super::RELAXATION_SCHEMA`] or
+    /// [`super::DMA_SCHEMA`]).
+    pub schema: &'static str,
 }
 
 /// The Prony series of a relaxation fit, read by name: `E_inf`, `E1…EN` (Pa) and
@@ -251,5 +257,7 @@ pub(super) fn relaxation_part(path: &Path, fit: &RelaxationJson) -> Result<Relax
         arms,
         formulation: fit.formulation,
         qlv,
+        shift: None,
+        schema: super::RELAXATION_SCHEMA,
     })
 }

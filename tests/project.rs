@@ -191,7 +191,9 @@ fn fits(dir: &Path) -> BTreeMap<String, Value> {
     out
 }
 
-/// The names of every file under a folder (sorted, relative).
+/// The names of every file under a folder (sorted, relative), but the copies the
+/// one write policy keeps aside (`<stem>.previous-<n>.<ext>`: a step the killed run
+/// had finished but not recorded runs again, and its fit differs in its seconds).
 fn tree(dir: &Path) -> Vec<PathBuf> {
     let mut out = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
@@ -200,7 +202,7 @@ fn tree(dir: &Path) -> Vec<PathBuf> {
             let p = e.unwrap().path();
             if p.is_dir() {
                 stack.push(p);
-            } else {
+            } else if !p.to_string_lossy().contains(".previous-") {
                 out.push(p.strip_prefix(dir).unwrap().to_path_buf());
             }
         }

@@ -26,9 +26,12 @@ pub struct Args {
     dir: PathBuf,
 }
 
+/// Whether a reader takes a file.
+type Reader = fn(&Path) -> bool;
+
 /// What a data file is, by the reader that takes it (tried in this order: a
 /// trace's time and voltage would read as neither of the others).
-const READERS: [(&str, fn(&Path) -> bool); 6] = [
+const READERS: [(&str, Reader); 6] = [
     ("trace", |p| io::trace::read(p).is_ok()),
     ("dma", |p| {
         dea_fit::dma::read::read_with(p, &io::table::ColumnMap::default()).is_ok()
@@ -78,7 +81,7 @@ pub fn run(a: Args) -> Result<i32> {
     dea_fit::io::write::atomic_write(&file, text.as_bytes())?;
     let steps = text.lines().filter(|l| l.starts_with('[')).count();
     println!(
-        "init: wrote {} with {steps} step(s) from {} data file(s){}; edit it, then run dea-fit make{}",
+        "init: wrote {}: {steps} step(s) from {} data file(s){}",
         file.display(),
         csv.len() - unknown.len(),
         if unknown.is_empty() {
@@ -86,6 +89,9 @@ pub fn run(a: Args) -> Result<i32> {
         } else {
             format!(" ({} not recognised, listed at its end)", unknown.len())
         },
+    );
+    println!(
+        "edit it (docs/project.md), then run dea-fit make{}",
         if a.dir == Path::new(".") {
             String::new()
         } else {

@@ -109,15 +109,27 @@ pub fn print(dir: &Path, what: &str, steps: &[StepReport], json: bool, dry_run: 
         println!("{}", serde_json::to_string_pretty(&v).expect("json"));
         return;
     }
-    let w = steps.iter().map(|s| s.target.len()).max().unwrap_or(0);
+    use dea_fit::report::format::{wrap, WIDTH};
+    let w = steps
+        .iter()
+        .map(|s| s.target.chars().count())
+        .max()
+        .unwrap_or(0);
     for s in steps {
         let word = if dry_run && s.state == Standing::Stale {
             "would run"
         } else {
             s.state.word()
         };
-        let line = format!("{word:<10}  {:<w$}  {:<12}  {}", s.target, s.kind, s.reason);
-        println!("{}", line.trim_end());
+        let head = format!("{word:<10}  {:<w$}  {:<12}  ", s.target, s.kind);
+        // the reason fills the rest of a 100-column line, continued under itself
+        let indent = head.chars().count().min(WIDTH / 2);
+        let lines = wrap(&s.reason, WIDTH - indent);
+        let first = lines.first().map_or("", |l| l.as_str());
+        println!("{}", format!("{head}{first}").trim_end());
+        for l in lines.iter().skip(1) {
+            println!("{:indent$}{l}", "");
+        }
     }
     let parts: Vec<String> = counts
         .iter()
@@ -132,16 +144,14 @@ pub fn print(dir: &Path, what: &str, steps: &[StepReport], json: bool, dry_run: 
     } else {
         parts.join(", ")
     };
-    let tail = if counts
+    println!("{what}: {parts}");
+    if counts
         .iter()
         .any(|(x, n)| *n > 0 && matches!(x, Standing::Failed | Standing::Blocked))
     {
-        format!(
-            " (keep-going: a failed step blocks only what depends on it, the rest went on; logs in {}/logs/)",
+        println!(
+            "keep-going: a failed step blocks only what depends on it, the rest went on; logs in {}/logs/",
             dea_fit::project::STATE_DIR
-        )
-    } else {
-        String::new()
-    };
-    println!("{what}: {parts}{tail}");
+        );
+    }
 }

@@ -29,7 +29,6 @@
 //! `report` or `no-report` say otherwise.
 
 use crate::error::{Error, Location, Result};
-use crate::io::manifest::line_col;
 use crate::material::check::did_you_mean;
 use crate::project::glob;
 use std::collections::BTreeMap;
@@ -132,11 +131,20 @@ impl Project {
         flags: &dyn Fn(&str) -> Option<Vec<Flag>>,
         strict: bool,
     ) -> Result<Project> {
-        let cx = Cx { file, text, dir };
+        let cx = Cx {
+            file,
+            text,
+            dir,
+            lines: std::iter::once(0)
+                .chain(text.match_indices('\n').map(|(i, _)| i + 1))
+                .collect(),
+        };
         let root = DeTable::parse(text).map_err(|e| {
-            let (l, c) = e.span().map_or((1, 1), |s| line_col(text, s.start));
-            Error::input(Location::at(file, l, c), e.message().trim().to_string())
-                .with_hint("the project file must be valid TOML; see docs/project.md")
+            Error::input(
+                cx.loc(e.span().map_or(0, |s| s.start)),
+                e.message().trim().to_string(),
+            )
+            .with_hint("the project file must be valid TOML; see docs/project.md")
         })?;
         let mut strict = strict;
         // the declared steps, before their references are resolved
@@ -217,8 +225,10 @@ impl Project {
             .collect::<Result<_>>()?;
         let targets: Vec<&str> = decl.iter().map(|d| d.target.as_str()).collect();
         let mut steps = Vec::with_capacity(decl.len());
-        for d in &decl {
-            steps.push(cx.step(d, &targets, &fits, flags, strict)?);
+        let written: std::collections::HashSet<&str> =
+            fits.iter().flatten().map(|f| f.as_str()).collect();
+        for (me, d) in decl.iter().enumerate() {
+            steps.push(cx.step(d, me, &targets, &fits, &written, flags, strict)?);
         }
         // a file another step writes is that step's output: read after it, by its identity
         let mut writers: BTreeMap<&str, usize> = BTreeMap::new();
@@ -283,18 +293,37 @@ fn clean(s: &str) -> String {
     s.trim_end_matches('/').to_string()
 }
 
+/// Whether a flag's value may name a file: it has a `/`, or ends in an extension
+/// that starts with a letter (`design.toml`, not `1.000mm` or `0.5`); a value that
+/// does is read (and hashed) when the file exists.
+fn looks_like_a_path(s: &str) -> bool {
+    s.contains('/')
+        || s.rsplit_once('.').is_some_and(|(stem, ext)| {
+            !stem.is_empty()
+                && ext.starts_with(|c: char| c.is_ascii_alphabetic())
+                && ext.chars().all(|c| c.is_ascii_alphanumeric())
+        })
+}
+
 struct Cx<'a> {
     file: &'a Path,
     text: &'a str,
     dir: &'a Path,
+    /// The byte offset where each line starts (a location is found by bisection:
+    /// a project of thousands of steps is read in linear time).
+    lines: Vec<usize>,
 }
 
 type Val<'i> = Spanned<DeValue<'i>>;
 
 impl<'a> Cx<'a> {
+    /// 1-based line and column (in characters) of a byte offset.
     fn loc(&self, offset: usize) -> Location {
-        let (l, c) = line_col(self.text, offset);
-        Location::at(self.file, l, c)
+        let offset = offset.min(self.text.len());
+        let line = self.lines.partition_point(|&s| s <= offset);
+        let start = self.lines[line - 1];
+        let col = self.text[start..offset].chars().count() + 1;
+        Location::at(self.file, line, col)
     }
 
     fn err(&self, offset: usize, msg: impl Into<String>) -> Error {
@@ -418,11 +447,14 @@ impl<'a> Cx<'a> {
         }
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn step(
         &self,
         d: &Decl<'_, '_>,
+        me: usize,
         targets: &[&str],
         fits: &[Option<String>],
+        written: &std::collections::HashSet<&str>,
         flags: &dyn Fn(&str) -> Option<Vec<Flag>>,
         strict: bool,
     ) -> Result<Step> {
@@ -529,7 +561,8 @@ impl<'a> Cx<'a> {
                         } else {
                             let c = clean(s);
                             // a value naming a file (or a step's fit) is read
-                            if self.dir.join(&c).is_file() || fits.iter().flatten().any(|o| *o == c)
+                            if written.contains(c.as_str())
+                                || (looks_like_a_path(&c) && self.dir.join(&c).is_file())
                             {
                                 inputs.push(c);
                             }
@@ -557,11 +590,7 @@ impl<'a> Cx<'a> {
         args.extend(positionals);
         args.extend(flags_out);
         let mut outputs = Vec::new();
-        let fit = fits[targets
-            .iter()
-            .position(|t| *t == d.target)
-            .expect("declared")]
-        .clone();
+        let fit = fits[me].clone();
         if let Some(f) = &fit {
             if !d.body.contains_key("out") {
                 args.push(format!("--out={f}"));

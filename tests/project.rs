@@ -71,6 +71,12 @@ fn make_reruns_exactly_what_changed() {
         ALL,
         "an unchanged project runs nothing: {m:?}"
     );
+    // a target named by its output file brings what it needs along
+    let (_, m, _) = steps(p, &["make", "--dry-run", "fits/vhb4910-rel*"]);
+    assert_eq!(
+        m.keys().collect::<Vec<_>>(),
+        ["vhb4910/relaxation", "vhb4910/tensile"]
+    );
 
     // one raw file: its fit and the two steps that read that fit
     let f = p.join("raw/vhb4910/uniaxial.csv");

@@ -96,11 +96,6 @@ pub struct Project {
     pub steps: Vec<Step>,
 }
 
-/// Whether the folder has a project file.
-pub fn exists(dir: &Path) -> bool {
-    dir.join(super::FILE).is_file()
-}
-
 impl Project {
     /// Read `<dir>/dea-fit.toml`; `flags` gives the long flags of a command (None
     /// for a command that does not exist); `strict` forces `--strict` on every step.
@@ -266,11 +261,6 @@ impl Project {
             strict,
             steps,
         })
-    }
-
-    /// The index of a target.
-    pub fn index(&self, target: &str) -> Option<usize> {
-        self.steps.iter().position(|s| s.target == target)
     }
 }
 

@@ -322,7 +322,18 @@ pub fn make(p: &Project, opts: &Options, exe: &Path) -> Result<Vec<StepReport>> 
     if opts.dry_run {
         return Ok(order.iter().filter_map(|&i| out[i].take()).collect());
     }
-    if state.files != cached {
+    // forget files and steps the project no longer has
+    let read: std::collections::HashSet<&str> = p
+        .steps
+        .iter()
+        .flat_map(|s| s.inputs.iter().map(|f| f.as_str()))
+        .collect();
+    state.files.retain(|f, _| read.contains(f.as_str()));
+    let before = state.steps.len();
+    let targets: std::collections::HashSet<&str> =
+        p.steps.iter().map(|s| s.target.as_str()).collect();
+    state.steps.retain(|t, _| targets.contains(t.as_str()));
+    if state.files != cached || state.steps.len() != before {
         state.save(&p.dir)?;
     }
     let logs = p.dir.join(super::STATE_DIR).join("logs");

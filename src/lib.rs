@@ -25,6 +25,7 @@ pub mod io;
 pub mod material;
 pub mod numerics;
 pub mod observe;
+pub mod project;
 pub mod rank;
 pub mod report;
 pub mod sim;

@@ -6,7 +6,7 @@
 //! `--report` pointing into it, so the tests never write into the worktree (except
 //! when regenerating goldens, see [`golden`]).
 
-use crate::support::{names_in, repo, run};
+use crate::support::{copy_dir, names_in, repo, run};
 use dea_fit::data::Dataset;
 use dea_fit::io::tensile::{self, TensileOptions};
 use dea_fit::material::hyperelastic::Mode;
@@ -1012,19 +1012,6 @@ fn strict_agrees_with_the_reported_status() {
 // ---------------------------------------------------------------------------------
 // The README
 // ---------------------------------------------------------------------------------
-
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).expect("mkdir");
-    for e in std::fs::read_dir(from).expect("read dir") {
-        let e = e.expect("entry");
-        let target = to.join(e.file_name());
-        if e.file_type().expect("type").is_dir() {
-            copy_dir(&e.path(), &target);
-        } else {
-            std::fs::copy(e.path(), &target).expect("copy");
-        }
-    }
-}
 
 /// The lines of the README's first fenced code block, comments stripped.
 fn readme_first_block() -> Vec<String> {

@@ -25,6 +25,7 @@ mod models;
 mod numeric_input;
 mod permittivity;
 mod progress;
+mod project;
 mod prony_frequency;
 mod rank;
 mod relaxation;

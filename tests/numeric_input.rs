@@ -4,7 +4,7 @@
 //! non-finite or unphysical series is refused with its location. The CLI's counts and
 //! non-finite outputs are in the bad-input corpus (`tests/data/bad_cli/counts.tsv`).
 
-use crate::support::repo;
+use crate::support::{copy_dir, repo};
 use dea_fit::fit::composite;
 use dea_fit::fit::relaxation::{self, Loading, Settings};
 use dea_fit::io::manifest;
@@ -60,19 +60,6 @@ fn design_with(edit: impl Fn(&str) -> String) -> (tempfile::TempDir, std::path::
     assert_ne!(changed, text, "the edit changed nothing");
     std::fs::write(&p, changed).unwrap();
     (dir, p)
-}
-
-fn copy_dir(from: &Path, to: &Path) {
-    for e in std::fs::read_dir(from).unwrap() {
-        let e = e.unwrap();
-        let target = to.join(e.file_name());
-        if e.file_type().unwrap().is_dir() {
-            std::fs::create_dir_all(&target).unwrap();
-            copy_dir(&e.path(), &target);
-        } else {
-            std::fs::copy(e.path(), target).unwrap();
-        }
-    }
 }
 
 /// `tan_delta = "0.0012 ± 1e300"` once became "exact" (`std_error: null`) in the

@@ -14,12 +14,15 @@ mod dma;
 mod export;
 mod hyperelastic;
 mod identify;
+mod init;
+mod make;
 mod man;
 mod permittivity;
 mod rank;
 mod relaxation;
 mod simulate;
 mod static_curve;
+mod status;
 mod synth;
 
 use clap::{Parser, Subcommand};
@@ -59,6 +62,12 @@ enum Command {
     Export(export::Args),
     /// Rank fillers and composites by what they buy an actuator (sweeps, shards, Slurm).
     Rank(rank::Args),
+    /// Bring a project's fits, identifications and rankings up to date (dea-fit.toml).
+    Make(make::Args),
+    /// Where each step of a project stands: up to date, stale, failed or blocked, and why.
+    Status(status::Args),
+    /// Write dea-fit.toml from the data files in a folder, for the user to edit.
+    Init(init::Args),
     /// Measure speed against accuracy and write tables and charts under reports/.
     Bench(bench::Args),
     /// Print a shell completion script (bash, zsh, fish, elvish, powershell).
@@ -83,6 +92,9 @@ pub fn run(cli: Cli) -> Result<i32> {
         Command::Static(a) => static_curve::run(a),
         Command::Export(a) => export::run(a),
         Command::Rank(a) => rank::run(a),
+        Command::Make(a) => make::run(a),
+        Command::Status(a) => status::run(a),
+        Command::Init(a) => init::run(a),
         Command::Completions(a) => completions::run(a),
         Command::Man(a) => man::run(a),
     }

@@ -1,0 +1,157 @@
+//! `dea-fit make`: bring a project's steps up to date (docs/project.md).
+
+use dea_fit::project::file::{Flag, Project, KINDS};
+use dea_fit::project::run::{self, Standing, StepReport};
+use dea_fit::Result;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Targets to bring up to date, with the steps they need: names
+    /// (vhb4910/tensile), patterns (vhb4910/*) or output patterns (fits/vhb4910-*);
+    /// default every step
+    targets: Vec<String>,
+    /// The project folder (the one holding dea-fit.toml)
+    #[arg(
+        short = 'C',
+        long = "directory",
+        value_name = "DIR",
+        default_value = "."
+    )]
+    dir: PathBuf,
+    /// List what would run and why (which input, setting or upstream step changed), run nothing
+    #[arg(long)]
+    dry_run: bool,
+    /// Steps run at once (default: the number of CPUs)
+    #[arg(long, short = 'j', value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    jobs: Option<u16>,
+    /// Print every step as JSON (target, kind, state, reason, outputs, command)
+    #[arg(long)]
+    json: bool,
+    /// Run every step with --strict (as `strict = true` in the project file): a
+    /// blocking status fails the step and blocks what depends on it
+    #[arg(long)]
+    strict: bool,
+}
+
+/// The project in `dir`, its steps' flags checked against the commands' own.
+pub fn read_project(dir: &Path, strict: bool) -> Result<Project> {
+    use clap::CommandFactory;
+    let cli = super::Cli::command();
+    let flags: HashMap<&str, Vec<Flag>> = KINDS
+        .iter()
+        .filter_map(|k| {
+            let c = cli.find_subcommand(k.1)?;
+            let f = c
+                .get_arguments()
+                .filter_map(|a| {
+                    Some(Flag {
+                        long: a.get_long()?.to_string(),
+                        takes_value: a.get_action().takes_values(),
+                    })
+                })
+                .collect();
+            Some((k.1, f))
+        })
+        .collect();
+    Project::read(dir, &|k| flags.get(k).cloned(), strict)
+}
+
+pub fn run(a: Args) -> Result<i32> {
+    let p = read_project(&a.dir, a.strict)?;
+    let jobs = a.jobs.map_or_else(
+        || std::thread::available_parallelism().map_or(1, |n| n.get()),
+        usize::from,
+    );
+    let exe = std::env::current_exe().map_err(|e| dea_fit::Error::io("dea-fit", e))?;
+    let opts = run::Options {
+        jobs,
+        dry_run: a.dry_run,
+        targets: a.targets,
+    };
+    let steps = run::make(&p, &opts, &exe)?;
+    let what = if a.dry_run { "make --dry-run" } else { "make" };
+    print(&a.dir, what, &steps, a.json, a.dry_run);
+    let bad = steps
+        .iter()
+        .any(|s| matches!(s.state, Standing::Failed | Standing::Blocked));
+    Ok(i32::from(bad))
+}
+
+/// Print a report: one line a step and the summary, or the JSON.
+pub fn print(dir: &Path, what: &str, steps: &[StepReport], json: bool, dry_run: bool) {
+    let count = |x: Standing| steps.iter().filter(|s| s.state == x).count();
+    let counts: Vec<(Standing, usize)> = [
+        Standing::Ran,
+        Standing::Stale,
+        Standing::UpToDate,
+        Standing::Failed,
+        Standing::Blocked,
+    ]
+    .into_iter()
+    .map(|x| (x, count(x)))
+    .collect();
+    if json {
+        let c: serde_json::Map<String, serde_json::Value> = counts
+            .iter()
+            .map(|(x, n)| {
+                let k = serde_json::to_value(x).expect("a standing serialises");
+                (k.as_str().unwrap_or_default().to_string(), (*n).into())
+            })
+            .collect();
+        let v = serde_json::json!({
+            "project": dir.display().to_string(),
+            "command": what,
+            "counts": c,
+            "steps": steps,
+        });
+        println!("{}", serde_json::to_string_pretty(&v).expect("json"));
+        return;
+    }
+    use dea_fit::report::format::{wrap, WIDTH};
+    let w = steps
+        .iter()
+        .map(|s| s.target.chars().count())
+        .max()
+        .unwrap_or(0);
+    for s in steps {
+        let word = if dry_run && s.state == Standing::Stale {
+            "would run"
+        } else {
+            s.state.word()
+        };
+        let head = format!("{word:<10}  {:<w$}  {:<12}  ", s.target, s.kind);
+        // the reason fills the rest of a 100-column line, continued under itself
+        let indent = head.chars().count().min(WIDTH / 2);
+        let lines = wrap(&s.reason, WIDTH - indent);
+        let first = lines.first().map_or("", |l| l.as_str());
+        println!("{}", format!("{head}{first}").trim_end());
+        for l in lines.iter().skip(1) {
+            println!("{:indent$}{l}", "");
+        }
+    }
+    let parts: Vec<String> = counts
+        .iter()
+        .filter(|(_, n)| *n > 0)
+        .map(|(x, n)| match (x, dry_run) {
+            (Standing::Stale, true) => format!("{n} would run"),
+            _ => format!("{n} {}", x.word()),
+        })
+        .collect();
+    let parts = if parts.is_empty() {
+        "no steps".to_string()
+    } else {
+        parts.join(", ")
+    };
+    println!("{what}: {parts}");
+    if counts
+        .iter()
+        .any(|(x, n)| *n > 0 && matches!(x, Standing::Failed | Standing::Blocked))
+    {
+        println!(
+            "keep-going: a failed step blocks only what depends on it, the rest went on; logs in {}/logs/",
+            dea_fit::project::STATE_DIR
+        );
+    }
+}

@@ -1,0 +1,398 @@
+//! `dea-fit make`, `status` and `init` on the shipped lab project (datasets/lab),
+//! copied to a temporary folder first (its outputs never land in the repository).
+
+use crate::support::{copy_dir, repo, run};
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// A fresh copy of datasets/lab without any outputs a developer's run left there.
+fn lab() -> tempfile::TempDir {
+    let d = tempfile::tempdir().expect("tempdir");
+    copy_dir(&repo().join("datasets/lab"), d.path());
+    for o in ["fits", "reports", ".dea-fit"] {
+        let _ = std::fs::remove_dir_all(d.path().join(o));
+    }
+    d
+}
+
+/// `dea-fit <args> --json` in `dir`: the exit status and the steps' (target → state).
+fn steps(dir: &Path, args: &[&str]) -> (i32, BTreeMap<String, String>, Value) {
+    let mut a = args.to_vec();
+    a.push("--json");
+    let o = run(dir, &a);
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap_or_else(|e| {
+        panic!(
+            "{args:?}: {e}\n{}\n{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        )
+    });
+    let m = v["steps"]
+        .as_array()
+        .expect("steps")
+        .iter()
+        .map(|s| {
+            (
+                s["target"].as_str().unwrap().to_string(),
+                s["state"].as_str().unwrap().to_string(),
+            )
+        })
+        .collect();
+    (o.status.code().expect("an exit status"), m, v)
+}
+
+/// The targets in a given state.
+fn with(m: &BTreeMap<String, String>, state: &str) -> Vec<String> {
+    m.iter()
+        .filter(|(_, s)| *s == state)
+        .map(|(t, _)| t.clone())
+        .collect()
+}
+
+const ALL: usize = 12;
+
+/// From scratch every step runs; again, none does; one changed raw file re-runs
+/// exactly its fit and what reads it (the relaxation's QLV reads the tensile fit,
+/// the identification's scene reads it too); one changed setting re-runs exactly
+/// that step; `status` and `--dry-run` say why without running anything.
+#[test]
+fn make_reruns_exactly_what_changed() {
+    let d = lab();
+    let p = d.path();
+    let (code, m, _) = steps(p, &["make", "--jobs", "2"]);
+    assert_eq!(code, 0, "{m:?}");
+    assert_eq!(with(&m, "ran").len(), ALL, "{m:?}");
+
+    let (code, m, _) = steps(p, &["make"]);
+    assert_eq!(code, 0);
+    assert_eq!(
+        with(&m, "up_to_date").len(),
+        ALL,
+        "an unchanged project runs nothing: {m:?}"
+    );
+    // a target named by its output file brings what it needs along
+    let (_, m, _) = steps(p, &["make", "--dry-run", "fits/vhb4910-rel*"]);
+    assert_eq!(
+        m.keys().collect::<Vec<_>>(),
+        ["vhb4910/relaxation", "vhb4910/tensile"]
+    );
+
+    // one raw file: its fit and the two steps that read that fit
+    let f = p.join("raw/vhb4910/uniaxial.csv");
+    let mut text = std::fs::read_to_string(&f).unwrap();
+    text.push_str("# one more comment line\n");
+    std::fs::write(&f, text).unwrap();
+    let (_, m, v) = steps(p, &["status"]);
+    assert_eq!(
+        with(&m, "stale"),
+        ["stack/identify", "vhb4910/relaxation", "vhb4910/tensile"]
+    );
+    let reason = |v: &Value, t: &str| {
+        v["steps"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|s| s["target"] == t)
+            .map(|s| s["reason"].as_str().unwrap().to_string())
+            .unwrap()
+    };
+    assert_eq!(
+        reason(&v, "vhb4910/tensile"),
+        "input raw/vhb4910/uniaxial.csv changed"
+    );
+    assert_eq!(
+        reason(&v, "vhb4910/relaxation"),
+        "upstream vhb4910/tensile changed"
+    );
+    let (_, m, _) = steps(p, &["make", "--dry-run"]);
+    assert_eq!(with(&m, "stale").len(), 3, "dry run: {m:?}");
+    let (code, m, _) = steps(p, &["make"]);
+    assert_eq!(code, 0);
+    assert_eq!(
+        with(&m, "ran"),
+        ["stack/identify", "vhb4910/relaxation", "vhb4910/tensile"]
+    );
+
+    // one setting
+    let proj = p.join("dea-fit.toml");
+    let t = std::fs::read_to_string(&proj).unwrap();
+    std::fs::write(&proj, t.replace("strain = 0.5", "strain = 0.50001")).unwrap();
+    let (_, m, v) = steps(p, &["make"]);
+    assert_eq!(with(&m, "ran"), ["vhb4910/relaxation"]);
+    assert_eq!(
+        reason(&v, "vhb4910/relaxation"),
+        "settings changed: --strain=0.50001 (was --strain=0.5)"
+    );
+
+    // a new coupon matching a pattern is picked up
+    std::fs::copy(
+        p.join("raw/sylgard184/tensile_2.csv"),
+        p.join("raw/sylgard184/tensile_3.csv"),
+    )
+    .unwrap();
+    let (_, m, v) = steps(p, &["make", "sylgard184/*"]);
+    assert_eq!(with(&m, "ran"), ["sylgard184/tensile"]);
+    assert_eq!(m.len(), 2, "only the selected targets: {m:?}");
+    assert!(reason(&v, "sylgard184/tensile").contains("new input raw/sylgard184/tensile_3.csv"));
+}
+
+/// A failing step blocks only what depends on it; the rest runs; the exit status
+/// and the summary say so; the next `status` names the failure and the blocks.
+#[test]
+fn a_failing_step_blocks_only_its_dependents() {
+    let d = lab();
+    let p = d.path();
+    std::fs::write(
+        p.join("raw/vhb4910/uniaxial.csv"),
+        "stretch,stress_kPa\n1,x\n",
+    )
+    .unwrap();
+    let (code, m, _) = steps(p, &["make"]);
+    assert_eq!(code, 1);
+    assert_eq!(with(&m, "failed"), ["vhb4910/tensile"]);
+    assert_eq!(
+        with(&m, "blocked"),
+        ["stack/identify", "vhb4910/relaxation"]
+    );
+    assert_eq!(with(&m, "ran").len(), ALL - 3);
+    let o = run(p, &["make"]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("keep-going"), "{out}");
+    assert!(out.contains("1 failed, 2 blocked"), "{out}");
+    let (code, m, _) = steps(p, &["status"]);
+    assert_eq!(code, 0);
+    assert_eq!(with(&m, "failed"), ["vhb4910/tensile"]);
+    assert_eq!(
+        with(&m, "blocked"),
+        ["stack/identify", "vhb4910/relaxation"]
+    );
+    assert_eq!(with(&m, "up_to_date").len(), ALL - 3);
+}
+
+/// The fit files of a folder with every `seconds` (solver wall time) and
+/// `sha256` field removed: the hyperelastic and relaxation fits record their
+/// solver's seconds, and a fit records the SHA-256 of a fit file it read, which
+/// differs with that file's seconds. Reports are not compared: their run.json and
+/// reports/index.html hold when they were written.
+fn fits(dir: &Path) -> BTreeMap<String, Value> {
+    fn strip(v: &mut Value) {
+        match v {
+            Value::Object(m) => {
+                m.remove("seconds");
+                m.remove("sha256");
+                m.values_mut().for_each(strip);
+            }
+            Value::Array(a) => a.iter_mut().for_each(strip),
+            _ => {}
+        }
+    }
+    let mut out = BTreeMap::new();
+    for e in std::fs::read_dir(dir.join("fits")).expect("fits/") {
+        let e = e.unwrap();
+        let mut v: Value = serde_json::from_slice(&std::fs::read(e.path()).unwrap()).unwrap();
+        strip(&mut v);
+        out.insert(e.file_name().to_string_lossy().into_owned(), v);
+    }
+    out
+}
+
+/// The names of every file under a folder (sorted, relative), but the copies the
+/// one write policy keeps aside (`<stem>.previous-<n>.<ext>`: a step the killed run
+/// had finished but not recorded runs again, and its fit differs in its seconds).
+fn tree(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if !p.to_string_lossy().contains(".previous-") {
+                out.push(p.strip_prefix(dir).unwrap().to_path_buf());
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Serial and parallel runs write the same fits (timings aside, see [`fits`]) and
+/// the same report files.
+#[test]
+fn parallel_and_serial_runs_agree() {
+    let (a, b) = (lab(), lab());
+    assert_eq!(steps(a.path(), &["make", "--jobs", "1"]).0, 0);
+    assert_eq!(steps(b.path(), &["make", "--jobs", "2"]).0, 0);
+    assert_eq!(
+        fits(a.path()).len(),
+        ALL - 1,
+        "every step but the ranking writes a fit"
+    );
+    assert_eq!(fits(a.path()), fits(b.path()));
+    assert_eq!(
+        tree(&a.path().join("reports")),
+        tree(&b.path().join("reports"))
+    );
+}
+
+/// A `make` killed (SIGKILL) in the middle, then `make` again, leaves the same
+/// files as an uninterrupted run: no step is recorded done that did not end, the
+/// steps it had started die with it, and the second run finishes the rest.
+#[test]
+fn a_killed_make_then_make_gives_the_same_files() {
+    let (a, b) = (lab(), lab());
+    assert_eq!(steps(a.path(), &["make", "--jobs", "1"]).0, 0);
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_dea-fit"))
+        .args(["make", "--jobs", "1"])
+        .current_dir(b.path())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // kill it once the third step has started (each step's log is made as it starts)
+    let logs = b.path().join(".dea-fit/logs");
+    let t0 = std::time::Instant::now();
+    while std::fs::read_dir(&logs).map_or(0, |r| r.count()) < 3 {
+        assert!(
+            t0.elapsed().as_secs() < 60,
+            "make never got to its third step"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let (code, m, _) = steps(b.path(), &["make", "--jobs", "1"]);
+    assert_eq!(code, 0, "{m:?}");
+    assert!(
+        with(&m, "ran").len() < ALL,
+        "the killed run did some steps: {m:?}"
+    );
+    assert_eq!(fits(a.path()), fits(b.path()));
+    assert_eq!(tree(&a.path().join("fits")), tree(&b.path().join("fits")));
+    assert_eq!(
+        tree(&a.path().join("reports")),
+        tree(&b.path().join("reports"))
+    );
+    let (_, m, _) = steps(b.path(), &["status"]);
+    assert_eq!(with(&m, "up_to_date").len(), ALL);
+}
+
+/// `make` in a folder holding `project` as dea-fit.toml (and the files named): the
+/// exit status and stderr.
+fn bad(project: &str, files: &[&str]) -> (i32, String) {
+    let d = tempfile::tempdir().unwrap();
+    for f in files {
+        let p = d.path().join(f);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(p, "stretch,stress_Pa\n1,0\n").unwrap();
+    }
+    std::fs::write(d.path().join("dea-fit.toml"), project).unwrap();
+    let o = run(d.path(), &["make", "--dry-run"]);
+    (
+        o.status.code().unwrap(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+/// Bad project files are refused with exit 2 and the place: a misspelt flag with
+/// the near miss, a reference to no target, a pattern matching nothing, a TOML
+/// error, a cycle named with its members.
+#[test]
+fn bad_project_files_get_located_errors() {
+    let (c, e) = bad(
+        "[materials.a.tensile]\nfiles = \"t.csv\"\nmodle = \"yeoh\"\n",
+        &["t.csv"],
+    );
+    assert_eq!(c, 2, "{e}");
+    assert!(
+        e.contains("dea-fit.toml:3:1: unknown setting of a hyperelastic step 'modle'"),
+        "{e}"
+    );
+    assert!(e.contains("did you mean 'model'?"), "{e}");
+
+    let (c, e) = bad(
+        "[materials.a.relaxation]\nfile = \"t.csv\"\nhyperelastic = { target = \"a/tensil\" }\n[materials.a.tensile]\nfiles = \"t.csv\"\n",
+        &["t.csv"],
+    );
+    assert_eq!(c, 2, "{e}");
+    assert!(
+        e.contains("dea-fit.toml:3:27: materials.a.relaxation.hyperelastic: no target 'a/tensil'"),
+        "{e}"
+    );
+    assert!(e.contains("did you mean 'a/tensile'?"), "{e}");
+
+    let (c, e) = bad("[materials.a.tensile]\nfiles = \"raw/t_*.csv\"\n", &[]);
+    assert_eq!(c, 2, "{e}");
+    assert!(
+        e.contains("dea-fit.toml:2:9: materials.a.tensile.files: no file matches 'raw/t_*.csv'"),
+        "{e}"
+    );
+
+    let (c, e) = bad("[materials.a.tensile]\nfiles = [\"t.csv\"\n", &["t.csv"]);
+    assert_eq!(c, 2, "{e}");
+    assert!(e.contains("dea-fit.toml:2:"), "{e}");
+
+    let (c, e) = bad("[materials.a.tensil]\nfiles = \"t.csv\"\n", &["t.csv"]);
+    assert_eq!(c, 2, "{e}");
+    assert!(
+        e.contains("dea-fit.toml:1:14: unknown step name 'tensil'"),
+        "{e}"
+    );
+    assert!(e.contains("did you mean 'tensile'?"), "{e}");
+
+    let cycle = "[materials.a.relaxation]\nfile = \"t.csv\"\nhyperelastic = { target = \"b/identify\" }\n\
+                 [materials.b.identify]\ntraces = \"t.csv\"\nscene = \"s.toml\"\nreads = [{ target = \"c/tensile\" }]\n\
+                 [materials.c.tensile]\nfiles = \"t.csv\"\nreads = [{ target = \"a/relaxation\" }]\n";
+    let (c, e) = bad(cycle, &["t.csv"]);
+    assert_eq!(c, 2, "{e}");
+    assert!(
+        e.contains("the steps form a cycle: a/relaxation → b/identify → c/tensile → a/relaxation"),
+        "{e}"
+    );
+    assert!(e.contains("dea-fit.toml:1:"), "{e}");
+
+    let (c, e) = bad("", &[]);
+    assert_eq!(c, 0, "an empty project is nothing to do: {e}");
+    let d = tempfile::tempdir().unwrap();
+    let o = run(d.path(), &["make"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("dea-fit init"));
+}
+
+/// `init` classifies the lab's raw files by the readers' own column detection into
+/// one step per kind and folder, and never overwrites a project file.
+#[test]
+fn init_writes_a_project_from_the_files_and_never_overwrites() {
+    let d = tempfile::tempdir().unwrap();
+    copy_dir(&repo().join("datasets/lab/raw"), &d.path().join("raw"));
+    let o = run(d.path(), &["init"]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let t = std::fs::read_to_string(d.path().join("dea-fit.toml")).unwrap();
+    for s in [
+        "[materials.raw-vhb4910.tensile]",
+        "[materials.raw-vhb4910.relaxation]",
+        "[materials.raw-vhb4910.permittivity]",
+        "[materials.raw-vhb4910.breakdown]",
+        "[materials.raw-vhb4910.dma]",
+        "[materials.raw-sylgard184.tensile]",
+        "# [actuators.raw-stack.identify]",
+    ] {
+        assert!(t.contains(s), "{s} missing:\n{t}");
+    }
+    // the project it wrote parses: what it can run without a geometry runs
+    let (_, m, _) = steps(d.path(), &["make", "--dry-run"]);
+    assert!(m.contains_key("raw-vhb4910/tensile"), "{m:?}");
+    let o = run(d.path(), &["init"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("never overwrites"));
+    assert_eq!(
+        std::fs::read_to_string(d.path().join("dea-fit.toml")).unwrap(),
+        t
+    );
+}

@@ -291,8 +291,12 @@ fn run(s: &Scenario, seed: u64, fix: &[String]) -> Outcome {
 /// Run the scenario's replicates in parallel, by default and with the advised
 /// fixes; print both tables and assert the criteria.
 fn study(s: &Scenario) {
-    let results: Vec<_> = (1000..1000 + REPLICATES)
+    // every replicate a task of its own: one that runs to the iteration limit
+    // costs several others, and replicates grouped into one task leave a thread idle
+    let seeds: Vec<u64> = (1000..1000 + REPLICATES).collect();
+    let results: Vec<_> = seeds
         .into_par_iter()
+        .with_max_len(1)
         .map(|seed| {
             let default = run(s, seed, &[]);
             let fixes = match &default {

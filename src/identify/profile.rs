@@ -153,8 +153,11 @@ pub fn assess(
         .filter(|&j| check && lin.sigma_x[j].is_some())
         .flat_map(|j| [(j, -1.0), (j, 1.0)])
         .collect();
+    // every side a task of its own (`with_max_len(1)`): a side's re-fits cost
+    // from one run to dozens, and sides grouped into one task leave a thread idle
     let checks: Vec<(Point, bool, Option<Point>)> = sides
         .par_iter()
+        .with_max_len(1)
         .map(|&(j, sign)| {
             let mut p = Profiler::new(&base, j);
             let sx = lin.sigma_x[j].expect("checked");
@@ -175,6 +178,7 @@ pub fn assess(
         .filter(|(&(j, _), _)| failed(j))
         .collect::<Vec<_>>()
         .into_par_iter()
+        .with_max_len(1)
         .map(|(&(j, sign), c)| {
             let mut p = Profiler::new(&base, j);
             p.points.push(c.0.clone());
@@ -217,6 +221,7 @@ pub fn assess(
     // the grids asked for
     let grids: Vec<(Profile, Option<Point>)> = profiled
         .par_iter()
+        .with_max_len(1)
         .map(|&j| {
             let mut p = Profiler::new(&base, j);
             (p.grid(lin.sigma_x[j]), p.lowest())

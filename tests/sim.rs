@@ -430,7 +430,7 @@ fn seed_hdea_settles_within_250_ms_and_alpha_stays_near_half_pi() {
     // the seed's α approximation differs from the exact helix
     let p = full_plant(&s).unwrap();
     if let dea_fit::sim::scene::Actuator::Helix(h) = p.actuator {
-        assert!((h.alpha(1.0) - h.seed_alpha(1.0)).abs() > 1e-4);
+        assert!((h.alpha(1.0) - h.elatrache2021_alpha(1.0)).abs() > 1e-4);
     }
 }
 

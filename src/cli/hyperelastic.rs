@@ -18,10 +18,11 @@ const STARTS: CountRange = CountRange::new(1, 100_000, "multi-start points to us
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum Form {
     /// 2μ/α², the form of Abaqus and CalculiX.
-    // `seed`, its old name: a hidden, deprecated alias (old command lines work)
-    #[value(alias = "seed")]
     Abaqus,
     Original,
+    /// `abaqus` by its former name: hidden, still accepted, with a note.
+    #[value(hide = true)]
+    Seed,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -195,6 +196,10 @@ pub fn run(a: Args) -> Result<i32> {
         ogden_form: match a.ogden_form {
             Form::Abaqus => OgdenForm::Abaqus,
             Form::Original => OgdenForm::Original,
+            Form::Seed => {
+                eprintln!("{}", OgdenForm::FORMER_NAME_NOTE);
+                OgdenForm::Abaqus
+            }
         },
         max_starts: a.max_starts,
         ..Settings::default()

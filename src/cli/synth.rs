@@ -660,8 +660,11 @@ fn hyperelastic(a: Args) -> Result<i32> {
     }
     let noise = relative_noise(&a, "the stress")?;
     let form = match a.ogden_form.as_str() {
-        // `seed`: the old name of the abaqus form, still accepted
-        "abaqus" | "seed" => OgdenForm::Abaqus,
+        "abaqus" => OgdenForm::Abaqus,
+        "seed" => {
+            eprintln!("{}", OgdenForm::FORMER_NAME_NOTE);
+            OgdenForm::Abaqus
+        }
         "original" => OgdenForm::Original,
         f => {
             return Err(Error::settings(format!("unknown Ogden form '{f}'"))

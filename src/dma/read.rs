@@ -219,7 +219,6 @@ struct Point {
 pub fn from_table(table: &Table, map: &ColumnMap) -> Result<(Vec<Isotherm>, DmaSource)> {
     let path = &table.path;
     map.check(table)?;
-    let hloc = |c: usize| Location::at(path, table.header_line, c + 1);
     let slots: [Option<(usize, Col)>; 4] = [None; 4];
     let [mut freq, mut storage, mut loss, mut temp] = slots;
     let mut unused: Vec<String> = Vec::new();
@@ -258,15 +257,7 @@ pub fn from_table(table: &Table, map: &ColumnMap) -> Result<(Vec<Isotherm>, DmaS
             _ => {}
         }
         if let Some((c0, _)) = *slot {
-            return Err(Error::input(
-                hloc(c),
-                format!(
-                    "a second column of the same kind, '{h}' (column {} is '{}')",
-                    c0 + 1,
-                    table.header[c0]
-                ),
-            )
-            .with_hint("keep one frequency, one storage modulus, one loss modulus or tan δ, and at most one temperature column"));
+            return Err(table.second_column(c, c0, "keep one frequency, one storage modulus, one loss modulus or tan δ, and at most one temperature column"));
         }
         *slot = Some((c, col));
     }

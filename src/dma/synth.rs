@@ -40,19 +40,11 @@ impl Synthetic {
     /// The CSV text (`temperature_C,frequency_Hz,storage_modulus_MPa,loss_modulus_MPa`),
     /// the generating parameters as `#` lines after `preamble` lines.
     pub fn csv(&self, preamble: &[&str]) -> Result<String> {
-        use rand::SeedableRng;
-        use rand_distr::Distribution;
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(self.seed);
-        let unit = rand_distr::Normal::new(0.0, 1.0).expect("valid");
-        let mut s = String::new();
-        for p in preamble {
-            let _ = writeln!(s, "# {p}");
-        }
-        let _ = writeln!(
-            s,
-            "# prony at the reference temperature: E_inf = {:e} Pa; (tau, E) = {}",
-            self.prony.e_inf,
-            self.prony.terms_text()
+        let (mut s, mut normal) = crate::io::synthetic_start(
+            self.seed,
+            preamble,
+            "at the reference temperature",
+            &self.prony,
         );
         let l = &self.law;
         let _ = writeln!(
@@ -89,8 +81,8 @@ impl Synthetic {
             let (a, b) = (10f64.powf(l.log_at(t)), self.vertical_factor(t));
             for &f in &self.frequencies_hz {
                 let (e1, e2) = self.prony.storage_loss(a * 2.0 * std::f64::consts::PI * f);
-                let n1 = 1.0 + self.noise * unit.sample(&mut rng);
-                let n2 = 1.0 + self.noise * unit.sample(&mut rng);
+                let n1 = 1.0 + self.noise * normal();
+                let n2 = 1.0 + self.noise * normal();
                 rows.push((t - CELSIUS_ZERO_K, f, b * e1 * n1 / 1e6, b * e2 * n2 / 1e6));
             }
         }

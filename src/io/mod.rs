@@ -42,3 +42,31 @@ pub fn finite_output<'a>(
         )),
     }
 }
+
+/// The start of a synthetic file of a Prony series: the `preamble` lines and the
+/// series (`what` says in which reading) as `#` lines, and the seeded relative
+/// noise, each call a standard normal draw (ChaCha8 from `seed`: the same file on
+/// every machine).
+pub fn synthetic_start(
+    seed: u64,
+    preamble: &[&str],
+    what: &str,
+    prony: &crate::material::viscoelastic::Prony,
+) -> (String, impl FnMut() -> f64) {
+    use rand::SeedableRng;
+    use rand_distr::Distribution;
+    use std::fmt::Write as _;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let unit = rand_distr::Normal::new(0.0, 1.0).expect("valid");
+    let mut s = String::new();
+    for p in preamble {
+        let _ = writeln!(s, "# {p}");
+    }
+    let _ = writeln!(
+        s,
+        "# prony {what}: E_inf = {:e} Pa; (tau, E) = {}",
+        prony.e_inf,
+        prony.terms_text()
+    );
+    (s, move || unit.sample(&mut rng))
+}

@@ -259,15 +259,9 @@ pub fn from_table_with(
             Col::Strain(_) | Col::Stretch => &mut load,
         };
         if let Some((c0, _)) = *slot {
-            return Err(Error::input(
-                hloc(c),
-                format!(
-                    "a second column of the same kind, '{h}' (column {} is '{}')",
-                    c0 + 1,
-                    table.header[c0]
-                ),
-            )
-            .with_hint(
+            return Err(table.second_column(
+                c,
+                c0,
                 "keep one time, one stress (or force) and at most one strain or stretch column",
             ));
         }
@@ -459,8 +453,6 @@ impl Synthetic {
     /// The CSV text (`time_s,stress_kPa[,strain]`), the generating parameters written
     /// as `#` comments after `preamble` lines.
     pub fn csv(&self, preamble: &[&str]) -> Result<String> {
-        use rand::SeedableRng;
-        use rand_distr::Distribution;
         use std::fmt::Write as _;
         let history = match self.ramp_time {
             Some(tr) => History::ramp(self.strain, tr),
@@ -468,17 +460,11 @@ impl Synthetic {
         };
         let sched = Schedule::new(&history, &self.times)?;
         let clean = self.prony.response(&sched);
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(self.seed);
-        let unit = rand_distr::Normal::new(0.0, 1.0).expect("valid");
-        let mut s = String::new();
-        for p in preamble {
-            let _ = writeln!(s, "# {p}");
-        }
-        let _ = writeln!(
-            s,
-            "# prony (small-strain reading, Pa per unit strain): E_inf = {:e} Pa; (tau, E) = {}",
-            self.prony.e_inf,
-            self.prony.terms_text()
+        let (mut s, mut normal) = crate::io::synthetic_start(
+            self.seed,
+            preamble,
+            "(small-strain reading, Pa per unit strain)",
+            &self.prony,
         );
         let _ = writeln!(
             s,
@@ -501,7 +487,7 @@ impl Synthetic {
         );
         let stress: Vec<f64> = clean
             .iter()
-            .map(|c| c * (1.0 + self.noise * unit.sample(&mut rng)))
+            .map(|c| c * (1.0 + self.noise * normal()))
             .collect();
         super::finite_output(
             "the synthetic relaxation curve",

@@ -69,6 +69,22 @@ struct Part {
 const PART_BYTES: usize = 1 << 20;
 
 impl Table {
+    /// The error of column `c`, a second column of a kind the reader takes once
+    /// (column `first` is the one it has), located at `c`'s header, with `hint`
+    /// naming the columns the reader takes.
+    pub fn second_column(&self, c: usize, first: usize, hint: &str) -> Error {
+        Error::input(
+            Location::at(&self.path, self.header_line, c + 1),
+            format!(
+                "a second column of the same kind, '{}' (column {} is '{}')",
+                self.header[c],
+                first + 1,
+                self.header[first]
+            ),
+        )
+        .with_hint(hint.to_string())
+    }
+
     /// Read and split a file.
     pub fn read(path: &Path) -> Result<Table> {
         let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;

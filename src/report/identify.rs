@@ -5,7 +5,7 @@
 
 use super::format::{constant, constant_pm, si};
 use super::page::{code, text, Page};
-use super::plot::{band, Chart, Series, Style, BAND_LABEL};
+use super::plot::{band, Chart, Series, Style, AXIS_FONT, BAND_LABEL, SVG_FONT};
 use super::runs::Run;
 use crate::error::{Error, Result};
 use crate::identify::failure::Failure;
@@ -716,7 +716,10 @@ fn sensitivity_chart(
 fn correlation(id: &Identification, path: &Path) -> Result<String> {
     let names: Vec<&str> = id.parameters.iter().map(|p| p.name.as_str()).collect();
     let k = names.len();
-    let cell = 48i32;
+    // text at the charts' tick size as drawn (plotters-svg divides by SVG_FONT);
+    // a cell holds "-0.99" and a column's name ("arm1.tau") at that size
+    let font = ("sans-serif", AXIS_FONT * SVG_FONT);
+    let cell = 62i32;
     let margin = 90i32;
     let size = (margin + cell * k as i32 + 20) as u32;
     let fail = |e: String| Error::settings(format!("{}: {e}", path.display()));
@@ -744,23 +747,19 @@ fn correlation(id: &Identification, path: &Path) -> Result<String> {
             ))
             .map_err(|e| fail(e.to_string()))?;
             let label = rho.map(|r| format!("{r:.2}")).unwrap_or_else(|| "—".into());
-            root.draw(&Text::new(
-                label,
-                (x + 8, y + cell / 2 - 6),
-                ("sans-serif", 13),
-            ))
-            .map_err(|e| fail(e.to_string()))?;
+            root.draw(&Text::new(label, (x + 8, y + cell / 2 - 7), font))
+                .map_err(|e| fail(e.to_string()))?;
         }
         root.draw(&Text::new(
             names[a].to_string(),
-            (4, margin + cell * a as i32 + cell / 2 - 6),
-            ("sans-serif", 13),
+            (4, margin + cell * a as i32 + cell / 2 - 7),
+            font,
         ))
         .map_err(|e| fail(e.to_string()))?;
         root.draw(&Text::new(
             names[a].to_string(),
-            (margin + cell * a as i32 + 4, margin - 20),
-            ("sans-serif", 13),
+            (margin + cell * a as i32 + 2, margin - 22),
+            font,
         ))
         .map_err(|e| fail(e.to_string()))?;
     }

@@ -352,11 +352,11 @@ const LEGEND_FONT: u32 = 14;
 /// Tick labels and axis descriptions (px as drawn): plotters' default, 12 given,
 /// is drawn at 9.7 px ([`SVG_FONT`]), small once a 1000–1300 px chart shrinks to
 /// the width of a page.
-const AXIS_FONT: f64 = 13.0;
+pub(crate) const AXIS_FONT: f64 = 13.0;
 /// plotters' SVG backend writes `font-size` as the size it is given divided by
 /// 1.24 (plotters-svg `svg.rs`): a size in px as drawn is given to it times this,
 /// so that the legend is drawn at the size its column is measured for.
-const SVG_FONT: f64 = 1.24;
+pub(crate) const SVG_FONT: f64 = 1.24;
 /// Where a legend line's text starts in the legend column (px; the key before it),
 /// and the room kept free right of the longest line.
 const LEGEND_TEXT_X: u32 = 40;

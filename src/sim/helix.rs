@@ -4,7 +4,7 @@
 //! Pitch P = Ne·z (4.1), height Z_T = Np·P (4.2), slant c = P/2π.
 //! * Complementary angle: the exact helix gives tan α = 2πR/P at radius R; we use the
 //!   mean radius Rm = (Ro + Ri)/2. The seed's Eq. 4.4 writes atan(4·Ro/P);
-//!   [`HelixGeometry::seed_alpha`] gives it for comparison.
+//!   [`HelixGeometry::elatrache2021_alpha`] gives it for comparison.
 //! * Electrode gap h = z·sin α (4.3); electrode area of one period Eq. 4.12.
 //! * Volume: an element is an annulus sheared along z, so its volume is exactly
 //!   π(Ro² − Ri²)·z (Cavalieri). With Eq. 4.18 (Ro and Ri move oppositely, Rm fixed)
@@ -49,7 +49,7 @@ impl HelixGeometry {
         (0.5 * (ro + ri)).atan2(c)
     }
     /// The seed's Eq. 4.4: α = atan(4·Ro/P).
-    pub fn seed_alpha(&self, lam: f64) -> f64 {
+    pub fn elatrache2021_alpha(&self, lam: f64) -> f64 {
         let (ro, _, c) = self.radii(lam);
         (4.0 * ro).atan2(2.0 * PI * c)
     }

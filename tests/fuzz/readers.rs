@@ -223,7 +223,7 @@ pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
         Reader::Lcr => dir("datasets/composites/sylgard_batio3"),
         Reader::Manifest => vec![
             "datasets/composites/sylgard_batio3.toml".into(),
-            "datasets/composites/seed_bjb_batio3_claims.toml".into(),
+            "datasets/composites/elatrache2021_bjb_batio3_claims.toml".into(),
         ],
         Reader::Scene => dir("datasets/scenes"),
         Reader::Fit => dir("tests/golden")

@@ -332,6 +332,12 @@ pub enum OgdenForm {
     Original,
 }
 
+impl OgdenForm {
+    /// What `--ogden-form seed` (the former name of [`OgdenForm::Abaqus`], still
+    /// accepted) prints: the word "seed" is kept for random seeds (issue 35, §6).
+    pub const FORMER_NAME_NOTE: &'static str = "note: Ogden form 'seed' is now called 'abaqus' (El Atrache Ceballos (2021) Eq. 2.9, the form Abaqus and CalculiX write); the old name still works but is deprecated: use --ogden-form abaqus";
+}
+
 impl std::fmt::Display for OgdenForm {
     /// The name the flag (`--ogden-form`) and the fit file use.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {

@@ -526,7 +526,10 @@ fn pyvisco_published_master_curve() {
     let (mut s2, mut l2, mut worst) = (0.0, 0.0, 0.0f64);
     for m in master {
         let w = m["reduced_omega_rad_s"].as_f64().unwrap();
-        let (s, l) = (m["storage_Pa"].as_f64().unwrap(), m["loss_Pa"].as_f64().unwrap());
+        let (s, l) = (
+            m["storage_Pa"].as_f64().unwrap(),
+            m["loss_Pa"].as_f64().unwrap(),
+        );
         let (fs, fl) = prony.storage_loss(w);
         let (rs, rl) = (fs / s - 1.0, (fl - l) / s.hypot(l));
         s2 += rs * rs;

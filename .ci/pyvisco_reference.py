@@ -8,7 +8,10 @@ fit a Prony series; each is compared with the generating series over the master
 curve's reduced-frequency range (not term by term: Prony terms are ill-posed):
 rms and max relative error of E' and E'' (each relative to the true value), E_inf,
 and the WLF constants. Fails unless dea-fit is at least as close as pyvisco in E'
-rms and in E_inf.
+rms and in E_inf. Then pyvisco's own published example (a master curve and the
+Prony table ANSYS fitted to it, datasets/dma/pyvisco_*): dea-fit, pyvisco and the
+table against the data over its range; fails unless dea-fit's E' rms is at most
+the table's and within the tolerances below.
 
 pyvisco 2.1.3 is run as its notebook/GUI runs it (pyvisco/inter.py, tutorials/
 freq_raw.py): load.user_raw (its CSV: `f,E_stor,E_loss,T,Set` over a units row

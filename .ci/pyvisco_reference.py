@@ -314,8 +314,8 @@ def main():
         f"{len(df['shift_factors']) - 1} isotherms it shifted"
     )
     print(
-        f"whole run, median of {REPEATS}: pyvisco {pv_time * 1e3:.0f} ms in-process "
-        f"(without its import), dea-fit {df_time * 1e3:.0f} ms (a process, JSON parsed)"
+        f"median of {REPEATS}: pyvisco {pv_time * 1e3:.0f} ms in-process (shifts, WLF, both Prony fits; "
+        f"its import not counted), dea-fit {df_time * 1e3:.0f} ms (the whole process, JSON parsed)"
     )
 
     failures = []

@@ -486,3 +486,64 @@ fn prony_of_the_master_curve_recovers_the_series() {
         );
     }
 }
+
+/// pyvisco's published example master curve (its verification/freq_master, at
+/// −5 °C, 206 points over 26 decades; origin, licence and SHA-256 in
+/// datasets/dma/README.md), read through `--columns`: dea-fit's Prony series
+/// follows E′ within 3 % rms and 10 % max (measured 2.10 % and 7.45 %; the ANSYS
+/// table pyvisco publishes for the same curve: 2.41 % and 6.54 %, compared in
+/// .ci/pyvisco-reference.sh) and E″ within 10 % of |E*| rms (7.31 %: the measured E″
+/// is ≈ 11 % of a flat E′ on the rubbery end, which no series consistent with E′
+/// gives), with E∞ > 0 fitted, and the Kramers–Kronig check says where.
+#[test]
+fn pyvisco_published_master_curve() {
+    let dir = tempdir();
+    let data = repo().join("datasets/dma/pyvisco_freq_user_master.csv");
+    let o = run_ok(
+        dir.path(),
+        &[
+            "dma",
+            data.to_str().unwrap(),
+            "--columns",
+            "frequency=f:Hz,storage=E_stor:MPa,loss=E_loss:MPa",
+            "--reference-temperature=-5C",
+            "--no-report",
+            "--json",
+        ],
+    );
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let p = &v["prony"];
+    let e_inf = p["E_inf"].as_f64().unwrap();
+    let terms: Vec<(f64, f64)> = p["terms"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| (t["tau"].as_f64().unwrap(), t["E"].as_f64().unwrap()))
+        .collect();
+    let prony = Prony::new(e_inf, &terms).unwrap();
+    let master = v["master_curve"].as_array().unwrap();
+    assert_eq!(master.len(), 206);
+    let (mut s2, mut l2, mut worst) = (0.0, 0.0, 0.0f64);
+    for m in master {
+        let w = m["reduced_omega_rad_s"].as_f64().unwrap();
+        let (s, l) = (
+            m["storage_Pa"].as_f64().unwrap(),
+            m["loss_Pa"].as_f64().unwrap(),
+        );
+        let (fs, fl) = prony.storage_loss(w);
+        let (rs, rl) = (fs / s - 1.0, (fl - l) / s.hypot(l));
+        s2 += rs * rs;
+        l2 += rl * rl;
+        worst = worst.max(rs.abs());
+    }
+    let n = master.len() as f64;
+    let (rs, rl) = ((s2 / n).sqrt(), (l2 / n).sqrt());
+    eprintln!("rms E′ {rs:.4}, max E′ {worst:.4}, rms E″/|E*| {rl:.4}, E∞ {e_inf:.4e} Pa");
+    assert!(rs <= 0.03 && worst <= 0.10 && rl <= 0.10);
+    assert!(e_inf > 0.0);
+    assert!(v["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|w| w.as_str().unwrap().contains("Kramers–Kronig")));
+}

@@ -372,15 +372,30 @@ pub fn fit(data: &ComplexModulus, settings: &FrequencySettings) -> Result<Freque
     check(data)?;
     let t0 = Instant::now();
     let mut setup = setup(data, settings.loss_weight);
+    let check_kk = settings.kramers_kronig && settings.loss_weight > 0.0;
+    // A stated count: the Kramers–Kronig check's storage-only fit (of that count)
+    // needs nothing of the joint fit and runs beside it (the same two fits as one
+    // after the other, on two cores); `auto` waits for the count it chooses.
+    let (estimated, kk) = match (check_kk, settings.search.terms) {
+        (true, Some(n)) => {
+            let (e, kk) = rayon::join(
+                || estimate(&mut setup, &settings.search),
+                || kramers_kronig(data, &settings.search, n),
+            );
+            (e?, Some(kk))
+        }
+        _ => (estimate(&mut setup, &settings.search)?, None),
+    };
     let Estimate {
         chosen: a,
         grid,
         selection,
         notes,
-    } = estimate(&mut setup, &settings.search)?;
-    let kk = match settings.kramers_kronig && settings.loss_weight > 0.0 {
-        true => kramers_kronig(data, &settings.search, a.tf.n_terms)?,
-        false => Vec::new(),
+    } = estimated;
+    let kk = match (kk, check_kk) {
+        (Some(kk), _) => kk?,
+        (None, true) => kramers_kronig(data, &settings.search, a.tf.n_terms)?,
+        (None, false) => Vec::new(),
     };
     let seconds = t0.elapsed().as_secs_f64();
     Ok(record(

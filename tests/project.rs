@@ -396,3 +396,75 @@ fn init_writes_a_project_from_the_files_and_never_overwrites() {
         t
     );
 }
+
+/// `make` writes the project page, reports/index.html and index.md: every target
+/// with its state (a target left out of a partial make shows as stale, with the
+/// reason), the provenance of the ranking and the identification down to the raw
+/// files with their SHA-256 (computed here from the files' bytes), and the run
+/// list of the reports folder; `--no-report` leaves the page as it was.
+#[test]
+fn make_writes_the_project_page() {
+    use sha2::Digest;
+    let d = lab();
+    let p = d.path();
+    assert_eq!(steps(p, &["make", "--no-report"]).0, 0);
+    assert!(
+        !p.join("reports/index.html").exists() || {
+            // the run list the steps' own reports keep there, not a project page
+            let h = std::fs::read_to_string(p.join("reports/index.html")).unwrap();
+            !h.contains("content=\"project\"")
+        }
+    );
+    // one changed coupon, and a make of another target only: that fit is stale
+    let f = p.join("raw/sylgard184/tensile_2.csv");
+    let mut b = std::fs::read(&f).unwrap();
+    b.extend_from_slice(b"\n");
+    std::fs::write(&f, b).unwrap();
+    assert_eq!(steps(p, &["make", "vhb4910/*"]).0, 0);
+    let html = std::fs::read_to_string(p.join("reports/index.html")).unwrap();
+    let md = std::fs::read_to_string(p.join("reports/index.md")).unwrap();
+    assert!(html.contains("content=\"project\""), "a project page");
+    let (_, m, v) = steps(p, &["status"]);
+    assert_eq!(with(&m, "stale"), ["sylgard184/tensile"]);
+    for s in v["steps"].as_array().unwrap() {
+        let target = s["target"].as_str().unwrap();
+        let state = match s["state"].as_str().unwrap() {
+            "up_to_date" => "up to date",
+            x => x,
+        };
+        // the target's row (the HTML lets a path break after its slashes)
+        let name = format!(">{}</a></td>", target.replace('/', "/<wbr>"));
+        let at = html.find(&name).unwrap_or_else(|| panic!("{name}"));
+        let row = &html[at..];
+        let row = &row[..row.find("</tr>").unwrap()];
+        assert!(
+            row.contains(&format!(">{state}</strong>")),
+            "{target} is {state}: {row}"
+        );
+    }
+    assert!(
+        html.contains(&"input raw/sylgard184/tensile_2.csv changed".replace('/', "/<wbr>")),
+        "the reason"
+    );
+    // provenance: every raw file the ranking and the identification rest on
+    for raw in [
+        "raw/vhb4910/breakdown.csv",
+        "raw/sylgard_batio3_20wt/equibiaxial.csv",
+        "design.toml",
+        "raw/stack/step.csv",
+        "raw/vhb4910/uniaxial.csv",
+    ] {
+        let sha = format!(
+            "{:x}",
+            sha2::Sha256::digest(std::fs::read(p.join(raw)).unwrap())
+        );
+        assert!(html.contains(&sha), "{raw} {sha}");
+        assert!(md.contains(&sha[..20]), "{raw} in index.md");
+    }
+    // the run list of the folder, embedded: every step's report
+    assert!(html.contains("fillers-rank/index.html"));
+    // --no-report leaves the page alone
+    let before = std::fs::read(p.join("reports/index.html")).unwrap();
+    assert_eq!(steps(p, &["make", "--no-report"]).0, 0);
+    assert_eq!(std::fs::read(p.join("reports/index.html")).unwrap(), before);
+}

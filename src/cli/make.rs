@@ -33,6 +33,9 @@ pub struct Args {
     /// blocking status fails the step and blocks what depends on it
     #[arg(long)]
     strict: bool,
+    /// Do not write the project page (reports/index.html and index.md)
+    #[arg(long)]
+    no_report: bool,
 }
 
 /// The project in `dir`, its steps' flags checked against the commands' own.
@@ -73,10 +76,29 @@ pub fn run(a: Args) -> Result<i32> {
     let steps = run::make(&p, &opts, &exe)?;
     let what = if a.dry_run { "make --dry-run" } else { "make" };
     print(&a.dir, what, &steps, a.json, a.dry_run);
+    if !a.dry_run && !a.no_report {
+        write_page(&p, a.json)?;
+    }
     let bad = steps
         .iter()
         .any(|s| matches!(s.state, Standing::Failed | Standing::Blocked));
     Ok(i32::from(bad))
+}
+
+/// Write the project page from where every step stands now; say where (on
+/// stderr with `--json`, which keeps stdout one document), or why not.
+fn write_page(p: &Project, json: bool) -> Result<()> {
+    let all = run::status(p)?;
+    let said = match dea_fit::project::page::write(p, &all)? {
+        Ok(path) => format!("project page: {}", path.display()),
+        Err(why) => format!("note: {why}"),
+    };
+    if json {
+        eprintln!("{said}");
+    } else {
+        println!("{said}");
+    }
+    Ok(())
 }
 
 /// Print a report: one line a step and the summary, or the JSON.

@@ -11,11 +11,13 @@
 //!   version and its upstream identities) and the stat cache that spares hashing.
 //! - [`state`]: what ran, kept in `<project>/.dea-fit/state.json`, written atomically.
 //! - [`run`]: what is stale and why; the job queue that runs the steps.
+//! - [`page`]: the project page, `reports/index.html`.
 
 pub mod file;
 pub mod glob;
 pub mod graph;
 pub mod identity;
+pub mod page;
 pub mod run;
 pub mod state;
 

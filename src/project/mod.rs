@@ -12,6 +12,7 @@
 //! - [`state`]: what ran, kept in `<project>/.dea-fit/state.json`, written atomically.
 //! - [`run`]: what is stale and why; the job queue that runs the steps.
 //! - [`page`]: the project page, `reports/index.html`.
+//! - [`slurm`]: the steps as Slurm batch jobs (`make --slurm`).
 
 pub mod file;
 pub mod glob;
@@ -19,6 +20,7 @@ pub mod graph;
 pub mod identity;
 pub mod page;
 pub mod run;
+pub mod slurm;
 pub mod state;
 
 /// The project file's name.

@@ -122,3 +122,5 @@ set -e
     echo "slurm-rank: an altered shard was not refused (exit $rc)" >&2; cat altered.err >&2; exit 1; }
 echo "slurm-rank: an altered shard is refused: $(cut -c1-120 altered.err)"
 echo "slurm-rank: ok in $(( $(date +%s) - t0 )) s"
+# dea-fit make --slurm --submit of the lab project, on the same cluster
+DEA_FIT=$bin "$repo/.ci/slurm-make.sh"

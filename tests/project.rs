@@ -396,3 +396,198 @@ fn init_writes_a_project_from_the_files_and_never_overwrites() {
         t
     );
 }
+
+/// `make` writes the project page, reports/index.html and index.md: every target
+/// with its state (a target left out of a partial make shows as stale, with the
+/// reason), the provenance of the ranking and the identification down to the raw
+/// files with their SHA-256 (computed here from the files' bytes), and the run
+/// list of the reports folder; `--no-report` leaves the page as it was.
+#[test]
+fn make_writes_the_project_page() {
+    use sha2::Digest;
+    let d = lab();
+    let p = d.path();
+    assert_eq!(steps(p, &["make", "--no-report"]).0, 0);
+    assert!(
+        !p.join("reports/index.html").exists() || {
+            // the run list the steps' own reports keep there, not a project page
+            let h = std::fs::read_to_string(p.join("reports/index.html")).unwrap();
+            !h.contains("content=\"project\"")
+        }
+    );
+    // one changed coupon, and a make of another target only: that fit is stale
+    let f = p.join("raw/sylgard184/tensile_2.csv");
+    let mut b = std::fs::read(&f).unwrap();
+    b.extend_from_slice(b"\n");
+    std::fs::write(&f, b).unwrap();
+    assert_eq!(steps(p, &["make", "vhb4910/*"]).0, 0);
+    let html = std::fs::read_to_string(p.join("reports/index.html")).unwrap();
+    let md = std::fs::read_to_string(p.join("reports/index.md")).unwrap();
+    assert!(html.contains("content=\"project\""), "a project page");
+    let (_, m, v) = steps(p, &["status"]);
+    assert_eq!(with(&m, "stale"), ["sylgard184/tensile"]);
+    for s in v["steps"].as_array().unwrap() {
+        let target = s["target"].as_str().unwrap();
+        let state = match s["state"].as_str().unwrap() {
+            "up_to_date" => "up to date",
+            x => x,
+        };
+        // the target's row (the HTML lets a path break after its slashes)
+        let name = format!(">{}</a></td>", target.replace('/', "/<wbr>"));
+        let at = html.find(&name).unwrap_or_else(|| panic!("{name}"));
+        let row = &html[at..];
+        let row = &row[..row.find("</tr>").unwrap()];
+        assert!(
+            row.contains(&format!(">{state}</strong>")),
+            "{target} is {state}: {row}"
+        );
+    }
+    assert!(
+        html.contains(&"input raw/sylgard184/tensile_2.csv changed".replace('/', "/<wbr>")),
+        "the reason"
+    );
+    // provenance: every raw file the ranking and the identification rest on
+    for raw in [
+        "raw/vhb4910/breakdown.csv",
+        "raw/sylgard_batio3_20wt/equibiaxial.csv",
+        "design.toml",
+        "raw/stack/step.csv",
+        "raw/vhb4910/uniaxial.csv",
+    ] {
+        let sha = format!(
+            "{:x}",
+            sha2::Sha256::digest(std::fs::read(p.join(raw)).unwrap())
+        );
+        assert!(html.contains(&sha), "{raw} {sha}");
+        assert!(md.contains(&sha[..20]), "{raw} in index.md");
+    }
+    // the run list of the folder, embedded: every step's report
+    assert!(html.contains("fillers-rank/index.html"));
+    // --no-report leaves the page alone
+    let before = std::fs::read(p.join("reports/index.html")).unwrap();
+    assert_eq!(steps(p, &["make", "--no-report"]).0, 0);
+    assert_eq!(std::fs::read(p.join("reports/index.html")).unwrap(), before);
+}
+
+/// `make --slurm` writes one batch script a step that would run, each running
+/// `dea-fit make --only --jobs 1 --no-report <target>` in the project folder, a
+/// page job after all of them, and submit.sh with each step's `afterok`
+/// dependencies on the jobs of the steps it reads. The scripts run here as a
+/// Slurm node would (the steps that read nothing all at once, so their records
+/// race for the state file) leave the same fits as a local make, a project page,
+/// and `status` saying everything is up to date.
+#[test]
+fn make_slurm_writes_jobs_with_dependencies() {
+    let (d, local) = (lab(), lab());
+    let p = d.path();
+    assert_eq!(steps(local.path(), &["make", "--jobs", "2"]).0, 0);
+    let (code, m, _) = steps(p, &["make", "--slurm"]);
+    assert_eq!(code, 0);
+    assert_eq!(with(&m, "stale").len(), ALL, "every step would run");
+    let s = p.join(".dea-fit/slurm");
+    let submit = std::fs::read_to_string(s.join("submit.sh")).unwrap();
+    // (target, script, the scripts it waits for), in submission order
+    let lines: Vec<&str> = submit
+        .lines()
+        .filter(|l| l.contains("sbatch --parsable"))
+        .collect();
+    assert_eq!(lines.len(), ALL + 1, "{submit}");
+    let var = |l: &str| l[..l.find('=').unwrap()].to_string();
+    let script = |l: &str| {
+        l.split_whitespace()
+            .find(|w| w.ends_with(".sbatch);"))
+            .unwrap()
+            .trim_end_matches(");")
+            .to_string()
+    };
+    let deps = |l: &str| -> Vec<String> {
+        l.split_whitespace()
+            .find_map(|w| {
+                w.strip_prefix("--dependency=afterok:")
+                    .or(w.strip_prefix("--dependency=afterany:"))
+            })
+            .map_or(Vec::new(), |d| {
+                d.split(':')
+                    .map(|x| x.trim_start_matches('$').to_string())
+                    .collect()
+            })
+    };
+    let by_script: BTreeMap<String, (String, Vec<String>)> = lines
+        .iter()
+        .map(|l| (script(l), (var(l), deps(l))))
+        .collect();
+    let var_of = |name: &str| by_script[name].0.clone();
+    let mut rank_deps = by_script["fillers-rank.sbatch"].1.clone();
+    rank_deps.sort();
+    let mut want: Vec<String> = [
+        "vhb4910-breakdown",
+        "sylgard_batio3-composite",
+        "sylgard_batio3_20wt-tensile",
+        "sylgard_batio3_40wt-tensile",
+    ]
+    .iter()
+    .map(|n| var_of(&format!("{n}.sbatch")))
+    .collect();
+    want.sort();
+    assert_eq!(rank_deps, want, "the ranking waits for the fits it reads");
+    assert_eq!(
+        by_script["stack-identify.sbatch"].1,
+        [var_of("vhb4910-tensile.sbatch")]
+    );
+    assert!(by_script["vhb4910-tensile.sbatch"].1.is_empty());
+    assert_eq!(
+        by_script["page.sbatch"].1.len(),
+        ALL,
+        "the page waits for every job"
+    );
+    assert!(
+        lines.last().unwrap().contains("afterany:"),
+        "even failed ones"
+    );
+    let job = std::fs::read_to_string(s.join("stack-identify.sbatch")).unwrap();
+    assert!(
+        job.contains("'make' '--only' '--jobs' '1' '--no-report' 'stack/identify'"),
+        "{job}"
+    );
+    assert!(job.contains("#SBATCH --chdir="), "{job}");
+
+    // run them as the node would: every job whose jobs have ended, at once
+    let mut done: Vec<String> = Vec::new();
+    while done.len() < lines.len() {
+        let ready: Vec<String> = by_script
+            .iter()
+            .filter(|(_, (v, d))| !done.contains(v) && d.iter().all(|x| done.contains(x)))
+            .map(|(n, _)| n.clone())
+            .collect();
+        assert!(!ready.is_empty(), "a job can start");
+        let kids: Vec<_> = ready
+            .iter()
+            .map(|n| {
+                std::process::Command::new("sh")
+                    .arg(s.join(n))
+                    .current_dir(p)
+                    .stdout(std::process::Stdio::null())
+                    .spawn()
+                    .unwrap()
+            })
+            .collect();
+        for (n, mut k) in ready.iter().zip(kids) {
+            assert!(k.wait().unwrap().success(), "{n}");
+            done.push(by_script[n].0.clone());
+        }
+    }
+    assert_eq!(fits(p), fits(local.path()), "the same fits as a local make");
+    let (code, m, _) = steps(p, &["status"]);
+    assert_eq!(code, 0);
+    assert_eq!(with(&m, "up_to_date").len(), ALL, "{m:?}");
+    let html = std::fs::read_to_string(p.join("reports/index.html")).unwrap();
+    assert!(
+        html.contains("content=\"project\""),
+        "the page job wrote it"
+    );
+    // an up-to-date project has no step job, only the page
+    let (code, _, _) = steps(p, &["make", "--slurm"]);
+    assert_eq!(code, 0);
+    let submit = std::fs::read_to_string(s.join("submit.sh")).unwrap();
+    assert_eq!(submit.matches("sbatch --parsable").count(), 1, "{submit}");
+}

@@ -33,6 +33,24 @@ pub struct Args {
     /// blocking status fails the step and blocks what depends on it
     #[arg(long)]
     strict: bool,
+    /// Do not write the project page (reports/index.html and index.md)
+    #[arg(long)]
+    no_report: bool,
+    /// Run the named targets only, not the steps they need (a need that is not up
+    /// to date blocks them): what each Slurm job runs
+    #[arg(long)]
+    only: bool,
+    /// Run nothing: write the project page from where the steps stand (the last
+    /// Slurm job)
+    #[arg(long, conflicts_with_all = ["dry_run", "no_report", "slurm"])]
+    page_only: bool,
+    /// Write the steps that would run as Slurm batch jobs with their dependencies
+    /// (.dea-fit/slurm/*.sbatch and submit.sh), run nothing here
+    #[arg(long, conflicts_with = "dry_run")]
+    slurm: bool,
+    /// With --slurm: submit the jobs (sh .dea-fit/slurm/submit.sh)
+    #[arg(long, requires = "slurm")]
+    submit: bool,
 }
 
 /// The project in `dir`, its steps' flags checked against the commands' own.
@@ -65,18 +83,94 @@ pub fn run(a: Args) -> Result<i32> {
         usize::from,
     );
     let exe = std::env::current_exe().map_err(|e| dea_fit::Error::io("dea-fit", e))?;
+    if a.page_only {
+        write_page(&p, a.json)?;
+        return Ok(0);
+    }
+    if a.slurm {
+        return slurm(&p, &a, &exe);
+    }
     let opts = run::Options {
         jobs,
         dry_run: a.dry_run,
         targets: a.targets,
+        only: a.only,
     };
     let steps = run::make(&p, &opts, &exe)?;
     let what = if a.dry_run { "make --dry-run" } else { "make" };
     print(&a.dir, what, &steps, a.json, a.dry_run);
+    if !a.dry_run && !a.no_report {
+        write_page(&p, a.json)?;
+    }
     let bad = steps
         .iter()
         .any(|s| matches!(s.state, Standing::Failed | Standing::Blocked));
     Ok(i32::from(bad))
+}
+
+/// `make --slurm [--submit]`: the selected steps that would run as batch jobs;
+/// with `--submit`, submitted. Exit status 0, or 1 when sbatch failed.
+fn slurm(p: &Project, a: &Args, exe: &Path) -> Result<i32> {
+    let chosen = if a.only {
+        dea_fit::project::graph::matched(p, &a.targets)?
+    } else {
+        dea_fit::project::graph::select(p, &a.targets)?
+    };
+    let sel: Vec<StepReport> = run::status(p)?
+        .into_iter()
+        .filter(|s| {
+            p.steps
+                .iter()
+                .zip(&chosen)
+                .any(|(x, &c)| c && x.target == s.target)
+        })
+        .collect();
+    let submit = dea_fit::project::slurm::write(p, &sel, exe)?;
+    print(&a.dir, "make --slurm", &sel, a.json, true);
+    let say = |s: String| {
+        if a.json {
+            eprintln!("{s}");
+        } else {
+            println!("{s}");
+        }
+    };
+    if !a.submit {
+        say(format!(
+            "slurm: one job a step to run in {}; submit them with: sh {}",
+            submit
+                .parent()
+                .map_or(submit.clone(), Path::to_path_buf)
+                .display(),
+            submit.display()
+        ));
+        return Ok(0);
+    }
+    let o = std::process::Command::new("sh")
+        .arg(&submit)
+        .stdin(std::process::Stdio::null())
+        .output()
+        .map_err(|e| dea_fit::Error::io(&submit, e))?;
+    for l in String::from_utf8_lossy(&o.stdout).lines() {
+        say(format!("submitted {l}"));
+    }
+    eprint!("{}", String::from_utf8_lossy(&o.stderr));
+    Ok(i32::from(!o.status.success()))
+}
+
+/// Write the project page from where every step stands now; say where (on
+/// stderr with `--json`, which keeps stdout one document), or why not.
+fn write_page(p: &Project, json: bool) -> Result<()> {
+    let all = run::status(p)?;
+    let said = match dea_fit::project::page::write(p, &all)? {
+        Ok(path) => format!("project page: {}", path.display()),
+        Err(why) => format!("note: {why}"),
+    };
+    if json {
+        eprintln!("{said}");
+    } else {
+        println!("{said}");
+    }
+    Ok(())
 }
 
 /// Print a report: one line a step and the summary, or the JSON.

@@ -67,6 +67,22 @@ pub fn order(p: &Project) -> Result<Vec<usize>> {
 /// pattern (`vhb4910/*`, `*/tensile`) or a pattern of an output path
 /// (`fits/vhb4910-*`); one that selects nothing is refused.
 pub fn select(p: &Project, patterns: &[String]) -> Result<Vec<bool>> {
+    let mut chosen = matched(p, patterns)?;
+    // with what they need
+    let mut stack: Vec<usize> = (0..chosen.len()).filter(|&i| chosen[i]).collect();
+    while let Some(i) = stack.pop() {
+        for &j in &p.steps[i].needs {
+            if !chosen[j] {
+                chosen[j] = true;
+                stack.push(j);
+            }
+        }
+    }
+    Ok(chosen)
+}
+
+/// The steps `patterns` select ([`select`]), without the steps they need.
+pub fn matched(p: &Project, patterns: &[String]) -> Result<Vec<bool>> {
     let n = p.steps.len();
     if patterns.is_empty() {
         return Ok(vec![true; n]);
@@ -90,16 +106,6 @@ pub fn select(p: &Project, patterns: &[String]) -> Result<Vec<bool>> {
                 Error::settings(format!("no target of the project matches '{pat}'"))
                     .with_hint(format!("{near}targets: {}", targets.join(", "))),
             );
-        }
-    }
-    // with what they need
-    let mut stack: Vec<usize> = (0..n).filter(|&i| chosen[i]).collect();
-    while let Some(i) = stack.pop() {
-        for &j in &p.steps[i].needs {
-            if !chosen[j] {
-                chosen[j] = true;
-                stack.push(j);
-            }
         }
     }
     Ok(chosen)

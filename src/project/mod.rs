@@ -11,12 +11,16 @@
 //!   version and its upstream identities) and the stat cache that spares hashing.
 //! - [`state`]: what ran, kept in `<project>/.dea-fit/state.json`, written atomically.
 //! - [`run`]: what is stale and why; the job queue that runs the steps.
+//! - [`page`]: the project page, `reports/index.html`.
+//! - [`slurm`]: the steps as Slurm batch jobs (`make --slurm`).
 
 pub mod file;
 pub mod glob;
 pub mod graph;
 pub mod identity;
+pub mod page;
 pub mod run;
+pub mod slurm;
 pub mod state;
 
 /// The project file's name.

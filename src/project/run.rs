@@ -284,6 +284,9 @@ pub struct Options {
     pub dry_run: bool,
     /// Target patterns ([`graph::select`]); none: every step.
     pub targets: Vec<String>,
+    /// Run the selected steps only, not the steps they need: a need that is not
+    /// up to date blocks them (one Slurm job a step, [`super::slurm`]).
+    pub only: bool,
 }
 
 /// The end of a step's process.
@@ -299,7 +302,11 @@ struct Ended {
 /// dependency order. `exe` is the program each step runs (this one).
 pub fn make(p: &Project, opts: &Options, exe: &Path) -> Result<Vec<StepReport>> {
     let order = graph::order(p)?;
-    let chosen = graph::select(p, &opts.targets)?;
+    let chosen = if opts.only {
+        graph::matched(p, &opts.targets)?
+    } else {
+        graph::select(p, &opts.targets)?
+    };
     let mut state = State::load(&p.dir);
     let cached = state.files.clone();
     let plans = plan(p, &mut state, &order);
@@ -322,6 +329,11 @@ pub fn make(p: &Project, opts: &Options, exe: &Path) -> Result<Vec<StepReport>> 
     if opts.dry_run {
         return Ok(order.iter().filter_map(|&i| out[i].take()).collect());
     }
+    // with --only, the needs left out count as they stand
+    for j in (0..p.steps.len()).filter(|&j| !chosen[j]) {
+        ok[j] = Some(plans[j].why.is_none());
+        out[j] = Some(report(&p.steps[j], Standing::Stale, String::new()));
+    }
     // forget files and steps the project no longer has
     let read: std::collections::HashSet<&str> = p
         .steps
@@ -333,7 +345,7 @@ pub fn make(p: &Project, opts: &Options, exe: &Path) -> Result<Vec<StepReport>> 
     let targets: std::collections::HashSet<&str> =
         p.steps.iter().map(|s| s.target.as_str()).collect();
     state.steps.retain(|t, _| targets.contains(t.as_str()));
-    if state.files != cached || state.steps.len() != before {
+    if !opts.only && (state.files != cached || state.steps.len() != before) {
         state.save(&p.dir)?;
     }
     let logs = p.dir.join(super::STATE_DIR).join("logs");
@@ -405,8 +417,9 @@ fn finish(p: &Project, state: &mut State, pl: &Planned, e: Ended) -> Result<(Sta
         (Ok(c), _) => (*c, last_line(&p.dir.join(&log))),
         (Err(m), _) => (-1, m.clone()),
     };
-    state.steps.insert(
-        s.target.clone(),
+    state.record(
+        &p.dir,
+        &s.target,
         Record {
             identity: pl.identity.clone(),
             exit,
@@ -417,8 +430,7 @@ fn finish(p: &Project, state: &mut State, pl: &Planned, e: Ended) -> Result<(Sta
             upstream: pl.upstream.clone(),
             outputs,
         },
-    );
-    state.save(&p.dir)?;
+    )?;
     let why = pl.why.clone().unwrap_or_default();
     if exit == 0 {
         return Ok((Standing::Ran, why));

@@ -111,6 +111,21 @@ impl State {
         }
     }
 
+    /// Record `rec` as the last run of `target` in the state file, as a locked
+    /// read-modify-write (the lock of `state.json`, [`crate::io::write`]): the
+    /// file is read again under the lock, so that the records of other `make`
+    /// processes finishing at once (one job a step under Slurm) are kept. `self`
+    /// becomes the merged state; its stat cache entries win (they are newer).
+    pub fn record(&mut self, dir: &Path, target: &str, rec: Record) -> Result<()> {
+        let _lock = crate::io::write::lock_target(&path(dir))?;
+        let mut now = State::load(dir);
+        now.files.extend(std::mem::take(&mut self.files));
+        now.steps.insert(target.to_string(), rec);
+        now.save(dir)?;
+        *self = now;
+        Ok(())
+    }
+
     /// Write the state atomically.
     pub fn save(&self, dir: &Path) -> Result<()> {
         let mut s = self.clone();

@@ -165,8 +165,10 @@ enum Block {
 pub struct Page {
     title: String,
     blocks: Vec<Block>,
-    /// The page is a folder's run list ([`super::runs`]).
-    run_list: bool,
+    /// The `<meta>` element that says what kind of generated page this is (a
+    /// folder's run list, [`super::runs`]; a project page), if any: only such an
+    /// `index.html` is ever rebuilt.
+    marker: Option<&'static str>,
 }
 
 impl Page {
@@ -175,14 +177,20 @@ impl Page {
         Page {
             title: title.into(),
             blocks: Vec::new(),
-            run_list: false,
+            marker: None,
         }
     }
 
     /// The same page marked as a folder's run list (only such an `index.html` is
     /// ever rebuilt).
-    pub(crate) fn run_list(mut self) -> Page {
-        self.run_list = true;
+    pub(crate) fn run_list(self) -> Page {
+        self.marked(runs::LIST_MARKER)
+    }
+
+    /// The same page carrying `marker` (a `<meta name="dea-fit-page" …>` element)
+    /// in its head, which says what wrote it and may write it again.
+    pub(crate) fn marked(mut self, marker: &'static str) -> Page {
+        self.marker = Some(marker);
         self
     }
 
@@ -360,11 +368,7 @@ impl Page {
              <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n\
              <meta name=\"generator\" content=\"{GENERATOR}\">\n{}<title>{}</title>\n\
              <style>\n{STYLE}</style>\n</head>\n<body>\n<main>\n<h1>{}</h1>\n",
-            if self.run_list {
-                format!("{}\n", runs::LIST_MARKER)
-            } else {
-                String::new()
-            },
+            self.marker.map_or(String::new(), |m| format!("{m}\n")),
             esc(&self.title),
             esc(&self.title)
         );

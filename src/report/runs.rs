@@ -181,6 +181,19 @@ fn list_page(root: &Path, entries: &[Entry]) -> Page {
         "{ok} run(s) in {}, newest first. dea-fit rebuilds this list from each run's metadata whenever a command writes a report here; each run's page is self-contained (charts inline) and can be mailed on its own.",
         root.display()
     ))]);
+    list_table(&mut page, entries);
+    page
+}
+
+/// The runs of `root`'s folders as a table on `page` (newest first; links relative
+/// to `root`), for a page in `root` that is not the run list (a project page).
+pub fn list_into(page: &mut Page, root: &Path) -> Result<()> {
+    list_table(page, &entries(root)?);
+    Ok(())
+}
+
+/// The table of `entries`, then those whose metadata could not be read.
+fn list_table(page: &mut Page, entries: &[Entry]) {
     let rows: Vec<Vec<Cell>> = entries
         .iter()
         .filter_map(|e| e.meta.as_ref().ok().map(|m| (e, m)))
@@ -224,7 +237,6 @@ fn list_page(root: &Path, entries: &[Entry]) -> Page {
         page.heading("Runs whose metadata could not be read");
         page.list(bad);
     }
-    page
 }
 
 /// Rebuild `root/index.html`, the list of the runs in `root`'s folders, unless

@@ -3,10 +3,10 @@
 //! written with the shift law by `export`.
 
 use crate::export::{DMA_ARRHENIUS, DMA_FREE, DMA_WLF};
+use crate::material_file::trajectory;
 use dea_fit::export::{self, Options, Target};
 use dea_fit::material::file::{read_material, read_viscous, MaterialFile, RelaxationPart};
 use dea_fit::sim::scene::Scene;
-use dea_fit::sim::{simulate, RunOptions};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -25,28 +25,10 @@ fn relaxation(path: &str) -> RelaxationPart {
 /// A one-layer Neo-Hookean stack with the DMA fit `fit` as its viscous part and
 /// `extra` lines in [material], read as if it were in tests/data/dma/.
 fn scene_text(fit: &str, extra: &str) -> String {
-    format!(
-        r#"
-[actuator]
-kind = "stack"
-radius = "5 mm"
-layer_thickness = "1 mm"
-layers = 1
-[material]
-hyperelastic = {{ model = "neo-hookean", parameters = {{ mu = "100 kPa" }} }}
-viscous = {fit}
-relative_permittivity = 4.0
-density = "1000 kg/m3"
-{extra}
-[load]
-gravity = 0.0
-[[input]]
-kind = "step"
-amplitude = "3 kV"
-[time]
-span = "2 s"
-samples = 40
-"#
+    crate::sim::nh_layer(
+        &format!("{fit}\n{extra}"),
+        "[[input]]\nkind = \"step\"\namplitude = \"3 kV\"",
+        "span = \"2 s\"\nsamples = 40",
     )
 }
 
@@ -57,15 +39,6 @@ fn parse(text: &str) -> dea_fit::Result<Scene> {
 fn scene(fit_file: &str, extra: &str) -> Scene {
     let name = Path::new(fit_file).file_name().unwrap().to_str().unwrap();
     parse(&scene_text(&format!("{{ fit = \"{name}\" }}"), extra)).expect("valid scene")
-}
-
-fn trajectory(s: &Scene) -> Vec<[f64; 4]> {
-    simulate(s, &RunOptions::default())
-        .unwrap()
-        .samples
-        .iter()
-        .map(|x| [x.time_s, x.stretch, x.voltage_v, x.current_a])
-        .collect()
 }
 
 /// A Prony term (τ in s, E in Pa).

@@ -80,7 +80,8 @@ pub fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
     p
 }
 
-fn trajectory(s: &Scene) -> Vec<[f64; 4]> {
+/// Time, stretch, voltage and current of every sample of a default run of `s`.
+pub(crate) fn trajectory(s: &Scene) -> Vec<[f64; 4]> {
     simulate(s, &RunOptions::default())
         .unwrap()
         .samples

@@ -12,18 +12,12 @@ use dea_fit::project::{glob, FILE, STATE_DIR};
 use dea_fit::{Error, Result};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The project folder
-    #[arg(
-        short = 'C',
-        long = "directory",
-        value_name = "DIR",
-        default_value = "."
-    )]
-    dir: PathBuf,
+    #[command(flatten)]
+    dir: super::make::ProjectDir,
 }
 
 /// Whether a reader takes a file.
@@ -51,19 +45,19 @@ const READERS: [(&str, Reader); 6] = [
 ];
 
 pub fn run(a: Args) -> Result<i32> {
-    let file = a.dir.join(FILE);
+    let file = a.dir.dir.join(FILE);
     if file.exists() {
         return Err(Error::settings(format!("{} exists already", file.display()))
             .with_hint("init never overwrites a project file: edit it (docs/project.md), or move it away and run init again"));
     }
     let mut csv = Vec::new();
-    collect(&a.dir, "", &mut csv);
+    collect(&a.dir.dir, "", &mut csv);
     csv.sort();
     // folder → kind → files
     let mut found: BTreeMap<String, BTreeMap<&str, Vec<String>>> = BTreeMap::new();
     let mut unknown = Vec::new();
     for f in &csv {
-        let p = a.dir.join(f);
+        let p = a.dir.dir.join(f);
         match READERS.iter().find(|(_, ok)| ok(&p)) {
             Some((kind, _)) => {
                 let folder = f.rsplit_once('/').map_or("", |(d, _)| d).to_string();
@@ -77,7 +71,7 @@ pub fn run(a: Args) -> Result<i32> {
             None => unknown.push(f.clone()),
         }
     }
-    let text = project_text(&a.dir, &found, &unknown);
+    let text = project_text(&a.dir.dir, &found, &unknown);
     dea_fit::io::write::atomic_write(&file, text.as_bytes())?;
     let steps = text.lines().filter(|l| l.starts_with('[')).count();
     println!(
@@ -92,10 +86,10 @@ pub fn run(a: Args) -> Result<i32> {
     );
     println!(
         "edit it (docs/project.md), then run dea-fit make{}",
-        if a.dir == Path::new(".") {
+        if a.dir.dir == Path::new(".") {
             String::new()
         } else {
-            format!(" -C {}", a.dir.display())
+            format!(" -C {}", a.dir.dir.display())
         }
     );
     Ok(0)

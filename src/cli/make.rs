@@ -6,12 +6,9 @@ use dea_fit::Result;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
+/// The `-C DIR` of `make`, `status` and `init`.
 #[derive(Debug, clap::Args)]
-pub struct Args {
-    /// Targets to bring up to date, with the steps they need: names
-    /// (vhb4910/tensile), patterns (vhb4910/*) or output patterns (fits/vhb4910-*);
-    /// default every step
-    targets: Vec<String>,
+pub struct ProjectDir {
     /// The project folder (the one holding dea-fit.toml)
     #[arg(
         short = 'C',
@@ -19,7 +16,17 @@ pub struct Args {
         value_name = "DIR",
         default_value = "."
     )]
-    dir: PathBuf,
+    pub dir: PathBuf,
+}
+
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Targets to bring up to date, with the steps they need: names
+    /// (vhb4910/tensile), patterns (vhb4910/*) or output patterns (fits/vhb4910-*);
+    /// default every step
+    targets: Vec<String>,
+    #[command(flatten)]
+    dir: ProjectDir,
     /// List what would run and why (which input, setting or upstream step changed), run nothing
     #[arg(long)]
     dry_run: bool,
@@ -77,7 +84,7 @@ pub fn read_project(dir: &Path, strict: bool) -> Result<Project> {
 }
 
 pub fn run(a: Args) -> Result<i32> {
-    let p = read_project(&a.dir, a.strict)?;
+    let p = read_project(&a.dir.dir, a.strict)?;
     let jobs = a.jobs.map_or_else(
         || std::thread::available_parallelism().map_or(1, |n| n.get()),
         usize::from,
@@ -98,7 +105,7 @@ pub fn run(a: Args) -> Result<i32> {
     };
     let steps = run::make(&p, &opts, &exe)?;
     let what = if a.dry_run { "make --dry-run" } else { "make" };
-    print(&a.dir, what, &steps, a.json, a.dry_run);
+    print(&a.dir.dir, what, &steps, a.json, a.dry_run);
     if !a.dry_run && !a.no_report {
         write_page(&p, a.json)?;
     }
@@ -126,7 +133,7 @@ fn slurm(p: &Project, a: &Args, exe: &Path) -> Result<i32> {
         })
         .collect();
     let submit = dea_fit::project::slurm::write(p, &sel, exe)?;
-    print(&a.dir, "make --slurm", &sel, a.json, true);
+    print(&a.dir.dir, "make --slurm", &sel, a.json, true);
     let say = |s: String| {
         if a.json {
             eprintln!("{s}");

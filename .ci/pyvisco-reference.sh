@@ -7,15 +7,8 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 venv=${PYVISCO_REFERENCE_VENV:-$root/target/pyvisco-reference-venv}
-if [ ! -x "$venv/bin/python" ]; then
-    if ! python3 -m venv "$venv" 2>/dev/null; then
-        # Debian ships venv's ensurepip separately.
-        rm -rf "$venv"
-        apt-get update -qq
-        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3-venv >/dev/null
-        python3 -m venv "$venv"
-    fi
-fi
+. "$root/.ci/venv.sh"
+make_venv "$venv"
 if ! "$venv/bin/python" -c 'import pyvisco, sys; sys.exit(pyvisco.__version__ != "2.1.3")' 2>/dev/null; then
     # pyvisco's own package imports numpy, pandas, scipy and matplotlib only; its
     # declared Jupyter/voila dependencies serve the notebook GUI (pyvisco.inter),

@@ -7,15 +7,8 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 venv=${WEIBULL_REFERENCE_VENV:-$root/target/weibull-reference-venv}
-if [ ! -x "$venv/bin/python" ]; then
-    if ! python3 -m venv "$venv" 2>/dev/null; then
-        # Debian ships venv's ensurepip separately.
-        rm -rf "$venv"
-        apt-get update -qq
-        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3-venv >/dev/null
-        python3 -m venv "$venv"
-    fi
-fi
+. "$root/.ci/venv.sh"
+make_venv "$venv"
 if ! "$venv/bin/python" -c 'import reliability, sys; sys.exit(reliability.__version__ != "0.9.0")' 2>/dev/null; then
     "$venv/bin/pip" install --quiet "reliability==0.9.0"
 fi

@@ -430,3 +430,82 @@ fn sensitivities_without_the_current_are_those_of_the_full_run() {
         }
     }
 }
+
+/// A run that carries some of θ's sensitivity columns
+/// ([`RunOptions::sensitivities_of`]: what a search with held constants asks)
+/// gives those columns of the full run bit for bit (the integrators' error control
+/// looks at the states alone, so the steps are the same), in θ's order, with their
+/// names, and the same samples; with and without the current, on a stack behind a
+/// resistance (whose initial charge depends on εr), the rig scene and the helix,
+/// at bdf, esdirk34 and the explicit tsit45 (each integrator and each scene once
+/// at least: the subset is taken in the plant, below every integrator).
+#[test]
+fn a_subset_of_sensitivity_columns_is_those_columns_of_the_full_run() {
+    let (rc, rig, helix) = (
+        rc_stack(),
+        scene(&shipped("stack_rig_7s")),
+        scene(&shipped("hdea_step_10N")),
+    );
+    let cases = [
+        (&rc, Method::Bdf, false),
+        (&rc, Method::Esdirk34, true),
+        (&rig, Method::Bdf, true),
+        (&helix, Method::Tsit45, true),
+        (&helix, Method::Bdf, false),
+    ];
+    let bits = |x: &dyn std::fmt::Debug| format!("{x:?}");
+    for (s, method, no_current) in cases {
+        let what = format!("{} {method:?} no_current {no_current}", s.name);
+        let full = RunOptions {
+            method: Some(method),
+            sensitivities: true,
+            no_current_sensitivity: no_current,
+            ..Default::default()
+        };
+        let f = trajectory(s, &full).unwrap();
+        let fs = f.sensitivities.as_ref().unwrap();
+        let n = fs.columns.len();
+        assert_eq!(fs.columns, (0..n).collect::<Vec<_>>(), "{what}");
+        // the first, the last (εr) and every third entry between
+        let keep: Vec<usize> = (0..n)
+            .filter(|&k| k % 3 == 1 || k == 0 || k == n - 1)
+            .collect();
+        let lean = RunOptions {
+            sensitivities_of: Some(keep.iter().fold(0u128, |m, &k| m | 1 << k)),
+            ..full
+        };
+        let l = trajectory(s, &lean).unwrap();
+        let ls = l.sensitivities.as_ref().unwrap();
+        assert_eq!(bits(&f.samples), bits(&l.samples), "{what}");
+        assert_eq!(ls.columns, keep, "{what}");
+        assert_eq!(ls.column(n - 2).is_some(), keep.contains(&(n - 2)));
+        for (c, &k) in keep.iter().enumerate() {
+            assert_eq!(ls.column(k), Some(c), "{what}");
+            assert_eq!(ls.params[c], fs.params[k], "{what}");
+            assert_eq!(ls.peak_stretch[c], fs.peak_stretch[k], "{what}");
+            for (name, _, rows) in &CHANNELS {
+                let (fr, lr) = (rows(fs), rows(ls));
+                assert_eq!(fr.len(), lr.len(), "{what} {name}");
+                for i in 0..fr.len() {
+                    let (a, b) = (fr[i][k], lr[i][c]);
+                    assert_eq!(a.to_bits(), b.to_bits(), "{what} {name} sample {i} θ{k}");
+                }
+            }
+        }
+    }
+    // no column (the profile of a model's only free constant holds it): the run
+    // is the plain one, with empty sensitivities
+    let none = RunOptions {
+        sensitivities: true,
+        sensitivities_of: Some(0),
+        ..Default::default()
+    };
+    let (p, z) = (
+        trajectory(&rc, &RunOptions::default()).unwrap(),
+        trajectory(&rc, &none).unwrap(),
+    );
+    assert_eq!(bits(&p.samples), bits(&z.samples));
+    let zs = z.sensitivities.unwrap();
+    assert!(zs.columns.is_empty() && zs.params.is_empty());
+    assert!(zs.stretch.iter().all(|row| row.is_empty()));
+}

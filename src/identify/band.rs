@@ -38,11 +38,14 @@ impl Identification {
             .zip(&self.parameters)
             .map(|(c, p)| {
                 let d = c.dsim_dvalue(p.value);
-                (0..run.samples.len())
-                    .map(|i| sensitivity(kind, se, i, c.index) * d)
-                    .collect()
+                let k = se.column(c.index)?;
+                Some(
+                    (0..run.samples.len())
+                        .map(|i| sensitivity(kind, se, i, k) * d)
+                        .collect(),
+                )
             })
-            .collect();
+            .collect::<Option<_>>()?;
         gradient_std(&grads, &cov)
     }
 }

@@ -29,7 +29,8 @@ pub fn simulated(kind: ChannelKind, s0: &Sample, s: &Sample) -> f64 {
     kind.simulated(s, s0.length_m).unwrap_or(f64::NAN)
 }
 
-/// ∂(simulated value)/∂θk at row `i` (row 0 is the first sample).
+/// ∂(simulated value)/∂θk at row `i` (row 0 is the first sample), from column `k`
+/// of `se` (that of a θ entry: [`Sensitivities::column`]).
 pub fn sensitivity(kind: ChannelKind, se: &Sensitivities, i: usize, k: usize) -> f64 {
     match kind {
         ChannelKind::Contraction => se.length[0][k] - se.length[i][k],
@@ -284,6 +285,16 @@ impl Problem {
             .collect()
     }
 
+    /// The free constants' entries of θ as a mask (bit k: entry k), the
+    /// sensitivities a run of the search carries
+    /// ([`RunOptions::sensitivities_of`]); None (every entry) where one lies beyond
+    /// the mask's 128 bits.
+    pub fn free_mask(&self) -> Option<u128> {
+        self.free.iter().try_fold(0u128, |m, c| {
+            (c.index < u128::BITS as usize).then(|| m | 1u128 << c.index)
+        })
+    }
+
     /// Bounds in search coordinates.
     pub fn x_bounds(&self) -> Vec<(f64, f64)> {
         self.free
@@ -329,6 +340,7 @@ impl Problem {
         let opts = RunOptions {
             sensitivities,
             no_current_sensitivity: !self.fits_current(),
+            sensitivities_of: self.free_mask(),
             ..self.run
         };
         let mut out = Vec::with_capacity(self.experiments.len());
@@ -377,6 +389,7 @@ impl Problem {
         let theta = self.theta_at(x);
         let opts = RunOptions {
             sensitivities: true,
+            sensitivities_of: self.free_mask(),
             ..self.run
         };
         let mut out = Vec::with_capacity(self.experiments.len());
@@ -445,6 +458,17 @@ impl Problem {
         let mut row = 0;
         for (e, o) in self.experiments.iter().zip(runs) {
             let s0 = &o.samples[0];
+            // each free constant's column in this run's sensitivities
+            let columns: Option<Vec<(usize, f64)>> = match (jac.is_some(), o.sensitivities) {
+                (true, Some(se)) => scale
+                    .iter()
+                    .map(|&(k, f)| se.column(k).map(|c| (c, f)))
+                    .collect(),
+                _ => None,
+            };
+            if jac.is_some() && columns.is_none() {
+                return false;
+            }
             for ch in &e.channels {
                 for (i, &y) in ch.values.iter().enumerate() {
                     if !y.is_finite() {
@@ -452,8 +476,10 @@ impl Problem {
                     }
                     let m = simulated(ch.kind, s0, &o.samples[i]);
                     r[row] = (m - y) / ch.sigma;
-                    if let (Some(j), Some(se)) = (jac.as_deref_mut(), o.sensitivities) {
-                        for (col, &(k, f)) in scale.iter().enumerate() {
+                    if let (Some(j), Some(se), Some(columns)) =
+                        (jac.as_deref_mut(), o.sensitivities, &columns)
+                    {
+                        for (col, &(k, f)) in columns.iter().enumerate() {
                             j[(row, col)] = sensitivity(ch.kind, se, i, k) * f / ch.sigma;
                         }
                     }

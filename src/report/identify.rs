@@ -680,15 +680,16 @@ fn sensitivity_chart(
         .parameters
         .iter()
         .filter_map(|p| constants.iter().find(|k| k.name == p.name))
+        .filter_map(|k| se.column(k.index).map(|col| (k, col)))
         .enumerate()
-        .map(|(j, k)| Series {
+        .map(|(j, (k, col))| Series {
             label: k.name.clone(),
             points: o
                 .samples
                 .iter()
                 .enumerate()
                 .map(|(i, s)| {
-                    let d = id.theta[k.index] * sensitivity(c.kind, se, i, k.index) / sigma;
+                    let d = id.theta[k.index] * sensitivity(c.kind, se, i, col) / sigma;
                     (s.time_s, d)
                 })
                 .filter(|(_, d)| d.is_finite())

@@ -459,6 +459,23 @@ impl Plant {
         names
     }
 
+    /// Carry the forward sensitivities of the θ entries in `mask` only (bit k:
+    /// entry k; bits beyond θ ignored), in θ's order: a search that holds some
+    /// constants propagates no columns it does not read. The integrators' error
+    /// control looks at the states alone, so the columns carried are the same
+    /// numbers as in a run that carries every column.
+    pub fn keep_sensitivities(&mut self, mask: u128) {
+        self.sens_columns = (0..self.n_theta().min(u128::BITS as usize))
+            .filter(|&k| mask >> k & 1 == 1)
+            .collect();
+    }
+
+    /// The θ entries whose sensitivities a run carries (column k is entry
+    /// `sensitivity_columns()[k]`).
+    pub fn sensitivity_columns(&self) -> &[usize] {
+        &self.sens_columns
+    }
+
     /// The parameter vector θ (see [`Plant::sensitivity_params`]).
     pub fn theta(&self) -> Vec<f64> {
         let mut th = self.params.clone();
@@ -548,11 +565,12 @@ impl Plant {
         self.one_lane(t, y, StateSeed::Along(v), ThetaSeed::None, out);
     }
 
-    /// J·s + ∂f/∂θk, the rate of the sensitivity column s = ∂y/∂θk, in one forward
-    /// evaluation seeded along s in state space and θk in parameter space. No
-    /// allocation.
+    /// J·s + ∂f/∂θ, the rate of the sensitivity column k, s = ∂y/∂θ for θ entry
+    /// [`Plant::sensitivity_columns`]`[k]`, in one forward evaluation seeded along s
+    /// in state space and that entry in parameter space. No allocation.
     pub fn sensitivity_rate(&self, t: f64, y: &[f64], s: &[f64], k: usize, out: &mut [f64]) {
-        self.one_lane(t, y, StateSeed::Along(s), ThetaSeed::Unit(k), out);
+        let th = ThetaSeed::Unit(self.sens_columns[k]);
+        self.one_lane(t, y, StateSeed::Along(s), th, out);
     }
 
     /// The right-hand side's derivative along one seed into `out`.
@@ -561,10 +579,11 @@ impl Plant {
         self.rhs_with(&e, t, y, &self.layout(), |i, d| out[i] = d.d[0]);
     }
 
-    /// The total derivatives d/dθk of the measured outputs at (t, y), for every θk,
-    /// given the state sensitivities `s` (column by column, `s[k·ns + i]` =
-    /// ∂yi/∂θk for the leading ns = `s.len()`/nθ states, see
-    /// [`super::integrate::System::dynamic_dim`]) into `out` (nθ entries): dλ/dθk = s0, dL/dθk = L0·s0, and the
+    /// The total derivatives d/dθk of the measured outputs at (t, y), for every
+    /// carried column k (θk the entry [`Plant::sensitivity_columns`]`[k]`), given
+    /// the state sensitivities `s` (column by column, `s[k·ns + i]` = ∂yi/∂θk for
+    /// the leading ns = `s.len()`/m states, see
+    /// [`super::integrate::System::dynamic_dim`]) into `out` (m entries): dλ/dθk = s0, dL/dθk = L0·s0, and the
     /// capacitance and the current (which depends on λ̇, V and the source state) as
     /// ∂out/∂y·s + ∂out/∂θk, by forward evaluation of the same output code that
     /// writes the samples ([`Plant::output`]), lane k seeded along s_k and θk. No
@@ -576,10 +595,14 @@ impl Plant {
         s: &[f64],
         out: &mut [OutputSensitivity],
     ) {
+        if out.is_empty() {
+            return; // no column carried
+        }
         let ns = stride(y, s, out.len());
+        let cols = &self.sens_columns;
         let seed = |k: usize| Seed {
             state: StateSeed::Along(&s[k * ns..(k + 1) * ns]),
-            theta: ThetaSeed::Unit(k),
+            theta: ThetaSeed::Unit(cols[k]),
         };
         self.in_lanes(out.len(), seed, &mut Outputs { t, y, s, out });
     }
@@ -591,12 +614,19 @@ impl Plant {
     /// search that fits no current: the lanes through the output code were most of
     /// a sample's sensitivity work. No allocation.
     pub fn state_output_sensitivities(&self, y: &[f64], s: &[f64], out: &mut [OutputSensitivity]) {
+        if out.is_empty() {
+            return; // no column carried
+        }
         let ns = stride(y, s, out.len());
         let (c, c1, _) = self.capacitance(y[0]);
         let eps = self.theta_index(Theta::EpsR);
         for (k, o) in out.iter_mut().enumerate() {
             let s0 = s[k * ns];
-            let de = if k == eps { 1.0 / self.eps_r } else { 0.0 };
+            let de = if self.sens_columns[k] == eps {
+                1.0 / self.eps_r
+            } else {
+                0.0
+            };
             *o = OutputSensitivity {
                 stretch: s0,
                 length: self.l0 * s0,
@@ -606,15 +636,17 @@ impl Plant {
         }
     }
 
-    /// ∂f/∂θ at fixed (t, y), row-major n×nθ into `dfdp` (∂f_i/∂θ_k at
-    /// `dfdp[i·nθ + k]`), including the chain through λ0 into λf and C_rest, every
-    /// column a lane of one evaluation. No allocation.
+    /// ∂f/∂θ at fixed (t, y) for the carried columns
+    /// ([`Plant::sensitivity_columns`], m of them), row-major n×m into `dfdp`
+    /// (∂f_i/∂θ_{c_k} at `dfdp[i·m + k]`), including the chain through λ0 into λf
+    /// and C_rest, every column a lane of one evaluation. No allocation.
     pub fn param_jacobian(&self, t: f64, y: &[f64], dfdp: &mut [f64]) {
-        let (n, m) = (self.layout().n, self.n_theta());
-        assert_eq!(dfdp.len(), n * m, "param_jacobian: n×nθ buffer");
-        let seed = |k| Seed {
+        let cols = &self.sens_columns;
+        let (n, m) = (self.layout().n, cols.len());
+        assert_eq!(dfdp.len(), n * m, "param_jacobian: n×m buffer");
+        let seed = |k: usize| Seed {
             state: StateSeed::None,
-            theta: ThetaSeed::Unit(k),
+            theta: ThetaSeed::Unit(cols[k]),
         };
         self.in_lanes(
             m,
@@ -628,7 +660,8 @@ impl Plant {
         );
     }
 
-    /// ∂y0/∂θ of [`Plant::initial_state`], row-major n×nθ into `out`:
+    /// ∂y0/∂θ of [`Plant::initial_state`] for the carried columns
+    /// ([`Plant::sensitivity_columns`], m of them), row-major n×m into `out`:
     /// * λ0: dλ0/dp = −(∂P/∂p)/P'(λ0) for the hyperelastic parameters;
     /// * the derivative filter D0 = r(0) − ŷ(λ0) = r(0): ŷ(λ0) = 1 − sqrt(C_rest/C(λ0))
     ///   is zero for every θ (C_rest is C(λ0)), so its row is zero, as is the
@@ -638,17 +671,18 @@ impl Plant {
     /// * arm stresses, integrator state and quadratures start at zero.
     pub fn initial_state_sensitivity(&self, out: &mut [f64]) {
         let l = self.layout();
-        let (n, m) = (l.n, self.n_theta());
-        assert_eq!(out.len(), n * m, "initial_state_sensitivity: n×nθ buffer");
+        let (n, m) = (l.n, self.sens_columns.len());
+        assert_eq!(out.len(), n * m, "initial_state_sensitivity: n×m buffer");
         out.fill(0.0);
         let y0 = self.initial_state();
         let (c, dc, _) = self.capacitance(self.lam0);
         let eps = self.theta_index(Theta::EpsR);
-        for (k, &(dlam0, _)) in self.rest_derivatives.iter().enumerate() {
+        for (k, &th) in self.sens_columns.iter().enumerate() {
+            let dlam0 = self.rest_derivatives[th].0;
             out[k] = dlam0;
             if let (Some(i), Source::Resistance { .. }) = (l.src, self.source) {
                 let u0 = y0[i] / c;
-                let de = (k == eps) as u8 as f64 / self.eps_r;
+                let de = (th == eps) as u8 as f64 / self.eps_r;
                 out[i * m + k] = u0 * (dc * dlam0 + de * c);
             }
         }

@@ -191,12 +191,15 @@ pub struct Outcome {
 /// integrated arm's k and τ, the dashpot Nv and εr. Arms lumped away by the
 /// fidelity choice are not parameters of that plant. One row per sample, one
 /// column per θj, for every channel a trace can measure; a pull-in sample's row is
-/// NaN (the event time itself moves with θ).
+/// NaN (the event time itself moves with θ). A run asked for some entries only
+/// ([`RunOptions::sensitivities_of`]) has a column for each of those.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Sensitivities {
-    /// Parameter names with units.
+    /// Parameter names with units, one per column.
     pub params: Vec<String>,
-    /// Parameter values θ (SI).
+    /// The θ entry of each column (indices into `theta`).
+    pub columns: Vec<usize>,
+    /// Parameter values θ (SI), every entry.
     pub theta: Vec<f64>,
     /// ∂λ/∂θj (`Sample::stretch`).
     pub stretch: Rows,
@@ -276,10 +279,16 @@ impl Serialize for Rows {
 }
 
 impl Sensitivities {
+    /// The column of θ entry `k`, if the run carried it.
+    pub fn column(&self, k: usize) -> Option<usize> {
+        self.columns.iter().position(|&c| c == k)
+    }
+
     /// The sensitivities at the rest state (∂y0/∂θ, `Plant::initial_state_sensitivity`),
     /// recorded as the row of sample 0; room for `rows` kept rows.
     fn at_start(p: &Plant, y0: &[f64], rows: usize, with_current: bool) -> Sensitivities {
-        let (n, np) = (y0.len(), p.n_theta());
+        let columns = p.sensitivity_columns().to_vec();
+        let (n, np) = (y0.len(), columns.len());
         let ns = integrate::System::dynamic_dim(p);
         let mut s0 = vec![0.0; n * np];
         p.initial_state_sensitivity(&mut s0);
@@ -291,8 +300,10 @@ impl Sensitivities {
             capacitance: 0.0,
             current: 0.0,
         };
+        let names = p.sensitivity_params();
         let mut se = Sensitivities {
-            params: p.sensitivity_params(),
+            params: columns.iter().map(|&k| names[k].clone()).collect(),
+            columns,
             theta: p.theta(),
             stretch: Rows::new(np, rows),
             length: Rows::new(np, rows),
@@ -315,8 +326,9 @@ impl Sensitivities {
             false => p.state_output_sensitivities(y, s, &mut self.scratch),
         }
         for (j, d) in self.scratch.iter().enumerate() {
+            let th = self.theta[self.columns[j]];
             let peak = |v: f64, m: &mut f64| {
-                let v = (self.theta[j] * v).abs();
+                let v = (th * v).abs();
                 if v.is_finite() {
                     *m = m.max(v);
                 }
@@ -375,6 +387,12 @@ pub struct RunOptions {
     /// has them: a search that compares plain runs with sensitivity runs
     /// (identification) needs one integrator for both.
     pub auto_as_with_sensitivities: bool,
+    /// With `sensitivities`, carry only the θ entries of this mask (bit k: entry
+    /// k, [`Sensitivities::columns`]; none beyond the 128th); None: every entry. A search that holds
+    /// some constants (a profile, a reduced model) integrates no column it does
+    /// not read: each column costs a lane of ∂f/∂θ and a right-hand side of the
+    /// corrector's solve at every step.
+    pub sensitivities_of: Option<u128>,
 }
 
 /// The largest |V| the scene drives over its span: the PID's ceiling, or the
@@ -565,8 +583,11 @@ struct Prepared {
 /// [`auto_method`]), its options and the restart times.
 fn prepare(scene: &Scene, opts: &RunOptions) -> crate::Result<Prepared> {
     let cost = budget::check(scene)?;
-    let plant = Plant::new(scene, cost.fidelity.inertia, &cost.fidelity.keep)
+    let mut plant = Plant::new(scene, cost.fidelity.inertia, &cost.fidelity.keep)
         .map_err(|why| budget::no_rest_state(scene, why))?;
+    if let Some(mask) = opts.sensitivities_of {
+        plant.keep_sensitivities(mask);
+    }
     let mode = &cost.mode;
     let rtol = opts.rtol.unwrap_or(scene.time.rtol);
     let requested = opts.method.or(scene.time.method);
@@ -857,7 +878,11 @@ fn integrate<'s, 'k>(
             jump(y, vm, vp);
         }
     };
-    let theta = p.theta();
+    // the magnitudes of the carried sensitivity columns' parameters
+    let theta: Vec<f64> = {
+        let all = p.theta();
+        p.sensitivity_columns().iter().map(|&k| all[k]).collect()
+    };
     // The accepted steps since the last sample (when the envelope wants them).
     let steps = std::cell::Cell::new(none);
     let last_sample = std::cell::Cell::new(0.0);

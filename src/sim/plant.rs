@@ -111,6 +111,10 @@ pub struct Plant {
     pub c_rest: f64,
     /// (dλ0/dθk, dC_rest/dθk) per entry of θ (`derivatives`), derived with λ0.
     pub(crate) rest_derivatives: Vec<(f64, f64)>,
+    /// The entries of θ whose forward sensitivities a run carries, in θ's order:
+    /// sensitivity column k is θ entry `sens_columns[k]` (every entry, unless
+    /// [`Plant::keep_sensitivities`] chose some).
+    pub(crate) sens_columns: Vec<usize>,
     /// The model's stress and tangent at `params` in `mode` ([`AtParams`]).
     at: AtParams,
 }
@@ -419,9 +423,11 @@ impl Plant {
             lam_f: 1.0,
             c_rest: 0.0,
             rest_derivatives: Vec::new(),
+            sens_columns: Vec::new(),
             at: AtParams::new(m.model.as_ref(), &m.params, mode),
         };
         p.derive()?;
+        p.sens_columns = (0..p.n_theta()).collect();
         let t_in = super::fidelity::input_time_scale(scene, p.c_rest);
         p.tau_c = BAUMGARTE_FRACTION
             * [1.0 / p.fastest_arm_rate(), t_in]
@@ -1025,7 +1031,7 @@ impl super::integrate::System for Plant {
         Plant::jacobian_times(self, t, y, v, out)
     }
     fn n_params(&self) -> usize {
-        self.n_theta()
+        self.sens_columns.len()
     }
     /// Every state before the energy-balance quadratures (which feed back into
     /// none).

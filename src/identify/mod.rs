@@ -250,6 +250,12 @@ pub struct Identification {
     /// (for reports).
     #[serde(skip)]
     pub runs: Vec<crate::sim::Outcome>,
+    /// A model the default reduction shrinks further ([`Settings::reducing`]): its
+    /// Wald intervals were not checked against profiles and its integration error
+    /// not measured, since no output reports it; a reduction that stops at it
+    /// identifies it again with both ([`reduce::identify`]).
+    #[serde(skip)]
+    pub provisional: bool,
 }
 
 /// What an identification of usable input gives: the identified constants, or a
@@ -361,10 +367,12 @@ pub fn identify_with(
     let started = Instant::now();
     let model = problem.experiments[0].scene.material.spec.name.clone();
     let converged = matches!(termination, Termination::Converged(_));
-    // not at an optimum: no interval is reported (below), so none is checked
-    let unchecked = |e: &[assessment::Estimate]| {
-        !converged || (settings.reducing && reduce::next_step(e, &all, &model).is_some())
+    // not at an optimum: no interval is reported (below), so none is checked; nor
+    // in a model the reduction shrinks further (provisional)
+    let provisional = |e: &[assessment::Estimate]| {
+        settings.reducing && reduce::next_step(e, &all, &model).is_some()
     };
+    let unchecked = |e: &[assessment::Estimate]| !converged || provisional(e);
     let (assessment, profiles) = profile::assess(
         &problem,
         &x,
@@ -391,7 +399,11 @@ pub fn identify_with(
     warnings.extend(structured_residuals(&problem, &r));
     warnings.extend(assessment.warnings.iter().cloned());
     warnings.extend(geometry.warning());
-    let shift = integration_shift(&mut problem, &x, &r, &jac, &assessment.estimates);
+    let provisional = converged && provisional(&assessment.estimates);
+    let shift = match provisional {
+        true => Ok(None),
+        false => integration_shift(&mut problem, &x, &r, &jac, &assessment.estimates),
+    };
     warnings.extend(shift_warning(&shift));
     let shift = shift.ok().flatten();
     let stretch_range = stretch_range(&runs);
@@ -433,6 +445,7 @@ pub fn identify_with(
         theta,
         stretch_range,
         runs,
+        provisional,
     })))
 }
 

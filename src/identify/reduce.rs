@@ -297,6 +297,38 @@ fn warm(id: &Identification) -> Vec<(String, f64)> {
         .collect()
 }
 
+/// `id` (identified with `settings`) identified again from its optimum, one
+/// start, as a model reported: its intervals checked against profiles, its
+/// integration error measured, the `profiles` asked for; `id` itself where that
+/// fails (a warning says so when `id` is provisional: its checks are missing).
+fn checked(
+    experiments: &[Experiment],
+    settings: &Settings,
+    id: &Identification,
+    profiles: Vec<String>,
+    control: &(dyn Fn(usize) -> Control + Sync),
+    warnings: &mut Vec<String>,
+) -> Identification {
+    let p = Settings {
+        starts: 1,
+        reducing: false,
+        warm: warm(id),
+        profiles,
+        ..settings.clone()
+    };
+    let why = match identify_with(experiments.to_vec(), &p, control) {
+        Ok(Run::Identified(again)) => return *again,
+        Ok(Run::Failed(f)) => f.reason,
+        Err(e) => e.to_string(),
+    };
+    if id.provisional {
+        warnings.push(format!(
+            "the intervals of the model reported were not checked against profiles, nor its integration error measured: its final identification failed ({why})"
+        ));
+    }
+    id.clone()
+}
+
 /// Identify with the default model reduction (module documentation): the full
 /// model first; when it leaves constants not identifiable, the rounds. Returns the
 /// run (the reduced model's identification, with its [`Reduction`] and its held
@@ -433,34 +465,45 @@ pub fn identify(
         s = next_settings;
         current = id;
     }
+    // A reduction that stopped early (a refit failed) reports a provisional model:
+    // it is identified again from its optimum with what it skipped, the checks of
+    // its intervals and of the integration error (and the profiles asked for).
     if rounds.is_empty() {
-        let mut full = full;
+        let mut full = match full.provisional {
+            true => checked(
+                experiments,
+                &reducing,
+                &full,
+                settings.profiles.clone(),
+                &round_control,
+                &mut warnings,
+            ),
+            false => full,
+        };
         full.warnings.extend(warnings);
         return Ok(Run::Identified(Box::new(full)));
     }
     // profiles asked for: of the reduced model's constants, from its optimum
-    if !settings.profiles.is_empty() {
-        let mut p = s.clone();
-        p.starts = 1;
-        p.reducing = false;
-        p.warm = warm(&current);
-        p.profiles = settings
-            .profiles
-            .iter()
-            .filter(|n| current.parameters.iter().any(|e| e.name == **n))
-            .cloned()
-            .collect();
-        for n in settings.profiles.iter().filter(|n| !p.profiles.contains(n)) {
-            warnings.push(format!(
-                "no profile of {n}: the reduction dropped or held it"
-            ));
-        }
-        if !p.profiles.is_empty() {
-            if let Ok(Run::Identified(id)) = identify_with(experiments.to_vec(), &p, &round_control)
-            {
-                current = *id;
-            }
-        }
+    let profiles: Vec<String> = settings
+        .profiles
+        .iter()
+        .filter(|n| current.parameters.iter().any(|e| e.name == **n))
+        .cloned()
+        .collect();
+    for n in settings.profiles.iter().filter(|n| !profiles.contains(n)) {
+        warnings.push(format!(
+            "no profile of {n}: the reduction dropped or held it"
+        ));
+    }
+    if current.provisional || !profiles.is_empty() {
+        current = checked(
+            experiments,
+            &s,
+            &current,
+            profiles,
+            &round_control,
+            &mut warnings,
+        );
     }
     let mut id = current;
     // σ came from the full model's residuals, not from the user

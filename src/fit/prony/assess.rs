@@ -86,7 +86,7 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
         jac.column_mut(1 + n + i).scale_mut(1.0 / si[1 + n + i]);
     }
     let unc = match prob.kern.noise_groups() {
-        Some(groups) => grouped_uncertainty(&mut r.clone(), &mut jac.clone(), &groups, rss),
+        Some(groups) => grouped_uncertainty(&mut r.clone(), jac, &groups, rss),
         None => diagnostics::uncertainty(&jac, rss),
     };
     let mut pred = vec![0.0; m];
@@ -144,7 +144,7 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
 /// group has no degrees of freedom or no residual.
 fn grouped_uncertainty(
     r: &mut DVector<f64>,
-    jac: &mut DMatrix<f64>,
+    mut jac: DMatrix<f64>,
     groups: &[usize],
     rss: f64,
 ) -> diagnostics::Uncertainty {
@@ -163,13 +163,13 @@ fn grouped_uncertainty(
         })
         .collect();
     if s.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
-        return diagnostics::uncertainty(jac, rss);
+        return diagnostics::uncertainty(&jac, rss);
     }
     for (row, g) in groups.iter().enumerate() {
         r[row] /= s[*g];
         jac.row_mut(row).scale_mut(1.0 / s[*g]);
     }
-    diagnostics::uncertainty(jac, r.norm_squared())
+    diagnostics::uncertainty(&jac, r.norm_squared())
 }
 
 /// Findings about a fit, each with the status it raises.

@@ -258,7 +258,15 @@ fn refine<K: Kernels>(
     };
     let mut joint_bounds = vec![(0.0, f64::INFINITY); 1 + n];
     joint_bounds.extend(bounds);
-    let polish = lm::minimize(&mut prob, &joint, &joint_bounds, &tail);
+    // The polish stops at the noise floor of the data too: where an accepted step
+    // lowers ½χ² by less than NOISE_FLOOR (½‖r‖² by less than NOISE_FLOOR·s²,
+    // s² = 2·cost/(m − 2N − 1), a relative decrease below 2·NOISE_FLOOR/(m − 2N − 1)).
+    let dof = prob.len().saturating_sub(2 * n + 1).max(1) as f64;
+    let polish_settings = LmSettings {
+        ftol: tail.ftol.max(2.0 * NOISE_FLOOR / dof),
+        ..tail
+    };
+    let polish = lm::minimize(&mut prob, &joint, &joint_bounds, &polish_settings);
     iterations += polish.iterations;
     let termination = match r.termination {
         Termination::Converged(_) => polish.termination,

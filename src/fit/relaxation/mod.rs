@@ -612,7 +612,7 @@ mod tests {
     }
 
     /// The projection's normal equations, formed from the Gram products in blocks
-    /// of [`GRAM_ROWS`] rows, are those of Kaufman's Jacobian Jᵢ = cᵢ·P⊥·dᵢ built
+    /// of [`BLOCK_ROWS`](crate::fit::prony::problem::BLOCK_ROWS) rows, are those of Kaufman's Jacobian Jᵢ = cᵢ·P⊥·dᵢ built
     /// explicitly (P⊥ from a QR factorisation of the positive columns) on a curve of
     /// 3000 points (six blocks), with one modulus at zero (a term at 1 ms, before
     /// the data): JᵀJ to 10⁻⁹ of its largest entry (the Gram route loses about

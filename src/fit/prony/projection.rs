@@ -195,8 +195,9 @@ impl<'p, K: Kernels> Projected<'p, K> {
             }
             for j in 1..=n {
                 let cj = self.c[j];
+                // a·c + r as gemv adds it (addition commutes bit for bit)
                 for (r, a) in rb.iter_mut().zip(col(j)) {
-                    *r = a * cj + *r;
+                    *r += a * cj;
                 }
             }
             if derivatives {

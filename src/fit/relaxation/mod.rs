@@ -623,6 +623,12 @@ mod tests {
         prob.n_terms = 4;
         let theta = [1e-3f64.ln(), 0.2f64.ln(), 20f64.ln(), 300f64.ln()];
         let m = prob.len();
+        // the columns A = [w·S·x, w·S·h(τᵢ)…] and dᵢ = ∂aᵢ/∂ln τᵢ, formed whole
+        let taus: Vec<f64> = theta.iter().map(|t| t.exp()).collect();
+        let (mut a, mut da) = (DMatrix::zeros(m, 5), DMatrix::zeros(m, 4));
+        let (x, terms) = a.as_mut_slice().split_at_mut(m);
+        prob.input_column(x);
+        prob.kernel_columns(&taus, terms, Some(da.as_mut_slice()));
         let mut r = DVector::zeros(m);
         let mut vp = Projected::new(&mut prob);
         assert!(vp.eval(&theta, &mut r, Some(&mut DMatrix::zeros(0, 4))));
@@ -630,11 +636,11 @@ mod tests {
         assert!(vp.normal_equations(&[0.0; 4]).is_none());
         let pos: Vec<usize> = (0..5).filter(|&j| vp.c[j] > 0.0).collect();
         assert_eq!(pos.len(), 4, "moduli {}", vp.c);
-        let ap = DMatrix::from_fn(m, pos.len(), |k, q| vp.a[(k, pos[q])]);
+        let ap = DMatrix::from_fn(m, pos.len(), |k, q| a[(k, pos[q])]);
         let q = ap.qr().q();
         let mut j = DMatrix::zeros(m, 4);
         for i in 0..4 {
-            let d = vp.da.column(i) * vp.c[1 + i];
+            let d = da.column(i) * vp.c[1 + i];
             let proj = &q * (q.tr_mul(&d));
             j.set_column(i, &(d - proj));
         }

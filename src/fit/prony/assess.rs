@@ -1,11 +1,13 @@
 //! Stage 4: what a term fit is worth: statistics, information criteria, the σ of
 //! every SI parameter, and the problems that keep `auto` from taking it.
 
+use super::problem::{Problem, BLOCK_ROWS};
 use super::refine::TermFit;
 use super::{fmt_s, param_names, Kernels, Setup};
+use crate::fit::linear::RowQr;
 use crate::fit::lm::LeastSquares;
 use crate::fit::{diagnostics, Parameter, Status};
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
 /// Diagnostics of one term fit: statistics, uncertainty in SI, problems found.
 pub struct Assessed<K: Kernels> {
@@ -71,24 +73,37 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
     let m = prob.len();
     let k = 1 + 2 * n;
     let mut r = DVector::zeros(m);
-    let mut jac = DMatrix::zeros(m, k);
-    let finite = prob.eval(&tf.p, &mut r, Some(&mut jac));
+    // the kernels with their derivatives, which the residuals then take
+    prob.kernels_at_log_taus(&tf.p[1 + n..], true);
+    let finite = prob.eval(&tf.p, &mut r, None);
     let rss = r.norm_squared();
     let s = prob.scale * setup.unit;
     let mut si = vec![tf.p[0] * s];
     si.extend((0..n).map(|i| tf.p[1 + i] * s));
     si.extend((0..n).map(|i| tf.p[1 + n + i].exp()));
-    // Jacobian with respect to the SI parameters.
-    for c in 0..=n {
-        jac.column_mut(c).scale_mut(1.0 / s);
-    }
-    for i in 0..n {
-        jac.column_mut(1 + n + i).scale_mut(1.0 / si[1 + n + i]);
-    }
-    let unc = match prob.kern.noise_groups() {
-        Some(groups) => grouped_uncertainty(&mut r.clone(), &mut jac.clone(), &groups, rss),
-        None => diagnostics::uncertainty(&jac, rss),
+    // Jacobian with respect to the SI parameters: column factors
+    let columns: Vec<f64> = (0..k)
+        .map(|c| match c <= n {
+            true => 1.0 / s,
+            false => 1.0 / si[c],
+        })
+        .collect();
+    let groups = prob
+        .kern
+        .noise_groups()
+        .and_then(|g| group_scales(&r, &g, k).map(|s| (g, s)));
+    let (qr, jac_finite) = factor(prob, &tf.p, &columns, groups.as_ref());
+    let unc = match groups {
+        Some((g, scales)) => {
+            let mut scaled = r.clone();
+            for (rk, g) in scaled.iter_mut().zip(&g) {
+                *rk /= scales[*g];
+            }
+            diagnostics::factor_uncertainty(&qr, scaled.norm_squared())
+        }
+        None => diagnostics::factor_uncertainty(&qr, rss),
     };
+    let finite = finite && jac_finite;
     let mut pred = vec![0.0; m];
     prob.model(&tf.p, &mut pred);
     let y: &[f64] = &prob.y;
@@ -115,6 +130,9 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
     let (aicc, bic) = diagnostics::information_criteria(rss, m, k);
 
     let (problems, warnings, identifiable) = problems(setup, &tf, &si, &unc, finite, m);
+    // every count's assessment waits for the choice: none keeps its kernels (at 10⁶
+    // points the seven counts' kernels and derivatives were 336 MB)
+    tf.problem.release_kernels();
     Assessed {
         tf,
         si,
@@ -136,19 +154,51 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
     }
 }
 
-/// The uncertainty with a residual variance per noise group: each group's rows
-/// of `r` and `jac` scaled by 1/s_g, s_g² = RSS_g/(m_g − k·m_g/m) (the degrees of
-/// freedom shared in proportion to the rows), so that cov = (Σ_g J_gᵀJ_g/s_g²)⁻¹,
-/// the weighted least-squares covariance with each group's own variance (Seber &
-/// Wild, *Nonlinear Regression*, 1989, §2.1.4). One pooled variance (`rss`) where a
-/// group has no degrees of freedom or no residual.
-fn grouped_uncertainty(
-    r: &mut DVector<f64>,
-    jac: &mut DMatrix<f64>,
-    groups: &[usize],
-    rss: f64,
-) -> diagnostics::Uncertainty {
-    let (m, k) = (jac.nrows(), jac.ncols());
+/// The factor R of the Jacobian at `p` with respect to the SI parameters (column
+/// c times `columns[c]`) and, with noise groups (`groups`: each row's group and
+/// each group's 1/s_g scale, [`group_scales`]), each row times 1/s_g, its rows pushed
+/// a block at a time ([`Problem::jacobian_block`], [`RowQr::push`]): the factor
+/// [`diagnostics::uncertainty`] takes of the whole m × (2N + 1) matrix, the same
+/// bits, without forming it (at 10⁶ points 104 MB for six terms). Whether every
+/// value was finite. The kernels of `prob` must be at `p`, with derivatives.
+fn factor<K: Kernels>(
+    prob: &Problem<K>,
+    p: &[f64],
+    columns: &[f64],
+    groups: Option<&(Vec<usize>, Vec<f64>)>,
+) -> (RowQr, bool) {
+    let (m, k) = (prob.len(), columns.len());
+    let mut qr = RowQr::with_rows(k, m);
+    let mut block = vec![0.0; k * BLOCK_ROWS.min(m)];
+    let mut row = vec![0.0; k];
+    let mut finite = true;
+    for lo in (0..m).step_by(BLOCK_ROWS) {
+        let hi = (lo + BLOCK_ROWS).min(m);
+        let len = hi - lo;
+        prob.jacobian_block(p, lo, hi, &mut block[..k * len]);
+        finite &= block[..k * len].iter().all(|v| v.is_finite());
+        for q in 0..len {
+            for (c, v) in row.iter_mut().enumerate() {
+                *v = block[c * len + q] * columns[c];
+            }
+            if let Some((g, scales)) = groups {
+                let f = 1.0 / scales[g[lo + q]];
+                row.iter_mut().for_each(|v| *v *= f);
+            }
+            qr.push(&row, 0.0);
+        }
+    }
+    (qr, finite)
+}
+
+/// The residual scale of each noise group, s_g² = RSS_g/(m_g − k·m_g/m) (the
+/// degrees of freedom shared in proportion to the rows), by which [`assess`]
+/// divides the group's rows of the residuals and the Jacobian, so that
+/// cov = (Σ_g J_gᵀJ_g/s_g²)⁻¹, the weighted least-squares covariance with each
+/// group's own variance (Seber & Wild, *Nonlinear Regression*, 1989, §2.1.4). None
+/// (one pooled variance) where a group has no degrees of freedom or no residual.
+fn group_scales(r: &DVector<f64>, groups: &[usize], k: usize) -> Option<Vec<f64>> {
+    let m = r.len();
     let count = groups.iter().copied().max().map_or(0, |g| g + 1);
     let mut sum = vec![0.0; count];
     let mut rows = vec![0usize; count];
@@ -162,14 +212,7 @@ fn grouped_uncertainty(
             (sum[g] / dof).sqrt()
         })
         .collect();
-    if s.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
-        return diagnostics::uncertainty(jac, rss);
-    }
-    for (row, g) in groups.iter().enumerate() {
-        r[row] /= s[*g];
-        jac.row_mut(row).scale_mut(1.0 / s[*g]);
-    }
-    diagnostics::uncertainty(jac, r.norm_squared())
+    s.iter().all(|s| s.is_finite() && *s > 0.0).then_some(s)
 }
 
 /// Findings about a fit, each with the status it raises.

@@ -37,21 +37,29 @@ pub fn grid_nnls<K: Kernels>(
     let taus: Vec<f64> = (0..count)
         .map(|i| 10f64.powf(a + (b - a) * i as f64 / (count - 1) as f64))
         .collect();
-    let (c, it) = nnls_at(prob, &taus)?;
+    let (c, it, _) = nnls_at(prob, &taus)?;
     Ok((taus, c, it))
 }
 
 /// Non-negative least squares for E∞ and moduli at fixed τ (scaled units), by
-/// Lawson–Hanson ([`nnls`]). Returns the coefficients and the active-set iterations.
-pub fn nnls_at<K: Kernels>(prob: &mut Problem<K>, taus: &[f64]) -> Result<(Vec<f64>, usize)> {
+/// Lawson–Hanson ([`nnls`]). Returns the coefficients, the active-set iterations
+/// and the cost ½‖A·c − b‖² there (∞ where not finite).
+pub fn nnls_at<K: Kernels>(prob: &mut Problem<K>, taus: &[f64]) -> Result<(Vec<f64>, usize, f64)> {
     let n = prob.len();
     let mut a = DMatrix::zeros(n, taus.len() + 1);
     let (input, terms) = a.as_mut_slice().split_at_mut(n);
     prob.input_column(input);
     prob.kernel_columns(taus, terms, None);
-    let sol = nnls(&a, &prob.targets(), None).map_err(|e| {
+    let b = prob.targets();
+    let sol = nnls(&a, &b, None).map_err(|e| {
         Error::settings(format!("the non-negative least-squares stage failed: {e}"))
     })?;
     prob.evaluations += 1;
-    Ok((sol.x.iter().copied().collect(), sol.iterations))
+    let cost = 0.5 * (&a * &sol.x - b).norm_squared();
+    let cost = if cost.is_finite() {
+        cost
+    } else {
+        f64::INFINITY
+    };
+    Ok((sol.x.iter().copied().collect(), sol.iterations, cost))
 }

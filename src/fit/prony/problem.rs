@@ -4,6 +4,7 @@
 
 use super::Kernels;
 use crate::fit::lm::LeastSquares;
+use crate::fit::nnls::dot;
 use nalgebra::{DMatrix, DVector};
 use std::sync::Arc;
 
@@ -35,9 +36,22 @@ pub struct Problem<K: Kernels> {
     /// the assessment at the polish's) takes them instead of a pass over the data.
     pub(crate) kernel_taus: Vec<f64>,
     kernel_derivatives: bool,
+    /// p, JᵀJ and Jᵀr of the last evaluation asked for its normal equations
+    /// ([`LeastSquares::forms_normal_equations`]).
+    normal: Option<(Vec<f64>, DMatrix<f64>, DVector<f64>)>,
+    /// A block of [`BLOCK_ROWS`] rows of columns ([`Problem::jacobian_block`]).
+    block: Vec<f64>,
     /// Evaluations so far (counted for the solver report).
     pub evaluations: usize,
 }
+
+/// Rows of a block of the products over the data ([`Problem`]'s normal equations,
+/// [`super::projection::Projected`]'s Gram products): the columns of a block (at
+/// most 2·40 + 2 of 4 kB) stay in the level-2 cache while all their products are
+/// taken, and no column of the data's length is formed; a curve of at most this
+/// many points (every shipped one, and the starts' subsample) takes each product
+/// in one piece.
+pub(crate) const BLOCK_ROWS: usize = 512;
 
 impl<K: Kernels> Problem<K> {
     /// The problem of the rows `kern` with data `y`, weights `w` and scale S, no
@@ -56,6 +70,8 @@ impl<K: Kernels> Problem<K> {
             taus: Vec::new(),
             kernel_taus: Vec::new(),
             kernel_derivatives: false,
+            normal: None,
+            block: Vec::new(),
             evaluations: 0,
         }
     }
@@ -168,42 +184,124 @@ impl<K: Kernels> Problem<K> {
     pub(crate) fn release_kernels(&mut self) {
         self.h = Vec::new();
         self.dh = Vec::new();
+        self.block = Vec::new();
+        self.normal = None;
         self.kernel_taus.clear();
         self.kernel_derivatives = false;
     }
 
     /// The weighted data w·y: the right-hand side of the moduli's least squares.
     pub(crate) fn targets(&self) -> DVector<f64> {
-        DVector::from_iterator(
-            self.len(),
-            self.y.iter().zip(self.w.iter()).map(|(y, w)| y * w),
-        )
+        let mut b = DVector::zeros(self.len());
+        self.targets_block(0, self.len(), b.as_mut_slice());
+        b
+    }
+
+    /// The rows `lo..hi` of [`Problem::targets`] into `out`.
+    pub(crate) fn targets_block(&self, lo: usize, hi: usize, out: &mut [f64]) {
+        for ((b, y), w) in out.iter_mut().zip(&self.y[lo..hi]).zip(&self.w[lo..hi]) {
+            *b = y * w;
+        }
     }
 
     /// The design's first column, w·S·x (the E∞ term), into `out`.
     pub(crate) fn input_column(&self, out: &mut [f64]) {
-        for ((o, x), ws) in out.iter_mut().zip(self.kern.input()).zip(self.ws.iter()) {
+        self.input_column_block(0, self.len(), out);
+    }
+
+    /// The rows `lo..hi` of [`Problem::input_column`] into `out`.
+    pub(crate) fn input_column_block(&self, lo: usize, hi: usize, out: &mut [f64]) {
+        let x = &self.kern.input()[lo..hi];
+        for ((o, x), ws) in out.iter_mut().zip(x).zip(&self.ws[lo..hi]) {
             *o = x * ws;
         }
     }
 
-    /// The design's columns of the terms at the τᵢ of the last evaluation,
-    /// [`Problem::kernel_columns`] from its kernels `h` (and `dh`, which must hold
-    /// their derivatives when `dout` is given): the same products, so the same bits.
-    pub(crate) fn design_columns(&self, out: &mut [f64], dout: Option<&mut [f64]>) {
-        let m = self.len();
-        for (i, a) in out.chunks_exact_mut(m).enumerate() {
-            for ((a, ws), h) in a.iter_mut().zip(self.ws.iter()).zip(&self.h[i * m..]) {
+    /// The rows `lo..hi` of the columns [w·S·x | w·S·h(τᵢ)… | w·y | w·S·τᵢ·∂h/∂τ(τᵢ)…]
+    /// (the last N only when `derivatives`; the kernels of the last evaluation,
+    /// which must hold their derivatives then) end to end into `out`: the columns of
+    /// [`super::projection::Projected`]'s Gram products a block at a time, each
+    /// value the product [`Problem::kernel_columns`] forms (h·wS, ∂h/∂τ·(wS·τ)), so
+    /// the same bits.
+    pub(crate) fn design_block(&self, lo: usize, hi: usize, derivatives: bool, out: &mut Vec<f64>) {
+        let (m, n, len) = (self.len(), self.n_terms, hi - lo);
+        let cols = 2 + n + if derivatives { n } else { 0 };
+        out.resize(cols * len, 0.0);
+        let ws = &self.ws[lo..hi];
+        let (x, rest) = out.split_at_mut(len);
+        self.input_column_block(lo, hi, x);
+        let (a, rest) = rest.split_at_mut(n * len);
+        for (i, a) in a.chunks_exact_mut(len).enumerate() {
+            for ((a, ws), h) in a.iter_mut().zip(ws).zip(&self.h[i * m + lo..]) {
                 *a = h * ws;
             }
         }
-        if let Some(d) = dout {
-            for ((i, a), tau) in d.chunks_exact_mut(m).enumerate().zip(&self.taus) {
-                for ((a, ws), dh) in a.iter_mut().zip(self.ws.iter()).zip(&self.dh[i * m..]) {
+        let (b, d) = rest.split_at_mut(len);
+        self.targets_block(lo, hi, b);
+        if derivatives {
+            for ((i, a), tau) in d.chunks_exact_mut(len).enumerate().zip(&self.taus) {
+                for ((a, ws), dh) in a.iter_mut().zip(ws).zip(&self.dh[i * m + lo..]) {
                     *a = dh * (ws * tau);
                 }
             }
         }
+    }
+
+    /// The rows `lo..hi` of the Jacobian at `p` (which the kernels of the last
+    /// evaluation, with derivatives, must be at) end to end into `out`: the columns
+    /// w·S·x, w·S·hᵢ and w·S·eᵢ·τᵢ·∂hᵢ/∂τ of [`LeastSquares::eval`], the same bits.
+    pub(crate) fn jacobian_block(&self, p: &[f64], lo: usize, hi: usize, out: &mut [f64]) {
+        let (m, n, len) = (self.len(), self.n_terms, hi - lo);
+        let ws = &self.ws[lo..hi];
+        let (j0, terms) = out.split_at_mut(len);
+        self.input_column_block(lo, hi, j0);
+        let (je, jt) = terms.split_at_mut(n * len);
+        for i in 0..n {
+            let (e, tau) = (p[1 + i], self.taus[i]);
+            let (h, dh) = (
+                &self.h[i * m + lo..i * m + hi],
+                &self.dh[i * m + lo..i * m + hi],
+            );
+            for ((j, ws), h) in je[i * len..(i + 1) * len].iter_mut().zip(ws).zip(h) {
+                *j = ws * h;
+            }
+            for ((j, ws), dh) in jt[i * len..(i + 1) * len].iter_mut().zip(ws).zip(dh) {
+                *j = ws * e * tau * dh;
+            }
+        }
+    }
+
+    /// JᵀJ and Jᵀr at `p` from the residuals `r` there, a block of [`BLOCK_ROWS`]
+    /// rows of the Jacobian at a time ([`Problem::jacobian_block`]): no m × (2N + 1)
+    /// Jacobian is formed (at 10⁶ points 104 MB for six terms, and as many for a
+    /// trial's). Kept for [`LeastSquares::normal_equations`]; false where not finite.
+    fn form_normal_equations(&mut self, p: &[f64], r: &[f64]) -> bool {
+        let (m, k) = (self.len(), 1 + 2 * self.n_terms);
+        let mut jtj = DMatrix::<f64>::zeros(k, k);
+        let mut jtr = DVector::<f64>::zeros(k);
+        let mut block = std::mem::take(&mut self.block);
+        for lo in (0..m).step_by(BLOCK_ROWS) {
+            let hi = (lo + BLOCK_ROWS).min(m);
+            let len = hi - lo;
+            block.resize(k * len, 0.0);
+            self.jacobian_block(p, lo, hi, &mut block);
+            let col = |i: usize| &block[i * len..(i + 1) * len];
+            for j in 0..k {
+                for i in 0..=j {
+                    jtj[(i, j)] += dot(col(i), col(j));
+                }
+                jtr[j] += dot(col(j), &r[lo..hi]);
+            }
+        }
+        self.block = block;
+        for j in 0..k {
+            for i in 0..j {
+                jtj[(j, i)] = jtj[(i, j)];
+            }
+        }
+        let finite = jtj.iter().chain(jtr.iter()).all(|v| v.is_finite());
+        self.normal = finite.then(|| (p.to_vec(), jtj, jtr));
+        finite
     }
 
     /// The design's columns of the terms at `taus`, w·S·h(τᵢ), end to end into `out`
@@ -235,7 +333,8 @@ impl<K: Kernels> LeastSquares for Problem<K> {
         (self.len(), 1 + 2 * self.n_terms)
     }
     /// Residuals wₖ·(S·(e∞·xₖ + Σ eᵢ·hᵢₖ) − yₖ); the Jacobian's columns w·S·x,
-    /// w·S·hᵢ and w·S·eᵢ·τᵢ·∂hᵢ/∂τ (∂/∂ln τᵢ).
+    /// w·S·hᵢ and w·S·eᵢ·τᵢ·∂hᵢ/∂τ (∂/∂ln τᵢ), or, asked with an empty (0-row)
+    /// Jacobian, its normal equations ([`Problem::form_normal_equations`]).
     fn eval(&mut self, p: &[f64], r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>) -> bool {
         self.evaluations += 1;
         let (n, m, s) = (self.n_terms, self.len(), self.scale);
@@ -249,23 +348,11 @@ impl<K: Kernels> LeastSquares for Problem<K> {
         let Some(jac) = jac else {
             return finite(r);
         };
-        let (j0, terms) = jac.as_mut_slice().split_at_mut(m);
-        self.input_column(j0);
-        let (je, jt) = terms.split_at_mut(n * m);
-        for i in 0..n {
-            let (e, tau) = (p[1 + i], self.taus[i]);
-            let (h, dh) = (&self.h[i * m..(i + 1) * m], &self.dh[i * m..(i + 1) * m]);
-            for ((j, ws), h) in je[i * m..(i + 1) * m].iter_mut().zip(self.ws.iter()).zip(h) {
-                *j = ws * h;
-            }
-            for ((j, ws), dh) in jt[i * m..(i + 1) * m]
-                .iter_mut()
-                .zip(self.ws.iter())
-                .zip(dh)
-            {
-                *j = ws * e * tau * dh;
-            }
+        if jac.nrows() == 0 {
+            return finite(r) && self.form_normal_equations(p, r);
         }
+        debug_assert_eq!(jac.shape(), (m, 1 + 2 * n));
+        self.jacobian_block(p, 0, m, jac.as_mut_slice());
         finite(r) && finite(jac.as_slice())
     }
     /// A trial's Jacobian costs the kernels' derivatives and the columns over the
@@ -273,5 +360,16 @@ impl<K: Kernels> LeastSquares for Problem<K> {
     /// kernels twice.
     fn jacobian_with_trial(&self) -> bool {
         true
+    }
+    /// The search takes the normal equations a block of rows at a time
+    /// ([`Problem::form_normal_equations`]).
+    fn forms_normal_equations(&self) -> bool {
+        true
+    }
+    fn normal_equations(&self, p: &[f64]) -> Option<(DMatrix<f64>, DVector<f64>)> {
+        match &self.normal {
+            Some((at, jtj, jtr)) if at.as_slice() == p => Some((jtj.clone(), jtr.clone())),
+            _ => None,
+        }
     }
 }

@@ -1,7 +1,7 @@
 //! Variable projection of the Prony problem: the search over ln τ alone, the
 //! moduli by non-negative least squares at each τ.
 
-use super::problem::Problem;
+use super::problem::{Problem, BLOCK_ROWS};
 use super::Kernels;
 use crate::fit::lm::LeastSquares;
 use crate::fit::nnls::{dot, NnlsWork};
@@ -25,11 +25,8 @@ use nalgebra::{DMatrix, DVector};
 /// so no m × N Jacobian is formed or projected.
 pub struct Projected<'p, K: Kernels> {
     prob: &'p mut Problem<K>,
-    /// The columns A(θ) of the last evaluation (the first, w·S·x, fixed).
-    pub(crate) a: DMatrix<f64>,
-    /// dᵢ = ∂aᵢ/∂ln τᵢ = w·S·τᵢ·∂h/∂τ(τᵢ), filled when a Jacobian is asked for.
-    pub(crate) da: DMatrix<f64>,
-    b: DVector<f64>,
+    /// Number of terms N.
+    n: usize,
     /// The Gram products of the columns [A | b | ∂A] of the last evaluation (the ∂A
     /// rows and columns only when it was asked for a Jacobian).
     gram: DMatrix<f64>,
@@ -48,38 +45,40 @@ pub struct Projected<'p, K: Kernels> {
     fixed: [f64; 2],
     /// θ of the last evaluation, whose Gram products of [A | b] `gram` holds.
     theta: Vec<f64>,
+    /// A block of [`BLOCK_ROWS`] rows of the columns ([`Problem::design_block`]):
+    /// no column of the data's length is kept.
+    block: Vec<f64>,
     /// θ, JᵀJ and Jᵀr of the last evaluation asked for a Jacobian.
     normal: Option<(Vec<f64>, DMatrix<f64>, DVector<f64>)>,
 }
 
-/// Rows of a block of [`Projected::gram`]: the columns of a block (at most 2·12 + 2
-/// of 4 kB) stay in the level-2 cache while all their products are taken; a curve
-/// of at most this many points (every shipped one, and the starts' subsample) takes
-/// each product in one piece, as [`nnls`] does.
-pub(crate) const GRAM_ROWS: usize = 512;
-
-/// a·b as [`Projected::gram`] sums it: [`dot`] of each block of [`GRAM_ROWS`]
-/// rows added in order to 0.
-fn blocked_dot(a: &[f64], b: &[f64]) -> f64 {
-    a.chunks(GRAM_ROWS)
-        .zip(b.chunks(GRAM_ROWS))
-        .fold(0.0, |g, (a, b)| g + dot(a, b))
+/// The row blocks `lo..hi` of [`BLOCK_ROWS`] rows of a curve of `m` points.
+fn blocks(m: usize) -> impl Iterator<Item = (usize, usize)> {
+    (0..m)
+        .step_by(BLOCK_ROWS)
+        .map(move |lo| (lo, (lo + BLOCK_ROWS).min(m)))
 }
 
 impl<'p, K: Kernels> Projected<'p, K> {
     /// The projection of `prob` (its term count set).
     pub fn new(prob: &'p mut Problem<K>) -> Projected<'p, K> {
         let (m, n) = (prob.len(), prob.n_terms);
-        let mut a = DMatrix::zeros(m, 1 + n);
-        prob.input_column(a.column_mut(0).as_mut_slice());
-        let b = prob.targets();
-        let x = &a.as_slice()[..m];
-        let fixed = [blocked_dot(x, x), blocked_dot(b.as_slice(), x)];
+        // x·x and b·x block by block, as [`Projected::gram`] adds its products
+        let mut block = Vec::new();
+        let mut fixed = [0.0; 2];
+        for (lo, hi) in blocks(m) {
+            let len = hi - lo;
+            // the kernels' columns are not read: only x (column 0) and b (n + 1)
+            block.resize((2 + n) * len, 0.0);
+            prob.input_column_block(lo, hi, &mut block[..len]);
+            prob.targets_block(lo, hi, &mut block[(n + 1) * len..(n + 2) * len]);
+            let (x, b) = (&block[..len], &block[(n + 1) * len..(n + 2) * len]);
+            fixed[0] += dot(x, x);
+            fixed[1] += dot(b, x);
+        }
         Projected {
             prob,
-            a,
-            da: DMatrix::zeros(m, n),
-            b,
+            n,
             gram: DMatrix::zeros(2 + 2 * n, 2 + 2 * n),
             ata: DMatrix::zeros(1 + n, 1 + n),
             atb: DVector::zeros(1 + n),
@@ -88,6 +87,7 @@ impl<'p, K: Kernels> Projected<'p, K> {
             work: NnlsWork::new(1 + n),
             fixed,
             theta: Vec::with_capacity(n),
+            block,
             normal: None,
         }
     }
@@ -101,10 +101,7 @@ impl<'p, K: Kernels> Projected<'p, K> {
     pub fn moduli_at(&mut self, theta: &[f64]) {
         self.prob.evaluations += 1;
         if self.theta != theta {
-            let m = self.prob.len();
             self.prob.kernels_at_log_taus(theta, true);
-            self.prob
-                .design_columns(&mut self.a.as_mut_slice()[m..], None);
             self.gram(false);
             self.theta.clear();
             self.theta.extend_from_slice(theta);
@@ -116,7 +113,7 @@ impl<'p, K: Kernels> Projected<'p, K> {
     /// the positive set of the one before, into `c` and `positive`; false (both
     /// unchanged) when it fails.
     fn solve_moduli(&mut self) -> bool {
-        let n = self.a.ncols() - 1;
+        let n = self.n;
         for j in 0..=n {
             for i in 0..=n {
                 self.ata[(i, j)] = self.gram[(i, j)];
@@ -146,32 +143,28 @@ impl<'p, K: Kernels> Projected<'p, K> {
 
     /// The Gram products kᵢ·kⱼ of the columns k = [A | b | ∂A] (∂A when
     /// `derivatives`; b·b and b·∂A, which nothing uses, left at 0) into the leading
-    /// block of `gram`, in one pass over the rows:
-    /// blocks of [`GRAM_ROWS`] rows, every product of a block while its columns are
-    /// in the cache (column by column, each product of a 10⁵-point curve would read
-    /// two 0.8 MB columns from memory). The two products of the fixed columns alone
-    /// are `fixed`'s.
+    /// block of `gram`, in one pass over the rows: blocks of [`BLOCK_ROWS`] rows
+    /// formed from the kernels ([`Problem::design_block`]), every product of a block
+    /// while its columns are in the cache (column by column, each product of a
+    /// 10⁵-point curve would read two 0.8 MB columns from memory). The two products
+    /// of the fixed columns alone are `fixed`'s.
     fn gram(&mut self, derivatives: bool) {
-        let (m, n) = (self.a.nrows(), self.a.ncols() - 1);
+        let (m, n) = (self.prob.len(), self.n);
         let k = n + 2 + if derivatives { n } else { 0 };
-        let (a, b, da) = (self.a.as_slice(), self.b.as_slice(), self.da.as_slice());
-        let col = |i: usize| match i {
-            _ if i <= n => &a[i * m..(i + 1) * m],
-            _ if i == n + 1 => b,
-            _ => &da[(i - n - 2) * m..(i - n - 1) * m],
-        };
-        let g = self.gram.as_mut_slice();
         let size = 2 + 2 * n;
+        let g = self.gram.as_mut_slice();
         g.fill(0.0);
-        for lo in (0..m).step_by(GRAM_ROWS) {
-            let hi = (lo + GRAM_ROWS).min(m);
+        for (lo, hi) in blocks(m) {
+            let len = hi - lo;
+            self.prob.design_block(lo, hi, derivatives, &mut self.block);
+            let col = |i: usize| &self.block[i * len..(i + 1) * len];
             for j in 0..k {
-                let cj = &col(j)[lo..hi];
+                let cj = col(j);
                 // b·b and b·∂A are not used (Jᵀr is taken from the residuals);
                 // x·x and b·x are `fixed`.
                 let fixed = |i: usize| i == 0 && (j == 0 || j == n + 1);
                 for i in (0..=j).filter(|&i| i != n + 1 && !fixed(i)) {
-                    g[j * size + i] += dot(&col(i)[lo..hi], cj);
+                    g[j * size + i] += dot(col(i), cj);
                 }
             }
         }
@@ -184,11 +177,42 @@ impl<'p, K: Kernels> Projected<'p, K> {
         }
     }
 
+    /// The residuals r = A·c − b at the moduli `c` into `r` (as nalgebra's gemv
+    /// forms them: a₀c₀ − b, then + aⱼcⱼ column by column, so the same bits), and,
+    /// when `derivatives`, dᵢ·r for each term (blocked as [`Projected::gram`] sums)
+    /// into `dr`: a second pass over the row blocks.
+    fn residuals(&mut self, r: &mut [f64], derivatives: bool, dr: &mut [f64]) {
+        let (m, n) = (self.prob.len(), self.n);
+        dr.fill(0.0);
+        for (lo, hi) in blocks(m) {
+            let len = hi - lo;
+            self.prob.design_block(lo, hi, derivatives, &mut self.block);
+            let col = |i: usize| &self.block[i * len..(i + 1) * len];
+            let rb = &mut r[lo..hi];
+            let c0 = self.c[0];
+            for ((r, a), b) in rb.iter_mut().zip(col(0)).zip(col(n + 1)) {
+                *r = a * c0 + -b;
+            }
+            for j in 1..=n {
+                let cj = self.c[j];
+                // a·c + r as gemv adds it (addition commutes bit for bit)
+                for (r, a) in rb.iter_mut().zip(col(j)) {
+                    *r += a * cj;
+                }
+            }
+            if derivatives {
+                for (i, d) in dr.iter_mut().enumerate() {
+                    *d += dot(col(n + 2 + i), rb);
+                }
+            }
+        }
+    }
+
     /// Kaufman's JᵀJ and Jᵀr (type notes) from the Gram products, moduli and
     /// residuals of the last evaluation; None where the positive columns' Gram
     /// matrix is singular.
-    fn normal_from_gram(&self, r: &DVector<f64>) -> Option<(DMatrix<f64>, DVector<f64>)> {
-        let (m, n) = (self.a.nrows(), self.a.ncols() - 1);
+    fn normal_from_gram(&self, dr: &[f64]) -> Option<(DMatrix<f64>, DVector<f64>)> {
+        let n = self.n;
         let gram = &self.gram;
         let pos: Vec<usize> = (0..=n).filter(|&j| self.c[j] > 0.0).collect();
         // (A_PᵀA_P)⁻¹ through the Cholesky factor of the unit-diagonal scaling
@@ -205,9 +229,7 @@ impl<'p, K: Kernels> Projected<'p, K> {
             let dd = gram[(n + 2 + i, n + 2 + j)];
             self.c[1 + i] * self.c[1 + j] * (dd - u.column(i).dot(&u.column(j)))
         });
-        let jtr = DVector::from_fn(n, |i, _| {
-            self.c[1 + i] * dot(&self.da.as_slice()[i * m..(i + 1) * m], r.as_slice())
-        });
+        let jtr = DVector::from_fn(n, |i, _| self.c[1 + i] * dr[i]);
         Some((jtj, jtr))
     }
 }
@@ -226,28 +248,23 @@ impl<K: Kernels> LeastSquares for Projected<'_, K> {
     ) -> bool {
         let p = &mut *self.prob;
         p.evaluations += 1;
-        let m = p.len();
         let derivatives = jac.is_some();
         p.kernels_at_log_taus(theta, derivatives);
-        p.design_columns(
-            &mut self.a.as_mut_slice()[m..],
-            derivatives.then_some(self.da.as_mut_slice()),
-        );
         self.gram(derivatives);
         self.theta.clear();
         self.theta.extend_from_slice(theta);
         if !self.solve_moduli() {
             return false;
         }
-        r.as_mut_slice().copy_from_slice(self.b.as_slice());
-        r.gemv(1.0, &self.a, &self.c, -1.0);
+        let mut dr = vec![0.0; self.n];
+        self.residuals(r.as_mut_slice(), derivatives, &mut dr);
         if !r.as_slice().iter().all(|v| v.is_finite()) {
             return false;
         }
         if !derivatives {
             return true;
         }
-        match self.normal_from_gram(r) {
+        match self.normal_from_gram(&dr) {
             Some((jtj, jtr)) if jtj.iter().chain(jtr.iter()).all(|v| v.is_finite()) => {
                 self.normal = Some((theta.to_vec(), jtj, jtr));
                 true

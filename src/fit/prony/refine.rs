@@ -17,6 +17,9 @@ pub struct TermFit<K: Kernels> {
     pub n_terms: usize,
     /// Scaled parameters, terms sorted by τ.
     pub p: Vec<f64>,
+    /// ½‖r‖² at `p` as the fit found it (the polish's [`LmResult::cost`], the grid
+    /// NNLS's residual), ∞ where not finite: what [`from_neighbours`] compares.
+    pub cost: f64,
     /// LM iterations (summed over the searches).
     pub iterations: usize,
     /// Evaluations (summed over the searches).
@@ -65,7 +68,7 @@ fn from_neighbours<K: Kernels>(
     fits: Vec<TermFit<K>>,
     settings: &Search,
 ) -> Vec<TermFit<K>> {
-    let costs: Vec<f64> = fits.par_iter().map(cost).collect();
+    let costs: Vec<f64> = fits.iter().map(|f| f.cost).collect();
     let m = setup.prob.len() as f64;
     let index = |n: usize| fits.iter().position(|g| g.n_terms == n);
     let starts: Vec<Vec<Vec<f64>>> = fits
@@ -101,8 +104,7 @@ fn from_neighbours<K: Kernels>(
             prob.n_terms = f.n_terms;
             prob.evaluations = 0;
             let g = refine(prob, &s, setup.bounds, settings);
-            let gc = cost(&g);
-            let (mut best, other) = match gc < fc {
+            let (mut best, other) = match g.cost < fc {
                 true => (g, f),
                 false => (f, g),
             };
@@ -112,16 +114,6 @@ fn from_neighbours<K: Kernels>(
             best
         })
         .collect()
-}
-
-/// ½‖r‖² of a term fit (∞ where not finite).
-fn cost<K: Kernels>(f: &TermFit<K>) -> f64 {
-    let mut prob = f.problem.clone();
-    let mut r = nalgebra::DVector::zeros(prob.len());
-    match lm::LeastSquares::eval(&mut prob, &f.p, &mut r, None) {
-        true => 0.5 * r.norm_squared(),
-        false => f64::INFINITY,
-    }
 }
 
 /// The ln τ of a fit of N + 1 terms without its term of least reach.
@@ -169,12 +161,13 @@ pub fn fit_terms<K: Kernels>(
     let starts = starts(setup.window, grid, n, settings.max_starts);
     if settings.method == Method::Grid {
         let ts: Vec<f64> = starts[0].iter().map(|l| l.exp()).collect();
-        let (e, it) = nnls_at(&mut prob, &ts)?;
+        let (e, it, cost) = nnls_at(&mut prob, &ts)?;
         let mut p = e;
         p.extend(ts.iter().map(|t| t.ln()));
         return Ok(TermFit {
             n_terms: n,
             p,
+            cost,
             iterations: it,
             evaluations: prob.evaluations,
             termination: Termination::Converged("exact (NNLS at fixed τ)"),
@@ -265,7 +258,15 @@ fn refine<K: Kernels>(
     };
     let mut joint_bounds = vec![(0.0, f64::INFINITY); 1 + n];
     joint_bounds.extend(bounds);
-    let polish = lm::minimize(&mut prob, &joint, &joint_bounds, &tail);
+    // The polish stops at the noise floor of the data too: where an accepted step
+    // lowers ½χ² by less than NOISE_FLOOR (½‖r‖² by less than NOISE_FLOOR·s²,
+    // s² = 2·cost/(m − 2N − 1), a relative decrease below 2·NOISE_FLOOR/(m − 2N − 1)).
+    let dof = prob.len().saturating_sub(2 * n + 1).max(1) as f64;
+    let polish_settings = LmSettings {
+        ftol: tail.ftol.max(2.0 * NOISE_FLOOR / dof),
+        ..tail
+    };
+    let polish = lm::minimize(&mut prob, &joint, &joint_bounds, &polish_settings);
     iterations += polish.iterations;
     let termination = match r.termination {
         Termination::Converged(_) => polish.termination,
@@ -277,6 +278,11 @@ fn refine<K: Kernels>(
     TermFit {
         n_terms: n,
         p,
+        cost: if polish.cost.is_finite() {
+            polish.cost
+        } else {
+            f64::INFINITY
+        },
         iterations,
         evaluations: prob.evaluations + evaluations,
         termination,

@@ -58,6 +58,11 @@ pub struct Args {
     /// With --slurm: submit the jobs (sh .dea-fit/slurm/submit.sh)
     #[arg(long, requires = "slurm")]
     submit: bool,
+    /// With --slurm: quick steps (fits of coupon files) run up to N to a job; 1 is
+    /// one job a step
+    #[arg(long, value_name = "N", default_value_t = 8, requires = "slurm",
+          value_parser = clap::value_parser!(u16).range(1..))]
+    batch: u16,
 }
 
 /// The project in `dir`, its steps' flags checked against the commands' own.
@@ -124,6 +129,7 @@ fn slurm(p: &Project, a: &Args, exe: &Path) -> Result<i32> {
         dea_fit::project::graph::select(p, &a.targets)?
     };
     let sel: Vec<StepReport> = run::status(p)?
+        .0
         .into_iter()
         .filter(|s| {
             p.steps
@@ -132,7 +138,7 @@ fn slurm(p: &Project, a: &Args, exe: &Path) -> Result<i32> {
                 .any(|(x, &c)| c && x.target == s.target)
         })
         .collect();
-    let submit = dea_fit::project::slurm::write(p, &sel, exe)?;
+    let submit = dea_fit::project::slurm::write(p, &sel, exe, usize::from(a.batch))?;
     print(&a.dir.dir, "make --slurm", &sel, a.json, true);
     let say = |s: String| {
         if a.json {
@@ -143,7 +149,7 @@ fn slurm(p: &Project, a: &Args, exe: &Path) -> Result<i32> {
     };
     if !a.submit {
         say(format!(
-            "slurm: one job a step to run in {}; submit them with: sh {}",
+            "slurm: the jobs of the steps to run are in {}; submit them with: sh {}",
             submit
                 .parent()
                 .map_or(submit.clone(), Path::to_path_buf)
@@ -167,10 +173,12 @@ fn slurm(p: &Project, a: &Args, exe: &Path) -> Result<i32> {
 /// Write the project page from where every step stands now; say where (on
 /// stderr with `--json`, which keeps stdout one document), or why not.
 fn write_page(p: &Project, json: bool) -> Result<()> {
-    let all = run::status(p)?;
-    let said = match dea_fit::project::page::write(p, &all)? {
-        Ok(path) => format!("project page: {}", path.display()),
-        Err(why) => format!("note: {why}"),
+    use dea_fit::project::page::{self, Wrote};
+    let (all, state) = run::status(p)?;
+    let said = match page::write(p, &all, &state)? {
+        Wrote::Written(path) => format!("project page: {}", path.display()),
+        Wrote::Unchanged(path) => format!("project page: {} (unchanged)", path.display()),
+        Wrote::Refused(why) => format!("note: {why}"),
     };
     if json {
         eprintln!("{said}");

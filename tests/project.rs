@@ -366,6 +366,12 @@ fn bad_project_files_get_located_errors() {
 fn init_writes_a_project_from_the_files_and_never_overwrites() {
     let d = tempfile::tempdir().unwrap();
     copy_dir(&repo().join("datasets/lab/raw"), &d.path().join("raw"));
+    // a file name with a quote and a backslash is written as a TOML string
+    std::fs::copy(
+        d.path().join("raw/sylgard184/tensile_1.csv"),
+        d.path().join("raw/sylgard184/tensile \"3\\.csv"),
+    )
+    .unwrap();
     let o = run(d.path(), &["init"]);
     assert_eq!(
         o.status.code(),
@@ -386,8 +392,12 @@ fn init_writes_a_project_from_the_files_and_never_overwrites() {
         assert!(t.contains(s), "{s} missing:\n{t}");
     }
     // the project it wrote parses: what it can run without a geometry runs
-    let (_, m, _) = steps(d.path(), &["make", "--dry-run"]);
+    let (_, m, v) = steps(d.path(), &["make", "--dry-run"]);
     assert!(m.contains_key("raw-vhb4910/tensile"), "{m:?}");
+    assert!(
+        v.to_string().contains(r#"tensile \"3\\.csv"#),
+        "the odd name is read: {v}"
+    );
     let o = run(d.path(), &["init"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("never overwrites"));
@@ -786,4 +796,69 @@ fn targets_inside_scenes_and_manifests() {
     );
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("no project file"));
+}
+
+/// `make`, `make --dry-run` and `status` with `--json` list every step (of the
+/// selection) with exactly its target, kind (the command), state (`up_to_date`,
+/// `stale`, `ran`, `failed`, `blocked`), reason (empty only when up to date),
+/// outputs and command line, and counts of every state; across the runs below
+/// every state occurs.
+#[test]
+fn json_lists_every_step_with_its_fields() {
+    let d = lab();
+    let p = d.path();
+    let mut seen = std::collections::BTreeSet::new();
+    let mut check = |args: &[&str], want: usize| {
+        let (_, m, v) = steps(p, args);
+        assert_eq!(m.len(), want, "{args:?}: {m:?}");
+        let list = v["steps"].as_array().unwrap();
+        for s in list {
+            let o = s.as_object().unwrap();
+            let keys: Vec<&str> = o.keys().map(|k| k.as_str()).collect();
+            assert_eq!(
+                keys,
+                ["command", "kind", "outputs", "reason", "state", "target"],
+                "{args:?}"
+            );
+            let state = s["state"].as_str().unwrap();
+            assert!(
+                ["up_to_date", "stale", "ran", "failed", "blocked"].contains(&state),
+                "{state}"
+            );
+            seen.insert(state.to_string());
+            assert_eq!(
+                s["reason"].as_str().unwrap().is_empty(),
+                state == "up_to_date",
+                "{args:?}: {s}"
+            );
+            let kind = s["kind"].as_str().unwrap();
+            assert!(
+                s["command"]
+                    .as_str()
+                    .unwrap()
+                    .starts_with(&format!("dea-fit {kind} ")),
+                "{s}"
+            );
+            assert!(!s["outputs"].as_array().unwrap().is_empty(), "{s}");
+        }
+        let counts = v["counts"].as_object().unwrap();
+        assert_eq!(counts.len(), 5);
+        let total: u64 = counts.values().map(|c| c.as_u64().unwrap()).sum();
+        assert_eq!(total as usize, list.len());
+    };
+    check(&["make", "--dry-run"], ALL);
+    check(&["status"], ALL);
+    check(&["make"], ALL);
+    check(&["make", "--dry-run", "vhb4910/relaxation"], 2);
+    std::fs::write(
+        p.join("raw/vhb4910/uniaxial.csv"),
+        "stretch,stress_kPa\n1,x\n",
+    )
+    .unwrap();
+    check(&["make"], ALL);
+    check(&["status"], ALL);
+    assert_eq!(
+        seen.into_iter().collect::<Vec<_>>(),
+        ["blocked", "failed", "ran", "stale", "up_to_date"]
+    );
 }

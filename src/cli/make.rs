@@ -2,6 +2,7 @@
 
 use dea_fit::project::file::{Flag, Project, KINDS};
 use dea_fit::project::run::{self, Standing, StepReport};
+use dea_fit::project::state::State;
 use dea_fit::Result;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -96,7 +97,7 @@ pub fn run(a: Args) -> Result<i32> {
     );
     let exe = std::env::current_exe().map_err(|e| dea_fit::Error::io("dea-fit", e))?;
     if a.page_only {
-        write_page(&p, a.json)?;
+        write_page(&p, None, a.json)?;
         return Ok(0);
     }
     if a.slurm {
@@ -108,11 +109,14 @@ pub fn run(a: Args) -> Result<i32> {
         targets: a.targets,
         only: a.only,
     };
-    let steps = run::make(&p, &opts, &exe)?;
+    let every = opts.targets.is_empty() && !opts.only;
+    let (steps, state) = run::make(&p, &opts, &exe)?;
     let what = if a.dry_run { "make --dry-run" } else { "make" };
     print(&a.dir.dir, what, &steps, a.json, a.dry_run);
     if !a.dry_run && !a.no_report {
-        write_page(&p, a.json)?;
+        // every step up to date: make's own report is what status would say
+        let known = every && steps.iter().all(|s| s.state == Standing::UpToDate);
+        write_page(&p, known.then_some((steps.as_slice(), &state)), a.json)?;
     }
     let bad = steps
         .iter()
@@ -170,12 +174,20 @@ fn slurm(p: &Project, a: &Args, exe: &Path) -> Result<i32> {
     Ok(i32::from(!o.status.success()))
 }
 
-/// Write the project page from where every step stands now; say where (on
-/// stderr with `--json`, which keeps stdout one document), or why not.
-fn write_page(p: &Project, json: bool) -> Result<()> {
+/// Write the project page from where every step stands now (`known`, or what
+/// [`run::status`] says); say where (on stderr with `--json`, which keeps stdout
+/// one document), or why not.
+fn write_page(p: &Project, known: Option<(&[StepReport], &State)>, json: bool) -> Result<()> {
     use dea_fit::project::page::{self, Wrote};
-    let (all, state) = run::status(p)?;
-    let said = match page::write(p, &all, &state)? {
+    let read;
+    let (all, state) = match known {
+        Some(k) => k,
+        None => {
+            read = run::status(p)?;
+            (read.0.as_slice(), &read.1)
+        }
+    };
+    let said = match page::write(p, all, state)? {
         Wrote::Written(path) => format!("project page: {}", path.display()),
         Wrote::Unchanged(path) => format!("project page: {} (unchanged)", path.display()),
         Wrote::Refused(why) => format!("note: {why}"),

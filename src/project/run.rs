@@ -298,13 +298,14 @@ struct Ended {
 /// Bring the selected steps up to date: run every stale (or last failed) step
 /// whose needs ended well, in dependency order, `jobs` at once; a step whose
 /// need failed is blocked, and the rest goes on. Returns the selected steps in
-/// dependency order. `exe` is the program each step runs (this one).
+/// dependency order, with the state they stand on (for the project page). `exe`
+/// is the program each step runs (this one).
 ///
 /// The queue is linear in steps and dependencies: each step waits on a count of
 /// its needs still to end, and each end settles the steps that read it (the
 /// ready ones start in the project file's order, so the start order does not
 /// depend on timing).
-pub fn make(p: &Project, opts: &Options, exe: &Path) -> Result<Vec<StepReport>> {
+pub fn make(p: &Project, opts: &Options, exe: &Path) -> Result<(Vec<StepReport>, State)> {
     let n = p.steps.len();
     let order = graph::order(p)?;
     let chosen = if opts.only {
@@ -332,7 +333,7 @@ pub fn make(p: &Project, opts: &Options, exe: &Path) -> Result<Vec<StepReport>> 
         }
     }
     if opts.dry_run {
-        return Ok(order.iter().filter_map(|&i| out[i].take()).collect());
+        return Ok((order.iter().filter_map(|&i| out[i].take()).collect(), state));
     }
     // with --only, the needs left out count as they stand
     let mut word: Vec<Standing> = vec![Standing::Stale; n];
@@ -450,7 +451,7 @@ pub fn make(p: &Project, opts: &Options, exe: &Path) -> Result<Vec<StepReport>> 
     for l in lists {
         crate::report::runs::refresh_index(&l)?;
     }
-    Ok(order.iter().filter_map(|&i| out[i].take()).collect())
+    Ok((order.iter().filter_map(|&i| out[i].take()).collect(), state))
 }
 
 /// Record a step's end in the state file (done only with status 0 and its

@@ -202,7 +202,7 @@ const EXPORT_DIR: &str = "tests/data/export";
 /// every file by its path in the project.
 fn lab_files() -> Vec<(String, Vec<u8>)> {
     fn walk(rel: &str, out: &mut Vec<(String, Vec<u8>)>) {
-        for f in dir(&format!("{LAB_DIR}/{rel}").trim_end_matches('/')) {
+        for f in dir(format!("{LAB_DIR}/{rel}").trim_end_matches('/')) {
             let inside = f[LAB_DIR.len() + 1..].to_string();
             if ["fits", "reports", ".dea-fit"].contains(&inside.as_str()) {
                 continue;

@@ -862,3 +862,46 @@ fn json_lists_every_step_with_its_fields() {
         ["blocked", "failed", "ran", "stale", "up_to_date"]
     );
 }
+
+/// `dea-fit bench make`, short (a 5-step generated project, one timed run each):
+/// both projects from scratch and up to date, as CSV, JSON, chart and page.
+#[test]
+fn bench_make_times_both_projects() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("bench");
+    let lab = repo().join("datasets/lab");
+    let o = run(
+        d.path(),
+        &[
+            "bench",
+            "make",
+            "--steps",
+            "5",
+            "--budget",
+            "0",
+            "--min-repeats",
+            "1",
+            "--lab",
+            lab.to_str().unwrap(),
+            "--out-dir",
+            out.to_str().unwrap(),
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("make.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 4, "{csv}");
+    for (row, want) in rows.iter().zip([
+        "generated,5,from_scratch",
+        "generated,5,up_to_date",
+        "lab,12,from_scratch",
+        "lab,12,up_to_date",
+    ]) {
+        assert!(row.starts_with(want), "{row}");
+        let t: f64 = row.split(',').nth(3).unwrap().parse().unwrap();
+        assert!(t > 0.0 && t.is_finite(), "{row}");
+    }
+    for f in ["make.json", "make.svg", "make.md"] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+}

@@ -366,6 +366,12 @@ fn bad_project_files_get_located_errors() {
 fn init_writes_a_project_from_the_files_and_never_overwrites() {
     let d = tempfile::tempdir().unwrap();
     copy_dir(&repo().join("datasets/lab/raw"), &d.path().join("raw"));
+    // a file name with a quote and a backslash is written as a TOML string
+    std::fs::copy(
+        d.path().join("raw/sylgard184/tensile_1.csv"),
+        d.path().join("raw/sylgard184/tensile \"3\\.csv"),
+    )
+    .unwrap();
     let o = run(d.path(), &["init"]);
     assert_eq!(
         o.status.code(),
@@ -386,8 +392,12 @@ fn init_writes_a_project_from_the_files_and_never_overwrites() {
         assert!(t.contains(s), "{s} missing:\n{t}");
     }
     // the project it wrote parses: what it can run without a geometry runs
-    let (_, m, _) = steps(d.path(), &["make", "--dry-run"]);
+    let (_, m, v) = steps(d.path(), &["make", "--dry-run"]);
     assert!(m.contains_key("raw-vhb4910/tensile"), "{m:?}");
+    assert!(
+        v.to_string().contains(r#"tensile \"3\\.csv"#),
+        "the odd name is read: {v}"
+    );
     let o = run(d.path(), &["init"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("never overwrites"));
@@ -469,80 +479,128 @@ fn make_writes_the_project_page() {
     assert_eq!(std::fs::read(p.join("reports/index.html")).unwrap(), before);
 }
 
-/// `make --slurm` writes one batch script a step that would run, each running
-/// `dea-fit make --only --jobs 1 --no-report <target>` in the project folder, a
-/// page job after all of them, and submit.sh with each step's `afterok`
-/// dependencies on the jobs of the steps it reads. The scripts run here as a
-/// Slurm node would (the steps that read nothing all at once, so their records
-/// race for the state file) leave the same fits as a local make, a project page,
-/// and `status` saying everything is up to date.
+/// One job of `submit.sh`: its variable, script, targets and the variables of the
+/// jobs it waits for.
+struct Job {
+    var: String,
+    script: String,
+    targets: Vec<String>,
+    after: Vec<String>,
+}
+
+/// The jobs of `.dea-fit/slurm/submit.sh`, in submission order.
+fn jobs(submit: &str) -> Vec<Job> {
+    submit
+        .lines()
+        .filter(|l| l.contains("sbatch --parsable"))
+        .map(|l| {
+            let words: Vec<&str> = l.split_whitespace().collect();
+            let script = words
+                .iter()
+                .find(|w| w.ends_with(".sbatch);"))
+                .unwrap()
+                .trim_end_matches(");")
+                .to_string();
+            let after = words
+                .iter()
+                .find_map(|w| w.strip_prefix("--dependency=afterany:"))
+                .map_or(Vec::new(), |d| {
+                    d.split(':')
+                        .map(|x| x.trim_start_matches('$').to_string())
+                        .collect()
+                });
+            // echo "<targets…> $jK"
+            let echo = &l[l.find("echo \"").unwrap() + 6..l.rfind(" $").unwrap()];
+            Job {
+                var: l[..l.find('=').unwrap()].to_string(),
+                script,
+                targets: echo.split(' ').map(str::to_string).collect(),
+                after,
+            }
+        })
+        .collect()
+}
+
+/// `make --slurm` writes the steps that would run as batch jobs, each running
+/// `dea-fit make --only --jobs 1 --no-report <targets…>` in the project folder:
+/// the quick steps (fits of coupon files) up to `--batch` (8) to a job, identify
+/// and rank a job each, a page job after all of them, and submit.sh with each
+/// job's `afterany` dependencies on the jobs of the steps it reads (no job waits
+/// for itself, none for a later one). `--batch 1` is one job a step. The scripts
+/// run here as a Slurm node would (the jobs that wait for nothing all at once, so
+/// their records race for the state file) leave the same fits as a local make, a
+/// project page, and `status` saying everything is up to date.
 #[test]
 fn make_slurm_writes_jobs_with_dependencies() {
     let (d, local) = (lab(), lab());
     let p = d.path();
     assert_eq!(steps(local.path(), &["make", "--jobs", "2"]).0, 0);
-    let (code, m, _) = steps(p, &["make", "--slurm"]);
+    let s = p.join(".dea-fit/slurm");
+    // one job a step
+    let (code, m, _) = steps(p, &["make", "--slurm", "--batch", "1"]);
     assert_eq!(code, 0);
     assert_eq!(with(&m, "stale").len(), ALL, "every step would run");
-    let s = p.join(".dea-fit/slurm");
+    let one = jobs(&std::fs::read_to_string(s.join("submit.sh")).unwrap());
+    assert_eq!(one.len(), ALL + 1);
+    assert!(one[..ALL].iter().all(|j| j.targets.len() == 1));
+    // batched (the default)
+    let (code, _, _) = steps(p, &["make", "--slurm"]);
+    assert_eq!(code, 0);
     let submit = std::fs::read_to_string(s.join("submit.sh")).unwrap();
-    // (target, script, the scripts it waits for), in submission order
-    let lines: Vec<&str> = submit
-        .lines()
-        .filter(|l| l.contains("sbatch --parsable"))
-        .collect();
-    assert_eq!(lines.len(), ALL + 1, "{submit}");
-    let var = |l: &str| l[..l.find('=').unwrap()].to_string();
-    let script = |l: &str| {
-        l.split_whitespace()
-            .find(|w| w.ends_with(".sbatch);"))
-            .unwrap()
-            .trim_end_matches(");")
-            .to_string()
+    let all = jobs(&submit);
+    let (page, steps_jobs) = all.split_last().unwrap();
+    let job_of = |t: &str| {
+        steps_jobs
+            .iter()
+            .position(|j| j.targets.iter().any(|x| x == t))
+            .unwrap_or_else(|| panic!("{t} has no job: {submit}"))
     };
-    let deps = |l: &str| -> Vec<String> {
-        l.split_whitespace()
-            .find_map(|w| {
-                w.strip_prefix("--dependency=afterok:")
-                    .or(w.strip_prefix("--dependency=afterany:"))
-            })
-            .map_or(Vec::new(), |d| {
-                d.split(':')
-                    .map(|x| x.trim_start_matches('$').to_string())
-                    .collect()
-            })
-    };
-    let by_script: BTreeMap<String, (String, Vec<String>)> = lines
+    let n: usize = steps_jobs.iter().map(|j| j.targets.len()).sum();
+    assert_eq!(n, ALL, "every step in one job: {submit}");
+    // 10 quick steps in two batches of at most 8, identify and rank alone
+    assert_eq!(steps_jobs.len(), 4, "{submit}");
+    assert!(steps_jobs.iter().all(|j| j.targets.len() <= 8));
+    for t in ["stack/identify", "fillers/rank"] {
+        let j = &steps_jobs[job_of(t)];
+        assert_eq!(j.targets, [t]);
+        assert_eq!(j.script, format!("{}.sbatch", t.replace('/', "-")));
+    }
+    assert!(steps_jobs
         .iter()
-        .map(|l| (script(l), (var(l), deps(l))))
-        .collect();
-    let var_of = |name: &str| by_script[name].0.clone();
-    let mut rank_deps = by_script["fillers-rank.sbatch"].1.clone();
-    rank_deps.sort();
-    let mut want: Vec<String> = [
-        "vhb4910-breakdown",
-        "sylgard_batio3-composite",
-        "sylgard_batio3_20wt-tensile",
-        "sylgard_batio3_40wt-tensile",
-    ]
-    .iter()
-    .map(|n| var_of(&format!("{n}.sbatch")))
-    .collect();
-    want.sort();
-    assert_eq!(rank_deps, want, "the ranking waits for the fits it reads");
+        .filter(|j| j.targets.len() > 1)
+        .all(|j| j.script.starts_with("batch-")));
+    // each step after what it reads: in its own job before it, or in a job waited for
+    for (user, need) in [
+        ("stack/identify", "vhb4910/tensile"),
+        ("vhb4910/relaxation", "vhb4910/tensile"),
+        ("fillers/rank", "vhb4910/breakdown"),
+        ("fillers/rank", "sylgard_batio3/composite"),
+        ("fillers/rank", "sylgard_batio3_20wt/tensile"),
+        ("fillers/rank", "sylgard_batio3_40wt/tensile"),
+    ] {
+        let (u, n) = (job_of(user), job_of(need));
+        if u == n {
+            let t = &steps_jobs[u].targets;
+            let at = |x: &str| t.iter().position(|y| y == x).unwrap();
+            assert!(at(need) < at(user), "{user} after {need} in {t:?}");
+        } else {
+            assert!(n < u, "{need}'s job is submitted first");
+            assert!(
+                steps_jobs[u].after.contains(&steps_jobs[n].var),
+                "{user} waits for {need}: {submit}"
+            );
+        }
+    }
+    for (k, j) in steps_jobs.iter().enumerate() {
+        for a in &j.after {
+            let w = steps_jobs.iter().position(|x| &x.var == a).unwrap();
+            assert!(w < k, "{} waits for a later job", j.script);
+        }
+    }
     assert_eq!(
-        by_script["stack-identify.sbatch"].1,
-        [var_of("vhb4910-tensile.sbatch")]
-    );
-    assert!(by_script["vhb4910-tensile.sbatch"].1.is_empty());
-    assert_eq!(
-        by_script["page.sbatch"].1.len(),
-        ALL,
+        page.after.len(),
+        steps_jobs.len(),
         "the page waits for every job"
-    );
-    assert!(
-        lines.last().unwrap().contains("afterany:"),
-        "even failed ones"
     );
     let job = std::fs::read_to_string(s.join("stack-identify.sbatch")).unwrap();
     assert!(
@@ -553,27 +611,26 @@ fn make_slurm_writes_jobs_with_dependencies() {
 
     // run them as the node would: every job whose jobs have ended, at once
     let mut done: Vec<String> = Vec::new();
-    while done.len() < lines.len() {
-        let ready: Vec<String> = by_script
+    while done.len() < all.len() {
+        let ready: Vec<&Job> = all
             .iter()
-            .filter(|(_, (v, d))| !done.contains(v) && d.iter().all(|x| done.contains(x)))
-            .map(|(n, _)| n.clone())
+            .filter(|j| !done.contains(&j.var) && j.after.iter().all(|x| done.contains(x)))
             .collect();
         assert!(!ready.is_empty(), "a job can start");
         let kids: Vec<_> = ready
             .iter()
-            .map(|n| {
+            .map(|j| {
                 std::process::Command::new("sh")
-                    .arg(s.join(n))
+                    .arg(s.join(&j.script))
                     .current_dir(p)
                     .stdout(std::process::Stdio::null())
                     .spawn()
                     .unwrap()
             })
             .collect();
-        for (n, mut k) in ready.iter().zip(kids) {
-            assert!(k.wait().unwrap().success(), "{n}");
-            done.push(by_script[n].0.clone());
+        for (j, mut k) in ready.iter().zip(kids) {
+            assert!(k.wait().unwrap().success(), "{}", j.script);
+            done.push(j.var.clone());
         }
     }
     assert_eq!(fits(p), fits(local.path()), "the same fits as a local make");
@@ -590,4 +647,261 @@ fn make_slurm_writes_jobs_with_dependencies() {
     assert_eq!(code, 0);
     let submit = std::fs::read_to_string(s.join("submit.sh")).unwrap();
     assert_eq!(submit.matches("sbatch --parsable").count(), 1, "{submit}");
+}
+
+/// An up-to-date `make` writes nothing: the page of the same identity is left as
+/// it is (and says so), the state is not rewritten; a deleted page or a report a
+/// single command wrote into reports/ brings the page back up to date. With
+/// `--no-report`, the steps' run list is rebuilt once, at the end, listing every
+/// step's report (the steps themselves leave it to make).
+#[test]
+fn an_up_to_date_make_writes_nothing() {
+    let d = lab();
+    let p = d.path();
+    assert_eq!(steps(p, &["make", "--no-report"]).0, 0);
+    let list = std::fs::read_to_string(p.join("reports/index.html")).unwrap();
+    assert!(list.contains("content=\"run-list\""), "a run list");
+    let (_, _, v) = steps(p, &["status"]);
+    for s in v["steps"].as_array().unwrap() {
+        let t = s["target"].as_str().unwrap().replace('/', "-");
+        assert!(list.contains(&format!("{t}/index.html")), "{t} listed");
+    }
+    assert!(!p.join(".dea-fit/journal.jsonl").exists(), "folded in");
+    let o = run(p, &["make"]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("project page: "));
+    let stamp = |f: &str| std::fs::metadata(p.join(f)).unwrap().modified().unwrap();
+    let files = [
+        "reports/index.html",
+        "reports/index.md",
+        ".dea-fit/state.json",
+    ];
+    let before: Vec<_> = files.iter().map(|f| stamp(f)).collect();
+    let o = run(p, &["make"]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("index.html (unchanged)"), "{out}");
+    assert_eq!(files.iter().map(|f| stamp(f)).collect::<Vec<_>>(), before);
+    // a page removed comes back
+    std::fs::remove_file(p.join("reports/index.html")).unwrap();
+    let o = run(p, &["make"]);
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("(unchanged)"));
+    assert!(p.join("reports/index.html").exists());
+    // a single command's report in reports/ joins the page's run list
+    let o = run(
+        p,
+        &[
+            "breakdown",
+            "raw/vhb4910/breakdown.csv",
+            "--report",
+            "reports/by-hand",
+        ],
+    );
+    assert!(o.status.success());
+    let o = run(p, &["make"]);
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("(unchanged)"));
+    let html = std::fs::read_to_string(p.join("reports/index.html")).unwrap();
+    assert!(html.contains("by-hand/index.html"), "listed");
+}
+
+/// `{ target = "…" }` inside the lab's scene and design manifest (no `reads` in
+/// the project file): each step is ordered after the steps it names, a changed
+/// fit re-runs exactly the steps whose files name it, the scene runs standalone
+/// (`dea-fit simulate`, from another folder too), and a misspelt target is a
+/// located error with the near miss (exit 2), in `make` and standalone alike.
+#[test]
+fn targets_inside_scenes_and_manifests() {
+    let d = lab();
+    let p = d.path();
+    assert!(!std::fs::read_to_string(p.join("dea-fit.toml"))
+        .unwrap()
+        .contains("reads"));
+    let (_, _, v) = steps(p, &["make", "--dry-run"]);
+    let order: Vec<&str> = v["steps"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["target"].as_str().unwrap())
+        .collect();
+    let at = |t: &str| order.iter().position(|x| *x == t).unwrap();
+    assert!(at("stack/identify") > at("vhb4910/tensile"), "{order:?}");
+    for t in [
+        "vhb4910/breakdown",
+        "sylgard_batio3/composite",
+        "sylgard_batio3_20wt/tensile",
+        "sylgard_batio3_40wt/tensile",
+    ] {
+        assert!(at("fillers/rank") > at(t), "{t}: {order:?}");
+    }
+    assert_eq!(steps(p, &["make"]).0, 0);
+    // a changed coupon of the 20 wt% series: its fit, then the ranking that names it
+    let f = p.join("raw/sylgard_batio3_20wt/equibiaxial.csv");
+    let mut b = std::fs::read(&f).unwrap();
+    b.extend_from_slice(b"\n");
+    std::fs::write(&f, b).unwrap();
+    let (_, m, _) = steps(p, &["make"]);
+    assert_eq!(
+        with(&m, "ran"),
+        ["fillers/rank", "sylgard_batio3_20wt/tensile"]
+    );
+    // standalone, from the project folder and from its parent
+    let traj = p.join("t.csv");
+    let traj = traj.to_str().unwrap();
+    for (cwd, scene) in [
+        (p.to_path_buf(), "scenes/stack.toml".to_string()),
+        (
+            p.parent().unwrap().to_path_buf(),
+            format!(
+                "{}/scenes/stack.toml",
+                p.file_name().unwrap().to_str().unwrap()
+            ),
+        ),
+    ] {
+        let o = run(&cwd, &["simulate", &scene, "--no-report", "--out", traj]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    // a misspelt target
+    let s = p.join("scenes/stack.toml");
+    let text = std::fs::read_to_string(&s).unwrap();
+    let line = text
+        .lines()
+        .position(|l| l.contains("vhb4910/tensile\" }"))
+        .unwrap()
+        + 1;
+    std::fs::write(
+        &s,
+        text.replace("vhb4910/tensile\" }", "vhb4910/tensil\" }"),
+    )
+    .unwrap();
+    for args in [
+        vec!["make", "--dry-run"],
+        vec![
+            "simulate",
+            "scenes/stack.toml",
+            "--no-report",
+            "--out",
+            traj,
+        ],
+    ] {
+        let o = run(p, &args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(&format!("stack.toml:{line}:")), "{err}");
+        assert!(err.contains("did you mean 'vhb4910/tensile'"), "{err}");
+    }
+    // outside any project
+    let out = tempfile::tempdir().unwrap();
+    std::fs::write(out.path().join("stack.toml"), &text).unwrap();
+    let o = run(
+        out.path(),
+        &["simulate", "stack.toml", "--no-report", "--out", traj],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no project file"));
+}
+
+/// `make`, `make --dry-run` and `status` with `--json` list every step (of the
+/// selection) with exactly its target, kind (the command), state (`up_to_date`,
+/// `stale`, `ran`, `failed`, `blocked`), reason (empty only when up to date),
+/// outputs and command line, and counts of every state; across the runs below
+/// every state occurs.
+#[test]
+fn json_lists_every_step_with_its_fields() {
+    let d = lab();
+    let p = d.path();
+    let mut seen = std::collections::BTreeSet::new();
+    let mut check = |args: &[&str], want: usize| {
+        let (_, m, v) = steps(p, args);
+        assert_eq!(m.len(), want, "{args:?}: {m:?}");
+        let list = v["steps"].as_array().unwrap();
+        for s in list {
+            let o = s.as_object().unwrap();
+            let keys: Vec<&str> = o.keys().map(|k| k.as_str()).collect();
+            assert_eq!(
+                keys,
+                ["command", "kind", "outputs", "reason", "state", "target"],
+                "{args:?}"
+            );
+            let state = s["state"].as_str().unwrap();
+            assert!(
+                ["up_to_date", "stale", "ran", "failed", "blocked"].contains(&state),
+                "{state}"
+            );
+            seen.insert(state.to_string());
+            assert_eq!(
+                s["reason"].as_str().unwrap().is_empty(),
+                state == "up_to_date",
+                "{args:?}: {s}"
+            );
+            let kind = s["kind"].as_str().unwrap();
+            assert!(
+                s["command"]
+                    .as_str()
+                    .unwrap()
+                    .starts_with(&format!("dea-fit {kind} ")),
+                "{s}"
+            );
+            assert!(!s["outputs"].as_array().unwrap().is_empty(), "{s}");
+        }
+        let counts = v["counts"].as_object().unwrap();
+        assert_eq!(counts.len(), 5);
+        let total: u64 = counts.values().map(|c| c.as_u64().unwrap()).sum();
+        assert_eq!(total as usize, list.len());
+    };
+    check(&["make", "--dry-run"], ALL);
+    check(&["status"], ALL);
+    check(&["make"], ALL);
+    check(&["make", "--dry-run", "vhb4910/relaxation"], 2);
+    std::fs::write(
+        p.join("raw/vhb4910/uniaxial.csv"),
+        "stretch,stress_kPa\n1,x\n",
+    )
+    .unwrap();
+    check(&["make"], ALL);
+    check(&["status"], ALL);
+    assert_eq!(
+        seen.into_iter().collect::<Vec<_>>(),
+        ["blocked", "failed", "ran", "stale", "up_to_date"]
+    );
+}
+
+/// `dea-fit bench make`, short (a 5-step generated project, one timed run each):
+/// both projects from scratch and up to date, as CSV, JSON, chart and page.
+#[test]
+fn bench_make_times_both_projects() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("bench");
+    let lab = repo().join("datasets/lab");
+    let o = run(
+        d.path(),
+        &[
+            "bench",
+            "make",
+            "--steps",
+            "5",
+            "--budget",
+            "0",
+            "--min-repeats",
+            "1",
+            "--lab",
+            lab.to_str().unwrap(),
+            "--out-dir",
+            out.to_str().unwrap(),
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("make.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 4, "{csv}");
+    for (row, want) in rows.iter().zip([
+        "generated,5,from_scratch",
+        "generated,5,up_to_date",
+        "lab,12,from_scratch",
+        "lab,12,up_to_date",
+    ]) {
+        assert!(row.starts_with(want), "{row}");
+        let t: f64 = row.split(',').nth(3).unwrap().parse().unwrap();
+        assert!(t > 0.0 && t.is_finite(), "{row}");
+    }
+    for f in ["make.json", "make.svg", "make.md"] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
 }

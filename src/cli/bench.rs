@@ -41,6 +41,9 @@ enum What {
     /// Growth with input size: each reader and estimator timed at growing row counts,
     /// with the log-log slope of time against rows (1 = linear).
     Scale(super::bench_scale::ScaleArgs),
+    /// `dea-fit make`: a generated project of 1 000 steps and the lab project, from
+    /// scratch and up to date (wall time of the whole process).
+    Make(super::bench_make::MakeArgs),
 }
 
 #[derive(Debug, clap::Args)]
@@ -102,6 +105,7 @@ pub fn run(a: Args) -> Result<i32> {
         What::Identify(i) => super::bench_identify::run(&i.scene)?,
         What::Rank(r) => super::bench_rank::run(&r)?,
         What::Scale(s) => super::bench_scale::run(&s)?,
+        What::Make(m) => super::bench_make::run(&m)?,
     };
     Ok(verdict.report(a.strict))
 }

@@ -136,12 +136,14 @@ fn project_text(
         "# dea-fit project (docs/project.md), written by dea-fit init: check every step,\n\
          # fill in what is commented, then run dea-fit make.\n",
     );
+    // a path as a TOML string (a name may hold a quote or a backslash)
+    let quoted = |f: &str| toml::Value::String(f.to_string()).to_string();
     let list = |files: &[String]| match files {
-        [one] => format!("\"{one}\""),
+        [one] => quoted(one),
         many => format!(
             "[\n{}]",
             many.iter()
-                .map(|f| format!("  \"{f}\",\n"))
+                .map(|f| format!("  {},\n", quoted(f)))
                 .collect::<String>()
         ),
     };
@@ -182,7 +184,7 @@ fn project_text(
                             let _ = writeln!(t, "[materials.{name}.relaxation-{}]", k + 1);
                             let _ = writeln!(t, "kind = \"relaxation\"");
                         }
-                        let _ = writeln!(t, "file = \"{f}\"");
+                        let _ = writeln!(t, "file = {}", quoted(f));
                     }
                 }
                 "permittivity" => {

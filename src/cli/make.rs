@@ -2,6 +2,7 @@
 
 use dea_fit::project::file::{Flag, Project, KINDS};
 use dea_fit::project::run::{self, Standing, StepReport};
+use dea_fit::project::state::State;
 use dea_fit::Result;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -58,6 +59,11 @@ pub struct Args {
     /// With --slurm: submit the jobs (sh .dea-fit/slurm/submit.sh)
     #[arg(long, requires = "slurm")]
     submit: bool,
+    /// With --slurm: quick steps (fits of coupon files) run up to N to a job; 1 is
+    /// one job a step
+    #[arg(long, value_name = "N", default_value_t = 8, requires = "slurm",
+          value_parser = clap::value_parser!(u16).range(1..))]
+    batch: u16,
 }
 
 /// The project in `dir`, its steps' flags checked against the commands' own.
@@ -91,7 +97,7 @@ pub fn run(a: Args) -> Result<i32> {
     );
     let exe = std::env::current_exe().map_err(|e| dea_fit::Error::io("dea-fit", e))?;
     if a.page_only {
-        write_page(&p, a.json)?;
+        write_page(&p, None, a.json)?;
         return Ok(0);
     }
     if a.slurm {
@@ -103,11 +109,14 @@ pub fn run(a: Args) -> Result<i32> {
         targets: a.targets,
         only: a.only,
     };
-    let steps = run::make(&p, &opts, &exe)?;
+    let every = opts.targets.is_empty() && !opts.only;
+    let (steps, state) = run::make(&p, &opts, &exe)?;
     let what = if a.dry_run { "make --dry-run" } else { "make" };
     print(&a.dir.dir, what, &steps, a.json, a.dry_run);
     if !a.dry_run && !a.no_report {
-        write_page(&p, a.json)?;
+        // every step up to date: make's own report is what status would say
+        let known = every && steps.iter().all(|s| s.state == Standing::UpToDate);
+        write_page(&p, known.then_some((steps.as_slice(), &state)), a.json)?;
     }
     let bad = steps
         .iter()
@@ -124,6 +133,7 @@ fn slurm(p: &Project, a: &Args, exe: &Path) -> Result<i32> {
         dea_fit::project::graph::select(p, &a.targets)?
     };
     let sel: Vec<StepReport> = run::status(p)?
+        .0
         .into_iter()
         .filter(|s| {
             p.steps
@@ -132,7 +142,7 @@ fn slurm(p: &Project, a: &Args, exe: &Path) -> Result<i32> {
                 .any(|(x, &c)| c && x.target == s.target)
         })
         .collect();
-    let submit = dea_fit::project::slurm::write(p, &sel, exe)?;
+    let submit = dea_fit::project::slurm::write(p, &sel, exe, usize::from(a.batch))?;
     print(&a.dir.dir, "make --slurm", &sel, a.json, true);
     let say = |s: String| {
         if a.json {
@@ -143,7 +153,7 @@ fn slurm(p: &Project, a: &Args, exe: &Path) -> Result<i32> {
     };
     if !a.submit {
         say(format!(
-            "slurm: one job a step to run in {}; submit them with: sh {}",
+            "slurm: the jobs of the steps to run are in {}; submit them with: sh {}",
             submit
                 .parent()
                 .map_or(submit.clone(), Path::to_path_buf)
@@ -164,13 +174,23 @@ fn slurm(p: &Project, a: &Args, exe: &Path) -> Result<i32> {
     Ok(i32::from(!o.status.success()))
 }
 
-/// Write the project page from where every step stands now; say where (on
-/// stderr with `--json`, which keeps stdout one document), or why not.
-fn write_page(p: &Project, json: bool) -> Result<()> {
-    let all = run::status(p)?;
-    let said = match dea_fit::project::page::write(p, &all)? {
-        Ok(path) => format!("project page: {}", path.display()),
-        Err(why) => format!("note: {why}"),
+/// Write the project page from where every step stands now (`known`, or what
+/// [`run::status`] says); say where (on stderr with `--json`, which keeps stdout
+/// one document), or why not.
+fn write_page(p: &Project, known: Option<(&[StepReport], &State)>, json: bool) -> Result<()> {
+    use dea_fit::project::page::{self, Wrote};
+    let read;
+    let (all, state) = match known {
+        Some(k) => k,
+        None => {
+            read = run::status(p)?;
+            (read.0.as_slice(), &read.1)
+        }
+    };
+    let said = match page::write(p, all, state)? {
+        Wrote::Written(path) => format!("project page: {}", path.display()),
+        Wrote::Unchanged(path) => format!("project page: {} (unchanged)", path.display()),
+        Wrote::Refused(why) => format!("note: {why}"),
     };
     if json {
         eprintln!("{said}");

@@ -3,6 +3,7 @@
 mod bench;
 mod bench_identify;
 mod bench_integrators;
+mod bench_make;
 mod bench_rank;
 mod bench_relaxation;
 mod bench_scale;

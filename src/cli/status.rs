@@ -13,7 +13,7 @@ pub struct Args {
 
 pub fn run(a: Args) -> Result<i32> {
     let p = super::make::read_project(&a.dir.dir, false)?;
-    let steps = dea_fit::project::run::status(&p)?;
+    let (steps, _) = dea_fit::project::run::status(&p)?;
     super::make::print(&a.dir.dir, "status", &steps, a.json, false);
     Ok(0)
 }

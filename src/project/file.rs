@@ -104,17 +104,7 @@ impl Project {
         flags: &dyn Fn(&str) -> Option<Vec<Flag>>,
         strict: bool,
     ) -> Result<Project> {
-        let file = dir.join(super::FILE);
-        let text = std::fs::read_to_string(&file).map_err(|e| {
-            if e.kind() == std::io::ErrorKind::NotFound {
-                Error::input(Location::file(&file), "no project file here").with_hint(format!(
-                    "run `dea-fit init{}` to write one from the files in the folder, or give the project folder with -C DIR (docs/project.md)",
-                    if dir == Path::new(".") { String::new() } else { format!(" -C {}", dir.display()) }
-                ))
-            } else {
-                Error::io(&file, e)
-            }
-        })?;
+        let (file, text) = read_text(dir)?;
         Project::parse(&text, dir, &file, flags, strict)
     }
 
@@ -126,28 +116,204 @@ impl Project {
         flags: &dyn Fn(&str) -> Option<Vec<Flag>>,
         strict: bool,
     ) -> Result<Project> {
-        let cx = Cx {
+        let cx = Cx::new(file, text, dir);
+        let root = cx.root()?;
+        let mut strict = strict;
+        let decl = cx.declare(&root, &mut strict)?;
+        let fits = cx.fits(&decl)?;
+        let targets: Vec<&str> = decl.iter().map(|d| d.target.as_str()).collect();
+        let mut steps = Vec::with_capacity(decl.len());
+        let written: std::collections::HashSet<&str> =
+            fits.iter().flatten().map(|f| f.as_str()).collect();
+        for (me, d) in decl.iter().enumerate() {
+            steps.push(cx.step(d, me, &targets, &fits, &written, flags, strict)?);
+        }
+        // a file another step writes is that step's output: read after it, by its identity
+        let mut writers: BTreeMap<&str, usize> = BTreeMap::new();
+        for (i, s) in steps.iter().enumerate() {
+            for o in &s.outputs {
+                if let Some(j) = writers.insert(o, i) {
+                    return Err(Error::input(
+                        s.at.clone(),
+                        format!(
+                            "{} writes {o}, which {} writes too",
+                            s.target, steps[j].target
+                        ),
+                    )
+                    .with_hint("give one of them another out (or report)"));
+                }
+            }
+        }
+        let writers: BTreeMap<String, usize> = writers
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v))
+            .collect();
+        for (i, s) in steps.iter_mut().enumerate() {
+            // (its own output, named by a file it reads, is not read)
+            s.inputs.retain(|p| match writers.get(p) {
+                Some(&j) if j != i => {
+                    s.needs.push(j);
+                    false
+                }
+                Some(_) => false,
+                None => true,
+            });
+            s.needs.sort_unstable();
+            s.needs.dedup();
+        }
+        Ok(Project {
+            dir: dir.to_path_buf(),
+            strict,
+            steps,
+        })
+    }
+}
+
+/// `<dir>/dea-fit.toml`: its path and text, or the error that says how to make one.
+fn read_text(dir: &Path) -> Result<(PathBuf, String)> {
+    let file = dir.join(super::FILE);
+    let text = std::fs::read_to_string(&file).map_err(|e| {
+        if e.kind() == std::io::ErrorKind::NotFound {
+            Error::input(Location::file(&file), "no project file here").with_hint(format!(
+                "run `dea-fit init{}` to write one from the files in the folder, or give the project folder with -C DIR (docs/project.md)",
+                if dir == Path::new(".") { String::new() } else { format!(" -C {}", dir.display()) }
+            ))
+        } else {
+            Error::io(&file, e)
+        }
+    })?;
+    Ok((file, text))
+}
+
+/// Every target of the project in `dir` with its fit file (project-relative; None
+/// for a step that writes none), in the project file's order: what a `{ target =
+/// "…" }` in a scene or manifest stands for ([`super::refs`]). Only the steps'
+/// names, kinds and `out` are read: their settings are checked by [`Project::read`].
+pub fn fit_files(dir: &Path) -> Result<Vec<(String, Option<String>)>> {
+    let (file, text) = read_text(dir)?;
+    let cx = Cx::new(&file, &text, dir);
+    let root = cx.root()?;
+    let decl = cx.declare(&root, &mut false)?;
+    let fits = cx.fits(&decl)?;
+    Ok(decl.into_iter().map(|d| d.target).zip(fits).collect())
+}
+
+/// `base/rel` (both `/`-separated, project-relative) with `.` and `..` folded;
+/// None for an absolute path or one that leaves the project folder.
+fn joined(base: &str, rel: &str) -> Option<String> {
+    if rel.starts_with('/') || rel.contains('\\') {
+        return None;
+    }
+    let mut parts: Vec<&str> = Vec::new();
+    for c in base.split('/').chain(rel.split('/')) {
+        match c {
+            "" | "." => {}
+            ".." => {
+                parts.pop()?;
+            }
+            c => parts.push(c),
+        }
+    }
+    Some(parts.join("/"))
+}
+
+/// A step as declared.
+struct Decl<'t, 'i> {
+    target: String,
+    file_stem: String,
+    kind: String,
+    path: String,
+    body: &'t DeTable<'i>,
+    at: Location,
+}
+
+/// `did you mean 'x'? ` for the nearest of `known`, or nothing.
+pub fn near(found: &str, known: &[&str]) -> String {
+    did_you_mean(found, known)
+        .map(|m| format!("did you mean '{m}'? "))
+        .unwrap_or_default()
+}
+
+/// The error of a reference to a target the project does not have.
+fn no_target(at: Location, key: &str, name: &str, targets: &[&str]) -> Error {
+    Error::input(at, format!("{key}: no target '{name}' in the project")).with_hint(format!(
+        "{}targets: {}",
+        near(name, targets),
+        targets.join(", ")
+    ))
+}
+
+/// `p` without a leading `./` (the one spelling of a project-relative path).
+fn clean(s: &str) -> String {
+    let mut s = s;
+    while let Some(r) = s.strip_prefix("./") {
+        s = r;
+    }
+    s.trim_end_matches('/').to_string()
+}
+
+/// Whether a flag's value may name a file: it has a `/`, or ends in an extension
+/// that starts with a letter (`design.toml`, not `1.000mm` or `0.5`); a value that
+/// does is read (and hashed) when the file exists.
+fn looks_like_a_path(s: &str) -> bool {
+    s.contains('/')
+        || s.rsplit_once('.').is_some_and(|(stem, ext)| {
+            !stem.is_empty()
+                && ext.starts_with(|c: char| c.is_ascii_alphabetic())
+                && ext.chars().all(|c| c.is_ascii_alphanumeric())
+        })
+}
+
+struct Cx<'a> {
+    file: &'a Path,
+    text: &'a str,
+    dir: &'a Path,
+    /// The byte offset where each line starts (a location is found by bisection:
+    /// a project of thousands of steps is read in linear time).
+    lines: Vec<usize>,
+}
+
+type Val<'i> = Spanned<DeValue<'i>>;
+
+impl<'a> Cx<'a> {
+    fn new(file: &'a Path, text: &'a str, dir: &'a Path) -> Cx<'a> {
+        Cx {
             file,
             text,
             dir,
             lines: std::iter::once(0)
                 .chain(text.match_indices('\n').map(|(i, _)| i + 1))
                 .collect(),
-        };
-        let root = DeTable::parse(text).map_err(|e| {
-            Error::input(
-                cx.loc(e.span().map_or(0, |s| s.start)),
-                e.message().trim().to_string(),
-            )
-            .with_hint("the project file must be valid TOML; see docs/project.md")
-        })?;
-        let mut strict = strict;
+        }
+    }
+
+    /// The project file's TOML.
+    fn root(&self) -> Result<DeTable<'a>> {
+        DeTable::parse(self.text)
+            .map(|t| t.into_inner())
+            .map_err(|e| {
+                Error::input(
+                    self.loc(e.span().map_or(0, |s| s.start)),
+                    e.message().trim().to_string(),
+                )
+                .with_hint("the project file must be valid TOML; see docs/project.md")
+            })
+    }
+
+    /// The steps the project file declares (`strict` set by its `strict = true`),
+    /// before their references are resolved.
+    fn declare<'t, 'i>(
+        &self,
+        root: &'t DeTable<'i>,
+        strict: &mut bool,
+    ) -> Result<Vec<Decl<'t, 'i>>> {
+        let cx = self;
         // the declared steps, before their references are resolved
-        let mut decl: Vec<Decl> = Vec::new();
-        for (k, v) in root.get_ref().iter() {
+        let mut decl: Vec<Decl<'t, 'i>> = Vec::new();
+        for (k, v) in root.iter() {
             let key = k.get_ref().as_ref();
             if key == "strict" {
-                strict |= cx.bool(v, "strict")?;
+                *strict |= cx.bool(v, "strict")?;
                 continue;
             }
             if !GROUPS.contains(&key) {
@@ -205,9 +371,13 @@ impl Project {
                 }
             }
         }
-        // each step's fit file, known before any reference is resolved
-        let fits: Vec<Option<String>> = decl
-            .iter()
+        Ok(decl)
+    }
+
+    /// Each declared step's fit file, known before any reference is resolved.
+    fn fits(&self, decl: &[Decl<'_, '_>]) -> Result<Vec<Option<String>>> {
+        let cx = self;
+        decl.iter()
             .map(|d| {
                 if !KINDS.iter().any(|k| k.1 == d.kind && k.3) {
                     return Ok(None);
@@ -217,94 +387,9 @@ impl Project {
                     None => format!("fits/{}.json", d.file_stem),
                 }))
             })
-            .collect::<Result<_>>()?;
-        let targets: Vec<&str> = decl.iter().map(|d| d.target.as_str()).collect();
-        let mut steps = Vec::with_capacity(decl.len());
-        let written: std::collections::HashSet<&str> =
-            fits.iter().flatten().map(|f| f.as_str()).collect();
-        for (me, d) in decl.iter().enumerate() {
-            steps.push(cx.step(d, me, &targets, &fits, &written, flags, strict)?);
-        }
-        // a file another step writes is that step's output: read after it, by its identity
-        let mut writers: BTreeMap<&str, usize> = BTreeMap::new();
-        for (i, s) in steps.iter().enumerate() {
-            for o in &s.outputs {
-                if let Some(j) = writers.insert(o, i) {
-                    return Err(Error::input(
-                        s.at.clone(),
-                        format!(
-                            "{} writes {o}, which {} writes too",
-                            s.target, steps[j].target
-                        ),
-                    )
-                    .with_hint("give one of them another out (or report)"));
-                }
-            }
-        }
-        let writers: BTreeMap<String, usize> = writers
-            .into_iter()
-            .map(|(k, v)| (k.to_string(), v))
-            .collect();
-        for (i, s) in steps.iter_mut().enumerate() {
-            s.inputs.retain(|p| match writers.get(p) {
-                Some(&j) if j != i => {
-                    s.needs.push(j);
-                    false
-                }
-                _ => true,
-            });
-            s.needs.sort_unstable();
-            s.needs.dedup();
-        }
-        Ok(Project {
-            dir: dir.to_path_buf(),
-            strict,
-            steps,
-        })
+            .collect::<Result<_>>()
     }
 }
-
-/// A step as declared.
-struct Decl<'t, 'i> {
-    target: String,
-    file_stem: String,
-    kind: String,
-    path: String,
-    body: &'t DeTable<'i>,
-    at: Location,
-}
-
-/// `p` without a leading `./` (the one spelling of a project-relative path).
-fn clean(s: &str) -> String {
-    let mut s = s;
-    while let Some(r) = s.strip_prefix("./") {
-        s = r;
-    }
-    s.trim_end_matches('/').to_string()
-}
-
-/// Whether a flag's value may name a file: it has a `/`, or ends in an extension
-/// that starts with a letter (`design.toml`, not `1.000mm` or `0.5`); a value that
-/// does is read (and hashed) when the file exists.
-fn looks_like_a_path(s: &str) -> bool {
-    s.contains('/')
-        || s.rsplit_once('.').is_some_and(|(stem, ext)| {
-            !stem.is_empty()
-                && ext.starts_with(|c: char| c.is_ascii_alphabetic())
-                && ext.chars().all(|c| c.is_ascii_alphanumeric())
-        })
-}
-
-struct Cx<'a> {
-    file: &'a Path,
-    text: &'a str,
-    dir: &'a Path,
-    /// The byte offset where each line starts (a location is found by bisection:
-    /// a project of thousands of steps is read in linear time).
-    lines: Vec<usize>,
-}
-
-type Val<'i> = Spanned<DeValue<'i>>;
 
 impl<'a> Cx<'a> {
     /// 1-based line and column (in characters) of a byte offset.
@@ -321,11 +406,9 @@ impl<'a> Cx<'a> {
     }
 
     fn unknown(&self, offset: usize, what: &str, found: &str, known: &[&str]) -> Error {
-        let near = did_you_mean(found, known)
-            .map(|m| format!("did you mean '{m}'? "))
-            .unwrap_or_default();
         Error::input(self.loc(offset), format!("unknown {what} '{found}'")).with_hint(format!(
-            "{near}known: {} (docs/project.md)",
+            "{}known: {} (docs/project.md)",
+            near(found, known),
             known.join(", ")
         ))
     }
@@ -391,16 +474,10 @@ impl<'a> Cx<'a> {
                 ));
             }
             let name = self.str(x, &format!("{key}.target"))?;
-            let i = targets.iter().position(|t| *t == name).ok_or_else(|| {
-                let near = did_you_mean(name, targets)
-                    .map(|m| format!("did you mean '{m}'? "))
-                    .unwrap_or_default();
-                Error::input(
-                    self.loc(x.span().start),
-                    format!("{key}: no target '{name}' in the project"),
-                )
-                .with_hint(format!("{near}targets: {}", targets.join(", ")))
-            })?;
+            let i = targets
+                .iter()
+                .position(|t| *t == name)
+                .ok_or_else(|| no_target(self.loc(x.span().start), key, name, targets))?;
             out = Some(i);
         }
         out.map(Some).ok_or_else(|| {
@@ -435,6 +512,63 @@ impl<'a> Cx<'a> {
             Some(a) => a.iter().collect(),
             None => vec![v],
         }
+    }
+
+    /// What the scenes and manifests a step reads name, followed into the TOML
+    /// files they name in turn: their `{ target = "…" }` references (the step runs
+    /// after those steps, [`super::refs`]) and the files they name by path (read,
+    /// so hashed; a path another step writes makes the step run after it).
+    fn named(
+        &self,
+        d: &Decl<'_, '_>,
+        inputs: &mut Vec<String>,
+        needs: &mut Vec<usize>,
+        targets: &[&str],
+        fits: &[Option<String>],
+        written: &std::collections::HashSet<&str>,
+    ) -> Result<()> {
+        let mut k = 0;
+        while k < inputs.len() {
+            let f = inputs[k].clone();
+            k += 1;
+            if !f.ends_with(".toml") {
+                continue;
+            }
+            let path = self.dir.join(&f);
+            let Ok(text) = std::fs::read_to_string(&path) else {
+                continue;
+            };
+            let base = f.rsplit_once('/').map_or("", |(b, _)| b);
+            let scan = super::refs::scan(&text);
+            for r in &scan.refs {
+                let at = || {
+                    let (l, c) = super::refs::line_col(&text, r.at);
+                    Location::at(&path, l, c)
+                };
+                let i = targets
+                    .iter()
+                    .position(|t| *t == r.target)
+                    .ok_or_else(|| no_target(at(), "target", &r.target, targets))?;
+                if fits[i].is_none() {
+                    return Err(Error::input(
+                        at(),
+                        format!("target '{}' writes no fit file to read", r.target),
+                    )
+                    .with_hint(format!("{} reads it (docs/project.md)", d.target)));
+                }
+                needs.push(i);
+            }
+            for (v, _) in &scan.strings {
+                let Some(p) = joined(base, v) else { continue };
+                if !inputs.contains(&p)
+                    && (written.contains(p.as_str())
+                        || (looks_like_a_path(&p) && self.dir.join(&p).is_file()))
+                {
+                    inputs.push(p);
+                }
+            }
+        }
+        Ok(())
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -550,9 +684,12 @@ impl<'a> Cx<'a> {
                             }
                         } else {
                             let c = clean(s);
-                            // a value naming a file (or a step's fit) is read
-                            if written.contains(c.as_str())
-                                || (looks_like_a_path(&c) && self.dir.join(&c).is_file())
+                            // a value naming a file (or a step's fit) is read; the
+                            // step's own out and report are what it writes
+                            let own = matches!(flag.as_str(), "out" | "report");
+                            if !own
+                                && (written.contains(c.as_str())
+                                    || (looks_like_a_path(&c) && self.dir.join(&c).is_file()))
                             {
                                 inputs.push(c);
                             }
@@ -606,6 +743,7 @@ impl<'a> Cx<'a> {
         if strict && has("strict") {
             args.push("--strict".into());
         }
+        self.named(d, &mut inputs, &mut needs, targets, fits, written)?;
         inputs.sort();
         inputs.dedup();
         needs.sort_unstable();
@@ -620,5 +758,43 @@ impl<'a> Cx<'a> {
             outputs,
             at: d.at.clone(),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn flags(kind: &str) -> Option<Vec<Flag>> {
+        let f = |long: &str, takes_value: bool| Flag {
+            long: long.into(),
+            takes_value,
+        };
+        (kind == "breakdown").then(|| {
+            vec![
+                f("out", true),
+                f("report", true),
+                f("no-report", false),
+                f("strict", false),
+            ]
+        })
+    }
+
+    /// A step's own `out` is what it writes, never what it reads, also when the
+    /// file is there from its last run (read, it would change the step's identity
+    /// with every run).
+    #[test]
+    fn own_out_is_not_an_input() {
+        let d = tempfile::tempdir().unwrap();
+        for f in ["raw/a.csv", "fits/mine.json"] {
+            std::fs::create_dir_all(d.path().join(f).parent().unwrap()).unwrap();
+            std::fs::write(d.path().join(f), "x").unwrap();
+        }
+        let text = "[materials.a.breakdown]\nfiles = \"raw/a.csv\"\nout = \"fits/mine.json\"\n";
+        let p = Project::parse(text, d.path(), Path::new("dea-fit.toml"), &flags, false).unwrap();
+        let s = &p.steps[0];
+        assert_eq!(s.inputs, ["raw/a.csv"]);
+        assert_eq!(s.fit.as_deref(), Some("fits/mine.json"));
+        assert!(s.args.contains(&"--out=fits/mine.json".to_string()));
     }
 }

@@ -2,8 +2,7 @@
 //! that prevents one, and the steps a selection of targets needs.
 
 use crate::error::{Error, Result};
-use crate::material::check::did_you_mean;
-use crate::project::file::Project;
+use crate::project::file::{near, Project};
 use crate::project::glob::matches;
 
 /// The steps in an order where each comes after every step it needs (Kahn's
@@ -99,12 +98,10 @@ pub fn matched(p: &Project, patterns: &[String]) -> Result<Vec<bool>> {
         }
         if !any {
             let targets: Vec<&str> = p.steps.iter().map(|s| s.target.as_str()).collect();
-            let near = did_you_mean(pat, &targets)
-                .map(|m| format!("did you mean '{m}'? "))
-                .unwrap_or_default();
             return Err(
-                Error::settings(format!("no target of the project matches '{pat}'"))
-                    .with_hint(format!("{near}targets: {}", targets.join(", "))),
+                Error::settings(format!("no target of the project matches '{pat}'")).with_hint(
+                    format!("{}targets: {}", near(pat, &targets), targets.join(", ")),
+                ),
             );
         }
     }

@@ -11,6 +11,7 @@
 //!   version and its upstream identities) and the stat cache that spares hashing.
 //! - [`state`]: what ran, kept in `<project>/.dea-fit/state.json`, written atomically.
 //! - [`run`]: what is stale and why; the job queue that runs the steps.
+//! - [`refs`]: `{ target = "…" }` inside scene and design files.
 //! - [`page`]: the project page, `reports/index.html`.
 //! - [`slurm`]: the steps as Slurm batch jobs (`make --slurm`).
 
@@ -19,6 +20,7 @@ pub mod glob;
 pub mod graph;
 pub mod identity;
 pub mod page;
+pub mod refs;
 pub mod run;
 pub mod slurm;
 pub mod state;

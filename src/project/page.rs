@@ -10,14 +10,21 @@
 //! It replaces the run list as `reports/index.html` (which single commands then
 //! leave alone, [`crate::report::runs::refresh_index`]), and is only ever written
 //! over a missing page, a run list or an earlier project page ([`MARKER`]).
+//!
+//! The page has an identity too ([`identity`]): what the steps say, the records
+//! they stand on and the stat of every run folder under `reports/`. When it is the
+//! one the page was last written with (`.dea-fit/page.json`) and `index.html` is
+//! as written, the page is left as it is: an up-to-date `make` reads no report.
 
 use crate::error::{Error, Result};
 use crate::io::write::{atomic_write, lock_target};
 use crate::project::file::Project;
 use crate::project::run::{Standing, StepReport};
-use crate::project::state::State;
+use crate::project::state::{Stat, State};
 use crate::report::page::{code, text, Cell, Page, Tone};
 use crate::report::runs::{self, RunMeta, LIST_MARKER};
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
 use std::path::PathBuf;
 
 /// The `<meta>` element that marks an `index.html` as a project page.
@@ -53,8 +60,9 @@ fn href(file: &str) -> String {
     }
 }
 
-/// The page of a project whose steps stand as `steps` say ([`super::run::status`]).
-pub fn page(p: &Project, steps: &[StepReport]) -> Result<Page> {
+/// The page of a project whose steps stand as `steps` say, with `state` their
+/// records ([`super::run::status`]).
+pub fn page(p: &Project, steps: &[StepReport], state: &State) -> Result<Page> {
     let mut page = Page::new("Project").marked(MARKER);
     let count = |x: Standing| steps.iter().filter(|s| s.state == x).count();
     let parts: Vec<String> = [
@@ -130,7 +138,7 @@ pub fn page(p: &Project, steps: &[StepReport]) -> Result<Page> {
             rows,
         );
     }
-    provenance(&mut page, p);
+    provenance(&mut page, p, state);
     page.heading("Runs in reports/");
     page.text(
         "Every report in this folder, newest first (the run list single commands keep here when there is no project page).",
@@ -141,8 +149,7 @@ pub fn page(p: &Project, steps: &[StepReport]) -> Result<Page> {
 
 /// For every ranking and identification: the steps it reads, transitively, and
 /// each one's raw files with the SHA-256 it last ran with.
-fn provenance(page: &mut Page, p: &Project) {
-    let state = State::load(&p.dir);
+fn provenance(page: &mut Page, p: &Project, state: &State) {
     let finals: Vec<usize> = (0..p.steps.len())
         .filter(|&i| matches!(p.steps[i].kind.as_str(), "rank" | "identify"))
         .collect();
@@ -195,20 +202,92 @@ fn provenance(page: &mut Page, p: &Project) {
     }
 }
 
+/// What [`write`] did.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Wrote {
+    /// The page was written, at this path.
+    Written(PathBuf),
+    /// The page at this path was already the page of this identity.
+    Unchanged(PathBuf),
+    /// `index.html` is a page of someone else's: nothing was written (why).
+    Refused(String),
+}
+
+/// The page's identity: the SHA-256 of the tool version, every step's report
+/// (target, kind, state, reason, outputs, command), the identity and exit status
+/// of every record, and the name, size and modification time of every run folder
+/// under `reports/` (a report written or removed in one changes its folder's
+/// time: files are written by rename).
+fn identity(p: &Project, steps: &[StepReport], state: &State) -> String {
+    let mut h = Sha256::new();
+    let mut field = |s: &[u8]| {
+        h.update((s.len() as u64).to_le_bytes());
+        h.update(s);
+    };
+    field(env!("CARGO_PKG_VERSION").as_bytes());
+    field(&serde_json::to_vec(steps).expect("step reports serialise"));
+    for (t, r) in &state.steps {
+        field(t.as_bytes());
+        field(r.identity.as_bytes());
+        field(&r.exit.to_le_bytes());
+    }
+    let mut runs: Vec<(String, u64, u64)> = std::fs::read_dir(p.dir.join(DIR))
+        .map(|rd| {
+            rd.flatten()
+                .filter_map(|e| {
+                    let m = e.metadata().ok().filter(|m| m.is_dir())?;
+                    let t = m
+                        .modified()
+                        .ok()
+                        .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+                        .map_or(0, |d| d.as_nanos() as u64);
+                    Some((e.file_name().to_string_lossy().into_owned(), m.len(), t))
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    runs.sort();
+    for (name, size, t) in runs {
+        field(name.as_bytes());
+        field(&size.to_le_bytes());
+        field(&t.to_le_bytes());
+    }
+    crate::io::hex(&h.finalize())
+}
+
+/// The page's identity and the stat of the `index.html` written with it.
+#[derive(Serialize, Deserialize, PartialEq)]
+struct Written {
+    identity: String,
+    html: Stat,
+}
+
+/// `<project>/.dea-fit/page.json`.
+fn written_path(p: &Project) -> PathBuf {
+    p.dir.join(super::STATE_DIR).join("page.json")
+}
+
 /// Write the project page into `<project>/reports/` (`index.html` and
 /// `index.md`, atomically, under the lock of `index.html` that the run list takes
-/// too), unless `index.html` there is a page of someone else's: then nothing is
-/// written and the reason is returned as `Ok(Err(why))`.
-pub fn write(p: &Project, steps: &[StepReport]) -> Result<std::result::Result<PathBuf, String>> {
+/// too), unless it is the page of this very identity already, or `index.html`
+/// there is a page of someone else's.
+pub fn write(p: &Project, steps: &[StepReport], state: &State) -> Result<Wrote> {
     let dir = p.dir.join(DIR);
-    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
     let html = dir.join("index.html");
+    let id = identity(p, steps, state);
+    let was: Option<Written> = std::fs::read(written_path(p))
+        .ok()
+        .and_then(|b| serde_json::from_slice(&b).ok());
+    if was.is_some_and(|w| w.identity == id && Stat::of(&html) == Some(w.html)) {
+        return Ok(Wrote::Unchanged(html));
+    }
+    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
     let _lock = lock_target(&html)?;
     match std::fs::read(&html) {
         Ok(old) => {
             let old = String::from_utf8_lossy(&old);
             if !old.contains(MARKER) && !old.contains(LIST_MARKER) {
-                return Ok(Err(format!(
+                return Ok(Wrote::Refused(format!(
                     "{} is not a page dea-fit wrote; the project page was not written over it",
                     html.display()
                 )));
@@ -217,8 +296,16 @@ pub fn write(p: &Project, steps: &[StepReport]) -> Result<std::result::Result<Pa
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
         Err(e) => return Err(Error::io(&html, e)),
     }
-    let page = page(p, steps)?;
+    let page = page(p, steps, state)?;
     atomic_write(&dir.join("index.md"), page.markdown().as_bytes())?;
     atomic_write(&html, page.html(Some("index.md")).as_bytes())?;
-    Ok(Ok(html))
+    if let Some(st) = Stat::of(&html) {
+        let w = Written {
+            identity: id,
+            html: st,
+        };
+        let json = serde_json::to_vec(&w).expect("the page's identity serialises");
+        atomic_write(&written_path(p), &json)?;
+    }
+    Ok(Wrote::Written(html))
 }

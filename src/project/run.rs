@@ -4,8 +4,8 @@
 //! `.dea-fit/logs/<target>.log`. A step starts when every step it needs has ended
 //! well; a failed step blocks what depends on it and the rest goes on (keep-going).
 //! A step is recorded done only after its process ended with status 0 and its
-//! outputs exist; the state file is rewritten atomically after each step, so a
-//! killed run leaves no step recorded that did not end.
+//! outputs exist; its record is appended to the state's journal as it ends
+//! ([`State::record`]), so a killed run leaves no step recorded that did not end.
 
 use crate::error::{Error, Result};
 use crate::project::file::{Project, Step};
@@ -235,10 +235,17 @@ fn report(s: &Step, state: Standing, reason: String) -> StepReport {
     }
 }
 
+/// Why a step is blocked: the need that failed or is blocked (or, under
+/// `--only`, is not up to date), as it stands.
+fn blocked(need: &Step, as_: Standing) -> String {
+    format!("upstream {} {}", need.target, as_.word())
+}
+
 /// Where every step stands, without running anything: up to date, stale (with
 /// what changed), failed (its last run with the same identity), or blocked (a
-/// step it needs failed or is blocked). In dependency order.
-pub fn status(p: &Project) -> Result<Vec<StepReport>> {
+/// step it needs failed or is blocked). In dependency order, with the state it
+/// was read from.
+pub fn status(p: &Project) -> Result<(Vec<StepReport>, State)> {
     let order = graph::order(p)?;
     let mut state = State::load(&p.dir);
     let plans = plan(p, &mut state, &order);
@@ -252,15 +259,7 @@ pub fn status(p: &Project) -> Result<Vec<StepReport>> {
             .iter()
             .find(|&&j| matches!(st[j], Some(Standing::Failed | Standing::Blocked)));
         let (x, why) = if let Some(&j) = bad {
-            (
-                Standing::Blocked,
-                format!(
-                    "{} {} is {}",
-                    "upstream",
-                    p.steps[j].target,
-                    st[j].expect("set").word()
-                ),
-            )
+            (Standing::Blocked, blocked(&p.steps[j], st[j].expect("set")))
         } else if pl.failed {
             (Standing::Failed, pl.why.clone().unwrap_or_default())
         } else {
@@ -272,7 +271,7 @@ pub fn status(p: &Project) -> Result<Vec<StepReport>> {
         st[i] = Some(x);
         out.push(report(s, x, why));
     }
-    Ok(out)
+    Ok((out, state))
 }
 
 /// How `make` runs.
@@ -299,8 +298,15 @@ struct Ended {
 /// Bring the selected steps up to date: run every stale (or last failed) step
 /// whose needs ended well, in dependency order, `jobs` at once; a step whose
 /// need failed is blocked, and the rest goes on. Returns the selected steps in
-/// dependency order. `exe` is the program each step runs (this one).
-pub fn make(p: &Project, opts: &Options, exe: &Path) -> Result<Vec<StepReport>> {
+/// dependency order, with the state they stand on (for the project page). `exe`
+/// is the program each step runs (this one).
+///
+/// The queue is linear in steps and dependencies: each step waits on a count of
+/// its needs still to end, and each end settles the steps that read it (the
+/// ready ones start in the project file's order, so the start order does not
+/// depend on timing).
+pub fn make(p: &Project, opts: &Options, exe: &Path) -> Result<(Vec<StepReport>, State)> {
+    let n = p.steps.len();
     let order = graph::order(p)?;
     let chosen = if opts.only {
         graph::matched(p, &opts.targets)?
@@ -311,9 +317,9 @@ pub fn make(p: &Project, opts: &Options, exe: &Path) -> Result<Vec<StepReport>> 
     let cached = state.files.clone();
     let plans = plan(p, &mut state, &order);
     let order: Vec<usize> = order.into_iter().filter(|&i| chosen[i]).collect();
-    let mut out: Vec<Option<StepReport>> = vec![None; p.steps.len()];
+    let mut out: Vec<Option<StepReport>> = vec![None; n];
     // None: to run; Some(true): ended well or up to date; Some(false): failed or blocked
-    let mut ok: Vec<Option<bool>> = vec![None; p.steps.len()];
+    let mut ok: Vec<Option<bool>> = vec![None; n];
     for &i in &order {
         if plans[i].why.is_none() {
             ok[i] = Some(true);
@@ -327,59 +333,98 @@ pub fn make(p: &Project, opts: &Options, exe: &Path) -> Result<Vec<StepReport>> 
         }
     }
     if opts.dry_run {
-        return Ok(order.iter().filter_map(|&i| out[i].take()).collect());
+        return Ok((order.iter().filter_map(|&i| out[i].take()).collect(), state));
     }
     // with --only, the needs left out count as they stand
-    for j in (0..p.steps.len()).filter(|&j| !chosen[j]) {
+    let mut word: Vec<Standing> = vec![Standing::Stale; n];
+    for j in (0..n).filter(|&j| !chosen[j]) {
         ok[j] = Some(plans[j].why.is_none());
-        out[j] = Some(report(&p.steps[j], Standing::Stale, String::new()));
     }
-    // forget files and steps the project no longer has
+    // forget files and steps the project no longer has; keep the stat cache
     let read: std::collections::HashSet<&str> = p
         .steps
         .iter()
         .flat_map(|s| s.inputs.iter().map(|f| f.as_str()))
         .collect();
     state.files.retain(|f, _| read.contains(f.as_str()));
-    let before = state.steps.len();
     let targets: std::collections::HashSet<&str> =
         p.steps.iter().map(|s| s.target.as_str()).collect();
-    state.steps.retain(|t, _| targets.contains(t.as_str()));
-    if !opts.only && (state.files != cached || state.steps.len() != before) {
-        state.save(&p.dir)?;
+    let gone = state.steps.keys().any(|t| !targets.contains(t.as_str()));
+    if !opts.only && (state.files != cached || gone) {
+        let files = state.files.clone();
+        state = State::update(&p.dir, |s| {
+            s.files = files;
+            s.steps.retain(|t, _| targets.contains(t.as_str()));
+        })?;
+    }
+    // the steps to run: each waits for its needs still to end
+    let mut waiting = vec![0usize; n];
+    let mut users: Vec<Vec<usize>> = vec![Vec::new(); n];
+    let mut bad: Vec<Option<usize>> = vec![None; n];
+    let mut rank = vec![0usize; n];
+    for (k, &i) in order.iter().enumerate() {
+        rank[i] = k;
+    }
+    let mut ready = std::collections::BTreeSet::new();
+    let mut settled: Vec<usize> = Vec::new();
+    for &i in order.iter().filter(|&&i| ok[i].is_none()) {
+        for &j in &p.steps[i].needs {
+            match ok[j] {
+                None => {
+                    waiting[i] += 1;
+                    users[j].push(i);
+                }
+                Some(false) => bad[i] = Some(bad[i].map_or(j, |b: usize| b.min(j))),
+                Some(true) => {}
+            }
+        }
+        if waiting[i] == 0 {
+            if bad[i].is_some() {
+                settled.push(i);
+            } else {
+                ready.insert(rank[i]);
+            }
+        }
     }
     let logs = p.dir.join(super::STATE_DIR).join("logs");
-    std::fs::create_dir_all(&logs).map_err(|e| Error::io(&logs, e))?;
+    if !ready.is_empty() {
+        std::fs::create_dir_all(&logs).map_err(|e| Error::io(&logs, e))?;
+    }
     let (tx, rx) = std::sync::mpsc::channel::<Ended>();
     let mut running = 0usize;
-    let mut started = vec![false; p.steps.len()];
     loop {
-        // block what cannot run, start what can
-        let mut progress = true;
-        while progress {
-            progress = false;
-            for &i in &order {
-                if ok[i].is_some() || started[i] {
-                    continue;
+        // block what cannot run (and what reads it), then start what can
+        while let Some(i) = settled.pop() {
+            if ok[i].is_none() {
+                let j = bad[i].expect("a settled step to block has a bad need");
+                ok[i] = Some(false);
+                word[i] = Standing::Blocked;
+                out[i] = Some(report(
+                    &p.steps[i],
+                    Standing::Blocked,
+                    blocked(&p.steps[j], word[j]),
+                ));
+            }
+            let good = ok[i] == Some(true);
+            for &u in &users[i] {
+                if !good {
+                    bad[u] = Some(bad[u].map_or(i, |b| b.min(i)));
                 }
-                let s = &p.steps[i];
-                if let Some(&j) = s.needs.iter().find(|&&j| ok[j] == Some(false)) {
-                    ok[i] = Some(false);
-                    let word = out[j].as_ref().map_or("failed", |r| r.state.word());
-                    out[i] = Some(report(
-                        s,
-                        Standing::Blocked,
-                        format!("upstream {} {word}", p.steps[j].target),
-                    ));
-                    progress = true;
-                } else if running < opts.jobs.max(1) && s.needs.iter().all(|&j| ok[j] == Some(true))
-                {
-                    started[i] = true;
-                    running += 1;
-                    spawn(&p.dir, exe, i, s, tx.clone());
-                    progress = true;
+                waiting[u] -= 1;
+                if waiting[u] == 0 {
+                    if bad[u].is_some() {
+                        settled.push(u);
+                    } else {
+                        ready.insert(rank[u]);
+                    }
                 }
             }
+        }
+        while running < opts.jobs.max(1) {
+            let Some(k) = ready.pop_first() else { break };
+            let i = order[k];
+            running += 1;
+            spawn(&p.dir, exe, i, &p.steps[i], tx.clone());
         }
         if running == 0 {
             break;
@@ -389,9 +434,24 @@ pub fn make(p: &Project, opts: &Options, exe: &Path) -> Result<Vec<StepReport>> 
         let step = e.step;
         let (x, why) = finish(p, &mut state, &plans[step], e)?;
         ok[step] = Some(x == Standing::Ran);
+        word[step] = x;
         out[step] = Some(report(&p.steps[step], x, why));
+        settled.push(step);
     }
-    Ok(order.iter().filter_map(|&i| out[i].take()).collect())
+    State::compact(&p.dir)?;
+    // the run lists the steps left to make (DEFER_ENV): each folder's once
+    let lists: std::collections::BTreeSet<PathBuf> = order
+        .iter()
+        .filter(|&&i| matches!(word[i], Standing::Ran | Standing::Failed))
+        .flat_map(|&i| &p.steps[i].outputs)
+        .map(|o| p.dir.join(o))
+        .filter(|o| o.is_dir())
+        .filter_map(|o| o.parent().map(Path::to_path_buf))
+        .collect();
+    for l in lists {
+        crate::report::runs::refresh_index(&l)?;
+    }
+    Ok((order.iter().filter_map(|&i| out[i].take()).collect(), state))
 }
 
 /// Record a step's end in the state file (done only with status 0 and its
@@ -489,6 +549,7 @@ fn run_child(
     let err = f.try_clone().map_err(|e| e.to_string())?;
     let mut cmd = std::process::Command::new(exe);
     cmd.args(args)
+        .env(crate::report::runs::DEFER_ENV, "1")
         .current_dir(dir)
         .stdin(std::process::Stdio::null())
         .stdout(f)

@@ -801,6 +801,9 @@ pub fn read(path: &Path) -> Result<Design> {
 pub fn parse(path: &Path, bytes: &[u8]) -> Result<Design> {
     let text = std::str::from_utf8(bytes)
         .map_err(|_| Error::input(Location::file(path), "the manifest is not UTF-8 text"))?;
+    // `{ target = "…" }`: a step's fit file of the project above (issue 37)
+    let resolved = crate::project::refs::resolve(text, path)?;
+    let text: &str = &resolved;
     let dir = path.parent().unwrap_or(Path::new(""));
     let cx = Ctx {
         path,

@@ -239,6 +239,11 @@ fn list_table(page: &mut Page, entries: &[Entry]) {
     }
 }
 
+/// Set (by `dea-fit make`, for the steps it runs) to leave the run list alone:
+/// make rebuilds each list its steps wrote into once at its end, so that n steps
+/// cost n reports, not n² list entries.
+pub const DEFER_ENV: &str = "DEA_FIT_DEFER_RUN_LIST";
+
 /// Rebuild `root/index.html`, the list of the runs in `root`'s folders, unless
 /// `root/index.html` exists and is not a run list (it is then left alone). Written
 /// atomically, as a locked read-modify-write (the lock of `index.html`,
@@ -246,6 +251,9 @@ fn list_table(page: &mut Page, entries: &[Entry]) {
 /// so the last of several runs finishing at once lists them all, and no run's
 /// rebuild from an older listing can replace a newer one.
 pub fn refresh_index(root: &Path) -> Result<()> {
+    if std::env::var_os(DEFER_ENV).is_some() {
+        return Ok(());
+    }
     let path = root.join("index.html");
     let _lock = lock_target(&path)?;
     match std::fs::read(&path) {

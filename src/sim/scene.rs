@@ -638,6 +638,9 @@ impl Scene {
     /// relative file references. Every quantity is checked against the simulator's
     /// table of plausible ranges (`sim::budget`), located at its key.
     pub fn parse(text: &str, path: &Path) -> Result<Scene> {
+        // `{ target = "…" }`: a step's fit file of the project above (issue 37)
+        let resolved = crate::project::refs::resolve(text, path)?;
+        let text: &str = &resolved;
         let root: toml::Table = text.parse().map_err(|e: toml::de::Error| {
             let (line, col) = e.span().map(|s| line_col(text, s.start)).unwrap_or((1, 1));
             Error::input(Location::at(path, line, col), e.message().to_string())

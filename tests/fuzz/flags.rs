@@ -330,9 +330,54 @@ fn finite_csv(path: &Path) -> Result<(), String> {
 /// Run the case's command in a fresh directory inside `dir`.
 pub fn run(bytes: &[u8], dir: &Path) -> Verdict {
     let work = tempfile::tempdir_in(dir).unwrap();
+    let (status, stderr) = match child(&args(bytes), work.path(), "flags") {
+        Ok(x) => x,
+        Err(v) => return v,
+    };
+    match status.code() {
+        Some(2) if stderr.contains("error") => Verdict::Refused,
+        Some(0 | 1) => {
+            let csvs = std::fs::read_dir(work.path())
+                .unwrap()
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|x| x == "csv"));
+            for p in csvs {
+                if let Err(detail) = finite_csv(&p) {
+                    return Verdict::Failed {
+                        class: "flags: a non-finite value or no row written".into(),
+                        detail,
+                    };
+                }
+            }
+            Verdict::Accepted
+        }
+        code => Verdict::Failed {
+            class: format!("flags: exit {code:?} (an abort, or a refusal without an error)"),
+            detail: first_error(&stderr),
+        },
+    }
+}
+
+/// The first line of stderr that says a panic or an error, at most 200 characters.
+pub fn first_error(s: &str) -> String {
+    s.lines()
+        .find(|l| l.contains("panicked") || l.starts_with("error"))
+        .unwrap_or("")
+        .chars()
+        .take(200)
+        .collect()
+}
+
+/// Run `dea-fit args…` in `cwd`, killed after [`RUN_LIMIT`]: its exit status and
+/// stderr, or the failure (a hang, a panic) of a case of the surface `what`.
+pub fn child(
+    args: &[String],
+    cwd: &Path,
+    what: &str,
+) -> Result<(std::process::ExitStatus, String), Verdict> {
     let mut child = Command::new(env!("CARGO_BIN_EXE_dea-fit"))
-        .args(args(bytes))
-        .current_dir(work.path())
+        .args(args)
+        .current_dir(cwd)
         .env("RUST_BACKTRACE", "0")
         .stdin(Stdio::null())
         .stdout(Stdio::null())
@@ -358,19 +403,11 @@ pub fn run(bytes: &[u8], dir: &Path) -> Verdict {
         std::thread::sleep(Duration::from_millis(5));
     };
     let stderr = reader.join().unwrap();
-    let last = |s: &str| {
-        s.lines()
-            .find(|l| l.contains("panicked") || l.starts_with("error"))
-            .unwrap_or("")
-            .chars()
-            .take(200)
-            .collect::<String>()
-    };
     let Some(status) = status else {
-        return Verdict::Failed {
-            class: format!("flags: hang (over {RUN_LIMIT:?})"),
+        return Err(Verdict::Failed {
+            class: format!("{what}: hang (over {RUN_LIMIT:?})"),
             detail: "killed".into(),
-        };
+        });
     };
     if stderr.contains("panicked") {
         let at = stderr
@@ -378,31 +415,10 @@ pub fn run(bytes: &[u8], dir: &Path) -> Verdict {
             .find(|l| l.contains("panicked at"))
             .and_then(|l| l.split("panicked at ").nth(1))
             .unwrap_or("?");
-        return Verdict::Failed {
-            class: format!("flags: panic at {at}"),
-            detail: last(&stderr),
-        };
+        return Err(Verdict::Failed {
+            class: format!("{what}: panic at {at}"),
+            detail: first_error(&stderr),
+        });
     }
-    match status.code() {
-        Some(2) if stderr.contains("error") => Verdict::Refused,
-        Some(0 | 1) => {
-            let csvs = std::fs::read_dir(work.path())
-                .unwrap()
-                .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.extension().is_some_and(|x| x == "csv"));
-            for p in csvs {
-                if let Err(detail) = finite_csv(&p) {
-                    return Verdict::Failed {
-                        class: "flags: a non-finite value or no row written".into(),
-                        detail,
-                    };
-                }
-            }
-            Verdict::Accepted
-        }
-        code => Verdict::Failed {
-            class: format!("flags: exit {code:?} (an abort, or a refusal without an error)"),
-            detail: last(&stderr),
-        },
-    }
+    Ok((status, stderr))
 }

@@ -276,6 +276,20 @@ const UNKNOWN_KEYS: [&str; 5] = ["colour", "presett", "damping", "spann", "fit_f
 /// removed, an unknown or misspelt key added, a kind swapped. The string is the reason
 /// the scene must be refused (without values, it names a class of failures), if the
 /// mutation makes it invalid whatever the numbers.
+/// One of `keys` removed from `doc`: what, the kind of mutation, no refusal due.
+fn remove_key(
+    doc: &mut toml::Value,
+    keys: &[Path],
+    rng: &mut ChaCha8Rng,
+) -> (String, String, Option<String>) {
+    let p = keys.choose(rng).unwrap().clone();
+    let (last, parent) = p.split_last().unwrap();
+    if let (PathStep::Key(k), toml::Value::Table(t)) = (last, get_mut(doc, parent)) {
+        t.remove(k);
+    }
+    (format!("{} removed", show(&p)), "key removed".into(), None)
+}
+
 pub fn scene(text: &str, rng: &mut ChaCha8Rng) -> (Mutated, Option<String>) {
     let mut doc: toml::Value = text.parse::<toml::Table>().expect("a shipped scene").into();
     let (mut tables, mut keys) = (Vec::new(), Vec::new());
@@ -288,7 +302,12 @@ pub fn scene(text: &str, rng: &mut ChaCha8Rng) -> (Mutated, Option<String>) {
         })
         .cloned()
         .collect();
+    // a `kind` or preset to swap (a project file has none: a key is removed instead)
+    let swappable = leaves
+        .iter()
+        .any(|p| matches!(p.last(), Some(PathStep::Key(k)) if k == "kind" || k == "preset"));
     let (what, kind, refuse) = match rng.gen_range(0..6) {
+        5 if !swappable => remove_key(&mut doc, &keys, rng),
         0 | 1 => {
             let p = leaves.choose(rng).unwrap();
             let v = get_mut(&mut doc, p);
@@ -323,14 +342,7 @@ pub fn scene(text: &str, rng: &mut ChaCha8Rng) -> (Mutated, Option<String>) {
             let what = format!("{} = {old} → {v}", show(p));
             (what, "value changed".to_string(), None)
         }
-        2 => {
-            let p = keys.choose(rng).unwrap().clone();
-            let (last, parent) = p.split_last().unwrap();
-            if let (PathStep::Key(k), toml::Value::Table(t)) = (last, get_mut(&mut doc, parent)) {
-                t.remove(k);
-            }
-            (format!("{} removed", show(&p)), "key removed".into(), None)
-        }
+        2 => remove_key(&mut doc, &keys, rng),
         3 => {
             let p = tables.choose(rng).unwrap();
             let k = UNKNOWN_KEYS.choose(rng).unwrap();

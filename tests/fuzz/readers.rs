@@ -53,10 +53,15 @@ pub enum Reader {
     Breakdown,
     /// DMA isotherms (`dma::read`), shifted (free and WLF) onto a master curve.
     Dma,
+    /// A project file (`dea-fit.toml`) with the lab project's files beside it (the
+    /// project file mutated, or the scene or design manifest whose targets it
+    /// follows), read with every step, scene and manifest it names by `dea-fit
+    /// status` (which runs nothing).
+    Project,
 }
 
 impl Reader {
-    pub const ALL: [Reader; 16] = [
+    pub const ALL: [Reader; 17] = [
         Reader::Tensile,
         Reader::Relaxation,
         Reader::Lcr,
@@ -73,6 +78,7 @@ impl Reader {
         Reader::Flags,
         Reader::Breakdown,
         Reader::Dma,
+        Reader::Project,
     ];
 
     pub fn name(self) -> &'static str {
@@ -93,6 +99,7 @@ impl Reader {
             Reader::Flags => "flags",
             Reader::Breakdown => "breakdown",
             Reader::Dma => "dma",
+            Reader::Project => "project",
         }
     }
 
@@ -191,6 +198,36 @@ const DESIGN_DIR: &str = "datasets/design";
 /// The material files of the export cases.
 const EXPORT_DIR: &str = "tests/data/export";
 
+/// The lab project (datasets/lab) without its outputs: `dea-fit.toml` first, then
+/// every file by its path in the project.
+fn lab_files() -> Vec<(String, Vec<u8>)> {
+    fn walk(rel: &str, out: &mut Vec<(String, Vec<u8>)>) {
+        for f in dir(format!("{LAB_DIR}/{rel}").trim_end_matches('/')) {
+            let inside = f[LAB_DIR.len() + 1..].to_string();
+            if ["fits", "reports", ".dea-fit"].contains(&inside.as_str()) {
+                continue;
+            }
+            if repo(&f).is_dir() {
+                walk(&format!("{inside}/"), out);
+            } else {
+                out.push((inside, std::fs::read(repo(&f)).unwrap()));
+            }
+        }
+    }
+    let mut out = Vec::new();
+    walk("", &mut out);
+    let k = out
+        .iter()
+        .position(|f| f.0 == "dea-fit.toml")
+        .expect("the lab project file");
+    let project = out.remove(k);
+    out.insert(0, project);
+    out
+}
+
+/// The lab project, whose project file seeds the project cases.
+const LAB_DIR: &str = "datasets/lab";
+
 /// The shipped files a reader's cases start from; each seed is the file set of a
 /// case before mutation.
 pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
@@ -244,6 +281,8 @@ pub fn seeds(r: Reader) -> Vec<Vec<(String, Vec<u8>)>> {
         Reader::Generate => vec![super::generate::SEED.into()],
         // a case is made whole, not mutated from a file
         Reader::Flags => return vec![Vec::new()],
+        // the project file first, every file of the lab project beside it
+        Reader::Project => return vec![lab_files()],
     };
     paths
         .iter()
@@ -501,6 +540,10 @@ pub fn generate(r: Reader, seeds: &[Vec<(String, Vec<u8>)>], rng: &mut ChaCha8Rn
             .iter()
             .position(|f| f.0.ends_with("composite.json"))
             .expect("the design's composite fit"),
+        Reader::Project if rng.gen_bool(0.25) => {
+            let f = *["scenes/stack.toml", "design.toml"].choose(rng).unwrap();
+            files.iter().position(|x| x.0 == f).expect("a lab file")
+        }
         _ => 0,
     };
     let name = files[main].0.clone();
@@ -508,7 +551,8 @@ pub fn generate(r: Reader, seeds: &[Vec<(String, Vec<u8>)>], rng: &mut ChaCha8Rn
     // a relaxation fit
     let hyperelastic_fit = r == Reader::Export && !name.contains("relaxation");
     let identified = r == Reader::Identified || (hyperelastic_fit && name.contains("identified"));
-    let toml = name.ends_with(".toml") && matches!(r, Reader::Scene | Reader::Design);
+    let toml =
+        name.ends_with(".toml") && matches!(r, Reader::Scene | Reader::Design | Reader::Project);
     let structured =
         (toml || r == Reader::Fit || identified || hyperelastic_fit) && rng.gen_bool(0.5);
     let seed_text = String::from_utf8_lossy(&files[main].1).into_owned();
@@ -520,6 +564,9 @@ pub fn generate(r: Reader, seeds: &[Vec<(String, Vec<u8>)>], rng: &mut ChaCha8Rn
     };
     let Mutated { bytes, what, kind } = m;
     let oracle = match (r, refuse) {
+        // a project's names are free (a misspelt material name is another name), and
+        // status reads a scene or manifest only for the targets and files it names
+        (Reader::Project, Some(_)) if main != 0 || kind == "key misspelt" => Oracle::Any,
         (_, Some(why)) => Oracle::Refuse(why),
         (Reader::Identified, None) => identified_oracle(&bytes),
         (Reader::Fit, None) => fit_oracle(&bytes),
@@ -567,6 +614,7 @@ pub fn replay(r: Reader, case: &Case, dir: &Path) -> String {
         Reader::Checkpoint => super::checkpoint::replay(&case.files[0].0, dir),
         Reader::Generate => format!("dea-fit composite {f} --generate"),
         Reader::Flags => super::flags::replay(&case.files[0].1, dir),
+        Reader::Project => format!("dea-fit status -C {}", dir.display()),
         Reader::Export => {
             let files: Vec<String> = case
                 .files
@@ -836,6 +884,7 @@ pub fn run(r: Reader, case: &Case, dir: &Path) -> Verdict {
         Reader::Merge => super::merge::run(case, dir),
         Reader::Generate => super::generate::run(&path, dir),
         Reader::Flags => super::flags::run(&case.files[0].1, dir),
+        Reader::Project => project(dir),
         Reader::Export => {
             let paths: Vec<PathBuf> = case.files.iter().map(|(n, _)| dir.join(n)).collect();
             export(&paths, &case.oracle)
@@ -851,6 +900,23 @@ pub fn run(r: Reader, case: &Case, dir: &Path) -> Verdict {
                 Err(_) => Verdict::Refused,
             }
         }
+    }
+}
+
+/// `dea-fit status -C dir` on a project case: exit 0 (every step listed) or a
+/// refusal (exit 2 with an error); anything else (a panic, a hang) fails.
+fn project(dir: &Path) -> Verdict {
+    let args = ["status".to_string(), "-C".into(), dir.display().to_string()];
+    match super::flags::child(&args, dir, "project") {
+        Err(v) => v,
+        Ok((s, stderr)) => match s.code() {
+            Some(0) => Verdict::Accepted,
+            Some(2) if stderr.contains("error") => Verdict::Refused,
+            code => Verdict::Failed {
+                class: format!("project: exit {code:?} (an abort, or a refusal without an error)"),
+                detail: super::flags::first_error(&stderr),
+            },
+        },
     }
 }
 

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # `dea-fit make --slurm --submit` on a real Slurm cluster (docs/project.md): the lab
-# project (a copy of datasets/lab) as one job a step with afterok dependencies and
+# project (a copy of datasets/lab) as jobs of batched quick steps and one job per
+# identify or rank step, with afterany dependencies (each job's `make --only` blocks
+# a step whose need failed), and
 # a page job; waits for the queue to empty, then checks that the fit files equal a
 # local `make`'s (the timing fields `seconds` and the fit-file hashes `sha256`
 # removed, as tests/project.rs compares them), that every report and the project

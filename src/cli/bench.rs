@@ -150,6 +150,38 @@ impl Verdict {
     }
 }
 
+/// A chart of median wall time against size, both log₁₀ (slope 1: linear): one
+/// line per group, each (label, [(size, median seconds)]), as `bench scale` and
+/// `bench make` draw them.
+pub fn loglog_times(
+    title: &str,
+    x_label: &str,
+    groups: Vec<(String, Vec<(f64, f64)>)>,
+) -> dea_fit::report::plot::Chart {
+    use dea_fit::report::plot::{Chart, Series, Style};
+    Chart {
+        title: title.into(),
+        x_label: x_label.into(),
+        y_label: "log₁₀ median time [s]".into(),
+        series: groups
+            .into_iter()
+            .enumerate()
+            .map(|(i, (label, points))| Series {
+                label,
+                points: points
+                    .into_iter()
+                    .map(|(size, s)| (size.log10(), s.log10()))
+                    .collect(),
+                color: i,
+                style: Style::Line,
+            })
+            .collect(),
+        log_x: false,
+        x_unit: None,
+        y_unit: None,
+    }
+}
+
 /// The progress of `bench <what>` over `len` cases ([`dea_fit::observe::Meter`]).
 pub fn progress_bar(what: &str, len: usize) -> dea_fit::observe::Meter {
     dea_fit::observe::Meter::new(&format!("bench {what}"), "cases", Some(len as u64))

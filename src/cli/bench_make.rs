@@ -16,7 +16,6 @@
 use dea_fit::bench::{copy_project, make_project, measure, Budget, Scratch, Timing};
 use dea_fit::io::write::atomic_write;
 use dea_fit::report::format::{si, table};
-use dea_fit::report::plot::{Chart, Series, Style};
 use dea_fit::units::CountRange;
 use dea_fit::{Error, Result};
 use serde::Serialize;
@@ -197,28 +196,19 @@ fn write(a: &MakeArgs, jobs: usize, rows: &[Row]) -> Result<()> {
     };
     let json = serde_json::to_string_pretty(&report).map_err(|e| io(e.to_string()))?;
     atomic_write(&dir.join("make.json"), json.as_bytes())?;
-    Chart {
-        title: "dea-fit make: wall time against the project's steps".into(),
-        x_label: "log₁₀ steps".into(),
-        y_label: "log₁₀ wall time [s]".into(),
-        series: ["from_scratch", "up_to_date"]
-            .iter()
-            .enumerate()
-            .map(|(i, case)| Series {
-                label: case.replace('_', " "),
-                points: rows
-                    .iter()
-                    .filter(|r| r.case == *case)
-                    .map(|r| ((r.steps as f64).log10(), r.median_s.log10()))
-                    .collect(),
-                color: i,
-                style: Style::Line,
-            })
-            .collect(),
-        log_x: false,
-        x_unit: None,
-        y_unit: None,
-    }
+    let groups = ["from_scratch", "up_to_date"]
+        .iter()
+        .map(|case| {
+            let points = rows.iter().filter(|r| r.case == *case);
+            let points = points.map(|r| (r.steps as f64, r.median_s)).collect();
+            (case.replace('_', " "), points)
+        })
+        .collect();
+    super::bench::loglog_times(
+        "dea-fit make: wall time against the project's steps",
+        "log₁₀ steps",
+        groups,
+    )
     .write_svg(&dir.join("make.svg"))?;
     let body: Vec<Vec<String>> = rows
         .iter()

@@ -21,7 +21,6 @@ use dea_fit::io::write::atomic_write;
 use dea_fit::material::hyperelastic::{Mode, ModelSpec, StrainEnergy};
 use dea_fit::material::viscoelastic::preset;
 use dea_fit::report::format::{si, table};
-use dea_fit::report::plot::{Chart, Series, Style};
 use dea_fit::units::CountRange;
 use dea_fit::{Error, Result};
 use rand::SeedableRng;
@@ -327,28 +326,19 @@ fn write(a: &ScaleArgs, rows: &[Row], slopes: &[Slope]) -> Result<()> {
     };
     let json = serde_json::to_string_pretty(&report).map_err(|e| io(e.to_string()))?;
     atomic_write(&dir.join("scale.json"), json.as_bytes())?;
-    Chart {
-        title: "time against input size (log-log; slope 1 = linear)".into(),
-        x_label: "log₁₀ rows".into(),
-        y_label: "log₁₀ median time [s]".into(),
-        series: slopes
-            .iter()
-            .enumerate()
-            .map(|(i, s)| Series {
-                label: format!("{} (slope {:.2})", s.estimator, s.slope),
-                points: rows
-                    .iter()
-                    .filter(|r| r.estimator == s.estimator)
-                    .map(|r| ((r.rows as f64).log10(), r.median_s.log10()))
-                    .collect(),
-                color: i,
-                style: Style::Line,
-            })
-            .collect(),
-        log_x: false,
-        x_unit: None,
-        y_unit: None,
-    }
+    let groups = slopes
+        .iter()
+        .map(|s| {
+            let points = rows.iter().filter(|r| r.estimator == s.estimator);
+            let points = points.map(|r| (r.rows as f64, r.median_s)).collect();
+            (format!("{} (slope {:.2})", s.estimator, s.slope), points)
+        })
+        .collect();
+    super::bench::loglog_times(
+        "time against input size (log-log; slope 1 = linear)",
+        "log₁₀ rows",
+        groups,
+    )
     .write_svg(&dir.join("scale.svg"))?;
     let body: Vec<Vec<String>> = rows
         .iter()

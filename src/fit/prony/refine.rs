@@ -358,6 +358,6 @@ pub const START_POINTS: usize = 400;
 /// searches and the polish, which have no level before, take s² from their own cost
 /// (a relative decrease of ½‖r‖² below 2·10⁻³/(m − 2N − 1) ends them): on the
 /// shipped DMA master curve at 30 terms the starts walked 35–90 iterations each
-/// without it, 14–45 with it (E∞ 79 811 → 79 809 Pa, no σ at 30 terms; the chosen
+/// without it, 21–33 with it (E∞ 79 811 → 79 809 Pa, no σ at 30 terms; the chosen
 /// `auto` fit's E∞ moved by 0.002 Pa of its σ 105 Pa).
 const NOISE_FLOOR: f64 = 1e-3;

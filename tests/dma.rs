@@ -548,7 +548,10 @@ fn dma_intervals_cover_the_truth() {
 /// ½χ² by less than 10⁻³. Before, both polishes (the fit's and the Kramers–Kronig
 /// check's) walked the negligible terms' flat valleys to the 200-iteration limit
 /// for 0.06 in ½χ² (408 iterations, status `not_converged`, 2.3 G instructions;
-/// now ≈ 210 iterations, `ill_posed` for the negligible terms, 1.2 G).
+/// then 211 iterations, `ill_posed` for the negligible terms, 1.2 G). The starts'
+/// searches stop at their noise floor too (126 iterations, 0.45 G with the
+/// Kramers–Kronig fit started from the joint fit's τ): the bound of 160 fails
+/// without it.
 #[test]
 fn thirty_terms_converge_and_say_they_are_too_many() {
     let data = read::read_all(
@@ -567,7 +570,7 @@ fn thirty_terms_converge_and_say_they_are_too_many() {
         f.solver.termination
     );
     assert!(
-        f.solver.iterations < 300,
+        f.solver.iterations < 160,
         "{} iterations",
         f.solver.iterations
     );

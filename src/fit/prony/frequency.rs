@@ -31,7 +31,8 @@
 //!
 //! **Kramers–Kronig check.** A Prony series is causal, so its E′ and E″ are
 //! Kramers–Kronig consistent by construction. The check fits E′ alone (the same
-//! search, at the term count of the joint fit),
+//! search, at the term count of the joint fit, started from the joint fit's τ: E′
+//! leads the joint fit, so its τ lie in or next to the valley E′ alone has),
 //! predicts E″ from that series, and lists the frequency ranges where the measured E″
 //! differs from the prediction by more than [`KK_TOLERANCE`] plus three times the
 //! storage fit's relative RMS residual (the noise): there the two measured moduli
@@ -372,30 +373,15 @@ pub fn fit(data: &ComplexModulus, settings: &FrequencySettings) -> Result<Freque
     check(data)?;
     let t0 = Instant::now();
     let mut setup = setup(data, settings.loss_weight);
-    let check_kk = settings.kramers_kronig && settings.loss_weight > 0.0;
-    // A stated count: the Kramers–Kronig check's storage-only fit (of that count)
-    // needs nothing of the joint fit and runs beside it (the same two fits as one
-    // after the other, on two cores); `auto` waits for the count it chooses.
-    let (estimated, kk) = match (check_kk, settings.search.terms) {
-        (true, Some(n)) => {
-            let (e, kk) = rayon::join(
-                || estimate(&mut setup, &settings.search),
-                || kramers_kronig(data, &settings.search, n),
-            );
-            (e?, Some(kk))
-        }
-        _ => (estimate(&mut setup, &settings.search)?, None),
-    };
     let Estimate {
         chosen: a,
         grid,
         selection,
         notes,
-    } = estimated;
-    let kk = match (kk, check_kk) {
-        (Some(kk), _) => kk?,
-        (None, true) => kramers_kronig(data, &settings.search, a.tf.n_terms)?,
-        (None, false) => Vec::new(),
+    } = estimate(&mut setup, &settings.search)?;
+    let kk = match settings.kramers_kronig && settings.loss_weight > 0.0 {
+        true => kramers_kronig(data, &settings.search, &a)?,
+        false => Vec::new(),
     };
     let seconds = t0.elapsed().as_secs_f64();
     Ok(record(
@@ -528,19 +514,19 @@ fn verdict(
 }
 
 /// The Kramers–Kronig check (module docs): E″ of a series fitted to E′ alone
-/// against the measured E″, sorted by ω; ranges of two or more consecutive points
-/// beyond [`KK_TOLERANCE`] + 3 × the storage fit's relative RMS residual.
+/// (the count of the joint fit `joint`, searched from its τ) against the measured
+/// E″, sorted by ω; ranges of two or more consecutive points beyond
+/// [`KK_TOLERANCE`] + 3 × the storage fit's relative RMS residual.
 fn kramers_kronig(
     data: &ComplexModulus,
     search: &Search,
-    terms: usize,
+    joint: &Assessed<FrequencyKernels>,
 ) -> Result<Vec<KkDisagreement>> {
-    let mut storage_only = setup(data, 0.0);
-    let search = Search {
-        terms: Some(terms),
-        ..*search
-    };
-    let a = estimate(&mut storage_only, &search)?.chosen;
+    let storage_only = setup(data, 0.0);
+    let n = joint.tf.n_terms;
+    let start = joint.tf.p[1 + n..].to_vec();
+    let tf = refine::fit_from(&storage_only, n, &[start], search);
+    let a = assess::assess(&storage_only, tf);
 
     let n = a.tf.n_terms;
     let terms: Vec<(f64, f64)> = (0..n).map(|i| (a.si[1 + n + i], a.si[1 + i])).collect();

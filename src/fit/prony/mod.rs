@@ -34,6 +34,36 @@ pub mod select;
 pub mod starts;
 
 pub use kernels::Kernels;
+
+/// The normal equations (JᵀJ, Jᵀr) a problem formed at its last point p, for
+/// [`crate::fit::lm::LeastSquares::normal_equations`]: handed out only at that p.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct NormalCache(Option<(Vec<f64>, nalgebra::DMatrix<f64>, nalgebra::DVector<f64>)>);
+
+impl NormalCache {
+    /// Keep (JᵀJ, Jᵀr) formed at p.
+    pub(crate) fn keep(
+        &mut self,
+        p: &[f64],
+        jtj: nalgebra::DMatrix<f64>,
+        jtr: nalgebra::DVector<f64>,
+    ) {
+        self.0 = Some((p.to_vec(), jtj, jtr));
+    }
+
+    /// Forget them (the next evaluation forms none).
+    pub(crate) fn clear(&mut self) {
+        self.0 = None;
+    }
+
+    /// (JᵀJ, Jᵀr) if they were formed at p.
+    pub(crate) fn at(&self, p: &[f64]) -> Option<(nalgebra::DMatrix<f64>, nalgebra::DVector<f64>)> {
+        match &self.0 {
+            Some((at, jtj, jtr)) if at.as_slice() == p => Some((jtj.clone(), jtr.clone())),
+            _ => None,
+        }
+    }
+}
 pub use select::{Candidate, Criterion, Selection};
 
 use crate::error::{Error, Result};

@@ -38,7 +38,7 @@ pub struct Problem<K: Kernels> {
     kernel_derivatives: bool,
     /// p, JᵀJ and Jᵀr of the last evaluation asked for its normal equations
     /// ([`LeastSquares::forms_normal_equations`]).
-    normal: Option<(Vec<f64>, DMatrix<f64>, DVector<f64>)>,
+    normal: super::NormalCache,
     /// A block of [`BLOCK_ROWS`] rows of columns ([`Problem::jacobian_block`]).
     block: Vec<f64>,
     /// Evaluations so far (counted for the solver report).
@@ -70,7 +70,7 @@ impl<K: Kernels> Problem<K> {
             taus: Vec::new(),
             kernel_taus: Vec::new(),
             kernel_derivatives: false,
-            normal: None,
+            normal: super::NormalCache::default(),
             block: Vec::new(),
             evaluations: 0,
         }
@@ -185,7 +185,7 @@ impl<K: Kernels> Problem<K> {
         self.h = Vec::new();
         self.dh = Vec::new();
         self.block = Vec::new();
-        self.normal = None;
+        self.normal.clear();
         self.kernel_taus.clear();
         self.kernel_derivatives = false;
     }
@@ -300,7 +300,10 @@ impl<K: Kernels> Problem<K> {
             }
         }
         let finite = jtj.iter().chain(jtr.iter()).all(|v| v.is_finite());
-        self.normal = finite.then(|| (p.to_vec(), jtj, jtr));
+        match finite {
+            true => self.normal.keep(p, jtj, jtr),
+            false => self.normal.clear(),
+        }
         finite
     }
 
@@ -367,9 +370,6 @@ impl<K: Kernels> LeastSquares for Problem<K> {
         true
     }
     fn normal_equations(&self, p: &[f64]) -> Option<(DMatrix<f64>, DVector<f64>)> {
-        match &self.normal {
-            Some((at, jtj, jtr)) if at.as_slice() == p => Some((jtj.clone(), jtr.clone())),
-            _ => None,
-        }
+        self.normal.at(p)
     }
 }

@@ -49,7 +49,7 @@ pub struct Projected<'p, K: Kernels> {
     /// no column of the data's length is kept.
     block: Vec<f64>,
     /// θ, JᵀJ and Jᵀr of the last evaluation asked for a Jacobian.
-    normal: Option<(Vec<f64>, DMatrix<f64>, DVector<f64>)>,
+    normal: super::NormalCache,
 }
 
 /// The row blocks `lo..hi` of [`BLOCK_ROWS`] rows of a curve of `m` points.
@@ -88,7 +88,7 @@ impl<'p, K: Kernels> Projected<'p, K> {
             fixed,
             theta: Vec::with_capacity(n),
             block,
-            normal: None,
+            normal: super::NormalCache::default(),
         }
     }
 
@@ -266,7 +266,7 @@ impl<K: Kernels> LeastSquares for Projected<'_, K> {
         }
         match self.normal_from_gram(&dr) {
             Some((jtj, jtr)) if jtj.iter().chain(jtr.iter()).all(|v| v.is_finite()) => {
-                self.normal = Some((theta.to_vec(), jtj, jtr));
+                self.normal.keep(theta, jtj, jtr);
                 true
             }
             _ => false,
@@ -279,9 +279,6 @@ impl<K: Kernels> LeastSquares for Projected<'_, K> {
         true
     }
     fn normal_equations(&self, p: &[f64]) -> Option<(DMatrix<f64>, DVector<f64>)> {
-        match &self.normal {
-            Some((at, jtj, jtr)) if at.as_slice() == p => Some((jtj.clone(), jtr.clone())),
-            _ => None,
-        }
+        self.normal.at(p)
     }
 }

@@ -495,14 +495,7 @@ mod tests {
     /// rounding ~10⁻⁹ of the largest entry) at the seed's Table 3.3 constants, 4 terms.
     #[test]
     fn joint_problem_has_its_residuals_derivative() {
-        let mut prob = long_curve(200).setup.prob;
-        prob.n_terms = 4;
-        let s = prob.scale;
-        let p: Vec<f64> = [43.3e3, 106.1e3, 45.5e3, 16.1e3, 10.9e3]
-            .iter()
-            .map(|e| e / s)
-            .chain([0.153f64, 0.464, 32.0, 216.0].iter().map(|t| t.ln()))
-            .collect();
+        let (mut prob, p) = four_terms_at_table_3_3(200);
         let m = prob.len();
         let (mut r, mut r_only, mut j) = (
             DVector::zeros(m),
@@ -544,14 +537,7 @@ mod tests {
     /// kept for that point only.
     #[test]
     fn joint_normal_equations_are_those_of_its_jacobian() {
-        let mut prob = long_curve(3000).setup.prob;
-        prob.n_terms = 4;
-        let s = prob.scale;
-        let p: Vec<f64> = [43.3e3, 106.1e3, 45.5e3, 16.1e3, 10.9e3]
-            .iter()
-            .map(|e| e / s)
-            .chain([0.153f64, 0.464, 32.0, 216.0].iter().map(|t| t.ln()))
-            .collect();
+        let (mut prob, p) = four_terms_at_table_3_3(3000);
         let m = prob.len();
         let (mut r, mut j) = (DVector::zeros(m), DMatrix::zeros(m, 9));
         assert!(prob.eval(&p, &mut r, Some(&mut j)));
@@ -620,6 +606,20 @@ mod tests {
 
     /// The seed's Table 3.3 as a step to strain 0.5, `points` log-spaced over
     /// 0.01–1000 s, 1 % noise, prepared.
+    /// The joint problem of `long_curve(points)` with 4 terms, and its parameters
+    /// (moduli over the problem's scale, ln τ) at the seed's Table 3.3 constants.
+    fn four_terms_at_table_3_3(points: usize) -> (Problem<TimeKernels>, Vec<f64>) {
+        let mut prob = long_curve(points).setup.prob;
+        prob.n_terms = 4;
+        let s = prob.scale;
+        let p = [43.3e3, 106.1e3, 45.5e3, 16.1e3, 10.9e3]
+            .iter()
+            .map(|e| e / s)
+            .chain([0.153f64, 0.464, 32.0, 216.0].iter().map(|t| t.ln()))
+            .collect();
+        (prob, p)
+    }
+
     fn long_curve(points: usize) -> Prepared {
         use crate::io::relaxation::{from_table, log_times, RelaxationOptions, Synthetic};
         use crate::io::table::Table;

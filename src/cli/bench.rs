@@ -182,6 +182,29 @@ pub fn loglog_times(
     }
 }
 
+/// Write `rows` as CSV to `path` (atomically), one line per row with a header.
+pub fn write_csv<T: serde::Serialize>(path: &std::path::Path, rows: &[T]) -> Result<()> {
+    let io = |e: String| Error::settings(format!("could not write the bench report: {e}"));
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for r in rows {
+        w.serialize(r).map_err(|e| io(e.to_string()))?;
+    }
+    let csv = w.into_inner().map_err(|e| io(e.to_string()))?;
+    dea_fit::io::write::atomic_write(path, &csv)
+}
+
+/// The timing cells of a `bench scale` or `bench make` table row: median,
+/// fastest, runs, and the median per unit of size (a row, a step).
+pub fn time_cells(median_s: f64, min_s: f64, repeats: usize, per_unit_s: f64) -> [String; 4] {
+    use dea_fit::report::format::si;
+    [
+        si(median_s, "s"),
+        si(min_s, "s"),
+        repeats.to_string(),
+        si(per_unit_s, "s"),
+    ]
+}
+
 /// The progress of `bench <what>` over `len` cases ([`dea_fit::observe::Meter`]).
 pub fn progress_bar(what: &str, len: usize) -> dea_fit::observe::Meter {
     dea_fit::observe::Meter::new(&format!("bench {what}"), "cases", Some(len as u64))

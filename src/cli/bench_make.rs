@@ -181,12 +181,7 @@ fn write(a: &MakeArgs, jobs: usize, rows: &[Row]) -> Result<()> {
     let dir = &a.out_dir;
     super::claim_dir(dir)?;
     let io = |e: String| Error::settings(format!("could not write the bench report: {e}"));
-    let mut w = csv::Writer::from_writer(Vec::new());
-    for r in rows {
-        w.serialize(r).map_err(|e| io(e.to_string()))?;
-    }
-    let csv = w.into_inner().map_err(|e| io(e.to_string()))?;
-    atomic_write(&dir.join("make.csv"), &csv)?;
+    super::bench::write_csv(&dir.join("make.csv"), rows)?;
     let report = Report {
         tool_version: env!("CARGO_PKG_VERSION"),
         jobs,
@@ -213,15 +208,13 @@ fn write(a: &MakeArgs, jobs: usize, rows: &[Row]) -> Result<()> {
     let body: Vec<Vec<String>> = rows
         .iter()
         .map(|r| {
-            vec![
+            let head = [
                 r.project.to_string(),
                 r.steps.to_string(),
                 r.case.replace('_', " "),
-                si(r.median_s, "s"),
-                si(r.min_s, "s"),
-                r.repeats.to_string(),
-                si(r.per_step_s, "s"),
-            ]
+            ];
+            let times = super::bench::time_cells(r.median_s, r.min_s, r.repeats, r.per_step_s);
+            head.into_iter().chain(times).collect()
         })
         .collect();
     let tab = table(

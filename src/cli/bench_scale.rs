@@ -311,12 +311,7 @@ fn write(a: &ScaleArgs, rows: &[Row], slopes: &[Slope]) -> Result<()> {
     let dir = &a.out_dir;
     super::claim_dir(dir)?;
     let io = |e: String| Error::settings(format!("could not write the bench report: {e}"));
-    let mut w = csv::Writer::from_writer(Vec::new());
-    for r in rows {
-        w.serialize(r).map_err(|e| io(e.to_string()))?;
-    }
-    let csv = w.into_inner().map_err(|e| io(e.to_string()))?;
-    atomic_write(&dir.join("scale.csv"), &csv)?;
+    super::bench::write_csv(&dir.join("scale.csv"), rows)?;
     let report = Report {
         tool_version: env!("CARGO_PKG_VERSION"),
         budget_s: a.budget,
@@ -343,14 +338,9 @@ fn write(a: &ScaleArgs, rows: &[Row], slopes: &[Slope]) -> Result<()> {
     let body: Vec<Vec<String>> = rows
         .iter()
         .map(|r| {
-            vec![
-                r.estimator.to_string(),
-                r.rows.to_string(),
-                si(r.median_s, "s"),
-                si(r.min_s, "s"),
-                r.repeats.to_string(),
-                si(r.per_row_s, "s"),
-            ]
+            let head = [r.estimator.to_string(), r.rows.to_string()];
+            let times = super::bench::time_cells(r.median_s, r.min_s, r.repeats, r.per_row_s);
+            head.into_iter().chain(times).collect()
         })
         .collect();
     let tab = table(

@@ -59,6 +59,9 @@
 use std::cell::Cell;
 use std::time::Instant;
 
+mod spline;
+use spline::Piece;
+
 /// Noise floor as a fraction of the record's range (0.1 %): below any real drive's
 /// noise; it keeps a noiseless synthetic record from being split at its rounding.
 pub const NOISE_FLOOR: f64 = 1e-3;
@@ -121,13 +124,13 @@ impl Work {
     }
 }
 
-/// A measured signal: smooth Hermite pieces between corners.
+/// A measured signal: smooth quintic pieces between corners.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Measured {
     /// Knot times (s), increasing; piece i spans `knots[i]..knots[i + 1]`.
     knots: Vec<f64>,
-    /// Per piece: value and slope at its start, value and slope at its end.
-    pieces: Vec<[f64; 4]>,
+    /// Per piece: its polynomial in u = (t − a)/h over [a, a + h] ([`spline::Piece`]).
+    pieces: Vec<Piece>,
     /// Corner times (s), increasing, including the first and last sample.
     corners: Vec<f64>,
     /// Steps (s): start and end of each jump the sampling did not resolve.
@@ -239,21 +242,10 @@ impl Measured {
         }
         let i = self.piece_end(t);
         if i >= k.len() {
-            return (self.pieces[self.pieces.len() - 1][2], 0.0);
+            return (spline::end(&self.pieces[self.pieces.len() - 1]), 0.0);
         }
-        let (a, b) = (k[i - 1], k[i]);
-        let [y0, s0, y1, s1] = self.pieces[i - 1];
-        let h = b - a;
-        let u = (t - a) / h;
-        let (u2, u3) = (u * u, u * u * u);
-        let v = (2.0 * u3 - 3.0 * u2 + 1.0) * y0
-            + (u3 - 2.0 * u2 + u) * h * s0
-            + (3.0 * u2 - 2.0 * u3) * y1
-            + (u3 - u2) * h * s1;
-        let d = (6.0 * u2 - 6.0 * u) / h * (y0 - y1)
-            + (3.0 * u2 - 4.0 * u + 1.0) * s0
-            + (3.0 * u2 - 2.0 * u) * s1;
-        (v, d)
+        let (a, h) = (k[i - 1], k[i] - k[i - 1]);
+        spline::eval(&self.pieces[i - 1], (t - a) / h, h)
     }
 
     /// The number of knots ≤ t (t ≥ the first knot): `knots.partition_point(|x| x
@@ -305,7 +297,7 @@ impl Measured {
 
     /// Values at the knots (for range checks).
     pub fn knot_values(&self) -> impl Iterator<Item = f64> + '_ {
-        self.pieces.iter().flat_map(|p| [p[0], p[2]])
+        self.pieces.iter().flat_map(|p| [p[0], spline::end(p)])
     }
 }
 
@@ -886,7 +878,7 @@ fn build(
 ) -> Measured {
     let n = t.len();
     let mut knots: Vec<f64> = Vec::new();
-    let mut pieces: Vec<[f64; 4]> = Vec::new();
+    let mut pieces: Vec<Piece> = Vec::new();
     // first piece index of each segment
     let mut first = Vec::with_capacity(segs.len() + 1);
     for (k, &(_, _, t0, step)) in segs.iter().enumerate() {
@@ -907,7 +899,7 @@ fn build(
     let mut ends: Vec<[Option<f64>; 2]> = vec![[None, None]; segs.len()];
     for k in 1..segs.len() {
         if !segs[k - 1].3 && !segs[k].3 {
-            let m = 0.5 * (pieces[first[k] - 1][2] + pieces[first[k]][0]);
+            let m = 0.5 * (spline::end(&pieces[first[k] - 1]) + pieces[first[k]][0]);
             ends[k - 1][1] = Some(m);
             ends[k][0] = Some(m);
         }
@@ -920,22 +912,18 @@ fn build(
         let ks = &knots[a..=b];
         let lo = t.partition_point(|&x| x < ks[0]);
         let hi = t.partition_point(|&x| x <= ks[ks.len() - 1]);
-        match hermite_lsq(&t[lo..hi], &v[lo..hi], ks, *fixed, work).filter(|_| hi - lo >= 4) {
-            Some((u, _)) => {
-                for j in 0..b - a {
-                    pieces[a + j] = [u[2 * j], u[2 * j + 1], u[2 * j + 2], u[2 * j + 3]];
-                }
-            }
-            // a straight piece (too few samples): through the held values
+        match spline_lsq(&t[lo..hi], &v[lo..hi], ks, *fixed, work) {
+            Some((u, _)) => pieces[a..b].copy_from_slice(&u),
+            // too few samples to fit again: the end pieces moved onto the held
+            // values by a straight line each (the shape between is kept)
             None => {
                 let y0 = fixed[0].unwrap_or(pieces[a][0]);
-                let y1 = fixed[1].unwrap_or(pieces[b - 1][2]);
-                let sl = (y1 - y0) / (ks[ks.len() - 1] - ks[0]);
+                let y1 = fixed[1].unwrap_or(spline::end(&pieces[b - 1]));
                 if b - a == 1 {
-                    pieces[a] = [y0, sl, y1, sl];
+                    pieces[a] = spline::with_ends(pieces[a], y0, y1);
                 } else {
-                    pieces[a][0] = y0;
-                    pieces[b - 1][2] = y1;
+                    pieces[a] = spline::with_ends(pieces[a], y0, spline::end(&pieces[a]));
+                    pieces[b - 1] = spline::with_ends(pieces[b - 1], pieces[b - 1][0], y1);
                 }
             }
         }
@@ -945,17 +933,16 @@ fn build(
         let (a, b) = (first[k], first[k + 1] - 1);
         if segs[k].3 {
             let y0 = if k > 0 {
-                pieces[a - 1][2]
+                spline::end(&pieces[a - 1])
             } else {
                 pieces[a][0]
             };
             let y1 = if k + 1 < segs.len() && !segs[k + 1].3 {
                 pieces[b + 1][0]
             } else {
-                pieces[b][2]
+                spline::end(&pieces[b])
             };
-            let s = (y1 - y0) / (knots[b + 1] - knots[a]);
-            pieces[a] = [y0, s, y1, s];
+            pieces[a] = spline::line(y0, y1);
         }
     }
     let mut corners: Vec<f64> = segs.iter().map(|s| s.2).collect();
@@ -976,7 +963,7 @@ fn build(
     }
 }
 
-/// Knots and Hermite pieces of one segment. A step is one straight piece (its
+/// Knots and quintic pieces of one segment. A step is one straight piece (its
 /// values are set from its neighbours afterwards).
 fn fit_segment(
     t: &[f64],
@@ -984,31 +971,27 @@ fn fit_segment(
     s: &Segment,
     sigma: f64,
     work: &Work,
-) -> (Vec<f64>, Vec<[f64; 4]>) {
+) -> (Vec<f64>, Vec<Piece>) {
     let lo = t.partition_point(|&x| x < s.t0);
     let hi = t.partition_point(|&x| x <= s.t1);
     let (ts, vs) = (&t[lo..hi], &v[lo..hi]);
     let m = ts.len();
-    if s.step || m < 4 {
-        // too few samples for a curve: the straight line of least squares
-        let (y0, y1) = line_fit(ts, vs, s.t0, s.t1);
-        let sl = (y1 - y0) / (s.t1 - s.t0);
-        return (vec![s.t0, s.t1], vec![[y0, sl, y1, sl]]);
+    let fitted = (!s.step)
+        .then(|| segment_fit(t, v, (s.t0, s.t1), sigma, m as f64, true, work))
+        .flatten();
+    match fitted {
+        Some((_, knots, pieces)) => (knots, pieces),
+        // a step, or too few samples for a curve: the straight line of least squares
+        None => {
+            let (y0, y1) = line_fit(ts, vs, s.t0, s.t1);
+            (vec![s.t0, s.t1], vec![spline::line(y0, y1)])
+        }
     }
-    let Some((_, knots, u)) = segment_fit(t, v, (s.t0, s.t1), sigma, m as f64, true, work) else {
-        let (y0, y1) = line_fit(ts, vs, s.t0, s.t1);
-        let sl = (y1 - y0) / (s.t1 - s.t0);
-        return (vec![s.t0, s.t1], vec![[y0, sl, y1, sl]]);
-    };
-    let pieces = (0..knots.len() - 1)
-        .map(|j| [u[2 * j], u[2 * j + 1], u[2 * j + 2], u[2 * j + 3]])
-        .collect();
-    (knots, pieces)
 }
 
 /// What a corner at c saves in BIC on [a, b] (`m` samples): the best spline over
-/// both sides, or the two sides' knots as one C¹ spline (the split without its
-/// slope jump, so the comparison is nested), against the two sides' splines: the
+/// both sides, or the two sides' knots as one spline (the split without its
+/// jumps, so the comparison is nested), against the two sides' splines: the
 /// RSS the split saves must exceed [`CORNER_SIGMAS`]² σ² (as a hinge's t-ratio).
 fn corner_gain(
     t: &[f64],
@@ -1028,23 +1011,25 @@ fn corner_gain(
     let hi = t.partition_point(|&x| x <= b);
     let mut knots = l.1.clone();
     knots.extend_from_slice(&r.1[1..]);
-    let joined = hermite_lsq(&t[lo..hi], &v[lo..hi], &knots, [None, None], work)
+    let joined = spline_lsq(&t[lo..hi], &v[lo..hi], &knots, [None, None], work)
         .map_or(f64::INFINITY, |(_, rss)| {
-            rss / (sigma * sigma) + 2.0 * knots.len() as f64 * m.ln()
+            rss / (sigma * sigma) + spline::unknowns(knots.len()) as f64 * m.ln()
         });
     let merged = segment_fit(t, v, (a, b), sigma, m, false, work).map_or(f64::INFINITY, |f| f.0);
-    // the split has two unknowns more than the joined spline (a second value and
-    // slope at c): refund their BIC and ask, as of a hinge, a 6σ saving instead
-    merged.min(joined) - l.0 - r.0 + 2.0 * m.ln() - CORNER_SIGMAS * CORNER_SIGMAS
+    // the split has more unknowns than the joined spline (a second value and
+    // derivatives at c): refund their BIC and ask, as of a hinge, a 6σ saving instead
+    let extra = spline::unknowns(l.1.len()) + spline::unknowns(r.1.len())
+        - spline::unknowns(knots.len());
+    merged.min(joined) - l.0 - r.0 + extra as f64 * m.ln() - CORNER_SIGMAS * CORNER_SIGMAS
 }
 
 /// The spline of least BIC on the samples in [t0, t1]: (score, knots, unknowns),
-/// score = RSS/σ² + p·ln `m` with p = 2(K + 1) unknowns for K intervals (BIC with
+/// score = RSS/σ² + p·ln `m` with p = K + 5 unknowns for K intervals (BIC with
 /// a known σ; `m` is the sample count the penalty is counted on); with `graded`,
 /// each K also with its first interval graded ([`graded_knots`]). The corner test
 /// ([`corner_gain`]) compares even knots only: graded knots right after a corner
-/// would let a C¹ spline turn within two samples, as sharply as the corner it
-/// tests. `None` with fewer than 4 samples.
+/// would let a spline turn within two samples, as sharply as the corner it
+/// tests. `None` with fewer samples than a single quintic's six unknowns.
 fn segment_fit(
     t: &[f64],
     v: &[f64],
@@ -1053,15 +1038,15 @@ fn segment_fit(
     m: f64,
     graded: bool,
     work: &Work,
-) -> Option<(f64, Vec<f64>, Vec<f64>)> {
+) -> Option<(f64, Vec<f64>, Vec<Piece>)> {
     let lo = t.partition_point(|&x| x < t0);
     let hi = t.partition_point(|&x| x <= t1);
     let (ts, vs) = (&t[lo..hi], &v[lo..hi]);
     let n = ts.len();
-    if n < 4 {
+    if n < spline::unknowns(2) {
         return None;
     }
-    let mut best: Option<(f64, Vec<f64>, Vec<f64>)> = None;
+    let mut best: Option<(f64, Vec<f64>, Vec<Piece>)> = None;
     let mut k = 1usize;
     while k == 1 || 4 * k <= n {
         let even = quantile_knots(ts, t0, t1, k);
@@ -1069,11 +1054,11 @@ fn segment_fit(
         for knots in [Some(even), graded].into_iter().flatten() {
             // the score is at least its penalty: a spline whose penalty alone
             // reaches the best score cannot beat it (not fitted)
-            let penalty = 2.0 * knots.len() as f64 * m.ln();
+            let penalty = spline::unknowns(knots.len()) as f64 * m.ln();
             if best.as_ref().is_some_and(|b| penalty >= b.0) {
                 continue;
             }
-            if let Some((u, rss)) = hermite_lsq(ts, vs, &knots, [None, None], work) {
+            if let Some((u, rss)) = spline_lsq(ts, vs, &knots, [None, None], work) {
                 let score = rss / (sigma * sigma) + penalty;
                 if best.as_ref().is_none_or(|b| score < b.0) {
                     best = Some((score, knots, u));
@@ -1138,113 +1123,19 @@ fn quantile_knots(ts: &[f64], t0: f64, t1: f64, k: usize) -> Vec<f64> {
     knots
 }
 
-/// Least-squares C¹ cubic Hermite spline on `knots`: unknowns (y_j, s_j) per knot,
-/// banded normal equations (half-bandwidth 3) solved by banded Cholesky; the value
-/// at the first and at the last knot held where `fixed` gives it. Returns the
-/// unknowns and the RSS; `None` when singular, or past the deadline of `work`.
-fn hermite_lsq(
+/// [`spline::lsq`] on `knots`, counted against the budget of `work`: `None` when
+/// singular, or past its deadline.
+fn spline_lsq(
     ts: &[f64],
     vs: &[f64],
     knots: &[f64],
     fixed: [Option<f64>; 2],
     work: &Work,
-) -> Option<(Vec<f64>, f64)> {
+) -> Option<(Vec<Piece>, f64)> {
     if !work.spend(ts.len()) {
         return None;
     }
-    const W: usize = 4;
-    let nu = 2 * knots.len();
-    let mut a = vec![[0.0; W]; nu]; // a[i][d] = A[i][i + d]
-    let mut b = vec![0.0; nu];
-    let basis = |x: f64, j: usize| -> [f64; 4] {
-        let h = knots[j + 1] - knots[j];
-        let u = (x - knots[j]) / h;
-        let (u2, u3) = (u * u, u * u * u);
-        [
-            2.0 * u3 - 3.0 * u2 + 1.0,
-            (u3 - 2.0 * u2 + u) * h,
-            3.0 * u2 - 2.0 * u3,
-            (u3 - u2) * h,
-        ]
-    };
-    let mut j = 0;
-    for (&x, &y) in ts.iter().zip(vs) {
-        while j + 2 < knots.len() && x >= knots[j + 1] {
-            j += 1;
-        }
-        let f = basis(x, j);
-        for r in 0..4 {
-            for c in r..4 {
-                a[2 * j + r][c - r] += f[r] * f[c];
-            }
-            b[2 * j + r] += f[r] * y;
-        }
-    }
-    // a held value: its column moves to the right-hand side, its row becomes y = value
-    for (i, value) in [(0, fixed[0]), (nu - 2, fixed[1])] {
-        let Some(value) = value else { continue };
-        for r in i.saturating_sub(W - 1)..(i + W).min(nu) {
-            let coupling = if r < i { a[r][i - r] } else { a[i][r - i] };
-            if r != i {
-                b[r] -= coupling * value;
-            }
-        }
-        for r in i.saturating_sub(W - 1)..i {
-            a[r][i - r] = 0.0;
-        }
-        a[i] = [0.0; W];
-        a[i][0] = 1.0;
-        b[i] = value;
-    }
-    let scale = a.iter().map(|r| r[0]).fold(0.0, f64::max);
-    for r in a.iter_mut() {
-        r[0] += 1e-12 * scale;
-    }
-    // banded Cholesky: A = L·Lᵀ, L stored as l[i][d] = L[i + d][i]
-    let mut l = vec![[0.0; W]; nu];
-    for i in 0..nu {
-        let mut d0 = a[i][0];
-        for k in i.saturating_sub(W - 1)..i {
-            d0 -= l[k][i - k] * l[k][i - k];
-        }
-        if d0 <= 0.0 {
-            return None;
-        }
-        let lii = d0.sqrt();
-        l[i][0] = lii;
-        for d in 1..W.min(nu - i) {
-            let r = i + d;
-            let mut s = a[i][d];
-            for k in r.saturating_sub(W - 1)..i {
-                s -= l[k][r - k] * l[k][i - k];
-            }
-            l[i][d] = s / lii;
-        }
-    }
-    let mut y = b.clone();
-    for i in 0..nu {
-        for k in i.saturating_sub(W - 1)..i {
-            y[i] -= l[k][i - k] * y[k];
-        }
-        y[i] /= l[i][0];
-    }
-    for i in (0..nu).rev() {
-        for d in 1..W.min(nu - i) {
-            y[i] -= l[i][d] * y[i + d];
-        }
-        y[i] /= l[i][0];
-    }
-    let mut rss = 0.0;
-    let mut j = 0;
-    for (&x, &v) in ts.iter().zip(vs) {
-        while j + 2 < knots.len() && x >= knots[j + 1] {
-            j += 1;
-        }
-        let f = basis(x, j);
-        let fit: f64 = (0..4).map(|r| f[r] * y[2 * j + r]).sum();
-        rss += (v - fit) * (v - fit);
-    }
-    Some((y, rss))
+    spline::lsq(ts, vs, knots, fixed)
 }
 
 #[cfg(test)]
@@ -1261,7 +1152,7 @@ mod tests {
         let end = knots[knots.len() - 1];
         knots.extend((1..100).map(|i| end + 1e-6 * i as f64));
         let m = Measured {
-            pieces: vec![[0.0; 4]; knots.len() - 1],
+            pieces: vec![[0.0; 6]; knots.len() - 1],
             corners: vec![knots[0], knots[knots.len() - 1]],
             steps: Vec::new(),
             noise: 0.0,

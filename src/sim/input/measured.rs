@@ -37,7 +37,7 @@
 //!    the test is repeated on the split segments until no ratio exceeds the
 //!    threshold (greedy, so two close corners are found as two).
 //!    A corner stays only where splitting its segment there lowers the BIC of
-//!    the pieces (step 4) on the two sides, by more than [`CORNER_SIGMAS`]² σ²
+//!    the pieces (step 4) on the two sides, by more than [`CORNER_RSS`]·σ²
 //!    in RSS, against one piece over both (also with the two sides' knots): a smooth
 //!    peak that a hinge imitates over a long window is one spline with a few more
 //!    knots. The least useful corner is removed until every one pays. Each
@@ -68,6 +68,13 @@ pub const NOISE_FLOOR: f64 = 1e-3;
 /// Threshold of the hinge t-ratio for a corner (a 6σ slope jump: the chance that
 /// noise alone reaches it anywhere in a 10⁴-sample record is below 10⁻⁵).
 pub const CORNER_SIGMAS: f64 = 6.0;
+/// The RSS (in σ²) a corner must save against one spline over both its sides
+/// ([`corner_gain`]): the split has five unknowns more (a second value and the
+/// first four derivatives at the corner; the pieces are quintics, C⁴ between
+/// corners), so the saving of noise alone is χ² with 5 degrees of freedom, and
+/// this is its quantile at the tail of a [`CORNER_SIGMAS`] normal deviation
+/// (2·Φ(−6) = 1.97·10⁻⁹): the hinge test's false-alarm rate.
+pub const CORNER_RSS: f64 = 49.25;
 /// Threshold of a one-interval jump for a step, in standard deviations of a
 /// difference of two noisy samples.
 pub const STEP_SIGMAS: f64 = 8.0;
@@ -992,7 +999,8 @@ fn fit_segment(
 /// What a corner at c saves in BIC on [a, b] (`m` samples): the best spline over
 /// both sides, or the two sides' knots as one spline (the split without its
 /// jumps, so the comparison is nested), against the two sides' splines: the
-/// RSS the split saves must exceed [`CORNER_SIGMAS`]² σ² (as a hinge's t-ratio).
+/// RSS the split saves must exceed [`CORNER_RSS`]·σ² (the hinge test's
+/// false-alarm rate).
 fn corner_gain(
     t: &[f64],
     v: &[f64],
@@ -1017,10 +1025,11 @@ fn corner_gain(
         });
     let merged = segment_fit(t, v, (a, b), sigma, m, false, work).map_or(f64::INFINITY, |f| f.0);
     // the split has more unknowns than the joined spline (a second value and
-    // derivatives at c): refund their BIC and ask, as of a hinge, a 6σ saving instead
-    let extra = spline::unknowns(l.1.len()) + spline::unknowns(r.1.len())
-        - spline::unknowns(knots.len());
-    merged.min(joined) - l.0 - r.0 + extra as f64 * m.ln() - CORNER_SIGMAS * CORNER_SIGMAS
+    // derivatives at c): refund their BIC and ask the saving of a χ² at the
+    // hinge test's false-alarm rate instead
+    let extra =
+        spline::unknowns(l.1.len()) + spline::unknowns(r.1.len()) - spline::unknowns(knots.len());
+    merged.min(joined) - l.0 - r.0 + extra as f64 * m.ln() - CORNER_RSS
 }
 
 /// The spline of least BIC on the samples in [t0, t1]: (score, knots, unknowns),
@@ -1140,7 +1149,22 @@ fn spline_lsq(
 
 #[cfg(test)]
 mod tests {
-    use super::{lookup_table, Measured};
+    use super::{lookup_table, spline, Measured, CORNER_RSS, CORNER_SIGMAS};
+
+    /// [`CORNER_RSS`] is the χ² quantile it says: 5 degrees of freedom (the
+    /// unknowns a split adds to one spline), at the two-sided normal tail of
+    /// [`CORNER_SIGMAS`] (to the 0.01 it is written with).
+    #[test]
+    fn the_corner_threshold_is_its_chi_square_quantile() {
+        use statrs::distribution::{ChiSquared, ContinuousCDF, Normal};
+        let tail = 2.0 * Normal::standard().cdf(-CORNER_SIGMAS);
+        let extra = 2 * spline::unknowns(2) - spline::unknowns(3);
+        assert_eq!(extra, 5);
+        let q = ChiSquared::new(extra as f64)
+            .expect("dof > 0")
+            .inverse_cdf(1.0 - tail);
+        assert!((q - CORNER_RSS).abs() < 0.01, "quantile {q}");
+    }
 
     /// The bucketed search ([`Measured::piece_end`]) gives what a binary search
     /// over every knot gives, at every knot, halfway between two, a hair below

@@ -11,7 +11,8 @@ use std::path::Path;
 
 fn bench(c: &mut Criterion) {
     let scene = Scene::read(Path::new("datasets/scenes/stack_rig_7s.toml")).expect("scene");
-    let (exp, _) = dea_fit::bench::identify_case(&scene).expect("case");
+    let (exp, _) =
+        dea_fit::bench::identify_case(&scene, dea_fit::bench::Drive::ClosedForm).expect("case");
     let settings = Settings {
         starts: 1,
         ..Settings::default()

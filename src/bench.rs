@@ -438,9 +438,33 @@ mod tests {
     }
 }
 
+/// The drive of [`identify_case`]'s trace.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Drive {
+    /// The scene's input in closed form (its steps, ramps and sines).
+    ClosedForm,
+    /// The actuator's voltage as a rig logs it: the simulated voltage at the
+    /// trace's samples with noise of 0.1 % of its peak (seed 11), fitted as a
+    /// measured input (`sim::input::measured`) behind an ideal source: what
+    /// `identify` does with a trace file.
+    Measured,
+}
+
+impl std::fmt::Display for Drive {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Drive::ClosedForm => "closed form",
+            Drive::Measured => "measured",
+        })
+    }
+}
+
 /// One measured case of `dea-fit bench identify`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct IdentifyRow {
+    /// The trace's drive.
+    pub drive: Drive,
     /// Simulator relative tolerance.
     pub rtol: f64,
     /// Multi-start points.
@@ -472,13 +496,18 @@ pub struct IdentifyRow {
 }
 
 /// The identification benchmark's problem: `scene` simulated at its constants with
-/// 1 % (of the peak) contraction and 0.1 % capacitance noise (seed 10), and the
-/// scene the search starts from, every free constant 20 % above its truth.
+/// 1 % (of the peak) contraction and 0.1 % capacitance noise (seed 10), driven as
+/// `drive` says, and the scene the search starts from, every free constant 20 %
+/// above its truth.
 pub fn identify_case(
     scene: &crate::sim::scene::Scene,
+    drive: Drive,
 ) -> Result<(crate::identify::problem::Experiment, Vec<f64>)> {
     use crate::identify::params;
     use crate::identify::problem::{simulated, ChannelKind, Experiment};
+    use crate::sim::input::{Measured, Term, Waveform};
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
     let o = crate::sim::simulate(scene, &crate::sim::RunOptions::default())?;
     let s0 = o.samples[0];
     let peak = |k: ChannelKind| {
@@ -501,6 +530,28 @@ pub fn identify_case(
         ],
         10,
     )?;
+    if drive == Drive::Measured {
+        let peak = o
+            .samples
+            .iter()
+            .map(|s| s.voltage_v.abs())
+            .fold(0.0, f64::max);
+        let noise = Normal::new(0.0, 1e-3 * peak)
+            .map_err(|e| Error::settings(format!("voltage noise of {}: {e}", scene.name)))?;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let t: Vec<f64> = o.samples.iter().map(|s| s.time_s).collect();
+        let v: Vec<f64> = o
+            .samples
+            .iter()
+            .map(|s| s.voltage_v + noise.sample(&mut rng))
+            .collect();
+        let m = Measured::fit(&t, &v)
+            .map_err(|e| Error::settings(format!("the measured drive of {}: {e}", scene.name)))?;
+        exp.scene.input = Waveform {
+            terms: vec![Term::Measured(std::sync::Arc::new(m))],
+        };
+        exp.scene.source = crate::sim::scene::Source::Ideal;
+    }
     let truth = params::theta(scene);
     let start: Vec<f64> = truth.iter().map(|v| 1.2 * v).collect();
     params::set_theta(&mut exp.scene, &start);
@@ -509,20 +560,27 @@ pub fn identify_case(
 
 /// Identify `scene`'s constants (from [`identify_case`]) as the command line does
 /// by default (every constant free, the smallest identifiable model:
-/// [`crate::identify::reduce::identify`]) at each rtol and start count, fastest of
-/// `repeats` runs each.
+/// [`crate::identify::reduce::identify`]) for each drive, rtol and start count,
+/// fastest of `repeats` runs each.
 pub fn identify_rows(
     scene: &crate::sim::scene::Scene,
+    drives: &[Drive],
     rtols: &[f64],
     starts: &[usize],
     repeats: usize,
     progress: &mut dyn FnMut(&IdentifyRow),
 ) -> Result<Vec<IdentifyRow>> {
     use crate::identify::{params, reduce, Run, Settings};
-    let (exp, truth) = identify_case(scene)?;
     let all = params::constants(scene);
     let mut rows = Vec::new();
-    for &rtol in rtols {
+    let cases = drives
+        .iter()
+        .map(|&d| identify_case(scene, d).map(|c| (d, c)))
+        .collect::<Result<Vec<_>>>()?;
+    for ((drive, (exp, truth)), &rtol) in
+        cases.iter().flat_map(|c| rtols.iter().map(move |r| (c, r)))
+    {
+        let drive = *drive;
         for &n in starts {
             let settings = Settings {
                 starts: n,
@@ -533,7 +591,7 @@ pub fn identify_rows(
             let mut fastest = None;
             for _ in 0..repeats.max(1) {
                 let t = Instant::now();
-                let id = reduce::identify(std::slice::from_ref(&exp), &settings, &|_| {
+                let id = reduce::identify(std::slice::from_ref(exp), &settings, &|_| {
                     crate::fit::lm::Control::default()
                 })?;
                 let s = t.elapsed().as_secs_f64();
@@ -554,6 +612,7 @@ pub fn identify_rows(
                         }
                     }
                     IdentifyRow {
+                        drive,
                         rtol,
                         starts: n,
                         seconds: best,
@@ -571,6 +630,7 @@ pub fn identify_rows(
                 }
                 // no result: no error to measure
                 Run::Failed(f) => IdentifyRow {
+                    drive,
                     rtol,
                     starts: n,
                     seconds: best,

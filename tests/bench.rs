@@ -186,7 +186,15 @@ fn bench_identify_times_the_interval_stage_apart() {
         super::support::SEED_STACK_ACTUATOR
     );
     let scene = dea_fit::sim::scene::Scene::parse(&text, Path::new("bench_case.toml")).unwrap();
-    let rows = dea_fit::bench::identify_rows(&scene, &[1e-6], &[1], 1, &mut |_| {}).unwrap();
+    let rows = dea_fit::bench::identify_rows(
+        &scene,
+        &[dea_fit::bench::Drive::ClosedForm],
+        &[1e-6],
+        &[1],
+        1,
+        &mut |_| {},
+    )
+    .unwrap();
     assert_eq!(rows.len(), 1);
     let r = &rows[0];
     assert!(

@@ -1146,7 +1146,8 @@ fn a_run_far_from_the_start_stops_at_its_work_budget() {
     use dea_fit::identify::problem::{Problem, WORK_FACTOR};
     let scene = Scene::read(&super::support::repo().join("datasets/scenes/stack_rig_7s.toml"))
         .expect("shipped scene");
-    let (exp, _) = dea_fit::bench::identify_case(&scene).expect("case");
+    let (exp, _) =
+        dea_fit::bench::identify_case(&scene, dea_fit::bench::Drive::ClosedForm).expect("case");
     let all = constants(&exp.scene);
     let chosen = choose(&all, None, &[]).expect("every constant free");
     let th0 = theta(&exp.scene);

@@ -1,9 +1,10 @@
 //! `dea-fit bench identify`: time against parameter error of the identification of
 //! a rig-log-sized trace (datasets/scenes/stack_rig_7s.toml: 7 s, 3500 samples of
-//! contraction and capacitance, 9 free constants), over simulator tolerances and
-//! start counts. Writes `reports/bench/identify.{csv,svg,md}`.
+//! contraction and capacitance, 9 free constants), over the drive (in closed form,
+//! or measured as a rig logs it), simulator tolerances and start counts. Writes
+//! `reports/bench/identify.{csv,svg,md}`.
 
-use dea_fit::bench::identify_rows;
+use dea_fit::bench::{identify_rows, Drive};
 use dea_fit::fit::{permittivity::worst, Status};
 use dea_fit::io::write::atomic_write;
 use dea_fit::report::format::table;
@@ -20,25 +21,30 @@ pub fn run(scene: &Path) -> Result<super::bench::Verdict> {
     let s = Scene::read(scene)?;
     let rtols = [1e-4, 1e-6];
     let starts = [1, 8];
-    let bar = super::bench::progress_bar("identify", rtols.len() * starts.len());
-    let rows = identify_rows(&s, &rtols, &starts, 1, &mut |r| {
+    let drives = [Drive::ClosedForm, Drive::Measured];
+    let bar = super::bench::progress_bar("identify", drives.len() * rtols.len() * starts.len());
+    let rows = identify_rows(&s, &drives, &rtols, &starts, 1, &mut |r| {
         bar.set_message(format!(
-            "rtol {:e}, {} starts: {:.3} s",
-            r.rtol, r.starts, r.seconds
+            "{} drive, rtol {:e}, {} starts: {:.3} s",
+            r.drive, r.rtol, r.starts, r.seconds
         ));
         bar.inc(1);
     })?;
     bar.finish();
-    let mut csv = String::from("rtol,starts,seconds,per_start_s,interval_s,max_rel_error,max_z,identified,free,starts_at_best,iterations,simulator_runs,status\n");
+    let mut csv = String::from("drive,rtol,starts,seconds,per_start_s,interval_s,max_rel_error,max_z,identified,free,starts_at_best,iterations,simulator_runs,status\n");
     let mut verdict = super::bench::Verdict::default();
     let mut table_rows = Vec::new();
     let mut series: Vec<Series> = Vec::new();
-    for (i, &n) in starts.iter().enumerate() {
+    for (i, (&d, &n)) in drives
+        .iter()
+        .flat_map(|d| starts.iter().map(move |n| (d, n)))
+        .enumerate()
+    {
         series.push(Series {
-            label: format!("{n} start(s), rtol 1e-4 and 1e-6"),
+            label: format!("{d} drive, {n} start(s), rtol 1e-4 and 1e-6"),
             points: rows
                 .iter()
-                .filter(|r| r.starts == n)
+                .filter(|r| r.starts == n && r.drive == d)
                 .map(|r| (r.seconds, r.max_rel_error.max(1e-16).log10()))
                 .collect(),
             color: i,
@@ -48,7 +54,8 @@ pub fn run(scene: &Path) -> Result<super::bench::Verdict> {
     for r in &rows {
         let _ = writeln!(
             csv,
-            "{:e},{},{:e},{:e},{:e},{:e},{:e},{},{},{},{},{},{}",
+            "{},{:e},{},{:e},{:e},{:e},{:e},{:e},{},{},{},{},{},{}",
+            r.drive,
             r.rtol,
             r.starts,
             r.seconds,
@@ -63,8 +70,12 @@ pub fn run(scene: &Path) -> Result<super::bench::Verdict> {
             r.simulator_runs,
             r.status
         );
-        verdict.add(format!("rtol {:e}, {} starts", r.rtol, r.starts), r.status);
+        verdict.add(
+            format!("{} drive, rtol {:e}, {} starts", r.drive, r.rtol, r.starts),
+            r.status,
+        );
         table_rows.push(vec![
+            r.drive.to_string(),
             format!("{:e}", r.rtol),
             r.starts.to_string(),
             format!("{:.3}", r.seconds),
@@ -91,6 +102,7 @@ pub fn run(scene: &Path) -> Result<super::bench::Verdict> {
         y_unit: None,
     };
     let header = [
+        "drive",
         "rtol",
         "starts",
         "time [s]",
@@ -109,7 +121,7 @@ pub fn run(scene: &Path) -> Result<super::bench::Verdict> {
     page.para(vec![
         text("Scene "),
         code(scene.display().to_string()),
-        text(" simulated at its constants, 1 % contraction and 0.1 % capacitance noise (seed 10); the search starts 20 % above every constant. Time: one whole identification (multi-start, σ re-estimation, polish, assessment) on this machine; of it, the interval stage (covariance, profile checks and profile intervals) in its own column. Rerun: "),
+        text(" simulated at its constants, 1 % contraction and 0.1 % capacitance noise (seed 10); the search starts 20 % above every constant. The drive is the scene's input in closed form, or the actuator voltage as a rig logs it (0.1 % noise, seed 11) fitted as a measured input, as `identify` does with a trace file. Time: one whole identification (multi-start, σ re-estimation, polish, assessment) on this machine; of it, the interval stage (covariance, profile checks and profile intervals) in its own column. Rerun: "),
         code("dea-fit bench identify"),
         text(". All rows: "),
         link("identify.csv", "identify.csv"),
@@ -123,8 +135,8 @@ pub fn run(scene: &Path) -> Result<super::bench::Verdict> {
         .min_by(|a, b| a.seconds.total_cmp(&b.seconds))
         .map(|r| {
             format!(
-                "fastest {:.3} s (rtol {:e}, {} start(s)), max |Δθ/θ| {:.2e}",
-                r.seconds, r.rtol, r.starts, r.max_rel_error
+                "fastest {:.3} s ({} drive, rtol {:e}, {} start(s)), max |Δθ/θ| {:.2e}",
+                r.seconds, r.drive, r.rtol, r.starts, r.max_rel_error
             )
         });
     let run = Run::new(

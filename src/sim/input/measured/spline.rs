@@ -65,31 +65,64 @@ pub fn with_ends(mut p: Piece, y0: f64, y1: f64) -> Piece {
     p
 }
 
-/// The B-spline basis functions N_{j..j+DEGREE} at `x` in interval j of the clamped
-/// knot vector on `breaks` (Cox–de Boor, NURBS Book A2.2).
-#[inline]
-fn basis(breaks: &[f64], j: usize, x: f64) -> [f64; W] {
-    // the clamped knot vector U: breaks[0] repeated DEGREE + 1 times, the interior
-    // breakpoints, the last repeated DEGREE + 1 times; interval j is span j + DEGREE
-    let k = breaks.len() - 1;
-    let knot = |i: usize| breaks[i.saturating_sub(DEGREE).min(k)];
-    let span = j + DEGREE;
-    let mut n = [0.0; W];
-    let mut left = [0.0; W];
-    let mut right = [0.0; W];
-    n[0] = 1.0;
-    for d in 1..=DEGREE {
-        left[d] = x - knot(span + 1 - d);
-        right[d] = knot(span + d) - x;
-        let mut saved = 0.0;
-        for r in 0..d {
-            let temp = n[r] / (right[r + 1] + left[d - r]);
-            n[r] = saved + right[r + 1] * temp;
-            saved = left[d - r] * temp;
+/// The knot data of interval j for [`Span::basis`]: the knots beside it and the
+/// reciprocals of the knot differences the recursion divides by, which depend on
+/// the interval only (computed once for all its samples).
+struct Span {
+    /// U[span + 1 − d] for d = 1..=DEGREE (left[d] = x − this).
+    lo: [f64; W],
+    /// U[span + d] for d = 1..=DEGREE (right[d] = this − x).
+    hi: [f64; W],
+    /// 1/(right[r + 1] + left[d − r]) = 1/(U[span + r + 1] − U[span + r + 1 − d]),
+    /// zero where the difference is (a repeated knot, whose term is zero).
+    inv: [[f64; W]; W],
+}
+
+impl Span {
+    /// Interval j of the clamped knot vector on `breaks`: breaks[0] repeated
+    /// DEGREE + 1 times, the interior breakpoints, the last repeated DEGREE + 1
+    /// times; interval j is the span j + DEGREE.
+    fn new(breaks: &[f64], j: usize) -> Span {
+        let k = breaks.len() - 1;
+        let knot = |i: usize| breaks[i.saturating_sub(DEGREE).min(k)];
+        let span = j + DEGREE;
+        let mut s = Span {
+            lo: [0.0; W],
+            hi: [0.0; W],
+            inv: [[0.0; W]; W],
+        };
+        for d in 1..=DEGREE {
+            s.lo[d] = knot(span + 1 - d);
+            s.hi[d] = knot(span + d);
+            for r in 0..d {
+                let gap = knot(span + r + 1) - knot(span + r + 1 - d);
+                s.inv[d][r] = if gap > 0.0 { 1.0 / gap } else { 0.0 };
+            }
         }
-        n[d] = saved;
+        s
     }
-    n
+
+    /// The B-spline basis functions N_{j..j+DEGREE} at `x` in this interval
+    /// (Cox–de Boor, NURBS Book A2.2).
+    #[inline]
+    fn basis(&self, x: f64) -> [f64; W] {
+        let mut n = [0.0; W];
+        let mut left = [0.0; W];
+        let mut right = [0.0; W];
+        n[0] = 1.0;
+        for d in 1..=DEGREE {
+            left[d] = x - self.lo[d];
+            right[d] = self.hi[d] - x;
+            let mut saved = 0.0;
+            for r in 0..d {
+                let temp = n[r] * self.inv[d][r];
+                n[r] = saved + right[r + 1] * temp;
+                saved = left[d - r] * temp;
+            }
+            n[d] = saved;
+        }
+        n
+    }
 }
 
 /// The interval of `breaks` holding `x`, searched forward from `j` (samples come in
@@ -120,9 +153,14 @@ pub fn lsq(
     let mut a = vec![[0.0; W]; nu]; // a[i][d] = A[i][i + d]
     let mut b = vec![0.0; nu];
     let mut j = 0;
+    let mut span = Span::new(breaks, 0);
     for (&x, &y) in ts.iter().zip(vs) {
-        j = interval(breaks, j, x);
-        let f = basis(breaks, j, x);
+        let next = interval(breaks, j, x);
+        if next != j {
+            j = next;
+            span = Span::new(breaks, j);
+        }
+        let f = span.basis(x);
         for r in 0..W {
             for c in r..W {
                 a[j + r][c - r] += f[r] * f[c];
@@ -215,10 +253,11 @@ fn to_pieces(breaks: &[f64], c: &[f64]) -> Vec<Piece> {
     (0..breaks.len() - 1)
         .map(|j| {
             let (a, h) = (breaks[j], breaks[j + 1] - breaks[j]);
+            let span = Span::new(breaks, j);
             let mut values = [0.0; W];
             for (k, v) in values.iter_mut().enumerate() {
                 let u = k as f64 / DEGREE as f64;
-                let f = basis(breaks, j, a + u * h);
+                let f = span.basis(a + u * h);
                 *v = (0..W).map(|r| f[r] * c[j + r]).sum();
             }
             let mut p = [0.0; W];

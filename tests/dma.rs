@@ -501,15 +501,20 @@ fn prony_of_the_master_curve_recovers_the_series() {
 ///   that chose the generating 10 (matched by rank of τ), ≤ 1.15 each (400 values,
 ///   correlated within a fit, so an effective count between 40 and 400: sampling
 ///   error 0.04–0.11);
-/// - rms z of C1, C2 and of the free log10 aT (all isotherms but the reference's,
-///   whose σ is 0) ≤ 1.15.
+/// - rms z of C1 and C2 ≤ 1.15;
+/// - rms z of the free log10 aT (all isotherms but the reference's, whose σ is 0)
+///   within [0.85, 1.15]: not too small, and not too large either (800 values,
+///   correlated along each replicate's chain).
 ///
 /// Measured (`cargo test --release --test main dma_intervals -- --nocapture`):
 /// E∞ rms z 1.13, 38/40 intervals (over 200 replicates, seeds 100–299: 1.04, 95 %);
 /// Eᵢ 0.94, τᵢ 1.05 (all 40 fits chose 10 terms); C1 0.62 and C2 0.71, 40/40
 /// (conservative: the law takes the pair shifts as independent); free log10 aT
-/// 0.36–1.1, pooled 0.79 (conservative: adjacent pairs share an isotherm and their
-/// errors partly cancel in the sum that the accumulation takes as independent).
+/// 1.10 pooled (over 200 replicates 0.79–1.11 by temperature). Before the
+/// accumulation took the correlation of adjacent pairs
+/// ([`dea_fit::dma::shift::adjacent_correlations`]: they share an isotherm, and
+/// their errors largely cancel in the sum), 0.79 pooled, 0.35–0.45 at the ends of
+/// the chain: σ 2–3× too large.
 /// Before the Prony covariance became the sandwich one
 /// ([`dea_fit::fit::prony`], assess: the fit weighs storage and loss rows alike
 /// but their noise differs), the same replicates gave E∞ 1.26 (36/40), Eᵢ 1.47,
@@ -561,7 +566,7 @@ fn dma_intervals_cover_the_truth() {
             let z_shifts = f
                 .shift_factors
                 .iter()
-                .filter(|s| s.std_error > 0.0)
+                .filter(|s| s.temperature_k != C0 + 25.0)
                 .map(|s| (s.log10_at - law.log_at(s.temperature_k)) / s.std_error)
                 .collect();
             eprintln!(
@@ -609,15 +614,16 @@ fn dma_intervals_cover_the_truth() {
         ("τᵢ", pooled(|t| t.1), 1.15),
         ("C1", rms(reps.iter().map(|r| r.z_c[0]).collect()), 1.15),
         ("C2", rms(reps.iter().map(|r| r.z_c[1]).collect()), 1.15),
-        (
-            "log10 aT",
-            rms(reps.iter().flat_map(|r| r.z_shifts.clone()).collect()),
-            1.15,
-        ),
     ] {
         eprintln!("{name}: rms z {value:.3} (at most {limit})");
         assert!(value <= limit, "{name}: rms z {value:.3} > {limit}");
     }
+    let shifts = rms(reps.iter().flat_map(|r| r.z_shifts.clone()).collect());
+    eprintln!("log10 aT: rms z {shifts:.3} (within 0.85 … 1.15)");
+    assert!(
+        (0.85..=1.15).contains(&shifts),
+        "log10 aT: rms z {shifts:.3} outside 0.85 … 1.15"
+    );
 }
 
 /// 30 terms on the shipped 21 × 10 sweep (far more than its 12 decades resolve:

@@ -326,7 +326,8 @@ fn shifted(data: &DmaData, settings: &Settings, warnings: &mut Vec<String>) -> R
             ));
         }
     }
-    let acc = shift::accumulate(&temps, &pairs, tr);
+    let rho = shift::adjacent_correlations(iso, &pairs, settings.on);
+    let acc = shift::accumulate(&temps, &pairs, &rho, tr);
     let model = match settings.mode {
         ShiftMode::Free => {
             if acc.extrapolated {

@@ -325,12 +325,110 @@ pub struct Accumulated {
     pub extrapolated: bool,
 }
 
+/// How the shift (d, v) of a pair moves with each log value of its two isotherms,
+/// by the implicit function theorem at the minimum: δθ = −(JᵀJ)⁻¹Jᵀ ∂r/∂y δy, J
+/// the mismatch's derivatives by d (and v), ∂r/∂y by a central difference of the
+/// mismatch with one log value moved (its PCHIP slopes recomputed). The colder
+/// isotherm's values first, then the warmer's, channel by channel; each entry
+/// (∂d/∂y, ∂v/∂y).
+fn sensitivities(c: &Curves, w: &Curves, p: &PairShift) -> [Vec<[f64; 2]>; 2] {
+    let (d, v) = (p.log_shift, p.log_vertical.unwrap_or(0.0));
+    let vertical = p.log_vertical.is_some();
+    let m = mismatch(c, w, d, v);
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let (a11, a12, a22) = (dot(&m.dd, &m.dd), dot(&m.dd, &m.dv), dot(&m.dv, &m.dv));
+    let det = a11 * a22 - a12 * a12;
+    let solve = |g1: f64, g2: f64| match vertical {
+        true => [-(a22 * g1 - a12 * g2) / det, -(a11 * g2 - a12 * g1) / det],
+        false => [-g1 / a11, 0.0],
+    };
+    let h = 1e-6;
+    let moved = |k: &Curves, ch: usize, j: usize, by: f64| {
+        let mut y = k.y.clone();
+        y[ch][j] += by;
+        let mut s = k.m.clone();
+        s[ch] = pchip_slopes(&k.x, &y[ch]);
+        Curves {
+            x: k.x.clone(),
+            y,
+            m: s,
+            moves: k.moves.clone(),
+        }
+    };
+    let of = |cold: bool| -> Vec<[f64; 2]> {
+        let k = if cold { c } else { w };
+        let mut out = Vec::new();
+        for ch in 0..k.y.len() {
+            for j in 0..k.x.len() {
+                let (up, down) = (moved(k, ch, j, h), moved(k, ch, j, -h));
+                let (ru, rd) = match cold {
+                    true => (mismatch(&up, w, d, v).r, mismatch(&down, w, d, v).r),
+                    false => (mismatch(c, &up, d, v).r, mismatch(c, &down, d, v).r),
+                };
+                let dr: Vec<f64> = ru
+                    .iter()
+                    .zip(&rd)
+                    .map(|(a, b)| (a - b) / (2.0 * h))
+                    .collect();
+                out.push(solve(dot(&m.dd, &dr), dot(&m.dv, &dr)));
+            }
+        }
+        out
+    };
+    [of(true), of(false)]
+}
+
+/// The correlation of the shifts of adjacent pairs i and i + 1, which share
+/// isotherm i + 1 (the warmer of pair i, the colder of pair i + 1): noise that
+/// moves it one way widens one pair's shift and narrows the next's, so their errors
+/// are anticorrelated and largely cancel in the sum that refers an isotherm to Tr.
+/// From the [`sensitivities`] s of each pair's shift to every log value y, taken
+/// with one common variance σ_y²: ρᵢ = Σ_{y ∈ i+1} sᵢ(y)·sᵢ₊₁(y) /
+/// √(Σ_y sᵢ² · Σ_y sᵢ₊₁²) (the first-order covariance of two functions of the same
+/// data, σ_y² cancelling). Horizontal (d) and, with a vertical shift, vertical (v)
+/// correlations; one fewer than the pairs.
+pub fn adjacent_correlations(
+    isotherms: &[Isotherm],
+    pairs: &[PairShift],
+    on: ShiftOn,
+) -> (Vec<f64>, Vec<f64>) {
+    let curves: Vec<Curves> = isotherms.iter().map(|i| curves(i, on)).collect();
+    let s: Vec<[Vec<[f64; 2]>; 2]> = pairs
+        .iter()
+        .enumerate()
+        .map(|(i, p)| sensitivities(&curves[i], &curves[i + 1], p))
+        .collect();
+    let rho = |q: usize| -> Vec<f64> {
+        let sq = |v: &[[f64; 2]]| v.iter().map(|e| e[q] * e[q]).sum::<f64>();
+        s.windows(2)
+            .map(|w| {
+                let cov: f64 = w[0][1].iter().zip(&w[1][0]).map(|(a, b)| a[q] * b[q]).sum();
+                let var = (sq(&w[0][0]) + sq(&w[0][1])) * (sq(&w[1][0]) + sq(&w[1][1]));
+                if var > 0.0 {
+                    (cov / var.sqrt()).clamp(-1.0, 1.0)
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    };
+    (rho(0), rho(1))
+}
+
 /// The chain of pair shifts `pairs` (between `temps[i]` and `temps[i + 1]`) summed to
 /// each isotherm and referred to `tr` (K): linearly interpolated in T between the two
 /// isotherms around it (extrapolated from the nearest two outside). A shift's
-/// variance is Σ cᵢ² σᵢ² over the pairs it sums (cᵢ its weight on pair i; pairs taken
-/// as independent).
-pub fn accumulate(temps: &[f64], pairs: &[PairShift], tr: f64) -> Accumulated {
+/// variance is cᵀΣc over the pairs it sums (cᵢ its weight on pair i), Σ the pairs'
+/// covariance: σᵢ² on the diagonal, ρᵢσᵢσᵢ₊₁ between adjacent pairs (`rho`, from
+/// [`adjacent_correlations`]: `.0` horizontal, `.1` vertical), 0 beyond (pairs
+/// two apart share no isotherm). Taken as independent (ρ = 0), the shifts far from
+/// Tr came out 2–3× too uncertain (tests/dma.rs).
+pub fn accumulate(
+    temps: &[f64],
+    pairs: &[PairShift],
+    rho: &(Vec<f64>, Vec<f64>),
+    tr: f64,
+) -> Accumulated {
     let n = temps.len();
     let m = temps.partition_point(|&t| t <= tr).clamp(1, n - 1) - 1;
     let w = (tr - temps[m]) / (temps[m + 1] - temps[m]);
@@ -339,7 +437,7 @@ pub fn accumulate(temps: &[f64], pairs: &[PairShift], tr: f64) -> Accumulated {
         let e = |k: usize| if i >= k { 1.0 } else { 0.0 };
         e(j) - (1.0 - w) * e(m) - w * e(m + 1)
     };
-    let combine = |val: &dyn Fn(&PairShift) -> f64, sd: &dyn Fn(&PairShift) -> f64| {
+    let combine = |val: &dyn Fn(&PairShift) -> f64, sd: &dyn Fn(&PairShift) -> f64, rho: &[f64]| {
         let vals: Vec<f64> = (0..n)
             .map(|j| {
                 pairs
@@ -351,22 +449,28 @@ pub fn accumulate(temps: &[f64], pairs: &[PairShift], tr: f64) -> Accumulated {
             .collect();
         let ses: Vec<f64> = (0..n)
             .map(|j| {
-                pairs
-                    .iter()
-                    .enumerate()
-                    .map(|(i, p)| (weight(j, i) * sd(p)).powi(2))
-                    .sum::<f64>()
-                    .sqrt()
+                let c: Vec<f64> = (0..pairs.len())
+                    .map(|i| weight(j, i) * sd(&pairs[i]))
+                    .collect();
+                let diagonal: f64 = c.iter().map(|x| x * x).sum();
+                let off: f64 = c
+                    .windows(2)
+                    .zip(rho)
+                    .map(|(x, r)| 2.0 * r * x[0] * x[1])
+                    .sum();
+                (diagonal + off).max(0.0).sqrt()
             })
             .collect();
         (vals, ses)
     };
-    let (log_at, std_error) = combine(&|p| p.log_shift, &|p| p.std_error);
+    let (log_at, std_error) = combine(&|p| p.log_shift, &|p| p.std_error, &rho.0);
     let vertical = pairs.first().is_some_and(|p| p.log_vertical.is_some());
     let (log_bt, bt_se) = if vertical {
-        let (a, b) = combine(&|p| p.log_vertical.unwrap_or(0.0), &|p| {
-            p.vertical_std_error.unwrap_or(0.0)
-        });
+        let (a, b) = combine(
+            &|p| p.log_vertical.unwrap_or(0.0),
+            &|p| p.vertical_std_error.unwrap_or(0.0),
+            &rho.1,
+        );
         (Some(a), Some(b))
     } else {
         (None, None)

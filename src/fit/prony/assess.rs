@@ -92,16 +92,12 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
         .kern
         .noise_groups()
         .and_then(|g| group_scales(&r, &g, k).map(|s| (g, s)));
-    let (qr, jac_finite) = factor(prob, &tf.p, &columns, groups.as_ref());
-    let unc = match groups {
-        Some((g, scales)) => {
-            let mut scaled = r.clone();
-            for (rk, g) in scaled.iter_mut().zip(&g) {
-                *rk /= scales[*g];
-            }
-            diagnostics::factor_uncertainty(&qr, scaled.norm_squared())
+    let (unc, jac_finite) = match groups {
+        Some((g, scales)) => group_sandwich(prob, &tf.p, &columns, g, &scales),
+        None => {
+            let (qr, finite) = factor(prob, &tf.p, &columns, None);
+            (diagnostics::factor_uncertainty(&qr, rss), finite)
         }
-        None => diagnostics::factor_uncertainty(&qr, rss),
     };
     let finite = finite && jac_finite;
     let mut pred = vec![0.0; m];
@@ -155,8 +151,8 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
 }
 
 /// The factor R of the Jacobian at `p` with respect to the SI parameters (column
-/// c times `columns[c]`) and, with noise groups (`groups`: each row's group and
-/// each group's 1/s_g scale, [`group_scales`]), each row times 1/s_g, its rows pushed
+/// c times `columns[c]`) and, with noise groups (`groups`: each row's group and a
+/// scale per group), each row divided by its group's scale, its rows pushed
 /// a block at a time ([`Problem::jacobian_block`], [`RowQr::push`]): the factor
 /// [`diagnostics::uncertainty`] takes of the whole m × (2N + 1) matrix, the same
 /// bits, without forming it (at 10⁶ points 104 MB for six terms). Whether every
@@ -192,11 +188,9 @@ fn factor<K: Kernels>(
 }
 
 /// The residual scale of each noise group, s_g² = RSS_g/(m_g − k·m_g/m) (the
-/// degrees of freedom shared in proportion to the rows), by which [`assess`]
-/// divides the group's rows of the residuals and the Jacobian, so that
-/// cov = (Σ_g J_gᵀJ_g/s_g²)⁻¹, the weighted least-squares covariance with each
-/// group's own variance (Seber & Wild, *Nonlinear Regression*, 1989, §2.1.4). None
-/// (one pooled variance) where a group has no degrees of freedom or no residual.
+/// degrees of freedom shared in proportion to the rows), [`group_sandwich`]'s
+/// variances. None (one pooled variance) where a group has no degrees of freedom
+/// or no residual.
 fn group_scales(r: &DVector<f64>, groups: &[usize], k: usize) -> Option<Vec<f64>> {
     let m = r.len();
     let count = groups.iter().copied().max().map_or(0, |g| g + 1);
@@ -213,6 +207,53 @@ fn group_scales(r: &DVector<f64>, groups: &[usize], k: usize) -> Option<Vec<f64>
         })
         .collect();
     s.iter().all(|s| s.is_finite() && *s > 0.0).then_some(s)
+}
+
+/// The uncertainty of a fit whose rows fall in noise groups of their own variances
+/// s_g² ([`group_scales`]) while the fit weighs every row alike: the least-squares
+/// estimate's covariance is then the sandwich
+///
+/// C = A⁻¹ B A⁻¹,  A = JᵀJ,  B = Σ_g s_g² J_gᵀJ_g
+///
+/// (Huber, Proc. 5th Berkeley Symp. 1, 221–233, 1967; White, Econometrica 48,
+/// 817–838, 1980, with the variance modelled per group instead of per row; Seber &
+/// Wild, *Nonlinear Regression*, 1989, §2.1.4 for (Σ_g J_gᵀJ_g/s_g²)⁻¹, the
+/// covariance of the estimate that would weigh each group by 1/s_g², which the fit
+/// is not: that one was 1.5–1.7× too small for a DMA fit's terms, whose loss rows
+/// the fit weighs by w < 1 though their noise is smaller, tests/dma.rs). A and its
+/// rank test, condition number and t quantile are [`diagnostics::factor_uncertainty`]'s
+/// (s² = 1); B is the factor of the rows times s_g ([`factor`] divides by the scales
+/// it is given: 1/s_g). Whether every value of J was finite.
+fn group_sandwich<K: Kernels>(
+    prob: &Problem<K>,
+    p: &[f64],
+    columns: &[f64],
+    groups: Vec<usize>,
+    scales: &[f64],
+) -> (diagnostics::Uncertainty, bool) {
+    let k = columns.len();
+    let (qa, finite_a) = factor(prob, p, columns, None);
+    let inverse = (groups, scales.iter().map(|s| 1.0 / s).collect());
+    let (qb, finite_b) = factor(prob, p, columns, Some(&inverse));
+    let dof = qa.rows().saturating_sub(k);
+    let mut unc = diagnostics::factor_uncertainty(&qa, dof as f64);
+    let rb = qb.r();
+    let cov = &unc.covariance * (rb.transpose() * &rb) * &unc.covariance;
+    unc.std_error = (0..k)
+        .map(|i| Some(cov[(i, i)].sqrt()).filter(|v| v.is_finite()))
+        .collect();
+    unc.correlation = (0..k)
+        .map(|a| {
+            (0..k)
+                .map(|b| match (unc.std_error[a], unc.std_error[b]) {
+                    (Some(sa), Some(sb)) if sa > 0.0 && sb > 0.0 => Some(cov[(a, b)] / (sa * sb)),
+                    _ => None,
+                })
+                .collect()
+        })
+        .collect();
+    unc.covariance = cov;
+    (unc, finite_a && finite_b)
 }
 
 /// Findings about a fit, each with the status it raises.

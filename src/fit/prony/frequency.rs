@@ -148,11 +148,12 @@ pub struct KkDisagreement {
     pub worst_ratio: f64,
 }
 
-/// A frequency-domain Prony fit. The σ of every parameter weighs the storage and
-/// the loss rows each by its own residual variance ([`Kernels::noise_groups`]):
-/// the loss rows' weighted noise is smaller than the storage rows' (module docs,
-/// "Weighting"), and one pooled variance left the σ of a parameter set by E′ alone
-/// (E∞ at the lowest frequencies) low by a factor 1.35 on the shipped master curve.
+/// A frequency-domain Prony fit. The σ of every parameter takes the storage and
+/// the loss rows each with its own residual variance ([`Kernels::noise_groups`],
+/// the sandwich covariance of `assess`): the loss rows' weighted noise is smaller
+/// than the storage rows' (module docs, "Weighting"), and one pooled variance left
+/// the σ of a parameter set by E′ alone (E∞ at the lowest frequencies) low by a
+/// factor 1.35 on the shipped master curve.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FrequencyFit {
     /// Overall status.

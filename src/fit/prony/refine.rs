@@ -30,8 +30,7 @@ pub struct TermFit<K: Kernels> {
     pub starts: usize,
     /// Starts whose search ended at the best cost.
     pub at_best: usize,
-    /// The count's problem (its kernels released: the fits of every count wait
-    /// for their assessment together).
+    /// The count's problem.
     pub problem: Problem<K>,
 }
 
@@ -118,7 +117,6 @@ fn without_least_reaching<K: Kernels>(setup: &Setup<K>, f: &TermFit<K>) -> Vec<f
     let n = f.n_terms;
     let mut prob = setup.prob.clone();
     prob.n_terms = n;
-    prob.kernels_at_log_taus(&f.p[1 + n..], false);
     let reach = prob.reach(&f.p);
     let weakest = (0..n)
         .min_by(|&a, &b| reach[a].total_cmp(&reach[b]))
@@ -296,7 +294,6 @@ fn refine<K: Kernels>(
     };
     let mut p = polish.x;
     sort_terms(&mut p, n);
-    prob.release_kernels();
     TermFit {
         n_terms: n,
         p,

@@ -535,7 +535,8 @@ fn kramers_kronig(
     let storage_only = setup(data, 0.0);
     let n = joint.tf.n_terms;
     let start = joint.tf.p[1 + n..].to_vec();
-    let tf = refine::fit_from(&storage_only, n, &[start], search);
+    let levels = refine::Levels::new(&storage_only.prob);
+    let tf = refine::fit_from(&storage_only, &levels, n, &[start], search);
     let a = assess::assess(&storage_only, tf);
 
     let n = a.tf.n_terms;

@@ -432,7 +432,7 @@ mod tests {
     use crate::fit::prony::grid::{grid_nnls, grid_stage};
     use crate::fit::prony::problem::Problem;
     use crate::fit::prony::projection::Projected;
-    use crate::fit::prony::refine::{fit_terms, TermFit, START_POINTS};
+    use crate::fit::prony::refine::{fit_terms, Levels, TermFit, START_POINTS};
     use crate::io::relaxation::{read, RelaxationOptions};
     use nalgebra::{DMatrix, DVector};
     use std::path::Path;
@@ -712,9 +712,10 @@ mod tests {
             assert!(prob.eval(&tf.p, &mut r, None));
             0.5 * r.norm_squared()
         };
+        let levels = Levels::new(&prep.setup.prob);
         for n in 1..=4 {
-            let a = cost(&fit_terms(&prep.setup, &grid, n, &settings).unwrap());
-            let b = cost(&fit_terms(&prep.setup, &full, n, &settings).unwrap());
+            let a = cost(&fit_terms(&prep.setup, &levels, &grid, n, &settings).unwrap());
+            let b = cost(&fit_terms(&prep.setup, &levels, &full, n, &settings).unwrap());
             assert!((a - b).abs() <= 1e-5 * b, "{n} terms: {a} vs {b}");
         }
     }

@@ -1205,7 +1205,10 @@ mod tests {
         let history =
             History::from_knots(vec![(0.0, 0.0), (0.4, 1.5), (3.0, 1.5), (3.5, -0.2)]).unwrap();
         let held = Schedule::new(&history, &times).unwrap();
-        assert!(held.intervals.len() - held.hold_from > 40, "a long final hold");
+        assert!(
+            held.intervals.len() - held.hold_from > 40,
+            "a long final hold"
+        );
         let general = Schedule {
             hold_from: held.intervals.len(),
             ..held.clone()

@@ -205,7 +205,12 @@ impl<K: Kernels> Problem<K> {
             let c = &mut model[..rows.len()];
             prob.combine(p, b, c);
             let rb = &mut r[rows.clone()];
-            for (((rk, c), w), y) in rb.iter_mut().zip(&*c).zip(&prob.w[rows.clone()]).zip(&prob.y[rows]) {
+            for (((rk, c), w), y) in rb
+                .iter_mut()
+                .zip(&*c)
+                .zip(&prob.w[rows.clone()])
+                .zip(&prob.y[rows])
+            {
                 *rk = w * (s * c - y);
             }
             then(prob, b, c, rb);
@@ -217,7 +222,9 @@ impl<K: Kernels> Problem<K> {
     pub fn reach(&mut self, p: &[f64]) -> Vec<f64> {
         let mut reach = vec![0.0; self.n_terms];
         let taus = self.taus(p);
-        self.pass(&taus, Need::Values, |prob, b| prob.reach_block(p, b, &mut reach));
+        self.pass(&taus, Need::Values, |prob, b| {
+            prob.reach_block(p, b, &mut reach)
+        });
         reach
     }
 
@@ -225,7 +232,11 @@ impl<K: Kernels> Problem<K> {
     fn reach_block(&self, p: &[f64], b: &KernelBlock<K::Carry>, reach: &mut [f64]) {
         let (len, s) = (b.rows.len(), self.scale);
         let w = &self.w[b.rows.clone()];
-        for ((e, h), reach) in p[1..=self.n_terms].iter().zip(b.h.chunks_exact(len)).zip(reach) {
+        for ((e, h), reach) in p[1..=self.n_terms]
+            .iter()
+            .zip(b.h.chunks_exact(len))
+            .zip(reach)
+        {
             *reach = h
                 .iter()
                 .zip(w)

@@ -220,7 +220,13 @@ pub fn fit_from<K: Kernels>(
     starts: &[Vec<f64>],
     settings: &Search,
 ) -> TermFit<K> {
-    refine(count_problem(setup, n), levels, starts, setup.bounds, settings)
+    refine(
+        count_problem(setup, n),
+        levels,
+        starts,
+        setup.bounds,
+        settings,
+    )
 }
 
 /// Sort the terms of a scaled parameter vector by τ.

@@ -127,6 +127,13 @@ impl<K: Kernels> Problem<K> {
         Some(sub)
     }
 
+    /// How many kernels and τ-derivatives the problem holds (those of the last
+    /// block a pass visited).
+    #[cfg(test)]
+    pub(crate) fn kernel_values(&self) -> (usize, usize) {
+        (self.kernels.h.len(), self.kernels.dh.len())
+    }
+
     /// The τᵢ = e^(ln τᵢ) of the terms of `p`.
     pub(crate) fn taus(&self, p: &[f64]) -> Vec<f64> {
         let n = self.n_terms;

@@ -72,6 +72,25 @@ struct Row {
     repeats: usize,
     /// Median seconds per row.
     per_row_s: f64,
+    /// Peak resident memory of the process over this size's runs (MB), where the
+    /// system tells ([`peak_memory`]).
+    peak_rss_mb: Option<f64>,
+}
+
+/// Reset the process's peak resident memory to what it holds now (Linux: "5" into
+/// `/proc/self/clear_refs`), so that [`peak_memory`] then reads the peak of what
+/// runs after; false where that cannot be done.
+fn reset_peak_memory() -> bool {
+    std::fs::write("/proc/self/clear_refs", "5").is_ok()
+}
+
+/// The process's peak resident memory (MB) since [`reset_peak_memory`]: VmHWM of
+/// `/proc/self/status`; None where the system does not tell.
+fn peak_memory() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024.0 / 1e6)
 }
 
 /// The log-log slope of one estimator's times.
@@ -239,7 +258,7 @@ pub fn run(a: &ScaleArgs) -> Result<Verdict> {
     let yeoh = ModelSpec::new("yeoh", Default::default());
     let mut verdict = Verdict::default();
     let mut rows: Vec<Row> = Vec::new();
-    let mut push = |estimator: &'static str, n: usize, t: dea_fit::bench::Timing| {
+    let mut push = |estimator: &'static str, n: usize, t: dea_fit::bench::Timing, peak| {
         bar.set_message(format!("{estimator} {n}: {}", si(t.median_s, "s")));
         bar.inc(1);
         rows.push(Row {
@@ -249,23 +268,29 @@ pub fn run(a: &ScaleArgs) -> Result<Verdict> {
             min_s: t.min_s,
             repeats: t.repeats,
             per_row_s: t.median_s / n as f64,
+            peak_rss_mb: peak,
         });
     };
+    // The peak memory of each size's runs: reset once its input is made, read
+    // (and reset for the next runs) after them.
+    let peak = || peak_memory().filter(|_| reset_peak_memory());
     for &n in &read_sizes {
         let data = Tensile::new(model.as_ref(), &p, &ranges, n)?;
+        reset_peak_memory();
         let (t, _) = measure(&budget, || data.read())?;
-        push("read", n, t);
+        push("read", n, t, peak());
         let (t, fit) = measure(&budget, || {
             hyperelastic::fit(&data.read()?, &yeoh, &settings)
         })?;
         verdict.add(format!("read+yeoh {n} rows"), fit.status);
-        push("read+yeoh", n, t);
+        push("read+yeoh", n, t, peak());
     }
     for &n in &fit_sizes {
         let data = Tensile::new(model.as_ref(), &p, &ranges, n)?.read()?;
+        reset_peak_memory();
         let (t, (fit, _)) = measure(&budget, || hyperelastic::fit_auto(&data, &settings))?;
         verdict.add(format!("hyperelastic auto {n} rows"), fit.status);
-        push("hyperelastic-auto", n, t);
+        push("hyperelastic-auto", n, t, peak());
     }
     for &n in &relaxation_sizes {
         let data = relaxation_data(n)?;
@@ -274,9 +299,10 @@ pub fn run(a: &ScaleArgs) -> Result<Verdict> {
             ramp_time: None,
         };
         let rs = relaxation::Settings::default();
+        reset_peak_memory();
         let (t, fit) = measure(&budget, || relaxation::fit(&data, &loading, None, &rs))?;
         verdict.add(format!("relaxation auto {n} rows"), fit.status);
-        push("relaxation-auto", n, t);
+        push("relaxation-auto", n, t, peak());
     }
     bar.finish();
 
@@ -340,11 +366,20 @@ fn write(a: &ScaleArgs, rows: &[Row], slopes: &[Slope]) -> Result<()> {
         .map(|r| {
             let head = [r.estimator.to_string(), r.rows.to_string()];
             let times = super::bench::time_cells(r.median_s, r.min_s, r.repeats, r.per_row_s);
-            head.into_iter().chain(times).collect()
+            let peak = r.peak_rss_mb.map_or("–".into(), |mb| format!("{mb:.0} MB"));
+            head.into_iter().chain(times).chain([peak]).collect()
         })
         .collect();
     let tab = table(
-        &["estimator", "rows", "median", "fastest", "runs", "per row"],
+        &[
+            "estimator",
+            "rows",
+            "median",
+            "fastest",
+            "runs",
+            "per row",
+            "peak memory",
+        ],
         &body,
     );
     let slope_tab = table(
@@ -364,7 +399,7 @@ fn write(a: &ScaleArgs, rows: &[Row], slopes: &[Slope]) -> Result<()> {
         "# Time against input size\n\ndea-fit {}; budget {} s and at least {} runs per size. Rerun: `dea-fit bench scale`.\n\n\
          Each estimator is timed at growing row counts (half-decade steps); the slope of ln t against ln n, fitted by least squares, is 1 when the cost grows linearly. \
          *read*: the tensile reader (CSV text in memory → samples); *read+yeoh*: reading and the whole Yeoh fit call; *hyperelastic-auto*: `hyperelastic --model auto` on the samples; \
-         *relaxation-auto*: `relaxation --terms auto`. Tensile data: the Ogden-3 fit of Treloar's three modes, 1 % noise; relaxation: the Table 3.3 series of El Atrache Ceballos (2021), 1 % noise.\n\n\
+         *relaxation-auto*: `relaxation --terms auto`. Peak memory: the process's resident high-water mark over each size's runs, its input included (Linux only). Tensile data: the Ogden-3 fit of Treloar's three modes, 1 % noise; relaxation: the Table 3.3 series of El Atrache Ceballos (2021), 1 % noise.\n\n\
          ![scale](scale.svg)\n\n```\n{slope_tab}```\n\nAll rows: [scale.csv](scale.csv), [scale.json](scale.json).\n\n```\n{tab}```\n",
         env!("CARGO_PKG_VERSION"),
         a.budget,

@@ -453,6 +453,9 @@ struct Interval {
 #[derive(Debug, Clone)]
 pub struct Schedule {
     intervals: Vec<Interval>,
+    /// The first interval of the hold that ends the schedule: from it on, every
+    /// interval has rate and jump +0 ([`Interval::hold`]).
+    hold_from: usize,
     input: Vec<f64>,
 }
 
@@ -504,7 +507,13 @@ impl Schedule {
             }
             now = at;
         }
-        Ok(Schedule { intervals, input })
+        let held = |iv: &Interval| iv.rate.to_bits() == 0 && iv.jump.to_bits() == 0;
+        let hold_from = intervals.len() - intervals.iter().rev().take_while(|iv| held(iv)).count();
+        Ok(Schedule {
+            intervals,
+            hold_from,
+            input,
+        })
     }
 
     /// The input x at each evaluation time.
@@ -536,38 +545,80 @@ impl Schedule {
     /// on each; every value is the same arithmetic for any number of τ, bit for bit.
     /// Up to [`KERNEL_CHUNK`] τ share a pass, their states on the stack (no
     /// allocation); more take one pass a chunk.
-    pub fn kernels(&self, taus: &[f64], h: &mut [f64], mut dh: Option<&mut [f64]>) {
-        let m = self.len();
-        if m == 0 {
+    pub fn kernels(&self, taus: &[f64], h: &mut [f64], dh: Option<&mut [f64]>) {
+        let rows = 0..self.len();
+        self.kernel_rows(taus, rows, &mut KernelCarry::default(), h, dh);
+    }
+
+    /// [`Schedule::kernels`] of the evaluation times `rows` alone: `h` (and `dh`)
+    /// hold one block of `rows.len()` values per τ, end to end. `carry` is where the
+    /// pass stands: a fresh one ([`KernelCarry::default`]) starts at the first time,
+    /// and each call leaves it at the end of its rows, where the next call (the same
+    /// τ, with derivatives or not alike) must start. The pass over the rows a block
+    /// at a time is the pass over all of them, the same arithmetic in the same
+    /// order, so the same bits, with nothing of the data's length formed.
+    pub fn kernel_rows(
+        &self,
+        taus: &[f64],
+        rows: std::ops::Range<usize>,
+        carry: &mut KernelCarry,
+        h: &mut [f64],
+        mut dh: Option<&mut [f64]>,
+    ) {
+        assert_eq!(carry.row, rows.start, "kernel rows taken out of order");
+        let len = rows.len();
+        if len == 0 {
             // No evaluation time: nothing to record (and no column to split).
             return;
         }
+        carry.state.resize(taus.len(), 0.0);
+        carry.derivative.resize(taus.len(), 0.0);
+        let mut next = carry.interval;
         for (c, chunk) in taus.chunks(KERNEL_CHUNK).enumerate() {
-            let at = c * KERNEL_CHUNK * m;
-            let end = at + chunk.len() * m;
+            let (at, end) = (
+                c * KERNEL_CHUNK * len,
+                (c * KERNEL_CHUNK + chunk.len()) * len,
+            );
+            let s = &mut carry.state[c * KERNEL_CHUNK..][..chunk.len()];
+            let d = &mut carry.derivative[c * KERNEL_CHUNK..][..chunk.len()];
+            let from = Stand {
+                interval: carry.interval,
+                row: rows.start,
+                s,
+                d,
+            };
             let h = &mut h[at..end];
-            match dh.as_deref_mut() {
-                Some(d) => self.kernel_chunk::<true>(chunk, h, &mut d[at..end]),
-                None => self.kernel_chunk::<false>(chunk, h, &mut []),
-            }
+            next = match dh.as_deref_mut() {
+                Some(dh) => self.kernel_chunk::<true>(chunk, from, h, &mut dh[at..end]),
+                None => self.kernel_chunk::<false>(chunk, from, h, &mut []),
+            };
         }
+        carry.interval = next;
+        carry.row = rows.end;
     }
 
     /// One pass of [`Schedule::kernels`] over 1 to [`KERNEL_CHUNK`] τ, in a fixed
     /// number of lanes (4 or 8, the τ padded with copies of the first) so that the
     /// lanes' arithmetic, [`numerics::exp`] included, compiles to vector
     /// instructions, recording exactly as many columns as there are τ (a constant
-    /// of the pass, so that each output's stores are a fixed sequence).
-    fn kernel_chunk<const D: bool>(&self, taus: &[f64], h: &mut [f64], dh: &mut [f64]) {
+    /// of the pass, so that each output's stores are a fixed sequence); from
+    /// `from`, which it leaves at its last row, returning the interval after it.
+    fn kernel_chunk<const D: bool>(
+        &self,
+        taus: &[f64],
+        from: Stand,
+        h: &mut [f64],
+        dh: &mut [f64],
+    ) -> usize {
         match taus.len() {
-            1 => self.lanes::<4, 1, D>(taus, h, dh),
-            2 => self.lanes::<4, 2, D>(taus, h, dh),
-            3 => self.lanes::<4, 3, D>(taus, h, dh),
-            4 => self.lanes::<4, 4, D>(taus, h, dh),
-            5 => self.lanes::<8, 5, D>(taus, h, dh),
-            6 => self.lanes::<8, 6, D>(taus, h, dh),
-            7 => self.lanes::<8, 7, D>(taus, h, dh),
-            _ => self.lanes::<8, 8, D>(taus, h, dh),
+            1 => self.lanes::<4, 1, D>(taus, from, h, dh),
+            2 => self.lanes::<4, 2, D>(taus, from, h, dh),
+            3 => self.lanes::<4, 3, D>(taus, from, h, dh),
+            4 => self.lanes::<4, 4, D>(taus, from, h, dh),
+            5 => self.lanes::<8, 5, D>(taus, from, h, dh),
+            6 => self.lanes::<8, 6, D>(taus, from, h, dh),
+            7 => self.lanes::<8, 7, D>(taus, from, h, dh),
+            _ => self.lanes::<8, 8, D>(taus, from, h, dh),
         }
     }
 
@@ -577,15 +628,16 @@ impl Schedule {
     fn lanes<const L: usize, const K: usize, const D: bool>(
         &self,
         taus: &[f64],
+        from: Stand,
         h: &mut [f64],
         dh: &mut [f64],
-    ) {
+    ) -> usize {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the processor has AVX2 (detected on the line above).
-            return unsafe { self.lanes_avx2::<L, K, D>(taus, h, dh) };
+            return unsafe { self.lanes_avx2::<L, K, D>(taus, from, h, dh) };
         }
-        self.lanes_portable::<L, K, D>(taus, h, dh)
+        self.lanes_portable::<L, K, D>(taus, from, h, dh)
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -593,24 +645,30 @@ impl Schedule {
     fn lanes_avx2<const L: usize, const K: usize, const D: bool>(
         &self,
         taus: &[f64],
+        from: Stand,
         h: &mut [f64],
         dh: &mut [f64],
-    ) {
-        self.lanes_portable::<L, K, D>(taus, h, dh)
+    ) -> usize {
+        self.lanes_portable::<L, K, D>(taus, from, h, dh)
     }
 
-    /// The pass itself: every interval advances all `L` lanes' states
-    /// ([`Interval::advance`]); the first `K` (= `taus.len()`) are recorded at the
-    /// outputs, into their columns of `h` (of [`Schedule::len`] values each), with
-    /// their τ-derivatives into `dh` when `D`.
+    /// The pass itself: from the interval and the states of `from`, every interval
+    /// advances all `L` lanes' states ([`Interval::advance`]); the first `K`
+    /// (= `taus.len()`) are recorded at the outputs, into their columns of `h` (of
+    /// `h.len() / K` rows from `from.row`), with their τ-derivatives into `dh` when
+    /// `D`, up to the last of those rows. The lanes' states there go back into
+    /// `from` (a padding lane, a copy of the first τ, has the first's state), and
+    /// the interval after it is returned.
     #[inline(always)]
     fn lanes_portable<const L: usize, const K: usize, const D: bool>(
         &self,
         taus: &[f64],
+        from: Stand,
         h: &mut [f64],
         dh: &mut [f64],
-    ) {
-        let m = self.len();
+    ) -> usize {
+        let m = h.len() / K;
+        let (lo, last) = (from.row, from.row + m - 1);
         let mut tau = [taus[0]; L];
         tau[..K].copy_from_slice(taus);
         let inv = tau.map(|t| 1.0 / t);
@@ -621,23 +679,85 @@ impl Schedule {
             true => dc.next().expect("a derivative column a τ"),
             false => &mut [],
         });
-        let (mut s, mut d) = ([0.0; L], [0.0; L]);
+        let (mut s, mut d) = ([from.s[0]; L], [from.d[0]; L]);
+        s[..K].copy_from_slice(from.s);
+        d[..K].copy_from_slice(from.d);
         // The exponential's constants as operands from memory (see `ExpTable`).
         let table = std::hint::black_box(&numerics::ExpTable::<L>::SPLAT);
-        for iv in &self.intervals {
+        let mut next = from.interval;
+        // The intervals before the final hold, then those of the hold, each loop of
+        // one kind of interval (the same arithmetic either way: `Interval::hold`).
+        let general = from.interval..self.hold_from.max(from.interval);
+        let mut done = false;
+        for iv in &self.intervals[general] {
+            next += 1;
             iv.advance::<L, D>(&tau, &inv, table, &mut s, &mut d);
             if let Some(o) = iv.out {
-                for (c, v) in hc.iter_mut().zip(&s) {
-                    c[o] = *v;
+                record::<L, K, D>(&mut hc, &mut dc, &s, &d, o - lo);
+                if o == last {
+                    done = true;
+                    break;
                 }
-                if D {
-                    for (c, v) in dc.iter_mut().zip(&d) {
-                        c[o] = *v;
+            }
+        }
+        if !done {
+            for iv in &self.intervals[next..] {
+                next += 1;
+                iv.hold::<L>(&inv, table, &mut s, &mut d);
+                if let Some(o) = iv.out {
+                    record::<L, K, D>(&mut hc, &mut dc, &s, &d, o - lo);
+                    if o == last {
+                        break;
                     }
                 }
             }
         }
+        from.s.copy_from_slice(&s[..K]);
+        if D {
+            from.d.copy_from_slice(&d[..K]);
+        }
+        next
     }
+}
+
+/// The first `K` lanes' states `s` (and derivatives `d` when `D`) into row `row` of
+/// their columns.
+#[inline(always)]
+fn record<const L: usize, const K: usize, const D: bool>(
+    hc: &mut [&mut [f64]; K],
+    dc: &mut [&mut [f64]; K],
+    s: &[f64; L],
+    d: &[f64; L],
+    row: usize,
+) {
+    for (c, v) in hc.iter_mut().zip(s) {
+        c[row] = *v;
+    }
+    if D {
+        for (c, v) in dc.iter_mut().zip(d) {
+            c[row] = *v;
+        }
+    }
+}
+
+/// Where a pass of [`Schedule::kernel_rows`] stands between calls: the next
+/// evaluation time and interval, and each τ's state and τ-derivative there (all 0
+/// at the start).
+#[derive(Debug, Clone, Default)]
+pub struct KernelCarry {
+    row: usize,
+    interval: usize,
+    state: Vec<f64>,
+    derivative: Vec<f64>,
+}
+
+/// One chunk's share of a [`KernelCarry`]: its next interval and row, its τ's
+/// states and derivatives.
+struct Stand<'a> {
+    interval: usize,
+    row: usize,
+    s: &'a mut [f64],
+    d: &'a mut [f64],
 }
 
 /// The most τ one pass of [`Schedule::kernels`] carries (a relaxation fit has at most
@@ -676,6 +796,33 @@ impl Interval {
         }
         for v in s.iter_mut() {
             *v += self.jump;
+        }
+    }
+
+    /// [`Interval::advance`] of an interval of the final hold (rate and jump +0):
+    /// ṙτ·b and ṙ·b are +0 (b is finite), so b, a third of the arithmetic, is not
+    /// formed: s ← a·s + 0, d ← a·(d + s·dt/τ²) + 0, then s + 0 (a no-op after the
+    /// first + 0 but where dt = 0), the same bits. The derivatives are formed even
+    /// when not asked for (where they are not, the vectoriser left the four lanes
+    /// of a pass of four τ scalar: twice the time).
+    #[inline(always)]
+    fn hold<const L: usize>(
+        &self,
+        inv: &[f64; L],
+        table: &numerics::ExpTable<L>,
+        s: &mut [f64; L],
+        d: &mut [f64; L],
+    ) {
+        if self.dt > 0.0 {
+            for i in 0..L {
+                let a = table.exp(-(self.dt * inv[i]), i);
+                d[i] = a * (d[i] + s[i] * self.dt * inv[i] * inv[i]) + 0.0;
+                s[i] = a * s[i] + 0.0;
+            }
+        } else {
+            for v in s.iter_mut() {
+                *v += 0.0;
+            }
         }
     }
 }
@@ -1017,13 +1164,22 @@ mod tests {
         let (mut h, mut d, mut hv, mut dv) =
             (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
         let (mut h1, mut h1v) = (vec![0.0; n], vec![0.0; n]);
+        // each pass from the start: its own zero states
+        let (mut s, mut sd) = ([[0.0; K]; 5], [[0.0; K]; 5]);
+        let mut starts = s.iter_mut().zip(&mut sd).map(|(s, d)| Stand {
+            interval: 0,
+            row: 0,
+            s,
+            d,
+        });
+        let mut start = || starts.next().expect("a start a pass");
         // SAFETY: the caller detected AVX2.
         unsafe {
-            sched.lanes_avx2::<8, K, true>(taus, &mut hv, &mut dv);
-            sched.lanes_avx2::<8, K, false>(taus, &mut h1v, &mut []);
+            sched.lanes_avx2::<8, K, true>(taus, start(), &mut hv, &mut dv);
+            sched.lanes_avx2::<8, K, false>(taus, start(), &mut h1v, &mut []);
         }
-        sched.lanes_portable::<8, K, true>(taus, &mut h, &mut d);
-        sched.lanes_portable::<8, K, false>(taus, &mut h1, &mut []);
+        sched.lanes_portable::<8, K, true>(taus, start(), &mut h, &mut d);
+        sched.lanes_portable::<8, K, false>(taus, start(), &mut h1, &mut []);
         assert_eq!(h, hv);
         assert_eq!(d, dv);
         assert_eq!(h1, h1v);
@@ -1031,9 +1187,92 @@ mod tests {
         if K <= 4 {
             let (mut h4, mut d4) = (vec![0.0; n], vec![0.0; n]);
             // SAFETY: the caller detected AVX2.
-            unsafe { sched.lanes_avx2::<4, K, true>(taus, &mut h4, &mut d4) };
+            unsafe { sched.lanes_avx2::<4, K, true>(taus, start(), &mut h4, &mut d4) };
             assert_eq!(h4, h);
             assert_eq!(d4, d);
+        }
+    }
+
+    /// The kernels of a schedule that ends in a hold, its intervals there taken by
+    /// [`Interval::hold`], are those of [`Interval::advance`] for every interval,
+    /// bit for bit (with and without derivatives, 3 τ and 11), on a ramp, a hold,
+    /// an unloading to a negative value (negative states) and a final hold with
+    /// repeated times (intervals of dt = 0).
+    #[test]
+    fn the_final_hold_is_the_general_interval_bit_for_bit() {
+        let mut times: Vec<f64> = (0..80).map(|i| 0.1 * i as f64).collect();
+        times.extend([7.9, 7.9, 8.5]);
+        let history =
+            History::from_knots(vec![(0.0, 0.0), (0.4, 1.5), (3.0, 1.5), (3.5, -0.2)]).unwrap();
+        let held = Schedule::new(&history, &times).unwrap();
+        assert!(
+            held.intervals.len() - held.hold_from > 40,
+            "a long final hold"
+        );
+        let general = Schedule {
+            hold_from: held.intervals.len(),
+            ..held.clone()
+        };
+        let m = times.len();
+        let all = [0.03, 0.7, 2.0, 45.0, 1e4, 0.2, 0.9, 3.3, 11.0, 0.05, 600.0];
+        for taus in [&all[..3], &all[..]] {
+            let n = taus.len();
+            let bits = |sched: &Schedule, derivatives: bool| {
+                let (mut h, mut dh) = (vec![0.0; n * m], vec![0.0; n * m]);
+                sched.kernels(taus, &mut h, derivatives.then_some(&mut dh[..]));
+                let b = |v: Vec<f64>| v.into_iter().map(f64::to_bits).collect::<Vec<_>>();
+                (b(h), b(dh))
+            };
+            for derivatives in [true, false] {
+                assert_eq!(bits(&held, derivatives), bits(&general, derivatives));
+            }
+        }
+    }
+
+    /// The kernels taken a block of rows at a time ([`Schedule::kernel_rows`], the
+    /// pass resumed from its [`KernelCarry`]: blocks of 1, 7 and 64 rows, the last
+    /// one short) are the one-pass kernels bit for bit, with and without
+    /// derivatives, on a history with a ramp, a hold and an unloading whose knots
+    /// fall between rows inside the blocks, for 3 τ (one chunk) and 11 (two).
+    #[test]
+    fn kernels_a_block_of_rows_at_a_time_are_the_one_pass_kernels() {
+        let times: Vec<f64> = (0..150).map(|i| 0.04 * i as f64).collect();
+        let history =
+            History::from_knots(vec![(0.0, 0.0), (0.41, 1.5), (2.8, 1.5), (3.5, 0.2)]).unwrap();
+        let sched = Schedule::new(&history, &times).unwrap();
+        let m = times.len();
+        let all = [0.03, 0.7, 2.0, 45.0, 1e4, 0.2, 0.9, 3.3, 11.0, 0.05, 600.0];
+        for taus in [&all[..3], &all[..]] {
+            let n = taus.len();
+            let (mut h, mut dh, mut h_only) =
+                (vec![0.0; n * m], vec![0.0; n * m], vec![0.0; n * m]);
+            sched.kernels(taus, &mut h, Some(&mut dh));
+            sched.kernels(taus, &mut h_only, None);
+            for block in [1, 7, 64] {
+                let (mut carry, mut carry_only) = (KernelCarry::default(), KernelCarry::default());
+                for lo in (0..m).step_by(block) {
+                    let hi = (lo + block).min(m);
+                    let len = hi - lo;
+                    let (mut hb, mut db, mut hob) =
+                        (vec![0.0; n * len], vec![0.0; n * len], vec![0.0; n * len]);
+                    sched.kernel_rows(taus, lo..hi, &mut carry, &mut hb, Some(&mut db));
+                    sched.kernel_rows(taus, lo..hi, &mut carry_only, &mut hob, None);
+                    for i in 0..n {
+                        let (want, got) = (i * m + lo..i * m + hi, i * len..(i + 1) * len);
+                        assert_eq!(
+                            h[want.clone()],
+                            hb[got.clone()],
+                            "{n} τ, block {block} at {lo}"
+                        );
+                        assert_eq!(
+                            dh[want.clone()],
+                            db[got.clone()],
+                            "{n} τ, block {block} at {lo}"
+                        );
+                        assert_eq!(h_only[want], hob[got], "{n} τ, block {block} at {lo}");
+                    }
+                }
+            }
         }
     }
 

@@ -1,11 +1,10 @@
 //! Stage 4: what a term fit is worth: statistics, information criteria, the σ of
 //! every SI parameter, and the problems that keep `auto` from taking it.
 
-use super::problem::{Problem, BLOCK_ROWS};
+use super::problem::{Need, Problem};
 use super::refine::TermFit;
 use super::{fmt_s, param_names, Kernels, Setup};
 use crate::fit::linear::RowQr;
-use crate::fit::lm::LeastSquares;
 use crate::fit::{diagnostics, Parameter, Status};
 use nalgebra::DVector;
 
@@ -73,9 +72,9 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
     let m = prob.len();
     let k = 1 + 2 * n;
     let mut r = DVector::zeros(m);
-    // the kernels with their derivatives, which the residuals then take
-    prob.kernels_at_log_taus(&tf.p[1 + n..], true);
-    let finite = prob.eval(&tf.p, &mut r, None);
+    let mut pred = vec![0.0; m];
+    let reach = prob.residuals_model_reach(&tf.p, r.as_mut_slice(), &mut pred);
+    let finite = r.iter().all(|v| v.is_finite());
     let rss = r.norm_squared();
     let s = prob.scale * setup.unit;
     let mut si = vec![tf.p[0] * s];
@@ -100,8 +99,6 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
         }
     };
     let finite = finite && jac_finite;
-    let mut pred = vec![0.0; m];
-    prob.model(&tf.p, &mut pred);
     let y: &[f64] = &prob.y;
     let nf = m as f64;
     let mean = y.iter().sum::<f64>() / nf;
@@ -125,10 +122,7 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
     };
     let (aicc, bic) = diagnostics::information_criteria(rss, m, k);
 
-    let (problems, warnings, identifiable) = problems(setup, &tf, &si, &unc, finite, m);
-    // every count's assessment waits for the choice: none keeps its kernels (at 10⁶
-    // points the seven counts' kernels and derivatives were 336 MB)
-    tf.problem.release_kernels();
+    let (problems, warnings, identifiable) = problems(setup, &tf, &si, &reach, &unc, finite, m);
     Assessed {
         tf,
         si,
@@ -152,38 +146,39 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
 
 /// The factor R of the Jacobian at `p` with respect to the SI parameters (column
 /// c times `columns[c]`) and, with noise groups (`groups`: each row's group and a
-/// scale per group), each row divided by its group's scale, its rows pushed
-/// a block at a time ([`Problem::jacobian_block`], [`RowQr::push`]): the factor
-/// [`diagnostics::uncertainty`] takes of the whole m × (2N + 1) matrix, the same
-/// bits, without forming it (at 10⁶ points 104 MB for six terms). Whether every
-/// value was finite. The kernels of `prob` must be at `p`, with derivatives.
+/// scale per group), each row divided by its group's scale, its rows pushed a block
+/// at a time in one pass over the rows ([`Problem::jacobian_block`],
+/// [`RowQr::push`]): the factor [`diagnostics::uncertainty`] takes of the whole
+/// m × (2N + 1) matrix, the same bits, without forming it (at 10⁶ points 104 MB for
+/// six terms). Whether every value was finite.
 fn factor<K: Kernels>(
-    prob: &Problem<K>,
+    prob: &mut Problem<K>,
     p: &[f64],
     columns: &[f64],
     groups: Option<&(Vec<usize>, Vec<f64>)>,
 ) -> (RowQr, bool) {
     let (m, k) = (prob.len(), columns.len());
     let mut qr = RowQr::with_rows(k, m);
-    let mut block = vec![0.0; k * BLOCK_ROWS.min(m)];
+    let mut block = Vec::new();
     let mut row = vec![0.0; k];
     let mut finite = true;
-    for lo in (0..m).step_by(BLOCK_ROWS) {
-        let hi = (lo + BLOCK_ROWS).min(m);
-        let len = hi - lo;
-        prob.jacobian_block(p, lo, hi, &mut block[..k * len]);
-        finite &= block[..k * len].iter().all(|v| v.is_finite());
+    let taus = prob.taus(p);
+    prob.pass(&taus, Need::Derivatives, |prob, b| {
+        let len = b.rows.len();
+        block.resize(k * len, 0.0);
+        prob.jacobian_block(p, b, &mut block);
+        finite &= block.iter().all(|v| v.is_finite());
         for q in 0..len {
             for (c, v) in row.iter_mut().enumerate() {
                 *v = block[c * len + q] * columns[c];
             }
             if let Some((g, scales)) = groups {
-                let f = 1.0 / scales[g[lo + q]];
+                let f = 1.0 / scales[g[b.rows.start + q]];
                 row.iter_mut().for_each(|v| *v *= f);
             }
             qr.push(&row, 0.0);
         }
-    }
+    });
     (qr, finite)
 }
 
@@ -225,7 +220,7 @@ fn group_scales(r: &DVector<f64>, groups: &[usize], k: usize) -> Option<Vec<f64>
 /// (s² = 1); B is the factor of the rows times s_g ([`factor`] divides by the scales
 /// it is given: 1/s_g). Whether every value of J was finite.
 fn group_sandwich<K: Kernels>(
-    prob: &Problem<K>,
+    prob: &mut Problem<K>,
     p: &[f64],
     columns: &[f64],
     groups: Vec<usize>,
@@ -319,11 +314,12 @@ fn term_problems<K: Kernels>(
 /// one rule (fit::identifiability; E∞ at its physical bound 0, or with an interval
 /// reaching it, is judged by its
 /// correlations only, and said as a one-sided interval); and per parameter whether
-/// it is identifiable.
+/// it is identifiable. `reach`: each term's ([`Problem::reach`]).
 fn problems<K: Kernels>(
     setup: &Setup<K>,
     tf: &TermFit<K>,
     si: &[f64],
+    reach: &[f64],
     unc: &diagnostics::Uncertainty,
     finite: bool,
     m: usize,
@@ -350,13 +346,7 @@ fn problems<K: Kernels>(
     let at_bound: Vec<bool> = (0..n)
         .map(|i| si[1 + n + i] <= lo * 1.0001 || si[1 + n + i] >= hi / 1.0001)
         .collect();
-    term_problems(
-        setup,
-        si,
-        &tf.problem.reach(&tf.p),
-        &at_bound,
-        &mut problems,
-    );
+    term_problems(setup, si, reach, &at_bound, &mut problems);
     if m <= k + 1 {
         problems.push((
             Status::IllPosed,

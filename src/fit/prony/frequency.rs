@@ -232,21 +232,31 @@ impl Kernels for FrequencyKernels {
     fn input(&self) -> &[f64] {
         &self.input
     }
-    /// With u = ωτ and d = 1 + u²: storage h = u²/d, ∂h/∂τ = 2ωu/d²; loss h = u/d,
-    /// ∂h/∂τ = ω(1 − u²)/d².
-    fn kernels(&self, taus: &[f64], h: &mut [f64], mut dh: Option<&mut [f64]>) {
-        let m = self.len();
+    /// Each row alone (nothing carried): with u = ωτ and d = 1 + u², storage
+    /// h = u²/d, ∂h/∂τ = 2ωu/d²; loss h = u/d, ∂h/∂τ = ω(1 − u²)/d².
+    type Carry = ();
+
+    fn kernel_rows(
+        &self,
+        taus: &[f64],
+        rows: std::ops::Range<usize>,
+        _: &mut (),
+        h: &mut [f64],
+        mut dh: Option<&mut [f64]>,
+    ) {
+        let len = rows.len();
+        let (omega, loss) = (&self.omega[rows.clone()], &self.loss[rows]);
         for (i, &tau) in taus.iter().enumerate() {
-            for (k, (&w, &loss)) in self.omega.iter().zip(&self.loss).enumerate() {
+            for (k, (&w, &loss)) in omega.iter().zip(loss).enumerate() {
                 let u = w * tau;
                 let d = 1.0 + u * u;
                 let (v, dv) = match loss {
                     true => (u / d, w * (1.0 - u * u) / (d * d)),
                     false => (u * u / d, 2.0 * w * u / (d * d)),
                 };
-                h[i * m + k] = v;
+                h[i * len + k] = v;
                 if let Some(dh) = dh.as_deref_mut() {
-                    dh[i * m + k] = dv;
+                    dh[i * len + k] = dv;
                 }
             }
         }
@@ -526,7 +536,8 @@ fn kramers_kronig(
     let storage_only = setup(data, 0.0);
     let n = joint.tf.n_terms;
     let start = joint.tf.p[1 + n..].to_vec();
-    let tf = refine::fit_from(&storage_only, n, &[start], search);
+    let levels = refine::Levels::new(&storage_only.prob);
+    let tf = refine::fit_from(&storage_only, &levels, n, &[start], search);
     let a = assess::assess(&storage_only, tf);
 
     let n = a.tf.n_terms;

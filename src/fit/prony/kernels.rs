@@ -23,10 +23,31 @@ pub trait Kernels: Clone + Send + Sync {
     /// The input xₖ of every row: the column of E∞.
     fn input(&self) -> &[f64];
 
-    /// The kernels hₖ(τ) of every τ of `taus` into `h`, one block of [`Kernels::len`]
-    /// values a τ end to end (the columns of a column-major matrix), and ∂h/∂τ into
-    /// `dh` if given, the same layout.
-    fn kernels(&self, taus: &[f64], h: &mut [f64], dh: Option<&mut [f64]>);
+    /// Where a pass over the rows stands between blocks of them
+    /// ([`Kernels::kernel_rows`]): a time-domain kernel is a recursion from row to
+    /// row, a frequency-domain one carries nothing.
+    type Carry: Default + Clone + std::fmt::Debug + Send + Sync;
+
+    /// The kernels hₖ(τ) of every τ of `taus` at the rows `rows` into `h`, one block
+    /// of `rows.len()` values a τ end to end (the columns of a column-major matrix),
+    /// and ∂h/∂τ into `dh` if given, the same layout. `carry` is where the pass
+    /// stands: a fresh one starts at row 0, and each call leaves it where the next
+    /// block (the same τ, with derivatives or not alike) starts. A pass a block at a
+    /// time gives the bits of one over all rows.
+    fn kernel_rows(
+        &self,
+        taus: &[f64],
+        rows: std::ops::Range<usize>,
+        carry: &mut Self::Carry,
+        h: &mut [f64],
+        dh: Option<&mut [f64]>,
+    );
+
+    /// [`Kernels::kernel_rows`] of all the rows in one pass.
+    fn kernels(&self, taus: &[f64], h: &mut [f64], dh: Option<&mut [f64]>) {
+        let rows = 0..self.len();
+        self.kernel_rows(taus, rows, &mut Self::Carry::default(), h, dh);
+    }
 
     /// Each row's noise group, where the rows are of kinds whose weighted residuals
     /// have different variances (a DMA fit's storage and loss rows): the

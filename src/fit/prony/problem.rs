@@ -10,6 +10,12 @@ use std::sync::Arc;
 
 /// The fitting problem: p = [e∞, e₁…e_N, ln τ₁…ln τ_N] in scaled units (observation =
 /// S·(e∞·x + Σ eᵢ·hᵢ)), residuals rₖ = wₖ·(model − yₖ).
+///
+/// Every product over the data is taken a block of [`BLOCK_ROWS`] rows at a time
+/// ([`Problem::pass`]): the terms' kernels of a block are computed, used and
+/// overwritten by the next block's, so an evaluation holds n·[`BLOCK_ROWS`] kernels
+/// (and as many derivatives) whatever the number of rows, not n per row (at 10⁶
+/// points and six terms the kernels and their derivatives were 96 MB a term count).
 #[derive(Debug, Clone)]
 pub struct Problem<K: Kernels> {
     /// The domain's rows: inputs and kernels. The rows, data and weights are
@@ -20,56 +26,70 @@ pub struct Problem<K: Kernels> {
     pub y: Arc<[f64]>,
     /// The residual weights wₖ.
     pub w: Arc<[f64]>,
-    /// The scale S of the moduli.
+    /// The scale S of the moduli: every column of the design (and of the Jacobian)
+    /// has the factor wₖ·S, formed where it is used (the same product every time).
     pub scale: f64,
-    /// wₖ·S: the factor of every column of the design (and of the Jacobian).
-    ws: Arc<[f64]>,
     /// Number of Prony terms N.
     pub n_terms: usize,
-    /// The terms' kernels and their τ-derivatives of the last evaluation, one block
-    /// of [`Problem::len`] values a term ([`Kernels::kernels`]), and their τᵢ.
-    h: Vec<f64>,
-    dh: Vec<f64>,
-    taus: Vec<f64>,
-    /// The τᵢ whose kernels `h` holds, and whether `dh` holds their derivatives: an
-    /// evaluation at the same τ (the polish's start at the projection's optimum,
-    /// the assessment at the polish's) takes them instead of a pass over the data.
-    pub(crate) kernel_taus: Vec<f64>,
-    kernel_derivatives: bool,
+    /// The kernels of the last block a pass visited.
+    kernels: KernelBlock<K::Carry>,
     /// p, JᵀJ and Jᵀr of the last evaluation asked for its normal equations
     /// ([`LeastSquares::forms_normal_equations`]).
     normal: super::NormalCache,
-    /// A block of [`BLOCK_ROWS`] rows of columns ([`Problem::jacobian_block`]).
+    /// A block of [`BLOCK_ROWS`] rows of the Jacobian ([`Problem::jacobian_block`]).
     block: Vec<f64>,
     /// Evaluations so far (counted for the solver report).
     pub evaluations: usize,
 }
 
-/// Rows of a block of the products over the data ([`Problem`]'s normal equations,
-/// [`super::projection::Projected`]'s Gram products): the columns of a block (at
-/// most 2·40 + 2 of 4 kB) stay in the level-2 cache while all their products are
-/// taken, and no column of the data's length is formed; a curve of at most this
-/// many points (every shipped one, and the starts' subsample) takes each product
-/// in one piece.
+/// Rows of a block of the products over the data ([`Problem`]'s kernels, residuals
+/// and normal equations, [`super::projection::Projected`]'s Gram products): the
+/// kernels and columns of a block (at most 2·40 + 2 of 4 kB) stay in the level-2
+/// cache while all their products are taken, and no column of the data's length is
+/// formed; a curve of at most this many points (every shipped one, and the starts'
+/// subsample) is one block, whose kernels a problem keeps from pass to pass.
 pub(crate) const BLOCK_ROWS: usize = 512;
+
+/// The terms' kernels at one block of rows ([`Problem::pass`]): hᵢ(τᵢ) of the rows
+/// `rows`, one column of `rows.len()` values a term end to end, and their
+/// τ-derivatives in `dh` where they were asked for; `carry`, where the pass over
+/// the rows stands after them ([`Kernels::kernel_rows`]).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct KernelBlock<C> {
+    /// The τᵢ.
+    pub(crate) taus: Vec<f64>,
+    /// The rows.
+    pub(crate) rows: std::ops::Range<usize>,
+    /// Whether `dh` holds the derivatives.
+    derivatives: bool,
+    pub(crate) h: Vec<f64>,
+    pub(crate) dh: Vec<f64>,
+    carry: C,
+}
+
+/// What a pass over the rows needs of the kernels ([`Problem::pass`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Need {
+    /// The kernels.
+    Values,
+    /// The kernels and their τ-derivatives.
+    Derivatives,
+    /// The kernels, and the derivatives at the same τ in the pass after: a problem
+    /// of one block, which keeps its kernels, computes both at once.
+    ValuesThenDerivatives,
+}
 
 impl<K: Kernels> Problem<K> {
     /// The problem of the rows `kern` with data `y`, weights `w` and scale S, no
     /// terms yet.
     pub fn new(kern: K, y: Vec<f64>, w: Vec<f64>, scale: f64) -> Problem<K> {
-        let ws = w.iter().map(|w| w * scale).collect();
         Problem {
             kern: Arc::new(kern),
             y: y.into(),
             w: w.into(),
             scale,
-            ws,
             n_terms: 0,
-            h: Vec::new(),
-            dh: Vec::new(),
-            taus: Vec::new(),
-            kernel_taus: Vec::new(),
-            kernel_derivatives: false,
+            kernels: KernelBlock::default(),
             normal: super::NormalCache::default(),
             block: Vec::new(),
             evaluations: 0,
@@ -107,87 +127,152 @@ impl<K: Kernels> Problem<K> {
         Some(sub)
     }
 
-    /// Model observation (stress, modulus) at every point into `m`, from the kernels of the last evaluation
-    /// (which must have been at `p`).
-    pub fn model(&self, p: &[f64], m: &mut [f64]) {
-        self.combine(p, m);
-        for mk in m.iter_mut() {
-            *mk *= self.scale;
+    /// How many kernels and τ-derivatives the problem holds (those of the last
+    /// block a pass visited).
+    #[cfg(test)]
+    pub(crate) fn kernel_values(&self) -> (usize, usize) {
+        (self.kernels.h.len(), self.kernels.dh.len())
+    }
+
+    /// The τᵢ = e^(ln τᵢ) of the terms of `p`.
+    pub(crate) fn taus(&self, p: &[f64]) -> Vec<f64> {
+        let n = self.n_terms;
+        p[1 + n..1 + 2 * n].iter().map(|lt| lt.exp()).collect()
+    }
+
+    /// One pass over the rows with the terms' kernels at `taus`: for each block of
+    /// [`BLOCK_ROWS`] rows in order, their kernels (and τ-derivatives, as `need`
+    /// says) computed from where the block before left the pass
+    /// ([`Kernels::kernel_rows`]), then `f(self, block)`. A problem of one block
+    /// keeps its kernels: a pass at the same τ takes them instead (the same bits:
+    /// each τ's kernel depends on that τ alone).
+    pub(crate) fn pass(
+        &mut self,
+        taus: &[f64],
+        need: Need,
+        mut f: impl FnMut(&Self, &KernelBlock<K::Carry>),
+    ) {
+        let m = self.len();
+        let derivatives = match need {
+            Need::Values => false,
+            Need::Derivatives => true,
+            Need::ValuesThenDerivatives => m <= BLOCK_ROWS,
+        };
+        let mut b = std::mem::take(&mut self.kernels);
+        for lo in (0..m).step_by(BLOCK_ROWS) {
+            let rows = lo..(lo + BLOCK_ROWS).min(m);
+            let kept = b.rows == rows && b.taus == taus && (b.derivatives || !derivatives);
+            if !kept {
+                if lo == 0 {
+                    b.carry = Default::default();
+                }
+                let len = rows.len();
+                b.h.resize(taus.len() * len, 0.0);
+                b.dh.resize(if derivatives { taus.len() * len } else { 0 }, 0.0);
+                let dh = derivatives.then_some(&mut b.dh[..]);
+                self.kern
+                    .kernel_rows(taus, rows.clone(), &mut b.carry, &mut b.h, dh);
+                b.taus.clear();
+                b.taus.extend_from_slice(taus);
+                b.rows = rows;
+                b.derivatives = derivatives;
+            }
+            f(self, &b);
         }
+        self.kernels = b;
     }
 
-    /// Each term's reach: the largest weighted change it makes to any row,
-    /// maxₖ wₖ·|Eᵢ·hₖ(τᵢ)| (a relative change where the weights are relative), from
-    /// the kernels of the last evaluation (which must have been at `p`).
-    pub fn reach(&self, p: &[f64]) -> Vec<f64> {
-        let m = self.len();
-        p[1..=self.n_terms]
-            .iter()
-            .zip(self.h.chunks_exact(m))
-            .map(|(e, h)| {
-                h.iter()
-                    .zip(self.ws.iter())
-                    .map(|(h, ws)| (ws * e * h).abs())
-                    .fold(0.0, f64::max)
-            })
-            .collect()
-    }
-
-    /// e∞·x + Σ eᵢ·hᵢ at every point into `out` (the model over S), from the
-    /// kernels of the last evaluation.
-    fn combine(&self, p: &[f64], out: &mut [f64]) {
-        let m = self.len();
-        for (o, x) in out.iter_mut().zip(self.kern.input()) {
+    /// e∞·x + Σ eᵢ·hᵢ at the rows of `b` into `out` (the model over S).
+    fn combine(&self, p: &[f64], b: &KernelBlock<K::Carry>, out: &mut [f64]) {
+        let len = b.rows.len();
+        for (o, x) in out.iter_mut().zip(&self.kern.input()[b.rows.clone()]) {
             *o = p[0] * x;
         }
-        for (e, h) in p[1..=self.n_terms].iter().zip(self.h.chunks_exact(m)) {
+        for (e, h) in p[1..=self.n_terms].iter().zip(b.h.chunks_exact(len)) {
             for (o, h) in out.iter_mut().zip(h) {
                 *o += e * h;
             }
         }
     }
 
-    /// Every term's kernel at the τᵢ = e^(ln τᵢ) of `p` into `h` (and their
-    /// τ-derivatives into `dh` when `derivatives`), in one pass over the data.
-    fn kernels_at(&mut self, p: &[f64], derivatives: bool) {
-        let n = self.n_terms;
-        self.kernels_at_log_taus(&p[1 + n..1 + 2 * n], derivatives);
+    /// One pass at `p`: the residuals wₖ·(S·(e∞·xₖ + Σ eᵢ·hᵢₖ) − yₖ) into `r`, and for
+    /// each block `then(self, block, model over S, residuals)` of its rows.
+    fn residual_pass(
+        &mut self,
+        p: &[f64],
+        need: Need,
+        r: &mut [f64],
+        mut then: impl FnMut(&Self, &KernelBlock<K::Carry>, &[f64], &[f64]),
+    ) {
+        let taus = self.taus(p);
+        let s = self.scale;
+        let mut model = vec![0.0; BLOCK_ROWS.min(self.len())];
+        self.pass(&taus, need, |prob, b| {
+            let rows = b.rows.clone();
+            let c = &mut model[..rows.len()];
+            prob.combine(p, b, c);
+            let rb = &mut r[rows.clone()];
+            for (((rk, c), w), y) in rb
+                .iter_mut()
+                .zip(&*c)
+                .zip(&prob.w[rows.clone()])
+                .zip(&prob.y[rows])
+            {
+                *rk = w * (s * c - y);
+            }
+            then(prob, b, c, rb);
+        });
     }
 
-    /// [`Problem::kernels_at`] of the terms' ln τᵢ alone; nothing to compute when
-    /// `h` (and `dh` if asked for) hold the kernels of these τ already, bit for bit
-    /// the values a pass would give (each τ's kernel depends on that τ alone).
-    pub(crate) fn kernels_at_log_taus(&mut self, ln_taus: &[f64], derivatives: bool) {
-        let m = self.len();
-        let n = ln_taus.len();
-        self.taus.clear();
-        self.taus.extend(ln_taus.iter().map(|lt| lt.exp()));
-        if self.kernel_taus == self.taus && (self.kernel_derivatives || !derivatives) {
-            return;
-        }
-        self.h.resize(n * m, 0.0);
-        if derivatives {
-            self.dh.resize(n * m, 0.0);
-        }
-        self.kern.kernels(
-            &self.taus,
-            &mut self.h,
-            derivatives.then_some(&mut self.dh[..]),
-        );
-        self.kernel_taus.clone_from(&self.taus);
-        self.kernel_derivatives = derivatives;
+    /// Each term's reach: the largest weighted change it makes to any row,
+    /// maxₖ wₖ·|Eᵢ·hₖ(τᵢ)| (a relative change where the weights are relative).
+    pub fn reach(&mut self, p: &[f64]) -> Vec<f64> {
+        let mut reach = vec![0.0; self.n_terms];
+        let taus = self.taus(p);
+        self.pass(&taus, Need::Values, |prob, b| {
+            prob.reach_block(p, b, &mut reach)
+        });
+        reach
     }
 
-    /// Free the kept kernels (n·m values, and as many derivatives): a term fit
-    /// waiting for its assessment keeps nothing of the data's size; the
-    /// assessment computes them again, the same bits ([`Problem::kernels_at_log_taus`]).
-    pub(crate) fn release_kernels(&mut self) {
-        self.h = Vec::new();
-        self.dh = Vec::new();
-        self.block = Vec::new();
-        self.normal.clear();
-        self.kernel_taus.clear();
-        self.kernel_derivatives = false;
+    /// [`Problem::reach`] over the rows of `b`, each term's into `reach` where larger.
+    fn reach_block(&self, p: &[f64], b: &KernelBlock<K::Carry>, reach: &mut [f64]) {
+        let (len, s) = (b.rows.len(), self.scale);
+        let w = &self.w[b.rows.clone()];
+        for ((e, h), reach) in p[1..=self.n_terms]
+            .iter()
+            .zip(b.h.chunks_exact(len))
+            .zip(reach)
+        {
+            *reach = h
+                .iter()
+                .zip(w)
+                .map(|(h, w)| (w * s * e * h).abs())
+                .fold(*reach, f64::max);
+        }
+    }
+
+    /// What the assessment takes of a fit at `p`, in one pass over the rows: the
+    /// residuals into `r` (those of [`LeastSquares::eval`]), the model observations
+    /// (stress, modulus) into `model`, and each term's reach ([`Problem::reach`]),
+    /// returned; the kernels' derivatives at p follow (a problem of one block keeps
+    /// them for the Jacobian: [`Need::ValuesThenDerivatives`]).
+    pub(crate) fn residuals_model_reach(
+        &mut self,
+        p: &[f64],
+        r: &mut [f64],
+        model: &mut [f64],
+    ) -> Vec<f64> {
+        self.evaluations += 1;
+        let s = self.scale;
+        let mut reach = vec![0.0; self.n_terms];
+        self.residual_pass(p, Need::ValuesThenDerivatives, r, |prob, b, c, _| {
+            for (m, c) in model[b.rows.clone()].iter_mut().zip(c) {
+                *m = c * s;
+            }
+            prob.reach_block(p, b, &mut reach);
+        });
+        reach
     }
 
     /// The weighted data w·y: the right-hand side of the moduli's least squares.
@@ -211,120 +296,89 @@ impl<K: Kernels> Problem<K> {
 
     /// The rows `lo..hi` of [`Problem::input_column`] into `out`.
     pub(crate) fn input_column_block(&self, lo: usize, hi: usize, out: &mut [f64]) {
-        let x = &self.kern.input()[lo..hi];
-        for ((o, x), ws) in out.iter_mut().zip(x).zip(&self.ws[lo..hi]) {
-            *o = x * ws;
+        let (x, s) = (&self.kern.input()[lo..hi], self.scale);
+        for ((o, x), w) in out.iter_mut().zip(x).zip(&self.w[lo..hi]) {
+            *o = x * (w * s);
         }
     }
 
-    /// The rows `lo..hi` of the columns [w·S·x | w·S·h(τᵢ)… | w·y | w·S·τᵢ·∂h/∂τ(τᵢ)…]
-    /// (the last N only when `derivatives`; the kernels of the last evaluation,
-    /// which must hold their derivatives then) end to end into `out`: the columns of
-    /// [`super::projection::Projected`]'s Gram products a block at a time, each
-    /// value the product [`Problem::kernel_columns`] forms (h·wS, ∂h/∂τ·(wS·τ)), so
-    /// the same bits.
-    pub(crate) fn design_block(&self, lo: usize, hi: usize, derivatives: bool, out: &mut Vec<f64>) {
-        let (m, n, len) = (self.len(), self.n_terms, hi - lo);
+    /// The rows of `b` of the columns [w·S·x | w·S·h(τᵢ)… | w·y | w·S·τᵢ·∂h/∂τ(τᵢ)…]
+    /// (the last N only when `derivatives`, which `b` must hold then) end to end
+    /// into `out`: the columns of [`super::projection::Projected`]'s Gram products a
+    /// block at a time, each value the product [`Problem::kernel_columns`] forms
+    /// (h·wS, ∂h/∂τ·(wS·τ)), so the same bits.
+    pub(crate) fn design_block(
+        &self,
+        b: &KernelBlock<K::Carry>,
+        derivatives: bool,
+        out: &mut Vec<f64>,
+    ) {
+        let (lo, hi) = (b.rows.start, b.rows.end);
+        let (n, len, s) = (self.n_terms, hi - lo, self.scale);
         let cols = 2 + n + if derivatives { n } else { 0 };
         out.resize(cols * len, 0.0);
-        let ws = &self.ws[lo..hi];
+        let w = &self.w[lo..hi];
         let (x, rest) = out.split_at_mut(len);
         self.input_column_block(lo, hi, x);
         let (a, rest) = rest.split_at_mut(n * len);
-        for (i, a) in a.chunks_exact_mut(len).enumerate() {
-            for ((a, ws), h) in a.iter_mut().zip(ws).zip(&self.h[i * m + lo..]) {
-                *a = h * ws;
+        for (a, h) in a.chunks_exact_mut(len).zip(b.h.chunks_exact(len)) {
+            for ((a, w), h) in a.iter_mut().zip(w).zip(h) {
+                *a = h * (w * s);
             }
         }
-        let (b, d) = rest.split_at_mut(len);
-        self.targets_block(lo, hi, b);
+        let (t, d) = rest.split_at_mut(len);
+        self.targets_block(lo, hi, t);
         if derivatives {
-            for ((i, a), tau) in d.chunks_exact_mut(len).enumerate().zip(&self.taus) {
-                for ((a, ws), dh) in a.iter_mut().zip(ws).zip(&self.dh[i * m + lo..]) {
-                    *a = dh * (ws * tau);
+            let dh = b.dh.chunks_exact(len);
+            for ((a, tau), dh) in d.chunks_exact_mut(len).zip(&b.taus).zip(dh) {
+                for ((a, w), dh) in a.iter_mut().zip(w).zip(dh) {
+                    *a = dh * (w * s * tau);
                 }
             }
         }
     }
 
-    /// The rows `lo..hi` of the Jacobian at `p` (which the kernels of the last
-    /// evaluation, with derivatives, must be at) end to end into `out`: the columns
-    /// w·S·x, w·S·hᵢ and w·S·eᵢ·τᵢ·∂hᵢ/∂τ of [`LeastSquares::eval`], the same bits.
-    pub(crate) fn jacobian_block(&self, p: &[f64], lo: usize, hi: usize, out: &mut [f64]) {
-        let (m, n, len) = (self.len(), self.n_terms, hi - lo);
-        let ws = &self.ws[lo..hi];
+    /// The rows of `b` (which must hold the kernels' derivatives at `p`) of the
+    /// Jacobian at `p` end to end into `out`: the columns w·S·x, w·S·hᵢ and
+    /// w·S·eᵢ·τᵢ·∂hᵢ/∂τ of [`LeastSquares::eval`].
+    pub(crate) fn jacobian_block(&self, p: &[f64], b: &KernelBlock<K::Carry>, out: &mut [f64]) {
+        let (lo, hi) = (b.rows.start, b.rows.end);
+        let (n, len, s) = (self.n_terms, hi - lo, self.scale);
+        let w = &self.w[lo..hi];
         let (j0, terms) = out.split_at_mut(len);
         self.input_column_block(lo, hi, j0);
         let (je, jt) = terms.split_at_mut(n * len);
         for i in 0..n {
-            let (e, tau) = (p[1 + i], self.taus[i]);
-            let (h, dh) = (
-                &self.h[i * m + lo..i * m + hi],
-                &self.dh[i * m + lo..i * m + hi],
-            );
-            for ((j, ws), h) in je[i * len..(i + 1) * len].iter_mut().zip(ws).zip(h) {
-                *j = ws * h;
+            let (e, tau) = (p[1 + i], b.taus[i]);
+            let (h, dh) = (&b.h[i * len..(i + 1) * len], &b.dh[i * len..(i + 1) * len]);
+            for ((j, w), h) in je[i * len..(i + 1) * len].iter_mut().zip(w).zip(h) {
+                *j = w * s * h;
             }
-            for ((j, ws), dh) in jt[i * len..(i + 1) * len].iter_mut().zip(ws).zip(dh) {
-                *j = ws * e * tau * dh;
+            for ((j, w), dh) in jt[i * len..(i + 1) * len].iter_mut().zip(w).zip(dh) {
+                *j = w * s * e * tau * dh;
             }
         }
-    }
-
-    /// JᵀJ and Jᵀr at `p` from the residuals `r` there, a block of [`BLOCK_ROWS`]
-    /// rows of the Jacobian at a time ([`Problem::jacobian_block`]): no m × (2N + 1)
-    /// Jacobian is formed (at 10⁶ points 104 MB for six terms, and as many for a
-    /// trial's). Kept for [`LeastSquares::normal_equations`]; false where not finite.
-    fn form_normal_equations(&mut self, p: &[f64], r: &[f64]) -> bool {
-        let (m, k) = (self.len(), 1 + 2 * self.n_terms);
-        let mut jtj = DMatrix::<f64>::zeros(k, k);
-        let mut jtr = DVector::<f64>::zeros(k);
-        let mut block = std::mem::take(&mut self.block);
-        for lo in (0..m).step_by(BLOCK_ROWS) {
-            let hi = (lo + BLOCK_ROWS).min(m);
-            let len = hi - lo;
-            block.resize(k * len, 0.0);
-            self.jacobian_block(p, lo, hi, &mut block);
-            let col = |i: usize| &block[i * len..(i + 1) * len];
-            for j in 0..k {
-                for i in 0..=j {
-                    jtj[(i, j)] += dot(col(i), col(j));
-                }
-                jtr[j] += dot(col(j), &r[lo..hi]);
-            }
-        }
-        self.block = block;
-        for j in 0..k {
-            for i in 0..j {
-                jtj[(j, i)] = jtj[(i, j)];
-            }
-        }
-        let finite = jtj.iter().chain(jtr.iter()).all(|v| v.is_finite());
-        match finite {
-            true => self.normal.keep(p, jtj, jtr),
-            false => self.normal.clear(),
-        }
-        finite
     }
 
     /// The design's columns of the terms at `taus`, w·S·h(τᵢ), end to end into `out`
     /// (one pass over the data, [`Kernels::kernels`]), and their derivatives
-    /// w·S·τᵢ·∂h/∂τ(τᵢ) = ∂aᵢ/∂ln τᵢ into `dout` if given.
+    /// w·S·τᵢ·∂h/∂τ(τᵢ) = ∂aᵢ/∂ln τᵢ into `dout` if given: the whole m × N matrix, for
+    /// the grid NNLS of at most [`super::refine::START_POINTS`] rows.
     pub(crate) fn kernel_columns(
         &self,
         taus: &[f64],
         out: &mut [f64],
         mut dout: Option<&mut [f64]>,
     ) {
-        let m = self.len();
+        let (m, s) = (self.len(), self.scale);
         self.kern.kernels(taus, out, dout.as_deref_mut());
         for (i, &tau) in taus.iter().enumerate() {
-            for (a, ws) in out[i * m..(i + 1) * m].iter_mut().zip(self.ws.iter()) {
-                *a *= ws;
+            for (a, w) in out[i * m..(i + 1) * m].iter_mut().zip(self.w.iter()) {
+                *a *= w * s;
             }
             if let Some(d) = dout.as_deref_mut() {
-                for (a, ws) in d[i * m..(i + 1) * m].iter_mut().zip(self.ws.iter()) {
-                    *a *= ws * tau;
+                for (a, w) in d[i * m..(i + 1) * m].iter_mut().zip(self.w.iter()) {
+                    *a *= w * s * tau;
                 }
             }
         }
@@ -337,26 +391,58 @@ impl<K: Kernels> LeastSquares for Problem<K> {
     }
     /// Residuals wₖ·(S·(e∞·xₖ + Σ eᵢ·hᵢₖ) − yₖ); the Jacobian's columns w·S·x,
     /// w·S·hᵢ and w·S·eᵢ·τᵢ·∂hᵢ/∂τ (∂/∂ln τᵢ), or, asked with an empty (0-row)
-    /// Jacobian, its normal equations ([`Problem::form_normal_equations`]).
+    /// Jacobian, its normal equations JᵀJ and Jᵀr summed a block of rows at a time
+    /// (no m × (2N + 1) Jacobian formed: at 10⁶ points 104 MB for six terms), kept
+    /// for [`LeastSquares::normal_equations`]: all in one pass over the rows.
     fn eval(&mut self, p: &[f64], r: &mut DVector<f64>, jac: Option<&mut DMatrix<f64>>) -> bool {
         self.evaluations += 1;
-        let (n, m, s) = (self.n_terms, self.len(), self.scale);
-        self.kernels_at(p, jac.is_some());
-        let r = r.as_mut_slice();
-        self.combine(p, r);
-        for ((rk, w), y) in r.iter_mut().zip(self.w.iter()).zip(self.y.iter()) {
-            *rk = w * (s * *rk - y);
-        }
+        let (m, k) = (self.len(), 1 + 2 * self.n_terms);
         let finite = |v: &[f64]| v.iter().all(|v| v.is_finite());
+        let r = r.as_mut_slice();
         let Some(jac) = jac else {
+            self.residual_pass(p, Need::Values, r, |_, _, _, _| {});
             return finite(r);
         };
-        if jac.nrows() == 0 {
-            return finite(r) && self.form_normal_equations(p, r);
+        let normal = jac.nrows() == 0;
+        if !normal {
+            debug_assert_eq!(jac.shape(), (m, k));
         }
-        debug_assert_eq!(jac.shape(), (m, 1 + 2 * n));
-        self.jacobian_block(p, 0, m, jac.as_mut_slice());
-        finite(r) && finite(jac.as_slice())
+        let (mut jtj, mut jtr) = (DMatrix::<f64>::zeros(k, k), DVector::<f64>::zeros(k));
+        let mut block = std::mem::take(&mut self.block);
+        let jac = jac.as_mut_slice();
+        self.residual_pass(p, Need::Derivatives, r, |prob, b, _, rb| {
+            let len = b.rows.len();
+            block.resize(k * len, 0.0);
+            prob.jacobian_block(p, b, &mut block);
+            let col = |i: usize| &block[i * len..(i + 1) * len];
+            if !normal {
+                for c in 0..k {
+                    jac[c * m + b.rows.start..c * m + b.rows.end].copy_from_slice(col(c));
+                }
+                return;
+            }
+            for j in 0..k {
+                for i in 0..=j {
+                    jtj[(i, j)] += dot(col(i), col(j));
+                }
+                jtr[j] += dot(col(j), rb);
+            }
+        });
+        self.block = block;
+        if !normal {
+            return finite(r) && finite(jac);
+        }
+        for j in 0..k {
+            for i in 0..j {
+                jtj[(j, i)] = jtj[(i, j)];
+            }
+        }
+        let formed = finite(r) && finite(jtj.as_slice()) && finite(jtr.as_slice());
+        match formed {
+            true => self.normal.keep(p, jtj, jtr),
+            false => self.normal.clear(),
+        }
+        formed
     }
     /// A trial's Jacobian costs the kernels' derivatives and the columns over the
     /// residuals alone, where evaluating again after an accepted trial costs the
@@ -364,8 +450,7 @@ impl<K: Kernels> LeastSquares for Problem<K> {
     fn jacobian_with_trial(&self) -> bool {
         true
     }
-    /// The search takes the normal equations a block of rows at a time
-    /// ([`Problem::form_normal_equations`]).
+    /// The search takes the normal equations a block of rows at a time.
     fn forms_normal_equations(&self) -> bool {
         true
     }

@@ -1,7 +1,7 @@
 //! Variable projection of the Prony problem: the search over ln τ alone, the
 //! moduli by non-negative least squares at each τ.
 
-use super::problem::{Problem, BLOCK_ROWS};
+use super::problem::{Need, Problem, BLOCK_ROWS};
 use super::Kernels;
 use crate::fit::lm::LeastSquares;
 use crate::fit::nnls::{dot, NnlsWork};
@@ -19,7 +19,7 @@ use nalgebra::{DMatrix, DVector};
 /// between a modulus and its τ that a joint search walks along.
 ///
 /// The search only uses the Jacobian's normal equations, and those follow from the
-/// Gram products of the columns ([`Projected::gram`], one pass over the data):
+/// Gram products of the columns ([`Projected::gram`], [`Projected::residuals`]):
 /// (JᵀJ)ᵢⱼ = cᵢ·cⱼ·(dᵢ·dⱼ − (A_Pᵀdᵢ)ᵀ(A_PᵀA_P)⁻¹(A_Pᵀdⱼ)) with dᵢ = ∂aᵢ/∂θᵢ and A_P
 /// the positive columns, and (Jᵀr)ᵢ = cᵢ·dᵢ·r ([`LeastSquares::forms_normal_equations`]),
 /// so no m × N Jacobian is formed or projected.
@@ -46,7 +46,7 @@ pub struct Projected<'p, K: Kernels> {
     /// θ of the last evaluation, whose Gram products of [A | b] `gram` holds.
     theta: Vec<f64>,
     /// A block of [`BLOCK_ROWS`] rows of the columns ([`Problem::design_block`]):
-    /// no column of the data's length is kept.
+    /// no column of the data's length is formed.
     block: Vec<f64>,
     /// θ, JᵀJ and Jᵀr of the last evaluation asked for a Jacobian.
     normal: super::NormalCache,
@@ -95,14 +95,14 @@ impl<'p, K: Kernels> Projected<'p, K> {
     /// The moduli at θ into `c` (a failed solve leaves them as they were), as
     /// [`LeastSquares::eval`] without a Jacobian would set them, counted as an
     /// evaluation: from the Gram products of the last evaluation when it was at θ
-    /// (the same products, so the same bits), else from the kernels at θ with their
-    /// derivatives, which the joint problem's first evaluation at the same τ then
-    /// takes ([`Problem::kernels_at_log_taus`]).
+    /// (the same products, so the same bits), else from a pass at θ, which a problem
+    /// of one block makes with the kernels' derivatives for the joint problem's
+    /// first evaluation at the same τ ([`Need::ValuesThenDerivatives`]).
     pub fn moduli_at(&mut self, theta: &[f64]) {
         self.prob.evaluations += 1;
         if self.theta != theta {
-            self.prob.kernels_at_log_taus(theta, true);
-            self.gram(false);
+            let taus: Vec<f64> = theta.iter().map(|t| t.exp()).collect();
+            self.gram(&taus, Need::ValuesThenDerivatives);
             self.theta.clear();
             self.theta.extend_from_slice(theta);
         }
@@ -141,60 +141,55 @@ impl<'p, K: Kernels> Projected<'p, K> {
         self.c.iter().chain(theta).copied().collect()
     }
 
-    /// The Gram products kᵢ·kⱼ of the columns k = [A | b | ∂A] (∂A when
-    /// `derivatives`; b·b and b·∂A, which nothing uses, left at 0) into the leading
-    /// block of `gram`, in one pass over the rows: blocks of [`BLOCK_ROWS`] rows
-    /// formed from the kernels ([`Problem::design_block`]), every product of a block
-    /// while its columns are in the cache (column by column, each product of a
-    /// 10⁵-point curve would read two 0.8 MB columns from memory). The two products
-    /// of the fixed columns alone are `fixed`'s.
-    fn gram(&mut self, derivatives: bool) {
-        let (m, n) = (self.prob.len(), self.n);
-        let k = n + 2 + if derivatives { n } else { 0 };
+    /// The Gram products kᵢ·kⱼ of the columns [A | b] (b·b, which nothing uses,
+    /// left at 0) into the leading block of `gram`, in one pass over the rows at
+    /// `taus` ([`Problem::pass`]): blocks of [`BLOCK_ROWS`] rows formed from the
+    /// kernels ([`Problem::design_block`]), every product of a block while its
+    /// columns are in the cache (column by column, each product of a 10⁵-point
+    /// curve would read two 0.8 MB columns from memory). The two products of the
+    /// fixed columns alone are `fixed`'s. The rows and columns of ∂A are
+    /// [`Projected::residuals`]'s.
+    fn gram(&mut self, taus: &[f64], need: Need) {
+        let n = self.n;
         let size = 2 + 2 * n;
         let g = self.gram.as_mut_slice();
         g.fill(0.0);
-        for (lo, hi) in blocks(m) {
-            let len = hi - lo;
-            self.prob.design_block(lo, hi, derivatives, &mut self.block);
-            let col = |i: usize| &self.block[i * len..(i + 1) * len];
-            for j in 0..k {
-                let cj = col(j);
-                // b·b and b·∂A are not used (Jᵀr is taken from the residuals);
-                // x·x and b·x are `fixed`.
-                let fixed = |i: usize| i == 0 && (j == 0 || j == n + 1);
-                for i in (0..=j).filter(|&i| i != n + 1 && !fixed(i)) {
-                    g[j * size + i] += dot(col(i), cj);
-                }
-            }
-        }
+        let block = &mut self.block;
+        self.prob.pass(taus, need, |prob, b| {
+            prob.design_block(b, false, block);
+            products(block, b.rows.len(), n, 0..n + 2, g);
+        });
         g[0] = self.fixed[0];
         g[(n + 1) * size] = self.fixed[1];
-        for j in 0..k {
-            for i in 0..j {
-                g[i * size + j] = g[j * size + i];
-            }
-        }
+        symmetric(g, size, 0..n + 2);
     }
 
     /// The residuals r = A·c − b at the moduli `c` into `r` (as nalgebra's gemv
-    /// forms them: a₀c₀ − b, then + aⱼcⱼ column by column, so the same bits), and,
-    /// when `derivatives`, dᵢ·r for each term (blocked as [`Projected::gram`] sums)
-    /// into `dr`: a second pass over the row blocks.
-    fn residuals(&mut self, r: &mut [f64], derivatives: bool, dr: &mut [f64]) {
-        let (m, n) = (self.prob.len(), self.n);
+    /// forms them: a₀c₀ − b, then + aⱼcⱼ column by column, so the same bits) in a
+    /// second pass over the row blocks at `taus`, and, when `derivatives`, dᵢ·r for
+    /// each term (blocked as [`Projected::gram`] sums) into `dr` and the Gram
+    /// products of the columns ∂A with [A | ∂A] into `gram`; then `gram` made
+    /// symmetric.
+    fn residuals(&mut self, taus: &[f64], r: &mut [f64], derivatives: bool, dr: &mut [f64]) {
+        let n = self.n;
+        let size = 2 + 2 * n;
         dr.fill(0.0);
-        for (lo, hi) in blocks(m) {
-            let len = hi - lo;
-            self.prob.design_block(lo, hi, derivatives, &mut self.block);
-            let col = |i: usize| &self.block[i * len..(i + 1) * len];
-            let rb = &mut r[lo..hi];
-            let c0 = self.c[0];
+        let (block, c, g) = (&mut self.block, &self.c, self.gram.as_mut_slice());
+        let need = match derivatives {
+            true => Need::Derivatives,
+            false => Need::Values,
+        };
+        self.prob.pass(taus, need, |prob, b| {
+            let (rows, len) = (b.rows.clone(), b.rows.len());
+            prob.design_block(b, derivatives, block);
+            let col = |i: usize| &block[i * len..(i + 1) * len];
+            let rb = &mut r[rows];
+            let c0 = c[0];
             for ((r, a), b) in rb.iter_mut().zip(col(0)).zip(col(n + 1)) {
                 *r = a * c0 + -b;
             }
             for j in 1..=n {
-                let cj = self.c[j];
+                let cj = c[j];
                 // a·c + r as gemv adds it (addition commutes bit for bit)
                 for (r, a) in rb.iter_mut().zip(col(j)) {
                     *r += a * cj;
@@ -204,7 +199,11 @@ impl<'p, K: Kernels> Projected<'p, K> {
                 for (i, d) in dr.iter_mut().enumerate() {
                     *d += dot(col(n + 2 + i), rb);
                 }
+                products(block, len, n, n + 2..2 * n + 2, g);
             }
+        });
+        if derivatives {
+            symmetric(g, size, n + 2..size);
         }
     }
 
@@ -234,6 +233,33 @@ impl<'p, K: Kernels> Projected<'p, K> {
     }
 }
 
+/// The Gram products of a block of `len` rows of the columns [x | A | b | ∂A]
+/// ([`Problem::design_block`], N = `n` terms) of the columns `cols` with those
+/// before them, each added to its entry of the column-major `g` (of side 2N + 2,
+/// the upper triangle: row ≤ column): b·b and b·∂A, which nothing uses, are not
+/// formed (Jᵀr is taken from the residuals), nor x·x and b·x (`fixed`).
+fn products(block: &[f64], len: usize, n: usize, cols: std::ops::Range<usize>, g: &mut [f64]) {
+    let size = 2 + 2 * n;
+    let col = |i: usize| &block[i * len..(i + 1) * len];
+    for j in cols {
+        let cj = col(j);
+        let fixed = |i: usize| i == 0 && (j == 0 || j == n + 1);
+        for i in (0..=j).filter(|&i| i != n + 1 && !fixed(i)) {
+            g[j * size + i] += dot(col(i), cj);
+        }
+    }
+}
+
+/// The columns `cols` of the column-major `g` (of side `size`) above the diagonal
+/// copied to their rows below it.
+fn symmetric(g: &mut [f64], size: usize, cols: std::ops::Range<usize>) {
+    for j in cols {
+        for i in 0..j {
+            g[i * size + j] = g[j * size + i];
+        }
+    }
+}
+
 impl<K: Kernels> LeastSquares for Projected<'_, K> {
     fn dims(&self) -> (usize, usize) {
         (self.prob.len(), self.prob.n_terms)
@@ -246,18 +272,21 @@ impl<K: Kernels> LeastSquares for Projected<'_, K> {
         r: &mut DVector<f64>,
         jac: Option<&mut DMatrix<f64>>,
     ) -> bool {
-        let p = &mut *self.prob;
-        p.evaluations += 1;
+        self.prob.evaluations += 1;
         let derivatives = jac.is_some();
-        p.kernels_at_log_taus(theta, derivatives);
-        self.gram(derivatives);
+        let taus: Vec<f64> = theta.iter().map(|t| t.exp()).collect();
+        let need = match derivatives {
+            true => Need::ValuesThenDerivatives,
+            false => Need::Values,
+        };
+        self.gram(&taus, need);
         self.theta.clear();
         self.theta.extend_from_slice(theta);
         if !self.solve_moduli() {
             return false;
         }
         let mut dr = vec![0.0; self.n];
-        self.residuals(r.as_mut_slice(), derivatives, &mut dr);
+        self.residuals(&taus, r.as_mut_slice(), derivatives, &mut dr);
         if !r.as_slice().iter().all(|v| v.is_finite()) {
             return false;
         }

@@ -30,9 +30,30 @@ pub struct TermFit<K: Kernels> {
     pub starts: usize,
     /// Starts whose search ended at the best cost.
     pub at_best: usize,
-    /// The count's problem (its kernels released: the fits of every count wait
-    /// for their assessment together).
+    /// The count's problem.
     pub problem: Problem<K>,
+}
+
+/// The subsamples the search of a longer curve runs on ([`Problem::subsample`]):
+/// [`START_POINTS`] points, then ten times more a level while fewer than all of
+/// them (none for a curve of at most [`START_POINTS`] points). Built once and
+/// shared by every term count's searches: built by each, a 10⁶-point curve's
+/// levels were 4·10⁵ + 4·10⁴ + 4·10³ rows (some 30 MB) again for every search,
+/// two searches at a time.
+#[derive(Debug, Clone)]
+pub struct Levels<K: Kernels>(Vec<Problem<K>>);
+
+impl<K: Kernels> Levels<K> {
+    /// The levels of `prob`.
+    pub fn new(prob: &Problem<K>) -> Levels<K> {
+        let mut levels = Vec::new();
+        let mut count = START_POINTS;
+        while let Some(level) = prob.subsample(count) {
+            levels.push(level);
+            count *= 10;
+        }
+        Levels(levels)
+    }
 }
 
 /// Stage 2 and 3 for every term count of `counts`, in parallel, then
@@ -43,13 +64,14 @@ pub fn fit_counts<K: Kernels>(
     counts: &[usize],
     settings: &Search,
 ) -> Result<Vec<TermFit<K>>> {
+    let levels = Levels::new(&setup.prob);
     let fits = counts
         .par_iter()
-        .map(|&nt| fit_terms(setup, grid, nt, settings))
+        .map(|&nt| fit_terms(setup, &levels, grid, nt, settings))
         .collect::<Result<Vec<_>>>()?;
     Ok(match settings.method {
         Method::Grid => fits,
-        _ => from_neighbours(setup, fits, settings),
+        _ => from_neighbours(setup, &levels, fits, settings),
     })
 }
 
@@ -65,6 +87,7 @@ pub fn fit_counts<K: Kernels>(
 /// reaching one reach 0.7 % (tests/dma.rs, the Prony recovery).
 fn from_neighbours<K: Kernels>(
     setup: &Setup<K>,
+    levels: &Levels<K>,
     fits: Vec<TermFit<K>>,
     settings: &Search,
 ) -> Vec<TermFit<K>> {
@@ -100,7 +123,7 @@ fn from_neighbours<K: Kernels>(
             if s.is_empty() {
                 return f;
             }
-            let g = fit_from(setup, f.n_terms, &s, settings);
+            let g = fit_from(setup, levels, f.n_terms, &s, settings);
             let (mut best, other) = match g.cost < fc {
                 true => (g, f),
                 false => (f, g),
@@ -118,7 +141,6 @@ fn without_least_reaching<K: Kernels>(setup: &Setup<K>, f: &TermFit<K>) -> Vec<f
     let n = f.n_terms;
     let mut prob = setup.prob.clone();
     prob.n_terms = n;
-    prob.kernels_at_log_taus(&f.p[1 + n..], false);
     let reach = prob.reach(&f.p);
     let weakest = (0..n)
         .min_by(|&a, &b| reach[a].total_cmp(&reach[b]))
@@ -145,9 +167,11 @@ fn with_widest_gap_filled<K: Kernels>(setup: &Setup<K>, f: &TermFit<K>) -> Vec<f
 }
 
 /// Stage 2 for one term count: the [`starts`], then either the moduli at the first
-/// start's τ (the grid method) or [`refine`].
+/// start's τ (the grid method) or [`refine`] (on `levels`, those of the setup's
+/// problem).
 pub fn fit_terms<K: Kernels>(
     setup: &Setup<K>,
+    levels: &Levels<K>,
     grid: &Grid,
     n: usize,
     settings: &Search,
@@ -171,25 +195,38 @@ pub fn fit_terms<K: Kernels>(
             problem: prob,
         });
     }
-    Ok(fit_from(setup, n, &starts, settings))
+    Ok(fit_from(setup, levels, n, &starts, settings))
 }
 
 /// The problem of `setup` at `n` terms, its evaluations counted from 0.
 fn count_problem<K: Kernels>(setup: &Setup<K>, n: usize) -> Problem<K> {
-    let mut prob = setup.prob.clone();
+    at_count(&setup.prob, n)
+}
+
+/// `prob` (its rows shared) at `n` terms, its evaluations counted from 0.
+fn at_count<K: Kernels>(prob: &Problem<K>, n: usize) -> Problem<K> {
+    let mut prob = prob.clone();
     prob.n_terms = n;
     prob.evaluations = 0;
     prob
 }
 
-/// Stage 3 for `n` terms from the given starts (ln τ of each term): [`refine`].
+/// Stage 3 for `n` terms from the given starts (ln τ of each term): [`refine`] on
+/// `levels` (those of the setup's problem).
 pub fn fit_from<K: Kernels>(
     setup: &Setup<K>,
+    levels: &Levels<K>,
     n: usize,
     starts: &[Vec<f64>],
     settings: &Search,
 ) -> TermFit<K> {
-    refine(count_problem(setup, n), starts, setup.bounds, settings)
+    refine(
+        count_problem(setup, n),
+        levels,
+        starts,
+        setup.bounds,
+        settings,
+    )
 }
 
 /// Sort the terms of a scaled parameter vector by τ.
@@ -214,6 +251,7 @@ fn sort_terms(p: &mut [f64], n: usize) {
 /// makes the optimum the joint problem's to the solver's tolerances.
 fn refine<K: Kernels>(
     mut prob: Problem<K>,
+    levels: &Levels<K>,
     starts: &[Vec<f64>],
     ln_tau: (f64, f64),
     settings: &Search,
@@ -236,7 +274,7 @@ fn refine<K: Kernels>(
     let mut iterations = 0;
     let mut evaluations = 0;
     let mut tail = lms;
-    let (r, joint, at_best) = match prob.subsample(START_POINTS) {
+    let (r, joint, at_best) = match levels.0.split_first() {
         // Every point: the starts' projection is the last one; the moduli at the end
         // come from a cold start, as a fresh projection's would.
         None => {
@@ -248,7 +286,8 @@ fn refine<K: Kernels>(
             let joint = vp.joint(&r.x);
             (r, joint, at_best)
         }
-        Some(mut sub) => {
+        Some((first, rest)) => {
+            let mut sub = at_count(first, n);
             let (mut r, at_best) = {
                 let mut vp = Projected::new(&mut sub);
                 best_start(&mut vp, starts, &bounds, &lms, &mut iterations)
@@ -260,13 +299,12 @@ fn refine<K: Kernels>(
                 false => 0.0,
             };
             tail.min_decrease = floor(r.cost, sub.len());
-            let mut count = 10 * START_POINTS;
-            while let Some(mut level) = prob.subsample(count) {
+            for level in rest {
+                let mut level = at_count(level, n);
                 r = lm::minimize(&mut Projected::new(&mut level), &r.x, &bounds, &tail);
                 iterations += r.iterations;
                 evaluations += level.evaluations;
                 tail.min_decrease = floor(r.cost, level.len());
-                count *= 10;
             }
             let mut vp = Projected::new(&mut prob);
             r = lm::minimize(&mut vp, &r.x, &bounds, &tail);
@@ -296,7 +334,6 @@ fn refine<K: Kernels>(
     };
     let mut p = polish.x;
     sort_terms(&mut p, n);
-    prob.release_kernels();
     TermFit {
         n_terms: n,
         p,

@@ -432,7 +432,7 @@ mod tests {
     use crate::fit::prony::grid::{grid_nnls, grid_stage};
     use crate::fit::prony::problem::Problem;
     use crate::fit::prony::projection::Projected;
-    use crate::fit::prony::refine::{fit_terms, TermFit, START_POINTS};
+    use crate::fit::prony::refine::{fit_terms, Levels, TermFit, START_POINTS};
     use crate::io::relaxation::{read, RelaxationOptions};
     use nalgebra::{DMatrix, DVector};
     use std::path::Path;
@@ -505,8 +505,9 @@ mod tests {
         assert!(prob.eval(&p, &mut r_only, None));
         assert!(prob.eval(&p, &mut r, Some(&mut j)));
         assert_eq!(r, r_only);
-        let mut model = vec![0.0; m];
-        prob.model(&p, &mut model);
+        let (mut model, mut r_again) = (vec![0.0; m], vec![0.0; m]);
+        prob.residuals_model_reach(&p, &mut r_again, &mut model);
+        assert_eq!(r.as_slice(), r_again);
         let peak = prob.y.iter().fold(0.0f64, |a, y| a.max(y.abs()));
         for k in 0..m {
             let want = r[k] / prob.w[k] + prob.y[k];
@@ -557,14 +558,21 @@ mod tests {
 
     /// Kernels reused at the same τ are the ones a fresh problem computes: the
     /// joint problem's residuals and Jacobian after a projected evaluation at θ
-    /// (kernels with derivatives, taken from the cache), after one without (the
-    /// derivatives then computed), and at other τ, each the same bits as a fresh
-    /// problem's; and the projection's moduli at θ from its kept Gram products
-    /// ([`Projected::moduli_at`]) are a fresh projection's, cold-started, bit for
-    /// bit. On a curve of 3000 points (six Gram blocks), 3 terms.
+    /// (kernels with derivatives, kept by a problem of one block), after one
+    /// without (the derivatives then computed), and at other τ, each the same bits
+    /// as a fresh problem's; and the projection's moduli at θ from its kept Gram
+    /// products ([`Projected::moduli_at`]) are a fresh projection's, cold-started,
+    /// bit for bit. On curves of 300 points (one block, whose kernels a problem
+    /// keeps) and 3000 (six blocks, each computed from the one before), 3 terms.
     #[test]
     fn reused_kernels_and_gram_products_are_fresh_ones() {
-        let prep = long_curve(3000);
+        for points in [300, 3000] {
+            reused_kernels_are_fresh_ones(points);
+        }
+    }
+
+    fn reused_kernels_are_fresh_ones(points: usize) {
+        let prep = long_curve(points);
         let mut prob = prep.setup.prob.clone();
         prob.n_terms = 3;
         let (m, theta) = (prob.len(), [0.2f64.ln(), 20f64.ln(), 300f64.ln()]);
@@ -585,7 +593,6 @@ mod tests {
             let mut vp = Projected::new(&mut prob);
             assert!(vp.eval(&theta, &mut r, derivatives.then_some(&mut none)));
             let joint = vp.joint(&theta);
-            assert_eq!(prob.kernel_taus.len(), 3);
             assert_eq!(joint_at(&mut prob, &joint), fresh(&joint), "{derivatives}");
             let mut moved = joint.clone();
             moved[5] += 0.1;
@@ -602,6 +609,31 @@ mod tests {
         let mut cold = Projected::new(&mut other);
         assert!(cold.eval(&theta, &mut r, None));
         assert_eq!(bits(kept.as_slice()), bits(cold.c.as_slice()));
+    }
+
+    /// No evaluation forms the kernels of more than one block of rows: after the
+    /// projection's and the joint problem's evaluations (with derivatives, and the
+    /// normal equations) and the assessment's passes on a curve of 3000 points (six
+    /// blocks), the kernels a problem holds are at most N·512 values and as many
+    /// derivatives (they were N·m: at 10⁶ points and six terms 96 MB a count).
+    #[test]
+    fn kernels_are_formed_a_block_of_rows_at_a_time() {
+        use crate::fit::prony::problem::BLOCK_ROWS;
+        let (mut prob, p) = four_terms_at_table_3_3(3000);
+        let m = prob.len();
+        let (h, dh) = prob.kernel_values();
+        assert_eq!((h, dh), (0, 0));
+        let mut r = DVector::zeros(m);
+        let mut vp = Projected::new(&mut prob);
+        assert!(vp.eval(&p[5..], &mut r, Some(&mut DMatrix::zeros(0, 4))));
+        assert!(prob.eval(&p, &mut r, Some(&mut DMatrix::zeros(0, 9))));
+        let (mut model, mut rr) = (vec![0.0; m], vec![0.0; m]);
+        prob.residuals_model_reach(&p, &mut rr, &mut model);
+        let (h, dh) = prob.kernel_values();
+        assert!(
+            h > 0 && h <= 4 * BLOCK_ROWS && dh <= 4 * BLOCK_ROWS,
+            "{h}, {dh}"
+        );
     }
 
     /// The seed's Table 3.3 as a step to strain 0.5, `points` log-spaced over
@@ -705,9 +737,10 @@ mod tests {
             assert!(prob.eval(&tf.p, &mut r, None));
             0.5 * r.norm_squared()
         };
+        let levels = Levels::new(&prep.setup.prob);
         for n in 1..=4 {
-            let a = cost(&fit_terms(&prep.setup, &grid, n, &settings).unwrap());
-            let b = cost(&fit_terms(&prep.setup, &full, n, &settings).unwrap());
+            let a = cost(&fit_terms(&prep.setup, &levels, &grid, n, &settings).unwrap());
+            let b = cost(&fit_terms(&prep.setup, &levels, &full, n, &settings).unwrap());
             assert!((a - b).abs() <= 1e-5 * b, "{n} terms: {a} vs {b}");
         }
     }

@@ -9,7 +9,7 @@ use crate::fit::prony::problem::Problem;
 use crate::fit::prony::{fmt_s, Kernels, Setup};
 use crate::io::relaxation::RelaxationData;
 use crate::material::hyperelastic::Mode;
-use crate::material::viscoelastic::{Formulation, History, Schedule};
+use crate::material::viscoelastic::{Formulation, History, KernelCarry, Schedule};
 
 /// Most decades of time the τ search spans, counted back from the last sample: a
 /// relaxation record covers 3–8 decades (a 1 ms rig to a day); a first time of
@@ -36,8 +36,17 @@ impl Kernels for TimeKernels {
     fn input(&self) -> &[f64] {
         self.sched.input()
     }
-    fn kernels(&self, taus: &[f64], h: &mut [f64], dh: Option<&mut [f64]>) {
-        self.sched.kernels(taus, h, dh);
+    type Carry = KernelCarry;
+
+    fn kernel_rows(
+        &self,
+        taus: &[f64],
+        rows: std::ops::Range<usize>,
+        carry: &mut KernelCarry,
+        h: &mut [f64],
+        dh: Option<&mut [f64]>,
+    ) {
+        self.sched.kernel_rows(taus, rows, carry, h, dh);
     }
     fn subsample(&self, idx: &[usize]) -> Option<TimeKernels> {
         let times: Vec<f64> = idx.iter().map(|&i| self.times[i]).collect();

@@ -162,7 +162,14 @@ fn bench_scale_writes_rows_slopes_and_chart() {
         assert!(t > 0.0 && t.is_finite(), "{r}");
     }
     let csv = std::fs::read_to_string(out.join("scale.csv")).unwrap();
-    assert!(csv.starts_with("estimator,rows,median_s,min_s,repeats,per_row_s\n"));
+    assert!(csv.starts_with("estimator,rows,median_s,min_s,repeats,per_row_s,peak_rss_mb\n"));
+    // the peak resident memory of each size's runs (Linux: VmHWM after a reset)
+    if cfg!(target_os = "linux") {
+        for r in rows {
+            let mb = r["peak_rss_mb"].as_f64().unwrap_or(f64::NAN);
+            assert!(mb > 1.0 && mb < 1e5, "{r}");
+        }
+    }
     assert_eq!(csv.lines().count(), 1 + rows.len());
     assert!(std::fs::read_to_string(out.join("scale.svg"))
         .unwrap()

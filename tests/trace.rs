@@ -354,32 +354,19 @@ fn identify_datasets_regenerate() {
 /// rebuilt drive differs from the true one between samples, within 1 %).
 #[test]
 fn synth_trace_round_trip() {
-    use dea_fit::io::trace::{self, ChannelKind};
+    use dea_fit::io::trace::ChannelKind;
     use dea_fit::sim::{
         self,
         scene::{Scene, Source},
     };
-    let dir = tempfile::tempdir().expect("temp dir");
     for scene_file in [
         "datasets/identify/stack.toml",
         "datasets/identify/validate.toml",
     ] {
-        let out = dir.path().join("t.csv");
-        let o = out.display().to_string();
-        let r = crate::support::run(
-            &crate::support::repo(),
-            &[
-                "synth",
-                "trace",
-                scene_file,
-                "--channels",
-                "contraction,capacitance,current",
-                "--out",
-                &o,
-            ],
+        let t = synth_trace(
+            scene_file,
+            &["--channels", "contraction,capacitance,current"],
         );
-        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-        let t = trace::read(&out).expect("a synth trace reads");
         let base = Scene::read(&crate::support::repo().join(scene_file)).expect("scene");
         let mut scene = t.scene(&base, None).expect("trace scene");
         scene.source = Source::Ideal;
@@ -682,28 +669,9 @@ fn the_start_of_a_sine_on_a_hold_is_a_corner() {
 /// third derivative of the solution jumped at every knot.
 #[test]
 fn a_measured_drive_costs_about_what_its_closed_form_costs() {
-    use dea_fit::io::trace;
     use dea_fit::sim::{self, scene::Scene};
-    let dir = tempfile::tempdir().expect("temp dir");
     let scene_file = "datasets/scenes/stack_rig_7s.toml";
-    let out = dir.path().join("rig.csv");
-    let o = out.display().to_string();
-    let r = crate::support::run(
-        &crate::support::repo(),
-        &[
-            "synth",
-            "trace",
-            scene_file,
-            "--noise",
-            "voltage=5V",
-            "--seed",
-            "1",
-            "--out",
-            &o,
-        ],
-    );
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let t = trace::read(&out).expect("a synth trace reads");
+    let t = synth_trace(scene_file, &["--noise", "voltage=5V", "--seed", "1"]);
     let base = Scene::read(&crate::support::repo().join(scene_file)).expect("scene");
     let measured = t.scene(&base, None).expect("trace scene");
     let opts = sim::RunOptions::default();
@@ -725,4 +693,17 @@ fn a_measured_drive_costs_about_what_its_closed_form_costs() {
         m.rejected,
         a.rejected
     );
+}
+
+/// The trace `dea-fit synth trace <scene_file> <args>` writes, read back.
+fn synth_trace(scene_file: &str, args: &[&str]) -> dea_fit::io::trace::Trace {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("t.csv");
+    let o = out.display().to_string();
+    let mut all = vec!["synth", "trace", scene_file];
+    all.extend_from_slice(args);
+    all.extend(["--out", &o]);
+    let r = crate::support::run(&crate::support::repo(), &all);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    dea_fit::io::trace::read(&out).expect("a synth trace reads")
 }

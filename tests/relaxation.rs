@@ -1133,7 +1133,7 @@ fn relaxation_band_is_the_propagated_covariance() {
         ramp_time: None,
     };
     let f = relaxation::fit(&d, &load, None, &Settings::default()).unwrap();
-    let std = relaxation::predict_std(&f, &d, None).unwrap().unwrap();
+    let std = relaxation::predict(&f, &d, None).unwrap().std.unwrap();
     assert_eq!(std.len(), d.time.len());
     assert!(std.iter().all(|s| s.is_finite() && *s > 0.0), "{std:?}");
     let se: Vec<Option<f64>> = f.parameters.iter().map(|p| p.std_error).collect();
@@ -1142,7 +1142,7 @@ fn relaxation_band_is_the_propagated_covariance() {
     let moved = |j: usize, h: f64| {
         let mut g = f.clone();
         g.parameters[j].value += h;
-        relaxation::predict(&g, &d, None).unwrap()
+        relaxation::predict(&g, &d, None).unwrap().stress
     };
     let grads: Vec<Vec<f64>> = (0..k)
         .map(|j| {

@@ -496,14 +496,11 @@ impl Chart {
                 let spans = self.series.iter().filter(|s| s.style == Style::Span);
                 for s in spans.chain(self.series.iter().filter(|s| s.style != Style::Span)) {
                     let c = color(s.color);
-                    let pts = s
-                        .points
-                        .iter()
-                        .copied()
-                        .filter(|p| p.0.is_finite() && p.1.is_finite());
+                    let pts = drawn(s, size, |p| chart.backend_coord(p)).into_iter();
                     match s.style {
                         Style::Points => {
-                            chart.draw_series(pts.map(|p| Circle::new(p, 3, c.filled())))?;
+                            chart
+                                .draw_series(pts.map(|p| Circle::new(p, MARKER_PX, c.filled())))?;
                         }
                         Style::OpenPoints => {
                             chart.draw_series(pts.map(|p| Circle::new(p, 4, c.stroke_width(2))))?;
@@ -618,6 +615,137 @@ impl Chart {
     }
 }
 
+/// The points of `s` that are drawn: the finite ones, thinned to what shows at the
+/// chart's resolution, in their order. `pixel` maps a point to the pixel it lands on.
+///
+/// A series of 10⁶ points draws as a few thousand, the same picture (a relaxation
+/// curve of 10⁶ samples made a 130 MB SVG before):
+/// - filled markers ([`Style::Points`]): those that still colour a pixel when
+///   drawn in order ([`uncovered_discs`]): a marker whose every pixel an earlier
+///   marker of the series, in the same colour, already covers changes nothing;
+/// - open markers and stems ([`Style::OpenPoints`], [`Style::Stems`]): one per
+///   pixel, the first that lands there ([`distinct_pixels`]);
+/// - lines and band outlines ([`Style::Line`], [`Style::Dashed`], [`Style::Band`]):
+///   in each run of points on one pixel column, its first, lowest, highest and last
+///   point ([`m4`]: Jugel, Jerzak, Hackenbroich & Markl 2014, "M4: a
+///   visualization-oriented time series data aggregation", PVLDB 7(10) 797–808),
+///   which rasterize as the whole run does; every extreme is kept;
+/// - error bars, spans and anchors as they are (they are few, or only their range
+///   counts).
+fn drawn(
+    s: &Series,
+    size: (u32, u32),
+    pixel: impl Fn(&(f64, f64)) -> (i32, i32),
+) -> Vec<(f64, f64)> {
+    let finite = |p: &(f64, f64)| p.0.is_finite() && p.1.is_finite();
+    let keep = |pts: &[(f64, f64)], pick: &Thinning<'_>| {
+        let pts: Vec<(f64, f64)> = pts.iter().copied().filter(finite).collect();
+        let px: Vec<(i32, i32)> = pts.iter().map(&pixel).collect();
+        pick(&px).into_iter().map(|i| pts[i]).collect::<Vec<_>>()
+    };
+    match s.style {
+        Style::Points => keep(&s.points, &|px| uncovered_discs(px, size, MARKER_PX)),
+        Style::OpenPoints | Style::Stems => keep(&s.points, &distinct_pixels),
+        Style::Line | Style::Dashed => keep(&s.points, &m4),
+        // a band's outline is its lower edge forward, then its upper edge back
+        // ([`band`]): each edge is a line of its own
+        Style::Band => {
+            let (lower, upper) = s.points.split_at(s.points.len() / 2);
+            let mut out = keep(lower, &m4);
+            out.extend(keep(upper, &m4));
+            out
+        }
+        Style::ErrorBars | Style::Span | Style::Anchor => {
+            s.points.iter().copied().filter(finite).collect()
+        }
+    }
+}
+
+/// A rule choosing which of a series' points (given as the pixels they land on) to
+/// draw: their indices, in order.
+type Thinning<'a> = dyn Fn(&[(i32, i32)]) -> Vec<usize> + 'a;
+
+/// The radius (px) of a filled data marker ([`Style::Points`]).
+const MARKER_PX: i32 = 3;
+
+/// The indices (in order) of a set of the filled markers of radius `r` centred on
+/// `px` that covers the pixels all of them cover: a pixel belongs to a marker when
+/// its centre is within r + ½ of the marker's. Markers of one colour drawn opaque
+/// make the same picture in any order, so the markers are tried first one per
+/// cell of a lattice of spacing r + 1 (their discs tile the plane), then the rest,
+/// and each is kept when it colours a pixel no marker kept before it has: a dense
+/// cloud draws as about its area / (r + 1)² markers, not one per pixel. A marker
+/// off the picture of `size` is kept.
+fn uncovered_discs(px: &[(i32, i32)], size: (u32, u32), r: i32) -> Vec<usize> {
+    let (w, h) = (size.0 as i32, size.1 as i32);
+    let reach = (r as f64 + 0.5).powi(2);
+    let disc: Vec<(i32, i32)> = (-r..=r)
+        .flat_map(|dx| (-r..=r).map(move |dy| (dx, dy)))
+        .filter(|&(dx, dy)| f64::from(dx * dx + dy * dy) <= reach)
+        .collect();
+    let mut covered = vec![false; (w.max(0) * h.max(0)) as usize];
+    let at =
+        |x: i32, y: i32| ((0..w).contains(&x) && (0..h).contains(&y)).then(|| (y * w + x) as usize);
+    let cell = |(x, y): (i32, i32)| (x.div_euclid(r + 1), y.div_euclid(r + 1));
+    let mut cells = std::collections::HashSet::new();
+    let (first, rest): (Vec<usize>, Vec<usize>) =
+        (0..px.len()).partition(|&i| cells.insert(cell(px[i])));
+    let mut out = Vec::new();
+    for i in first.into_iter().chain(rest) {
+        let (x, y) = px[i];
+        let mut new = false;
+        for &(dx, dy) in &disc {
+            match at(x + dx, y + dy) {
+                Some(k) if !covered[k] => {
+                    covered[k] = true;
+                    new = true;
+                }
+                Some(_) => {}
+                None => new = true,
+            }
+        }
+        if new {
+            out.push(i);
+        }
+    }
+    out.sort_unstable();
+    out
+}
+
+/// The indices of the first point on each pixel (in order).
+fn distinct_pixels(px: &[(i32, i32)]) -> Vec<usize> {
+    let mut seen = std::collections::HashSet::with_capacity(px.len().min(1 << 16));
+    (0..px.len()).filter(|&i| seen.insert(px[i])).collect()
+}
+
+/// The indices (in order) of the points a polyline through `px` needs to rasterize
+/// as the whole does: in each run of consecutive points on one pixel column, the
+/// first, the lowest, the highest and the last (M4, Jugel et al. 2014). The
+/// segments inside a run cover the column from its lowest to its highest point,
+/// and so do first → extremes → last; the segments between runs are kept whole.
+fn m4(px: &[(i32, i32)]) -> Vec<usize> {
+    let mut out = Vec::new();
+    let mut start = 0;
+    while start < px.len() {
+        let mut end = start + 1;
+        while end < px.len() && px[end].0 == px[start].0 {
+            end += 1;
+        }
+        let run = start..end;
+        let lo = run.clone().min_by_key(|&i| px[i].1).unwrap_or(start);
+        let hi = run.clone().max_by_key(|&i| px[i].1).unwrap_or(start);
+        let mut picks = [start, lo.min(hi), lo.max(hi), end - 1];
+        picks.sort_unstable();
+        for (k, &i) in picks.iter().enumerate() {
+            if k == 0 || picks[k - 1] != i {
+                out.push(i);
+            }
+        }
+        start = end;
+    }
+    out
+}
+
 /// Draw the legend key of a series of `style` in colour `c`, 24 px wide from `(x, y)`
 /// (its vertical middle): a marker, a solid or a visibly dashed line (three dashes),
 /// a filled and outlined box for a band, a capped bar for error bars.
@@ -673,6 +801,99 @@ fn legend_key<DB: DrawingBackend>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// What a polyline through `px` colours in each pixel column it crosses: the
+    /// lowest and highest pixel of each run of points on one column, and the
+    /// columns in the order visited. M4 keeps all of it.
+    fn columns(px: &[(i32, i32)]) -> Vec<(i32, i32, i32)> {
+        let mut out: Vec<(i32, i32, i32)> = Vec::new();
+        for &(x, y) in px {
+            match out.last_mut() {
+                Some(c) if c.0 == x => {
+                    c.1 = c.1.min(y);
+                    c.2 = c.2.max(y);
+                }
+                _ => out.push((x, y, y)),
+            }
+        }
+        out
+    }
+
+    /// 10⁵ noisy points over 900 pixel columns thin to at most four a column run,
+    /// keep every run's extremes, its first and last point and the order, and a
+    /// line that moves back and forth (a band's edges, a hysteresis loop) too.
+    #[test]
+    fn m4_keeps_what_a_line_draws() {
+        let mut state = 12345u64;
+        let mut noise = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 33) % 41) as i32 - 20
+        };
+        let forward: Vec<(i32, i32)> = (0..100_000)
+            .map(|i| (i * 900 / 100_000, 300 + noise()))
+            .collect();
+        let looped: Vec<(i32, i32)> = (0..20_000)
+            .map(|i| {
+                let x = if i < 10_000 {
+                    i / 20
+                } else {
+                    (20_000 - i) / 20
+                };
+                (x, 100 + (i / 10_000) * 50 + noise())
+            })
+            .collect();
+        for px in [forward, looped] {
+            let keep = m4(&px);
+            assert!(keep.windows(2).all(|w| w[0] < w[1]), "in order");
+            assert_eq!(keep[0], 0);
+            assert_eq!(*keep.last().unwrap(), px.len() - 1);
+            let kept: Vec<(i32, i32)> = keep.iter().map(|&i| px[i]).collect();
+            assert_eq!(columns(&kept), columns(&px));
+            assert!(kept.len() <= 4 * columns(&px).len());
+        }
+    }
+
+    /// Markers: the thinned set covers exactly the pixels all markers cover, with
+    /// far fewer markers in a dense cloud; distinct pixels keep one point a pixel.
+    #[test]
+    fn thinned_markers_colour_the_same_pixels() {
+        let mut state = 99u64;
+        let mut next = |m: u64| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 33) % m) as i32
+        };
+        let size = (300, 200);
+        let px: Vec<(i32, i32)> = (0..50_000)
+            .map(|_| (next(320) - 10, next(120) + 40))
+            .collect();
+        let r = MARKER_PX;
+        let paint = |idx: &mut dyn Iterator<Item = usize>| {
+            let mut on = std::collections::BTreeSet::new();
+            for i in idx {
+                let (x, y) = px[i];
+                for dx in -r..=r {
+                    for dy in -r..=r {
+                        if f64::from(dx * dx + dy * dy) <= (r as f64 + 0.5).powi(2) {
+                            on.insert((x + dx, y + dy));
+                        }
+                    }
+                }
+            }
+            on
+        };
+        let keep = uncovered_discs(&px, size, r);
+        assert!(keep.windows(2).all(|w| w[0] < w[1]), "in order");
+        assert_eq!(paint(&mut keep.iter().copied()), paint(&mut (0..px.len())));
+        // the cloud's 320 × 120 px: 2 400 lattice cells of 4 × 4 px, then markers
+        // filling the gaps between their discs (6 727 in all), not 50 000
+        assert!(keep.len() < 8_000, "{} markers", keep.len());
+        let one = distinct_pixels(&[(1, 1), (2, 1), (1, 1), (2, 2), (2, 1)]);
+        assert_eq!(one, vec![0, 1, 3]);
+    }
 
     /// The first 40 colours are pairwise at least 0.07 apart in OKLab (about three
     /// just noticeable differences; the greedy order gives 0.0726 at 40), and the

@@ -9,7 +9,7 @@ use super::plot::{band, error_bars, Chart, Series, Style, BAND_LABEL};
 use super::runs::Run;
 use crate::error::Result;
 use crate::fit::problem::{Residual, REL_FLOOR};
-use crate::fit::relaxation::{predict, predict_std, unloads, QlvInput, RelaxationFit};
+use crate::fit::relaxation::{predict, unloads, Prediction, QlvInput, RelaxationFit};
 use crate::io::relaxation::RelaxationData;
 use std::path::{Path, PathBuf};
 
@@ -25,8 +25,7 @@ pub fn write(
     qlv: Option<&QlvInput>,
     dir: &Path,
 ) -> Result<PathBuf> {
-    let pred = predict(fit, data, qlv)?;
-    let std = predict_std(fit, data, qlv)?;
+    let Prediction { stress: pred, std } = predict(fit, data, qlv)?;
     // A relaxation spans decades of time; a load-unload cycle is read on linear time.
     let log_x = !data.strain.as_deref().is_some_and(unloads);
     let idx: Vec<usize> = (0..data.time.len())

@@ -384,33 +384,33 @@ pub fn fit(
     ))
 }
 
-/// The fitted model's stress at the data's times: the fit's Prony series applied to
-/// the data's loading history (as the fit saw it).
+/// The fitted model at the data's times: the stress, and its ±1σ band.
+pub struct Prediction {
+    /// The fit's Prony series applied to the data's loading history (as the fit saw
+    /// it), Pa.
+    pub stress: Vec<f64>,
+    /// The first-order standard deviation of the fitted stress (Pa), from the
+    /// parameter covariance ([`diagnostics::propagated_std`]): the ±1σ confidence
+    /// band of the fitted curve. None when a parameter has no standard error or
+    /// correlation.
+    pub std: Option<Vec<f64>>,
+}
+
+/// The fitted model's stress at the data's times and its ±1σ band ([`Prediction`]),
+/// on one prepared loading history.
 pub fn predict(
     fit: &RelaxationFit,
     data: &RelaxationData,
     qlv: Option<&QlvInput>,
-) -> Result<Vec<f64>> {
+) -> Result<Prediction> {
     let prep = prepare(data, &fit.provenance.loading, qlv, &Settings::default())?;
-    response(&prep, &fit.values())
-}
-
-/// The first-order standard deviation of the fitted stress (Pa) at the data's times,
-/// from the parameter covariance ([`diagnostics::propagated_std`]): the ±1σ
-/// confidence band of the fitted curve. None when a parameter has no standard error
-/// or correlation.
-pub fn predict_std(
-    fit: &RelaxationFit,
-    data: &RelaxationData,
-    qlv: Option<&QlvInput>,
-) -> Result<Option<Vec<f64>>> {
-    let prep = prepare(data, &fit.provenance.loading, qlv, &Settings::default())?;
+    let theta = fit.values();
     let se: Vec<Option<f64>> = fit.parameters.iter().map(|p| p.std_error).collect();
-    Ok(
-        diagnostics::covariance(&se, &fit.correlation).and_then(|cov| {
-            diagnostics::propagated_std(|p| response(&prep, p).ok(), &fit.values(), &cov)
-        }),
-    )
+    Ok(Prediction {
+        stress: response(&prep, &theta)?,
+        std: diagnostics::covariance(&se, &fit.correlation)
+            .and_then(|cov| diagnostics::propagated_std(|p| response(&prep, p).ok(), &theta, &cov)),
+    })
 }
 
 /// The stress for SI parameters θ = (E∞, E₁…E_N, τ₁…τ_N) (the order of

@@ -451,10 +451,12 @@ pub enum Drive {
     Measured,
 }
 
+/// The drive as the JSON names it ("closed-form", "measured"), one spelling for
+/// the CSV, the table and the JSON.
 impl std::fmt::Display for Drive {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
-            Drive::ClosedForm => "closed form",
+            Drive::ClosedForm => "closed-form",
             Drive::Measured => "measured",
         })
     }

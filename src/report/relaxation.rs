@@ -32,24 +32,28 @@ pub fn write(
         .filter(|&i| !log_x || data.time[i] > 0.0)
         .collect();
     let n = fit.prony.len();
-    let band_series = std.as_ref().map(|std| {
-        let t: Vec<f64> = idx.iter().map(|&i| data.time[i]).collect();
-        let (down, up): (Vec<f64>, Vec<f64>) = idx
-            .iter()
-            .map(|&i| (pred[i] - std[i], pred[i] + std[i]))
-            .unzip();
-        Series {
-            label: BAND_LABEL.into(),
-            points: band(&t, &down, &up),
-            color: 1,
-            style: Style::Band,
-        }
-    });
-    let fit_chart = Chart {
+    // Each chart is made where it is drawn and dropped after: a chart of 10⁶ points
+    // holds 64 MB until it is thinned for drawing.
+    let band_series = || {
+        std.as_ref().map(|std| {
+            let t: Vec<f64> = idx.iter().map(|&i| data.time[i]).collect();
+            let (down, up): (Vec<f64>, Vec<f64>) = idx
+                .iter()
+                .map(|&i| (pred[i] - std[i], pred[i] + std[i]))
+                .unzip();
+            Series {
+                label: BAND_LABEL.into(),
+                points: band(&t, &down, &up),
+                color: 1,
+                style: Style::Band,
+            }
+        })
+    };
+    let fit_chart = || Chart {
         title: format!("relaxation: data and {n}-term Prony fit"),
         x_label: "time (s)".into(),
         y_label: "nominal stress".into(),
-        series: band_series
+        series: band_series()
             .into_iter()
             .chain([
                 Series {
@@ -78,7 +82,7 @@ pub fn write(
         Residual::Rel => y.abs().max(REL_FLOOR * ymax),
         Residual::Abs => ymax,
     };
-    let residuals_chart = Chart {
+    let residuals_chart = || Chart {
         title: match fit.residual {
             Residual::Rel => "relative residuals (model − data) / |data|".into(),
             Residual::Abs => "residuals (model − data) / peak |data|".into(),
@@ -185,11 +189,11 @@ pub fn write(
         y_unit: Some("Pa".into()),
     };
     let page = page(fit, |page| {
-        page.chart(dir, "fit.svg", "data and fit", &fit_chart)?;
+        page.chart(dir, "fit.svg", "data and fit", &fit_chart())?;
         if std.is_none() {
             page.text("No confidence band: a parameter has no standard error (see the warnings).");
         }
-        page.chart(dir, "residuals.svg", "residuals", &residuals_chart)?;
+        page.chart(dir, "residuals.svg", "residuals", &residuals_chart())?;
         page.chart(dir, "spectrum.svg", "spectrum", &spectrum_chart)?;
         page.chart(dir, "dynamic.svg", "storage and loss", &dynamic_chart)
     })?;

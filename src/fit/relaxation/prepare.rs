@@ -17,21 +17,20 @@ use crate::material::viscoelastic::{Formulation, History, KernelCarry, Schedule}
 const MAX_DECADES: i32 = 12;
 
 /// The rows of a relaxation curve: the loading x(tₖ) and the hereditary states
-/// hₖ(τ) = ∫ e^(−(tₖ−s)/τ) dx(s) ([`Schedule::kernels`]), with the loading and the
-/// times kept to build subsamples.
+/// hₖ(τ) = ∫ e^(−(tₖ−s)/τ) dx(s) ([`Schedule::kernels`]), with the loading kept to
+/// build subsamples (the schedule holds the times).
 #[derive(Debug, Clone)]
 pub struct TimeKernels {
     /// The loading merged with the times.
     pub sched: Schedule,
     history: History,
-    times: Vec<f64>,
 }
 
 impl Kernels for TimeKernels {
     const WINDOW: &'static str = "the sampled time window";
 
     fn len(&self) -> usize {
-        self.times.len()
+        self.sched.len()
     }
     fn input(&self) -> &[f64] {
         self.sched.input()
@@ -49,12 +48,11 @@ impl Kernels for TimeKernels {
         self.sched.kernel_rows(taus, rows, carry, h, dh);
     }
     fn subsample(&self, idx: &[usize]) -> Option<TimeKernels> {
-        let times: Vec<f64> = idx.iter().map(|&i| self.times[i]).collect();
+        let times: Vec<f64> = idx.iter().map(|&i| self.sched.times()[i]).collect();
         let sched = Schedule::new(&self.history, &times).ok()?;
         Some(TimeKernels {
             sched,
             history: self.history.clone(),
-            times,
         })
     }
     fn outside_window(name: &str, short: bool, window: (f64, f64)) -> String {
@@ -155,11 +153,7 @@ pub(super) fn prepare(
             fmt_s(t_end)
         ));
     }
-    let kern = TimeKernels {
-        sched,
-        history,
-        times: data.time.clone(),
-    };
+    let kern = TimeKernels { sched, history };
     Ok(Prepared {
         setup: Setup::new(Problem::new(kern, y, w, ymax / xmax), window, unit),
         formulation,

@@ -274,9 +274,16 @@ fn to_pieces(breaks: &[f64], c: &[f64]) -> Vec<Piece> {
 }
 
 /// The inverse of the Vandermonde matrix V[k][r] = (k/5)^r: power coefficients
-/// from values at u = 0, 1/5, …, 1.
-fn equispaced_inverse() -> [[f64; W]; W] {
-    // Gauss–Jordan on [V | I] with partial pivoting (6 × 6, once per fit)
+/// from values at u = 0, 1/5, …, 1 (formed once per process: a measured drive
+/// makes about 90 least-squares fits a segment, each wanting it).
+fn equispaced_inverse() -> &'static [[f64; W]; W] {
+    static INVERSE: std::sync::OnceLock<[[f64; W]; W]> = std::sync::OnceLock::new();
+    INVERSE.get_or_init(vandermonde_inverse)
+}
+
+/// [`equispaced_inverse`] itself.
+fn vandermonde_inverse() -> [[f64; W]; W] {
+    // Gauss–Jordan on [V | I] with partial pivoting (6 × 6)
     let mut m = [[0.0; 2 * W]; W];
     for (k, row) in m.iter_mut().enumerate() {
         let u = k as f64 / DEGREE as f64;

@@ -5,7 +5,7 @@
 
 use super::format::{si, si_pm};
 use super::page::{code, text, Page};
-use super::plot::{band, error_bars, Chart, Series, Style, BAND_LABEL};
+use super::plot::{band, error_bars, line, Chart, Series, Style, BAND_LABEL};
 use super::runs::Run;
 use crate::error::Result;
 use crate::fit::problem::{Residual, REL_FLOOR};
@@ -67,7 +67,7 @@ pub fn write(
                 },
                 Series {
                     label: format!("Prony fit ({n} terms, {})", fit.formulation),
-                    points: idx.iter().map(|&i| (data.time[i], pred[i])).collect(),
+                    points: line(idx.iter().map(|&i| (data.time[i], pred[i]))),
                     color: 1,
                     style: Style::Line,
                 },

@@ -726,36 +726,48 @@ fn m4(px: &[(i32, i32)]) -> Vec<usize> {
 /// the indices (in order) of its first item, of its least and greatest value, and
 /// of its last.
 fn m4_runs<K: PartialEq>(items: impl Iterator<Item = (K, f64)>) -> Vec<usize> {
-    let mut out = Vec::new();
-    // the run: its key, first index, (index, value) of its least and greatest, last
-    let mut run: Option<(K, usize, (usize, f64), (usize, f64), usize)> = None;
-    let flush =
-        |out: &mut Vec<usize>,
-         (_, first, lo, hi, last): (K, usize, (usize, f64), (usize, f64), usize)| {
-            let mut picks = [first, lo.0.min(hi.0), lo.0.max(hi.0), last];
-            picks.sort_unstable();
-            for (k, &i) in picks.iter().enumerate() {
-                if k == 0 || picks[k - 1] != i {
-                    out.push(i);
-                }
+    /// A run: its key, its first index, (index, value) of its least and greatest,
+    /// its last index.
+    struct Run<K> {
+        key: K,
+        first: usize,
+        lo: (usize, f64),
+        hi: (usize, f64),
+        last: usize,
+    }
+    let flush = |out: &mut Vec<usize>, r: Run<K>| {
+        let mut picks = [r.first, r.lo.0.min(r.hi.0), r.lo.0.max(r.hi.0), r.last];
+        picks.sort_unstable();
+        for (k, &i) in picks.iter().enumerate() {
+            if k == 0 || picks[k - 1] != i {
+                out.push(i);
             }
-        };
+        }
+    };
+    let mut out = Vec::new();
+    let mut run: Option<Run<K>> = None;
     for (i, (key, v)) in items.enumerate() {
         match &mut run {
-            Some(r) if r.0 == key => {
-                if v < r.2 .1 {
-                    r.2 = (i, v);
+            Some(r) if r.key == key => {
+                if v < r.lo.1 {
+                    r.lo = (i, v);
                 }
-                if v > r.3 .1 {
-                    r.3 = (i, v);
+                if v > r.hi.1 {
+                    r.hi = (i, v);
                 }
-                r.4 = i;
+                r.last = i;
             }
             _ => {
                 if let Some(r) = run.take() {
                     flush(&mut out, r);
                 }
-                run = Some((key, i, (i, v), (i, v), i));
+                run = Some(Run {
+                    key,
+                    first: i,
+                    lo: (i, v),
+                    hi: (i, v),
+                    last: i,
+                });
             }
         }
     }

@@ -141,6 +141,7 @@ fn bench_scale_writes_rows_slopes_and_chart() {
         ("read+yeoh", vec![30, 95, 300]),
         ("hyperelastic-auto", vec![30, 90]),
         ("relaxation-auto", vec![30, 90]),
+        ("relaxation-report", vec![30, 90]),
     ] {
         let got: Vec<u64> = rows
             .iter()

@@ -252,7 +252,7 @@ pub fn run(a: &ScaleArgs) -> Result<Verdict> {
     let relaxation_sizes = sizes(a.min_rows, a.max_relaxation_rows);
     let bar = progress_bar(
         "scale",
-        2 * read_sizes.len() + fit_sizes.len() + relaxation_sizes.len(),
+        2 * read_sizes.len() + fit_sizes.len() + 2 * relaxation_sizes.len(),
     );
     let settings = Settings::default();
     let yeoh = ModelSpec::new("yeoh", Default::default());
@@ -303,10 +303,28 @@ pub fn run(a: &ScaleArgs) -> Result<Verdict> {
         let (t, fit) = measure(&budget, || relaxation::fit(&data, &loading, None, &rs))?;
         verdict.add(format!("relaxation auto {n} rows"), fit.status);
         push("relaxation-auto", n, t, peak());
+        // what `relaxation` writes after the fit: the charts of every point, the page
+        // (into a scratch folder, removed after: a report also lists itself in the
+        // folder above it)
+        let scratch =
+            std::env::temp_dir().join(format!("dea-fit-bench-scale-{}", std::process::id()));
+        let dir = scratch.join("relaxation-report");
+        reset_peak_memory();
+        let (t, _) = measure(&budget, || {
+            dea_fit::report::relaxation::write(&fit, &data, None, &dir)
+        })?;
+        push("relaxation-report", n, t, peak());
+        std::fs::remove_dir_all(&scratch).map_err(|e| Error::io(&scratch, e))?;
     }
     bar.finish();
 
-    let names = ["read", "read+yeoh", "hyperelastic-auto", "relaxation-auto"];
+    let names = [
+        "read",
+        "read+yeoh",
+        "hyperelastic-auto",
+        "relaxation-auto",
+        "relaxation-report",
+    ];
     let slopes: Vec<Slope> = names
         .iter()
         .map(|&e| {
@@ -399,7 +417,7 @@ fn write(a: &ScaleArgs, rows: &[Row], slopes: &[Slope]) -> Result<()> {
         "# Time against input size\n\ndea-fit {}; budget {} s and at least {} runs per size. Rerun: `dea-fit bench scale`.\n\n\
          Each estimator is timed at growing row counts (half-decade steps); the slope of ln t against ln n, fitted by least squares, is 1 when the cost grows linearly. \
          *read*: the tensile reader (CSV text in memory → samples); *read+yeoh*: reading and the whole Yeoh fit call; *hyperelastic-auto*: `hyperelastic --model auto` on the samples; \
-         *relaxation-auto*: `relaxation --terms auto`. Peak memory: the process's resident high-water mark over each size's runs, its input included (Linux only). Tensile data: the Ogden-3 fit of Treloar's three modes, 1 % noise; relaxation: the Table 3.3 series of El Atrache Ceballos (2021), 1 % noise.\n\n\
+         *relaxation-auto*: `relaxation --terms auto`; *relaxation-report*: the report it writes after (charts of every point, the page). Peak memory: the process's resident high-water mark over each size's runs, its input included (Linux only). Tensile data: the Ogden-3 fit of Treloar's three modes, 1 % noise; relaxation: the Table 3.3 series of El Atrache Ceballos (2021), 1 % noise.\n\n\
          ![scale](scale.svg)\n\n```\n{slope_tab}```\n\nAll rows: [scale.csv](scale.csv), [scale.json](scale.json).\n\n```\n{tab}```\n",
         env!("CARGO_PKG_VERSION"),
         a.budget,

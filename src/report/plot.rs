@@ -885,6 +885,18 @@ fn legend_key<DB: DrawingBackend>(
 mod tests {
     use super::*;
 
+    /// Reproducible draws below m (Knuth's 64-bit linear congruential generator,
+    /// its high bits): test data without a seeded crate's stream.
+    fn draws(seed: u64) -> impl FnMut(u64) -> u64 {
+        let mut state = seed;
+        move |m| {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) % m
+        }
+    }
+
     /// What a polyline through `px` colours in each pixel column it crosses: the
     /// lowest and highest pixel of each run of points on one column, and the
     /// columns in the order visited. M4 keeps all of it.
@@ -907,13 +919,8 @@ mod tests {
     /// line that moves back and forth (a band's edges, a hysteresis loop) too.
     #[test]
     fn m4_keeps_what_a_line_draws() {
-        let mut state = 12345u64;
-        let mut noise = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((state >> 33) % 41) as i32 - 20
-        };
+        let mut draw = draws(12345);
+        let mut noise = || draw(41) as i32 - 20;
         let forward: Vec<(i32, i32)> = (0..100_000)
             .map(|i| (i * 900 / 100_000, 300 + noise()))
             .collect();
@@ -946,13 +953,8 @@ mod tests {
     /// most 4·2·4096.
     #[test]
     fn a_line_thinned_before_its_chart_draws_the_same() {
-        let mut state = 7u64;
-        let mut noise = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((state >> 33) % 1000) as f64 / 1000.0 - 0.5
-        };
+        let mut draw = draws(7);
+        let mut noise = || draw(1000) as f64 / 1000.0 - 0.5;
         let t = |i: usize| 0.01 * 10f64.powf(5.0 * i as f64 / 99_999.0);
         let noisy: Vec<(f64, f64)> = (0..100_000)
             .map(|i| (t(i), 3.0 + t(i).ln() + noise()))
@@ -993,13 +995,8 @@ mod tests {
     /// far fewer markers in a dense cloud; distinct pixels keep one point a pixel.
     #[test]
     fn thinned_markers_colour_the_same_pixels() {
-        let mut state = 99u64;
-        let mut next = |m: u64| {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((state >> 33) % m) as i32
-        };
+        let mut draw = draws(99);
+        let mut next = |m: u64| draw(m) as i32;
         let size = (300, 200);
         let px: Vec<(i32, i32)> = (0..50_000)
             .map(|_| (next(320) - 10, next(120) + 40))

@@ -486,16 +486,11 @@ impl Schedule {
         let mut rate = 0.0;
         let mut x = 0.0;
         let mut input = vec![0.0; times.len()];
-        // The final hold starts after the last knot once the rate is +0 (a ramp
-        // ending at the last knot leaves rate 0; a knot's jump is not +0 unless the
-        // input does not move there).
-        let held_after_knots = |i: usize, rate: f64| i == k.len() && rate.to_bits() == 0;
-        while i < k.len() || j < times.len() {
-            if held_after_knots(i, rate) {
-                break;
-            }
+        // After the last knot the input holds (rate +0, no jump): the final hold,
+        // whose intervals are not stored.
+        while i < k.len() {
             // Knots come first at equal times, so outputs see the value after a jump.
-            let knot_next = i < k.len() && (j >= times.len() || k[i].0 <= times[j]);
+            let knot_next = j >= times.len() || k[i].0 <= times[j];
             let at = if knot_next { k[i].0 } else { times[j] };
             let dt = at - now;
             x += rate * dt;

@@ -26,9 +26,10 @@ pub struct Row {
 ///
 /// The data fields are held back to back in one string (`cells`, with the end of
 /// each field in `ends`), not as a string per field: a 10⁶-row file then costs a few
-/// allocations instead of three million, and about its own size. A large file is
-/// split in parts at line ends and the parts are read in parallel ([`PART_BYTES`]),
-/// each into its own stretch of `cells`, `ends` and `rows`, sized before reading.
+/// allocations instead of three million, and the file's own bytes hold the fields.
+/// A large file is split in parts at line ends and the parts are read in parallel
+/// ([`PART_BYTES`]), each in its own text and its own stretch of `ends` and `rows`,
+/// sized before reading.
 #[derive(Debug, Clone)]
 pub struct Table {
     /// The file.
@@ -44,83 +45,22 @@ pub struct Table {
     /// `# key: value` comment lines: (line, lower-case key, value).
     pub directives: Vec<(usize, String, String)>,
     delimiter: u8,
-    /// The data fields, trimmed: each part's back to back from where the part's text
-    /// starts in the body (trimming and unquoting only shorten a line, so a part's
-    /// fields fit in its text's stretch; the rest of the stretch stays zero).
+    /// The file's text with each part's data fields, trimmed and unquoted, moved
+    /// back to back to where the part's text starts (trimming and unquoting only
+    /// shorten a line, so a line's fields fit where it was), and the rest of the
+    /// part's text zeroed.
     cells: String,
-    /// The end in `cells` of each field, in 4 bytes (the body is under 4 GiB); each
+    /// The end in `cells` of each field, in 4 bytes (the file is under 4 GiB); each
     /// part's ends are preceded by the start of its first field, so that field `i`
     /// is `cells[ends[i - 1]..ends[i]]`.
     ends: Vec<u32>,
 }
 
-/// Where a [`Splitter`] writes the fields of lines: stretches of a table's `cells`
-/// and `ends`, filled from the front. Fields beyond the room in `ends` are counted
-/// but not stored (only a line with more fields than the header, an error, or a
-/// blank one, which is dropped, can reach that far).
-struct Store<'a> {
-    cells: &'a mut [u8],
-    /// Offset of `cells[0]` in the table's cells.
-    base: usize,
-    /// Bytes of `cells` used.
-    used: usize,
-    ends: &'a mut [u32],
-    /// Fields stored or counted.
-    fields: usize,
-}
-
-impl<'a> Store<'a> {
-    /// A store at offset `base` of the table's cells.
-    fn new(cells: &'a mut [u8], base: usize, ends: &'a mut [u32]) -> Store<'a> {
-        Store {
-            cells,
-            base,
-            used: 0,
-            ends,
-            fields: 0,
-        }
-    }
-
-    /// Append a field: its bytes fit, as the caller gives the store at least the
-    /// bytes of the lines it splits into it (see [`Table`]'s `cells`).
-    fn push(&mut self, field: &str) {
-        let stop = self.used + field.len();
-        self.cells[self.used..stop].copy_from_slice(field.as_bytes());
-        self.used = stop;
-        if let Some(end) = self.ends.get_mut(self.fields) {
-            // The caller checked that the table's cells are under 4 GiB.
-            *end = (self.base + stop) as u32;
-        }
-        self.fields += 1;
-    }
-
-    /// Drop what was appended after `mark` (a [`Store::mark`]), zeroing its bytes: the
-    /// bytes past those used stay zero, so that the cells hold whole fields and zeros.
-    fn truncate(&mut self, (used, fields): (usize, usize)) {
-        self.cells[used..self.used].fill(0);
-        self.used = used;
-        self.fields = fields;
-    }
-
-    /// Where the store is: (bytes used, fields).
-    fn mark(&self) -> (usize, usize) {
-        (self.used, self.fields)
-    }
-}
-
 /// The fields of one line, as owned strings (the header, a preamble line).
 fn line_fields(splitter: &mut Splitter, line: &str) -> Vec<String> {
-    let (mut cells, mut ends) = (vec![0; line.len()], vec![0; line.len() + 1]);
-    let mut store = Store::new(&mut cells, 0, &mut ends);
-    let n = splitter.split(line, &mut store);
-    let mut start = 0;
-    ends[..n]
-        .iter()
-        .map(|&e| {
-            let field = String::from_utf8_lossy(&cells[start..e as usize]).into_owned();
-            start = e as usize;
-            field
-        })
+    splitter.split(line);
+    (0..splitter.fields.len())
+        .map(|i| splitter.field(line, i).to_string())
         .collect()
 }
 
@@ -146,21 +86,31 @@ impl Table {
         .with_hint(hint.to_string())
     }
 
-    /// Read and split a file.
+    /// Read and split a file, hashing its bytes as they are read.
     pub fn read(path: &Path) -> Result<Table> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-        Self::parse(path, &bytes)
+        let (bytes, sha256) = read_hashed(path)?;
+        Self::split(path, bytes).map(|t| Table { sha256, ..t })
     }
 
     /// Split bytes that came from `path` (and hash them, alongside).
     pub fn parse(path: &Path, bytes: &[u8]) -> Result<Table> {
-        let (sha256, table) = rayon::join(|| super::sha256_hex(bytes), || Self::split(path, bytes));
+        let (sha256, table) = rayon::join(
+            || super::sha256_hex(bytes),
+            || Self::split(path, bytes.to_vec()),
+        );
         table.map(|t| Table { sha256, ..t })
     }
 
-    /// The header, then the data below it (in parts read in parallel when large).
-    fn split(path: &Path, bytes: &[u8]) -> Result<Table> {
-        let text = decode(path, bytes)?;
+    /// The header, then the data below it (in parts read in parallel when large),
+    /// each part's fields moved within its own text ([`Table`]'s `cells`).
+    fn split(path: &Path, mut bytes: Vec<u8>) -> Result<Table> {
+        if u32::try_from(bytes.len()).is_err() {
+            return Err(
+                Error::input(Location::file(path), "the file is larger than 4 GiB")
+                    .with_hint("split it into files of under 4 GiB"),
+            );
+        }
+        let text = decode(path, &bytes)?;
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         // Lines end in LF or CRLF; a file without any LF may use classic-Mac CR ends.
         let end = if memchr::memchr(b'\n', text.as_bytes()).is_some() {
@@ -204,55 +154,38 @@ impl Table {
         };
         let body = text.get(offset..).unwrap_or("");
         let header_line = header.0;
-        if u32::try_from(body.len()).is_err() {
-            return Err(Error::input(
-                Location::line(path, header_line),
-                "more than 4 GiB of data below the header",
-            )
-            .with_hint("split the file into files of under 4 GiB"));
-        }
         let parts = part_ranges(body, end);
         // The lines of each part: one vectorised count of line ends per part.
         let lines_of = |r: &std::ops::Range<usize>| {
             1 + memchr::memchr_iter(end, &body.as_bytes()[r.clone()]).count()
         };
         let lines: Vec<usize> = parts.par_iter().map(lines_of).collect();
-        // Each part's stretch of the stores, sized for its lines before reading: its
-        // text's bytes of cells, a start and the header's count of fields per line
-        // of ends, a row per line.
+        let body_start = bytes.len() - body.len();
+        // Each part's stretch of the stores, sized for its lines before reading: a
+        // start and the header's count of fields per line of ends, a row per line.
         let width = header.1.len();
-        let mut cells = vec![0u8; body.len()];
         let mut ends = vec![0u32; lines.iter().map(|n| 1 + n * width).sum()];
         let mut rows = vec![Row { line: 0, first: 0 }; lines.iter().sum()];
         let mut jobs = Vec::with_capacity(parts.len());
-        let (mut cells_left, mut ends_left, mut rows_left) =
-            (&mut cells[..], &mut ends[..], &mut rows[..]);
+        let (mut text_left, mut ends_left, mut rows_left) =
+            (&mut bytes[body_start..], &mut ends[..], &mut rows[..]);
         let (mut first_line, mut first_end, mut cut) = (line + 1, 0, 0);
         for (r, &n) in parts.iter().zip(&lines) {
             // Parts are apart by the line end between them.
-            let (c, rest) = std::mem::take(&mut cells_left)[r.start - cut..].split_at_mut(r.len());
+            let (c, rest) = std::mem::take(&mut text_left)[r.start - cut..].split_at_mut(r.len());
             let (e, rest_e) = std::mem::take(&mut ends_left).split_at_mut(1 + n * width);
             let (w, rest_w) = std::mem::take(&mut rows_left).split_at_mut(n);
-            (cells_left, ends_left, rows_left, cut) = (rest, rest_e, rest_w, r.end);
+            (text_left, ends_left, rows_left, cut) = (rest, rest_e, rest_w, r.end);
             let at = Start {
                 line: first_line,
-                cell: r.start,
+                cell: body_start + r.start,
                 end: first_end,
             };
-            jobs.push((&body[r.clone()], at, c, e, w));
+            jobs.push((c, at, e, w));
             (first_line, first_end) = (first_line + n, first_end + 1 + n * width);
         }
-        let read = |(text, at, c, e, w): (&str, Start, &mut [u8], &mut [u32], &mut [Row])| {
-            read_part(
-                path,
-                text,
-                end,
-                at,
-                Store::new(c, at.cell, e),
-                w,
-                delimiter,
-                &header,
-            )
+        let read = |(c, at, e, w): (&mut [u8], Start, &mut [u32], &mut [Row])| {
+            read_part(path, c, end, at, e, w, delimiter, &header)
         };
         let read: Vec<Result<(usize, Directives)>> = if parts.len() > 1 {
             jobs.into_par_iter().map(read).collect()
@@ -277,9 +210,9 @@ impl Table {
             )
             .with_hint("add one line per measured point below the header"));
         }
-        // The unused stretches hold zeros (ASCII NUL) and the fields are whole
-        // characters of the text: the store is UTF-8.
-        let cells = String::from_utf8(cells).expect("whole fields and zeros are UTF-8");
+        // The text above the body and the line ends between parts are untouched, and
+        // each part holds whole fields of it and zeros (ASCII NUL): UTF-8.
+        let cells = String::from_utf8(bytes).expect("text, whole fields and zeros are UTF-8");
         Ok(Table {
             path: path.to_path_buf(),
             sha256: String::new(),
@@ -293,10 +226,11 @@ impl Table {
         })
     }
 
-    /// Read a testing-machine or instrument export ([`Table::parse_export`]).
+    /// Read a testing-machine or instrument export ([`Table::parse_export`]),
+    /// hashing its bytes as they are read.
     pub fn read_export(path: &Path, is_header: &dyn Fn(&[&str]) -> bool) -> Result<Export> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-        Self::parse_export(path, &bytes, is_header)
+        let (bytes, sha256) = read_hashed(path)?;
+        Self::export(path, bytes, sha256, is_header)
     }
 
     /// Split an export whose header may sit below a preamble of metadata lines and
@@ -314,24 +248,32 @@ impl Table {
         bytes: &[u8],
         is_header: &dyn Fn(&[&str]) -> bool,
     ) -> Result<Export> {
+        Self::export(path, bytes.to_vec(), super::sha256_hex(bytes), is_header)
+    }
+
+    /// [`Table::parse_export`] of the bytes of `path`, of SHA-256 `sha256`.
+    fn export(
+        path: &Path,
+        bytes: Vec<u8>,
+        sha256: String,
+        is_header: &dyn Fn(&[&str]) -> bool,
+    ) -> Result<Export> {
         let mut notes = Vec::new();
-        let found = decode(path, bytes)
+        let found = decode(path, &bytes)
             .ok()
             .and_then(|text| preamble(text, is_header));
-        let mut table = match found {
+        let table = match found {
             Some((line, skipped, kept)) => {
                 notes.push(format!(
                     "{skipped} preamble line{} before the header on line {line} skipped",
                     if skipped == 1 { "" } else { "s" }
                 ));
-                let (sha256, table) = rayon::join(
-                    || super::sha256_hex(bytes),
-                    || Self::split(path, kept.as_bytes()),
-                );
-                table.map(|t| Table { sha256, ..t })?
+                drop(bytes);
+                Self::split(path, kept.into_bytes())?
             }
-            None => Self::parse(path, bytes)?,
+            None => Self::split(path, bytes)?,
         };
+        let mut table = Table { sha256, ..table };
         notes.extend(table.units_row()?);
         Ok(Export { table, notes })
     }
@@ -758,39 +700,49 @@ struct Start {
 }
 
 /// Read `text`, whole lines of a file below its header ending in `end`, the first at
-/// line `at.line`, into `store` (its `ends` slot 0 taking the start of the first
-/// field) and `rows`: comments kept as directives, blank lines skipped, every row
-/// checked to have the header's field count (the first that has not is the error).
-/// The rows read and the directives.
+/// line `at.line`, moving each row's fields to the front of `text` (the rest zeroed),
+/// their ends into `ends` (slot 0 taking the start of the first field) and the rows
+/// into `rows`: comments kept as directives, blank lines skipped, every row checked
+/// to have the header's field count (the first that has not is the error). The rows
+/// read and the directives.
 #[allow(clippy::too_many_arguments)]
 fn read_part(
     path: &Path,
-    text: &str,
+    text: &mut [u8],
     end: u8,
     at: Start,
-    mut store: Store,
+    ends: &mut [u32],
     rows: &mut [Row],
     delimiter: u8,
     (header_line, header): &(usize, Vec<String>),
 ) -> Result<(usize, Directives)> {
     let mut splitter = Splitter::new(delimiter);
     let mut directives = Vec::new();
-    let mut kept = 0;
-    // The start of the first field; fields go from slot 1.
-    store.push("");
-    for (i, raw) in split_bytes(text, end).enumerate() {
-        let (line, t) = (at.line + i, raw.strip_suffix('\r').unwrap_or(raw).trim());
+    // Rows and ends stored, bytes of fields moved, the next line's start.
+    let (mut kept, mut stored, mut used, mut next) = (0, 1, 0, 0);
+    // The caller checked that the file is under 4 GiB: offsets in it fit in 4 bytes.
+    ends[0] = at.cell as u32;
+    for line in at.line.. {
+        if next > text.len() {
+            break;
+        }
+        let start = next;
+        let stop = memchr::memchr(end, &text[start..]).map_or(text.len(), |i| start + i);
+        next = stop + 1;
+        // Fields move only down to before `start`: the line is as read, UTF-8.
+        let raw = std::str::from_utf8(&text[start..stop]).expect("lines of UTF-8 text");
+        let raw = raw.strip_suffix('\r').unwrap_or(raw);
+        let t = raw.trim();
+        let lead = start + raw.len() - raw.trim_start().len();
         if let Some(c) = t.strip_prefix('#') {
             directives.extend(directive(line, c));
             continue;
         } else if t.is_empty() {
             continue;
         }
-        let mark = store.mark();
-        let n = splitter.split(t, &mut store);
-        if store.used == mark.0 {
+        let n = splitter.split(t);
+        if splitter.fields.iter().all(|(a, b)| a == b) {
             // Every field is empty: a blank line.
-            store.truncate(mark);
             continue;
         }
         if n != header.len() {
@@ -805,11 +757,51 @@ fn read_part(
         }
         rows[kept] = Row {
             line,
-            first: at.end + mark.1,
+            first: at.end + stored,
         };
         kept += 1;
+        // Each field moves down to where the row's fields so far end: no further
+        // than where it was, and past no byte of the line not yet moved.
+        for &(a, b) in &splitter.fields {
+            if splitter.in_out {
+                text[used..used + b - a].copy_from_slice(&splitter.out[a..b]);
+            } else {
+                text.copy_within(lead + a..lead + b, used);
+            }
+            used += b - a;
+            ends[stored] = (at.cell + used) as u32;
+            stored += 1;
+        }
     }
+    text[used..].fill(0);
     Ok((kept, directives))
+}
+
+/// The bytes of the file at `path` and their SHA-256 (hex), hashed a block at a time
+/// as the blocks are read, while in cache: the bytes are then free to be rewritten.
+fn read_hashed(path: &Path) -> Result<(Vec<u8>, String)> {
+    use sha2::{Digest, Sha256};
+    use std::io::Read;
+    /// Bytes read and hashed at a time: a fraction of a core's cache.
+    const BLOCK: u64 = 1 << 18;
+    let io = |e| Error::io(path, e);
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let size = file.metadata().map_or(0, |m| m.len());
+    let mut bytes = Vec::with_capacity(usize::try_from(size).unwrap_or(0));
+    let mut hasher = Sha256::new();
+    loop {
+        let from = bytes.len();
+        if (&mut file)
+            .take(BLOCK)
+            .read_to_end(&mut bytes)
+            .map_err(io)?
+            == 0
+        {
+            break;
+        }
+        hasher.update(&bytes[from..]);
+    }
+    Ok((bytes, super::hex(&hasher.finalize())))
 }
 
 /// The text of a file, or an error saying what kind of file it is instead.
@@ -844,7 +836,7 @@ fn decode<'a>(path: &Path, bytes: &'a [u8]) -> Result<&'a str> {
 }
 
 /// Splits lines into trimmed fields (double quotes may wrap a field holding the
-/// separator), appending each field to one store.
+/// separator).
 struct Splitter {
     delimiter: u8,
     /// The CSV parser for lines with quotes, reset for each line: it reads a line as
@@ -853,6 +845,10 @@ struct Splitter {
     /// Its output buffers, reused from line to line.
     out: Vec<u8>,
     out_ends: Vec<usize>,
+    /// The fields of the last line split: byte ranges of the line, or of `out` when
+    /// it had quotes (`in_out`).
+    fields: Vec<(usize, usize)>,
+    in_out: bool,
 }
 
 impl Splitter {
@@ -867,38 +863,48 @@ impl Splitter {
                 .build(),
             out: vec![0; 256],
             out_ends: vec![0; 16],
+            fields: Vec::new(),
+            in_out: false,
         }
     }
 
     /// The fields of a line without quotes, split in one pass over its bytes (a
     /// vectorised search per field costs more than it saves on fields of a few
-    /// bytes) and trimmed of ASCII whitespace; `None`, with nothing appended, at the
-    /// first quote.
-    fn split_unquoted(&self, line: &str, store: &mut Store) -> Option<usize> {
-        let mark = store.mark();
+    /// bytes) and trimmed of ASCII whitespace; false at the first quote.
+    fn split_unquoted(&mut self, line: &str) -> bool {
+        let bytes = line.as_bytes();
+        // `delimiter` is ASCII: field ends are character boundaries.
+        let mut push = |a: usize, b: usize| {
+            let f = &bytes[a..b];
+            let lead = f.len() - f.trim_ascii_start().len();
+            self.fields
+                .push((a + lead, a + lead + f.trim_ascii().len()));
+        };
         let mut start = 0;
-        for (i, &b) in line.as_bytes().iter().enumerate() {
+        for (i, &b) in bytes.iter().enumerate() {
             if b == self.delimiter {
-                // `delimiter` is ASCII: both ends are character boundaries.
-                store.push(line[start..i].trim_ascii());
+                push(start, i);
                 start = i + 1;
             } else if b == b'"' {
-                store.truncate(mark);
-                return None;
+                return false;
             }
         }
-        store.push(line[start..].trim_ascii());
-        Some(store.fields - mark.1)
+        push(start, bytes.len());
+        true
     }
 
-    /// Append the fields of `line` to `store`; the number of fields. A line without
-    /// quotes (nearly every line) is split directly, trimming ASCII whitespace; a
-    /// quoted one goes through the CSV parser and its fields are trimmed as
-    /// `csv::Trim::All` trims them.
-    fn split(&mut self, line: &str, store: &mut Store) -> usize {
-        if let Some(n) = self.split_unquoted(line, store) {
-            return n;
+    /// Split `line` into [`Splitter::fields`]; their number. A line without quotes
+    /// (nearly every line) is split directly, trimming ASCII whitespace; a quoted one
+    /// goes through the CSV parser and its fields are trimmed as `csv::Trim::All`
+    /// trims them.
+    fn split(&mut self, line: &str) -> usize {
+        self.fields.clear();
+        self.in_out = false;
+        if self.split_unquoted(line) {
+            return self.fields.len();
         }
+        self.fields.clear();
+        self.in_out = true;
         use csv_core::ReadRecordResult as R;
         self.quoted.reset();
         let (mut input, mut nout, mut nend) = (line.as_bytes(), 0, 0);
@@ -920,10 +926,23 @@ impl Splitter {
         let mut start = 0;
         for &end in &self.out_ends[..nend] {
             // The parser only drops quote bytes from UTF-8 text: the field is UTF-8.
-            store.push(String::from_utf8_lossy(&self.out[start..end]).trim());
+            let f = std::str::from_utf8(&self.out[start..end]).expect("UTF-8 without quotes");
+            let lead = f.len() - f.trim_start().len();
+            self.fields
+                .push((start + lead, start + lead + f.trim().len()));
             start = end;
         }
         nend
+    }
+
+    /// The text of field `i` of `line`, the line last split.
+    fn field<'a>(&'a self, line: &'a str, i: usize) -> &'a str {
+        let (a, b) = self.fields[i];
+        if self.in_out {
+            std::str::from_utf8(&self.out[a..b]).expect("UTF-8 without quotes")
+        } else {
+            &line[a..b]
+        }
     }
 }
 
@@ -1067,23 +1086,10 @@ mod tests {
             proptest::prop_assume!(!line.is_empty());
             let first = ["a,b", "a;b", "a\tb"][sep];
             let mut splitter = Splitter::new(delimiter_of(first));
-            // A line before it, so that the store holds more than this line.
-            let before = "x\"y\",z";
-            let (mut cells, mut ends) = (vec![0; before.len() + line.len()], vec![0; 32]);
-            let mut store = Store::new(&mut cells, 0, &mut ends);
-            splitter.split(before, &mut store);
-            let (from, first_end) = store.mark();
-            let n = splitter.split(line, &mut store);
-            let stored = store.fields;
-            let mut start = from;
-            let got: Vec<&str> = ends[first_end..stored]
-                .iter()
-                .map(|&e| {
-                    let f = std::str::from_utf8(&cells[start..e as usize]).unwrap();
-                    start = e as usize;
-                    f
-                })
-                .collect();
+            // A line before it, so that the splitter's buffers hold more than this line.
+            splitter.split("x\"y\",z");
+            let n = splitter.split(line);
+            let got: Vec<&str> = (0..n).map(|i| splitter.field(line, i)).collect();
             proptest::prop_assert_eq!(n, got.len());
             let want = csv_fields(line, splitter.delimiter);
             if line.contains('"') {

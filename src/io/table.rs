@@ -13,13 +13,21 @@ use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
 /// One data row: its line and where its fields are in the table's field store (read
-/// them with [`Table::field`]).
+/// them with [`Table::field`]), in 8 bytes: a file under 4 GiB has fewer lines and
+/// fields than 4 bytes count ([`Table`]'s `ends`).
 #[derive(Debug, Clone, Copy)]
 pub struct Row {
     /// 1-based line number in the file.
-    pub line: usize,
+    line: u32,
     /// Index of the row's first field in the table's `ends`.
-    first: usize,
+    first: u32,
+}
+
+impl Row {
+    /// The row's 1-based line number in the file.
+    pub fn line(&self) -> usize {
+        self.line as usize
+    }
 }
 
 /// A parsed table: header, rows, `# key: value` directives and provenance.
@@ -164,7 +172,18 @@ impl Table {
         // Each part's stretch of the stores, sized for its lines before reading: a
         // start and the header's count of fields per line of ends, a row per line.
         let width = header.1.len();
-        let mut ends = vec![0u32; lines.iter().map(|n| 1 + n * width).sum()];
+        // A row of `width` fields has `width - 1` separators: a part stores at most
+        // its bytes and lines of fields.
+        let slots = |r: &std::ops::Range<usize>, n: usize| 1 + (n * width).min(r.len() + n);
+        let all: usize = parts.iter().zip(&lines).map(|(r, &n)| slots(r, n)).sum();
+        if u32::try_from(all).is_err() {
+            return Err(Error::input(
+                Location::line(path, header_line),
+                "more than 4·10⁹ fields below the header",
+            )
+            .with_hint("split the file into files of fewer rows"));
+        }
+        let mut ends = vec![0u32; all];
         let mut rows = vec![Row { line: 0, first: 0 }; lines.iter().sum()];
         let mut jobs = Vec::with_capacity(parts.len());
         let (mut text_left, mut ends_left, mut rows_left) =
@@ -173,7 +192,7 @@ impl Table {
         for (r, &n) in parts.iter().zip(&lines) {
             // Parts are apart by the line end between them.
             let (c, rest) = std::mem::take(&mut text_left)[r.start - cut..].split_at_mut(r.len());
-            let (e, rest_e) = std::mem::take(&mut ends_left).split_at_mut(1 + n * width);
+            let (e, rest_e) = std::mem::take(&mut ends_left).split_at_mut(slots(r, n));
             let (w, rest_w) = std::mem::take(&mut rows_left).split_at_mut(n);
             (text_left, ends_left, rows_left, cut) = (rest, rest_e, rest_w, r.end);
             let at = Start {
@@ -182,7 +201,7 @@ impl Table {
                 end: first_end,
             };
             jobs.push((c, at, e, w));
-            (first_line, first_end) = (first_line + n, first_end + 1 + n * width);
+            (first_line, first_end) = (first_line + n, first_end + slots(r, n));
         }
         let read = |(c, at, e, w): (&mut [u8], Start, &mut [u32], &mut [Row])| {
             read_part(path, c, end, at, e, w, delimiter, &header)
@@ -300,7 +319,7 @@ impl Table {
         }
         if self.rows.len() == 1 {
             return Err(Error::input(
-                Location::line(&self.path, row.line),
+                Location::line(&self.path, row.line()),
                 "the file has a header and a units row but no data rows",
             )
             .with_hint("add one line per measured point below the units row"));
@@ -319,14 +338,14 @@ impl Table {
         self.rows.remove(0);
         Ok(Some(format!(
             "units row on line {} read into the header: {}",
-            row.line,
+            row.line(),
             read.join(", ")
         )))
     }
 
     /// The trimmed text of `row`'s field in column `col` (0-based).
     pub fn field(&self, row: &Row, col: usize) -> &str {
-        let i = row.first + col;
+        let i = row.first as usize + col;
         &self.cells[self.ends[i - 1] as usize..self.ends[i] as usize]
     }
 
@@ -353,7 +372,7 @@ impl Table {
 
     /// The location of a field.
     pub fn loc(&self, row: &Row, col: usize) -> Location {
-        Location::at(&self.path, row.line, col + 1)
+        Location::at(&self.path, row.line(), col + 1)
     }
 
     /// A finite number in `row`, column `col` (0-based), named `what` in errors.
@@ -755,9 +774,10 @@ fn read_part(
             )
             .with_hint(field_count_hint(t, delimiter, n > header.len())));
         }
+        // The caller checked that lines and fields number under 4·10⁹.
         rows[kept] = Row {
-            line,
-            first: at.end + stored,
+            line: line as u32,
+            first: (at.end + stored) as u32,
         };
         kept += 1;
         // Each field moves down to where the row's fields so far end: no further
@@ -1203,7 +1223,13 @@ mod tests {
         let got: Vec<(usize, String, String)> = t
             .rows
             .iter()
-            .map(|r| (r.line, t.field(r, 0).to_string(), t.field(r, 1).to_string()))
+            .map(|r| {
+                (
+                    r.line(),
+                    t.field(r, 0).to_string(),
+                    t.field(r, 1).to_string(),
+                )
+            })
             .collect();
         assert_eq!(got, want);
         let notes: Vec<usize> = t.directives.iter().map(|d| d.0).collect();
@@ -1236,7 +1262,7 @@ mod tests {
             let e = Table::parse_export(Path::new("e.csv"), text.as_bytes(), &is_header).unwrap();
             let t = &e.table;
             assert_eq!(t.header, ["Time [s]", "Extension [mm]", "Load [N]"]);
-            assert_eq!((t.header_line, t.rows.len(), t.rows[0].line), (5, 1, 7));
+            assert_eq!((t.header_line, t.rows.len(), t.rows[0].line()), (5, 1, 7));
             assert_eq!(
                 t.directives,
                 [(2, "mode".to_string(), "planar".to_string())]
@@ -1290,6 +1316,70 @@ mod tests {
         }
     }
 
+    /// A large file's table holds its fields in the file's own bytes, with 4 bytes
+    /// per field end and 8 per row (it held a copy of the fields, 8 bytes per end and
+    /// 16 per row): at most the file and 16 bytes per two-column row.
+    #[test]
+    fn a_table_holds_its_file_and_16_bytes_per_two_column_row() {
+        let n = 300_000;
+        let mut text = String::from("time_s,stress_kPa\n");
+        for i in 0..n {
+            text.push_str(&format!("{i}.5, {}\n", 2 * i));
+        }
+        let t = Table::parse(Path::new("t.csv"), text.as_bytes()).unwrap();
+        assert!(part_ranges(&text, b'\n').len() > 2, "read in parts");
+        assert_eq!(t.rows.len(), n);
+        assert_eq!(std::mem::size_of::<Row>(), 8);
+        let index = t.ends.capacity() * std::mem::size_of_val(&t.ends[0])
+            + t.rows.capacity() * std::mem::size_of::<Row>();
+        // A start slot per part beside the two ends per row.
+        assert!(
+            index <= 16 * n + 4 * 64,
+            "{index} bytes of index for {n} rows"
+        );
+        assert!(
+            t.cells.capacity() <= text.len(),
+            "the fields are in the file's bytes"
+        );
+        // The fields and lines are those of the text.
+        for (i, r) in t.rows.iter().enumerate().step_by(997) {
+            assert_eq!(r.line(), i + 2);
+            assert_eq!(t.field(r, 0), format!("{i}.5"));
+            assert_eq!(t.field(r, 1), (2 * i).to_string());
+        }
+    }
+
+    /// A file read from disk (hashed a block at a time as read, then split in its own
+    /// bytes) is the table its text parses to, with the SHA-256 of its bytes; exports
+    /// read from disk too.
+    #[test]
+    fn a_file_read_from_disk_is_its_text_parsed() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("r.csv");
+        let mut text = String::from("\u{feff}# a: b\n\"Time\",\"Load\"\n\"(s)\",\"(N)\"\n");
+        for i in 0..200_000 {
+            text.push_str(&format!("{i}.25,\"{}\"\r\n", 3 * i));
+        }
+        std::fs::write(&path, &text).unwrap();
+        let from_disk = Table::read(&path).unwrap();
+        let parsed = Table::parse(&path, text.as_bytes()).unwrap();
+        assert_eq!(from_disk.sha256, super::super::sha256_hex(text.as_bytes()));
+        assert_eq!(from_disk.sha256, parsed.sha256);
+        assert_eq!(from_disk.directives, parsed.directives);
+        let rows = |t: &Table| -> Vec<(usize, String, String)> {
+            t.rows
+                .iter()
+                .map(|r| (r.line(), t.field(r, 0).into(), t.field(r, 1).into()))
+                .collect()
+        };
+        assert_eq!(rows(&from_disk), rows(&parsed));
+        let is_header = |f: &[&str]| f.contains(&"Load");
+        let e = Table::read_export(&path, &is_header).unwrap();
+        assert_eq!(e.table.header, ["Time [s]", "Load [N]"]);
+        assert_eq!(e.table.sha256, parsed.sha256);
+        assert_eq!(rows(&e.table)[..], rows(&parsed)[1..]);
+    }
+
     #[test]
     fn rows_and_fields_are_located() {
         let text = "# mode: planar\nstretch;stress_kPa\n\n1,5; 2\n ; \n\"3;0\";\"4\"\"\"\n";
@@ -1300,7 +1390,7 @@ mod tests {
             t.directives,
             [(1, "mode".to_string(), "planar".to_string())]
         );
-        let lines: Vec<usize> = t.rows.iter().map(|r| r.line).collect();
+        let lines: Vec<usize> = t.rows.iter().map(Row::line).collect();
         assert_eq!(lines, [4, 6]);
         assert_eq!(t.field(&t.rows[0], 0), "1,5");
         assert_eq!(t.number(&t.rows[0], 0, "x").unwrap(), 1.5);

@@ -749,8 +749,11 @@ fn read_part(
         let start = next;
         let stop = memchr::memchr(end, &text[start..]).map_or(text.len(), |i| start + i);
         next = stop + 1;
-        // Fields move only down to before `start`: the line is as read, UTF-8.
-        let raw = std::str::from_utf8(&text[start..stop]).expect("lines of UTF-8 text");
+        // SAFETY: `text` is whole lines of the file's text, which `decode` found UTF-8;
+        // fields are moved only to before `start` (`used` ≤ `start`: a line's fields
+        // are no longer than the line), so `text[start..stop]` is as decoded, and
+        // `start` and `stop` sit at line ends (ASCII): it is a whole line of UTF-8.
+        let raw = unsafe { std::str::from_utf8_unchecked(&text[start..stop]) };
         let raw = raw.strip_suffix('\r').unwrap_or(raw);
         let t = raw.trim();
         let lead = start + raw.len() - raw.trim_start().len();

@@ -359,7 +359,7 @@ pub fn from_table(table: &Table, map: &ColumnMap) -> Result<(Vec<Isotherm>, DmaS
             _ => fixed,
         };
         points.push(Point {
-            line: row.line,
+            line: row.line(),
             omega: f,
             storage: e1,
             loss: e2,

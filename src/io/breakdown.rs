@@ -238,7 +238,7 @@ pub fn from_table(table: &Table, opts: &BreakdownOptions) -> Result<BreakdownSer
     let mut specimens = Vec::with_capacity(table.rows.len());
     for row in &table.rows {
         let mut s = BreakdownSpecimen {
-            line: row.line,
+            line: row.line(),
             label: None,
             field: f64::NAN,
             survived: false,

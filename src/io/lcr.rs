@@ -512,11 +512,11 @@ fn read_csv(
         let a = value(&table, row, ca, &table.header[ca.col])?;
         let b = value(&table, row, cb, &table.header[cb.col])?;
         let y = pair.to_admittance(a, b, 2.0 * PI * f);
-        passive(path, row.line, f, y)?;
+        passive(path, row.line(), f, y)?;
         points.push(LcrPoint {
             freq: f,
             y,
-            line: row.line,
+            line: row.line(),
         });
     }
     Ok(Sweep {

@@ -369,7 +369,7 @@ pub fn from_table_with(
         }
         t.push(tv);
         y.push(sv);
-        line.push(row.line);
+        line.push(row.line());
     }
     if t.len() < 2 {
         return Err(Error::input(

@@ -12,24 +12,32 @@ use rayon::prelude::*;
 use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
-/// One data row: its line and where its fields start in the table's field store
-/// (read them with [`Table::field`]).
+/// One data row: its line and where its fields are in the table's field store (read
+/// them with [`Table::field`]), in 8 bytes: a file under 4 GiB has fewer lines and
+/// fields than 4 bytes count ([`Table`]'s `ends`).
 #[derive(Debug, Clone, Copy)]
 pub struct Row {
     /// 1-based line number in the file.
-    pub line: usize,
-    /// The part of the file holding the row ([`Table`]'s `parts`).
-    part: u32,
-    /// Index of the row's first field in its part's `ends`.
+    line: u32,
+    /// Index of the row's first field in the table's `ends`.
     first: u32,
+}
+
+impl Row {
+    /// The row's 1-based line number in the file.
+    pub fn line(&self) -> usize {
+        self.line as usize
+    }
 }
 
 /// A parsed table: header, rows, `# key: value` directives and provenance.
 ///
-/// The data fields are held back to back in one string per part of the file (`cells`,
-/// with the end of each field in `ends`), not as a string per field: a 10⁶-row file
-/// then costs a few allocations instead of three million. A large file is split in
-/// parts at line ends and the parts are read in parallel ([`PART_BYTES`]).
+/// The data fields are held back to back in one string (`cells`, with the end of
+/// each field in `ends`), not as a string per field: a 10⁶-row file then costs a few
+/// allocations instead of three million, and the file's own bytes hold the fields.
+/// A large file is split in parts at line ends and the parts are read in parallel
+/// ([`PART_BYTES`]), each in its own text and its own stretch of `ends` and `rows`,
+/// sized before reading.
 #[derive(Debug, Clone)]
 pub struct Table {
     /// The file.
@@ -45,22 +53,23 @@ pub struct Table {
     /// `# key: value` comment lines: (line, lower-case key, value).
     pub directives: Vec<(usize, String, String)>,
     delimiter: u8,
-    parts: Vec<Cells>,
-}
-
-/// The fields of one part of a file: every field, trimmed, back to back, and the end
-/// of each.
-#[derive(Debug, Clone, Default)]
-struct Cells {
+    /// The file's text with each part's data fields, trimmed and unquoted, moved
+    /// back to back to where the part's text starts (trimming and unquoting only
+    /// shorten a line, so a line's fields fit where it was), and the rest of the
+    /// part's text zeroed.
     cells: String,
-    ends: Vec<usize>,
+    /// The end in `cells` of each field, in 4 bytes (the file is under 4 GiB); each
+    /// part's ends are preceded by the start of its first field, so that field `i`
+    /// is `cells[ends[i - 1]..ends[i]]`.
+    ends: Vec<u32>,
 }
 
-/// The rows, fields and directives read from one part of a file.
-struct Part {
-    rows: Vec<Row>,
-    cells: Cells,
-    directives: Vec<(usize, String, String)>,
+/// The fields of one line, as owned strings (the header, a preamble line).
+fn line_fields(splitter: &mut Splitter, line: &str) -> Vec<String> {
+    splitter.split(line);
+    (0..splitter.fields.len())
+        .map(|i| splitter.field(line, i).to_string())
+        .collect()
 }
 
 /// Bytes of the data below the header from which a file is read in parts, and about
@@ -85,21 +94,32 @@ impl Table {
         .with_hint(hint.to_string())
     }
 
-    /// Read and split a file.
+    /// Read and split a file, hashing its bytes as they are read.
     pub fn read(path: &Path) -> Result<Table> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-        Self::parse(path, &bytes)
+        let (bytes, sha256) = read_hashed(path)?;
+        Self::split(path, bytes).map(|t| Table { sha256, ..t })
     }
 
     /// Split bytes that came from `path` (and hash them, alongside).
     pub fn parse(path: &Path, bytes: &[u8]) -> Result<Table> {
-        let (sha256, table) = rayon::join(|| super::sha256_hex(bytes), || Self::split(path, bytes));
+        let (sha256, table) = rayon::join(
+            || super::sha256_hex(bytes),
+            || Self::split(path, bytes.to_vec()),
+        );
         table.map(|t| Table { sha256, ..t })
     }
 
-    /// The header, then the data below it (in parts read in parallel when large).
-    fn split(path: &Path, bytes: &[u8]) -> Result<Table> {
-        let text = decode(path, bytes)?;
+    /// The header, then the data below it (in parts read in parallel when large),
+    /// each part's fields moved within its own text ([`Table`]'s `cells`).
+    fn split(path: &Path, mut bytes: Vec<u8>) -> Result<Table> {
+        // Under 4 GiB, line numbers (a byte each at least) and offsets fit in 4 bytes.
+        if u32::try_from(bytes.len() + 1).is_err() {
+            return Err(
+                Error::input(Location::file(path), "the file is 4 GiB or larger")
+                    .with_hint("split it into files of under 4 GiB"),
+            );
+        }
+        let text = decode(path, &bytes)?;
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         // Lines end in LF or CRLF; a file without any LF may use classic-Mac CR ends.
         let end = if memchr::memchr(b'\n', text.as_bytes()).is_some() {
@@ -135,57 +155,74 @@ impl Table {
                 continue;
             }
             let splitter = splitter.get_or_insert_with(|| Splitter::new(delimiter_of(t)));
-            let mut cells = Cells::default();
-            splitter.split(t, &mut cells.cells, &mut cells.ends);
-            if cells.cells.is_empty() {
+            let names = line_fields(splitter, t);
+            if names.iter().all(|n| n.is_empty()) {
                 continue;
             }
-            let mut start = 0;
-            let names: Vec<String> = cells
-                .ends
-                .iter()
-                .map(|&e| {
-                    let name = cells.cells[start..e].to_string();
-                    start = e;
-                    name
-                })
-                .collect();
             break (splitter.delimiter, (line, names));
         };
         let body = text.get(offset..).unwrap_or("");
         let header_line = header.0;
         let parts = part_ranges(body, end);
-        // The line of each part's first line: one vectorised count of line ends per part.
+        // The lines of each part: one vectorised count of line ends per part.
         let lines_of = |r: &std::ops::Range<usize>| {
             1 + memchr::memchr_iter(end, &body.as_bytes()[r.clone()]).count()
         };
-        let mut first_lines: Vec<usize> = parts.par_iter().map(lines_of).collect();
-        let mut next = line + 1;
-        for n in &mut first_lines {
-            (*n, next) = (next, next + *n);
+        let lines: Vec<usize> = parts.par_iter().map(lines_of).collect();
+        let body_start = bytes.len() - body.len();
+        // Each part's stretch of the stores, sized for its lines before reading: a
+        // start and the header's count of fields per line of ends, a row per line.
+        let width = header.1.len();
+        // A row of `width` fields has `width - 1` separators: a part stores at most
+        // its bytes and lines of fields.
+        let slots = |r: &std::ops::Range<usize>, n: usize| 1 + (n * width).min(r.len() + n);
+        let all: usize = parts.iter().zip(&lines).map(|(r, &n)| slots(r, n)).sum();
+        if u32::try_from(all).is_err() {
+            return Err(Error::input(
+                Location::line(path, header_line),
+                "more than 4·10⁹ fields below the header",
+            )
+            .with_hint("split the file into files of fewer rows"));
         }
-        let read = |(p, r): (usize, &std::ops::Range<usize>)| {
-            let at = (first_lines[p], p as u32);
-            read_part(path, &body[r.clone()], end, at, delimiter, &header)
+        let mut ends = vec![0u32; all];
+        let mut rows = vec![Row { line: 0, first: 0 }; lines.iter().sum()];
+        let mut jobs = Vec::with_capacity(parts.len());
+        let (mut text_left, mut ends_left, mut rows_left) =
+            (&mut bytes[body_start..], &mut ends[..], &mut rows[..]);
+        let (mut first_line, mut first_end, mut cut) = (line + 1, 0, 0);
+        for (r, &n) in parts.iter().zip(&lines) {
+            // Parts are apart by the line end between them.
+            let (c, rest) = std::mem::take(&mut text_left)[r.start - cut..].split_at_mut(r.len());
+            let (e, rest_e) = std::mem::take(&mut ends_left).split_at_mut(slots(r, n));
+            let (w, rest_w) = std::mem::take(&mut rows_left).split_at_mut(n);
+            (text_left, ends_left, rows_left, cut) = (rest, rest_e, rest_w, r.end);
+            let at = Start {
+                line: first_line,
+                cell: body_start + r.start,
+                end: first_end,
+            };
+            jobs.push((c, at, e, w));
+            (first_line, first_end) = (first_line + n, first_end + slots(r, n));
+        }
+        let read = |(c, at, e, w): (&mut [u8], Start, &mut [u32], &mut [Row])| {
+            read_part(path, c, end, at, e, w, delimiter, &header)
         };
-        let read: Vec<Result<Part>> = if parts.len() > 1 {
-            parts.par_iter().enumerate().map(read).collect()
+        let read: Vec<Result<(usize, Directives)>> = if parts.len() > 1 {
+            jobs.into_par_iter().map(read).collect()
         } else {
-            parts.iter().enumerate().map(read).collect()
+            jobs.into_iter().map(read).collect()
         };
-        let mut rows = Vec::with_capacity(
-            read.iter()
-                .map(|p| p.as_ref().map_or(0, |p| p.rows.len()))
-                .sum(),
-        );
-        let mut cells = Vec::with_capacity(read.len());
-        for part in read {
+        // The rows of each part moved down to follow the previous part's.
+        let (mut kept, mut from) = (0, 0);
+        for (part, n) in read.into_iter().zip(&lines) {
             // The first error in file order: parts stop at their own first.
-            let part = part?;
-            rows.extend(part.rows);
-            directives.extend(part.directives);
-            cells.push(part.cells);
+            let (used, found) = part?;
+            rows.copy_within(from..from + used, kept);
+            (kept, from) = (kept + used, from + n);
+            directives.extend(found);
         }
+        rows.truncate(kept);
+        rows.shrink_to_fit();
         if rows.is_empty() {
             return Err(Error::input(
                 Location::line(path, header_line),
@@ -193,6 +230,9 @@ impl Table {
             )
             .with_hint("add one line per measured point below the header"));
         }
+        // The text above the body and the line ends between parts are untouched, and
+        // each part holds whole fields of it and zeros (ASCII NUL): UTF-8.
+        let cells = String::from_utf8(bytes).expect("text, whole fields and zeros are UTF-8");
         Ok(Table {
             path: path.to_path_buf(),
             sha256: String::new(),
@@ -201,14 +241,16 @@ impl Table {
             rows,
             directives,
             delimiter,
-            parts: cells,
+            cells,
+            ends,
         })
     }
 
-    /// Read a testing-machine or instrument export ([`Table::parse_export`]).
+    /// Read a testing-machine or instrument export ([`Table::parse_export`]),
+    /// hashing its bytes as they are read.
     pub fn read_export(path: &Path, is_header: &dyn Fn(&[&str]) -> bool) -> Result<Export> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-        Self::parse_export(path, &bytes, is_header)
+        let (bytes, sha256) = read_hashed(path)?;
+        Self::export(path, bytes, sha256, is_header)
     }
 
     /// Split an export whose header may sit below a preamble of metadata lines and
@@ -226,24 +268,32 @@ impl Table {
         bytes: &[u8],
         is_header: &dyn Fn(&[&str]) -> bool,
     ) -> Result<Export> {
+        Self::export(path, bytes.to_vec(), super::sha256_hex(bytes), is_header)
+    }
+
+    /// [`Table::parse_export`] of the bytes of `path`, of SHA-256 `sha256`.
+    fn export(
+        path: &Path,
+        bytes: Vec<u8>,
+        sha256: String,
+        is_header: &dyn Fn(&[&str]) -> bool,
+    ) -> Result<Export> {
         let mut notes = Vec::new();
-        let found = decode(path, bytes)
+        let found = decode(path, &bytes)
             .ok()
             .and_then(|text| preamble(text, is_header));
-        let mut table = match found {
+        let table = match found {
             Some((line, skipped, kept)) => {
                 notes.push(format!(
                     "{skipped} preamble line{} before the header on line {line} skipped",
                     if skipped == 1 { "" } else { "s" }
                 ));
-                let (sha256, table) = rayon::join(
-                    || super::sha256_hex(bytes),
-                    || Self::split(path, kept.as_bytes()),
-                );
-                table.map(|t| Table { sha256, ..t })?
+                drop(bytes);
+                Self::split(path, kept.into_bytes())?
             }
-            None => Self::parse(path, bytes)?,
+            None => Self::split(path, bytes)?,
         };
+        let mut table = Table { sha256, ..table };
         notes.extend(table.units_row()?);
         Ok(Export { table, notes })
     }
@@ -270,7 +320,7 @@ impl Table {
         }
         if self.rows.len() == 1 {
             return Err(Error::input(
-                Location::line(&self.path, row.line),
+                Location::line(&self.path, row.line()),
                 "the file has a header and a units row but no data rows",
             )
             .with_hint("add one line per measured point below the units row"));
@@ -289,17 +339,15 @@ impl Table {
         self.rows.remove(0);
         Ok(Some(format!(
             "units row on line {} read into the header: {}",
-            row.line,
+            row.line(),
             read.join(", ")
         )))
     }
 
     /// The trimmed text of `row`'s field in column `col` (0-based).
     pub fn field(&self, row: &Row, col: usize) -> &str {
-        let part = &self.parts[row.part as usize];
         let i = row.first as usize + col;
-        let start = if i == 0 { 0 } else { part.ends[i - 1] };
-        &part.cells[start..part.ends[i]]
+        &self.cells[self.ends[i - 1] as usize..self.ends[i] as usize]
     }
 
     /// The error for a header field that names no accepted column: empty, a number
@@ -325,7 +373,7 @@ impl Table {
 
     /// The location of a field.
     pub fn loc(&self, row: &Row, col: usize) -> Location {
-        Location::at(&self.path, row.line, col + 1)
+        Location::at(&self.path, row.line(), col + 1)
     }
 
     /// A finite number in `row`, column `col` (0-based), named `what` in errors.
@@ -592,18 +640,8 @@ fn preamble(text: &str, is_header: &dyn Fn(&[&str]) -> bool) -> Option<(usize, u
         if t.is_empty() || t.starts_with('#') {
             continue;
         }
-        let mut splitter = Splitter::new(delimiter_of(t));
-        let (mut cells, mut ends) = (String::new(), Vec::new());
-        splitter.split(t, &mut cells, &mut ends);
-        let mut start = 0;
-        let fields: Vec<&str> = ends
-            .iter()
-            .map(|&e| {
-                let f = &cells[start..e];
-                start = e;
-                f
-            })
-            .collect();
+        let owned = line_fields(&mut Splitter::new(delimiter_of(t)), t);
+        let fields: Vec<&str> = owned.iter().map(String::as_str).collect();
         if fields.iter().all(|f| f.is_empty()) {
             continue;
         }
@@ -668,40 +706,66 @@ fn part_ranges(body: &str, end: u8) -> Vec<std::ops::Range<usize>> {
     ranges
 }
 
-/// The rows of `text`, whole lines of a file below its header ending in `end`, the
-/// first at line `at.0`, read as part `at.1` of the table: comments kept as
-/// directives, blank lines skipped, every row checked to have the header's field
-/// count (the first that has not is the error).
+/// `# key: value` comment lines: (line, lower-case key, value).
+type Directives = Vec<(usize, String, String)>;
+
+/// Where a part of a file starts: its first line, the offset of its text in the
+/// body (and of its fields in the table's cells), the index of its first slot in the
+/// table's ends.
+#[derive(Debug, Clone, Copy)]
+struct Start {
+    line: usize,
+    cell: usize,
+    end: usize,
+}
+
+/// Read `text`, whole lines of a file below its header ending in `end`, the first at
+/// line `at.line`, moving each row's fields to the front of `text` (the rest zeroed),
+/// their ends into `ends` (slot 0 taking the start of the first field) and the rows
+/// into `rows`: comments kept as directives, blank lines skipped, every row checked
+/// to have the header's field count (the first that has not is the error). The rows
+/// read and the directives.
+#[allow(clippy::too_many_arguments)]
 fn read_part(
     path: &Path,
-    text: &str,
+    text: &mut [u8],
     end: u8,
-    (first_line, part): (usize, u32),
+    at: Start,
+    ends: &mut [u32],
+    rows: &mut [Row],
     delimiter: u8,
     (header_line, header): &(usize, Vec<String>),
-) -> Result<Part> {
+) -> Result<(usize, Directives)> {
     let mut splitter = Splitter::new(delimiter);
-    let lines = 1 + memchr::memchr_iter(end, text.as_bytes()).count();
-    let mut rows = Vec::with_capacity(lines);
     let mut directives = Vec::new();
-    // The fields are a subset of the text: one allocation holds them all.
-    let mut cells = Cells {
-        cells: String::with_capacity(text.len()),
-        ends: Vec::with_capacity(lines * header.len()),
-    };
-    for (i, raw) in split_bytes(text, end).enumerate() {
-        let (line, t) = (first_line + i, raw.strip_suffix('\r').unwrap_or(raw).trim());
+    // Rows and ends stored, bytes of fields moved, the next line's start.
+    let (mut kept, mut stored, mut used, mut next) = (0, 1, 0, 0);
+    // The caller checked that the file is under 4 GiB: offsets in it fit in 4 bytes.
+    ends[0] = at.cell as u32;
+    for line in at.line.. {
+        if next > text.len() {
+            break;
+        }
+        let start = next;
+        let stop = memchr::memchr(end, &text[start..]).map_or(text.len(), |i| start + i);
+        next = stop + 1;
+        // SAFETY: `text` is whole lines of the file's text, which `decode` found UTF-8;
+        // fields are moved only to before `start` (`used` ≤ `start`: a line's fields
+        // are no longer than the line), so `text[start..stop]` is as decoded, and
+        // `start` and `stop` sit at line ends (ASCII): it is a whole line of UTF-8.
+        let raw = unsafe { std::str::from_utf8_unchecked(&text[start..stop]) };
+        let raw = raw.strip_suffix('\r').unwrap_or(raw);
+        let t = raw.trim();
+        let lead = start + raw.len() - raw.trim_start().len();
         if let Some(c) = t.strip_prefix('#') {
             directives.extend(directive(line, c));
             continue;
         } else if t.is_empty() {
             continue;
         }
-        let (first, from) = (cells.ends.len(), cells.cells.len());
-        let n = splitter.split(t, &mut cells.cells, &mut cells.ends);
-        if cells.cells.len() == from {
+        let n = splitter.split(t);
+        if splitter.fields.iter().all(|(a, b)| a == b) {
             // Every field is empty: a blank line.
-            cells.ends.truncate(first);
             continue;
         }
         if n != header.len() {
@@ -714,19 +778,54 @@ fn read_part(
             )
             .with_hint(field_count_hint(t, delimiter, n > header.len())));
         }
-        let first = u32::try_from(first).map_err(|_| {
-            Error::input(
-                Location::line(path, line),
-                "more than 4·10⁹ fields in one part of the file",
-            )
-        })?;
-        rows.push(Row { line, part, first });
+        // The caller checked that lines and fields number under 4·10⁹.
+        rows[kept] = Row {
+            line: line as u32,
+            first: (at.end + stored) as u32,
+        };
+        kept += 1;
+        // Each field moves down to where the row's fields so far end: no further
+        // than where it was, and past no byte of the line not yet moved.
+        for &(a, b) in &splitter.fields {
+            if splitter.in_out {
+                text[used..used + b - a].copy_from_slice(&splitter.out[a..b]);
+            } else {
+                text.copy_within(lead + a..lead + b, used);
+            }
+            used += b - a;
+            ends[stored] = (at.cell + used) as u32;
+            stored += 1;
+        }
     }
-    Ok(Part {
-        rows,
-        cells,
-        directives,
-    })
+    text[used..].fill(0);
+    Ok((kept, directives))
+}
+
+/// The bytes of the file at `path` and their SHA-256 (hex), hashed a block at a time
+/// as the blocks are read, while in cache: the bytes are then free to be rewritten.
+fn read_hashed(path: &Path) -> Result<(Vec<u8>, String)> {
+    use sha2::{Digest, Sha256};
+    use std::io::Read;
+    /// Bytes read and hashed at a time: a fraction of a core's cache.
+    const BLOCK: u64 = 1 << 18;
+    let io = |e| Error::io(path, e);
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let size = file.metadata().map_or(0, |m| m.len());
+    let mut bytes = Vec::with_capacity(usize::try_from(size).unwrap_or(0));
+    let mut hasher = Sha256::new();
+    loop {
+        let from = bytes.len();
+        if (&mut file)
+            .take(BLOCK)
+            .read_to_end(&mut bytes)
+            .map_err(io)?
+            == 0
+        {
+            break;
+        }
+        hasher.update(&bytes[from..]);
+    }
+    Ok((bytes, super::hex(&hasher.finalize())))
 }
 
 /// The text of a file, or an error saying what kind of file it is instead.
@@ -761,7 +860,7 @@ fn decode<'a>(path: &Path, bytes: &'a [u8]) -> Result<&'a str> {
 }
 
 /// Splits lines into trimmed fields (double quotes may wrap a field holding the
-/// separator), appending each field to one store.
+/// separator).
 struct Splitter {
     delimiter: u8,
     /// The CSV parser for lines with quotes, reset for each line: it reads a line as
@@ -770,6 +869,10 @@ struct Splitter {
     /// Its output buffers, reused from line to line.
     out: Vec<u8>,
     out_ends: Vec<usize>,
+    /// The fields of the last line split: byte ranges of the line, or of `out` when
+    /// it had quotes (`in_out`).
+    fields: Vec<(usize, usize)>,
+    in_out: bool,
 }
 
 impl Splitter {
@@ -784,48 +887,48 @@ impl Splitter {
                 .build(),
             out: vec![0; 256],
             out_ends: vec![0; 16],
+            fields: Vec::new(),
+            in_out: false,
         }
     }
 
     /// The fields of a line without quotes, split in one pass over its bytes (a
     /// vectorised search per field costs more than it saves on fields of a few
-    /// bytes) and trimmed of ASCII whitespace; `None`, with nothing appended, at the
-    /// first quote.
-    fn split_unquoted(
-        &self,
-        line: &str,
-        cells: &mut String,
-        ends: &mut Vec<usize>,
-    ) -> Option<usize> {
-        let (from, first) = (cells.len(), ends.len());
-        let mut push = |field: &str| {
-            cells.push_str(field.trim_ascii());
-            ends.push(cells.len());
+    /// bytes) and trimmed of ASCII whitespace; false at the first quote.
+    fn split_unquoted(&mut self, line: &str) -> bool {
+        let bytes = line.as_bytes();
+        // `delimiter` is ASCII: field ends are character boundaries.
+        let mut push = |a: usize, b: usize| {
+            let f = &bytes[a..b];
+            let lead = f.len() - f.trim_ascii_start().len();
+            self.fields
+                .push((a + lead, a + lead + f.trim_ascii().len()));
         };
         let mut start = 0;
-        for (i, &b) in line.as_bytes().iter().enumerate() {
+        for (i, &b) in bytes.iter().enumerate() {
             if b == self.delimiter {
-                // `delimiter` is ASCII: both ends are character boundaries.
-                push(&line[start..i]);
+                push(start, i);
                 start = i + 1;
             } else if b == b'"' {
-                cells.truncate(from);
-                ends.truncate(first);
-                return None;
+                return false;
             }
         }
-        push(&line[start..]);
-        Some(ends.len() - first)
+        push(start, bytes.len());
+        true
     }
 
-    /// Append the fields of `line` to `cells` (their ends to `ends`); the number of
-    /// fields. A line without quotes (nearly every line) is split directly, trimming
-    /// ASCII whitespace; a quoted one goes through the CSV parser and its fields are
-    /// trimmed as `csv::Trim::All` trims them.
-    fn split(&mut self, line: &str, cells: &mut String, ends: &mut Vec<usize>) -> usize {
-        if let Some(n) = self.split_unquoted(line, cells, ends) {
-            return n;
+    /// Split `line` into [`Splitter::fields`]; their number. A line without quotes
+    /// (nearly every line) is split directly, trimming ASCII whitespace; a quoted one
+    /// goes through the CSV parser and its fields are trimmed as `csv::Trim::All`
+    /// trims them.
+    fn split(&mut self, line: &str) -> usize {
+        self.fields.clear();
+        self.in_out = false;
+        if self.split_unquoted(line) {
+            return self.fields.len();
         }
+        self.fields.clear();
+        self.in_out = true;
         use csv_core::ReadRecordResult as R;
         self.quoted.reset();
         let (mut input, mut nout, mut nend) = (line.as_bytes(), 0, 0);
@@ -847,11 +950,23 @@ impl Splitter {
         let mut start = 0;
         for &end in &self.out_ends[..nend] {
             // The parser only drops quote bytes from UTF-8 text: the field is UTF-8.
-            cells.push_str(String::from_utf8_lossy(&self.out[start..end]).trim());
-            ends.push(cells.len());
+            let f = std::str::from_utf8(&self.out[start..end]).expect("UTF-8 without quotes");
+            let lead = f.len() - f.trim_start().len();
+            self.fields
+                .push((start + lead, start + lead + f.trim().len()));
             start = end;
         }
         nend
+    }
+
+    /// The text of field `i` of `line`, the line last split.
+    fn field<'a>(&'a self, line: &'a str, i: usize) -> &'a str {
+        let (a, b) = self.fields[i];
+        if self.in_out {
+            std::str::from_utf8(&self.out[a..b]).expect("UTF-8 without quotes")
+        } else {
+            &line[a..b]
+        }
     }
 }
 
@@ -995,20 +1110,10 @@ mod tests {
             proptest::prop_assume!(!line.is_empty());
             let first = ["a,b", "a;b", "a\tb"][sep];
             let mut splitter = Splitter::new(delimiter_of(first));
-            let (mut cells, mut ends) = (String::new(), Vec::new());
-            // A line before it, so that the store holds more than this line.
-            splitter.split("x\"y\",z", &mut cells, &mut ends);
-            let (from, first_end) = (cells.len(), ends.len());
-            let n = splitter.split(line, &mut cells, &mut ends);
-            let mut start = from;
-            let got: Vec<&str> = ends[first_end..]
-                .iter()
-                .map(|&e| {
-                    let f = &cells[start..e];
-                    start = e;
-                    f
-                })
-                .collect();
+            // A line before it, so that the splitter's buffers hold more than this line.
+            splitter.split("x\"y\",z");
+            let n = splitter.split(line);
+            let got: Vec<&str> = (0..n).map(|i| splitter.field(line, i)).collect();
             proptest::prop_assert_eq!(n, got.len());
             let want = csv_fields(line, splitter.delimiter);
             if line.contains('"') {
@@ -1114,11 +1219,21 @@ mod tests {
         }
         assert!(part_ranges(&text, b'\n').len() > 1);
         let t = Table::parse(Path::new("t.csv"), text.as_bytes()).unwrap();
-        assert_eq!(t.parts.len(), 2, "the body is read in parts");
+        assert_eq!(
+            part_ranges(&text, b'\n').len(),
+            2,
+            "the body is read in parts"
+        );
         let got: Vec<(usize, String, String)> = t
             .rows
             .iter()
-            .map(|r| (r.line, t.field(r, 0).to_string(), t.field(r, 1).to_string()))
+            .map(|r| {
+                (
+                    r.line(),
+                    t.field(r, 0).to_string(),
+                    t.field(r, 1).to_string(),
+                )
+            })
             .collect();
         assert_eq!(got, want);
         let notes: Vec<usize> = t.directives.iter().map(|d| d.0).collect();
@@ -1151,7 +1266,7 @@ mod tests {
             let e = Table::parse_export(Path::new("e.csv"), text.as_bytes(), &is_header).unwrap();
             let t = &e.table;
             assert_eq!(t.header, ["Time [s]", "Extension [mm]", "Load [N]"]);
-            assert_eq!((t.header_line, t.rows.len(), t.rows[0].line), (5, 1, 7));
+            assert_eq!((t.header_line, t.rows.len(), t.rows[0].line()), (5, 1, 7));
             assert_eq!(
                 t.directives,
                 [(2, "mode".to_string(), "planar".to_string())]
@@ -1205,6 +1320,70 @@ mod tests {
         }
     }
 
+    /// A large file's table holds its fields in the file's own bytes, with 4 bytes
+    /// per field end and 8 per row (it held a copy of the fields, 8 bytes per end and
+    /// 16 per row): at most the file and 16 bytes per two-column row.
+    #[test]
+    fn a_table_holds_its_file_and_16_bytes_per_two_column_row() {
+        let n = 300_000;
+        let mut text = String::from("time_s,stress_kPa\n");
+        for i in 0..n {
+            text.push_str(&format!("{i}.5, {}\n", 2 * i));
+        }
+        let t = Table::parse(Path::new("t.csv"), text.as_bytes()).unwrap();
+        assert!(part_ranges(&text, b'\n').len() > 2, "read in parts");
+        assert_eq!(t.rows.len(), n);
+        assert_eq!(std::mem::size_of::<Row>(), 8);
+        let index = t.ends.capacity() * std::mem::size_of_val(&t.ends[0])
+            + t.rows.capacity() * std::mem::size_of::<Row>();
+        // A start slot per part beside the two ends per row.
+        assert!(
+            index <= 16 * n + 4 * 64,
+            "{index} bytes of index for {n} rows"
+        );
+        assert!(
+            t.cells.capacity() <= text.len(),
+            "the fields are in the file's bytes"
+        );
+        // The fields and lines are those of the text.
+        for (i, r) in t.rows.iter().enumerate().step_by(997) {
+            assert_eq!(r.line(), i + 2);
+            assert_eq!(t.field(r, 0), format!("{i}.5"));
+            assert_eq!(t.field(r, 1), (2 * i).to_string());
+        }
+    }
+
+    /// A file read from disk (hashed a block at a time as read, then split in its own
+    /// bytes) is the table its text parses to, with the SHA-256 of its bytes; exports
+    /// read from disk too.
+    #[test]
+    fn a_file_read_from_disk_is_its_text_parsed() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("r.csv");
+        let mut text = String::from("\u{feff}# a: b\n\"Time\",\"Load\"\n\"(s)\",\"(N)\"\n");
+        for i in 0..200_000 {
+            text.push_str(&format!("{i}.25,\"{}\"\r\n", 3 * i));
+        }
+        std::fs::write(&path, &text).unwrap();
+        let from_disk = Table::read(&path).unwrap();
+        let parsed = Table::parse(&path, text.as_bytes()).unwrap();
+        assert_eq!(from_disk.sha256, super::super::sha256_hex(text.as_bytes()));
+        assert_eq!(from_disk.sha256, parsed.sha256);
+        assert_eq!(from_disk.directives, parsed.directives);
+        let rows = |t: &Table| -> Vec<(usize, String, String)> {
+            t.rows
+                .iter()
+                .map(|r| (r.line(), t.field(r, 0).into(), t.field(r, 1).into()))
+                .collect()
+        };
+        assert_eq!(rows(&from_disk), rows(&parsed));
+        let is_header = |f: &[&str]| f.contains(&"Load");
+        let e = Table::read_export(&path, &is_header).unwrap();
+        assert_eq!(e.table.header, ["Time [s]", "Load [N]"]);
+        assert_eq!(e.table.sha256, parsed.sha256);
+        assert_eq!(rows(&e.table)[..], rows(&parsed)[1..]);
+    }
+
     #[test]
     fn rows_and_fields_are_located() {
         let text = "# mode: planar\nstretch;stress_kPa\n\n1,5; 2\n ; \n\"3;0\";\"4\"\"\"\n";
@@ -1215,7 +1394,7 @@ mod tests {
             t.directives,
             [(1, "mode".to_string(), "planar".to_string())]
         );
-        let lines: Vec<usize> = t.rows.iter().map(|r| r.line).collect();
+        let lines: Vec<usize> = t.rows.iter().map(Row::line).collect();
         assert_eq!(lines, [4, 6]);
         assert_eq!(t.field(&t.rows[0], 0), "1,5");
         assert_eq!(t.number(&t.rows[0], 0, "x").unwrap(), 1.5);

@@ -485,7 +485,7 @@ pub fn from_table_with(table: &Table, opts: &TensileOptions, map: &ColumnMap) ->
             stress: p,
             weight,
             source: 0,
-            line: row.line,
+            line: row.line(),
         };
         if let Err(f) = sample.check() {
             let col = match f.field {
@@ -531,7 +531,7 @@ pub fn from_table_with(table: &Table, opts: &TensileOptions, map: &ColumnMap) ->
                         stress: f64::NAN,
                         weight: f64::NAN,
                         source: 0,
-                        line: row.line,
+                        line: row.line(),
                     }
                 })
             })
@@ -635,7 +635,7 @@ fn disagreements(
             .map(|r| table.number(r, c, "").ok())
             .collect()
     };
-    let lines = |i: usize| table.rows[i].line;
+    let lines = |i: usize| table.rows[i].line();
     let eps: Vec<f64> = samples.iter().map(|s| s.stretch - 1.0).collect();
     let eps_max = eps.iter().fold(0.0f64, |a, e| a.max(e.abs()));
     let used_kin = kins.iter().find(|k| k.0 == kc).and_then(|k| k.1);

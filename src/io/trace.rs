@@ -332,7 +332,7 @@ pub fn from_table(table: &Table) -> Result<Trace> {
             values[k].push(x);
         }
         t.push(tv);
-        line.push(row.line);
+        line.push(row.line());
     }
     if t.len() < 2 {
         return Err(Error::input(

@@ -1569,13 +1569,13 @@ fn read_pwl(path: &Path) -> Result<Vec<(f64, f64)>> {
         let v = table.number(row, cv, "voltage")? * fv;
         for (col, dom, x) in [(ct, &budget::INSTANT, t), (cv, &budget::VOLTAGE, v)] {
             dom.check(&table.header[col], x).map_err(|e| {
-                Error::input(Location::at(path, row.line, col + 1), e.msg).with_hint(e.hint)
+                Error::input(Location::at(path, row.line(), col + 1), e.msg).with_hint(e.hint)
             })?;
         }
         if let Some(&(tp, _)) = pts.last() {
             if t <= tp {
                 return Err(Error::input(
-                    Location::at(path, row.line, ct + 1),
+                    Location::at(path, row.line(), ct + 1),
                     format!("time {t} s is not after the previous {tp} s"),
                 )
                 .with_hint("times must increase strictly"));

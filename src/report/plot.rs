@@ -796,19 +796,17 @@ const LINE_BINS: f64 = 4096.0;
 /// out).
 pub fn line<I: Iterator<Item = (f64, f64)> + Clone>(points: I) -> Vec<(f64, f64)> {
     let finite = |p: &(f64, f64)| p.0.is_finite() && p.1.is_finite();
-    let span = |f: fn(f64) -> f64, keep: fn(f64) -> bool| {
+    let widen = |(a, b): (f64, f64), v: f64| (a.min(v), b.max(v));
+    let empty = (f64::INFINITY, f64::NEG_INFINITY);
+    // x's range on a linear and on a log scale (x > 0), in one pass
+    let (lin, log) =
         points
             .clone()
             .filter(finite)
-            .map(|p| p.0)
-            .filter(|&x| keep(x))
-            .map(f)
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-                (a.min(v), b.max(v))
-            })
-    };
-    let lin = span(|x| x, |_| true);
-    let log = span(f64::ln, |x| x > 0.0);
+            .fold((empty, empty), |(lin, log), (x, _)| match x > 0.0 {
+                true => (widen(lin, x), widen(log, x.ln())),
+                false => (widen(lin, x), log),
+            });
     let bin = |(lo, hi): (f64, f64), v: f64| match hi > lo {
         true => ((v - lo) / (hi - lo) * LINE_BINS).min(LINE_BINS - 1.0) as i64,
         false => 0,

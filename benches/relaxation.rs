@@ -148,6 +148,7 @@ fn frequency(c: &mut Criterion) {
         omega_rad_s: &omega,
         storage_pa: &storage,
         loss_pa: &loss,
+        shifts: None,
     };
     let grid30 = FrequencySettings {
         search: Search {

@@ -6,7 +6,7 @@ use super::temperature::celsius;
 use super::{DmaData, DmaSource};
 use crate::error::{Error, Result};
 use crate::fit::prony::frequency::{self, ComplexModulus, FrequencyFit, FrequencySettings};
-use crate::fit::prony::Search;
+use crate::fit::prony::{Search, ShiftCovariance};
 use crate::fit::Status;
 use serde::{Deserialize, Serialize};
 
@@ -172,7 +172,7 @@ pub fn fit(data: &DmaData, settings: &Settings) -> Result<DmaFit> {
         )
         .with_hint("shift on storage, loss or both with --vertical-shift"));
     }
-    let (factors, pairs, model, master) = if data.is_master() {
+    let (factors, pairs, model, master, shifts) = if data.is_master() {
         if settings.mode != ShiftMode::Free {
             return Err(Error::settings(
                 "--shift wlf|arrhenius needs isotherms; this is a master curve (no temperature)",
@@ -188,7 +188,7 @@ pub fn fit(data: &DmaData, settings: &Settings) -> Result<DmaFit> {
                 temperature_k: None,
             })
             .collect();
-        (Vec::new(), Vec::new(), None, master)
+        (Vec::new(), Vec::new(), None, master, None)
     } else {
         shifted(data, settings, &mut warnings)?
     };
@@ -200,7 +200,7 @@ pub fn fit(data: &DmaData, settings: &Settings) -> Result<DmaFit> {
         .iter()
         .map(|p| p.reduced_omega_rad_s)
         .fold(0.0, f64::max);
-    let (prony, prony_status) = prony_step(&master, settings, &mut warnings)?;
+    let (prony, prony_status) = prony_step(&master, shifts.as_ref(), settings, &mut warnings)?;
     // what the reader did is said, and does not make the result a warning; a
     // blocking status of the Prony fit is the run's
     let status = match prony_status {
@@ -232,10 +232,12 @@ pub fn fit(data: &DmaData, settings: &Settings) -> Result<DmaFit> {
 
 /// The Prony step: the frequency-domain Prony fit of the master curve (E′ and E″
 /// against reduced ω, `settings.terms` terms or auto; the Prony core shared with
-/// `relaxation`, [`crate::fit::prony::frequency::fit`]). Its warnings join the
-/// run's, prefixed; its status is returned for the run's.
+/// `relaxation`, [`crate::fit::prony::frequency::fit`]), the uncertainty of the
+/// shifts that built it (`shifts`, by master point) carried into its σ. Its
+/// warnings join the run's, prefixed; its status is returned for the run's.
 fn prony_step(
     master: &[MasterPoint],
+    shifts: Option<&ShiftCovariance>,
     settings: &Settings,
     warnings: &mut Vec<String>,
 ) -> Result<(PronyOut, Status)> {
@@ -246,6 +248,7 @@ fn prony_step(
         omega_rad_s: &omega,
         storage_pa: &storage,
         loss_pa: &loss,
+        shifts,
     };
     // auto tries up to one term per decade of the master curve (Park & Schapery
     // 1999 place one τ a decade), at least the core's default 6: on the shipped
@@ -290,6 +293,7 @@ type Shifted = (
     Vec<PairShift>,
     Option<LawFit>,
     Vec<MasterPoint>,
+    Option<ShiftCovariance>,
 );
 
 /// Free shifts of adjacent isotherms, accumulated to Tr, the law, the master curve.
@@ -370,16 +374,39 @@ fn shifted(data: &DmaData, settings: &Settings, warnings: &mut Vec<String>) -> R
         let a = 10f64.powf(f.law_log10_at.unwrap_or(f.log10_at));
         let b = 10f64.powf(f.log10_bt.unwrap_or(0.0));
         for k in 0..i.len() {
-            master.push(MasterPoint {
-                reduced_omega_rad_s: a * i.omega[k],
-                storage_pa: i.storage[k] / b,
-                loss_pa: i.loss[k] / b,
-                temperature_k: Some(f.temperature_k),
-            });
+            master.push((
+                j,
+                MasterPoint {
+                    reduced_omega_rad_s: a * i.omega[k],
+                    storage_pa: i.storage[k] / b,
+                    loss_pa: i.loss[k] / b,
+                    temperature_k: Some(f.temperature_k),
+                },
+            ));
         }
     }
-    master.sort_by(|a, b| a.reduced_omega_rad_s.total_cmp(&b.reduced_omega_rad_s));
-    Ok((factors, pairs, model, master))
+    master.sort_by(|a, b| a.1.reduced_omega_rad_s.total_cmp(&b.1.reduced_omega_rad_s));
+    let (group, master): (Vec<usize>, Vec<MasterPoint>) = master.into_iter().unzip();
+    // the shifts the master curve was built with, and their covariance
+    let horizontal = match &model {
+        None => Some(acc.covariance.clone()),
+        Some(m) => m.shift_covariance(&temps, &pairs, &rho.0),
+    };
+    let shifts = match horizontal {
+        Some(horizontal) => Some(ShiftCovariance {
+            group,
+            horizontal,
+            vertical: acc.bt_covariance.clone(),
+        }),
+        None => {
+            warnings.push(format!(
+                "the {} constants have no standard error, so the shifts' uncertainty is not in the Prony series' σ (they are too narrow)",
+                model.as_ref().map_or("shift law", |m| m.law.kind.label())
+            ));
+            None
+        }
+    };
+    Ok((factors, pairs, model, master, shifts))
 }
 
 /// The warning for a pair whose shift is not positive (the colder isotherm should

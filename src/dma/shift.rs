@@ -17,6 +17,7 @@
 
 use super::Isotherm;
 use crate::error::{Error, Location, Result};
+use nalgebra::DMatrix;
 
 /// What the shifts are computed on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -317,10 +318,15 @@ pub struct Accumulated {
     pub log_at: Vec<f64>,
     /// Standard errors (decades).
     pub std_error: Vec<f64>,
+    /// The covariance of the log10 aT of every two isotherms (decades²): they share
+    /// the pair shifts of their chains, so they are not independent.
+    pub covariance: DMatrix<f64>,
     /// log10 bT per isotherm, with a vertical shift.
     pub log_bt: Option<Vec<f64>>,
     /// Standard errors of log10 bT.
     pub bt_std_error: Option<Vec<f64>>,
+    /// The covariance of the log10 bT, with a vertical shift.
+    pub bt_covariance: Option<DMatrix<f64>>,
     /// The reference temperature lies outside the isotherms' (extrapolated).
     pub extrapolated: bool,
 }
@@ -417,12 +423,12 @@ pub fn adjacent_correlations(
 
 /// The chain of pair shifts `pairs` (between `temps[i]` and `temps[i + 1]`) summed to
 /// each isotherm and referred to `tr` (K): linearly interpolated in T between the two
-/// isotherms around it (extrapolated from the nearest two outside). A shift's
-/// variance is cᵀΣc over the pairs it sums (cᵢ its weight on pair i), Σ the pairs'
-/// covariance: σᵢ² on the diagonal, ρᵢσᵢσᵢ₊₁ between adjacent pairs (`rho`, from
-/// [`adjacent_correlations`]: `.0` horizontal, `.1` vertical), 0 beyond (pairs
-/// two apart share no isotherm). Taken as independent (ρ = 0), the shifts far from
-/// Tr came out 2–3× too uncertain (tests/dma.rs).
+/// isotherms around it (extrapolated from the nearest two outside). The shifts are
+/// L = W·d, W the weight of each pair in each isotherm's sum, so their covariance is
+/// W Σ Wᵀ, Σ the pairs' covariance: σᵢ² on the diagonal, ρᵢσᵢσᵢ₊₁ between adjacent
+/// pairs (`rho`, from [`adjacent_correlations`]: `.0` horizontal, `.1` vertical), 0
+/// beyond (pairs two apart share no isotherm). Taken as independent (ρ = 0), the
+/// shifts far from Tr came out 2–3× too uncertain (tests/dma.rs).
 pub fn accumulate(
     temps: &[f64],
     pairs: &[PairShift],
@@ -433,53 +439,42 @@ pub fn accumulate(
     let m = temps.partition_point(|&t| t <= tr).clamp(1, n - 1) - 1;
     let w = (tr - temps[m]) / (temps[m + 1] - temps[m]);
     // weight of pair i in L_j − L(Tr), with L_j = Σ_{i ≥ j} d_i
-    let weight = |j: usize, i: usize| {
+    let weights = DMatrix::from_fn(n, pairs.len(), |j, i| {
         let e = |k: usize| if i >= k { 1.0 } else { 0.0 };
         e(j) - (1.0 - w) * e(m) - w * e(m + 1)
-    };
+    });
     let combine = |val: &dyn Fn(&PairShift) -> f64, sd: &dyn Fn(&PairShift) -> f64, rho: &[f64]| {
-        let vals: Vec<f64> = (0..n)
-            .map(|j| {
-                pairs
-                    .iter()
-                    .enumerate()
-                    .map(|(i, p)| weight(j, i) * val(p))
-                    .sum()
-            })
-            .collect();
-        let ses: Vec<f64> = (0..n)
-            .map(|j| {
-                let c: Vec<f64> = (0..pairs.len())
-                    .map(|i| weight(j, i) * sd(&pairs[i]))
-                    .collect();
-                let diagonal: f64 = c.iter().map(|x| x * x).sum();
-                let off: f64 = c
-                    .windows(2)
-                    .zip(rho)
-                    .map(|(x, r)| 2.0 * r * x[0] * x[1])
-                    .sum();
-                (diagonal + off).max(0.0).sqrt()
-            })
-            .collect();
-        (vals, ses)
+        let d = DMatrix::from_iterator(pairs.len(), 1, pairs.iter().map(val));
+        let p = pairs.len();
+        let sigma = DMatrix::from_fn(p, p, |a, b| match a.abs_diff(b) {
+            0 => sd(&pairs[a]).powi(2),
+            1 => rho[a.min(b)] * sd(&pairs[a]) * sd(&pairs[b]),
+            _ => 0.0,
+        });
+        let cov = &weights * sigma * weights.transpose();
+        let vals = (&weights * d).iter().copied().collect();
+        let ses = (0..n).map(|j| cov[(j, j)].max(0.0).sqrt()).collect();
+        (vals, ses, cov)
     };
-    let (log_at, std_error) = combine(&|p| p.log_shift, &|p| p.std_error, &rho.0);
+    let (log_at, std_error, covariance) = combine(&|p| p.log_shift, &|p| p.std_error, &rho.0);
     let vertical = pairs.first().is_some_and(|p| p.log_vertical.is_some());
-    let (log_bt, bt_se) = if vertical {
-        let (a, b) = combine(
+    let (log_bt, bt_std_error, bt_covariance) = if vertical {
+        let (a, b, c) = combine(
             &|p| p.log_vertical.unwrap_or(0.0),
             &|p| p.vertical_std_error.unwrap_or(0.0),
             &rho.1,
         );
-        (Some(a), Some(b))
+        (Some(a), Some(b), Some(c))
     } else {
-        (None, None)
+        (None, None, None)
     };
     Accumulated {
         log_at,
         std_error,
+        covariance,
         log_bt,
-        bt_std_error: bt_se,
+        bt_std_error,
+        bt_covariance,
         extrapolated: tr < temps[0] || tr > temps[n - 1],
     }
 }

@@ -102,25 +102,39 @@ pub fn factor_uncertainty(qr: &RowQr, rss: f64) -> Uncertainty {
             }
         }
     }
-    let std_error: Vec<Option<f64>> = (0..k)
-        .map(|i| Some(cov[(i, i)].sqrt()).filter(|v| v.is_finite()))
-        .collect();
-    let correlation = (0..k)
-        .map(|a| {
-            (0..k)
-                .map(|b| match (std_error[a], std_error[b]) {
-                    (Some(sa), Some(sb)) if sa > 0.0 && sb > 0.0 => Some(cov[(a, b)] / (sa * sb)),
-                    _ => None,
-                })
-                .collect()
-        })
-        .collect();
-    Uncertainty {
-        covariance: cov,
-        std_error,
-        correlation,
+    let mut unc = Uncertainty {
+        covariance: DMatrix::zeros(0, 0),
+        std_error: Vec::new(),
+        correlation: Vec::new(),
         condition,
         t95,
+    };
+    unc.set_covariance(cov);
+    unc
+}
+
+impl Uncertainty {
+    /// Take `cov` as the covariance, with the standard errors (None where a
+    /// variance is not finite) and correlations that follow from it.
+    pub fn set_covariance(&mut self, cov: DMatrix<f64>) {
+        let k = cov.nrows();
+        self.std_error = (0..k)
+            .map(|i| Some(cov[(i, i)].sqrt()).filter(|v| v.is_finite()))
+            .collect();
+        let se = &self.std_error;
+        self.correlation = (0..k)
+            .map(|a| {
+                (0..k)
+                    .map(|b| match (se[a], se[b]) {
+                        (Some(sa), Some(sb)) if sa > 0.0 && sb > 0.0 => {
+                            Some(cov[(a, b)] / (sa * sb))
+                        }
+                        _ => None,
+                    })
+                    .collect()
+            })
+            .collect();
+        self.covariance = cov;
     }
 }
 

@@ -6,7 +6,7 @@ use super::refine::TermFit;
 use super::{fmt_s, param_names, Kernels, Setup};
 use crate::fit::linear::RowQr;
 use crate::fit::{diagnostics, Parameter, Status};
-use nalgebra::DVector;
+use nalgebra::{DMatrix, DVector};
 
 /// Diagnostics of one term fit: statistics, uncertainty in SI, problems found.
 pub struct Assessed<K: Kernels> {
@@ -91,14 +91,23 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
         .kern
         .noise_groups()
         .and_then(|g| group_scales(&r, &g, k).map(|s| (g, s)));
-    let (unc, jac_finite) = match groups {
+    let shifts = prob.kern.shift_covariance().is_some();
+    let (mut unc, bread, jac_finite) = match groups {
         Some((g, scales)) => group_sandwich(prob, &tf.p, &columns, g, &scales),
         None => {
             let (qr, finite) = factor(prob, &tf.p, &columns, None);
-            (diagnostics::factor_uncertainty(&qr, rss), finite)
+            let dof = m.saturating_sub(k) as f64;
+            let bread = shifts.then(|| diagnostics::factor_uncertainty(&qr, dof).covariance);
+            (diagnostics::factor_uncertainty(&qr, rss), bread, finite)
         }
     };
-    let finite = finite && jac_finite;
+    let mut finite = finite && jac_finite;
+    if let Some(bread) = bread.filter(|_| shifts) {
+        let (cov, shift_finite) =
+            with_shifts(prob, &tf.p, &columns, &bread, unc.covariance.clone());
+        unc.set_covariance(cov);
+        finite &= shift_finite;
+    }
     let y: &[f64] = &prob.y;
     let nf = m as f64;
     let mean = y.iter().sum::<f64>() / nf;
@@ -225,7 +234,7 @@ fn group_sandwich<K: Kernels>(
     columns: &[f64],
     groups: Vec<usize>,
     scales: &[f64],
-) -> (diagnostics::Uncertainty, bool) {
+) -> (diagnostics::Uncertainty, Option<DMatrix<f64>>, bool) {
     let k = columns.len();
     let (qa, finite_a) = factor(prob, p, columns, None);
     let inverse = (groups, scales.iter().map(|s| 1.0 / s).collect());
@@ -233,22 +242,64 @@ fn group_sandwich<K: Kernels>(
     let dof = qa.rows().saturating_sub(k);
     let mut unc = diagnostics::factor_uncertainty(&qa, dof as f64);
     let rb = qb.r();
-    let cov = &unc.covariance * (rb.transpose() * &rb) * &unc.covariance;
-    unc.std_error = (0..k)
-        .map(|i| Some(cov[(i, i)].sqrt()).filter(|v| v.is_finite()))
-        .collect();
-    unc.correlation = (0..k)
-        .map(|a| {
-            (0..k)
-                .map(|b| match (unc.std_error[a], unc.std_error[b]) {
-                    (Some(sa), Some(sb)) if sa > 0.0 && sb > 0.0 => Some(cov[(a, b)] / (sa * sb)),
-                    _ => None,
-                })
-                .collect()
-        })
-        .collect();
-    unc.covariance = cov;
-    (unc, finite_a && finite_b)
+    let bread = unc.covariance.clone();
+    let cov = &bread * (rb.transpose() * &rb) * &bread;
+    unc.set_covariance(cov);
+    (unc, Some(bread), finite_a && finite_b)
+}
+
+/// The covariance `cov` of the data's noise plus what the uncertain shifts of the
+/// rows' groups do to the estimate ([`Kernels::shift_covariance`]): at the optimum
+/// of ½‖r(p; s)‖² the estimate moves with the shifts s as ∂p/∂s = −A⁻¹JᵀD (the
+/// implicit function theorem, A = JᵀJ the unscaled `bread`, J the Jacobian in SI
+/// `columns`, D = ∂r/∂s), so it gains G Σ_s Gᵀ, G = A⁻¹JᵀD and Σ_s the shifts'
+/// covariance (the delta method; the shifts' errors taken as independent of the
+/// residuals' noise, which is what the fit leaves of the data, not what the
+/// overlaps that made the shifts hold). A row of group g with abscissa ω has
+/// kernels of ω·a_g·τ, so ∂r/∂log10 a_g = ln 10 · Σᵢ ∂r/∂ln τᵢ; its value divided
+/// by b_g makes its weighted residual w·model/b_g − w·y/b_g with w ∝ b_g (a relative
+/// weight), so ∂r/∂log10 b_g = ln 10 · w·model. Over the rows a block at a time
+/// ([`Problem::pass`]). Whether every value was finite.
+fn with_shifts<K: Kernels>(
+    prob: &mut Problem<K>,
+    p: &[f64],
+    columns: &[f64],
+    bread: &DMatrix<f64>,
+    cov: DMatrix<f64>,
+) -> (DMatrix<f64>, bool) {
+    let kern = prob.kern.clone();
+    let Some(sh) = kern.shift_covariance() else {
+        return (cov, true);
+    };
+    let (k, n) = (columns.len(), prob.n_terms);
+    let gh = sh.horizontal.nrows();
+    let gv = sh.vertical.as_ref().map_or(0, |v| v.nrows());
+    let mut jtd = DMatrix::zeros(k, gh + gv);
+    let mut block = Vec::new();
+    let mut finite = true;
+    let ln10 = std::f64::consts::LN_10;
+    let taus = prob.taus(p);
+    prob.pass(&taus, Need::Derivatives, |prob, b| {
+        let len = b.rows.len();
+        block.resize(k * len, 0.0);
+        prob.jacobian_block(p, b, &mut block);
+        finite &= block.iter().all(|v| v.is_finite());
+        for q in 0..len {
+            let g = sh.group[b.rows.start + q];
+            let dh = ln10 * (0..n).map(|i| block[(1 + n + i) * len + q]).sum::<f64>();
+            let dv = ln10 * (0..=n).map(|c| block[c * len + q] * p[c]).sum::<f64>();
+            for c in 0..k {
+                let j = block[c * len + q] * columns[c];
+                jtd[(c, g)] += j * dh;
+                if gv > 0 {
+                    jtd[(c, gh + g)] += j * dv;
+                }
+            }
+        }
+    });
+    let gain = bread * jtd;
+    let added = &gain * sh.joint() * gain.transpose();
+    (cov + added, finite)
 }
 
 /// Findings about a fit, each with the status it raises.

@@ -43,7 +43,7 @@ use super::assess::{self, Assessed};
 use super::grid::{self, Grid};
 use super::problem::Problem;
 use super::select::{self, Selection};
-use super::{fmt_s, refine, Kernels, Search, Setup};
+use super::{fmt_s, refine, Kernels, Search, Setup, ShiftCovariance};
 use crate::error::{Error, Result};
 use crate::fit::{Parameter, SolverReport, Status};
 use crate::material::viscoelastic::Prony;
@@ -77,6 +77,10 @@ pub struct ComplexModulus<'a> {
     pub storage_pa: &'a [f64],
     /// Loss modulus E″ (Pa), ≥ 0.
     pub loss_pa: &'a [f64],
+    /// The uncertainty of the shifts that made a master curve of these points
+    /// (`group`: each point's isotherm, in the points' order), carried into the σ
+    /// of every parameter; None where ω and the moduli are as measured.
+    pub shifts: Option<&'a ShiftCovariance>,
 }
 
 /// Settings of a frequency-domain fit.
@@ -213,13 +217,21 @@ pub struct FrequencyKernels {
     /// Whether each row is a loss row.
     loss: Vec<bool>,
     input: Vec<f64>,
+    /// The shifts' uncertainty, by row.
+    shifts: Option<ShiftCovariance>,
 }
 
 impl FrequencyKernels {
-    /// Rows at `omega` (rad/s), loss rows where `loss`.
-    fn new(omega: Vec<f64>, loss: Vec<bool>) -> FrequencyKernels {
+    /// Rows at `omega` (rad/s), loss rows where `loss`, with the shifts' uncertainty
+    /// by row.
+    fn new(omega: Vec<f64>, loss: Vec<bool>, shifts: Option<ShiftCovariance>) -> FrequencyKernels {
         let input = loss.iter().map(|&l| if l { 0.0 } else { 1.0 }).collect();
-        FrequencyKernels { omega, loss, input }
+        FrequencyKernels {
+            omega,
+            loss,
+            input,
+            shifts,
+        }
     }
 }
 
@@ -266,10 +278,14 @@ impl Kernels for FrequencyKernels {
     fn noise_groups(&self) -> Option<Vec<usize>> {
         Some(self.loss.iter().map(|&l| usize::from(l)).collect())
     }
+    fn shift_covariance(&self) -> Option<&ShiftCovariance> {
+        self.shifts.as_ref()
+    }
     fn subsample(&self, idx: &[usize]) -> Option<FrequencyKernels> {
         Some(FrequencyKernels::new(
             idx.iter().map(|&i| self.omega[i]).collect(),
             idx.iter().map(|&i| self.loss[i]).collect(),
+            self.shifts.as_ref().map(|s| s.rows(idx)),
         ))
     }
     fn outside_window(name: &str, short: bool, window: (f64, f64)) -> String {
@@ -308,6 +324,20 @@ fn check(data: &ComplexModulus) -> Result<()> {
             k + 1
         )))
     };
+    if let Some(sh) = data.shifts {
+        let g = sh.horizontal.nrows();
+        let square = |c: &nalgebra::DMatrix<f64>| c.is_square() && c.nrows() == g;
+        if sh.group.len() != m
+            || sh.group.iter().any(|&i| i >= g)
+            || !square(&sh.horizontal)
+            || sh.vertical.as_ref().is_some_and(|v| !square(v))
+            || sh.joint().iter().any(|v| !v.is_finite())
+        {
+            return Err(Error::settings(format!(
+                "the shifts' uncertainty must give each of the {m} points one of {g} groups and finite {g} × {g} covariances"
+            )));
+        }
+    }
     for k in 0..m {
         let (w, s, l) = (data.omega_rad_s[k], data.storage_pa[k], data.loss_pa[k]);
         if !(w.is_finite() && w > 0.0) {
@@ -347,7 +377,16 @@ fn setup(data: &ComplexModulus, loss_weight: f64) -> Setup<FrequencyKernels> {
         w.extend(modulus.iter().map(|e| loss_weight / e));
     }
     let window = (1.0 / omega[omega.len() - 1], 1.0 / omega[0]);
-    let kern = FrequencyKernels::new(rows, loss);
+    let shifts = data.shifts.map(|s| {
+        let idx: Vec<usize> = order
+            .iter()
+            .chain(&order)
+            .take(rows.len())
+            .copied()
+            .collect();
+        s.rows(&idx)
+    });
+    let kern = FrequencyKernels::new(rows, loss, shifts);
     Setup::new(Problem::new(kern, y, w, smax), window, 1.0)
 }
 

@@ -7,6 +7,8 @@
 //!   h = ω²τ²/(1 + ω²τ²), a loss row x = 0 and h = ωτ/(1 + ω²τ²)
 //!   ([`super::frequency`]).
 
+use nalgebra::DMatrix;
+
 /// The rows of a Prony problem in one domain.
 pub trait Kernels: Clone + Send + Sync {
     /// The words naming the τ window in messages ("the sampled time window").
@@ -56,6 +58,14 @@ pub trait Kernels: Clone + Send + Sync {
         None
     }
 
+    /// The uncertainty of the shifts the rows' abscissae were built with (a master
+    /// curve's isotherms, each moved by an uncertain log10 aT, and log10 bT): the
+    /// assessment adds what it does to the parameters. None (the default): the
+    /// abscissae are exact.
+    fn shift_covariance(&self) -> Option<&ShiftCovariance> {
+        None
+    }
+
     /// The same domain on the rows `idx` (increasing); None where that cannot be
     /// built.
     fn subsample(&self, idx: &[usize]) -> Option<Self>;
@@ -63,4 +73,42 @@ pub trait Kernels: Clone + Send + Sync {
     /// The finding for a term (`name`: "τ2 = 3 s") whose τ lies outside `window`,
     /// below it when `short`: why its τ and modulus are not determined.
     fn outside_window(name: &str, short: bool, window: (f64, f64)) -> String;
+}
+
+/// The uncertainty of the shifts that built a data set from groups of rows (the
+/// isotherms of a time–temperature master curve): group g's abscissa was multiplied
+/// by a_g = 10^(log10 a_g) and its values divided by b_g = 10^(log10 b_g), each
+/// uncertain. A kernel that depends on ωτ alone moves with log10 a_g as with every
+/// τ of the group's rows together, so a shift's error is an error of the data the
+/// fit cannot see in its residuals ([`super::assess`] propagates it).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShiftCovariance {
+    /// Each row's group.
+    pub group: Vec<usize>,
+    /// The covariance of the groups' horizontal shifts log10 a_g (decades²).
+    pub horizontal: DMatrix<f64>,
+    /// The covariance of their vertical shifts log10 b_g, where there are.
+    pub vertical: Option<DMatrix<f64>>,
+}
+
+impl ShiftCovariance {
+    /// The same shifts on the rows `idx`.
+    pub fn rows(&self, idx: &[usize]) -> ShiftCovariance {
+        ShiftCovariance {
+            group: idx.iter().map(|&i| self.group[i]).collect(),
+            ..self.clone()
+        }
+    }
+
+    /// The covariance of all the shifts, horizontal then vertical (decades²).
+    pub fn joint(&self) -> DMatrix<f64> {
+        let h = self.horizontal.nrows();
+        let v = self.vertical.as_ref().map_or(0, |v| v.nrows());
+        let mut c = DMatrix::zeros(h + v, h + v);
+        c.view_mut((0, 0), (h, h)).copy_from(&self.horizontal);
+        if let Some(vert) = &self.vertical {
+            c.view_mut((h, h), (v, v)).copy_from(vert);
+        }
+        c
+    }
 }

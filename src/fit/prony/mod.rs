@@ -33,7 +33,7 @@ pub mod refine;
 pub mod select;
 pub mod starts;
 
-pub use kernels::Kernels;
+pub use kernels::{Kernels, ShiftCovariance};
 
 /// The normal equations (JᵀJ, Jᵀr) a problem formed at its last point p, for
 /// [`crate::fit::lm::LeastSquares::normal_equations`]: handed out only at that p.

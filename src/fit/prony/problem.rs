@@ -12,10 +12,13 @@ use std::sync::Arc;
 /// S·(e∞·x + Σ eᵢ·hᵢ)), residuals rₖ = wₖ·(model − yₖ).
 ///
 /// Every product over the data is taken a block of [`BLOCK_ROWS`] rows at a time
-/// ([`Problem::pass`]): the terms' kernels of a block are computed, used and
-/// overwritten by the next block's, so an evaluation holds n·[`BLOCK_ROWS`] kernels
-/// (and as many derivatives) whatever the number of rows, not n per row (at 10⁶
-/// points and six terms the kernels and their derivatives were 96 MB a term count).
+/// ([`Problem::pass`]). A problem whose kernels and derivatives fit
+/// [`KEPT_KERNEL_BYTES`] keeps every block's between passes, so a second pass at
+/// the same τ computes none; a larger one computes each block's, uses them and
+/// overwrites them with the next block's, so an evaluation holds N·[`BLOCK_ROWS`]
+/// kernels (and as many derivatives) whatever the number of rows, not N per row (at
+/// 10⁶ points and six terms the kernels and their derivatives were 96 MB a term
+/// count).
 #[derive(Debug, Clone)]
 pub struct Problem<K: Kernels> {
     /// The domain's rows: inputs and kernels. The rows, data and weights are
@@ -31,8 +34,9 @@ pub struct Problem<K: Kernels> {
     pub scale: f64,
     /// Number of Prony terms N.
     pub n_terms: usize,
-    /// The kernels of the last block a pass visited.
-    kernels: KernelBlock<K::Carry>,
+    /// The kernels of the last pass: every block's, in order, where they fit
+    /// [`KEPT_KERNEL_BYTES`], else the last block's.
+    kernels: Vec<KernelBlock>,
     /// p, JᵀJ and Jᵀr of the last evaluation asked for its normal equations
     /// ([`LeastSquares::forms_normal_equations`]).
     normal: super::NormalCache,
@@ -46,16 +50,29 @@ pub struct Problem<K: Kernels> {
 /// and normal equations, [`super::projection::Projected`]'s Gram products): the
 /// kernels and columns of a block (at most 2·40 + 2 of 4 kB) stay in the level-2
 /// cache while all their products are taken, and no column of the data's length is
-/// formed; a curve of at most this many points (every shipped one, and the starts'
-/// subsample) is one block, whose kernels a problem keeps from pass to pass.
+/// formed.
 pub(crate) const BLOCK_ROWS: usize = 512;
+
+/// The most a problem spends on keeping its kernels hᵢ and τ-derivatives between
+/// passes ([`Problem::pass`]): it keeps every block's when 2·N·m·8 B (N terms, m
+/// rows) is at most this. A pass at the kernels' τ (the projection's residuals
+/// after its Gram products, the joint polish's first evaluation after the
+/// projection's moduli, the assessment's Jacobian after its residuals) then
+/// computes none: at 10⁵ points they were an 18 % longer `relaxation --terms
+/// auto`. 12 MiB keeps a curve of 10⁵ points up to 7 terms (the default
+/// `--max-terms` is 6: N·1.6 MB) and every curve of at most [`BLOCK_ROWS`] points
+/// at any term count, and no curve of 10⁶ points (one term alone is 16 MB), whose
+/// kernels would multiply its memory. The term counts are fitted in parallel
+/// (rayon, each on its own clone of the problem) and each finished count keeps its
+/// problem until the choice, so a run holds at most Σ_N min(2·N·m·8 B, this): 34 MB
+/// for the counts 1–6 at 10⁵ points, nothing more at 10⁶.
+pub(crate) const KEPT_KERNEL_BYTES: usize = 12 << 20;
 
 /// The terms' kernels at one block of rows ([`Problem::pass`]): hᵢ(τᵢ) of the rows
 /// `rows`, one column of `rows.len()` values a term end to end, and their
-/// τ-derivatives in `dh` where they were asked for; `carry`, where the pass over
-/// the rows stands after them ([`Kernels::kernel_rows`]).
+/// τ-derivatives in `dh` where they were asked for.
 #[derive(Debug, Clone, Default)]
-pub(crate) struct KernelBlock<C> {
+pub(crate) struct KernelBlock {
     /// The τᵢ.
     pub(crate) taus: Vec<f64>,
     /// The rows.
@@ -64,7 +81,31 @@ pub(crate) struct KernelBlock<C> {
     derivatives: bool,
     pub(crate) h: Vec<f64>,
     pub(crate) dh: Vec<f64>,
-    carry: C,
+}
+
+impl KernelBlock {
+    /// The kernels of `kern` at `taus` on `rows` (and their derivatives when
+    /// `derivatives`), the pass standing at `carry` before them and left after them
+    /// ([`Kernels::kernel_rows`]), in place of this block's (no allocation when it
+    /// held as many).
+    fn compute<K: Kernels>(
+        &mut self,
+        kern: &K,
+        taus: &[f64],
+        rows: std::ops::Range<usize>,
+        derivatives: bool,
+        carry: &mut K::Carry,
+    ) {
+        let len = taus.len() * rows.len();
+        self.h.resize(len, 0.0);
+        self.dh.resize(if derivatives { len } else { 0 }, 0.0);
+        let dh = derivatives.then_some(&mut self.dh[..]);
+        kern.kernel_rows(taus, rows.clone(), carry, &mut self.h, dh);
+        self.taus.clear();
+        self.taus.extend_from_slice(taus);
+        self.rows = rows;
+        self.derivatives = derivatives;
+    }
 }
 
 /// What a pass over the rows needs of the kernels ([`Problem::pass`]).
@@ -75,7 +116,7 @@ pub(crate) enum Need {
     /// The kernels and their τ-derivatives.
     Derivatives,
     /// The kernels, and the derivatives at the same τ in the pass after: a problem
-    /// of one block, which keeps its kernels, computes both at once.
+    /// that keeps its kernels ([`KEPT_KERNEL_BYTES`]) computes both at once.
     ValuesThenDerivatives,
 }
 
@@ -89,7 +130,7 @@ impl<K: Kernels> Problem<K> {
             w: w.into(),
             scale,
             n_terms: 0,
-            kernels: KernelBlock::default(),
+            kernels: Vec::new(),
             normal: super::NormalCache::default(),
             block: Vec::new(),
             evaluations: 0,
@@ -128,10 +169,17 @@ impl<K: Kernels> Problem<K> {
     }
 
     /// How many kernels and τ-derivatives the problem holds (those of the last
-    /// block a pass visited).
+    /// pass: [`Problem::pass`]).
     #[cfg(test)]
     pub(crate) fn kernel_values(&self) -> (usize, usize) {
-        (self.kernels.h.len(), self.kernels.dh.len())
+        let sum = |f: fn(&KernelBlock) -> usize| self.kernels.iter().map(f).sum();
+        (sum(|b| b.h.len()), sum(|b| b.dh.len()))
+    }
+
+    /// Whether the problem keeps the kernels and derivatives of `terms` terms at
+    /// every row between passes: 2·N·m·8 B within [`KEPT_KERNEL_BYTES`].
+    fn keeps_kernels(&self, terms: usize) -> bool {
+        2 * terms * self.len() * std::mem::size_of::<f64>() <= KEPT_KERNEL_BYTES
     }
 
     /// The τᵢ = e^(ln τᵢ) of the terms of `p`.
@@ -140,50 +188,50 @@ impl<K: Kernels> Problem<K> {
         p[1 + n..1 + 2 * n].iter().map(|lt| lt.exp()).collect()
     }
 
-    /// One pass over the rows with the terms' kernels at `taus`: for each block of
-    /// [`BLOCK_ROWS`] rows in order, their kernels (and τ-derivatives, as `need`
-    /// says) computed from where the block before left the pass
-    /// ([`Kernels::kernel_rows`]), then `f(self, block)`. A problem of one block
-    /// keeps its kernels: a pass at the same τ takes them instead (the same bits:
-    /// each τ's kernel depends on that τ alone).
+    /// One pass over the rows with the terms' kernels at `taus`: `f(self, block)`
+    /// for each block of [`BLOCK_ROWS`] rows in order, with its kernels (and
+    /// τ-derivatives, as `need` says). Where the problem holds every block's at
+    /// `taus` (with derivatives if needed) from the pass before, the pass takes them
+    /// (the same bits: each τ's kernel depends on that τ alone); otherwise each
+    /// block's are computed from where the block before left the pass
+    /// ([`Kernels::kernel_rows`]), and kept for the next pass, every block's where
+    /// they fit [`KEPT_KERNEL_BYTES`], else only the last one's.
     pub(crate) fn pass(
         &mut self,
         taus: &[f64],
         need: Need,
-        mut f: impl FnMut(&Self, &KernelBlock<K::Carry>),
+        mut f: impl FnMut(&Self, &KernelBlock),
     ) {
         let m = self.len();
+        let keep = self.keeps_kernels(taus.len());
         let derivatives = match need {
             Need::Values => false,
             Need::Derivatives => true,
-            Need::ValuesThenDerivatives => m <= BLOCK_ROWS,
+            Need::ValuesThenDerivatives => keep,
         };
-        let mut b = std::mem::take(&mut self.kernels);
-        for lo in (0..m).step_by(BLOCK_ROWS) {
-            let rows = lo..(lo + BLOCK_ROWS).min(m);
-            let kept = b.rows == rows && b.taus == taus && (b.derivatives || !derivatives);
-            if !kept {
-                if lo == 0 {
-                    b.carry = Default::default();
-                }
-                let len = rows.len();
-                b.h.resize(taus.len() * len, 0.0);
-                b.dh.resize(if derivatives { taus.len() * len } else { 0 }, 0.0);
-                let dh = derivatives.then_some(&mut b.dh[..]);
-                self.kern
-                    .kernel_rows(taus, rows.clone(), &mut b.carry, &mut b.h, dh);
-                b.taus.clear();
-                b.taus.extend_from_slice(taus);
-                b.rows = rows;
-                b.derivatives = derivatives;
+        let mut kept = std::mem::take(&mut self.kernels);
+        let blocks = m.div_ceil(BLOCK_ROWS);
+        let held = kept.len() == blocks
+            && kept
+                .iter()
+                .all(|b| b.taus == taus && (b.derivatives || !derivatives));
+        if held {
+            kept.iter().for_each(|b| f(self, b));
+        } else {
+            kept.resize_with(if keep { blocks } else { blocks.min(1) }, Default::default);
+            let mut carry = K::Carry::default();
+            for (i, lo) in (0..m).step_by(BLOCK_ROWS).enumerate() {
+                let b = &mut kept[if keep { i } else { 0 }];
+                let rows = lo..(lo + BLOCK_ROWS).min(m);
+                b.compute(&*self.kern, taus, rows, derivatives, &mut carry);
+                f(self, b);
             }
-            f(self, &b);
         }
-        self.kernels = b;
+        self.kernels = kept;
     }
 
     /// e∞·x + Σ eᵢ·hᵢ at the rows of `b` into `out` (the model over S).
-    fn combine(&self, p: &[f64], b: &KernelBlock<K::Carry>, out: &mut [f64]) {
+    fn combine(&self, p: &[f64], b: &KernelBlock, out: &mut [f64]) {
         let len = b.rows.len();
         for (o, x) in out.iter_mut().zip(&self.kern.input()[b.rows.clone()]) {
             *o = p[0] * x;
@@ -202,7 +250,7 @@ impl<K: Kernels> Problem<K> {
         p: &[f64],
         need: Need,
         r: &mut [f64],
-        mut then: impl FnMut(&Self, &KernelBlock<K::Carry>, &[f64], &[f64]),
+        mut then: impl FnMut(&Self, &KernelBlock, &[f64], &[f64]),
     ) {
         let taus = self.taus(p);
         let s = self.scale;
@@ -236,7 +284,7 @@ impl<K: Kernels> Problem<K> {
     }
 
     /// [`Problem::reach`] over the rows of `b`, each term's into `reach` where larger.
-    fn reach_block(&self, p: &[f64], b: &KernelBlock<K::Carry>, reach: &mut [f64]) {
+    fn reach_block(&self, p: &[f64], b: &KernelBlock, reach: &mut [f64]) {
         let (len, s) = (b.rows.len(), self.scale);
         let w = &self.w[b.rows.clone()];
         for ((e, h), reach) in p[1..=self.n_terms]
@@ -255,8 +303,8 @@ impl<K: Kernels> Problem<K> {
     /// What the assessment takes of a fit at `p`, in one pass over the rows: the
     /// residuals into `r` (those of [`LeastSquares::eval`]), the model observations
     /// (stress, modulus) into `model`, and each term's reach ([`Problem::reach`]),
-    /// returned; the kernels' derivatives at p follow (a problem of one block keeps
-    /// them for the Jacobian: [`Need::ValuesThenDerivatives`]).
+    /// returned; the kernels' derivatives at p follow (a problem that keeps its
+    /// kernels keeps them for the Jacobian: [`Need::ValuesThenDerivatives`]).
     pub(crate) fn residuals_model_reach(
         &mut self,
         p: &[f64],
@@ -307,12 +355,7 @@ impl<K: Kernels> Problem<K> {
     /// into `out`: the columns of [`super::projection::Projected`]'s Gram products a
     /// block at a time, each value the product [`Problem::kernel_columns`] forms
     /// (h·wS, ∂h/∂τ·(wS·τ)), so the same bits.
-    pub(crate) fn design_block(
-        &self,
-        b: &KernelBlock<K::Carry>,
-        derivatives: bool,
-        out: &mut Vec<f64>,
-    ) {
+    pub(crate) fn design_block(&self, b: &KernelBlock, derivatives: bool, out: &mut Vec<f64>) {
         let (lo, hi) = (b.rows.start, b.rows.end);
         let (n, len, s) = (self.n_terms, hi - lo, self.scale);
         let cols = 2 + n + if derivatives { n } else { 0 };
@@ -341,7 +384,7 @@ impl<K: Kernels> Problem<K> {
     /// The rows of `b` (which must hold the kernels' derivatives at `p`) of the
     /// Jacobian at `p` end to end into `out`: the columns w·S·x, w·S·hᵢ and
     /// w·S·eᵢ·τᵢ·∂hᵢ/∂τ of [`LeastSquares::eval`].
-    pub(crate) fn jacobian_block(&self, p: &[f64], b: &KernelBlock<K::Carry>, out: &mut [f64]) {
+    pub(crate) fn jacobian_block(&self, p: &[f64], b: &KernelBlock, out: &mut [f64]) {
         let (lo, hi) = (b.rows.start, b.rows.end);
         let (n, len, s) = (self.n_terms, hi - lo, self.scale);
         let w = &self.w[lo..hi];

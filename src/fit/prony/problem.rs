@@ -176,6 +176,14 @@ impl<K: Kernels> Problem<K> {
         (sum(|b| b.h.len()), sum(|b| b.dh.len()))
     }
 
+    /// Drops the kernels the problem keeps ([`Problem::pass`]): a finished fit
+    /// waits for the others before its assessment, whose passes are at other τ
+    /// (the terms sorted), and the kept kernels of every count at 10⁵ points were
+    /// 34 MB.
+    pub(crate) fn release_kernels(&mut self) {
+        self.kernels = Vec::new();
+    }
+
     /// Whether the problem keeps the kernels and derivatives of `terms` terms at
     /// every row between passes: 2·N·m·8 B within [`KEPT_KERNEL_BYTES`].
     fn keeps_kernels(&self, terms: usize) -> bool {

@@ -34,9 +34,8 @@ pub struct Problem<K: Kernels> {
     pub scale: f64,
     /// Number of Prony terms N.
     pub n_terms: usize,
-    /// The kernels of the last pass: every block's, in order, where they fit
-    /// [`KEPT_KERNEL_BYTES`], else the last block's.
-    kernels: Vec<KernelBlock>,
+    /// The kernels of the last pass ([`Problem::pass`]).
+    kernels: Kept,
     /// p, JᵀJ and Jᵀr of the last evaluation asked for its normal equations
     /// ([`LeastSquares::forms_normal_equations`]).
     normal: super::NormalCache,
@@ -70,42 +69,31 @@ pub(crate) const KEPT_KERNEL_BYTES: usize = 12 << 20;
 
 /// The terms' kernels at one block of rows ([`Problem::pass`]): hᵢ(τᵢ) of the rows
 /// `rows`, one column of `rows.len()` values a term end to end, and their
-/// τ-derivatives in `dh` where they were asked for.
-#[derive(Debug, Clone, Default)]
-pub(crate) struct KernelBlock {
+/// τ-derivatives in `dh` where they were asked for (else empty).
+#[derive(Debug)]
+pub(crate) struct KernelBlock<'a> {
     /// The τᵢ.
-    pub(crate) taus: Vec<f64>,
+    pub(crate) taus: &'a [f64],
     /// The rows.
     pub(crate) rows: std::ops::Range<usize>,
-    /// Whether `dh` holds the derivatives.
-    derivatives: bool,
-    pub(crate) h: Vec<f64>,
-    pub(crate) dh: Vec<f64>,
+    pub(crate) h: &'a [f64],
+    pub(crate) dh: &'a [f64],
 }
 
-impl KernelBlock {
-    /// The kernels of `kern` at `taus` on `rows` (and their derivatives when
-    /// `derivatives`), the pass standing at `carry` before them and left after them
-    /// ([`Kernels::kernel_rows`]), in place of this block's (no allocation when it
-    /// held as many).
-    fn compute<K: Kernels>(
-        &mut self,
-        kern: &K,
-        taus: &[f64],
-        rows: std::ops::Range<usize>,
-        derivatives: bool,
-        carry: &mut K::Carry,
-    ) {
-        let len = taus.len() * rows.len();
-        self.h.resize(len, 0.0);
-        self.dh.resize(if derivatives { len } else { 0 }, 0.0);
-        let dh = derivatives.then_some(&mut self.dh[..]);
-        kern.kernel_rows(taus, rows.clone(), carry, &mut self.h, dh);
-        self.taus.clear();
-        self.taus.extend_from_slice(taus);
-        self.rows = rows;
-        self.derivatives = derivatives;
-    }
+/// The kernels a [`Problem`] holds from its last pass: every block's [`KernelBlock`]
+/// end to end (`whole`: block-major, so a block's are one slice) where they fit
+/// [`KEPT_KERNEL_BYTES`], else the last block's; one allocation each for the
+/// kernels and derivatives, reused from pass to pass.
+#[derive(Debug, Clone, Default)]
+struct Kept {
+    /// The τᵢ.
+    taus: Vec<f64>,
+    /// Whether `h` holds every row's kernels.
+    whole: bool,
+    /// Whether `dh` holds the derivatives.
+    derivatives: bool,
+    h: Vec<f64>,
+    dh: Vec<f64>,
 }
 
 /// What a pass over the rows needs of the kernels ([`Problem::pass`]).
@@ -130,7 +118,7 @@ impl<K: Kernels> Problem<K> {
             w: w.into(),
             scale,
             n_terms: 0,
-            kernels: Vec::new(),
+            kernels: Kept::default(),
             normal: super::NormalCache::default(),
             block: Vec::new(),
             evaluations: 0,
@@ -172,8 +160,7 @@ impl<K: Kernels> Problem<K> {
     /// pass: [`Problem::pass`]).
     #[cfg(test)]
     pub(crate) fn kernel_values(&self) -> (usize, usize) {
-        let sum = |f: fn(&KernelBlock) -> usize| self.kernels.iter().map(f).sum();
-        (sum(|b| b.h.len()), sum(|b| b.dh.len()))
+        (self.kernels.h.len(), self.kernels.dh.len())
     }
 
     /// Drops the kernels the problem keeps ([`Problem::pass`]): a finished fit
@@ -181,7 +168,7 @@ impl<K: Kernels> Problem<K> {
     /// (the terms sorted), and the kept kernels of every count at 10⁵ points were
     /// 34 MB.
     pub(crate) fn release_kernels(&mut self) {
-        self.kernels = Vec::new();
+        self.kernels = Kept::default();
     }
 
     /// Whether the problem keeps the kernels and derivatives of `terms` terms at
@@ -198,48 +185,64 @@ impl<K: Kernels> Problem<K> {
 
     /// One pass over the rows with the terms' kernels at `taus`: `f(self, block)`
     /// for each block of [`BLOCK_ROWS`] rows in order, with its kernels (and
-    /// τ-derivatives, as `need` says). Where the problem holds every block's at
-    /// `taus` (with derivatives if needed) from the pass before, the pass takes them
-    /// (the same bits: each τ's kernel depends on that τ alone); otherwise each
-    /// block's are computed from where the block before left the pass
-    /// ([`Kernels::kernel_rows`]), and kept for the next pass, every block's where
-    /// they fit [`KEPT_KERNEL_BYTES`], else only the last one's.
+    /// τ-derivatives, as `need` says). Where the problem holds every row's at `taus`
+    /// (with derivatives if needed) from the pass before, the pass takes them (the
+    /// same bits: each τ's kernel depends on that τ alone); otherwise each block's
+    /// are computed from where the block before left the pass
+    /// ([`Kernels::kernel_rows`]), and kept for the next pass: every block's where
+    /// they fit [`KEPT_KERNEL_BYTES`], else each overwrites the one before.
     pub(crate) fn pass(
         &mut self,
         taus: &[f64],
         need: Need,
-        mut f: impl FnMut(&Self, &KernelBlock),
+        mut f: impl FnMut(&Self, &KernelBlock<'_>),
     ) {
-        let m = self.len();
-        let keep = self.keeps_kernels(taus.len());
+        let (m, n) = (self.len(), taus.len());
+        let whole = self.keeps_kernels(n);
         let derivatives = match need {
             Need::Values => false,
             Need::Derivatives => true,
-            Need::ValuesThenDerivatives => keep,
+            Need::ValuesThenDerivatives => whole,
         };
-        let mut kept = std::mem::take(&mut self.kernels);
-        let blocks = m.div_ceil(BLOCK_ROWS);
-        let held = kept.len() == blocks
-            && kept
-                .iter()
-                .all(|b| b.taus == taus && (b.derivatives || !derivatives));
-        if held {
-            kept.iter().for_each(|b| f(self, b));
-        } else {
-            kept.resize_with(if keep { blocks } else { blocks.min(1) }, Default::default);
-            let mut carry = K::Carry::default();
-            for (i, lo) in (0..m).step_by(BLOCK_ROWS).enumerate() {
-                let b = &mut kept[if keep { i } else { 0 }];
-                let rows = lo..(lo + BLOCK_ROWS).min(m);
-                b.compute(&*self.kern, taus, rows, derivatives, &mut carry);
-                f(self, b);
-            }
+        let mut k = std::mem::take(&mut self.kernels);
+        let held = k.whole && k.taus == taus && (k.derivatives || !derivatives);
+        if !held {
+            let size = n * if whole { m } else { m.min(BLOCK_ROWS) };
+            k.h.resize(size, 0.0);
+            k.dh.resize(if derivatives { size } else { 0 }, 0.0);
+            k.taus.clear();
+            k.taus.extend_from_slice(taus);
+            (k.whole, k.derivatives) = (whole, derivatives);
         }
-        self.kernels = kept;
+        let mut carry = K::Carry::default();
+        for lo in (0..m).step_by(BLOCK_ROWS) {
+            let rows = lo..(lo + BLOCK_ROWS).min(m);
+            let at = if k.whole { n * lo } else { 0 };
+            let values = at..at + n * rows.len();
+            if !held {
+                let dh = derivatives.then(|| &mut k.dh[values.clone()]);
+                let h = &mut k.h[values.clone()];
+                self.kern.kernel_rows(taus, rows.clone(), &mut carry, h, dh);
+            }
+            let dh = match k.dh.is_empty() {
+                true => &[][..],
+                false => &k.dh[values.clone()],
+            };
+            f(
+                self,
+                &KernelBlock {
+                    taus,
+                    rows,
+                    h: &k.h[values],
+                    dh,
+                },
+            );
+        }
+        self.kernels = k;
     }
 
     /// e∞·x + Σ eᵢ·hᵢ at the rows of `b` into `out` (the model over S).
-    fn combine(&self, p: &[f64], b: &KernelBlock, out: &mut [f64]) {
+    fn combine(&self, p: &[f64], b: &KernelBlock<'_>, out: &mut [f64]) {
         let len = b.rows.len();
         for (o, x) in out.iter_mut().zip(&self.kern.input()[b.rows.clone()]) {
             *o = p[0] * x;
@@ -258,7 +261,7 @@ impl<K: Kernels> Problem<K> {
         p: &[f64],
         need: Need,
         r: &mut [f64],
-        mut then: impl FnMut(&Self, &KernelBlock, &[f64], &[f64]),
+        mut then: impl FnMut(&Self, &KernelBlock<'_>, &[f64], &[f64]),
     ) {
         let taus = self.taus(p);
         let s = self.scale;
@@ -292,7 +295,7 @@ impl<K: Kernels> Problem<K> {
     }
 
     /// [`Problem::reach`] over the rows of `b`, each term's into `reach` where larger.
-    fn reach_block(&self, p: &[f64], b: &KernelBlock, reach: &mut [f64]) {
+    fn reach_block(&self, p: &[f64], b: &KernelBlock<'_>, reach: &mut [f64]) {
         let (len, s) = (b.rows.len(), self.scale);
         let w = &self.w[b.rows.clone()];
         for ((e, h), reach) in p[1..=self.n_terms]
@@ -363,7 +366,7 @@ impl<K: Kernels> Problem<K> {
     /// into `out`: the columns of [`super::projection::Projected`]'s Gram products a
     /// block at a time, each value the product [`Problem::kernel_columns`] forms
     /// (h·wS, ∂h/∂τ·(wS·τ)), so the same bits.
-    pub(crate) fn design_block(&self, b: &KernelBlock, derivatives: bool, out: &mut Vec<f64>) {
+    pub(crate) fn design_block(&self, b: &KernelBlock<'_>, derivatives: bool, out: &mut Vec<f64>) {
         let (lo, hi) = (b.rows.start, b.rows.end);
         let (n, len, s) = (self.n_terms, hi - lo, self.scale);
         let cols = 2 + n + if derivatives { n } else { 0 };
@@ -381,7 +384,7 @@ impl<K: Kernels> Problem<K> {
         self.targets_block(lo, hi, t);
         if derivatives {
             let dh = b.dh.chunks_exact(len);
-            for ((a, tau), dh) in d.chunks_exact_mut(len).zip(&b.taus).zip(dh) {
+            for ((a, tau), dh) in d.chunks_exact_mut(len).zip(b.taus).zip(dh) {
                 for ((a, w), dh) in a.iter_mut().zip(w).zip(dh) {
                     *a = dh * (w * s * tau);
                 }
@@ -392,7 +395,7 @@ impl<K: Kernels> Problem<K> {
     /// The rows of `b` (which must hold the kernels' derivatives at `p`) of the
     /// Jacobian at `p` end to end into `out`: the columns w·S·x, w·S·hᵢ and
     /// w·S·eᵢ·τᵢ·∂hᵢ/∂τ of [`LeastSquares::eval`].
-    pub(crate) fn jacobian_block(&self, p: &[f64], b: &KernelBlock, out: &mut [f64]) {
+    pub(crate) fn jacobian_block(&self, p: &[f64], b: &KernelBlock<'_>, out: &mut [f64]) {
         let (lo, hi) = (b.rows.start, b.rows.end);
         let (n, len, s) = (self.n_terms, hi - lo, self.scale);
         let w = &self.w[lo..hi];

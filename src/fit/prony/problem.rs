@@ -34,8 +34,12 @@ pub struct Problem<K: Kernels> {
     pub scale: f64,
     /// Number of Prony terms N.
     pub n_terms: usize,
-    /// The kernels of the last pass ([`Problem::pass`]).
-    kernels: Kept,
+    /// The rows of the curve whose subsample the problem is (its own where it is
+    /// none): what its kept kernels are reckoned on ([`Problem::keeps_kernels`]).
+    curve_rows: usize,
+    /// The kernels of the last pass: every block's, in order, where they fit
+    /// [`KEPT_KERNEL_BYTES`], else the last block's.
+    kernels: Vec<KernelBlock>,
     /// p, JᵀJ and Jᵀr of the last evaluation asked for its normal equations
     /// ([`LeastSquares::forms_normal_equations`]).
     normal: super::NormalCache,
@@ -69,31 +73,42 @@ pub(crate) const KEPT_KERNEL_BYTES: usize = 12 << 20;
 
 /// The terms' kernels at one block of rows ([`Problem::pass`]): hᵢ(τᵢ) of the rows
 /// `rows`, one column of `rows.len()` values a term end to end, and their
-/// τ-derivatives in `dh` where they were asked for (else empty).
-#[derive(Debug)]
-pub(crate) struct KernelBlock<'a> {
+/// τ-derivatives in `dh` where they were asked for.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct KernelBlock {
     /// The τᵢ.
-    pub(crate) taus: &'a [f64],
+    pub(crate) taus: Vec<f64>,
     /// The rows.
     pub(crate) rows: std::ops::Range<usize>,
-    pub(crate) h: &'a [f64],
-    pub(crate) dh: &'a [f64],
-}
-
-/// The kernels a [`Problem`] holds from its last pass: every block's [`KernelBlock`]
-/// end to end (`whole`: block-major, so a block's are one slice) where they fit
-/// [`KEPT_KERNEL_BYTES`], else the last block's; one allocation each for the
-/// kernels and derivatives, reused from pass to pass.
-#[derive(Debug, Clone, Default)]
-struct Kept {
-    /// The τᵢ.
-    taus: Vec<f64>,
-    /// Whether `h` holds every row's kernels.
-    whole: bool,
     /// Whether `dh` holds the derivatives.
     derivatives: bool,
-    h: Vec<f64>,
-    dh: Vec<f64>,
+    pub(crate) h: Vec<f64>,
+    pub(crate) dh: Vec<f64>,
+}
+
+impl KernelBlock {
+    /// The kernels of `kern` at `taus` on `rows` (and their derivatives when
+    /// `derivatives`), the pass standing at `carry` before them and left after them
+    /// ([`Kernels::kernel_rows`]), in place of this block's (no allocation when it
+    /// held as many).
+    fn compute<K: Kernels>(
+        &mut self,
+        kern: &K,
+        taus: &[f64],
+        rows: std::ops::Range<usize>,
+        derivatives: bool,
+        carry: &mut K::Carry,
+    ) {
+        let len = taus.len() * rows.len();
+        self.h.resize(len, 0.0);
+        self.dh.resize(if derivatives { len } else { 0 }, 0.0);
+        let dh = derivatives.then_some(&mut self.dh[..]);
+        kern.kernel_rows(taus, rows.clone(), carry, &mut self.h, dh);
+        self.taus.clear();
+        self.taus.extend_from_slice(taus);
+        self.rows = rows;
+        self.derivatives = derivatives;
+    }
 }
 
 /// What a pass over the rows needs of the kernels ([`Problem::pass`]).
@@ -112,13 +127,15 @@ impl<K: Kernels> Problem<K> {
     /// The problem of the rows `kern` with data `y`, weights `w` and scale S, no
     /// terms yet.
     pub fn new(kern: K, y: Vec<f64>, w: Vec<f64>, scale: f64) -> Problem<K> {
+        let m = y.len();
         Problem {
             kern: Arc::new(kern),
             y: y.into(),
             w: w.into(),
             scale,
             n_terms: 0,
-            kernels: Kept::default(),
+            curve_rows: m,
+            kernels: Vec::new(),
             normal: super::NormalCache::default(),
             block: Vec::new(),
             evaluations: 0,
@@ -153,6 +170,7 @@ impl<K: Kernels> Problem<K> {
             self.scale,
         );
         sub.n_terms = self.n_terms;
+        sub.curve_rows = self.curve_rows;
         Some(sub)
     }
 
@@ -160,7 +178,8 @@ impl<K: Kernels> Problem<K> {
     /// pass: [`Problem::pass`]).
     #[cfg(test)]
     pub(crate) fn kernel_values(&self) -> (usize, usize) {
-        (self.kernels.h.len(), self.kernels.dh.len())
+        let sum = |f: fn(&KernelBlock) -> usize| self.kernels.iter().map(f).sum();
+        (sum(|b| b.h.len()), sum(|b| b.dh.len()))
     }
 
     /// Drops the kernels the problem keeps ([`Problem::pass`]): a finished fit
@@ -168,13 +187,19 @@ impl<K: Kernels> Problem<K> {
     /// (the terms sorted), and the kept kernels of every count at 10⁵ points were
     /// 34 MB.
     pub(crate) fn release_kernels(&mut self) {
-        self.kernels = Kept::default();
+        self.kernels = Vec::new();
     }
 
     /// Whether the problem keeps the kernels and derivatives of `terms` terms at
-    /// every row between passes: 2·N·m·8 B within [`KEPT_KERNEL_BYTES`].
+    /// every row between passes: where they are one block, or where those of the
+    /// whole curve (`curve_rows`, m) would fit [`KEPT_KERNEL_BYTES`] (2·N·m·8 B).
+    /// A subsample of a longer curve (the searches of [`super::refine::Levels`])
+    /// keeps them as that curve would: its searches run before the whole curve's,
+    /// where the fit's memory peaks, and kept kernels freed by then stay in the
+    /// allocator's pages (10⁶ points on one thread: 133–135 → 138–140 MB).
     fn keeps_kernels(&self, terms: usize) -> bool {
-        2 * terms * self.len() * std::mem::size_of::<f64>() <= KEPT_KERNEL_BYTES
+        let bytes = 2 * terms * self.curve_rows * std::mem::size_of::<f64>();
+        self.len() <= BLOCK_ROWS || bytes <= KEPT_KERNEL_BYTES
     }
 
     /// The τᵢ = e^(ln τᵢ) of the terms of `p`.
@@ -185,64 +210,48 @@ impl<K: Kernels> Problem<K> {
 
     /// One pass over the rows with the terms' kernels at `taus`: `f(self, block)`
     /// for each block of [`BLOCK_ROWS`] rows in order, with its kernels (and
-    /// τ-derivatives, as `need` says). Where the problem holds every row's at `taus`
-    /// (with derivatives if needed) from the pass before, the pass takes them (the
-    /// same bits: each τ's kernel depends on that τ alone); otherwise each block's
-    /// are computed from where the block before left the pass
-    /// ([`Kernels::kernel_rows`]), and kept for the next pass: every block's where
-    /// they fit [`KEPT_KERNEL_BYTES`], else each overwrites the one before.
+    /// τ-derivatives, as `need` says). Where the problem holds every block's at
+    /// `taus` (with derivatives if needed) from the pass before, the pass takes them
+    /// (the same bits: each τ's kernel depends on that τ alone); otherwise each
+    /// block's are computed from where the block before left the pass
+    /// ([`Kernels::kernel_rows`]), and kept for the next pass, every block's where
+    /// they fit [`KEPT_KERNEL_BYTES`], else only the last one's.
     pub(crate) fn pass(
         &mut self,
         taus: &[f64],
         need: Need,
-        mut f: impl FnMut(&Self, &KernelBlock<'_>),
+        mut f: impl FnMut(&Self, &KernelBlock),
     ) {
-        let (m, n) = (self.len(), taus.len());
-        let whole = self.keeps_kernels(n);
+        let m = self.len();
+        let keep = self.keeps_kernels(taus.len());
         let derivatives = match need {
             Need::Values => false,
             Need::Derivatives => true,
-            Need::ValuesThenDerivatives => whole,
+            Need::ValuesThenDerivatives => keep,
         };
-        let mut k = std::mem::take(&mut self.kernels);
-        let held = k.whole && k.taus == taus && (k.derivatives || !derivatives);
-        if !held {
-            let size = n * if whole { m } else { m.min(BLOCK_ROWS) };
-            k.h.resize(size, 0.0);
-            k.dh.resize(if derivatives { size } else { 0 }, 0.0);
-            k.taus.clear();
-            k.taus.extend_from_slice(taus);
-            (k.whole, k.derivatives) = (whole, derivatives);
-        }
-        let mut carry = K::Carry::default();
-        for lo in (0..m).step_by(BLOCK_ROWS) {
-            let rows = lo..(lo + BLOCK_ROWS).min(m);
-            let at = if k.whole { n * lo } else { 0 };
-            let values = at..at + n * rows.len();
-            if !held {
-                let dh = derivatives.then(|| &mut k.dh[values.clone()]);
-                let h = &mut k.h[values.clone()];
-                self.kern.kernel_rows(taus, rows.clone(), &mut carry, h, dh);
+        let mut kept = std::mem::take(&mut self.kernels);
+        let blocks = m.div_ceil(BLOCK_ROWS);
+        let held = kept.len() == blocks
+            && kept
+                .iter()
+                .all(|b| b.taus == taus && (b.derivatives || !derivatives));
+        if held {
+            kept.iter().for_each(|b| f(self, b));
+        } else {
+            kept.resize_with(if keep { blocks } else { blocks.min(1) }, Default::default);
+            let mut carry = K::Carry::default();
+            for (i, lo) in (0..m).step_by(BLOCK_ROWS).enumerate() {
+                let b = &mut kept[if keep { i } else { 0 }];
+                let rows = lo..(lo + BLOCK_ROWS).min(m);
+                b.compute(&*self.kern, taus, rows, derivatives, &mut carry);
+                f(self, b);
             }
-            let dh = match k.dh.is_empty() {
-                true => &[][..],
-                false => &k.dh[values.clone()],
-            };
-            f(
-                self,
-                &KernelBlock {
-                    taus,
-                    rows,
-                    h: &k.h[values],
-                    dh,
-                },
-            );
         }
-        self.kernels = k;
+        self.kernels = kept;
     }
 
     /// e∞·x + Σ eᵢ·hᵢ at the rows of `b` into `out` (the model over S).
-    fn combine(&self, p: &[f64], b: &KernelBlock<'_>, out: &mut [f64]) {
+    fn combine(&self, p: &[f64], b: &KernelBlock, out: &mut [f64]) {
         let len = b.rows.len();
         for (o, x) in out.iter_mut().zip(&self.kern.input()[b.rows.clone()]) {
             *o = p[0] * x;
@@ -261,7 +270,7 @@ impl<K: Kernels> Problem<K> {
         p: &[f64],
         need: Need,
         r: &mut [f64],
-        mut then: impl FnMut(&Self, &KernelBlock<'_>, &[f64], &[f64]),
+        mut then: impl FnMut(&Self, &KernelBlock, &[f64], &[f64]),
     ) {
         let taus = self.taus(p);
         let s = self.scale;
@@ -295,7 +304,7 @@ impl<K: Kernels> Problem<K> {
     }
 
     /// [`Problem::reach`] over the rows of `b`, each term's into `reach` where larger.
-    fn reach_block(&self, p: &[f64], b: &KernelBlock<'_>, reach: &mut [f64]) {
+    fn reach_block(&self, p: &[f64], b: &KernelBlock, reach: &mut [f64]) {
         let (len, s) = (b.rows.len(), self.scale);
         let w = &self.w[b.rows.clone()];
         for ((e, h), reach) in p[1..=self.n_terms]
@@ -366,7 +375,7 @@ impl<K: Kernels> Problem<K> {
     /// into `out`: the columns of [`super::projection::Projected`]'s Gram products a
     /// block at a time, each value the product [`Problem::kernel_columns`] forms
     /// (h·wS, ∂h/∂τ·(wS·τ)), so the same bits.
-    pub(crate) fn design_block(&self, b: &KernelBlock<'_>, derivatives: bool, out: &mut Vec<f64>) {
+    pub(crate) fn design_block(&self, b: &KernelBlock, derivatives: bool, out: &mut Vec<f64>) {
         let (lo, hi) = (b.rows.start, b.rows.end);
         let (n, len, s) = (self.n_terms, hi - lo, self.scale);
         let cols = 2 + n + if derivatives { n } else { 0 };
@@ -384,7 +393,7 @@ impl<K: Kernels> Problem<K> {
         self.targets_block(lo, hi, t);
         if derivatives {
             let dh = b.dh.chunks_exact(len);
-            for ((a, tau), dh) in d.chunks_exact_mut(len).zip(b.taus).zip(dh) {
+            for ((a, tau), dh) in d.chunks_exact_mut(len).zip(&b.taus).zip(dh) {
                 for ((a, w), dh) in a.iter_mut().zip(w).zip(dh) {
                     *a = dh * (w * s * tau);
                 }
@@ -395,7 +404,7 @@ impl<K: Kernels> Problem<K> {
     /// The rows of `b` (which must hold the kernels' derivatives at `p`) of the
     /// Jacobian at `p` end to end into `out`: the columns w·S·x, w·S·hᵢ and
     /// w·S·eᵢ·τᵢ·∂hᵢ/∂τ of [`LeastSquares::eval`].
-    pub(crate) fn jacobian_block(&self, p: &[f64], b: &KernelBlock<'_>, out: &mut [f64]) {
+    pub(crate) fn jacobian_block(&self, p: &[f64], b: &KernelBlock, out: &mut [f64]) {
         let (lo, hi) = (b.rows.start, b.rows.end);
         let (n, len, s) = (self.n_terms, hi - lo, self.scale);
         let w = &self.w[lo..hi];
@@ -574,8 +583,12 @@ mod tests {
             carry.row = rows.end;
             self.computed.fetch_add(taus.len() * len, Ordering::Relaxed);
         }
-        fn subsample(&self, _: &[usize]) -> Option<Decays> {
-            None
+        /// The rows `idx`, numbered anew from 0.
+        fn subsample(&self, idx: &[usize]) -> Option<Decays> {
+            Some(Decays {
+                x: idx.iter().map(|&i| self.x[i]).collect(),
+                computed: self.computed.clone(),
+            })
         }
         fn outside_window(name: &str, _: bool, _: (f64, f64)) -> String {
             name.to_string()
@@ -682,7 +695,9 @@ mod tests {
 
     /// A problem whose kernels and derivatives exceed [`KEPT_KERNEL_BYTES`] (by one
     /// row's) holds those of one block of rows, not of every row, and computes them
-    /// again each pass, the same bits as a pass over all rows at once.
+    /// again each pass, the same bits as a pass over all rows at once. Its
+    /// subsamples keep their kernels as it does, except in one block; those of a
+    /// problem within the budget keep them.
     #[test]
     fn kernels_beyond_the_budget_are_held_a_block_at_a_time() {
         let n = 4;
@@ -697,6 +712,11 @@ mod tests {
         }
         assert_eq!(passed(&mut prob, &taus, Need::Derivatives), (h, dh));
         assert_eq!(computed.swap(0, Ordering::Relaxed), n * m);
-        assert_eq!(prob.kernel_values(), (n * BLOCK_ROWS, n * BLOCK_ROWS));
+        let (h, dh) = prob.kernel_values();
+        assert!(h <= n * BLOCK_ROWS && dh <= n * BLOCK_ROWS, "{h}, {dh}");
+        let keeps = |prob: &Problem<Decays>, rows| prob.subsample(rows).unwrap().keeps_kernels(n);
+        assert!(!keeps(&prob, 4 * BLOCK_ROWS) && keeps(&prob, BLOCK_ROWS));
+        let (within, _) = decays(m - 1, n);
+        assert!(keeps(&within, 4 * BLOCK_ROWS));
     }
 }

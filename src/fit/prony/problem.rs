@@ -58,17 +58,17 @@ pub(crate) const BLOCK_ROWS: usize = 512;
 
 /// The most a problem spends on keeping its kernels hᵢ and τ-derivatives between
 /// passes ([`Problem::pass`]): it keeps every block's when 2·N·m·8 B (N terms, m
-/// rows) is at most this. A pass at the kernels' τ (the projection's residuals
-/// after its Gram products, the joint polish's first evaluation after the
-/// projection's moduli, the assessment's Jacobian after its residuals) then
-/// computes none: at 10⁵ points they were an 18 % longer `relaxation --terms
-/// auto`. 12 MiB keeps a curve of 10⁵ points up to 7 terms (the default
-/// `--max-terms` is 6: N·1.6 MB) and every curve of at most [`BLOCK_ROWS`] points
-/// at any term count, and no curve of 10⁶ points (one term alone is 16 MB), whose
-/// kernels would multiply its memory. The term counts are fitted in parallel
-/// (rayon, each on its own clone of the problem) and each finished count keeps its
-/// problem until the choice, so a run holds at most Σ_N min(2·N·m·8 B, this): 34 MB
-/// for the counts 1–6 at 10⁵ points, nothing more at 10⁶.
+/// rows) is at most this ([`Problem::keeps_kernels`]). A pass at the kernels' τ
+/// (the projection's residuals after its Gram products, the joint polish's first
+/// evaluation after the projection's moduli, the assessment's Jacobian after its
+/// residuals) then computes none: at 10⁵ points recomputing them made
+/// `relaxation --terms auto` 18 % longer. 12 MiB keeps a curve of 10⁵ points up to
+/// 7 terms (N·1.6 MB; the default `--max-terms` is 6) and no curve of 10⁶ points
+/// (one term alone is 16 MB), whose kernels would multiply its memory. The term
+/// counts are searched in parallel (rayon, each on its own clone of the problem),
+/// so the searches hold at most this a thread; a finished search drops them
+/// ([`Problem::release_kernels`]), but an assessed count keeps its assessment's
+/// until the choice: Σ_N 2·N·m·8 B, 34 MB for the counts 1–6 at 10⁵ points.
 pub(crate) const KEPT_KERNEL_BYTES: usize = 12 << 20;
 
 /// The terms' kernels at one block of rows ([`Problem::pass`]): hᵢ(τᵢ) of the rows

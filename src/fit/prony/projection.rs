@@ -96,7 +96,7 @@ impl<'p, K: Kernels> Projected<'p, K> {
     /// [`LeastSquares::eval`] without a Jacobian would set them, counted as an
     /// evaluation: from the Gram products of the last evaluation when it was at θ
     /// (the same products, so the same bits), else from a pass at θ, which a problem
-    /// of one block makes with the kernels' derivatives for the joint problem's
+    /// that keeps its kernels makes with their derivatives for the joint problem's
     /// first evaluation at the same τ ([`Need::ValuesThenDerivatives`]).
     pub fn moduli_at(&mut self, theta: &[f64]) {
         self.prob.evaluations += 1;
@@ -166,7 +166,8 @@ impl<'p, K: Kernels> Projected<'p, K> {
 
     /// The residuals r = A·c − b at the moduli `c` into `r` (as nalgebra's gemv
     /// forms them: a₀c₀ − b, then + aⱼcⱼ column by column, so the same bits) in a
-    /// second pass over the row blocks at `taus`, and, when `derivatives`, dᵢ·r for
+    /// second pass over the row blocks at `taus` (the kernels of [`Projected::gram`]'s,
+    /// where the problem keeps them: [`Problem::pass`]), and, when `derivatives`, dᵢ·r for
     /// each term (blocked as [`Projected::gram`] sums) into `dr` and the Gram
     /// products of the columns ∂A with [A | ∂A] into `gram`; then `gram` made
     /// symmetric.

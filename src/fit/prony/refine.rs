@@ -334,6 +334,7 @@ fn refine<K: Kernels>(
     };
     let mut p = polish.x;
     sort_terms(&mut p, n);
+    prob.release_kernels();
     TermFit {
         n_terms: n,
         p,

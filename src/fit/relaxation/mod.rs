@@ -558,12 +558,13 @@ mod tests {
 
     /// Kernels reused at the same τ are the ones a fresh problem computes: the
     /// joint problem's residuals and Jacobian after a projected evaluation at θ
-    /// (kernels with derivatives, kept by a problem of one block), after one
+    /// (kernels with derivatives, kept by a problem whose kernels fit
+    /// [`KEPT_KERNEL_BYTES`](crate::fit::prony::problem::KEPT_KERNEL_BYTES)), after one
     /// without (the derivatives then computed), and at other τ, each the same bits
     /// as a fresh problem's; and the projection's moduli at θ from its kept Gram
     /// products ([`Projected::moduli_at`]) are a fresh projection's, cold-started,
-    /// bit for bit. On curves of 300 points (one block, whose kernels a problem
-    /// keeps) and 3000 (six blocks, each computed from the one before), 3 terms.
+    /// bit for bit. On curves of 300 points (one block) and 3000 (six blocks, each
+    /// computed from the one before), 3 terms, whose kernels a problem keeps.
     #[test]
     fn reused_kernels_and_gram_products_are_fresh_ones() {
         for points in [300, 3000] {
@@ -609,31 +610,6 @@ mod tests {
         let mut cold = Projected::new(&mut other);
         assert!(cold.eval(&theta, &mut r, None));
         assert_eq!(bits(kept.as_slice()), bits(cold.c.as_slice()));
-    }
-
-    /// No evaluation forms the kernels of more than one block of rows: after the
-    /// projection's and the joint problem's evaluations (with derivatives, and the
-    /// normal equations) and the assessment's passes on a curve of 3000 points (six
-    /// blocks), the kernels a problem holds are at most N·512 values and as many
-    /// derivatives (they were N·m: at 10⁶ points and six terms 96 MB a count).
-    #[test]
-    fn kernels_are_formed_a_block_of_rows_at_a_time() {
-        use crate::fit::prony::problem::BLOCK_ROWS;
-        let (mut prob, p) = four_terms_at_table_3_3(3000);
-        let m = prob.len();
-        let (h, dh) = prob.kernel_values();
-        assert_eq!((h, dh), (0, 0));
-        let mut r = DVector::zeros(m);
-        let mut vp = Projected::new(&mut prob);
-        assert!(vp.eval(&p[5..], &mut r, Some(&mut DMatrix::zeros(0, 4))));
-        assert!(prob.eval(&p, &mut r, Some(&mut DMatrix::zeros(0, 9))));
-        let (mut model, mut rr) = (vec![0.0; m], vec![0.0; m]);
-        prob.residuals_model_reach(&p, &mut rr, &mut model);
-        let (h, dh) = prob.kernel_values();
-        assert!(
-            h > 0 && h <= 4 * BLOCK_ROWS && dh <= 4 * BLOCK_ROWS,
-            "{h}, {dh}"
-        );
     }
 
     /// The seed's Table 3.3 as a step to strain 0.5, `points` log-spaced over

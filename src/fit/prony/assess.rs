@@ -108,6 +108,9 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
         unc.set_covariance(cov);
         finite &= shift_finite;
     }
+    // the count waits for the others' assessments before the choice: its kept
+    // kernels are of no further use (10⁵ points, counts 1–6: ≈ 10 MB less at the peak)
+    prob.release_kernels();
     let y: &[f64] = &prob.y;
     let nf = m as f64;
     let mean = y.iter().sum::<f64>() / nf;

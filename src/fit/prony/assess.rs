@@ -156,6 +156,28 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
     }
 }
 
+/// The Jacobian at `p` a block of rows at a time ([`Problem::pass`],
+/// [`Problem::jacobian_block`]): `f(first row, rows, block)` with the block's
+/// columns end to end. Whether every value was finite.
+fn jacobian_pass<K: Kernels>(
+    prob: &mut Problem<K>,
+    p: &[f64],
+    mut f: impl FnMut(usize, usize, &[f64]),
+) -> bool {
+    let k = 1 + 2 * prob.n_terms;
+    let mut block = Vec::new();
+    let mut finite = true;
+    let taus = prob.taus(p);
+    prob.pass(&taus, Need::Derivatives, |prob, b| {
+        let len = b.rows.len();
+        block.resize(k * len, 0.0);
+        prob.jacobian_block(p, b, &mut block);
+        finite &= block.iter().all(|v| v.is_finite());
+        f(b.rows.start, len, &block);
+    });
+    finite
+}
+
 /// The factor R of the Jacobian at `p` with respect to the SI parameters (column
 /// c times `columns[c]`) and, with noise groups (`groups`: each row's group and a
 /// scale per group), each row divided by its group's scale, its rows pushed a block
@@ -171,21 +193,14 @@ fn factor<K: Kernels>(
 ) -> (RowQr, bool) {
     let (m, k) = (prob.len(), columns.len());
     let mut qr = RowQr::with_rows(k, m);
-    let mut block = Vec::new();
     let mut row = vec![0.0; k];
-    let mut finite = true;
-    let taus = prob.taus(p);
-    prob.pass(&taus, Need::Derivatives, |prob, b| {
-        let len = b.rows.len();
-        block.resize(k * len, 0.0);
-        prob.jacobian_block(p, b, &mut block);
-        finite &= block.iter().all(|v| v.is_finite());
+    let finite = jacobian_pass(prob, p, |start, len, block| {
         for q in 0..len {
             for (c, v) in row.iter_mut().enumerate() {
                 *v = block[c * len + q] * columns[c];
             }
             if let Some((g, scales)) = groups {
-                let f = 1.0 / scales[g[b.rows.start + q]];
+                let f = 1.0 / scales[g[start + q]];
                 row.iter_mut().for_each(|v| *v *= f);
             }
             qr.push(&row, 0.0);
@@ -278,17 +293,10 @@ fn with_shifts<K: Kernels>(
     let gh = sh.horizontal.nrows();
     let gv = sh.vertical.as_ref().map_or(0, |v| v.nrows());
     let mut jtd = DMatrix::zeros(k, gh + gv);
-    let mut block = Vec::new();
-    let mut finite = true;
     let ln10 = std::f64::consts::LN_10;
-    let taus = prob.taus(p);
-    prob.pass(&taus, Need::Derivatives, |prob, b| {
-        let len = b.rows.len();
-        block.resize(k * len, 0.0);
-        prob.jacobian_block(p, b, &mut block);
-        finite &= block.iter().all(|v| v.is_finite());
+    let finite = jacobian_pass(prob, p, |start, len, block| {
         for q in 0..len {
-            let g = sh.group[b.rows.start + q];
+            let g = sh.group[start + q];
             let dh = ln10 * (0..n).map(|i| block[(1 + n + i) * len + q]).sum::<f64>();
             let dv = ln10 * (0..=n).map(|c| block[c * len + q] * p[c]).sum::<f64>();
             for c in 0..k {

@@ -141,6 +141,9 @@ pub(super) fn write(m: &Material, opts: &Options, d: &mut Draft) -> Result<()> {
 fn shift(r: &Relaxation, d: &mut Draft) {
     match super::trs(r, "ANSYS", |_| true, d) {
         Some(Trs::Law(law)) => {
+            d.warn(
+                "the TB,SHIFT fields (WLF: Tr, C1, C2 with log10 A = C1(T - Tr)/(C2 + T - Tr) and A = 1/aT multiplying the time; TN: Tr, H/R) follow the Mechanical APDL Material Reference's Shift Function section, which could not be read to check them: compare TBLIST and a one-element relaxation at a second temperature with the fit's shift_factors before relying on the shift",
+            );
             d.line("! time-temperature shift of the DMA fit; temperatures in K");
             let v = match law.kind {
                 LawKind::Wlf => {

@@ -136,7 +136,7 @@ fn an_interrupted_identification_says_how_to_resume() {
     let scene = d.join("stack.toml").display().to_string();
     for starts in ["2", "8"] {
         let dir = tempfile::tempdir().expect("a temporary directory");
-        let child = Command::new(env!("CARGO_BIN_EXE_dea-fit"))
+        let child = super::support::interruptible()
             .args([
                 "identify",
                 &trace,

@@ -135,3 +135,26 @@ pub fn relative_noise(truth: &Scene, rel: &[(ChannelKind, f64)]) -> Vec<(Channel
         })
         .collect()
 }
+
+/// The binary as a command whose interrupts (SIGINT, SIGTERM, SIGHUP) have their
+/// default action in the child, as when started from a terminal: a test suite run
+/// as a background job of a shell without job control inherits SIGINT ignored, and
+/// `dea-fit` keeps an ignored signal ignored (src/main.rs), so a test that
+/// interrupts it would test nothing there.
+#[cfg(unix)]
+pub fn interruptible() -> Command {
+    use std::os::unix::process::CommandExt;
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_dea-fit"));
+    // SAFETY: signal() is async-signal-safe; it changes the child alone.
+    unsafe {
+        cmd.pre_exec(|| {
+            for s in [libc::SIGINT, libc::SIGTERM, libc::SIGHUP] {
+                if libc::signal(s, libc::SIG_DFL) == libc::SIG_ERR {
+                    return Err(std::io::Error::last_os_error());
+                }
+            }
+            Ok(())
+        });
+    }
+    cmd
+}

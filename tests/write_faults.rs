@@ -417,7 +417,7 @@ fn interrupted_simulate_leaves_no_litter() {
         loop {
             let d = tempdir();
             let scene = long_scene(d.path(), samples);
-            let mut child = Command::new(env!("CARGO_BIN_EXE_dea-fit"))
+            let mut child = super::support::interruptible()
                 .arg("simulate")
                 .arg(&scene)
                 .args(["--out", "new/out.csv", "--report", "rep"])

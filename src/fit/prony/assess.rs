@@ -3,7 +3,7 @@
 
 use super::problem::{Need, Problem};
 use super::refine::TermFit;
-use super::{fmt_s, param_names, Kernels, Setup};
+use super::{fmt_s, param_names, Kernels, Setup, ShiftCovariance};
 use crate::fit::linear::RowQr;
 use crate::fit::{diagnostics, Parameter, Status};
 use nalgebra::{DMatrix, DVector};
@@ -91,21 +91,21 @@ pub fn assess<K: Kernels>(setup: &Setup<K>, mut tf: TermFit<K>) -> Assessed<K> {
         .kern
         .noise_groups()
         .and_then(|g| group_scales(&r, &g, k).map(|s| (g, s)));
-    let shifts = prob.kern.shift_covariance().is_some();
+    let kern = prob.kern.clone();
+    let shifts = kern.shift_covariance();
     let (mut unc, bread, jac_finite) = match groups {
         Some((g, scales)) => group_sandwich(prob, &tf.p, &columns, g, &scales),
         None => {
             let (qr, finite) = factor(prob, &tf.p, &columns, None);
             let dof = m.saturating_sub(k) as f64;
-            let bread = shifts.then(|| diagnostics::factor_uncertainty(&qr, dof).covariance);
+            let bread = shifts.map(|_| diagnostics::factor_uncertainty(&qr, dof).covariance);
             (diagnostics::factor_uncertainty(&qr, rss), bread, finite)
         }
     };
     let mut finite = finite && jac_finite;
-    if let Some(bread) = bread.filter(|_| shifts) {
-        let (cov, shift_finite) =
-            with_shifts(prob, &tf.p, &columns, &bread, unc.covariance.clone());
-        unc.set_covariance(cov);
+    if let (Some(sh), Some(bread)) = (shifts, bread) {
+        let (added, shift_finite) = with_shifts(prob, &tf.p, &columns, &bread, sh);
+        unc.set_covariance(&unc.covariance + added);
         finite &= shift_finite;
     }
     // the count waits for the others' assessments before the choice: its kept
@@ -266,8 +266,8 @@ fn group_sandwich<K: Kernels>(
     (unc, Some(bread), finite_a && finite_b)
 }
 
-/// The covariance `cov` of the data's noise plus what the uncertain shifts of the
-/// rows' groups do to the estimate ([`Kernels::shift_covariance`]): at the optimum
+/// What the uncertain shifts `sh` of the rows' groups add to the covariance of the
+/// estimate ([`Kernels::shift_covariance`]): at the optimum
 /// of ½‖r(p; s)‖² the estimate moves with the shifts s as ∂p/∂s = −A⁻¹JᵀD (the
 /// implicit function theorem, A = JᵀJ the unscaled `bread`, J the Jacobian in SI
 /// `columns`, D = ∂r/∂s), so it gains G Σ_s Gᵀ, G = A⁻¹JᵀD and Σ_s the shifts'
@@ -283,12 +283,8 @@ fn with_shifts<K: Kernels>(
     p: &[f64],
     columns: &[f64],
     bread: &DMatrix<f64>,
-    cov: DMatrix<f64>,
+    sh: &ShiftCovariance,
 ) -> (DMatrix<f64>, bool) {
-    let kern = prob.kern.clone();
-    let Some(sh) = kern.shift_covariance() else {
-        return (cov, true);
-    };
     let (k, n) = (columns.len(), prob.n_terms);
     let gh = sh.horizontal.nrows();
     let gv = sh.vertical.as_ref().map_or(0, |v| v.nrows());
@@ -309,8 +305,7 @@ fn with_shifts<K: Kernels>(
         }
     });
     let gain = bread * jtd;
-    let added = &gain * sh.joint() * gain.transpose();
-    (cov + added, finite)
+    (&gain * sh.joint() * gain.transpose(), finite)
 }
 
 /// Findings about a fit, each with the status it raises.
